@@ -1,0 +1,121 @@
+"""Command line: ``evotol reproduce NAME|all --out DIR``, ``evotol run STUDY.toml``, ...
+
+Further sub-commands are discovered from ``evotol/commands/*.py`` modules that define
+``register(subparsers)``; each sets ``func`` on its parser (argparse ``set_defaults``).
+"""
+from __future__ import annotations
+
+import argparse
+import html
+import importlib
+import pkgutil
+import sys
+import time
+from pathlib import Path
+
+from evotol.errors import EvotolError
+
+
+def _write_index(out: Path, summaries: dict[str, dict]) -> Path:
+    from evotol import studies
+
+    rows = []
+    for name, study in studies.available().items():
+        present = (out / f"{name}.html").exists()
+        secs = summaries.get(name, {}).get("seconds")
+        rows.append(
+            f"<tr><td>{'<a href=%r>%s</a>' % (name + '.html', html.escape(name)) if present else html.escape(name)}</td>"
+            f"<td>{html.escape(study.title)}</td><td>{html.escape(study.seed_paper)}</td>"
+            f"<td>{'%.1f s' % secs if secs is not None else ('written earlier' if present else 'not run')}</td>"
+            f"<td>{'<a href=%r>JSON</a>' % (name + '.json') if (out / f'{name}.json').exists() else ''}</td></tr>")
+    page = ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>evotol studies</title>"
+            "<style>body{font-family:system-ui,sans-serif;max-width:1000px;margin:2em auto}"
+            "td,th{border:1px solid #ccc;padding:.3em .6em}table{border-collapse:collapse}</style></head>"
+            "<body><h1>evotol: reproduced seed studies</h1><table><tr><th>study</th><th>what</th>"
+            "<th>seed paper</th><th>run time</th><th>data</th></tr>" + "".join(rows) + "</table></body></html>")
+    path = out / "index.html"
+    path.write_text(page, encoding="utf-8")
+    return path
+
+
+def cmd_reproduce(args) -> int:
+    from evotol import studies
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    names = list(studies.available()) if args.study == "all" else [studies.get(args.study).name]
+    summaries, failed = {}, []
+    for name in names:
+        study = studies.get(name)
+        print(f"[evotol] reproducing {name}: {study.title}", flush=True)
+        t0 = time.perf_counter()
+        try:
+            summaries[name] = study.run(out, quick=args.quick, seed=args.seed)
+        except EvotolError as exc:
+            failed.append(name)
+            print(f"[evotol] {name} failed: {exc}", file=sys.stderr)
+            continue
+        print(f"[evotol] {name} done in {time.perf_counter() - t0:.1f} s -> {out / (name + '.html')}", flush=True)
+    index = _write_index(out, summaries)
+    print(f"[evotol] index: {index}")
+    return 1 if failed else 0
+
+
+def cmd_run(args) -> int:
+    from evotol.studyfile import run_study_file
+
+    summary = run_study_file(args.study_file, out=args.out, seed=args.seed)
+    print(f"[evotol] wrote {summary['html']} and {summary['json']}")
+    return 0
+
+
+def cmd_list(args) -> int:
+    from evotol import studies
+
+    for name, s in studies.available().items():
+        print(f"{name:28s} {s.title}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="evotol", description="Cost-optimal tolerance allocation for robots.")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("reproduce", help="reproduce a seed study (or 'all') into HTML + JSON")
+    r.add_argument("study", help="study name (see 'evotol list') or 'all'")
+    r.add_argument("--out", default="reports", help="output folder (default: reports)")
+    r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    r.add_argument("--quick", action="store_true", help="smaller run for a fast look")
+    r.set_defaults(func=cmd_reproduce)
+
+    u = sub.add_parser("run", help="run a user study described in a TOML file")
+    u.add_argument("study_file")
+    u.add_argument("--out", default=None, help="output folder (default: next to the TOML file)")
+    u.add_argument("--seed", type=int, default=None, help="override the study's seed")
+    u.set_defaults(func=cmd_run)
+
+    ls = sub.add_parser("list", help="list the reproducible studies")
+    ls.set_defaults(func=cmd_list)
+
+    import evotol.commands as commands
+    for info in pkgutil.iter_modules(commands.__path__):
+        mod = importlib.import_module(f"evotol.commands.{info.name}")
+        if hasattr(mod, "register"):
+            mod.register(sub)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except EvotolError as exc:
+        print(f"evotol: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("evotol: interrupted; results saved so far are kept", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

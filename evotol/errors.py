@@ -1,0 +1,29 @@
+"""The one small error hierarchy of evotol (see STYLE.md, "Errors")."""
+from __future__ import annotations
+
+
+class EvotolError(Exception):
+    """Base class of every error evotol raises on purpose."""
+
+
+class ValidationError(EvotolError, ValueError):
+    """Bad input: names the field, the value, and what was expected."""
+
+    def __init__(self, field: str, value, expected: str):
+        self.field, self.value, self.expected = field, value, expected
+        super().__init__(f"{field} = {value!r}: expected {expected}")
+
+
+class KinematicsError(EvotolError):
+    """A pose is out of reach of the mechanism or at a singularity.
+
+    ``poses`` holds the offending pose(s), in the units of the robot's workspace coordinates.
+    """
+
+    def __init__(self, message: str, poses=None):
+        self.poses = poses
+        super().__init__(message)
+
+
+class ConvergenceError(EvotolError):
+    """A numerical solver did not reach the requested tolerance."""

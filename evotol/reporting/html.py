@@ -1,0 +1,124 @@
+"""Self-contained, offline HTML reports built from plotly figures and tables.
+
+plotly.js is embedded once per file (no CDN), so a report opens from disk on a machine with no
+network. Figures are added with :meth:`Report.figure`, prose with :meth:`Report.text`, tables
+with :meth:`Report.table`.
+"""
+from __future__ import annotations
+
+import html
+import json
+import math
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+
+_CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2em auto;max-width:1200px;
+     padding:0 1em;color:#222;line-height:1.45}
+h1{font-size:1.6em;margin-bottom:.2em} h2{font-size:1.25em;margin-top:1.8em;border-bottom:1px solid #ddd}
+table.ev{border-collapse:collapse;margin:.6em 0;font-size:.9em}
+table.ev th,table.ev td{border:1px solid #ccc;padding:.25em .6em;text-align:right}
+table.ev th{background:#f3f3f3} table.ev td:first-child,table.ev th:first-child{text-align:left}
+.note{background:#fff8e1;border-left:4px solid #f0b400;padding:.5em 1em;margin:1em 0}
+.ok{color:#1b7f2a;font-weight:600} .bad{color:#b00020;font-weight:600}
+.meta{color:#666;font-size:.85em}
+"""
+
+
+def _fmt(v, digits: int = 4) -> str:
+    if isinstance(v, (float, np.floating)):
+        if not math.isfinite(v):
+            return html.escape(str(v))
+        if v != 0 and (abs(v) < 1e-3 or abs(v) >= 1e5):
+            return f"{v:.{digits}e}"
+        return f"{v:.{digits}g}"
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
+    return html.escape(str(v))
+
+
+def table_html(rows: Sequence[Sequence], header: Sequence[str] | None = None, digits: int = 4,
+               table_id: str | None = None) -> str:
+    """An HTML table; floats are printed with ``digits`` significant digits."""
+    out = [f'<table class="ev"{f" id={html.escape(table_id)!r}" if table_id else ""}>']
+    if header:
+        out.append("<tr>" + "".join(f"<th>{html.escape(str(h))}</th>" for h in header) + "</tr>")
+    for r in rows:
+        out.append("<tr>" + "".join(f"<td>{_fmt(v, digits)}</td>" for v in r) + "</tr>")
+    out.append("</table>")
+    return "\n".join(out)
+
+
+class Report:
+    """Collects sections and writes one self-contained HTML file."""
+
+    def __init__(self, title: str, subtitle: str = ""):
+        self.title, self.subtitle = title, subtitle
+        self._parts: list[str] = []
+        self._n_fig = 0
+
+    def heading(self, text: str) -> "Report":
+        self._parts.append(f"<h2>{html.escape(text)}</h2>")
+        return self
+
+    def text(self, text: str, note: bool = False, raw: bool = False) -> "Report":
+        body = text if raw else html.escape(text)
+        self._parts.append(f'<div class="note">{body}</div>' if note else f"<p>{body}</p>")
+        return self
+
+    def html(self, fragment: str) -> "Report":
+        self._parts.append(fragment)
+        return self
+
+    def table(self, rows, header=None, digits: int = 4, table_id: str | None = None) -> "Report":
+        self._parts.append(table_html(rows, header, digits, table_id))
+        return self
+
+    def figure(self, fig, div_id: str | None = None) -> "Report":
+        self._n_fig += 1
+        div_id = div_id or f"fig{self._n_fig}"
+        self._parts.append(fig.to_html(full_html=False, include_plotlyjs=False, div_id=div_id,
+                                       config={"responsive": True, "displaylogo": False}))
+        return self
+
+    def render(self) -> str:
+        from plotly.offline import get_plotlyjs
+
+        sub = f'<p class="meta">{html.escape(self.subtitle)}</p>' if self.subtitle else ""
+        return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+                f"<title>{html.escape(self.title)}</title><style>{_CSS}</style>"
+                f"<script type=\"text/javascript\">{get_plotlyjs()}</script></head><body>"
+                f"<h1>{html.escape(self.title)}</h1>{sub}" + "\n".join(self._parts) + "</body></html>")
+
+    def write(self, path: str | Path) -> Path:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(self.render(), encoding="utf-8")
+        return path
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (np.bool_,)):
+        return bool(obj)
+    return obj
+
+
+def write_json(path: str | Path, data: dict) -> Path:
+    """Write ``data`` as JSON; numpy values are converted, non-finite floats become null."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(_jsonable(data), indent=1), encoding="utf-8")
+    return path

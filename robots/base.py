@@ -1,0 +1,230 @@
+"""The robot error-model protocol every plugin in ``robots/`` follows.
+
+A robot error model knows nothing about costs or optimisers. It declares
+
+* its **error sources** (:class:`SourceSpec`): each source is a small vector ``e_j`` of
+  dimension ``dim`` whose Euclidean norm is bounded by the source's tolerance ``t_j``:
+  ``dim = 1`` is an interval ``|e| <= t`` (a length error, a joint offset), ``dim = 2`` a disk
+  (the radial clearance of a revolute joint, Yao et al. 2013 eq. 12), ``dim = 3`` a ball
+  (a spherical joint's clearance);
+* its **workspace** (:class:`Workspace`): named pose coordinates with units and ranges, so a
+  problem can lay a grid or a Latin hypercube over it;
+* the **first-order map** ``sensitivity(poses)`` of shape ``(n_poses, 6, n_columns)`` from the
+  stacked source vectors to the end-effector error twist ``[dp (m); dtheta (rad)]``
+  (``n_columns = sum(dim_j)``; rows 0-2 position in metres, rows 3-5 small rotation in
+  radians, both in the base frame; a planar robot fills the rows it does not move with zeros);
+* optionally the **nonlinear** ``pose_error(poses, errors)`` that re-solves the kinematics with
+  the given source errors, so Monte Carlo verification can measure the linearisation error.
+
+Everything is in SI units inside (m, rad). Poses outside the workspace or at a singularity raise
+:class:`evotol.errors.KinematicsError` naming the pose, never return NaN.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from evotol.errors import KinematicsError, ValidationError
+
+SHAPES = {1: "interval", 2: "disk", 3: "ball"}
+UNITS = ("m", "rad")
+
+
+@dataclass(frozen=True)
+class SourceSpec:
+    """One error source of a robot.
+
+    name: unique identifier, e.g. ``"l1"`` or ``"U1a"``.
+    dim: 1 (interval), 2 (disk) or 3 (ball) -- the error is a vector of this size, norm <= t.
+    unit: ``"m"`` or ``"rad"``: the unit of the error vector's components.
+    group: family the source belongs to (``"length"``, ``"U joint"``...), used by cost models,
+        reports and the sensitivity rule.
+    description: one line for reports.
+    """
+
+    name: str
+    dim: int = 1
+    unit: str = "m"
+    group: str = "default"
+    description: str = ""
+
+    def __post_init__(self):
+        if self.dim not in SHAPES:
+            raise ValidationError(f"SourceSpec({self.name!r}).dim", self.dim, "1, 2 or 3")
+        if self.unit not in UNITS:
+            raise ValidationError(f"SourceSpec({self.name!r}).unit", self.unit, f"one of {UNITS}")
+
+    @property
+    def shape(self) -> str:
+        return SHAPES[self.dim]
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """Named pose coordinates with units and closed ranges ``[low, high]``.
+
+    ``units`` are the SI units of the coordinates as the robot takes them (``"m"``, ``"rad"``).
+    ``display_scale`` converts each coordinate to the unit shown in reports (e.g. rad -> deg).
+    """
+
+    names: tuple[str, ...]
+    low: tuple[float, ...]
+    high: tuple[float, ...]
+    units: tuple[str, ...]
+    display_units: tuple[str, ...] = ()
+    display_scale: tuple[float, ...] = ()
+
+    def __post_init__(self):
+        n = len(self.names)
+        for f in ("low", "high", "units"):
+            if len(getattr(self, f)) != n:
+                raise ValidationError(f"Workspace.{f}", getattr(self, f), f"{n} entries, one per coordinate")
+        for name, lo, hi in zip(self.names, self.low, self.high):
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+                raise ValidationError(f"Workspace range of {name}", (lo, hi), "finite low <= high")
+        if not self.display_units:
+            object.__setattr__(self, "display_units", self.units)
+        if not self.display_scale:
+            object.__setattr__(self, "display_scale", tuple(1.0 for _ in self.names))
+
+    @property
+    def dim(self) -> int:
+        return len(self.names)
+
+    def grid(self, counts: int | Sequence[int]) -> np.ndarray:
+        """Full grid with ``counts`` points per coordinate, shape (prod(counts), dim)."""
+        counts = [counts] * self.dim if np.isscalar(counts) else list(counts)
+        if len(counts) != self.dim or any(int(c) < 1 for c in counts):
+            raise ValidationError("grid counts", counts, f"{self.dim} positive integers")
+        axes = [np.linspace(lo, hi, int(c)) if c > 1 else np.array([(lo + hi) / 2])
+                for lo, hi, c in zip(self.low, self.high, counts)]
+        mesh = np.meshgrid(*axes, indexing="ij")
+        return np.stack([m.ravel() for m in mesh], axis=1)
+
+    def latin_hypercube(self, n: int, seed: int | None = 0) -> np.ndarray:
+        """``n`` Latin-hypercube poses (scipy.stats.qmc), shape (n, dim), reproducible from seed."""
+        from scipy.stats import qmc
+
+        if int(n) < 1:
+            raise ValidationError("latin_hypercube n", n, "a positive integer")
+        u = qmc.LatinHypercube(d=self.dim, seed=seed).random(int(n))
+        return qmc.scale(u, self.low, self.high) if self.dim else u
+
+    def contains(self, poses: np.ndarray, rtol: float = 1e-9) -> np.ndarray:
+        poses = np.atleast_2d(poses)
+        lo, hi = np.asarray(self.low), np.asarray(self.high)
+        span = np.maximum(hi - lo, 1.0)
+        return np.all((poses >= lo - rtol * span) & (poses <= hi + rtol * span), axis=1)
+
+
+class RobotErrorModel:
+    """Base class of robot error models (see the module docstring for the contract).
+
+    Subclasses set ``name``, ``sources`` and ``workspace`` and implement ``sensitivity``;
+    ``pose_error`` (nonlinear propagation) is optional.
+    """
+
+    name: str = "robot"
+    sources: tuple[SourceSpec, ...] = ()
+    workspace: Workspace
+
+    # --- contract -----------------------------------------------------------------------
+    def sensitivity(self, poses: np.ndarray) -> np.ndarray:
+        """First-order map, shape (n_poses, 6, n_columns): [dp (m); dtheta (rad)] per unit error."""
+        raise NotImplementedError
+
+    def pose_error(self, poses: np.ndarray, errors: np.ndarray) -> np.ndarray:
+        """Nonlinear end-effector error twist for given source errors.
+
+        poses: (n_poses, workspace.dim); errors: (n_poses, n_samples, n_columns) in SI units.
+        Returns (n_poses, n_samples, 6): [dp (m); small-rotation vector (rad)].
+        """
+        raise NotImplementedError(f"{self.name} has no nonlinear error model")
+
+    @property
+    def has_nonlinear_model(self) -> bool:
+        return type(self).pose_error is not RobotErrorModel.pose_error
+
+    # --- helpers ------------------------------------------------------------------------
+    @property
+    def source_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.sources)
+
+    @property
+    def column_slices(self) -> tuple[slice, ...]:
+        """Slice of the stacked error vector that belongs to each source, in source order."""
+        out, start = [], 0
+        for s in self.sources:
+            out.append(slice(start, start + s.dim))
+            start += s.dim
+        return tuple(out)
+
+    @property
+    def n_columns(self) -> int:
+        return sum(s.dim for s in self.sources)
+
+    def check_poses(self, poses) -> np.ndarray:
+        """Validate an array of poses against the workspace; returns float array (n, dim)."""
+        try:
+            arr = np.asarray(poses, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ValidationError("poses", poses, "an array of numbers") from exc
+        if arr.ndim == 1:
+            arr = arr[None, :]
+        if arr.ndim != 2 or arr.shape[1] != self.workspace.dim:
+            raise ValidationError("poses shape", arr.shape, f"(n, {self.workspace.dim}) with columns {self.workspace.names}")
+        bad = ~np.all(np.isfinite(arr), axis=1)
+        if bad.any():
+            raise ValidationError("poses", arr[bad][0].tolist(), "finite numbers")
+        outside = ~self.workspace.contains(arr)
+        if outside.any():
+            raise KinematicsError(
+                f"{self.name}: pose {arr[outside][0].tolist()} ({', '.join(self.workspace.names)}) "
+                f"is outside the workspace {list(zip(self.workspace.low, self.workspace.high))}",
+                poses=arr[outside])
+        return arr
+
+
+def check_robot(robot: RobotErrorModel, poses: np.ndarray | None = None, *, step: float = 1e-7,
+                rtol: float = 1e-4, atol: float = 1e-9) -> dict:
+    """Conformance check a plugin author runs in their own tests (like sklearn's check_estimator).
+
+    Checks: declared sources and workspace; ``sensitivity`` has shape (n, 6, n_columns) and is
+    finite; if the robot has a nonlinear model, its central finite differences match the
+    first-order map to ``rtol`` relative to the largest entry (+ ``atol``); zero errors give zero
+    pose error. Returns a dict of measured quantities (e.g. the finite-difference mismatch).
+    """
+    if not robot.sources:
+        raise AssertionError(f"{robot.name}: no error sources declared")
+    names = [s.name for s in robot.sources]
+    if len(set(names)) != len(names):
+        raise AssertionError(f"{robot.name}: duplicate source names {names}")
+    if poses is None:
+        poses = robot.workspace.latin_hypercube(8, seed=1)
+    poses = robot.check_poses(poses)
+    J = np.asarray(robot.sensitivity(poses))
+    expected = (poses.shape[0], 6, robot.n_columns)
+    if J.shape != expected:
+        raise AssertionError(f"{robot.name}: sensitivity shape {J.shape}, expected {expected}")
+    if not np.all(np.isfinite(J)):
+        raise AssertionError(f"{robot.name}: sensitivity has non-finite entries")
+    report = {"n_poses": len(poses), "n_columns": robot.n_columns}
+    if robot.has_nonlinear_model:
+        n = robot.n_columns
+        zero = robot.pose_error(poses, np.zeros((len(poses), 1, n)))
+        if np.max(np.abs(zero)) > atol:
+            raise AssertionError(f"{robot.name}: zero source errors give pose error {np.max(np.abs(zero)):.3g}")
+        E = np.concatenate([np.eye(n) * step, -np.eye(n) * step], axis=0)  # (2n, n)
+        E = np.broadcast_to(E, (len(poses), 2 * n, n))
+        out = robot.pose_error(poses, np.ascontiguousarray(E))
+        fd = (out[:, :n, :] - out[:, n:, :]).transpose(0, 2, 1) / (2 * step)
+        scale = np.max(np.abs(J))
+        mismatch = np.max(np.abs(fd - J))
+        report["fd_mismatch"] = float(mismatch)
+        report["fd_relative_mismatch"] = float(mismatch / scale)
+        if mismatch > rtol * scale + atol:
+            raise AssertionError(f"{robot.name}: sensitivity differs from finite differences by "
+                                 f"{mismatch:.3g} (scale {scale:.3g})")
+    return report
