@@ -10,6 +10,8 @@ class ValidationError(EvotolError, ValueError):
     """Bad input: names the field, the value, and what was expected."""
 
     def __init__(self, field: str, value, expected: str):
+        if hasattr(value, "item") and getattr(value, "ndim", 1) == 0:
+            value = value.item()  # print 1.0, not np.float64(1.0)
         self.field, self.value, self.expected = field, value, expected
         super().__init__(f"{field} = {value!r}: expected {expected}")
 

@@ -1,0 +1,30 @@
+"""Exponential-reciprocal power model ``c = a0·x^(-a1)·exp(-a2·x)`` (Michael & Siddall 1981)."""
+import numpy as np
+
+from cost_models.base import CostModel
+from evotol.errors import ValidationError
+
+
+class ExpReciprocalCost(CostModel):
+    name = "exp_reciprocal"
+    param_names = ("a0", "a1", "a2")
+    formula = "a0·x^(-a1)·exp(-a2·x)"
+
+    def _check_params(self):
+        a0, a1, a2 = self.p
+        if a0 <= 0:
+            raise ValidationError("exp_reciprocal.a0", a0, "a positive cost coefficient")
+        if a1 < 0 or a2 < 0 or (a1 == 0 and a2 == 0):
+            raise ValidationError("exp_reciprocal.(a1, a2)", (a1, a2), "a1 >= 0 and a2 >= 0, not both zero (else cost does not decrease)")
+
+    def _f(self, x):
+        a0, a1, a2 = self.p
+        return a0 * np.power(x, -a1) * np.exp(-a2 * x)
+
+    def _df(self, x):
+        a0, a1, a2 = self.p
+        return -self._f(x) * (a1 / x + a2)
+
+    def _d2f(self, x):
+        a0, a1, a2 = self.p
+        return self._f(x) * ((a1 / x + a2) ** 2 + a1 / x ** 2)

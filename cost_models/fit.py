@@ -1,0 +1,87 @@
+"""Fit any cost model to shop data (scipy.optimize.least_squares) and report the fit quality."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from cost_models.base import CostModel
+from evotol.errors import ValidationError
+
+
+@dataclass(frozen=True)
+class FitResult:
+    model: CostModel
+    r2: float              #: coefficient of determination
+    rmse: float            #: root-mean-square residual (cost units)
+    max_relative_error: float
+    residuals: np.ndarray
+
+    def summary(self) -> str:
+        return (f"{self.model!r}: R² = {self.r2:.5f}, RMSE = {self.rmse:.4g}, "
+                f"max relative error = {100 * self.max_relative_error:.2f} %")
+
+
+def _initial_guess(name: str, x: np.ndarray, c: np.ndarray, n: int) -> np.ndarray:
+    lx, lc = np.log(x), np.log(np.maximum(c, 1e-300))
+    if name == "exponential":
+        k, b = np.polyfit(x, lc, 1)
+        return np.array([np.exp(b), max(-k, 1e-6)])
+    if name == "power":
+        k, b = np.polyfit(lx, lc, 1)
+        return np.array([np.exp(b), max(-k, 1e-6)])
+    if name in ("reciprocal", "reciprocal_square"):
+        p = 1 if name == "reciprocal" else 2
+        A = np.stack([np.ones_like(x), x ** -p], 1)
+        sol = np.linalg.lstsq(A, c, rcond=None)[0]
+        return np.array([sol[0], max(sol[1], 1e-9)])
+    if name == "exp_reciprocal":
+        A = np.stack([np.ones_like(x), -lx, -x], 1)
+        sol = np.linalg.lstsq(A, lc, rcond=None)[0]
+        return np.array([np.exp(sol[0]), max(sol[1], 0.0), max(sol[2], 0.0)])
+    if name.startswith("polynomial"):
+        return np.polynomial.polynomial.polyfit(x, c, n - 1)
+    if name == "linear_exponential":
+        k, b = np.polyfit(x, lc, 1)
+        return np.array([0.0, 0.0, np.exp(b), max(-k, 1e-6)])
+    return np.ones(n)
+
+
+def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
+    """Least-squares fit of ``model`` (a CostModel class or registered name) to ``(t, cost)`` data.
+
+    ``tolerances`` are in SI units, coefficients are fitted in units of ``scale``. Returns the
+    fitted model with R², RMSE and the largest relative error. Raises ValidationError when the
+    data are unusable or the best fit violates the model's validity (negative/increasing cost).
+    """
+    from cost_models.registry import get
+
+    cls = get(model) if isinstance(model, str) else model
+    t = np.asarray(tolerances, dtype=float).ravel()
+    c = np.asarray(costs, dtype=float).ravel()
+    if t.shape != c.shape:
+        raise ValidationError("costs", c.shape, f"as many costs as tolerances {t.shape}")
+    n = len(cls.param_names)
+    if t.size < n + 1:
+        raise ValidationError("tolerances", t.size, f"at least {n + 1} data points to fit {n} parameters")
+    if not (np.all(np.isfinite(t)) and np.all(t > 0)):
+        raise ValidationError("tolerances", t.tolist(), "positive finite values (SI)")
+    if not (np.all(np.isfinite(c)) and np.all(c >= 0)):
+        raise ValidationError("costs", c.tolist(), "non-negative finite values")
+    x = t / scale
+    guess = np.asarray(p0, float) if p0 is not None else _initial_guess(cls.name, x, c, n)
+
+    def model_values(p):
+        m = object.__new__(cls)
+        m.p, m.scale = np.asarray(p, float), 1.0
+        return m._f(x)
+
+    res = least_squares(lambda p: model_values(p) - c, guess, method="lm" if t.size >= n else "trf",
+                        x_scale="jac", max_nfev=20000)
+    fitted = cls(*res.x, scale=scale, t_min=float(t.min()), t_max=float(t.max()))
+    r = fitted.cost(t) - c
+    ss_tot = float(np.sum((c - c.mean()) ** 2))
+    r2 = 1 - float(np.sum(r ** 2)) / ss_tot if ss_tot > 0 else 1.0
+    return FitResult(fitted, r2, float(np.sqrt(np.mean(r ** 2))),
+                     float(np.max(np.abs(r) / np.maximum(np.abs(c), 1e-300))), r)

@@ -1,0 +1,33 @@
+"""Polynomial cost models of 3rd and 4th order ``c = Σ a_k·x^k`` (Dong, Hu & Xue 1994).
+
+Polynomials are monotone and positive only on a range: give ``t_min``/``t_max`` (SI) and the model
+checks them (or :meth:`validate_range` is called by the problem with the source's bounds).
+"""
+import numpy as np
+
+from cost_models.base import CostModel
+
+
+class _Polynomial(CostModel):
+    convex = False  # depends on the coefficients and the range: see is_convex()
+
+    def _f(self, x):
+        return np.polynomial.polynomial.polyval(x, self.p)
+
+    def _df(self, x):
+        return np.polynomial.polynomial.polyval(x, np.polynomial.polynomial.polyder(self.p))
+
+    def _d2f(self, x):
+        return np.polynomial.polynomial.polyval(x, np.polynomial.polynomial.polyder(self.p, 2))
+
+
+class Polynomial3Cost(_Polynomial):
+    name = "polynomial3"
+    param_names = ("a0", "a1", "a2", "a3")
+    formula = "a0 + a1·x + a2·x² + a3·x³"
+
+
+class Polynomial4Cost(_Polynomial):
+    name = "polynomial4"
+    param_names = ("a0", "a1", "a2", "a3", "a4")
+    formula = "a0 + a1·x + a2·x² + a3·x³ + a4·x⁴"

@@ -1,0 +1,28 @@
+"""Power cost model ``c = a0·x^(-a1)``, x = t/scale (Speckhart / Chase–Greenwood reciprocal power)."""
+import numpy as np
+
+from cost_models.base import CostModel
+from evotol.errors import ValidationError
+
+
+class PowerCost(CostModel):
+    name = "power"
+    param_names = ("a0", "a1")
+    formula = "a0·x^(-a1)"
+
+    def _check_params(self):
+        a0, a1 = self.p
+        if a0 <= 0:
+            raise ValidationError("power.a0", a0, "a positive cost coefficient")
+        if a1 <= 0:
+            raise ValidationError("power.a1", a1, "a positive exponent (a1 <= 0 makes cost increase with t)")
+
+    def _f(self, x):
+        return self.p[0] * np.power(x, -self.p[1])
+
+    def _df(self, x):
+        return -self.p[1] * self.p[0] * np.power(x, -self.p[1] - 1)
+
+    def _d2f(self, x):
+        a0, a1 = self.p
+        return a1 * (a1 + 1) * a0 * np.power(x, -a1 - 2)

@@ -1,0 +1,60 @@
+"""User cost models: from a Python callable, or registered by another package as an entry point.
+
+A package registers a model class under the entry-point group ``evotol.cost_models``::
+
+    [project.entry-points."evotol.cost_models"]
+    my_model = "my_pkg.costs:MyCost"     # a CostModel subclass
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from cost_models.base import CostModel
+from evotol.errors import ValidationError
+
+
+class CallableCost(CostModel):
+    """Wraps ``func(x)`` (and optionally ``dfunc(x)``), x = t/scale; derivative by central differences otherwise."""
+
+    param_names = ()
+    convex = False
+
+    def __init__(self, func: Callable, dfunc: Callable | None = None, *, name: str = "user",
+                 scale: float = 1.0, convex: bool = False, t_min: float | None = None,
+                 t_max: float | None = None):
+        if not callable(func):
+            raise ValidationError("CallableCost func", func, "a callable cost(x)")
+        if dfunc is not None and not callable(dfunc):
+            raise ValidationError("CallableCost dfunc", dfunc, "a callable d cost/dx or None")
+        self.func, self.dfunc = func, dfunc
+        self.name = str(name)
+        self.convex = bool(convex)
+        super().__init__(scale=scale, t_min=t_min, t_max=t_max)
+
+    def _f(self, x):
+        out = np.asarray(self.func(x), dtype=float)
+        return np.broadcast_to(out, np.shape(x)).copy() if out.shape != np.shape(x) else out
+
+    def _df(self, x):
+        if self.dfunc is not None:
+            return np.asarray(self.dfunc(x), dtype=float)
+        h = 1e-6 * np.maximum(np.abs(x), 1e-8)
+        return (self._f(x + h) - self._f(x - h)) / (2 * h)
+
+    def to_dict(self):
+        return {"model": self.name, "callable": getattr(self.func, "__qualname__", repr(self.func)), "scale": self.scale}
+
+
+def entry_point_models() -> dict[str, type]:
+    """Cost-model classes registered by installed packages under ``evotol.cost_models``."""
+    from importlib.metadata import entry_points
+
+    found = {}
+    for ep in entry_points(group="evotol.cost_models"):
+        cls = ep.load()
+        if not (isinstance(cls, type) and issubclass(cls, CostModel)):
+            raise ValidationError(f"entry point evotol.cost_models:{ep.name}", cls, "a CostModel subclass")
+        found[ep.name] = cls
+    return found
