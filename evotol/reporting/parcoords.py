@@ -1,0 +1,341 @@
+"""Interactive parallel-coordinate reports of design studies (Deng 2012, Figs. VII.1-VII.16).
+
+One plotly ``Parcoords`` trace (WebGL, so tens of thousands of lines stay interactive) with an
+axis per input and per objective; tolerance axes spanning decades are drawn on log10 with tick
+labels in the axis unit (``0.0001 … 0.1``). Lines are coloured by a chosen objective; entries
+that come from NSGA-II (``source`` column) and their knee points get their own colours and a
+``source`` axis, so they stand out from the level grid.
+
+Named presets (:class:`evotol.filtering.Preset`, the filters of the thesis's figures) become
+buttons that set the axes' constraint ranges; the page then shows how many entries are kept,
+the range each axis keeps and a table of the kept entries. Brushing an axis by hand updates the
+same read-outs. A static table beside it lists every preset's count computed in Python by
+:meth:`evotol.filtering.DesignStudy.filter` (the numbers the page must reproduce).
+
+The report reads results; it computes no physics (STYLE.md).
+"""
+from __future__ import annotations
+
+import html
+import json
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from evotol.doe import ENTRY, SOURCE
+from evotol.errors import ValidationError
+from evotol.filtering import DesignStudy, Preset
+
+GRID, PARETO, KNEE = "level grid", "NSGA-II", "knee"
+_SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+_GRID_TOP = 0.75          # grid entries use [0, 0.75] of the colour scale; NSGA-II and knees the rest
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One parallel-coordinate axis: a column, its label and whether it is drawn on log10."""
+
+    column: str
+    label: str = ""
+    log: bool = False
+
+    def values(self, s: pd.Series) -> np.ndarray:
+        v = s.to_numpy(dtype=float)
+        if self.log:
+            if np.any(v <= 0):
+                raise ValidationError(f"log axis {self.column}", float(v[v <= 0][0]), "positive values")
+            return np.log10(v)
+        return v
+
+    def transform(self, x: float) -> float:
+        return math.log10(x) if self.log else float(x)
+
+
+def format_tick(v: float) -> str:
+    """Readable tick text: plain decimals from 0.0001 to 99 999, else ``2·10⁻⁵``."""
+    if v == 0:
+        return "0"
+    if 1e-4 <= abs(v) < 1e5:
+        return f"{v:.4g}"
+    e = int(math.floor(math.log10(abs(v)) + 1e-12))
+    m = v / 10 ** e
+    mant = "" if abs(m - 1) < 1e-9 else f"{m:.3g}·"
+    return f"{mant}10{str(e).translate(_SUP)}"
+
+
+def log_ticks(lo: float, hi: float) -> tuple[list[float], list[str]]:
+    """Tick positions (log10 units) and labels (axis units) for a log axis spanning [lo, hi] (log10)."""
+    d0, d1 = math.floor(lo + 1e-9), math.ceil(hi - 1e-9)
+    mults = (1,) if d1 - d0 >= 3 else ((1, 2, 5) if d1 - d0 >= 1 else (1, 1.5, 2, 3, 5, 7))
+    vals = [math.log10(m) + d for d in range(d0, d1 + 1) for m in mults]
+    vals = [v for v in vals if lo - 1e-9 <= v <= hi + 1e-9]
+    if len(vals) < 2:
+        vals = [lo, hi]
+    return vals, [format_tick(10 ** v) for v in vals]
+
+
+def default_axes(study: DesignStudy, log_objectives: Sequence[str] = ()) -> list[Axis]:
+    """Inputs then objectives; factors with ``log=True`` and ``log_objectives`` on log10."""
+    axes = []
+    for c in study.inputs:
+        f = study.factors.get(c)
+        axes.append(Axis(c, f.label if f else c, bool(f and f.log)))
+    for c in study.objectives:
+        axes.append(Axis(c, c, c in log_objectives))
+    return axes
+
+
+def _viridis(n: int = 9) -> list[str]:
+    import plotly.colors as pc
+
+    return pc.sample_colorscale("Viridis", [i / (n - 1) for i in range(n)])
+
+
+def parcoords_frame(study: DesignStudy, among: pd.DataFrame | None = None,
+                    extra: pd.DataFrame | None = None) -> pd.DataFrame:
+    """The lines to draw: the (feasible) study entries, then the ``extra`` (NSGA-II) entries."""
+    grid = study.entries if among is None else among
+    if "feasible" in grid:
+        grid = grid[grid["feasible"].astype(bool)]
+    grid = grid.assign(**{SOURCE: GRID})
+    parts = [grid]
+    if extra is not None and len(extra):
+        e = extra.copy()
+        knee = e["knee"].astype(bool) if "knee" in e else pd.Series(False, index=e.index)
+        e[SOURCE] = np.where(knee, KNEE, PARETO)
+        if ENTRY not in e:
+            e[ENTRY] = -1 - np.arange(len(e))
+        parts.append(e.sort_values(SOURCE, key=lambda s: s.eq(KNEE)))   # knees drawn last
+    return pd.concat(parts, ignore_index=True)
+
+
+def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, title: str = "",
+                     height: int = 600):
+    """A plotly Parcoords figure of ``frame`` (see :func:`parcoords_frame`), coloured by ``color``."""
+    import plotly.graph_objects as go
+
+    by_col = {a.column: a for a in axes}
+    if color not in by_col:
+        raise ValidationError("color", color, f"one of the axis columns {list(by_col)}")
+    missing = [a.column for a in axes if a.column not in frame]
+    if missing:
+        raise ValidationError("axis columns", missing, f"columns of the entries {list(frame.columns)}")
+    src = frame[SOURCE].to_numpy() if SOURCE in frame else np.full(len(frame), GRID)
+    has_extra = bool(np.any(src != GRID))
+    dims = []
+    if has_extra:
+        code = np.select([src == PARETO, src == KNEE], [1, 2], 0)
+        dims.append(dict(label="source", values=code, tickvals=[0, 1, 2], ticktext=[GRID, PARETO, KNEE],
+                         range=[-0.1, 2.1]))
+    for a in axes:
+        v = a.values(frame[a.column])
+        lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
+        pad = 0.02 * (hi - lo) if hi > lo else (0.5 if a.log else max(abs(lo) * 0.02, 1e-12))
+        d = dict(label=a.label or a.column, values=v, range=[lo - pad, hi + pad])
+        if a.log:
+            d["tickvals"], d["ticktext"] = log_ticks(lo - pad, hi + pad)
+        dims.append(d)
+
+    ca = by_col[color]
+    cv = ca.values(frame[color])
+    g = src == GRID
+    lo, hi = float(np.nanmin(cv[g])), float(np.nanmax(cv[g]))
+    top = _GRID_TOP if has_extra else 1.0
+    c = np.clip((cv - lo) / (hi - lo if hi > lo else 1.0), 0, 1) * top
+    c[src == PARETO], c[src == KNEE] = 0.875, 1.0
+    vir = _viridis()
+    scale = [[top * i / (len(vir) - 1), col] for i, col in enumerate(vir)]
+    if has_extra:
+        scale += [[0.76, "#ff7f0e"], [0.94, "#ff7f0e"], [0.95, "#d62728"], [1.0, "#d62728"]]
+    if ca.log:
+        tv, tt = log_ticks(lo, hi)
+    else:
+        tv = list(np.linspace(lo, hi, 5))
+        tt = [format_tick(x) for x in tv]
+    cb_vals = [(t - lo) / (hi - lo if hi > lo else 1.0) * top for t in tv]
+    cb_text = list(tt)
+    if has_extra:
+        cb_vals += [0.875, 1.0]
+        cb_text += [PARETO, KNEE]
+    line = dict(color=c, colorscale=scale, cmin=0.0, cmax=1.0, showscale=True,
+                colorbar=dict(title=dict(text=ca.label or color), tickvals=cb_vals, ticktext=cb_text))
+    fig = go.Figure(go.Parcoords(line=line, dimensions=dims, labelangle=-20, labelside="top",
+                                 unselected=dict(line=dict(color="#d9d9d9", opacity=0.25))))
+    fig.update_layout(height=height, margin=dict(l=70, r=40, t=110, b=40),
+                      title=dict(text=title) if title else None)
+    return fig
+
+
+def _preset_ranges(preset: Preset, axes: Sequence[Axis], offset: int, frame: pd.DataFrame) -> list:
+    """Constraint ranges ``[dim index, low, high]`` (plotted units) that a preset sets."""
+    idx = {a.column: i for i, a in enumerate(axes)}
+    out = []
+    for col, (lo, hi) in preset.bounds.items():
+        if col not in idx:
+            raise ValidationError(f"preset {preset.name!r} column", col, f"an axis column {list(idx)}")
+        a = axes[idx[col]]
+        v = a.values(frame[col])
+        span = float(np.nanmax(v) - np.nanmin(v)) or 1.0
+        plo = a.transform(lo) if lo is not None else float(np.nanmin(v)) - span
+        phi = a.transform(hi) if hi is not None else float(np.nanmax(v)) + span
+        out.append([idx[col] + offset, plo, phi])
+    return out
+
+
+_JS = r"""
+(function(){
+var P = %(payload)s;
+var gd = document.getElementById(P.div);
+function q(id){ return document.getElementById(P.div + '-' + id); }
+var TYPES = {f8: Float64Array, f4: Float32Array, i4: Int32Array, u4: Uint32Array, i2: Int16Array,
+             u2: Uint16Array, i1: Int8Array, u1: Uint8Array};
+var cache = {};
+function decode(v){ // plotly.py sends numpy arrays as {dtype, bdata} (base64)
+  if(!v || !v.bdata) return v;
+  var bin = atob(v.bdata), buf = new ArrayBuffer(bin.length), u8 = new Uint8Array(buf);
+  for(var i=0;i<bin.length;i++) u8[i] = bin.charCodeAt(i);
+  return new TYPES[v.dtype](buf); }
+function vals(k){ if(!(k in cache)) cache[k] = decode(gd.data[0].dimensions[k].values); return cache[k]; }
+function fmt(v){ if(!isFinite(v)) return String(v); var a=Math.abs(v);
+  if(a===0) return '0'; if(a>=1e-4 && a<1e5) return String(Number(v.toPrecision(4)));
+  return v.toExponential(3); }
+function ranges(){ var dims = gd.data[0].dimensions, out = [];
+  for(var k=0;k<dims.length;k++){ var cr = dims[k].constraintrange;
+    if(cr && cr.length){ out.push([k, (Array.isArray(cr[0]) ? cr : [cr])]); } }
+  return out; }
+function keptRows(){ var dims = gd.data[0].dimensions, R = ranges(), n = P.n, keep = [];
+  var cols = R.map(function(r){ return vals(r[0]); });
+  for(var i=0;i<n;i++){ var ok = true;
+    for(var j=0;j<R.length && ok;j++){ var v = cols[j][i], rs = R[j][1], any = false;
+      for(var m=0;m<rs.length;m++){ if(v >= rs[m][0] && v <= rs[m][1]){ any = true; break; } }
+      ok = any; }
+    if(ok) keep.push(i); }
+  return keep; }
+function value(k, i){ var v = vals(k)[i]; return P.log[k] ? Math.pow(10, v) : v; }
+function update(){
+  var keep = keptRows();
+  q('count-n').textContent = keep.length;
+  var dims = gd.data[0].dimensions, rows = [];
+  // kept range of every axis
+  var h = '<tr><th>axis</th><th>kept</th></tr>';
+  for(var k=P.first;k<dims.length;k++){
+    var lo = Infinity, hi = -Infinity, lv = {}, elo = Infinity, ehi = -Infinity, ne = 0;
+    for(var t=0;t<keep.length;t++){ var i = keep[t], x = value(k, i);
+      if(P.source[i] === P.grid){ if(x<lo) lo=x; if(x>hi) hi=x; if(P.discrete[k]) lv[fmt(x)] = x; }
+      else { ne++; if(x<elo) elo=x; if(x>ehi) ehi=x; } }
+    var keys = Object.keys(lv).sort(function(a,b){ return lv[a] - lv[b]; });
+    var txt = lo <= hi ? (P.discrete[k] ? 'levels ' + keys.join(', ') : '[' + fmt(lo) + ', ' + fmt(hi) + ']') : '–';
+    if(ne){ txt += '; NSGA-II [' + fmt(elo) + ', ' + fmt(ehi) + ']'; }
+    h += '<tr><td>' + dims[k].label + '</td><td>' + txt + '</td></tr>'; }
+  q('ranges').innerHTML = h;
+  // table of kept entries, best colour value first
+  var ck = P.colorDim, cv = vals(ck), order = keep.slice().sort(function(a,b){ return cv[a] - cv[b]; });
+  var t = '<tr><th>entry</th><th>source</th>' + P.cols.map(function(k){ return '<th>' + dims[k].label + '</th>'; }).join('') + '</tr>';
+  for(var r=0;r<Math.min(order.length, P.tableRows);r++){ var i = order[r];
+    t += '<tr><td>' + P.entry[i] + '</td><td>' + P.source[i] + '</td>' +
+         P.cols.map(function(k){ return '<td>' + fmt(value(k, i)) + '</td>'; }).join('') + '</tr>'; }
+  q('table').innerHTML = t;
+  q('table-note').textContent = keep.length > P.tableRows ? ('first ' + P.tableRows + ' of ' + keep.length + ' kept entries, sorted by ' + dims[ck].label) : (keep.length + ' kept entries, sorted by ' + dims[ck].label);
+  gd.setAttribute('data-kept', keep.length);
+}
+function apply(name){
+  var upd = {}, dims = gd.data[0].dimensions, set = {};
+  var pr = P.presets.filter(function(p){ return p.name === name; })[0];
+  if(pr){ pr.ranges.forEach(function(r){ set[r[0]] = [r[1], r[2]]; }); }
+  for(var k=0;k<dims.length;k++){ upd['dimensions[' + k + '].constraintrange'] = [k in set ? set[k] : null]; }
+  q('preset').textContent = pr ? pr.name : 'none';
+  gd.setAttribute('data-preset', pr ? pr.name : '');
+  var t0 = performance.now();
+  return Plotly.restyle(gd, upd, [0]).then(function(){ update();
+    return new Promise(function(res){ requestAnimationFrame(function(){ requestAnimationFrame(function(){
+      var ms = performance.now() - t0; gd.setAttribute('data-apply-ms', ms.toFixed(1)); res(ms); }); }); }); });
+}
+window.evotolParcoords = window.evotolParcoords || {};
+window.evotolParcoords[P.div] = {apply: apply, update: update, keptRows: keptRows};
+q('controls').addEventListener('click', function(ev){ var b = ev.target.closest('button[data-preset]');
+  if(b){ apply(b.getAttribute('data-preset')); } });
+gd.on('plotly_restyle', function(){ update(); });
+update();
+gd.setAttribute('data-ready', '1');
+})();
+"""
+
+
+def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = None, color: str | None = None,
+                  presets: Sequence[Preset] | None = None, extra: pd.DataFrame | None = None,
+                  among: pd.DataFrame | None = None, log_objectives: Sequence[str] = (),
+                  table_rows: int = 50, div_id: str = "pc", title: str = "", height: int = 600) -> dict:
+    """Add the interactive parallel-coordinate section to ``report`` (an :class:`html.Report`).
+
+    study: the evaluated entries; among: draw only these entries (e.g. a filtered subset);
+    extra: NSGA-II Pareto entries (columns of the axes, optional bool ``knee``) drawn on top;
+    presets: filters shown as buttons (default: the study's presets); color: objective column
+    colouring the lines (default: the first objective).
+
+    Returns ``{"n_lines", "presets": {name: count}}`` -- the Python counts the page shows.
+    """
+    axes = list(axes) if axes is not None else default_axes(study, log_objectives)
+    color = color or study.objectives[0]
+    presets = list(presets) if presets is not None else list(study.presets.values())
+    if extra is not None and len(extra):
+        missing = [a.column for a in axes if a.column not in extra]
+        if missing:
+            raise ValidationError("extra (NSGA-II) entries columns", missing, "every axis column")
+    frame = parcoords_frame(study, among, extra)
+    fig = parcoords_figure(frame, axes, color, title=title, height=height)
+    offset = 1 if fig.data[0].dimensions[0].label == "source" else 0
+    counts = {}
+    for p in presets:
+        counts[p.name] = study.filter(p, among=frame).count
+    log_flags = ([False] * offset) + [a.log for a in axes]
+    payload = {
+        "div": div_id, "n": int(len(frame)), "first": offset, "log": log_flags,
+        "colorDim": offset + [a.column for a in axes].index(color),
+        "cols": list(range(offset, offset + len(axes))), "tableRows": int(table_rows),
+        "grid": GRID, "discrete": ([False] * offset) + [bool(a.column in study.factors and study.factors[a.column].is_discrete) for a in axes],
+        "entry": frame[ENTRY].astype(int).tolist() if ENTRY in frame else list(range(len(frame))),
+        "source": frame[SOURCE].tolist() if SOURCE in frame else [GRID] * len(frame),
+        "presets": [{"name": p.name, "ranges": _preset_ranges(p, axes, offset, frame), "count": counts[p.name]}
+                    for p in presets],
+    }
+    e = html.escape
+    buttons = [f'<button type="button" data-preset="">all entries ({len(frame)})</button>']
+    for p in presets:
+        buttons.append(f'<button type="button" data-preset="{e(p.name)}" title="{e(p.query)} — {e(p.figure)}">'
+                       f'{e(p.name)}</button>')
+    report.html(
+        f'<style>#{div_id}-controls button{{margin:.15em .3em .15em 0;padding:.3em .7em;border:1px solid #888;'
+        f'border-radius:4px;background:#f7f7f7;cursor:pointer}}#{div_id}-controls button:hover{{background:#e8eefc}}'
+        f'.ev-count{{font-size:1.1em}}</style>'
+        f'<div id="{div_id}-controls"><b>Presets:</b> {"".join(buttons)}</div>'
+        f'<p class="ev-count"><span id="{div_id}-count-n">{len(frame)}</span> of {len(frame)} entries kept '
+        f'(preset: <span id="{div_id}-preset">none</span>). Drag along any axis to filter by hand; click an '
+        f'axis filter bar to remove it.</p>')
+    report.figure(fig, div_id=div_id)
+    report.html(f'<div style="display:flex;gap:2em;flex-wrap:wrap"><div><b>Kept range per axis</b>'
+                f'<table class="ev" id="{div_id}-ranges"></table></div><div><b>Kept entries</b> '
+                f'<span class="meta" id="{div_id}-table-note"></span><table class="ev" id="{div_id}-table"></table>'
+                f'</div></div>')
+    report.html(f'<script type="text/javascript">{_JS % {"payload": json.dumps(payload)}}</script>')
+    return {"n_lines": int(len(frame)), "presets": counts}
+
+
+def preset_table_rows(study: DesignStudy, presets: Sequence[Preset] | None = None,
+                      among: pd.DataFrame | None = None) -> list[list]:
+    """Rows ``[preset, figure, query, kept count, kept input ranges]`` for a static report table."""
+    presets = list(presets) if presets is not None else list(study.presets.values())
+    rows = []
+    for p in presets:
+        r = study.filter(p, among=among)
+        parts = []
+        for name, rg in r.ranges.items():
+            label = study.factors[name].label if name in study.factors else name
+            if rg.get("levels") is not None:
+                parts.append(f"{label}: {', '.join(format_tick(v) for v in rg['levels']) or '–'}")
+            elif rg["min"] is not None:
+                parts.append(f"{label}: [{format_tick(rg['min'])}, {format_tick(rg['max'])}]")
+        rows.append([p.name, p.figure, r.resolved_query, r.count, "; ".join(parts) or "–"])
+    return rows

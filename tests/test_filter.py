@@ -1,0 +1,118 @@
+"""Filtering evaluated entries (evotol.filtering, ``evotol filter``; Deng 2012 Figs. VII.3-VII.8).
+
+Counts are checked against numpy masks of the same data; kept level sets against the closed
+form of a serial chain (see tests/test_doe.py): with p = sqrt((Σ Δb_xy)² + (Σ Δb_z)²) a filter
+p <= c keeps exactly the level combinations that satisfy it.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from evotol import doe
+from evotol.cli import main
+from evotol.errors import ValidationError
+from evotol.filtering import DesignStudy, Preset, main_effects, resolve_query
+
+
+def thesis_factors(n_joints: int):
+    """Δb_xy on the 4 levels and Δb_z on the 2 levels of Deng 2012 Sec. VII.1.2 (mm)."""
+    xy = [doe.Factor(f"db_xy_{j}_mm", (1e-4, 1e-3, 1e-2, 1e-1), log=True, si_scale=1e-3) for j in "ABCDE"[:n_joints]]
+    z = [doe.Factor(f"db_z_{j}_mm", (1e-3, 1e-1), log=True, si_scale=1e-3) for j in "ABCDE"[:n_joints]]
+    return xy + z
+
+
+class SerialChainClearance:
+    """p_max (mm) = sqrt((Σ Δb_xy)² + (Σ Δb_z)²): translational clearances of a serial chain."""
+
+    def __call__(self, X):
+        xy = X[[c for c in X if c.startswith("db_xy")]].to_numpy().sum(1)
+        z = X[[c for c in X if c.startswith("db_z")]].to_numpy().sum(1)
+        return pd.DataFrame({"p_max_mm": np.hypot(xy, z), "p_xy_mm": xy})
+
+
+@pytest.fixture(scope="module")
+def study():
+    E = doe.full_factorial(thesis_factors(3))
+    df = doe.evaluate(E, SerialChainClearance(), workers=1, progress=False)
+    df["r_max_deg"] = np.degrees(df["p_xy_mm"] / 10.0)      # a second objective in deg
+    df.attrs["evotol"]["objectives"] = ["p_max_mm", "p_xy_mm", "r_max_deg"]
+    return DesignStudy(df, presets=[Preset("p_max <= 0.05 mm", {"p_max_mm": (None, 0.05)}, "Fig. VII.4"),
+                                    Preset("p_max >= 0.1 mm", {"p_max_mm": (0.1, None)}, "Fig. VII.3")])
+
+
+def test_filter_counts_match_numpy_masks(study):
+    df = study.entries
+    r = study.filter("p_max <= 0.05 and r_max_deg <= 0.05")
+    mask = (df["p_max_mm"] <= 0.05) & (df["r_max_deg"] <= 0.05)
+    assert r.count == int(mask.sum()) and r.total == len(df) == 512
+    assert r.resolved_query == "p_max_mm <= 0.05 and r_max_deg <= 0.05"
+    assert r.kept["entry"].tolist() == df.loc[mask, "entry"].tolist()
+    assert study.filter("p_max >= 0.1 mm").count == int((df["p_max_mm"] >= 0.1).sum())
+
+
+def test_kept_levels_are_what_the_closed_form_allows(study):
+    """p <= 0.05 mm needs every Δb_xy < 0.1 and every Δb_z = 1e-3 (3 x 0.1 > 0.05)."""
+    r = study.filter("p_max <= 0.05")
+    for j in "ABC":
+        assert r.ranges[f"db_xy_{j}_mm"]["levels"] == [1e-4, 1e-3, 1e-2]
+        assert r.ranges[f"db_z_{j}_mm"]["levels"] == [1e-3]
+    # the kept objective range is inside the filter
+    assert r.objective_ranges["p_max_mm"]["max"] <= 0.05
+    json.dumps(r.to_dict())                     # JSON-ready
+
+
+def test_resolve_query_units_and_errors():
+    cols = ["p_max_mm", "r_max_deg", "db_xy_A_mm", "area_mm2"]
+    assert resolve_query("p_max <= 0.05 and r_max <= 1", cols) == "p_max_mm <= 0.05 and r_max_deg <= 1"
+    assert resolve_query("area >= 4e4", cols) == "area_mm2 >= 4e4"
+    assert resolve_query("db_xy_A_mm == 0.1", cols) == "db_xy_A_mm == 0.1"
+    assert resolve_query("p_max_mm < 1e-2 or not (r_max_deg > 0.5)", cols) == "p_max_mm < 1e-2 or not (r_max_deg > 0.5)"
+    with pytest.raises(ValidationError, match="a column of the entries"):
+        resolve_query("q_max <= 1", cols)
+    with pytest.raises(ValidationError, match="ambiguous"):
+        resolve_query("p <= 1", ["p_mm", "p_deg"])
+
+
+def test_bad_query_is_a_validation_error(study):
+    with pytest.raises(ValidationError, match="query"):
+        study.filter("p_max_mm <=")
+
+
+def test_main_effects_of_an_additive_log_model():
+    """log10 y = Σ c_j log10 x_j on a full factorial: main effect_j = c_j x (decades of x_j)."""
+    f = [doe.Factor("a", (1e-3, 1e-2, 1e-1)), doe.Factor("b", (1e-3, 1e-1)), doe.Factor("c", (1.0, 10.0))]
+    E = doe.full_factorial(f)
+    E["y"] = E["a"] ** 1.0 * E["b"] ** 0.25 * E["c"] ** 0.0
+    me = main_effects(E, ["a", "b", "c"], "y").set_index("input")
+    np.testing.assert_allclose(me.loc["a", "effect"], 2.0, rtol=1e-12)
+    np.testing.assert_allclose(me.loc["b", "effect"], 0.5, rtol=1e-12)
+    np.testing.assert_allclose(me.loc["c", "effect"], 0.0, atol=1e-12)
+    assert list(me.index) == ["a", "b", "c"]
+
+
+def test_cli_filter_prints_counts_and_ranges(tmp_path, study, capsys):
+    paths = study.save(tmp_path / "entries")
+    out_json, out_csv = tmp_path / "kept.json", tmp_path / "kept.csv"
+    code = main(["filter", str(paths["parquet"]), "p_max <= 0.05 and r_max_deg <= 0.05",
+                 "--json", str(out_json), "--out", str(out_csv)])
+    text = capsys.readouterr().out
+    expected = study.filter("p_max <= 0.05 and r_max_deg <= 0.05")
+    assert code == 0
+    assert f"{expected.count} of 512 entries kept" in text
+    assert "db_z_A_mm" in text and "levels 0.001" in text
+    summary = json.loads(out_json.read_text())
+    assert summary["count"] == expected.count and summary["ranges"]["db_z_A_mm"]["levels"] == [0.001]
+    assert len(pd.read_csv(out_csv)) == expected.count
+
+
+def test_cli_filter_on_a_csv_needs_or_infers_columns(tmp_path, study, capsys):
+    paths = study.save(tmp_path / "entries")
+    code = main(["filter", str(paths["csv"]), "p_max_mm >= 0.1", "--objectives", "p_max_mm,p_xy_mm,r_max_deg",
+                 "--show", "0"])
+    assert code == 0
+    assert f"{study.filter('p_max_mm >= 0.1').count} of 512" in capsys.readouterr().out
+    assert main(["filter", str(tmp_path / "missing.parquet"), "p_max <= 1"]) == 2

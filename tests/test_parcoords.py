@@ -1,0 +1,133 @@
+"""Parallel-coordinate report (evotol.reporting.parcoords; Deng 2012 Figs. VII.1-VII.8).
+
+The browser test opens the written HTML in headless Chromium, clicks a preset button and checks
+that the count the page shows equals the count Python's DesignStudy.filter computed; brushing an
+axis by hand (a plotly restyle, what a drag does) updates the count too.
+"""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from evotol import doe
+from evotol.filtering import DesignStudy, Preset
+from evotol.reporting.headless import HeadlessChromium, find_chromium
+from evotol.reporting.html import Report
+from evotol.reporting.parcoords import (KNEE, PARETO, Axis, add_parcoords, format_tick, log_ticks,
+                                        parcoords_figure, parcoords_frame, preset_table_rows)
+
+LEVELS_XY, LEVELS_Z = (1e-4, 1e-3, 1e-2, 1e-1), (1e-3, 1e-1)
+
+
+class SerialChainClearance:
+    """p_max (mm) = sqrt((Σ Δb_xy)² + (Σ Δb_z)²) of a translational-clearance serial chain."""
+
+    def __call__(self, X):
+        xy = X[[c for c in X if c.startswith("db_xy")]].to_numpy().sum(1)
+        z = X[[c for c in X if c.startswith("db_z")]].to_numpy().sum(1)
+        return pd.DataFrame({"p_max_mm": np.hypot(xy, z), "r_max_deg": np.degrees(xy / 20.0)})
+
+
+def make_study(n_joints=3):
+    f = ([doe.Factor(f"db_xy_{j}_mm", LEVELS_XY, log=True, label=f"Δb_xy {j} (mm)", si_scale=1e-3) for j in "ABCDE"[:n_joints]]
+         + [doe.Factor(f"db_z_{j}_mm", LEVELS_Z, log=True, label=f"Δb_z {j} (mm)", si_scale=1e-3) for j in "ABCDE"[:n_joints]])
+    df = doe.evaluate(doe.full_factorial(f), SerialChainClearance(), workers=1, progress=False)
+    presets = [Preset("p_max ≥ 0.2 mm", {"p_max_mm": (0.2, None)}, "Fig. VII.3 (scaled)"),
+               Preset("p_max ≤ 0.05 mm", {"p_max_mm": (None, 0.05)}, "Fig. VII.4"),
+               Preset("r_max ≤ 0.01°", {"r_max_deg": (None, 0.01)}, "Fig. VII.8"),
+               Preset("Δb_xy A = 0.1", {"db_xy_A_mm": (0.1, 0.1)}, "input filter")]
+    return DesignStudy(df, presets=presets, name="toy")
+
+
+def pareto_like(study, n=12):
+    """A few off-grid entries standing in for NSGA-II output, one marked as knee."""
+    rng = np.random.default_rng(0)
+    e = pd.DataFrame({c: 10 ** rng.uniform(-4, -1, n) for c in study.inputs})
+    ev = SerialChainClearance()(e)
+    e = pd.concat([e, ev], axis=1)
+    e["knee"] = np.arange(n) == 3
+    return e
+
+
+def test_format_and_log_ticks_are_readable():
+    assert format_tick(1e-4) == "0.0001" and format_tick(0.05) == "0.05" and format_tick(200.0) == "200"
+    assert format_tick(1e-6) == "10⁻⁶" and format_tick(2e-7) == "2·10⁻⁷"
+    vals, text = log_ticks(-4.05, -0.95)
+    assert text == ["0.0001", "0.001", "0.01", "0.1"] and np.allclose(vals, [-4, -3, -2, -1])
+    vals, text = log_ticks(-2.0, -1.0)           # one decade: 1-2-5 ticks
+    assert text == ["0.01", "0.02", "0.05", "0.1"]
+
+
+def test_figure_draws_log10_axes_and_colours_extra_entries_apart():
+    st = make_study()
+    extra = pareto_like(st)
+    axes = [Axis(c, c, log=True) for c in st.inputs] + [Axis("p_max_mm", "p_max (mm)", True), Axis("r_max_deg", "r (deg)", True)]
+    frame = parcoords_frame(st, extra=extra)
+    fig = parcoords_figure(frame, axes, "p_max_mm")
+    dims = fig.data[0].dimensions
+    assert dims[0].label == "source" and list(dims[0].ticktext) == ["level grid", PARETO, KNEE]
+    np.testing.assert_allclose(dims[1].values, np.log10(frame["db_xy_A_mm"]))
+    assert "0.0001" in dims[1].ticktext and "0.1" in dims[1].ticktext
+    c = np.asarray(fig.data[0].line.color)
+    src = frame["source"].to_numpy()
+    assert c[src == "level grid"].max() <= 0.75 + 1e-12
+    assert np.all(c[src == PARETO] == 0.875) and np.all(c[src == KNEE] == 1.0) and (src == KNEE).sum() == 1
+    # knees are drawn last (on top)
+    assert src[-1] == KNEE
+
+
+def test_report_is_self_contained_and_lists_python_counts(tmp_path):
+    st = make_study()
+    rep = Report("toy", "")
+    info = add_parcoords(rep, st, log_objectives=["p_max_mm", "r_max_deg"])
+    for name, count in info["presets"].items():
+        assert count == st.filter(name).count
+    rows = preset_table_rows(st)
+    assert [r[3] for r in rows] == [info["presets"][p] for p in st.presets]
+    html = rep.render()
+    assert not re.search(r'<script[^>]+src=["\']https?:', html), "the report must not load scripts from the network"
+    assert 'data-preset="p_max ≤ 0.05 mm"' in html
+
+
+@pytest.mark.skipif(find_chromium() is None, reason="headless Chromium is not installed (CI installs the chromium package)")
+def test_preset_button_in_headless_chromium_shows_the_python_count(tmp_path):
+    st = make_study(3)
+    extra = pareto_like(st)
+    rep = Report("toy parcoords", "")
+    info = add_parcoords(rep, st, extra=extra, log_objectives=["p_max_mm", "r_max_deg"], div_id="pc")
+    path = rep.write(tmp_path / "toy.html")
+    n_lines = len(st.entries) + len(extra)
+    with HeadlessChromium() as browser:
+        page = browser.open(path)
+        page.wait_for("document.getElementById('pc') && document.getElementById('pc').getAttribute('data-ready')")
+        assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == n_lines
+        for name in ["p_max ≤ 0.05 mm", "Δb_xy A = 0.1"]:
+            page.evaluate(f"document.querySelector('button[data-preset=\"{name}\"]').click()")
+            page.wait_for(f"document.getElementById('pc').getAttribute('data-preset') === {name!r} && "
+                          "document.getElementById('pc').getAttribute('data-apply-ms')")
+            shown = int(page.evaluate("document.getElementById('pc-count-n').textContent"))
+            python = st.filter(name, among=parcoords_frame(st, extra=extra)).count
+            assert shown == python == info["presets"][name]
+            page.evaluate("document.getElementById('pc').removeAttribute('data-apply-ms')")
+        # the kept-ranges panel reads like the thesis: Δb_z keeps only 0.001 under p_max <= 0.05
+        page.evaluate("document.querySelector('button[data-preset=\"p_max ≤ 0.05 mm\"]').click()")
+        page.wait_for("document.getElementById('pc').getAttribute('data-apply-ms')")
+        ranges = page.evaluate("document.getElementById('pc-ranges').innerText")
+        assert re.search(r"Δb_z A \(mm\)\s+levels 0\.001(;|\s*$|\n)", ranges)
+        table = page.evaluate("document.getElementById('pc-table').innerText")
+        assert table.count("\n") >= 1
+        # brushing by hand = a restyle of one axis' constraint range; the count follows
+        lo, hi = math.log10(0.02), math.log10(0.3)
+        k = 1 + st.inputs.index("db_xy_B_mm")
+        page.evaluate(f"Plotly.restyle('pc', {{'dimensions[{k}].constraintrange': [[{lo}, {hi}]]}}, [0]).then(function(){{ return 1; }})")
+        shown = int(page.wait_for(f"document.getElementById('pc').getAttribute('data-kept')"))
+        frame = parcoords_frame(st, extra=extra)
+        expect = int(((frame["p_max_mm"] <= 0.05) & (frame["db_xy_B_mm"] >= 0.02) & (frame["db_xy_B_mm"] <= 0.3)).sum())
+        assert shown == expect
+        # 'all entries' clears every constraint
+        page.evaluate("document.querySelector('button[data-preset=\"\"]').click()")
+        page.wait_for(f"document.getElementById('pc-count-n').textContent === '{n_lines}'")
