@@ -1,0 +1,16 @@
+"""Allocation methods. All return an :class:`evotol.result.AllocationResult`.
+
+* :func:`allocate_sensitivity` – the equal-effect rule the literature compares against;
+* :func:`allocate_optimum` – exact optimum of the convex problem, with a certificate;
+* :func:`allocate_ga` – single-objective GA (pymoo) with the penalty fitness of Yao 2013 eq. 15;
+* :func:`allocate_nsga2` – cost vs. accuracy Pareto front (pymoo NSGA-II);
+* :mod:`evotol.allocators.baselines` – equal tolerance, proportional scaling, Lagrange closed forms.
+"""
+from evotol.allocators.baselines import allocate_equal, allocate_lagrange, allocate_proportional
+from evotol.allocators.ga import allocate_ga
+from evotol.allocators.nsga import ParetoFront, allocate_nsga2
+from evotol.allocators.optimum import allocate_optimum
+from evotol.allocators.sensitivity import aggregated_sensitivity, allocate_sensitivity
+
+__all__ = ["allocate_sensitivity", "allocate_optimum", "allocate_ga", "allocate_nsga2", "ParetoFront",
+           "allocate_equal", "allocate_proportional", "allocate_lagrange", "aggregated_sensitivity"]

@@ -1,0 +1,145 @@
+"""Textbook allocation baselines, usable as GA seeds.
+
+All use the aggregated sensitivity s_j of :func:`aggregated_sensitivity` (largest effect of source j
+per unit tolerance over the poses, relative to the bound), i.e. the single-stack-up model
+    worst case:  Σ_j s_j t_j <= 1          RSS:  Σ_j s_j² t_j² <= 1,
+which is conservative for the real multi-pose problem (so the baselines are feasible).
+
+* equal tolerance: every free t_j equal, the largest value that holds the *exact* requirement;
+* proportional scaling: t_j ∝ w_j (default: the upper bounds), scaled to hold it exactly;
+* Lagrange closed forms (Spotts 1973; Chase & Greenwood 1988): minimise Σ c_j(t_j) on the
+  single stack-up. Stationarity c_j'(t_j) + λ ∂g/∂t_j = 0 gives, with c = a0·exp(-a1 t/σ):
+      worst case  t_j = (σ/a1)·ln(a0 a1 / (σ λ s_j));   RSS  t_j = (σ/a1)·W(a0 a1² / (2 λ s_j² σ²))
+  (W: Lambert W), and with c = a0·(t/σ)^(-k):
+      worst case  t_j = σ·(a0 k / (σ λ s_j))^(1/(k+1));   RSS  t_j = (a0 k σ^k / (2 λ s_j²))^(1/(k+2)).
+  λ > 0 is found by a 1-D root solve so the stack-up holds with equality; other cost models use
+  a 1-D bisection for each t_j(λ). Results are clipped to the bounds.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.optimize import brentq
+from scipy.special import lambertw
+
+from cost_models.exponential import ExponentialCost
+from cost_models.power import PowerCost
+from evotol.allocators.sensitivity import aggregated_sensitivity
+from evotol.constraints import ConstraintRows
+from evotol.errors import ValidationError
+from evotol.problem import ToleranceProblem
+from evotol.result import make_result
+
+
+def _scale_exact(problem: ToleranceProblem, t: np.ndarray) -> np.ndarray:
+    """Scale the free tolerances by one factor so the exact requirement holds with equality."""
+    measure = problem.requirement.measure
+    if measure in ("worst_case", "rss"):
+        rows = ConstraintRows(problem)
+        for _ in range(10):
+            t = rows.scale_to_boundary(t[None])[0]
+            viol, added = rows.check(t[None])
+            if viol[0] <= 1e-10 and added == 0:
+                break
+        return t
+    # mc_quantile: bisection on the exact evaluation
+    lo, hi = 0.0, 1.0
+    f = problem.free
+    while problem.evaluate(problem.full((t[f] * hi)[None])).violation[0] <= 0 and hi < 1e6:
+        lo, hi = hi, hi * 2
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        ok = problem.evaluate(problem.full((t[f] * mid)[None])).violation[0] <= 0
+        lo, hi = (mid, hi) if ok else (lo, mid)
+    out = t.copy()
+    out[f] = np.clip(t[f] * lo, problem.lower[f], problem.upper[f])
+    return out
+
+
+def equal_design(problem: ToleranceProblem) -> np.ndarray:
+    t = problem.locked_values.copy()
+    f = problem.free
+    t[f] = np.sqrt(problem.lower[f] * problem.upper[f]).min()
+    return _scale_exact(problem, t)
+
+
+def proportional_design(problem: ToleranceProblem, weights=None) -> np.ndarray:
+    t = problem.locked_values.copy()
+    f = problem.free
+    w = problem.upper if weights is None else problem.as_array(weights)
+    if np.any(w[f] <= 0):
+        raise ValidationError("weights", w.tolist(), "positive weights for the free sources")
+    t[f] = w[f] / np.max(w[f]) * problem.upper[f].min()
+    return _scale_exact(problem, t)
+
+
+def _t_of_lambda(problem: ToleranceProblem, s: np.ndarray, lam: float, measure: str) -> np.ndarray:
+    t = problem.locked_values.copy()
+    for j in np.flatnonzero(problem.free):
+        cm = problem.tolerances[problem.names[j]].cost
+        lo, hi = problem.lower[j], problem.upper[j]
+        sig = cm.scale
+        if isinstance(cm, ExponentialCost):
+            a0, a1 = cm.p
+            if measure == "worst_case":
+                arg = a0 * a1 / (sig * lam * s[j])
+                tj = sig / a1 * np.log(arg) if arg > 0 else lo
+            else:
+                tj = sig / a1 * float(np.real(lambertw(a0 * a1 ** 2 / (2 * lam * s[j] ** 2 * sig ** 2))))
+        elif isinstance(cm, PowerCost):
+            a0, k = cm.p
+            if measure == "worst_case":
+                tj = sig * (a0 * k / (sig * lam * s[j])) ** (1 / (k + 1))
+            else:
+                tj = (a0 * k * sig ** k / (2 * lam * s[j] ** 2)) ** (1 / (k + 2))
+        else:  # generic convex model: solve c'(t) + λ g'(t) = 0 by bisection
+            def g(x):
+                dg = s[j] if measure == "worst_case" else 2 * s[j] ** 2 * x
+                return float(cm.dcost(x)) + lam * dg
+            if g(lo) >= 0:
+                tj = lo
+            elif g(hi) <= 0:
+                tj = hi
+            else:
+                tj = brentq(g, lo, hi, xtol=1e-15 * hi)
+        t[j] = np.clip(tj, lo, hi)
+    return t
+
+
+def lagrange_design(problem: ToleranceProblem, measure: str | None = None) -> np.ndarray:
+    measure = measure or problem.requirement.measure
+    if measure not in ("worst_case", "rss"):
+        measure = "rss"
+    s = aggregated_sensitivity(problem)
+
+    def stack(t):
+        return float(np.sum(s * t)) if measure == "worst_case" else float(np.sqrt(np.sum((s * t) ** 2)))
+
+    def resid(loglam):
+        return stack(_t_of_lambda(problem, s, np.exp(loglam), measure)) - 1
+
+    lo, hi = -50.0, 50.0
+    if resid(lo) < 0:       # even the loosest tolerances hold: all at upper bound
+        return _t_of_lambda(problem, s, np.exp(lo), measure)
+    if resid(hi) > 0:
+        raise ValidationError("requirement", problem.requirement, "a bound the lower tolerance limits can hold")
+    loglam = brentq(resid, lo, hi, xtol=1e-12)
+    return _t_of_lambda(problem, s, np.exp(loglam), measure)
+
+
+def allocate_equal(problem: ToleranceProblem):
+    t0 = time.perf_counter()
+    return make_result(problem, "equal tolerance", equal_design(problem), seconds=time.perf_counter() - t0)
+
+
+def allocate_proportional(problem: ToleranceProblem, weights=None):
+    t0 = time.perf_counter()
+    return make_result(problem, "proportional scaling", proportional_design(problem, weights), seconds=time.perf_counter() - t0)
+
+
+def allocate_lagrange(problem: ToleranceProblem, measure: str | None = None):
+    t0 = time.perf_counter()
+    t = lagrange_design(problem, measure)
+    return make_result(problem, "Lagrange closed form", t, seconds=time.perf_counter() - t0,
+                       info={"stack_up": measure or problem.requirement.measure})

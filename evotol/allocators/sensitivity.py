@@ -1,0 +1,60 @@
+"""Sensitivity-based allocation ("equal effect"), the rule accuracy-synthesis papers compare against.
+
+Rule (documented exactly): let s_j = max over poses and constrained components of ‖B_j‖₂ / E_c
+(source j's largest effect per unit tolerance, relative to the bound E_c of that component). Each
+free source receives the same share of the error budget:
+  * worst-case measure:  s_j t_j = (1 − Σ_locked s_k t_k) / m         (linear stack-up);
+  * RSS measure:         s_j t_j = sqrt((1 − Σ_locked (s_k t_k)²) / m)  (root-sum-square stack-up);
+m = number of free sources. Tolerances are then clipped to their bounds. The allocation holds
+the requirement by construction (sum/RSS of per-source maxima bounds the true error) but ignores
+cost entirely.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from evotol.errors import ValidationError
+from evotol.problem import ToleranceProblem
+from evotol.result import make_result
+
+
+def aggregated_sensitivity(problem: ToleranceProblem) -> np.ndarray:
+    """s_j (1/unit of t_j): max over poses and components of ‖B_j‖₂ / E_c."""
+    s = np.zeros(problem.n_sources)
+    for comp, lim in problem.components:
+        s = np.maximum(s, problem.sensitivities[comp].max(axis=0) / lim)
+    return s
+
+
+def sensitivity_design(problem: ToleranceProblem, measure: str | None = None) -> np.ndarray:
+    measure = measure or problem.requirement.measure
+    if measure not in ("worst_case", "rss"):
+        measure = "rss"
+    s = aggregated_sensitivity(problem)
+    free, m = problem.free, int(problem.free.sum())
+    t = problem.locked_values.copy()
+    locked = ~free
+    if np.any(s[free] <= 0):
+        bad = problem.names[int(np.flatnonzero(free & (s <= 0))[0])]
+        raise ValidationError(f"sensitivity of {bad}", 0.0, "a source that moves the end-effector (zero effect: give it its upper bound by locking)")
+    if measure == "worst_case":
+        budget = 1 - float(np.sum(s[locked] * t[locked]))
+        share = budget / m
+    else:
+        budget = 1 - float(np.sum((s[locked] * t[locked]) ** 2))
+        share = np.sqrt(max(budget, 0.0) / m)
+    if budget <= 0:
+        raise ValidationError("locked tolerances", {n: problem.locked_values[i] for i, n in enumerate(problem.names) if locked[i]},
+                              "locked values that leave some error budget for the free sources")
+    t[free] = np.clip(share / s[free], problem.lower[free], problem.upper[free])
+    return t
+
+
+def allocate_sensitivity(problem: ToleranceProblem, measure: str | None = None):
+    """Equal-effect allocation (see module docstring); ``measure`` defaults to the requirement's."""
+    t0 = time.perf_counter()
+    t = sensitivity_design(problem, measure)
+    return make_result(problem, "sensitivity", t, seconds=time.perf_counter() - t0,
+                       info={"rule": f"equal effect, {measure or problem.requirement.measure} stack-up"})

@@ -1,0 +1,125 @@
+"""The accuracy requirement as explicit constraint rows, for optimisers.
+
+Both measures are positively homogeneous and convex in the tolerances t:
+  * worst case: |error| <= E at pose p  ⇔  Σ_j t_j ‖B_jᵀu‖ / E <= 1 for every unit direction u,
+    an infinite family of *linear* rows a·t <= 1 (one per pose and direction);
+  * RSS: Σ_j (s_pj / E)² t_j² <= 1, one *quadratic* row b·t² <= 1 per pose.
+Worst-case rows are generated lazily (cutting planes): a working set starts from each pose's
+worst grid direction at a few probe designs and grows whenever an exact evaluation
+(:meth:`ToleranceProblem.evaluate`, refined direction) finds a row the set misses. The working set
+gives a *lower* estimate of the violation, exact on the rows it holds; ``check`` makes it exact for
+the designs it is given. Optimisers must judge their final answers with ``ToleranceProblem.evaluate``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from evotol.problem import ToleranceProblem
+
+
+class ConstraintRows:
+    def __init__(self, problem: ToleranceProblem, n_probe: int = 16, seed: int = 0):
+        self.problem = problem
+        measure = problem.requirement.measure
+        if measure not in ("worst_case", "rss"):
+            raise ValueError("ConstraintRows needs the worst_case or rss measure")
+        self.measure = measure
+        n = problem.n_sources
+        self.A = np.zeros((0, n))    # linear rows  a·t <= 1
+        self.B = np.zeros((0, n))    # quadratic rows b·t² <= 1
+        self._keys: set = set()
+        if measure == "rss":
+            rows = [(problem.sensitivities[c] / lim) ** 2 for c, lim in problem.components]
+            self.B = np.unique(np.concatenate(rows, axis=0), axis=0)
+        else:
+            rng = np.random.default_rng(seed)
+            lo, hi = np.log(problem.lower), np.log(problem.upper)
+            probes = np.exp(rng.uniform(lo, hi, size=(n_probe, n)))
+            probes = np.concatenate([probes, np.sqrt(problem.lower * problem.upper)[None], problem.upper[None]])
+            probes = problem.full(probes[:, problem.free])
+            for comp, lim in problem.components:
+                c, D, _ = problem.coefficients(comp)
+                grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ probes.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)
+                k = np.argmax(grid, axis=2)                              # (n_probe, n_poses)
+                flat = np.unique((np.arange(problem.n_poses)[None, :] * D.shape[0] + k).ravel())
+                pp, dd = np.divmod(flat, D.shape[0])
+                self._add_linear(c[pp, dd, :] / lim, [(comp, int(a), int(b)) for a, b in zip(pp, dd)])
+            self.check(probes)
+
+    # --- rows ------------------------------------------------------------------------------
+    def _add_linear(self, rows: np.ndarray, keys) -> int:
+        new = [i for i, k in enumerate(keys) if k not in self._keys]
+        if not new:
+            return 0
+        self._keys.update(keys[i] for i in new)
+        self.A = np.concatenate([self.A, rows[new]], axis=0)
+        return len(new)
+
+    @property
+    def n_rows(self) -> int:
+        return self.A.shape[0] + self.B.shape[0]
+
+    def violation(self, T: np.ndarray) -> np.ndarray:
+        """max over working rows of (row value − 1), per design (n_designs,). A lower estimate for
+        the worst case until ``check``ed; exact for RSS."""
+        T = np.atleast_2d(T)
+        v = np.full(T.shape[0], -np.inf)
+        if self.A.shape[0]:
+            v = np.maximum(v, np.max(T @ self.A.T, axis=1) - 1)
+        if self.B.shape[0]:
+            v = np.maximum(v, np.sqrt(np.max((T ** 2) @ self.B.T, axis=1)) - 1)
+        return v
+
+    def normalised_error(self, T: np.ndarray) -> np.ndarray:
+        """max error / bound over poses and components (working rows)."""
+        return self.violation(T) + 1
+
+    def check(self, T: np.ndarray) -> tuple[np.ndarray, int]:
+        """Exact violation of designs T (refined worst directions); adds the rows it finds.
+        Returns (violation (n_designs,), number of rows added)."""
+        T = np.atleast_2d(T)
+        if self.measure == "rss":
+            return self.violation(T), 0
+        ev = self.problem.evaluate(T, "worst_case", top_only=True)
+        added = 0
+        for comp, lim in self.problem.components:
+            val = getattr(ev, comp)
+            u = getattr(ev, f"{comp}_direction")
+            p = np.argmax(val, axis=1)                       # worst pose per design
+            for i, pi in enumerate(p):
+                uu = u[i, pi]
+                row = np.array([np.linalg.norm(B[pi].T @ uu) for B in self.problem.blocks[comp]]) / lim
+                key = (comp, int(pi), tuple(np.round(uu, 9)))
+                added += self._add_linear(row[None], [key])
+        return ev.violation, added
+
+    # --- helpers for optimisers --------------------------------------------------------------
+    def scale_to_boundary(self, T: np.ndarray, iters: int = 50) -> np.ndarray:
+        """Scale each design's free tolerances by one factor so it meets the working rows with
+        equality (within bounds), by bisection on the factor; locked tolerances are kept."""
+        p = self.problem
+        T = np.atleast_2d(np.array(T, dtype=float))
+        free = p.free
+        lo_f = np.zeros(T.shape[0])
+        hi_f = np.full(T.shape[0], 1.0)
+        # grow hi until infeasible or upper bounds reached
+        for _ in range(60):
+            Th = T.copy()
+            Th[:, free] = np.clip(T[:, free] * hi_f[:, None], p.lower[free], p.upper[free])
+            feas = self.violation(Th) <= 0
+            at_top = np.all(Th[:, free] >= p.upper[free], axis=1)
+            grow = feas & ~at_top
+            if not grow.any():
+                break
+            lo_f = np.where(grow, hi_f, lo_f)
+            hi_f = np.where(grow, hi_f * 2, hi_f)
+        for _ in range(iters):
+            mid = 0.5 * (lo_f + hi_f)
+            Tm = T.copy()
+            Tm[:, free] = np.clip(T[:, free] * mid[:, None], p.lower[free], p.upper[free])
+            feas = self.violation(Tm) <= 0
+            lo_f = np.where(feas, mid, lo_f)
+            hi_f = np.where(feas, hi_f, mid)
+        out = T.copy()
+        out[:, free] = np.clip(T[:, free] * lo_f[:, None], p.lower[free], p.upper[free])
+        return out

@@ -1,0 +1,96 @@
+"""The one result type every allocator returns, with the contributor report."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from evotol.problem import Evaluation, ToleranceProblem
+
+
+@dataclass
+class AllocationResult:
+    """Tolerances (SI), cost, accuracy at every pose, feasibility, history, contributors.
+
+    ``errors`` holds the exact per-pose errors under the problem's measure; ``certificate`` holds
+    optimality evidence where the method has it (lower bound, gap, KKT residual).
+    """
+
+    method: str
+    problem: ToleranceProblem = field(repr=False)
+    tolerances: dict[str, float]
+    cost: float
+    feasible: bool
+    errors: Evaluation = field(repr=False)
+    history: pd.DataFrame | None = field(default=None, repr=False)
+    certificate: dict | None = None
+    seconds: float = 0.0
+    info: dict = field(default_factory=dict)
+
+    @property
+    def t(self) -> np.ndarray:
+        return np.array([self.tolerances[n] for n in self.problem.names])
+
+    def max_error(self, component: str = "position") -> float:
+        v = getattr(self.errors, component)
+        return float(np.max(v)) if v is not None else float("nan")
+
+    def worst_pose(self, component: str = "position") -> int:
+        return int(np.argmax(getattr(self.errors, component)[0]))
+
+    def contributions(self, component: str = "position", pose: int | str = "worst") -> pd.DataFrame:
+        """Each source's share (%) of the error at one pose (default: the worst pose).
+
+        Worst case: share of h(u*) = Σ_j t_j‖B_jᵀu*‖ at the worst direction u*; RSS: share of the
+        sum of squares. The standard contributor report of tolerance-analysis tools.
+        """
+        c = getattr(self.errors, f"{component}_contrib")
+        if c is None:
+            raise ValueError(f"no contributions for measure {self.problem.requirement.measure}")
+        p = self.worst_pose(component) if pose == "worst" else int(pose)
+        share = 100 * c[0, p]
+        p_ = self.problem
+        return pd.DataFrame({"source": p_.names, "group": p_.groups(), "tolerance": self.t,
+                             "unit": p_.units(), "cost": p_.source_costs(self.t), "percent": share}).sort_values(
+            "percent", ascending=False, ignore_index=True)
+
+    def contributions_per_pose(self, component: str = "position") -> pd.DataFrame:
+        """(n_poses × n_sources) table of % contributions."""
+        c = getattr(self.errors, f"{component}_contrib")
+        return pd.DataFrame(100 * c[0], columns=list(self.problem.names))
+
+    def to_dict(self) -> dict:
+        d = {"method": self.method, "tolerances": dict(self.tolerances), "cost": self.cost,
+             "feasible": self.feasible, "seconds": self.seconds,
+             "measure": self.problem.requirement.measure}
+        for comp, _ in self.problem.components:
+            d[f"max_{comp}_error"] = self.max_error(comp)
+            b = getattr(self.errors, f"{comp}_bound")
+            if b is not None:
+                d[f"max_{comp}_error_bound"] = float(np.max(b))
+        if self.certificate:
+            d["certificate"] = self.certificate
+        d.update({k: v for k, v in self.info.items() if np.isscalar(v) or isinstance(v, (list, dict, str))})
+        return d
+
+    def summary(self) -> str:
+        lines = [f"{self.method}: cost {self.cost:.5g}, feasible {self.feasible}"]
+        for comp, lim in self.problem.components:
+            lines.append(f"  max {comp} error {self.max_error(comp):.4g} (bound {lim:.4g})")
+        if self.certificate:
+            lines.append("  certificate: " + ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
+                                                    for k, v in self.certificate.items()))
+        return "\n".join(lines)
+
+
+def make_result(problem: ToleranceProblem, method: str, t, *, history=None, certificate=None,
+                seconds: float = 0.0, info=None, feas_rtol: float = 1e-9) -> AllocationResult:
+    """Evaluate design ``t`` exactly and wrap it as an :class:`AllocationResult`."""
+    t = np.asarray(problem.as_array(t), dtype=float)
+    ev = problem.evaluate(t[None])
+    f = problem.free
+    in_bounds = bool(np.all(t[f] >= problem.lower[f] * (1 - 1e-9)) and np.all(t[f] <= problem.upper[f] * (1 + 1e-9)))
+    feasible = bool(ev.violation[0] <= feas_rtol) and in_bounds
+    return AllocationResult(method, problem, dict(zip(problem.names, t.tolist())), float(problem.cost(t)),
+                            feasible, ev, history, certificate, seconds, dict(info or {}))
