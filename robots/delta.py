@@ -349,6 +349,23 @@ class DeltaRobot(RobotErrorModel):
                                f"{poses[k].tolist()} m after {self.max_iter} iterations "
                                f"(step {np.max(np.abs(step)):.3g})")
 
+    def position_and_jacobian(self, pose, errors, h: float = 1e-30):
+        """Platform position with errors and its exact Jacobian w.r.t. the 47 errors *at* those errors.
+
+        pose: (3,) m; errors: (s, 47) SI. Returns P (s, 3) m and dP/de (s, 3, 47) by the implicit
+        function theorem at the solved loop closure (dX/de = -(dr/dX)^-1 dr/de, both by complex
+        step). Used by gradient-based solvers of the paper's problem (12).
+        """
+        pose = self.check_poses(pose)
+        q1, X, errors = self._solve(pose, np.atleast_2d(errors)[None])
+        X, errors = X[0], errors[0]                              # (s, 9), (s, 47)
+        JX = self._closure_jacobian(X, q1, errors)              # (s, 9, 9)
+        m = errors.shape[-1]
+        E = errors[:, None, :] + np.eye(m)[None] * (1j * h)      # (s, m, 47)
+        dr = self._residual(X[:, None, :], q1[:, None, :], E).imag / h  # (s, m, 9)
+        dX = -np.linalg.solve(JX[:, None], dr[..., None])[..., 0]       # (s, m, 9)
+        return X[:, :3], dX[..., :3].transpose(0, 2, 1)
+
     def _check_errors(self, errors, n_poses):
         try:
             errors = np.asarray(errors, dtype=float)

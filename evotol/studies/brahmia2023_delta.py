@@ -48,6 +48,16 @@ def paper_bounds() -> np.ndarray:
     return np.where(IS_LINEAR, BOUND_LINEAR_MM * 1e-3, np.radians(BOUND_ANGULAR_DEG))
 
 
+def inferred_min_magnitude() -> np.ndarray:
+    """Lower limits of eq. (12) read off Tables A1-A2 (SI, (47,)): 0.0095 mm and 0.001 deg.
+
+    The paper does not print ΔL_min, Δφ_min; in its 24 solutions every linear value has
+    |v| >= 0.0095 mm and every angular one |v| >= 0.00104 deg, with many values pinned at exactly
+    0.00958 mm / 0.00104 deg (P1, test 1) -- an interior-point solution sitting on a lower bound.
+    """
+    return np.where(IS_LINEAR, 0.0095e-3, np.radians(0.001))
+
+
 def postures_m(names=None) -> np.ndarray:
     names = list(POSTURES_MM) if names is None else list(names)
     return np.array([POSTURES_MM[n] for n in names]) / 1e3
@@ -82,15 +92,20 @@ def _objective_parts(robot: DeltaRobot, pose, displacement, bounds, objective: s
 
 
 def solve_displacement(robot: DeltaRobot, pose, displacement, bounds=None, *, objective: str = "closed",
-                       maxiter: int = 150, x0=None) -> dict:
+                       min_magnitude=None, maxiter: int = 150) -> dict:
     """Problem (12)-(13) for one posture and one imposed displacement ΔP (m).
 
     Minimises F = |P_e - P - ΔP|^2 (eq. 10; ``objective="open"`` sums it over the 6 serial
-    sub-chains) over the 47 errors within ``bounds`` (SI, default eq. 13) with
-    ``scipy.optimize.minimize(method="trust-constr")`` -- an interior-point method for the bound
-    constraints, like the paper's fmincon -- from x0 = 0, exact gradient and Gauss-Newton
-    Hessian, in variables scaled by the bounds. Returns errors (SI), F (in units of |ΔP|^2), the
-    achieved displacement of the platform (closed-loop forward kinematics, m), iterations, status.
+    sub-chains at Q_k) over the 47 errors with ``scipy.optimize.minimize(method="trust-constr")``
+    -- an interior-point method for the bound constraints, like the paper's fmincon -- with exact
+    gradient and Gauss-Newton Hessian, in variables scaled by the bounds.
+
+    ``bounds`` (SI, default eq. 13) bound |Δ|. ``min_magnitude`` (SI) adds the lower limit of
+    eq. (12), ``ΔL_min <= |ΔL|``: that set is two intervals per parameter, so the sign of each
+    parameter is fixed first to the descent direction of F at zero error (``+`` when the
+    parameter has no influence) and the problem is solved on ``sign * [min, max]``. Without it
+    the start is zero error. Returns errors (SI), F (in units of |ΔP|^2), the achieved
+    displacement of the platform (closed-loop forward kinematics, m), iterations, status.
     """
     from evotol.errors import ValidationError
 
@@ -110,24 +125,35 @@ def solve_displacement(robot: DeltaRobot, pose, displacement, bounds=None, *, ob
         return 2 * jac.T @ jac
 
     n = bounds.size
-    z0 = np.zeros(n) if x0 is None else np.asarray(x0, float) / bounds
-    sol = minimize(fun, z0, jac=True, hess=hess, method="trust-constr", bounds=Bounds(-np.ones(n), np.ones(n)),
+    if min_magnitude is None:
+        lower, upper, z0 = -np.ones(n), np.ones(n), np.zeros(n)
+    else:
+        frac = np.broadcast_to(np.asarray(min_magnitude, float), (n,)) / bounds
+        if np.any(frac < 0) or np.any(frac >= 1):
+            raise ValidationError("min_magnitude", min_magnitude, "0 <= min < bound for every parameter")
+        g = fun(np.zeros(n))[1]
+        sign = np.where(g > 1e-12 * np.max(np.abs(g)), -1.0, 1.0)
+        lower, upper = np.where(sign > 0, frac, -1.0), np.where(sign > 0, 1.0, -frac)
+        z0 = (lower + upper) / 2
+    sol = minimize(fun, z0, jac=True, hess=hess, method="trust-constr", bounds=Bounds(lower, upper),
                    options=dict(gtol=1e-10, xtol=1e-10, maxiter=int(maxiter)))
-    e = np.clip(sol.x, -1, 1) * bounds
+    e = np.clip(sol.x, lower, upper) * bounds
     achieved = robot.forward_kinematics(pose[None], e[None, None])[0, 0] - pose
     return {"errors": e, "F": float(sol.fun), "achieved": achieved, "nit": int(sol.nit), "status": int(sol.status),
             "residual_mm": float(np.linalg.norm(achieved - displacement) * 1e3)}
 
 
 def synthesis_runs(robot: DeltaRobot, postures=SYNTHESIS_POSTURES, tests=tuple(TEST_DIRECTIONS), *,
-                   objective: str = "closed", maxiter: int = 150, required_mm: float = REQUIRED_MM) -> list[dict]:
+                   objective: str = "closed", min_magnitude=None, maxiter: int = 150,
+                   required_mm: float = REQUIRED_MM) -> list[dict]:
     """Step 2 for every (posture, test) of Tables A1-A2; one dict per run (see solve_displacement)."""
     runs = []
     for p in postures:
         pose = postures_m([p])[0]
         for t in tests:
             dP = np.asarray(TEST_DIRECTIONS[t], float) * required_mm * 1e-3
-            out = solve_displacement(robot, pose, dP, objective=objective, maxiter=maxiter)
+            out = solve_displacement(robot, pose, dP, objective=objective, min_magnitude=min_magnitude,
+                                     maxiter=maxiter)
             out.update(posture=p, test=t)
             runs.append(out)
     return runs
