@@ -399,31 +399,44 @@ class UsableWorkspaceMap:
 
 
 def usable_workspace(r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, assembly=1, n: int = 241,
-                     seed=None) -> UsableWorkspaceMap:
+                     seed=None, refine: bool = True) -> UsableWorkspaceMap:
     """Usable workspace (Sec. 2.4): the connected region around ``seed`` (default: the numeric
     MIC centre) where both chains reach ``P`` in ``working_mode`` and ``sign(det J_x)`` equals the
-    assembly mode, i.e. bounded by singular loci. Grid of ``n x n`` points over the theoretical
-    workspace's bounding box; the LCI map is computed on it.
+    assembly mode, i.e. bounded by singular loci. A first ``n x n`` grid covers the theoretical
+    workspace's bounding box; with ``refine`` a second grid of equal spacing (``n`` points along
+    the longer side) covers the bounding box of the region found. The LCI map is computed on it.
     """
     from scipy import ndimage
+
+    if seed is None:
+        seed = (0.0, mic_numeric(r1, r2, r3, working_mode, assembly)["center_y"])
+
+    def evaluate(x, y):
+        X, Y = np.meshgrid(x, y)
+        t1, t2, ok = inverse_kinematics_raw(X, Y, r1, r2, r3, working_mode)
+        P = np.stack([X, Y], -1)
+        jx, jq = jacobians(P, np.stack([t1, t2], -1), r1, r3)
+        det = jx[..., 0, 0] * jx[..., 1, 1] - jx[..., 0, 1] * jx[..., 1, 0]
+        good = ok & (np.sign(det) == assembly) & (jq[..., 0] != 0) & (jq[..., 1] != 0)
+        labels, _ = ndimage.label(good)
+        j, i = int(np.argmin(np.abs(y - seed[1]))), int(np.argmin(np.abs(x - seed[0])))
+        if labels[j, i] == 0:
+            raise KinematicsError(f"5R: seed point {list(seed)} is not in the usable workspace", poses=np.array([seed]))
+        mask = labels == labels[j, i]
+        adj = np.stack([np.stack([jx[..., 1, 1], -jx[..., 0, 1]], -1), np.stack([-jx[..., 1, 0], jx[..., 0, 0]], -1)], -2)
+        return mask, np.where(mask, inverse_condition_number(adj * jq[..., None, :]), np.nan)
 
     R = r1 + r2
     x = np.linspace(-(R - r3), R - r3, n)
     y = np.linspace(-R, R, n)
-    X, Y = np.meshgrid(x, y)
-    t1, t2, ok = inverse_kinematics_raw(X, Y, r1, r2, r3, working_mode)
-    th = np.stack([t1, t2], -1)
-    P = np.stack([X, Y], -1)
-    jx, jq = jacobians(P, th, r1, r3)
-    det = jx[..., 0, 0] * jx[..., 1, 1] - jx[..., 0, 1] * jx[..., 1, 0]
-    good = ok & (np.sign(det) == assembly) & (jq[..., 0] != 0) & (jq[..., 1] != 0)
-    if seed is None:
-        seed = (0.0, mic_numeric(r1, r2, r3, working_mode, assembly)["center_y"])
-    labels, _ = ndimage.label(good)
-    j, i = int(np.argmin(np.abs(y - seed[1]))), int(np.argmin(np.abs(x - seed[0])))
-    if labels[j, i] == 0:
-        raise KinematicsError(f"5R: seed point {list(seed)} is not in the usable workspace", poses=np.array([seed]))
-    mask = labels == labels[j, i]
-    adj = np.stack([np.stack([jx[..., 1, 1], -jx[..., 0, 1]], -1), np.stack([-jx[..., 1, 0], jx[..., 0, 0]], -1)], -2)
-    lci = np.where(mask, inverse_condition_number(adj * jq[..., None, :]), np.nan)
+    mask, lci = evaluate(x, y)
+    if refine:
+        X, Y = np.meshgrid(x, y)
+        dx = x[1] - x[0]
+        x0, x1 = X[mask].min() - 2 * dx, X[mask].max() + 2 * dx
+        y0, y1 = Y[mask].min() - 2 * dx, Y[mask].max() + 2 * dx
+        h = max(x1 - x0, y1 - y0) / (n - 1)
+        x = np.linspace(x0, x1, int(round((x1 - x0) / h)) + 1)
+        y = np.linspace(y0, y1, int(round((y1 - y0) / h)) + 1)
+        mask, lci = evaluate(x, y)
     return UsableWorkspaceMap(x=x, y=y, mask=mask, lci=lci, seed=(float(seed[0]), float(seed[1])))

@@ -42,8 +42,9 @@ from robots.planar5r import kinematics as K
 DELTA_R = 0.004e-2
 #: Table 1: 0.05 deg (standard deviation of eqs. 8 / 23), in rad.
 DELTA_THETA = np.deg2rad(0.05)
-#: Radial clearance r_c in units of D (non-dimensional). Not printed in the paper: our choice.
-DEFAULT_CLEARANCE = 5e-4
+#: Radial clearance r_c in units of D (non-dimensional). Not printed in the paper: our choice,
+#: 2e-4 D = 20 um for D = 100 mm, the clearance of a precision running fit (H7/g6 around 10 mm).
+DEFAULT_CLEARANCE = 2e-4
 #: Non-dimensional radius of the circles the paper draws around each nominal pose (Sec. 3).
 PAPER_CIRCLE = 0.005
 

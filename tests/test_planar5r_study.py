@@ -1,0 +1,94 @@
+"""Study laramolina2019-5r (quick run) and its probabilistic clearance / actuator allocation."""
+import json
+
+import numpy as np
+import pytest
+
+from evotol import studies
+from evotol.studies import _laramolina2019_5r_allocation as A
+from robots.planar5r import Planar5R
+from robots.planar5r import uncertainty as U
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("laramolina2019_5r")
+    summary = studies.get("laramolina2019-5r").run(out, quick=True, seed=0)
+    return out, summary
+
+
+def test_study_writes_html_and_json_with_issue_keys(quick_run):
+    out, summary = quick_run
+    html = (out / "laramolina2019-5r.html").read_text()
+    data = json.loads((out / "laramolina2019-5r.json").read_text())
+    assert '<script src="http' not in html and "Plotly" in html   # offline: plotly.js embedded, no CDN
+    assert data["seconds"] > 0 and set(data["cases"]) == set("abcd")
+    for case in data["cases"].values():
+        for key in ("r1", "r2", "r3", "mic_radius", "mic_center_y", "lci_max"):
+            assert isinstance(case[key], float)
+        for key in ("mean_dx", "std_dx", "max_dev", "p_exceed"):
+            assert len(case["poses"][key]) == 9
+
+
+def test_study_mic_values_are_eqs21_22(quick_run):
+    """Table 2 cases through eq. 21 (b, d) and eq. 22 (a, c), recomputed by hand here."""
+    c = quick_run[1]["cases"]
+    assert c["b"]["mic_radius"] == pytest.approx(0.47) and c["b"]["mic_center_y"] == pytest.approx(np.sqrt(1.73**2 - 0.8**2))
+    assert c["d"]["mic_radius"] == pytest.approx(0.75) and c["d"]["mic_center_y"] == pytest.approx(np.sqrt(4 - 0.0625))
+    for k, (r1, r2, r3) in {"a": (2.0, 0.2, 0.8), "c": (0.6, 1.1, 1.3)}.items():
+        ycol = np.sqrt(r1**2 - (r2 - r3) ** 2)
+        yc = ((r1 + r2 + ycol) ** 2 - r3**2) / (2 * (r1 + r2 + ycol))
+        assert c[k]["mic_center_y"] == pytest.approx(yc) and c[k]["mic_radius"] == pytest.approx(yc - ycol)
+        assert c[k]["mic_numeric"]["radius"] == pytest.approx(yc - ycol, abs=1e-5)
+
+
+def test_study_reproduces_paper_trends(quick_run):
+    c = quick_run[1]["cases"]
+    # Sec. 3.2 / 3.4: case b well conditioned, case d max LCI ~ 0.55
+    assert c["b"]["lci_at_mic_center"] > 0.9 and c["d"]["lci_max"] == pytest.approx(0.55, abs=0.035)
+    # Sec. 3.2 / 3.4: every sample of cases b and d stays in its 0.005 circle
+    assert max(c["b"]["poses"]["p_exceed"]) == 0 and max(c["d"]["poses"]["p_exceed"]) == 0
+    # Sec. 3.1 / 3.3: cases a and c have poses near singular borders that leave the circle
+    assert max(c["a"]["poses"]["p_exceed"]) > 0.1 and max(c["c"]["poses"]["p_exceed"]) > 0.1
+
+
+def test_exceedance_model_equals_sampler_path():
+    """ExceedanceModel rescales unit errors; the direct sampler with the same rows must agree."""
+    robot = Planar5R("d", D=0.2)
+    poses = robot.miw_poses()
+    rc, sd, radius = 20e-6, np.deg2rad(0.02), 0.1e-3
+    em = A.ExceedanceModel(robot, poses, radius, 512, seed=3)
+    p = em.exceed([[rc, rc, sd]])[0]
+    m = U.UncertaintyModel(theta_std=sd, clearance=rc, shared_lengths=False, renormalise=False)
+    dp = U.sample_deviations(poses, robot.r1, robot.r2, robot.r3, m, 512, "lhs", seed=3)
+    np.testing.assert_allclose(p, np.mean(np.hypot(dp[..., 0], dp[..., 1]) > radius, axis=1))
+
+
+def test_exceedance_grows_with_every_tolerance():
+    robot = Planar5R("b", D=0.2)
+    em = A.ExceedanceModel(robot, robot.miw_poses(), 0.1e-3, 512, seed=0)
+    base = np.array([20e-6, 20e-6, 2e-4])
+    p0 = em.exceed(base).max()
+    for j in range(3):
+        t = base.copy()
+        t[j] *= 2
+        assert em.exceed(t).max() >= p0
+    assert em.exceed(base * 3).max() > p0
+
+
+def test_allocation_is_feasible_and_verified():
+    spec = A.AllocationSpec(case="b", D=0.2, radius=0.2e-3, p_max=0.01, n_samples=256)
+    res = A.allocate(spec, pop_size=12, n_gen=8, n_verify=20000, pareto=True, grid=5)
+    assert res["feasible"]
+    t = res["tolerances"]
+    for v, (lo, hi) in spec.bounds.items():
+        assert lo <= t[v] <= hi * (1 + 1e-12)
+    assert res["cost"] == pytest.approx(float(A.total_cost(spec, np.array([[t[v] for v in A.VARIABLES]]))[0]))
+    assert res["p_exceed_verified_max"] <= 0.0125          # 20 000 fresh samples, binomial noise ~7e-4
+    assert len(res["pareto"]["cost"]) > 3 and np.all(np.diff(res["pareto"]["cost"]) >= 0)
+
+
+def test_allocation_reports_infeasible_requirement():
+    spec = A.AllocationSpec(case="c", D=0.2, radius=0.1e-3, p_max=0.01, n_samples=128)
+    res = A.allocate(spec, pop_size=8, n_gen=3, n_verify=1000, pareto=False)
+    assert res["feasible"] is False and res["p_exceed_at_lower_bounds"] > 0.01
