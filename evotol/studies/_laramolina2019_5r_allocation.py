@@ -242,3 +242,50 @@ def allocate(spec: AllocationSpec, poses=None, pop_size: int = 40, n_gen: int = 
     out["n_design_evaluations"] = n_eval
     out["pose_samples_evaluated"] = int(n_eval * len(em.poses) * spec.n_samples)
     return out
+
+
+def worst_case_allocation(spec: AllocationSpec, poses=None, sigma_multiple: float = 3.0) -> dict:
+    """The deterministic counterpart through the evotol core: :class:`evotol.problem.ToleranceProblem`
+    with the exact worst-case measure and :func:`evotol.allocators.allocate_optimum` (certified).
+
+    Every source of :class:`Planar5R` gets its own tolerance: clearances are disks ``|c| <= r_c``
+    with the costs of ``spec``; the actuator errors are intervals ``|dtheta| <= t`` with
+    ``t = sigma_multiple x std``, costed as ``spec.costs["theta"](t / sigma_multiple)``; link
+    lengths are locked at ``sigma_multiple x`` their Table 1 std. The requirement is
+    ``|dP| <= radius`` for every admissible error. Returns the design (SI), its cost on the same
+    cost models as :func:`allocate`, and its exceedance under the probabilistic model.
+    """
+    from evotol.allocators import allocate_optimum
+    from evotol.problem import Requirement, Tolerance
+
+    robot = Planar5R(spec.case, D=spec.D)
+    poses = robot.miw_poses() if poses is None else poses
+    k = float(sigma_multiple)
+    th = spec.costs["theta"]
+    theta_cost = type(th)(*th.p, scale=th.scale * k)
+    tiny = ReciprocalCost(1e-12, 1e-12, scale=1e-6)          # locked sources: no cost to speak of
+    tol = {}
+    for name, length in (("A1B1", robot.r1), ("A2B2", robot.r1), ("B1P", robot.r2), ("B2P", robot.r2),
+                         ("OA1", robot.r3), ("OA2", robot.r3)):
+        t_len = k * U.DELTA_R * length
+        tol[name] = Tolerance(cost=tiny, lower=0.5 * t_len, upper=2 * t_len, locked=t_len)  # lower == upper is refused
+    lo_t, hi_t = spec.bounds["theta"]
+    for name in ("theta1", "theta2"):
+        tol[name] = Tolerance(cost=theta_cost, lower=k * lo_t, upper=k * hi_t)
+    for J in ("A", "B"):
+        for i in (1, 2):
+            tol[f"clearance_{J}{i}"] = Tolerance(cost=spec.costs[f"clearance_{J}"], lower=spec.bounds[f"clearance_{J}"][0],
+                                                 upper=spec.bounds[f"clearance_{J}"][1])
+    from evotol.problem import ToleranceProblem
+
+    problem = ToleranceProblem(robot, tol, Requirement(position=spec.radius, measure="worst_case"), poses=poses)
+    res = allocate_optimum(problem)
+    t = res.tolerances
+    T = np.array([[max(t["clearance_A1"], t["clearance_A2"]), max(t["clearance_B1"], t["clearance_B2"]),
+                   max(t["theta1"], t["theta2"]) / k]])
+    em = ExceedanceModel(robot, problem.poses, spec.radius, 20000, seed=spec.seed + 31)
+    free_cost = float(sum(tol[n].cost.cost(t[n]) for n in tol if tol[n].locked is None))
+    return {"tolerances": {n: float(v) for n, v in t.items()}, "cost": free_cost, "feasible": bool(res.feasible),
+            "max_position_error": res.max_error("position"), "certificate": res.certificate,
+            "as_variables": {v: float(T[0, j]) for j, v in enumerate(VARIABLES)},
+            "p_exceed_probabilistic_model": float(em.exceed(T).max()), "sigma_multiple": k}
