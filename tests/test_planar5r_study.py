@@ -92,3 +92,27 @@ def test_allocation_reports_infeasible_requirement():
     spec = A.AllocationSpec(case="c", D=0.2, radius=0.1e-3, p_max=0.01, n_samples=128)
     res = A.allocate(spec, pop_size=8, n_gen=3, n_verify=1000, pareto=False)
     assert res["feasible"] is False and res["p_exceed_at_lower_bounds"] > 0.01
+
+
+def test_worst_case_counterpart_through_the_core_holds_for_sampled_extreme_errors():
+    """allocate_optimum's design: no admissible error (checked on the nonlinear model with errors
+    on the tolerance boundaries) moves P by more than the radius; the probabilistic model never exceeds."""
+    spec = A.AllocationSpec(case="b", D=0.2, radius=0.2e-3)
+    res = A.worst_case_allocation(spec)
+    assert res["feasible"] and res["max_position_error"] <= spec.radius * (1 + 1e-9)
+    assert res["p_exceed_probabilistic_model"] == 0.0
+    robot = Planar5R("b", D=0.2)
+    poses = robot.miw_poses()
+    rng = np.random.default_rng(0)
+    n = 4000
+    cols = []
+    for s in robot.sources:
+        t = res["tolerances"][s.name]
+        if s.dim == 1:
+            cols.append(t * rng.choice([-1.0, 1.0], size=(n, 1)))
+        else:
+            a = rng.uniform(0, 2 * np.pi, n)
+            cols.append(t * np.stack([np.cos(a), np.sin(a)], -1))
+    E = np.concatenate(cols, axis=1)
+    dp = robot.pose_error(poses, np.broadcast_to(E, (len(poses),) + E.shape))
+    assert np.max(np.hypot(dp[..., 0], dp[..., 1])) <= spec.radius * 1.01      # linearisation error < 1 %
