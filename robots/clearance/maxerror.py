@@ -1,0 +1,370 @@
+"""Global maximum pose error under joint clearances, with a certificate (Deng 2012 eqs. III.26-III.27).
+
+The thesis maximises ``||dp||^2`` (or ``||dtheta||^2``) over the clearance screws -- a nonconvex
+problem it attacks with 200 local solves per pose. The feasible error twists form a convex,
+centrally symmetric set ``P`` (an intersection over chains of Minkowski sums of the joints'
+disk x interval x disk x interval sets), so
+
+    p_max = max_{x in P} ||x_pos|| = max_{|u| = 1} h_P(u),      h_P = support function of P.
+
+Each ``h_P(u)`` is a small convex problem solved with a two-sided certificate
+(:mod:`robots.clearance.support`). The maximum over unit directions ``u`` is found by
+branch and bound on the circle (2 target components) or the half sphere (3 components;
+``h(u) = h(-u)`` by symmetry): for a patch spanned by unit vectors ``u_1..u_q``,
+``max_patch h <= max_i h(u_i) / d`` where ``d`` is the distance from the origin to the flat
+patch (positive homogeneity + subadditivity of ``h``); patches whose bound does not exceed the
+best attained norm by more than the tolerance are discarded, the others are split. The result
+carries
+
+* ``p_max``: a value **attained** by an explicit feasible set of joint error screws (returned);
+* ``p_upper``: a **certified** upper bound (dual certificates on the directions + patch bound);
+
+and likewise for the rotation. Their relative gap is at most ``tol`` (default 1e-3).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from evotol.errors import ConvergenceError, ValidationError
+from robots.clearance.model import ClearanceMechanism, PoseMaps
+from robots.clearance.support import _gram_pinv, solve_support, true_dual
+
+
+# ---------------------------------------------------------------------------- geometry of directions
+def _octa_hemisphere(levels: int = 2):
+    """Upper-hemisphere triangles of a subdivided octahedron: (T, 3, 3) unit vertices."""
+    e = np.eye(3)
+    tris = [np.stack([a, b, e[2]]) for a, b in ((e[0], e[1]), (e[1], -e[0]), (-e[0], -e[1]), (-e[1], e[0]))]
+    tris = np.array(tris)
+    for _ in range(levels):
+        tris = _split_tris(tris)
+    return tris
+
+
+def _normalise(v):
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _split_tris(t):
+    a, b, c = t[:, 0], t[:, 1], t[:, 2]
+    ab, bc, ca = _normalise(a + b), _normalise(b + c), _normalise(c + a)
+    return np.concatenate([np.stack(x, 1) for x in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+
+
+def _tri_depth(t):
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    n = _normalise(n)
+    return np.abs((n * t[:, 0]).sum(-1))
+
+
+# ---------------------------------------------------------------------------- one target of one block
+@dataclass
+class _Target:
+    lower: np.ndarray      # (K,) attained norm
+    upper: np.ndarray      # (K,) certified bound
+    sigma: np.ndarray      # (K, R) attaining scaled screws
+    n_solves: int = 0
+
+
+class _Evaluator:
+    """Support values for (case, direction) pairs; keeps the best attained point of each case.
+
+    ``exact`` solves the convex problem (certified upper value + feasible primal point);
+    ``cheap`` only evaluates the dual objective at a given ``mu`` -- still a certified upper
+    bound of the support value (weak duality), at the cost of one matrix-vector product.
+    """
+
+    def __init__(self, Ct, Bt, gi, nd, tol_solve):
+        self.Ct, self.Bt, self.gi, self.nd = Ct, Bt, gi, nd
+        K, k, R = Ct.shape
+        self.best = np.zeros(K)
+        self.sigma = np.zeros((K, R))
+        self.mu = np.zeros((K, Bt.shape[-1]))
+        self.tol_solve = tol_solve
+        self.n_solves = 0
+        self.n_cheap = 0
+
+    def exact(self, case, u, mu0=None, scale=None, rtol=None, gap0=None):
+        a = np.einsum("kqr,kq->kr", self.Ct[case], u)
+        rtol = self.tol_solve if rtol is None else rtol
+        tol = 0.0 if scale is None else rtol * scale
+        if gap0 is None and mu0 is not None and scale is not None:
+            gap0 = 1e-3 * scale
+        res = solve_support(a, self.Bt[case], self.nd, tol=tol, rtol=rtol, mu0=mu0, gap0=gap0, gram_inv=self.gi[case])
+        self.n_solves += len(case)
+        norms = np.linalg.norm(np.einsum("kqr,kr->kq", self.Ct[case], res.sigma), axis=-1)
+        order = np.argsort(norms)          # last write wins -> the largest per case
+        c_sorted = case[order]
+        better = norms[order] > self.best[c_sorted]
+        cs, idx = c_sorted[better], order[better]
+        self.best[cs] = norms[idx]
+        self.sigma[cs] = res.sigma[idx]
+        self.mu[cs] = res.mu[idx]
+        return res.upper, res.mu
+
+    def cheap(self, case, u, mu):
+        a = np.einsum("kqr,kq->kr", self.Ct[case], u)
+        self.n_cheap += len(case)
+        return true_dual(a + (self.Bt[case] @ mu[..., None])[..., 0], self.nd)
+
+    def polish(self, n_iter: int = 2, rtol: float = 1e-8, cases=None):
+        """Local ascent from the best attained point: u <- x / ||x||, x <- argmax u^T x; monotone
+        (||x_new|| >= u^T x_new = h(u) >= u^T x_old = ||x_old||). Tightens the attained value."""
+        cases = np.arange(len(self.best)) if cases is None else cases
+        for _ in range(n_iter):
+            x = np.einsum("kqr,kr->kq", self.Ct[cases], self.sigma[cases])
+            nrm = np.linalg.norm(x, axis=-1)
+            ok = nrm > 0
+            if not ok.any():
+                break
+            c = cases[ok]
+            self.exact(c, x[ok] / nrm[ok, None], mu0=self.mu[c], scale=nrm[ok], rtol=rtol)
+
+
+def _depth(U):
+    """Distance from the origin to the flat patch spanned by unit vectors U (P, q, k)."""
+    if U.shape[1] == 2:
+        return np.linalg.norm(U[:, 0] + U[:, 1], axis=-1) / 2
+    return _tri_depth(U)
+
+
+def _initial_patches(k: int):
+    if k == 2:
+        n0 = 6
+        phi = np.arange(n0 + 1) * np.pi / n0
+        verts = np.stack([np.cos(phi[:-1]), np.sin(phi[:-1])], -1)
+        # arc i joins vertex i and i+1; vertex n0 is -vertex 0 (h(-u) = h(u), mu(-u) = -mu(u))
+        tri = np.stack([np.arange(n0), np.arange(1, n0 + 1)], 1)
+        sign = np.ones_like(tri, dtype=float)
+        sign[-1, 1] = -1.0
+        tri[-1, 1] = 0
+        return verts, tri, sign
+    tris0 = _octa_hemisphere(1)
+    verts, inv = np.unique(np.round(tris0.reshape(-1, 3), 12), axis=0, return_inverse=True)
+    return _normalise(verts), inv.reshape(-1, 3), np.ones((len(tris0), 3))
+
+
+def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40) -> _Target:
+    """max ||Ct sigma|| over feasible scaled screws for every case (Ct: (K, k, R), k in 1..3)."""
+    K, k, R = Ct.shape
+    m = Bt.shape[-1]
+    ev = _Evaluator(Ct, Bt, gi, nd, tol_solve)
+    cases = np.arange(K)
+    tol_bb = 0.5 * tol
+    if k == 1:
+        up, _ = ev.exact(cases, np.ones((K, 1)), rtol=1e-9)
+        return _Target(ev.best.copy(), np.maximum(up, ev.best), ev.sigma, ev.n_solves)
+    verts, tri, sign = _initial_patches(k)
+    nv, T = len(verts), len(tri)
+    up, mu = ev.exact(np.repeat(cases, nv), np.tile(verts, (K, 1)))
+    up, mu = up.reshape(K, nv), mu.reshape(K, nv, m)
+    ev.polish()
+    pc = np.repeat(cases, T)                                       # patch -> case
+    PU = np.tile(verts[tri] * sign[..., None], (K, 1, 1))         # (P, q, k)
+    PH = up[:, tri].reshape(K * T, -1)                             # (P, q) certified upper values
+    PM = (mu[:, tri] * sign[None, :, :, None]).reshape(K * T, tri.shape[1], m)
+    pruned = np.zeros(K)
+    q = PU.shape[1]
+    for _ in range(max_rounds):
+        bound = PH.max(-1) / _depth(PU)
+        keep = bound > ev.best[pc] * (1 + tol_bb)
+        np.maximum.at(pruned, pc[~keep], bound[~keep])
+        pc, PU, PH, PM = pc[keep], PU[keep], PH[keep], PM[keep]
+        if not pc.size:
+            break
+        if q == 2:
+            mids = _normalise(PU[:, 0] + PU[:, 1])[:, None]
+            mmu = ((PM[:, 0] + PM[:, 1]) / 2)[:, None]
+        else:
+            mids = _normalise(np.stack([PU[:, 0] + PU[:, 1], PU[:, 1] + PU[:, 2], PU[:, 2] + PU[:, 0]], 1))
+            mmu = np.stack([PM[:, 0] + PM[:, 1], PM[:, 1] + PM[:, 2], PM[:, 2] + PM[:, 0]], 1) / 2
+        e = mids.shape[1]
+        key = np.concatenate([np.repeat(pc, e)[:, None].astype(float), np.round(mids.reshape(-1, k), 12)], 1)
+        _, first, back = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        back = back.ravel()
+        uc = np.repeat(pc, e)[first]
+        uu = mids.reshape(-1, k)[first]
+        um = mmu.reshape(len(pc) * e, m)[first]
+        hm = ev.cheap(uc, uu, um)
+        need = np.nonzero(hm > ev.best[uc] * (1 + tol_bb))[0]
+        if need.size:
+            sc = np.maximum(ev.best[uc[need]], 1e-300)
+            he, me = ev.exact(uc[need], uu[need], mu0=um[need], scale=sc, rtol=tol_bb / 4, gap0=tol_bb * sc)
+            hm[need] = np.minimum(hm[need], he)
+            um[need] = me
+        hm = hm[back].reshape(len(pc), e)
+        mm = um[back].reshape(len(pc), e, m)
+        if q == 2:
+            a, b = PU[:, 0], PU[:, 1]
+            ab = mids[:, 0]
+            PU = np.concatenate([np.stack([a, ab], 1), np.stack([ab, b], 1)])
+            PH = np.concatenate([np.stack([PH[:, 0], hm[:, 0]], 1), np.stack([hm[:, 0], PH[:, 1]], 1)])
+            PM = np.concatenate([np.stack([PM[:, 0], mm[:, 0]], 1), np.stack([mm[:, 0], PM[:, 1]], 1)])
+            pc = np.tile(pc, 2)
+        else:
+            V = [PU[:, 0], PU[:, 1], PU[:, 2], mids[:, 0], mids[:, 1], mids[:, 2]]
+            Hh = [PH[:, 0], PH[:, 1], PH[:, 2], hm[:, 0], hm[:, 1], hm[:, 2]]
+            Mm = [PM[:, 0], PM[:, 1], PM[:, 2], mm[:, 0], mm[:, 1], mm[:, 2]]
+            kids = ((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5))
+            PU = np.concatenate([np.stack([V[i] for i in c], 1) for c in kids])
+            PH = np.concatenate([np.stack([Hh[i] for i in c], 1) for c in kids])
+            PM = np.concatenate([np.stack([Mm[i] for i in c], 1) for c in kids])
+            pc = np.tile(pc, 4)
+    alive = np.zeros(K)
+    if pc.size:
+        np.maximum.at(alive, pc, PH.max(-1) / _depth(PU))
+    ev.polish()
+    upper = np.maximum.reduce([pruned, alive, ev.best])
+    return _Target(ev.best.copy(), upper, ev.sigma, ev.n_solves)
+
+
+# ---------------------------------------------------------------------------- public API
+@dataclass
+class MaxPoseError:
+    """Global maximum pose errors of a set of cases (poses and/or clearance-bound sets).
+
+    p_max (m), r_max (rad): values attained by the explicit screws ``p_screws``/``r_screws``
+    (``(n, n_joints, 6)``, each joint's ``[dr; dt]`` in its own frame, rad and m);
+    p_upper, r_upper: certified upper bounds; p_twist, r_twist: end-effector error twists
+    ``[dtheta; dp]`` (base axes) produced by those screws; gap: largest relative gap per case.
+    """
+
+    p_max: np.ndarray
+    p_upper: np.ndarray
+    r_max: np.ndarray
+    r_upper: np.ndarray
+    p_screws: np.ndarray
+    r_screws: np.ndarray
+    p_twist: np.ndarray
+    r_twist: np.ndarray
+    joint_names: tuple[str, ...]
+    n_solves: int = 0
+    seconds: float = 0.0
+
+    @property
+    def p_gap(self) -> np.ndarray:
+        return (self.p_upper - self.p_max) / np.maximum(self.p_upper, 1e-300)
+
+    @property
+    def r_gap(self) -> np.ndarray:
+        return (self.r_upper - self.r_max) / np.maximum(self.r_upper, 1e-300)
+
+    @property
+    def gap(self) -> np.ndarray:
+        return np.maximum(self.p_gap, self.r_gap)
+
+    def dominant_joints(self, i: int = 0, which: str = "p") -> list[tuple[str, float]]:
+        """Joints ranked by the share of their clearance used at the maximiser of case ``i``."""
+        S = (self.p_screws if which == "p" else self.r_screws)[i]
+        mag = np.linalg.norm(S, axis=1)
+        order = np.argsort(mag)[::-1]
+        return [(self.joint_names[j], float(mag[j])) for j in order]
+
+
+def _as_bounds(mech: ClearanceMechanism, bounds, n: int) -> np.ndarray:
+    if bounds is None:
+        b = mech.default_bounds()
+    else:
+        b = np.asarray(bounds, float)
+    if b.shape[-2:] != (mech.n_joints, 4):
+        raise ValidationError("bounds shape", b.shape, f"(..., {mech.n_joints}, 4): [beta_xy, beta_z, b_xy, b_z] per joint "
+                              f"{[j.name for j in mech.joints]}")
+    if not np.all(np.isfinite(b)) or np.any(b < 0):
+        raise ValidationError("bounds", "negative or non-finite entries", "finite values >= 0 (rad, m)")
+    return b
+
+
+def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: np.ndarray, bounds: np.ndarray, *,
+                   tol: float = 1e-3, tol_solve: float = 2e-5) -> MaxPoseError:
+    """Maximum pose errors for cases ``(pose_index[i], bounds[i])`` using precomputed ``maps``
+    (``mech.pose_maps(poses)``). bounds: (n_cases, n_joints, 4). Identical sub-problems (same
+    pose and same bounds on a decoupled block) are solved once."""
+    import time
+
+    t0 = time.perf_counter()
+    pose_index = np.asarray(pose_index, int)
+    n = len(pose_index)
+    bounds = np.broadcast_to(bounds, (n, mech.n_joints, 4))
+    out = {}
+    screws = {w: np.zeros((n, mech.n_joints * 6)) for w in ("p", "r")}
+    sq = {w: np.zeros((n, 2)) for w in ("p", "r")}   # squared (lower, upper) summed over blocks
+    n_solves = 0
+    for pm in maps:
+        D = pm.row_bounds(bounds)                                   # (n, R)
+        key = np.concatenate([pose_index[:, None].astype(float), D], axis=1)
+        ukey, first, back = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        back = back.ravel()
+        pidx, Du = pose_index[first], D[first]
+        Bt = pm.B[pidx] * Du[..., None]
+        gi = _gram_pinv(Bt) if pm.n_loops else np.zeros((len(pidx), 0, 0))
+        for w, C in (("p", pm.C_pos), ("r", pm.C_rot)):
+            if C.shape[1] == 0:
+                continue
+            Ct = C[pidx] * Du[:, None, :]
+            tgt = _maximise_norm(Ct, Bt, gi, pm.n_disk, tol=tol, tol_solve=tol_solve)
+            n_solves += tgt.n_solves
+            sq[w][:, 0] += tgt.lower[back] ** 2
+            sq[w][:, 1] += tgt.upper[back] ** 2
+            s = tgt.sigma[back] * D
+            screws[w][:, pm.cols] = s
+    twists = {}
+    for w in ("p", "r"):
+        tw = np.zeros((n, 6))
+        for pm in maps:
+            s = screws[w][:, pm.cols]
+            tw[:, list(pm.pos_comps)] = np.einsum("nkr,nr->nk", pm.C_pos[pose_index], s)
+            tw[:, list(pm.rot_comps)] = np.einsum("nkr,nr->nk", pm.C_rot[pose_index], s)
+        twists[w] = tw
+    res = MaxPoseError(
+        p_max=np.sqrt(sq["p"][:, 0]), p_upper=np.sqrt(sq["p"][:, 1]),
+        r_max=np.sqrt(sq["r"][:, 0]), r_upper=np.sqrt(sq["r"][:, 1]),
+        p_screws=screws["p"].reshape(n, -1, 6), r_screws=screws["r"].reshape(n, -1, 6),
+        p_twist=twists["p"], r_twist=twists["r"], joint_names=tuple(j.name for j in mech.joints),
+        n_solves=n_solves, seconds=time.perf_counter() - t0)
+    return res
+
+
+def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float = 1e-3) -> MaxPoseError:
+    """Global maximum positional and rotational error at each pose (Deng 2012 eqs. III.26-III.27,
+    V.8, V.13), with explicit maximising screws and certified upper bounds.
+
+    poses: (n, d) in the mechanism's pose coordinates (m); bounds: None (the joints' own bounds),
+    an array (n_joints, 4) for all poses or (n, n_joints, 4) per pose, columns
+    ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]`` in the order of ``mech.joints``.
+    tol: relative gap between the attained value and the certified bound (default 0.1 %).
+    """
+    poses = np.atleast_2d(np.asarray(poses, float))
+    b = _as_bounds(mech, bounds, len(poses))
+    maps = mech.pose_maps(poses)
+    idx = np.arange(len(poses))
+    return evaluate_cases(mech, maps, idx, np.broadcast_to(b, (len(poses),) + b.shape[-2:]), tol=tol)
+
+
+class ClearanceEvaluator:
+    """Evaluate many clearance-bound sets at fixed poses; the per-pose maps are computed once.
+
+    >>> ev = ClearanceEvaluator(mech, poses)           # poses (n, d), metres
+    >>> ev.evaluate(bounds, pose_index=0)              # bounds (n_sets, n_joints, 4)
+    >>> ev.evaluate_poses(bounds)                      # bounds (n_joints, 4) or (n, n_joints, 4)
+    """
+
+    def __init__(self, mech: ClearanceMechanism, poses, *, tol: float = 1e-3):
+        self.mech = mech
+        self.poses = np.atleast_2d(np.asarray(poses, float))
+        self.maps = mech.pose_maps(self.poses)
+        self.tol = tol
+
+    def evaluate(self, bounds, pose_index=0) -> MaxPoseError:
+        b = _as_bounds(self.mech, bounds, 0)
+        b = b.reshape((-1,) + b.shape[-2:])
+        idx = np.broadcast_to(np.asarray(pose_index, int), (len(b),))
+        if idx.size and (idx.min() < 0 or idx.max() >= len(self.poses)):
+            raise ValidationError("pose_index", pose_index, f"indices in [0, {len(self.poses)})")
+        return evaluate_cases(self.mech, self.maps, idx, b, tol=self.tol)
+
+    def evaluate_poses(self, bounds=None) -> MaxPoseError:
+        n = len(self.poses)
+        b = _as_bounds(self.mech, bounds, n)
+        return evaluate_cases(self.mech, self.maps, np.arange(n), np.broadcast_to(b, (n,) + b.shape[-2:]), tol=self.tol)

@@ -1,0 +1,469 @@
+"""Joint clearances as bounded error screws and their linear map to the end-effector (Deng 2012 Ch. III, V).
+
+Model
+-----
+Every joint ``j`` has an **error screw** ``s_j = [dr_x, dr_y, dr_z, dt_x, dt_y, dt_z]`` expressed in
+its own DH frame (joint axis = ``z_j``), eq. III.1, bounded by four **clearance bounds**
+(:class:`ClearanceBounds`, eqs. III.3-III.6)::
+
+    dr_x^2 + dr_y^2 <= dbeta_xy^2,  |dr_z| <= dbeta_z,  dt_x^2 + dt_y^2 <= db_xy^2,  |dt_z| <= db_z
+
+A mechanism is a set of **bodies** (the fixed base, the moving platform ``P``, and for hybrid legs
+intermediate *sub-end-effectors* such as the elbows of the IRSBot-2, Ch. V) connected by serial
+**chains** of joints. The error of a body is a small-displacement twist ``[dtheta; dp]`` taken at
+the body's reference point and expressed in base-frame axes (the thesis's ``N_i`` in eq. III.18).
+A chain from body ``A`` to body ``B`` through joints ``j`` gives (eqs. III.22-III.24, V.1, V.4)::
+
+    delta_B = M^e_AB delta_A + sum_j M_j s_j,
+    M_j    = [[R_j, 0], [-[p_B - p_j]x R_j, R_j]]      (= prod N . prod adj(S_k)^-1, eq. III.24)
+    M^e_AB = [[I, 0], [-[p_B - p_A]x, I]]
+
+where ``R_j, p_j`` are the world orientation and origin of joint frame ``j``. Two chains that end
+on the same body must give the same twist (the loop-closure equalities III.13, V.3, V.28).
+
+Stacking all chains gives the linear system ``E_s s + E_d delta = 0`` (``delta`` = twists of the
+non-base bodies). A set of screws is **consistent** when this system has a solution ``delta``;
+then the platform twist is ``delta_P = C s`` with ``C = -(E_d^+ E_s)_P``, and consistency reads
+``B^T s = 0`` with ``B = E_s^T N``, ``N`` an orthonormal basis of ``null(E_d^T)``. ``B`` has
+``m = 6 (n_chains - n_bodies)`` columns: the number of independent loop equations. The pair
+``(C, B)`` at a pose is all the optimisation needs (:class:`PoseMaps`).
+
+Planar mechanisms (all joint axes parallel to the base ``z`` axis) split exactly into an
+in-plane block (``dr_z, dt_x, dt_y`` -> ``dtheta_z, dp_x, dp_y``) and an out-of-plane block
+(``dr_x, dr_y, dt_z`` -> ``dtheta_x, dtheta_y, dp_z``); the clearance set is a product over the two
+blocks, so each maximum is computed per block and combined exactly (``p_max^2 = p_in^2 + p_out^2``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from evotol.errors import KinematicsError, ValidationError
+from robots.clearance.kinematics import DHTree, exp_screw, inv_transform, rotation_vector, skew
+
+#: bound kinds, in the column order of a bounds array ``(..., n_joints, 4)``
+BOUND_NAMES = ("beta_xy", "beta_z", "b_xy", "b_z")
+BOUND_UNITS = ("rad", "rad", "m", "m")
+#: screw components each bound constrains (eqs. III.3-III.6): disk, interval, disk, interval
+CONE_COMPONENTS = ((0, 1), (2,), (3, 4), (5,))
+ROT, POS = (0, 1, 2), (3, 4, 5)
+
+
+@dataclass(frozen=True)
+class ClearanceBounds:
+    """Clearance bounds of one joint (Deng 2012 Fig. III.1, eqs. III.3-III.6), SI units.
+
+    beta_xy: tilt of the joint axis, rad (disk); beta_z: rotation about the axis, rad (interval;
+    ~0 for an actuated joint, large for a passive one: idle motion); b_xy: radial play, m (disk);
+    b_z: axial play, m (interval).
+    """
+
+    beta_xy: float
+    beta_z: float
+    b_xy: float
+    b_z: float
+
+    def __post_init__(self):
+        for k in BOUND_NAMES:
+            v = getattr(self, k)
+            if not isinstance(v, (int, float, np.floating)) or not np.isfinite(v) or v < 0:
+                raise ValidationError(f"ClearanceBounds.{k}", v, "a finite number >= 0 (SI units)")
+
+    @classmethod
+    def thesis(cls, active: bool, *, b_xy: float = 1e-4, b_z: float = 1e-4, beta_xy: float | None = 0.01,
+               h: float | None = None, beta_z_passive: float = 0.2, beta_z_active: float = 0.0) -> "ClearanceBounds":
+        """The thesis's convention (Sec. III.1.1, IV.3): ``beta_z`` = ``beta_z_active`` (locked,
+        default 0) for an actuated joint, ``beta_z_passive`` (idle motion, default 0.2 rad) for a
+        passive one; ``beta_xy = b_xy / h`` (eq. III.2) when a joint length ``h`` (m) is given."""
+        if h is not None:
+            if not h > 0:
+                raise ValidationError("ClearanceBounds.thesis h", h, "a joint length > 0 (m)")
+            beta_xy = b_xy / h
+        if beta_xy is None:
+            raise ValidationError("ClearanceBounds.thesis beta_xy", beta_xy, "a number, or give h")
+        return cls(float(beta_xy), float(beta_z_active if active else beta_z_passive), float(b_xy), float(b_z))
+
+    def as_array(self) -> np.ndarray:
+        return np.array([self.beta_xy, self.beta_z, self.b_xy, self.b_z])
+
+    def scaled(self, factor: float) -> "ClearanceBounds":
+        return ClearanceBounds(*(factor * self.as_array()))
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A joint with clearance: ``frame`` is the DH frame whose ``z`` axis is the joint axis (the
+    error screw is expressed in it); ``active``: actuated (locked for the analysis)."""
+
+    name: str
+    frame: str
+    active: bool
+    bounds: ClearanceBounds
+
+
+@dataclass(frozen=True)
+class Chain:
+    """A serial chain of joints from body ``start`` to body ``end`` (names of bodies; ``"base"`` is
+    fixed). ``joints``: names of the chain's joints, base side first. ``path_end``: DH frame at
+    the end of the chain's kinematic path (defaults to the end body's frame); the end body is
+    reached from it by a constant offset (a cut joint of a closed loop, e.g. frame 5 = frame 6 of
+    the 5-bar, Tab. IV.1)."""
+
+    name: str
+    start: str
+    end: str
+    joints: tuple[str, ...]
+    path_end: str | None = None
+
+
+@dataclass(frozen=True)
+class Block:
+    """A set of screw/twist components that decouples from the rest (planar in/out of plane)."""
+
+    name: str
+    components: tuple[int, ...]  # twist and screw components (same index sets for the blocks used)
+
+
+FULL = (Block("spatial", (0, 1, 2, 3, 4, 5)),)
+PLANAR = (Block("in-plane", (2, 3, 4)), Block("out-of-plane", (0, 1, 5)))
+
+
+@dataclass
+class PoseMaps:
+    """Per-pose linear maps of one decoupled block, computed once and reused for any bounds.
+
+    cols: (n_rows,) index into the stacked screw vector (6 * n_joints) of each row, in cone order;
+    cone_joint, cone_kind: joint index and bound kind (0..3) of each cone; disks come first
+    (``n_disk`` cones of 2 rows), then intervals (1 row each).
+    C_pos, C_rot: (n_poses, k, n_rows) -- target twist components (base frame) of a consistent
+    screw vector; B: (n_poses, n_rows, m) -- consistency ``B^T s = 0``.
+    """
+
+    block: Block
+    cols: np.ndarray
+    cone_joint: np.ndarray
+    cone_kind: np.ndarray
+    n_disk: int
+    pos_comps: tuple[int, ...]
+    rot_comps: tuple[int, ...]
+    C_pos: np.ndarray
+    C_rot: np.ndarray
+    B: np.ndarray
+
+    @property
+    def n_rows(self) -> int:
+        return len(self.cols)
+
+    @property
+    def n_loops(self) -> int:
+        return self.B.shape[-1]
+
+    def row_bounds(self, bounds: np.ndarray) -> np.ndarray:
+        """Bound of every row, (..., n_rows), from a bounds array (..., n_joints, 4)."""
+        per_cone = bounds[..., self.cone_joint, self.cone_kind]
+        nd = self.n_disk
+        return np.concatenate([np.repeat(per_cone[..., :nd], 2, axis=-1), per_cone[..., nd:]], axis=-1)
+
+    def take(self, idx) -> "PoseMaps":
+        return replace(self, C_pos=self.C_pos[idx], C_rot=self.C_rot[idx], B=self.B[idx])
+
+
+class ClearanceMechanism:
+    """A mechanism with joint clearances, built once and evaluated at many poses.
+
+    tree: the modified-DH frame tree; joints: the joints with clearance; bodies: body name -> DH
+    frame of its reference point (``"base"`` -> the base frame is implicit); chains: serial chains
+    between bodies; end_effector: the body whose error is reported; joint_values: the inverse
+    geometric model, ``poses (n, d) -> {variable: (n,) array}`` for the DH variables; planar: the
+    joint axes are all parallel to the base ``z`` axis (enables the exact in/out-of-plane split).
+    """
+
+    def __init__(self, *, name: str, tree: DHTree, joints: Sequence[Joint], bodies: Mapping[str, str],
+                 chains: Sequence[Chain], end_effector: str, joint_values: Callable[[np.ndarray], dict],
+                 planar: bool = False, pose_names: Sequence[str] = ("x", "y")):
+        self.name = name
+        self.tree = tree
+        self.joints = tuple(joints)
+        self.joint_index = {j.name: i for i, j in enumerate(self.joints)}
+        if len(self.joint_index) != len(self.joints):
+            raise ValidationError(f"{name} joints", [j.name for j in self.joints], "unique names")
+        for j in self.joints:
+            if j.frame not in tree.frames or not tree.frames[j.frame].is_joint:
+                raise ValidationError(f"{name} joint {j.name!r}.frame", j.frame, "a revolute/prismatic frame of the DH tree")
+        self.bodies = dict(bodies)
+        self.bodies.setdefault("base", tree.base)
+        self.body_names = [b for b in self.bodies if b != "base"]
+        if end_effector not in self.body_names:
+            raise ValidationError(f"{name} end_effector", end_effector, f"one of {self.body_names}")
+        self.end_effector = end_effector
+        self.chains = tuple(chains)
+        for c in self.chains:
+            for b in (c.start, c.end):
+                if b not in self.bodies:
+                    raise ValidationError(f"{name} chain {c.name!r} body", b, f"one of {sorted(self.bodies)}")
+            for jn in c.joints:
+                if jn not in self.joint_index:
+                    raise ValidationError(f"{name} chain {c.name!r} joint", jn, f"one of {sorted(self.joint_index)}")
+            path = tree.path(c.path_end or self.bodies[c.end])
+            frames = [self.joints[self.joint_index[jn]].frame for jn in c.joints]
+            if any(f not in path for f in frames) or [path.index(f) for f in frames] != sorted(path.index(f) for f in frames):
+                raise ValidationError(f"{name} chain {c.name!r}", c.joints, f"joints in path order along {path}")
+        self.joint_values = joint_values
+        self.planar = planar
+        self.blocks = PLANAR if planar else FULL
+        self.pose_names = tuple(pose_names)
+
+    # ------------------------------------------------------------------ bounds helpers
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
+
+    @property
+    def n_screw_variables(self) -> int:
+        return 6 * self.n_joints
+
+    def default_bounds(self) -> np.ndarray:
+        """Bounds array (n_joints, 4) [beta_xy, beta_z, b_xy, b_z] from the joints' own bounds."""
+        return np.array([j.bounds.as_array() for j in self.joints])
+
+    def thesis_bounds(self, *, b_xy=1e-4, b_z=1e-4, beta_xy=0.01, h=None, beta_z_passive: float = 0.2,
+                      beta_z_active: float = 0.0) -> np.ndarray:
+        """Bounds array (..., n_joints, 4) by the thesis's convention (Sec. III.1.1), vectorised.
+
+        b_xy, b_z (m), beta_xy (rad), h (m): scalars or arrays broadcasting to (..., n_joints)
+        (one column per joint, in the order of ``self.joints``); ``beta_xy = b_xy / h`` (eq.
+        III.2) when ``h`` is given; ``beta_z`` = ``beta_z_active`` for actuated joints,
+        ``beta_z_passive`` for passive ones. E.g. 32 768 tolerance combinations of the 5-bar:
+        ``mech.thesis_bounds(b_xy=B_XY, b_z=B_Z)`` with ``B_XY, B_Z`` of shape (32768, 5)."""
+        nj = self.n_joints
+        bxy, bz = np.asarray(b_xy, float), np.asarray(b_z, float)
+        if h is not None:
+            h = np.asarray(h, float)
+            if np.any(h <= 0):
+                raise ValidationError("thesis_bounds h", h, "joint lengths > 0 (m)")
+            bxy_, h_ = np.broadcast_arrays(bxy, h)
+            beta = bxy_ / h_
+        else:
+            beta = np.asarray(beta_xy, float)
+        active = np.array([j.active for j in self.joints])
+        bz_rot = np.where(active, beta_z_active, beta_z_passive)
+        shape = np.broadcast_shapes(np.shape(bxy), np.shape(bz), np.shape(beta), (nj,))
+        out = np.empty(shape + (4,))
+        out[..., 0] = beta
+        out[..., 1] = bz_rot
+        out[..., 2] = bxy
+        out[..., 3] = bz
+        if not np.all(np.isfinite(out)) or np.any(out < 0):
+            raise ValidationError("thesis_bounds", "negative or non-finite values", "bounds >= 0 (m, rad)")
+        return out
+
+    def with_bounds(self, bounds: Mapping[str, ClearanceBounds] | Callable[[Joint], ClearanceBounds]) -> "ClearanceMechanism":
+        """A copy with other clearance bounds (a dict by joint name or a function of the joint)."""
+        new = object.__new__(ClearanceMechanism)
+        new.__dict__.update(self.__dict__)
+        fn = bounds if callable(bounds) else (lambda j: bounds.get(j.name, j.bounds))
+        new.joints = tuple(replace(j, bounds=fn(j)) for j in self.joints)
+        return new
+
+    def with_active(self, names: Sequence[str], beta_z_active: float = 0.0) -> "ClearanceMechanism":
+        """Actuation redundancy (Sec. IV.4): the named joints become actuated (``beta_z`` locked)."""
+        for n in names:
+            if n not in self.joint_index:
+                raise ValidationError("with_active joint", n, f"one of {sorted(self.joint_index)}")
+        new = self.with_bounds(lambda j: replace(j.bounds, beta_z=beta_z_active) if j.name in names else j.bounds)
+        new.joints = tuple(replace(j, active=True) if j.name in names else j for j in new.joints)
+        return new
+
+    def sub_mechanism(self, chains: Sequence[str], name: str | None = None) -> "ClearanceMechanism":
+        """The mechanism restricted to some chains (e.g. one open serial leg, Sec. IV.4)."""
+        keep = [c for c in self.chains if c.name in chains]
+        if len(keep) != len(chains):
+            raise ValidationError("sub_mechanism chains", chains, f"names among {[c.name for c in self.chains]}")
+        used = {jn for c in keep for jn in c.joints}
+        bodies = {c.end for c in keep} | {c.start for c in keep}
+        return ClearanceMechanism(name=name or f"{self.name}[{','.join(chains)}]", tree=self.tree,
+                                  joints=[j for j in self.joints if j.name in used],
+                                  bodies={b: f for b, f in self.bodies.items() if b in bodies},
+                                  chains=keep, end_effector=self.end_effector, joint_values=self.joint_values,
+                                  planar=self.planar, pose_names=self.pose_names)
+
+    # ------------------------------------------------------------------ kinematics
+    def world(self, poses: np.ndarray) -> dict[str, np.ndarray]:
+        poses = np.atleast_2d(np.asarray(poses, float))
+        values = self.joint_values(poses)
+        return self.tree.world_transforms(values, len(poses))
+
+    def error_mapping(self, poses: np.ndarray, chain: str | Chain) -> tuple[np.ndarray, np.ndarray]:
+        """Error mapping matrices of one chain (eqs. III.22-III.24, V.1): ``M`` (n, 6, 6 n_joints)
+        for its joints' screws and ``M^e`` (n, 6, 6) for the start body's twist."""
+        c = chain if isinstance(chain, Chain) else {c.name: c for c in self.chains}[chain]
+        W = self.world(poses)
+        return self._chain_maps(W, c)
+
+    def error_mapping_thesis(self, poses: np.ndarray, chain: str | Chain) -> np.ndarray:
+        """The thesis's literal eq. III.24 for a chain starting at the base:
+        ``M_j = (prod_l N_l) prod_{k=n_f}^{j+1} adj(S_k)^-1`` (products of adjoints of the DH
+        transforms along the chain's path, then ``N`` = the end frame's orientation in the base).
+        Kept to check :meth:`error_mapping` (which uses world poses) against the thesis."""
+        from robots.clearance.kinematics import adjoint
+        c = chain if isinstance(chain, Chain) else {c.name: c for c in self.chains}[chain]
+        poses = np.atleast_2d(np.asarray(poses, float))
+        n = len(poses)
+        values = self.joint_values(poses)
+        local = self.tree.local_transforms(values, n)
+        W = self.tree.world_transforms(values, n)
+        end_frame = c.path_end or self.bodies[c.end]
+        path = self.tree.path(end_frame)
+        # the path's transforms after each frame, plus the constant cut offset to the end body
+        S = [local[f] for f in path] + [inv_transform(W[end_frame]) @ W[self.bodies[c.end]]]
+        R_end = W[self.bodies[c.end]][:, :3, :3]
+        N = np.zeros((n, 6, 6))
+        N[:, :3, :3] = R_end
+        N[:, 3:, 3:] = R_end
+        blocks = []
+        for jn in c.joints:
+            k0 = path.index(self.joints[self.joint_index[jn]].frame)
+            P = np.broadcast_to(np.eye(6), (n, 6, 6)).copy()
+            for T in S[k0 + 1:]:                       # adj(S_{j+1})^-1 ... adj(S_nf)^-1 (III.15)
+                P = np.linalg.inv(adjoint(T)) @ P
+            blocks.append(N @ P)
+        return np.concatenate(blocks, axis=2)
+
+    def _chain_maps(self, W, c: Chain):
+        pB = W[self.bodies[c.end]][:, :3, 3]
+        pA = W[self.bodies[c.start]][:, :3, 3]
+        n = len(pB)
+        blocks = []
+        for jn in c.joints:
+            T = W[self.joints[self.joint_index[jn]].frame]
+            R = T[:, :3, :3]
+            Mj = np.zeros((n, 6, 6))
+            Mj[:, :3, :3] = R
+            Mj[:, 3:, 3:] = R
+            Mj[:, 3:, :3] = -skew(pB - T[:, :3, 3]) @ R
+            blocks.append(Mj)
+        Me = np.zeros((n, 6, 6))
+        Me[:, :3, :3] = np.eye(3)
+        Me[:, 3:, 3:] = np.eye(3)
+        Me[:, 3:, :3] = -skew(pB - pA)
+        M = np.concatenate(blocks, axis=2) if blocks else np.zeros((n, 6, 0))
+        return M, Me
+
+    def linear_system(self, poses: np.ndarray):
+        """``E_s`` (n, 6 n_chains, 6 n_joints) and ``E_d`` (n, 6 n_chains, 6 n_bodies) of
+        ``E_s s + E_d delta = 0`` (all chains; the end-effector is body 0 of ``delta``)."""
+        W = self.world(poses)
+        n = len(next(iter(W.values())))
+        bodies = [self.end_effector] + [b for b in self.body_names if b != self.end_effector]
+        bidx = {b: i for i, b in enumerate(bodies)}
+        nc = len(self.chains)
+        Es = np.zeros((n, 6 * nc, 6 * self.n_joints))
+        Ed = np.zeros((n, 6 * nc, 6 * len(bodies)))
+        for ci, c in enumerate(self.chains):
+            M, Me = self._chain_maps(W, c)
+            r = slice(6 * ci, 6 * ci + 6)
+            for k, jn in enumerate(c.joints):
+                j = self.joint_index[jn]
+                Es[:, r, 6 * j:6 * j + 6] -= M[:, :, 6 * k:6 * k + 6]
+            b = bidx[c.end]
+            Ed[:, r, 6 * b:6 * b + 6] += np.eye(6)
+            if c.start != "base":
+                a = bidx[c.start]
+                Ed[:, r, 6 * a:6 * a + 6] -= Me
+        return Es, Ed
+
+    def pose_maps(self, poses: np.ndarray, split: bool = True) -> list[PoseMaps]:
+        """The per-pose linear maps (one :class:`PoseMaps` per decoupled block), computed once.
+        ``split=False`` keeps one 6-D block even for a planar mechanism (the thesis's form).
+
+        Raises KinematicsError if the chains do not determine the bodies' twists (a body left
+        free) -- never returns NaN."""
+        poses = np.atleast_2d(np.asarray(poses, float))
+        Es, Ed = self.linear_system(poses)
+        nb = Ed.shape[2] // 6
+        out = []
+        blocks = self.blocks if split else FULL
+        for blk in blocks:
+            comps = list(blk.components)
+            rows = [6 * c + k for c in range(len(self.chains)) for k in comps]
+            bcols = [6 * b + k for b in range(nb) for k in comps]
+            # cone layout: disks first, then intervals (cones split by the block are an error)
+            disk, inter = [], []
+            for j in range(self.n_joints):
+                for kind, cc in enumerate(CONE_COMPONENTS):
+                    inside = [k in comps for k in cc]
+                    if all(inside):
+                        (disk if len(cc) == 2 else inter).append((j, kind, [6 * j + k for k in cc]))
+                    elif any(inside):
+                        raise ValidationError(f"block {blk.name}", cc, "cones entirely inside one block")
+            cones = disk + inter
+            cols = np.array([c for _, _, cc in cones for c in cc], dtype=int)
+            if len(blocks) > 1:  # check that the block really decouples
+                other_cols = np.setdiff1d(np.arange(Es.shape[2]), cols)
+                other_b = np.setdiff1d(np.arange(Ed.shape[2]), bcols)
+                leak = max(np.abs(Es[:, rows][:, :, other_cols]).max(initial=0.0),
+                           np.abs(Ed[:, rows][:, :, other_b]).max(initial=0.0))
+                scale = max(np.abs(Es).max(), 1.0)
+                if leak > 1e-9 * scale:
+                    raise ValidationError(f"{self.name}: planar block {blk.name}", float(leak),
+                                          "zero coupling with the other block (are all joint axes parallel to z?)")
+            es = Es[:, rows][:, :, cols]
+            ed = Ed[:, rows][:, :, bcols]
+            U, S, Vt = np.linalg.svd(ed, full_matrices=True)
+            nbc = ed.shape[2]
+            if np.any(S[:, -1] < 1e-9 * np.maximum(S[:, 0], 1e-300)):
+                bad = np.nonzero(S[:, -1] < 1e-9 * S[:, 0])[0]
+                raise KinematicsError(f"{self.name}: the chains do not determine every body's error twist at pose "
+                                      f"{poses[bad[0]].tolist()}", poses=poses[bad])
+            # C = -(Ed^+ Es) restricted to the end-effector (body 0) components
+            pinv = np.einsum("nji,nj,nkj->nik", Vt, 1.0 / S, U[:, :, :nbc])
+            C = -(pinv @ es)[:, :len(comps), :]
+            N = U[:, :, nbc:]
+            B = np.swapaxes(es, 1, 2) @ N
+            pos = tuple(i for i, k in enumerate(comps) if k in POS)
+            rot = tuple(i for i, k in enumerate(comps) if k in ROT)
+            out.append(PoseMaps(block=blk, cols=cols, cone_joint=np.array([c[0] for c in cones], int),
+                                cone_kind=np.array([c[1] for c in cones], int), n_disk=len(disk),
+                                pos_comps=tuple(comps[i] for i in pos), rot_comps=tuple(comps[i] for i in rot),
+                                C_pos=C[:, list(pos), :], C_rot=C[:, list(rot), :], B=B))
+        return out
+
+    # ------------------------------------------------------------------ nonlinear checks
+    def chain_end_pose(self, poses: np.ndarray, chain: str | Chain, screws: Mapping[str, np.ndarray] | None = None,
+                       start_twist: np.ndarray | None = None) -> np.ndarray:
+        """Nonlinear pose (n, 4, 4) of a chain's end body with joint error screws applied
+        (``T_j -> T_j exp([s_j])``, s_j in frame j) and an optional start-body twist
+        ``[dtheta; dp]`` (base axes, at the start body's point). Used to check the error
+        mapping matrices against finite differences."""
+        c = chain if isinstance(chain, Chain) else {c.name: c for c in self.chains}[chain]
+        poses = np.atleast_2d(np.asarray(poses, float))
+        n = len(poses)
+        values = self.joint_values(poses)
+        local = self.tree.local_transforms(values, n)
+        W = self.tree.world_transforms(values, n)
+        start_frame = self.bodies[c.start]
+        end_frame = c.path_end or self.bodies[c.end]
+        path = self.tree.path(end_frame)
+        k0 = path.index(start_frame) + 1 if start_frame != self.tree.base else 0
+        T = W[start_frame].copy()
+        if start_twist is not None:
+            st = np.broadcast_to(start_twist, (n, 6))
+            # world twist at the start point -> displacement T_A' = D T_A with D about p_A
+            pA = T[:, :3, 3]
+            D = exp_screw(np.concatenate([st[:, :3], st[:, 3:] - np.cross(st[:, :3], pA)], axis=1))
+            T = D @ T
+        frame_of = {self.joints[self.joint_index[jn]].frame: jn for jn in c.joints}
+        for f in path[k0:]:
+            T = T @ local[f]
+            if screws is not None and f in frame_of and frame_of[f] in screws:
+                T = T @ exp_screw(np.broadcast_to(screws[frame_of[f]], (n, 6)))
+        offset = inv_transform(W[end_frame]) @ W[self.bodies[c.end]]
+        return T @ offset
+
+
+def twist_between(T0: np.ndarray, T1: np.ndarray) -> np.ndarray:
+    """Finite displacement ``[rotation vector; dp]`` (base axes) from pose T0 to T1, (..., 6)."""
+    return np.concatenate([rotation_vector(T1[..., :3, :3] @ np.swapaxes(T0[..., :3, :3], -1, -2)),
+                           T1[..., :3, 3] - T0[..., :3, 3]], axis=-1)
