@@ -33,6 +33,7 @@ import pandas as pd
 
 from evotol import doe
 from evotol.doe import Factor, Objective
+from evotol.errors import EvotolError
 from evotol.filtering import DesignStudy, Preset
 from evotol.studies import Study
 
@@ -101,33 +102,30 @@ class FiveBarToleranceEvaluator:
     tol: float = 1e-3
 
     def _model(self):
-        key = (self.pose_mm, self.beta_z_passive, self.beta_z_active)
+        """The engine's ClearanceEvaluator at the pose (maps computed once per process)."""
+        key = (self.pose_mm, self.beta_z_passive, self.beta_z_active, self.tol)
         if key not in _CACHE:
+            from robots.clearance import ClearanceEvaluator
             from robots.fivebar import FiveBar
 
             mech = FiveBar().clearance_mechanism(beta_z_passive=self.beta_z_passive, beta_z_active=self.beta_z_active)
-            pose = np.array([[self.pose_mm[0] * MM, self.pose_mm[1] * MM]])
-            _CACHE[key] = (mech, mech.pose_maps(pose))
+            _CACHE[key] = ClearanceEvaluator(mech, [[self.pose_mm[0] * MM, self.pose_mm[1] * MM]], tol=self.tol)
         return _CACHE[key]
 
     def bounds(self, X: pd.DataFrame) -> np.ndarray:
-        """Clearance bounds (n, 5, 4) [Δβ_xy, Δβ_z, Δb_xy, Δb_z] (rad, m) in the engine's joint order."""
-        mech, _ = self._model()
+        """Clearance bounds (n, 5, 4) [Δβ_xy, Δβ_z, Δb_xy, Δb_z] (rad, m) in the engine's joint order;
+        Δβ_xy = Δb_xy / h (eq. III.2), Δβ_z by the thesis's actuated/passive convention."""
+        mech = self._model().mech
         names = [j.name for j in mech.joints]
-        B = np.zeros((len(X), len(names), 4))
-        for k, j in enumerate(names):
-            bxy = X[f"db_xy_{j}_mm"].to_numpy(float) * MM
-            B[:, k, 0] = bxy / (self.h_mm * MM)                      # eq. III.2
-            B[:, k, 1] = self.beta_z_active if ACTIVE[j] else self.beta_z_passive
-            B[:, k, 2] = bxy
-            B[:, k, 3] = X[f"db_z_{j}_mm"].to_numpy(float) * MM
-        return B
+        if {j.name: j.active for j in mech.joints} != {j: ACTIVE[j] for j in names}:
+            raise EvotolError(f"5-bar joints {names} are not actuated as in Fig. IV.4 ({ACTIVE})")
+        bxy = X[[f"db_xy_{j}_mm" for j in names]].to_numpy(float) * MM
+        bz = X[[f"db_z_{j}_mm" for j in names]].to_numpy(float) * MM
+        return mech.thesis_bounds(b_xy=bxy, b_z=bz, h=self.h_mm * MM, beta_z_passive=self.beta_z_passive,
+                                  beta_z_active=self.beta_z_active)
 
     def __call__(self, X: pd.DataFrame) -> pd.DataFrame:
-        from robots.clearance.maxerror import evaluate_cases
-
-        mech, maps = self._model()
-        res = evaluate_cases(mech, maps, np.zeros(len(X), int), self.bounds(X), tol=self.tol)
+        res = self._model().evaluate(self.bounds(X), pose_index=0)
         cost = default_cost_model()
         tol_cols = [f"db_xy_{j}_mm" for j in JOINTS] + [f"db_z_{j}_mm" for j in JOINTS]
         c = cost.cost(X[tol_cols].to_numpy(float) * MM).sum(axis=1)
