@@ -106,9 +106,9 @@ class CostModel:
         """Reject parameters that make the cost negative or increasing in t on [t_min, t_max] (SI)."""
         if t_max is None:
             t_max = 100 * self.scale
-        if not (np.isfinite(t_min) and np.isfinite(t_max) and 0 <= t_min < t_max):
-            raise ValidationError(f"{self.name} tolerance range", (t_min, t_max), "0 <= t_min < t_max, finite (SI units)")
-        t = _range_grid(t_min, t_max, n)
+        if not (np.isfinite(t_min) and np.isfinite(t_max) and 0 <= t_min <= t_max):
+            raise ValidationError(f"{self.name} tolerance range", (t_min, t_max), "0 <= t_min <= t_max, finite (SI units)")
+        t = _range_grid(t_min, t_max, n) if t_max > t_min else np.array([t_max])
         c, dc = self.cost(t), self.dcost(t)
         bad = np.flatnonzero(~np.isfinite(c) | (c < 0))
         if bad.size:

@@ -45,6 +45,7 @@ class ConstraintRows:
                 pp, dd = np.divmod(flat, D.shape[0])
                 self._add_linear(c[pp, dd, :] / lim, [(comp, int(a), int(b)) for a, b in zip(pp, dd)])
             self.check(probes)
+            self.prune(probes)
 
     # --- rows ------------------------------------------------------------------------------
     def _add_linear(self, rows: np.ndarray, keys) -> int:
@@ -93,8 +94,23 @@ class ConstraintRows:
                 added += self._add_linear(row[None], [key])
         return ev.violation, added
 
+    def prune(self, T: np.ndarray, keep_ratio: float = 0.8) -> int:
+        """Drop linear rows below ``keep_ratio`` × the largest row value for every design in T.
+
+        Safe: the working set only ever under-estimates the error, and ``check`` re-adds any
+        row that becomes the maximum. Returns the number of rows dropped."""
+        if self.A.shape[0] == 0:
+            return 0
+        V = np.atleast_2d(T) @ self.A.T
+        keep = np.any(V >= keep_ratio * V.max(axis=1, keepdims=True), axis=0)
+        dropped = int((~keep).sum())
+        if dropped:
+            self.A = self.A[keep]
+            self._keys = set()  # keys no longer match rows; duplicates are harmless
+        return dropped
+
     # --- helpers for optimisers --------------------------------------------------------------
-    def scale_to_boundary(self, T: np.ndarray, iters: int = 50) -> np.ndarray:
+    def scale_to_boundary(self, T: np.ndarray, iters: int = 40) -> np.ndarray:
         """Scale each design's free tolerances by one factor so it meets the working rows with
         equality (within bounds), by bisection on the factor; locked tolerances are kept."""
         p = self.problem
@@ -103,7 +119,7 @@ class ConstraintRows:
         lo_f = np.zeros(T.shape[0])
         hi_f = np.full(T.shape[0], 1.0)
         # grow hi until infeasible or upper bounds reached
-        for _ in range(60):
+        for _ in range(30):
             Th = T.copy()
             Th[:, free] = np.clip(T[:, free] * hi_f[:, None], p.lower[free], p.upper[free])
             feas = self.violation(Th) <= 0

@@ -32,11 +32,11 @@ from evotol.problem import ToleranceProblem
 from evotol.result import make_result
 
 
-def _scale_exact(problem: ToleranceProblem, t: np.ndarray) -> np.ndarray:
+def _scale_exact(problem: ToleranceProblem, t: np.ndarray, rows: ConstraintRows | None = None) -> np.ndarray:
     """Scale the free tolerances by one factor so the exact requirement holds with equality."""
     measure = problem.requirement.measure
     if measure in ("worst_case", "rss"):
-        rows = ConstraintRows(problem)
+        rows = rows or ConstraintRows(problem)
         for _ in range(10):
             t = rows.scale_to_boundary(t[None])[0]
             viol, added = rows.check(t[None])
@@ -57,11 +57,11 @@ def _scale_exact(problem: ToleranceProblem, t: np.ndarray) -> np.ndarray:
     return out
 
 
-def equal_design(problem: ToleranceProblem) -> np.ndarray:
+def equal_design(problem: ToleranceProblem, rows: ConstraintRows | None = None) -> np.ndarray:
     t = problem.locked_values.copy()
     f = problem.free
     t[f] = np.sqrt(problem.lower[f] * problem.upper[f]).min()
-    return _scale_exact(problem, t)
+    return _scale_exact(problem, t, rows)
 
 
 def proportional_design(problem: ToleranceProblem, weights=None) -> np.ndarray:

@@ -20,19 +20,34 @@ from evotol.problem import ToleranceProblem
 from evotol.result import make_result
 
 
-def aggregated_sensitivity(problem: ToleranceProblem) -> np.ndarray:
-    """s_j (1/unit of t_j): max over poses and components of ‖B_j‖₂ / E_c."""
+def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> np.ndarray:
+    """s_j (1/unit of t_j): max over poses and components of ‖B_j‖₂ / E_c.
+
+    ``collective_groups``: groups of interval sources whose sensitivity is taken for all members
+    moving together, s = max_p ‖Σ_k B_k‖ / E (e.g. the three actuated lengths of a 3-UCR, which
+    then act as a platform lift): a variant that reproduces how Yao 2013's Table 2 sized lengths.
+    """
     s = np.zeros(problem.n_sources)
+    groups = np.array(problem.groups())
     for comp, lim in problem.components:
-        s = np.maximum(s, problem.sensitivities[comp].max(axis=0) / lim)
+        sc = problem.sensitivities[comp].max(axis=0) / lim
+        for g in collective_groups:
+            members = np.flatnonzero(groups == g)
+            if members.size == 0:
+                raise ValidationError("collective_groups", g, f"a source group of {problem.robot.name}: {sorted(set(groups))}")
+            if any(problem.robot.sources[k].dim != 1 for k in members):
+                raise ValidationError("collective_groups", g, "a group of interval (dim 1) sources")
+            Bsum = sum(problem.blocks[comp][k][:, :, 0] for k in members)
+            sc[members] = np.max(np.linalg.norm(Bsum, axis=1)) / lim
+        s = np.maximum(s, sc)
     return s
 
 
-def sensitivity_design(problem: ToleranceProblem, measure: str | None = None) -> np.ndarray:
+def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, collective_groups=()) -> np.ndarray:
     measure = measure or problem.requirement.measure
     if measure not in ("worst_case", "rss"):
         measure = "rss"
-    s = aggregated_sensitivity(problem)
+    s = aggregated_sensitivity(problem, collective_groups)
     free, m = problem.free, int(problem.free.sum())
     t = problem.locked_values.copy()
     locked = ~free
@@ -52,9 +67,13 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None) ->
     return t
 
 
-def allocate_sensitivity(problem: ToleranceProblem, measure: str | None = None):
-    """Equal-effect allocation (see module docstring); ``measure`` defaults to the requirement's."""
+def allocate_sensitivity(problem: ToleranceProblem, measure: str | None = None, collective_groups=()):
+    """Equal-effect allocation (see module docstring); ``measure`` defaults to the requirement's.
+    ``collective_groups``: see :func:`aggregated_sensitivity`."""
     t0 = time.perf_counter()
-    t = sensitivity_design(problem, measure)
-    return make_result(problem, "sensitivity", t, seconds=time.perf_counter() - t0,
-                       info={"rule": f"equal effect, {measure or problem.requirement.measure} stack-up"})
+    t = sensitivity_design(problem, measure, collective_groups)
+    rule = f"equal effect, {measure or problem.requirement.measure} stack-up"
+    if collective_groups:
+        rule += f", collective groups {list(collective_groups)}"
+    return make_result(problem, "sensitivity" + (" (collective)" if collective_groups else ""), t,
+                       seconds=time.perf_counter() - t0, info={"rule": rule})

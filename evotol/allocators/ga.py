@@ -1,0 +1,294 @@
+"""Single-objective genetic algorithm on pymoo with the penalty fitness of Yao et al. 2013 (eq. 15).
+
+Fitness (eq. 15):  f(t) = Σ c_j(t_j)            if the accuracy requirement holds,
+                   f(t) = Σ c_j(t_j) + k        otherwise (k: a large constant, default 10× the
+                                                cost of the tightest design).
+Two operator sets:
+  * ``operators="pymoo"`` (default): binary tournament, SBX crossover, polynomial mutation,
+    (μ+λ) fitness survival – pymoo's well-tested defaults;
+  * ``operators="paper"``: roulette-wheel selection (probability ∝ 1/f), elitism (the ``n_elite``
+    best parents pass unchanged, the rest of the generation are offspring), crossover
+    g = λ g1 + (1 − λ) g2 with λ ~ U(0, 1) (as printed in Sec. 4, step 5, under the name Wright's
+    heuristic crossover), and uniform mutation (a gene is redrawn uniformly inside its bounds:
+    the printed rule, "a random number in [a, b] is added", would push genes out of bounds).
+``repair=True`` (default) scales every design onto the boundary of the requirement (the error is
+positively homogeneous in t, so t ← t / (error/bound) is exact when no bound clips), which turns
+the penalty search into a search along the feasible boundary; ``repair=False`` is the paper's GA.
+
+The whole population is evaluated in one vectorised call. Worst-case rows are generated lazily
+(:mod:`evotol.constraints`): each generation the best designs are checked exactly and any missed
+row is added; the returned design is judged by the exact evaluation.
+Runs are reproducible from ``seed``; Ctrl-C stops the run and returns the best design so far.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from pymoo.algorithms.soo.nonconvex.ga import GA, FitnessSurvival
+from pymoo.core.crossover import Crossover
+from pymoo.core.mutation import Mutation
+from pymoo.core.problem import Problem
+from pymoo.core.repair import Repair
+from pymoo.core.selection import Selection
+from pymoo.core.survival import Survival
+from pymoo.operators.crossover.sbx import SBX
+from pymoo.operators.mutation.pm import PM
+from pymoo.operators.selection.tournament import TournamentSelection, compare
+from pymoo.termination import get_termination
+from scipy.stats import qmc
+
+from evotol.constraints import ConstraintRows
+from evotol.errors import ValidationError
+from evotol.problem import ToleranceProblem
+from evotol.result import make_result
+
+
+# --- the paper's operators --------------------------------------------------------------------------
+class RouletteSelection(Selection):
+    """Roulette-wheel selection for minimisation: probability ∝ 1/f (f > 0)."""
+
+    def _do(self, problem, pop, n_select, n_parents, random_state=None, **kwargs):
+        rng = random_state if random_state is not None else np.random.default_rng()
+        F = pop.get("F")[:, 0]
+        w = 1.0 / np.maximum(F - min(F.min(), 0.0) + 1e-12, 1e-12)
+        return rng.choice(len(pop), size=(n_select, n_parents), p=w / w.sum())
+
+
+class BlendCrossover(Crossover):
+    """g = λ g1 + (1 − λ) g2 and its mirror, λ ~ U(0, 1) per mating (Yao 2013 Sec. 4 step 5)."""
+
+    def __init__(self, prob: float = 0.9, **kwargs):
+        super().__init__(2, 2, prob=prob, **kwargs)
+
+    def _do(self, problem, X, random_state=None, **kwargs):
+        rng = random_state if random_state is not None else np.random.default_rng()
+        lam = rng.random((X.shape[1], 1))
+        return np.stack([lam * X[0] + (1 - lam) * X[1], (1 - lam) * X[0] + lam * X[1]])
+
+
+class UniformMutation(Mutation):
+    """Each gene is redrawn uniformly inside its bounds with probability ``prob_var``."""
+
+    def __init__(self, prob_var: float | None = None, **kwargs):
+        super().__init__(prob=1.0, **kwargs)
+        self.p_var = prob_var
+
+    def _do(self, problem, X, random_state=None, **kwargs):
+        rng = random_state if random_state is not None else np.random.default_rng()
+        p = self.p_var if self.p_var is not None else 1.0 / problem.n_var
+        mask = rng.random(X.shape) < p
+        new = problem.xl + rng.random(X.shape) * (problem.xu - problem.xl)
+        return np.where(mask, new, X)
+
+
+class EliteSurvival(Survival):
+    """The ``n_elite`` best parents survive unchanged; the offspring fill the rest (generational)."""
+
+    def __init__(self, n_elite: int = 2):
+        super().__init__(filter_infeasible=False)
+        self.n_elite = int(n_elite)
+
+    def _do(self, problem, pop, n_survive=None, algorithm=None, **kwargs):
+        n_off = len(algorithm.off) if algorithm is not None and algorithm.off is not None else 0
+        if n_off == 0 or n_off >= len(pop):
+            S = np.argsort(pop.get("F")[:, 0])
+            return pop[S[:n_survive]]
+        parents, offspring = pop[:len(pop) - n_off], pop[len(pop) - n_off:]
+        elite = np.argsort(parents.get("F")[:, 0])[:self.n_elite]
+        rest = np.argsort(offspring.get("F")[:, 0])[:n_survive - len(elite)]
+        from pymoo.core.population import Population
+        return Population.merge(parents[elite], offspring[rest])
+
+
+# --- pymoo problem and repair ---------------------------------------------------------------------
+class _BoundaryRepair(Repair):
+    def __init__(self, rows: ConstraintRows):
+        super().__init__()
+        self.rows = rows
+
+    def _do(self, problem, X, **kwargs):
+        P = self.rows.problem
+        T = P.full(X)
+        T = boundary_scale(self.rows, T)
+        return T[:, P.free]
+
+
+def boundary_scale(rows: ConstraintRows, T: np.ndarray, iters: int = 20) -> np.ndarray:
+    """t ← clip(t / error) on the free tolerances, a few fixed-point steps (exact without clipping)."""
+    P = rows.problem
+    f = P.free
+    T = T.copy()
+    active = np.arange(T.shape[0])
+    for _ in range(iters):
+        ne = rows.normalised_error(T[active])
+        Tn = T[active].copy()
+        Tn[:, f] = np.clip(Tn[:, f] / ne[:, None], P.lower[f], P.upper[f])
+        moved = np.any(np.abs(Tn - T[active]) > 1e-12 * np.abs(T[active]), axis=1) & (np.abs(ne - 1) > 1e-12)
+        T[active] = Tn
+        active = active[moved]
+        if active.size == 0:
+            break
+    ne = rows.normalised_error(T)
+    over = ne > 1 + 1e-10   # round-off of t/ne is not a violation
+    if over.any():  # locked sources / clipping: shrink by bisection on those left outside
+        T[over] = rows.scale_to_boundary(T[over], iters=30)
+    return T
+
+
+class _GAProblem(Problem):
+    def __init__(self, tp: ToleranceProblem, rows: ConstraintRows | None, penalty: float, budget: float | None,
+                 n_check: int):
+        f = tp.free
+        super().__init__(n_var=int(f.sum()), n_obj=1, xl=tp.lower[f], xu=tp.upper[f])
+        self.tp, self.rows, self.penalty, self.budget, self.n_check = tp, rows, penalty, budget, n_check
+        self.best = None  # (fitness, design, exact violation)
+
+    def _violation(self, T):
+        if self.rows is not None:
+            return self.rows.violation(T)
+        return self.tp.evaluate(T).violation
+
+    def _evaluate(self, X, out, *args, **kwargs):
+        T = self.tp.full(X)
+        cost = self.tp.cost(T)
+        viol = self._violation(T)
+        if self.budget is None:
+            fit = cost + self.penalty * (viol > 1e-9)
+            order = np.argsort(fit)[: self.n_check]
+            if self.rows is not None and self.rows.measure == "worst_case":
+                exact, added = self.rows.check(T[order])
+                if added:
+                    viol = self.rows.violation(T)
+                    fit = cost + self.penalty * (viol > 1e-9)
+                ok = order[exact <= 1e-9]
+            else:
+                ok = order[viol[order] <= 1e-9]
+            if ok.size:
+                i = ok[np.argmin(cost[ok])]
+                if self.best is None or cost[i] < self.best[0]:
+                    self.best = (float(cost[i]), T[i].copy())
+        else:
+            err = viol + 1
+            fit = err + self.penalty * (cost > self.budget)
+            ok = np.flatnonzero(cost <= self.budget)
+            if ok.size:
+                i = ok[np.argmin(err[ok])]
+                if self.best is None or err[i] < self.best[0]:
+                    self.best = (float(err[i]), T[i].copy())
+        out["F"] = fit[:, None]
+
+
+def initial_population(tp: ToleranceProblem, pop_size: int, seed: int, seeds=()) -> np.ndarray:
+    """Latin hypercube over the bounds (scipy.stats.qmc), with the given seed designs first."""
+    f = tp.free
+    X = qmc.scale(qmc.LatinHypercube(d=int(f.sum()), seed=seed).random(pop_size), tp.lower[f], tp.upper[f])
+    S = [tp.as_array(s)[f] for s in seeds]
+    for i, s in enumerate(S[:pop_size]):
+        X[i] = np.clip(s, tp.lower[f], tp.upper[f])
+    return X
+
+
+def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
+                operators: str = "pymoo", repair: bool | None = None, penalty: float | None = None,
+                seeds=None, seed_with_baselines: bool = True, budget: float | None = None,
+                n_elite: int = 2, n_check: int = 1, progress: bool | None = None,
+                checkpoint: str | Path | None = None, checkpoint_every: int = 20):
+    """GA allocation (see module docstring). Returns an AllocationResult with the history.
+
+    budget: if given, minimise the (normalised) error subject to cost <= budget instead.
+    seeds: designs (mapping or array) placed in the initial population; by default the
+        sensitivity, Lagrange and equal-tolerance baselines (``seed_with_baselines``).
+    progress: tqdm bar over generations (default: only on an interactive terminal).
+    checkpoint: JSON file updated every ``checkpoint_every`` generations with the best design.
+    """
+    t0 = time.perf_counter()
+    if operators not in ("pymoo", "paper"):
+        raise ValidationError("operators", operators, "'pymoo' or 'paper'")
+    for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1)):
+        if not isinstance(v, (int, np.integer)) or v < lo:
+            raise ValidationError(name, v, f"an integer >= {lo}")
+    if repair is None:
+        repair = operators == "pymoo" and budget is None
+    measure = problem.requirement.measure
+    rows = ConstraintRows(problem, seed=seed) if measure in ("worst_case", "rss") else None
+    if repair and rows is None:
+        raise ValidationError("repair", True, "the worst_case or rss measure (mc_quantile has no boundary scaling)")
+    if penalty is None:
+        penalty = 10.0 * float(problem.cost(problem.full(problem.lower[problem.free][None]))[0]) if budget is None else 10.0
+    if seeds is None:
+        seeds = []
+        if seed_with_baselines and budget is None:
+            from evotol.allocators.baselines import equal_design, lagrange_design
+            from evotol.allocators.sensitivity import sensitivity_design
+            for fn in (sensitivity_design, lagrange_design, lambda p: equal_design(p, rows)):
+                try:
+                    seeds.append(fn(problem))
+                except Exception:  # a baseline that does not apply (e.g. all bounds) is just skipped
+                    pass
+    gp = _GAProblem(problem, rows, penalty, budget, n_check)
+    X0 = initial_population(problem, pop_size, seed, seeds)
+    if operators == "pymoo":
+        algo = GA(pop_size=pop_size, sampling=X0, selection=TournamentSelection(func_comp=_binary_tournament),
+                  crossover=SBX(prob=0.9, eta=15), mutation=PM(eta=20), survival=FitnessSurvival(),
+                  repair=_BoundaryRepair(rows) if repair else None, eliminate_duplicates=True)
+    else:
+        algo = GA(pop_size=pop_size, sampling=X0, selection=RouletteSelection(), crossover=BlendCrossover(prob=0.9),
+                  mutation=UniformMutation(), survival=EliteSurvival(n_elite),
+                  repair=_BoundaryRepair(rows) if repair else None, eliminate_duplicates=False)
+    algo.setup(gp, termination=get_termination("n_gen", n_gen), seed=seed, verbose=False)
+    hist = []
+    interrupted = False
+    from tqdm.auto import tqdm
+    bar = tqdm(total=n_gen, desc="GA", unit="gen", disable=(not sys.stderr.isatty()) if progress is None else not progress,
+               leave=False)
+    try:
+        while algo.has_next():
+            algo.next()
+            F = algo.pop.get("F")[:, 0]
+            hist.append({"generation": algo.n_gen - 1, "best_fitness": float(F.min()), "mean_fitness": float(F.mean()),
+                         "best_feasible": gp.best[0] if gp.best else np.nan, "evaluations": algo.evaluator.n_eval})
+            bar.update(1)
+            if gp.best:
+                bar.set_postfix(best=f"{gp.best[0]:.5g}")
+            if rows is not None and len(hist) % 20 == 0:
+                rows.prune(problem.full(algo.pop.get("X")), keep_ratio=0.9)
+            if checkpoint and len(hist) % checkpoint_every == 0:
+                _write_checkpoint(checkpoint, problem, gp, hist)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        bar.close()
+    if checkpoint:
+        _write_checkpoint(checkpoint, problem, gp, hist)
+    if gp.best is None:
+        best = problem.full(algo.pop.get("X")[np.argmin(algo.pop.get("F")[:, 0])][None])[0]
+    else:
+        best = gp.best[1]
+    history = pd.DataFrame(hist)
+    name = "GA" if budget is None else "GA (best accuracy at budget)"
+    return make_result(problem, name, best, history=history, seconds=time.perf_counter() - t0,
+                       info={"operators": operators, "repair": bool(repair), "pop_size": pop_size, "n_gen": n_gen,
+                             "seed": seed, "penalty": penalty, "interrupted": interrupted,
+                             "initial_best": float(history["best_fitness"].iloc[0]) if len(history) else np.nan,
+                             **({"budget": budget} if budget is not None else {})})
+
+
+def _binary_tournament(pop, P, random_state=None, **kwargs):
+    F = pop.get("F")[:, 0]
+    S = np.empty(P.shape[0], dtype=int)
+    for i, (a, b) in enumerate(P):
+        S[i] = compare(a, F[a], b, F[b], method="smaller_is_better", return_random_if_equal=True,
+                       random_state=random_state)
+    return S[:, None]
+
+
+def _write_checkpoint(path, problem, gp, hist):
+    data = {"generation": len(hist), "history": hist,
+            "best": dict(zip(problem.names, gp.best[1].tolist())) if gp.best else None,
+            "best_value": gp.best[0] if gp.best else None}
+    Path(path).write_text(json.dumps(data, indent=1, default=float))

@@ -1,0 +1,123 @@
+"""Cost vs. accuracy trade-off: the whole Pareto front in one NSGA-II run (pymoo).
+
+Objectives: total cost and the largest normalised error over the poses (error / bound, the
+maximum over the constrained components; 1 = exactly at the requirement). The requirement itself
+is not imposed: the front spans tolerances from the tightest to the loosest bounds. Each
+generation the current front is checked exactly (lazy worst-case rows); the returned front is
+re-evaluated exactly and filtered for non-dominance.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from pymoo.algorithms.moo.nsga2 import NSGA2
+from pymoo.core.problem import Problem
+from pymoo.termination import get_termination
+from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
+
+from evotol.allocators.ga import initial_population
+from evotol.constraints import ConstraintRows
+from evotol.errors import ValidationError
+from evotol.problem import ToleranceProblem
+
+
+@dataclass
+class ParetoFront:
+    """Non-dominated designs sorted by cost: ``table`` has columns cost, normalised_error, one
+    column per constrained component (SI), and one column per source tolerance (SI)."""
+
+    table: pd.DataFrame
+    seconds: float = 0.0
+    history: pd.DataFrame | None = field(default=None, repr=False)
+
+    @property
+    def cost(self) -> np.ndarray:
+        return self.table["cost"].to_numpy()
+
+    @property
+    def error(self) -> np.ndarray:
+        return self.table["normalised_error"].to_numpy()
+
+    def cheapest_feasible(self) -> pd.Series:
+        ok = self.table[self.table["normalised_error"] <= 1 + 1e-9]
+        if ok.empty:
+            raise ValidationError("Pareto front", "no design", "a design that meets the requirement")
+        return ok.loc[ok["cost"].idxmin()]
+
+    def knee(self) -> int:
+        """Index of the knee: the point farthest from the line through the extremes (normalised)."""
+        c, e = self.cost, self.error
+        if len(c) < 3:
+            return 0
+        cn = (c - c.min()) / max(np.ptp(c), 1e-300)
+        en = (e - e.min()) / max(np.ptp(e), 1e-300)
+        a, b = np.array([cn[0], en[0]]), np.array([cn[-1], en[-1]])
+        d = np.abs(np.cross(b - a, np.stack([cn, en], 1) - a)) / max(np.linalg.norm(b - a), 1e-300)
+        return int(np.argmax(d))
+
+
+class _FrontProblem(Problem):
+    def __init__(self, tp: ToleranceProblem, rows: ConstraintRows | None):
+        f = tp.free
+        super().__init__(n_var=int(f.sum()), n_obj=2, xl=tp.lower[f], xu=tp.upper[f])
+        self.tp, self.rows = tp, rows
+
+    def _evaluate(self, X, out, *args, **kwargs):
+        T = self.tp.full(X)
+        err = self.rows.normalised_error(T) if self.rows is not None else self.tp.evaluate(T).violation + 1
+        out["F"] = np.stack([self.tp.cost(T), err], axis=1)
+
+
+def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
+                   seeds=(), n_check: int = 5, progress: bool | None = None) -> ParetoFront:
+    """NSGA-II cost vs. normalised error (see module docstring)."""
+    t0 = time.perf_counter()
+    for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1)):
+        if not isinstance(v, (int, np.integer)) or v < lo:
+            raise ValidationError(name, v, f"an integer >= {lo}")
+    rows = ConstraintRows(problem, seed=seed) if problem.requirement.measure in ("worst_case", "rss") else None
+    fp = _FrontProblem(problem, rows)
+    X0 = initial_population(problem, pop_size, seed, seeds)
+    algo = NSGA2(pop_size=pop_size, sampling=X0, eliminate_duplicates=True)
+    algo.setup(fp, termination=get_termination("n_gen", n_gen), seed=seed, verbose=False)
+    rng = np.random.default_rng(seed)
+    from tqdm.auto import tqdm
+    bar = tqdm(total=n_gen, desc="NSGA-II", unit="gen", leave=False,
+               disable=(not sys.stderr.isatty()) if progress is None else not progress)
+    hist = []
+    try:
+        while algo.has_next():
+            algo.next()
+            if rows is not None and rows.measure == "worst_case":
+                X = algo.opt.get("X")
+                pick = rng.choice(len(X), size=min(n_check, len(X)), replace=False)
+                _, added = rows.check(problem.full(X[pick]))
+                if added:  # re-score the population with the new rows
+                    F = algo.pop.get("F")
+                    F[:, 1] = rows.normalised_error(problem.full(algo.pop.get("X")))
+                    algo.pop.set("F", F)
+            F = algo.opt.get("F")
+            hist.append({"generation": algo.n_gen - 1, "front_size": len(F), "min_cost": float(F[:, 0].min()),
+                         "min_error": float(F[:, 1].min())})
+            bar.update(1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        bar.close()
+    X = algo.pop.get("X")
+    T = problem.full(X)
+    ev = problem.evaluate(T, top_only=True)
+    err = ev.violation + 1
+    cost = problem.cost(T)
+    nd = NonDominatedSorting().do(np.stack([cost, err], 1), only_non_dominated_front=True)
+    order = nd[np.argsort(cost[nd])]
+    table = pd.DataFrame({"cost": cost[order], "normalised_error": err[order]})
+    for comp, _ in problem.components:
+        table[f"{comp}_error"] = np.max(getattr(ev, comp)[order], axis=1)
+    for j, n in enumerate(problem.names):
+        table[n] = T[order, j]
+    return ParetoFront(table.reset_index(drop=True), time.perf_counter() - t0, pd.DataFrame(hist))
