@@ -206,7 +206,7 @@ function ranges(){ var dims = gd.data[0].dimensions, out = [];
   for(var k=0;k<dims.length;k++){ var cr = dims[k].constraintrange;
     if(cr && cr.length){ out.push([k, (Array.isArray(cr[0]) ? cr : [cr])]); } }
   return out; }
-function keptRows(){ var dims = gd.data[0].dimensions, R = ranges(), n = P.n, keep = [];
+function keptRows(R){ R = R || ranges(); var n = P.n, keep = [];
   var cols = R.map(function(r){ return vals(r[0]); });
   for(var i=0;i<n;i++){ var ok = true;
     for(var j=0;j<R.length && ok;j++){ var v = cols[j][i], rs = R[j][1], any = false;
@@ -215,8 +215,8 @@ function keptRows(){ var dims = gd.data[0].dimensions, R = ranges(), n = P.n, ke
     if(ok) keep.push(i); }
   return keep; }
 function value(k, i){ var v = vals(k)[i]; return P.log[k] ? Math.pow(10, v) : v; }
-function update(){
-  var keep = keptRows();
+function update(R){
+  var keep = keptRows(R);
   q('count-n').textContent = keep.length;
   var dims = gd.data[0].dimensions, rows = [];
   // kept range of every axis
@@ -242,16 +242,21 @@ function update(){
   gd.setAttribute('data-kept', keep.length);
 }
 function apply(name){
-  var upd = {}, dims = gd.data[0].dimensions, set = {};
+  // the read-outs (count, kept ranges, table) are computed from the preset first and painted
+  // at once; the WebGL redraw of the lines follows
+  var upd = {}, dims = gd.data[0].dimensions, set = {}, R = [];
   var pr = P.presets.filter(function(p){ return p.name === name; })[0];
-  if(pr){ pr.ranges.forEach(function(r){ set[r[0]] = [r[1], r[2]]; }); }
+  if(pr){ pr.ranges.forEach(function(r){ set[r[0]] = [r[1], r[2]]; R.push([r[0], [[r[1], r[2]]]]); }); }
   for(var k=0;k<dims.length;k++){ upd['dimensions[' + k + '].constraintrange'] = [k in set ? set[k] : null]; }
   q('preset').textContent = pr ? pr.name : 'none';
   gd.setAttribute('data-preset', pr ? pr.name : '');
   var t0 = performance.now();
-  return Plotly.restyle(gd, upd, [0]).then(function(){ update();
-    return new Promise(function(res){ requestAnimationFrame(function(){ requestAnimationFrame(function(){
-      var ms = performance.now() - t0; gd.setAttribute('data-apply-ms', ms.toFixed(1)); res(ms); }); }); }); });
+  update(R);
+  gd.setAttribute('data-count-ms', (performance.now() - t0).toFixed(1));
+  return new Promise(function(res){ requestAnimationFrame(function(){ setTimeout(function(){
+    Plotly.restyle(gd, upd, [0]).then(function(){ requestAnimationFrame(function(){ requestAnimationFrame(function(){
+      var ms = performance.now() - t0; gd.setAttribute('data-apply-ms', ms.toFixed(1)); res(ms); }); }); });
+  }, 0); }); });
 }
 window.evotolParcoords = window.evotolParcoords || {};
 window.evotolParcoords[P.div] = {apply: apply, update: update, keptRows: keptRows};
