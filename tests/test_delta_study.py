@@ -1,0 +1,70 @@
+"""Study brahmia2023-delta (quick run): outputs, the paper's verification, and the cost-optimal allocation."""
+import json
+
+import numpy as np
+import pytest
+
+from evotol import studies
+from evotol.studies import brahmia2023_delta as study
+from robots.delta import DeltaRobot, cylinder_poses
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("delta")
+    return out, study.run(out, quick=True, seed=0)
+
+
+def test_study_is_registered_and_writes_html_and_json(quick):
+    out, s = quick
+    assert "brahmia2023-delta" in studies.available()
+    html = (out / "brahmia2023-delta.html").read_text(encoding="utf-8")
+    assert '<script src="http' not in html and "Plotly" in html     # offline report: plotly.js embedded
+    data = json.loads((out / "brahmia2023-delta.json").read_text())
+    for key in ("tolerance_intervals", "verification_error_mm", "table3_cost", "optimum_cost", "ga_cost",
+                "worst_case_error_mm", "seconds"):
+        assert key in data
+    assert len(data["tolerance_intervals"]) == 47
+    assert all(lo <= 0 <= hi for lo, hi in data["tolerance_intervals"].values())
+    assert set(data["verification_error_mm"]) == set(study.VERIFICATION_CASES)
+
+
+def test_sec_4_1_verification_below_0_2_mm_in_all_cases(quick):
+    # Fig. 7: our intervals keep the position error below the imposed 0.2 mm at the 15 postures
+    _, s = quick
+    for case, errs in s["verification_error_mm"].items():
+        assert len(errs) == 15 and max(errs) < study.REQUIRED_MM
+
+
+def test_optimum_meets_requirement_on_dense_poses_and_beats_table3(quick):
+    _, s = quick
+    wc = s["worst_case_error_mm"]
+    assert wc["optimum"] <= study.REQUIRED_MM * (1 + 1e-9)
+    assert s["optimum_cost"] < s["table3_cost"]
+    # at the accuracy Table 3 actually holds the optimum is cheaper too
+    assert wc["optimum at Table 3's accuracy"] <= wc["paper Table 3"] * (1 + 1e-9)
+    assert s["optimum_cost_at_table3_accuracy"] < s["table3_cost"]
+    # the certified lower bound holds for every feasible design (GA, sensitivity)
+    lb = s["optimum_certificate"]["lower_bound"]
+    assert s["ga_cost"] >= lb * (1 - 1e-6) and s["sensitivity_cost"] >= lb * (1 - 1e-6)
+    assert s["optimum_certificate"]["gap"] < 1e-4
+    # nonlinear check of the worst case: the attaining vertex through the forward kinematics
+    for a in s["allocations"].values():
+        assert a["nonlinear_at_worst_vertex_mm"] == pytest.approx(a["worst_case_error_mm"], rel=0.02)
+        assert a["mc"]["max_mm"] <= a["worst_case_error_mm"] * 1.01
+
+
+def test_worst_case_with_offsets_is_attained_and_bounds_sampled_vertices():
+    robot = DeltaRobot()
+    poses = cylinder_poses(20, seed=5)
+    prob = study.tolerance_problem(robot, poses)
+    lo, hi = study.table3_si()
+    wc = study.worst_case_with_offsets(prob, lo, hi)                 # (20,)
+    S = prob.jacobian[:, :3]
+    rng = np.random.default_rng(0)
+    V = np.where(rng.random((4000, 47)) < 0.5, lo, hi)              # random vertices of the box
+    sampled = np.linalg.norm(np.einsum("pij,sj->psi", S, V), axis=-1).max(axis=1)
+    assert np.all(sampled <= wc * (1 + 1e-9))
+    # the attaining vertex of the nonlinear check reproduces the linear value to first order
+    v = study.worst_vertex_nonlinear(robot, prob, lo, hi)
+    assert np.allclose(v, wc * 1e3, rtol=1e-2)
