@@ -117,6 +117,33 @@ class FiveBar:
         u, v = g["E"] - g["C"], g["E"] - g["D"]
         return (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
 
+    def singularity_locus(self, x, y_low: float, y_high: float, n_bisect: int = 60) -> np.ndarray:
+        """Points (x, y) (m) of the parallel singularity (C, E, D aligned) inside ``[y_low, y_high]``
+        for each x of ``x``: the sign change of :meth:`parallel_singularity` along y, found by
+        bisection (vectorised). x values with no crossing in the range give no point."""
+        x = np.asarray(x, float)
+        ys = np.linspace(y_low, y_high, 81)
+        X, Yg = np.meshgrid(x, ys, indexing="ij")
+        s = self.parallel_singularity(np.stack([X.ravel(), Yg.ravel()], 1)).reshape(X.shape)
+        pts = []
+        for k in range(len(ys) - 1):
+            hit = (np.sign(s[:, k]) * np.sign(s[:, k + 1]) < 0) | (s[:, k] == 0)
+            if not hit.any():
+                continue
+            lo, hi = np.full(hit.sum(), ys[k]), np.full(hit.sum(), ys[k + 1])
+            xs = x[hit]
+            slo = s[hit, k]
+            for _ in range(n_bisect):
+                mid = (lo + hi) / 2
+                sm = self.parallel_singularity(np.stack([xs, mid], 1))
+                left = np.sign(sm) == np.sign(slo)
+                lo, hi = np.where(left, mid, lo), np.where(left, hi, mid)
+            pts.append(np.stack([xs, (lo + hi) / 2], 1))
+        if not pts:
+            return np.zeros((0, 2))
+        out = np.concatenate(pts)
+        return out[np.lexsort((out[:, 1], out[:, 0]))]
+
     def forward_geometry(self, theta1, theta3, lengths: dict | None = None, reference=None) -> np.ndarray:
         """End-effector position (n, 2) from the actuated angles (circle intersection at E), with
         optionally perturbed lengths ``lengths = {L0..L5: (n,) arrays}`` (m). The assembly
@@ -144,8 +171,8 @@ class FiveBar:
             ref = np.asarray(reference, float)
             pick = np.linalg.norm(E1 - ref, axis=-1) <= np.linalg.norm(E2 - ref, axis=-1)
             E = np.where(pick[..., None], E1, E2)
-        u = (E - C) / Ls["L2"]
-        return E + np.asarray(Ls["L5"])[..., None] * u
+        u = (E - C) / np.asarray(Ls["L2"], float)[..., None]
+        return E + np.asarray(Ls["L5"], float)[..., None] * u
 
     # ------------------------------------------------------------------ clearance model
     def dh_tree(self) -> DHTree:
@@ -181,3 +208,134 @@ class FiveBar:
             name="5-bar", tree=self.dh_tree(), joints=joints, bodies={"P": "7"},
             chains=[Chain("leg1", "base", "P", ("A", "C")), Chain("leg2", "base", "P", ("B", "D", "E"), path_end="5")],
             end_effector="P", joint_values=self.joint_values, planar=True)
+
+
+# ---------------------------------------------------------------------------- geometric sensitivity
+GEOMETRIC_SOURCES = (
+    SourceSpec("L0", 1, "m", "length", "base length A-B (A and B move by -+dL0/2 along x)"),
+    SourceSpec("L1", 1, "m", "length", "link A-C (leg 1 proximal)"),
+    SourceSpec("L2", 1, "m", "length", "link C-E (leg 1 distal)"),
+    SourceSpec("L3", 1, "m", "length", "link B-D (leg 2 proximal)"),
+    SourceSpec("L4", 1, "m", "length", "link D-E (leg 2 distal)"),
+    SourceSpec("L5", 1, "m", "length", "offset E-P along link C-E"),
+    SourceSpec("theta1", 1, "rad", "actuator", "actuated joint A (offset / encoder error)"),
+    SourceSpec("theta3", 1, "rad", "actuator", "actuated joint B (offset / encoder error)"),
+)
+#: default workspace of the geometric model: the thesis's x range above the singular circle |OP| = 50 mm
+GEOMETRIC_WORKSPACE = Workspace(names=("x", "y"), low=(-20 * MM, 55 * MM), high=(20 * MM, 70 * MM),
+                                units=("m", "m"), display_units=("mm", "mm"), display_scale=(1e3, 1e3))
+
+
+class FiveBarGeometric(RobotErrorModel):
+    """Sensitivity of the 5-bar's end-effector to its geometric parameters (Deng 2012 Sec. III.2, IV.5).
+
+    Sources (intervals): ``dL0..dL5`` (m) and the actuated-joint errors ``dtheta1, dtheta3`` (rad).
+    ``sensitivity`` is the vector-differentiation matrix J_p of eqs. IV.27-IV.43 (rows dp_x, dp_y)
+    plus the rotation of the end-effector link ``dtheta1 + dtheta2`` (row dtheta_z, from eq.
+    IV.39); ``pose_error`` re-solves the loop (circle intersection) with the perturbed lengths
+    and actuated angles, so the core's finite-difference check applies.
+
+    Poses at (or within ``singular_tol`` of) the parallel singularity raise KinematicsError: J_p
+    is unbounded there (the default workspace stays above the singular circle |OP| = 50 mm).
+    """
+
+    name = "deng2012-5bar-geometric"
+    sources = GEOMETRIC_SOURCES
+
+    def __init__(self, fivebar: FiveBar | None = None, workspace: Workspace | None = None, singular_tol: float = 1e-3):
+        self.robot = fivebar or FiveBar()
+        self.workspace = workspace or GEOMETRIC_WORKSPACE
+        self.singular_tol = float(singular_tol)
+
+    def _geometry(self, poses):
+        poses = self.check_poses(poses)
+        s = self.robot.parallel_singularity(poses)
+        bad = np.abs(s) < self.singular_tol
+        if bad.any():
+            raise KinematicsError(f"{self.name}: pose {poses[bad][0].tolist()} m is at (or within sin = "
+                                  f"{self.singular_tol:g} of) the parallel singularity; J_p is unbounded there", poses=poses[bad])
+        return poses, self.robot.inverse_geometry(poses)
+
+    def jacobian_thesis(self, poses) -> np.ndarray:
+        """J_p (n, 2, 8) of eq. IV.43 and J_theta2 (n, 8) of eq. IV.40, columns dL0..dL5, dth1, dth3."""
+        poses, g = self._geometry(poses)
+        r = self.robot
+        n = len(poses)
+        E = np.array([[0.0, -1.0], [1.0, 0.0]])
+        i = np.array([1.0, 0.0])
+        th1, th2, th3, th4 = g["theta1"], g["theta2"], g["theta3"], g["theta4"]
+        mu1 = np.stack([np.cos(th1), np.sin(th1)], 1)
+        v1 = np.stack([np.cos(th1 + th2), np.sin(th1 + th2)], 1)
+        mu2 = np.stack([np.cos(th3), np.sin(th3)], 1)
+        v2 = np.stack([np.cos(th3 + th4), np.sin(th3 + th4)], 1)
+        dot = lambda a, b: np.einsum("ni,ni->n", a, b)
+        Emu1, Emu2, Ev1 = mu1 @ E.T, mu2 @ E.T, v1 @ E.T
+        zero = np.zeros(n)
+        rows = np.stack([                                                   # eq. IV.37, right matrix
+            np.stack([-0.5 * v1 @ i, dot(v1, mu1), dot(v1, v1), zero, zero, zero, dot(v1, Emu1) * r.L1, zero], 1),
+            np.stack([0.5 * v2 @ i, zero, zero, dot(v2, mu2), dot(v2, v2), zero, zero, dot(v2, Emu2) * r.L3], 1),
+        ], 1)
+        V = np.stack([v1, v2], 1)
+        Je = np.linalg.solve(V, rows)                                       # eq. IV.38
+        Jth2 = (np.einsum("ni,nij->nj", Ev1, Je) / r.L2                     # eq. IV.40 (8 columns; the
+                + np.stack([0.5 * Ev1 @ i / r.L2, -dot(Ev1, mu1) / r.L2,     # printed row misses one 0)
+                            zero, zero, zero, zero, -dot(Ev1, Emu1) * r.L1 / r.L2 - 1.0, zero], 1))
+        JL5 = np.zeros(8); JL5[5] = 1.0
+        Jth1 = np.zeros(8); Jth1[6] = 1.0
+        Jp = Je + v1[:, :, None] * JL5 + r.L5 * Ev1[:, :, None] * (Jth1 + Jth2)[:, None, :]   # eq. IV.43
+        return Jp, Jth2
+
+    def sensitivity(self, poses) -> np.ndarray:
+        Jp, Jth2 = self.jacobian_thesis(poses)
+        out = np.zeros((len(Jp), 6, 8))
+        out[:, 0:2] = Jp
+        out[:, 5] = Jth2
+        out[:, 5, 6] += 1.0          # end-effector link angle theta1 + theta2
+        return out
+
+    def pose_error(self, poses, errors) -> np.ndarray:
+        poses, g = self._geometry(poses)
+        errors = np.asarray(errors, float)
+        n, m, _ = errors.shape
+        r = self.robot
+        L = {k: getattr(r, k) + errors[:, :, j] for j, k in enumerate(("L0", "L1", "L2", "L3", "L4", "L5"))}
+        th1 = g["theta1"][:, None] + errors[:, :, 6]
+        th3 = g["theta3"][:, None] + errors[:, :, 7]
+        Eref = np.broadcast_to(g["E"][:, None, :], (n, m, 2))
+        P = r.forward_geometry(th1, th3, lengths=L, reference=Eref)
+        C = np.stack([-L["L0"] / 2 + L["L1"] * np.cos(th1), L["L1"] * np.sin(th1)], -1)
+        # direction of link C-E in the perturbed loop (E = the loop point, P = E + L5 u)
+        Eloop = r.forward_geometry(th1, th3, lengths={**L, "L5": np.zeros_like(L["L5"])}, reference=Eref)
+        u = Eloop - C
+        ang = np.arctan2(u[..., 1], u[..., 0])
+        ang0 = (g["theta1"] + g["theta2"])[:, None]
+        out = np.zeros((n, m, 6))
+        out[..., 0:2] = P - g["P"][:, None, :]
+        out[..., 5] = (ang - ang0 + np.pi) % (2 * np.pi) - np.pi
+        return out
+
+
+def combined_max_pose_error(fivebar: FiveBar, poses, *, clearance=None, geometric=None, tol: float = 1e-3):
+    """Worst case of joint clearances **and** geometric variations together (the thesis's future
+    work 1, Sec. VIII.2): to first order the end-effector error is the sum of the clearance error
+    (Ch. III) and ``J_p dg`` (Sec. IV.5) with ``|dg_k| <= t_k``; the feasible set is the Minkowski
+    sum, whose support function is the sum of the two, and the same certified branch and bound
+    gives its maximum.
+
+    clearance: a ClearanceMechanism (default: the thesis's clearances) or None;
+    geometric: dict source name -> tolerance (m or rad) over L0..L5, theta1, theta3 (missing = 0).
+    Returns a MaxPoseError with ``p_extra``/``r_extra`` = the maximising geometric errors.
+    """
+    mech = clearance if clearance is not None else fivebar.clearance_mechanism()
+    poses = np.atleast_2d(np.asarray(poses, float))
+    geo = FiveBarGeometric(fivebar, workspace=Workspace(("x", "y"), tuple(poses.min(0)), tuple(poses.max(0)), ("m", "m")))
+    names = [s.name for s in GEOMETRIC_SOURCES]
+    t = np.zeros(len(names))
+    for k, v in (geometric or {}).items():
+        if k not in names:
+            raise ValidationError("geometric tolerance", k, f"one of {names}")
+        t[names.index(k)] = float(v)
+    Jb = geo.sensitivity(poses)                         # [dp; dtheta] (robots.base order)
+    J = np.concatenate([Jb[:, 3:], Jb[:, :3]], axis=1)  # -> thesis order [dtheta; dp]
+    from robots.clearance import max_pose_error
+    return max_pose_error(mech, poses, tol=tol, extra=(J, t))

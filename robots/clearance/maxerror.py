@@ -242,6 +242,8 @@ class MaxPoseError:
     joint_names: tuple[str, ...]
     n_solves: int = 0
     seconds: float = 0.0
+    p_extra: np.ndarray | None = None   # (n, q) values of the extra sources at the p maximiser
+    r_extra: np.ndarray | None = None
 
     @property
     def p_gap(self) -> np.ndarray:
@@ -277,29 +279,63 @@ def _as_bounds(mech: ClearanceMechanism, bounds, n: int) -> np.ndarray:
 
 
 def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: np.ndarray, bounds: np.ndarray, *,
-                   tol: float = 1e-3, tol_solve: float = 2e-5) -> MaxPoseError:
+                   tol: float = 1e-3, tol_solve: float = 2e-5, extra=None) -> MaxPoseError:
     """Maximum pose errors for cases ``(pose_index[i], bounds[i])`` using precomputed ``maps``
     (``mech.pose_maps(poses)``). bounds: (n_cases, n_joints, 4). Identical sub-problems (same
-    pose and same bounds on a decoupled block) are solved once."""
+    pose and same bounds on a decoupled block) are solved once.
+
+    extra: optional ``(J, t)``: other independent error sources added to the clearance error --
+    ``J`` (n_poses, 6, q) maps them to the end-effector twist ``[dtheta; dp]`` (thesis order, base
+    axes), ``t`` (q,) or (n_cases, q) are their interval half-widths (e.g. link-length and
+    actuator tolerances through the geometric sensitivity J_p). The support functions of the
+    clearance set and of the box ``|e_k| <= t_k`` add up (Minkowski sum), so the combined
+    worst case is computed by the same certified method."""
     import time
 
     t0 = time.perf_counter()
     pose_index = np.asarray(pose_index, int)
     n = len(pose_index)
     bounds = np.broadcast_to(bounds, (n, mech.n_joints, 4))
-    out = {}
     screws = {w: np.zeros((n, mech.n_joints * 6)) for w in ("p", "r")}
     sq = {w: np.zeros((n, 2)) for w in ("p", "r")}   # squared (lower, upper) summed over blocks
+    q = 0
+    if extra is not None:
+        J, t = np.asarray(extra[0], float), np.asarray(extra[1], float)
+        q = J.shape[-1]
+        if J.ndim != 3 or J.shape[1] != 6 or J.shape[0] != maps[0].C_pos.shape[0]:
+            raise ValidationError("extra J shape", J.shape, f"(n_poses={maps[0].C_pos.shape[0]}, 6, q)")
+        t = np.broadcast_to(t, (n, q))
+        if np.any(t < 0) or not np.all(np.isfinite(t)):
+            raise ValidationError("extra tolerances", "negative or non-finite", "half-widths >= 0")
+        owner = -np.ones(q, int)
+        for b, pm in enumerate(maps):
+            comps = list(pm.block.components)
+            hit = np.abs(J[:, comps, :]).max(axis=(0, 1)) > 0
+            if np.any(hit & (owner >= 0)):
+                raise ValidationError("extra J", "a source acting on two decoupled blocks",
+                                      "sources that act in-plane or out-of-plane only (or a non-planar mechanism)")
+            owner[hit] = b
+    extra_val = {w: np.zeros((n, q)) for w in ("p", "r")}
     n_solves = 0
-    for pm in maps:
+    for b, pm in enumerate(maps):
         D = pm.row_bounds(bounds)                                   # (n, R)
+        Cp, Cr, B = pm.C_pos, pm.C_rot, pm.B
+        mine = np.nonzero(owner == b)[0] if q else np.zeros(0, int)
+        if mine.size:
+            comps = list(pm.block.components)
+            Jb = J[:, :, mine]
+            Cp = np.concatenate([Cp, Jb[:, list(pm.pos_comps), :]], axis=2)
+            Cr = np.concatenate([Cr, Jb[:, list(pm.rot_comps), :]], axis=2)
+            B = np.concatenate([B, np.zeros((B.shape[0], mine.size, B.shape[2]))], axis=1)
+            D = np.concatenate([D, t[:, mine]], axis=1)
         key = np.concatenate([pose_index[:, None].astype(float), D], axis=1)
-        ukey, first, back = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        _, first, back = np.unique(key, axis=0, return_index=True, return_inverse=True)
         back = back.ravel()
         pidx, Du = pose_index[first], D[first]
-        Bt = pm.B[pidx] * Du[..., None]
+        Bt = B[pidx] * Du[..., None]
         gi = _gram_pinv(Bt) if pm.n_loops else np.zeros((len(pidx), 0, 0))
-        for w, C in (("p", pm.C_pos), ("r", pm.C_rot)):
+        R = pm.n_rows
+        for w, C in (("p", Cp), ("r", Cr)):
             if C.shape[1] == 0:
                 continue
             Ct = C[pidx] * Du[:, None, :]
@@ -307,8 +343,10 @@ def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: n
             n_solves += tgt.n_solves
             sq[w][:, 0] += tgt.lower[back] ** 2
             sq[w][:, 1] += tgt.upper[back] ** 2
-            s = tgt.sigma[back] * D
-            screws[w][:, pm.cols] = s
+            sfull = tgt.sigma[back] * D
+            screws[w][:, pm.cols] = sfull[:, :R]
+            if mine.size:
+                extra_val[w][:, mine] = sfull[:, R:]
     twists = {}
     for w in ("p", "r"):
         tw = np.zeros((n, 6))
@@ -316,17 +354,20 @@ def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: n
             s = screws[w][:, pm.cols]
             tw[:, list(pm.pos_comps)] = np.einsum("nkr,nr->nk", pm.C_pos[pose_index], s)
             tw[:, list(pm.rot_comps)] = np.einsum("nkr,nr->nk", pm.C_rot[pose_index], s)
+        if q:
+            tw += np.einsum("nkq,nq->nk", J[pose_index], extra_val[w])
         twists[w] = tw
     res = MaxPoseError(
         p_max=np.sqrt(sq["p"][:, 0]), p_upper=np.sqrt(sq["p"][:, 1]),
         r_max=np.sqrt(sq["r"][:, 0]), r_upper=np.sqrt(sq["r"][:, 1]),
         p_screws=screws["p"].reshape(n, -1, 6), r_screws=screws["r"].reshape(n, -1, 6),
         p_twist=twists["p"], r_twist=twists["r"], joint_names=tuple(j.name for j in mech.joints),
-        n_solves=n_solves, seconds=time.perf_counter() - t0)
+        n_solves=n_solves, seconds=time.perf_counter() - t0,
+        p_extra=extra_val["p"] if q else None, r_extra=extra_val["r"] if q else None)
     return res
 
 
-def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float = 1e-3) -> MaxPoseError:
+def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float = 1e-3, extra=None) -> MaxPoseError:
     """Global maximum positional and rotational error at each pose (Deng 2012 eqs. III.26-III.27,
     V.8, V.13), with explicit maximising screws and certified upper bounds.
 
@@ -334,12 +375,14 @@ def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float =
     an array (n_joints, 4) for all poses or (n, n_joints, 4) per pose, columns
     ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]`` in the order of ``mech.joints``.
     tol: relative gap between the attained value and the certified bound (default 0.1 %).
+    extra: optional ``(J, t)`` of other interval error sources added to the clearances (see
+    :func:`evaluate_cases`), e.g. geometric tolerances through the 5-bar's J_p.
     """
     poses = np.atleast_2d(np.asarray(poses, float))
     b = _as_bounds(mech, bounds, len(poses))
     maps = mech.pose_maps(poses)
     idx = np.arange(len(poses))
-    return evaluate_cases(mech, maps, idx, np.broadcast_to(b, (len(poses),) + b.shape[-2:]), tol=tol)
+    return evaluate_cases(mech, maps, idx, np.broadcast_to(b, (len(poses),) + b.shape[-2:]), tol=tol, extra=extra)
 
 
 class ClearanceEvaluator:
@@ -368,3 +411,48 @@ class ClearanceEvaluator:
         n = len(self.poses)
         b = _as_bounds(self.mech, bounds, n)
         return evaluate_cases(self.mech, self.maps, np.arange(n), np.broadcast_to(b, (n,) + b.shape[-2:]), tol=self.tol)
+
+
+def sample_max_errors(mech: ClearanceMechanism, pose, bounds=None, *, n_samples: int = 10 ** 6, seed: int = 0,
+                      mode: str = "boundary", chunk: int = 100_000) -> tuple[float, float]:
+    """Largest positional and rotational error reached by **random** clearance states at one pose
+    -- what plain Monte Carlo verification would report (compare with :func:`max_pose_error`).
+
+    Each sample draws every joint's screw at random in its clearance set (``mode="uniform"``:
+    uniformly inside the disks and intervals; ``"boundary"``: on their boundaries, i.e. every
+    clearance fully taken up in a random direction), removes the part that violates the loop
+    equations (orthogonal projection onto ``B^T s = 0``) and scales back into the clearance set,
+    so every sample is a feasible, consistent clearance state. Returns (p, r) in m and rad.
+    """
+    if mode not in ("uniform", "boundary"):
+        raise ValidationError("mode", mode, "'uniform' or 'boundary'")
+    rng = np.random.default_rng(seed)
+    maps = mech.pose_maps(np.atleast_2d(np.asarray(pose, float)))
+    b = _as_bounds(mech, bounds, 1)
+    best = {"p": np.zeros(1), "r": np.zeros(1)}
+    left = int(n_samples)
+    while left > 0:
+        n = min(chunk, left)
+        left -= n
+        tot = {"p": np.zeros(n), "r": np.zeros(n)}
+        for pm in maps:
+            D = pm.row_bounds(b[None])[0]
+            nd = pm.n_disk
+            ni = pm.n_rows - 2 * nd
+            ang = rng.uniform(0, 2 * np.pi, (n, nd))
+            rad = np.ones((n, nd)) if mode == "boundary" else np.sqrt(rng.uniform(0, 1, (n, nd)))
+            disk = np.stack([rad * np.cos(ang), rad * np.sin(ang)], -1).reshape(n, 2 * nd)
+            inter = rng.choice([-1.0, 1.0], (n, ni)) if mode == "boundary" else rng.uniform(-1, 1, (n, ni))
+            sig = np.concatenate([disk, inter], 1)
+            Bt = pm.B[0] * D[:, None]
+            if Bt.shape[1]:
+                sig = sig - (sig @ Bt) @ np.linalg.pinv(Bt)      # orthogonal projection onto B^T s = 0
+            nrm_d = np.sqrt((sig[:, :2 * nd].reshape(n, nd, 2) ** 2).sum(-1)).max(-1, initial=0.0)
+            nrm_i = np.abs(sig[:, 2 * nd:]).max(-1, initial=0.0)
+            sig = sig / np.maximum(np.maximum(nrm_d, nrm_i), 1.0)[:, None]
+            s = sig * D
+            tot["p"] += ((s @ pm.C_pos[0].T) ** 2).sum(-1)
+            tot["r"] += ((s @ pm.C_rot[0].T) ** 2).sum(-1)
+        for w in ("p", "r"):
+            best[w] = np.maximum(best[w], np.sqrt(tot[w].max()))
+    return float(best["p"][0]), float(best["r"][0])

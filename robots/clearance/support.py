@@ -183,7 +183,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             s0 = np.concatenate([(Ydc / tdc[..., None]).reshape(len(c_idx), 2 * nd), Yic / tic], axis=1)
             ac, Bc = wa[centred], wB[centred]
             s_new, lo_new = _project(s0, ac, Bc, nd, wgi[centred])
-            tgt = np.maximum(tol[c_idx], rtol * upper[c_idx])
+            tgt = np.maximum(np.maximum(tol[c_idx], rtol * upper[c_idx]), 1e-250)
             # complementary-slackness repair once the barrier gap is no longer what limits us
             weak = (upper[c_idx] - lo_new > tgt) & (2.0 * n_cones / tcen < 0.2 * (upper[c_idx] - lo_new))
             if weak.any():
