@@ -212,6 +212,7 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
     log = doe.EvaluationLog()
     df = doe.evaluate(entries, ev, store=out_dir / f"{NAME}_store{'_quick' if quick else ''}",
                       workers=workers, scheduler=scheduler, progress=progress, log=log,
+                      chunk_size=None if quick else 4096,   # ~2 ms/entry in chunks of 4096 vs ~5 ms in 256
                       description="5-bar tolerance entries")
     study = DesignStudy(df, objectives=list(OBJECTIVES), presets=presets(), name=NAME)
     paths = study.save(out_dir / f"{NAME}_entries")
@@ -253,6 +254,9 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
     pc = add_parcoords(rep, study, axes=axes, color="p_max_mm", extra=pareto, div_id="pc")
     rep.heading("Presets (Figs. VII.3-VII.8): kept entries and kept input levels")
     rep.table(preset_table_rows(study), ["preset", "thesis", "query", "kept", "kept levels (mm)"])
+    rep.text(f"The same filters on our {len(sample)}-entry random sample (seed {seed}), the size the thesis plots "
+             f"(its sample is unknown, so its readings are compared with both):")
+    rep.table(preset_table_rows(study, among=sample), ["preset", "thesis", "query", "kept", "kept levels (mm)"])
     rep.heading("Objective ranges vs the thesis")
     rows = []
     for c, lab in (("p_max_mm", "p_max (mm)"), ("r_max_deg", "r_max (deg)")):
