@@ -183,13 +183,16 @@ class _GAProblem(Problem):
         out["F"] = fit[:, None]
 
 
-def initial_population(tp: ToleranceProblem, pop_size: int, seed: int, seeds=()) -> np.ndarray:
-    """Latin hypercube over the bounds (scipy.stats.qmc), with the given seed designs first."""
+def initial_population(tp: ToleranceProblem, pop_size: int, seed: int, seeds=(), log_scale: bool = False) -> np.ndarray:
+    """Latin hypercube over the bounds (scipy.stats.qmc), with the given seed designs first.
+    With ``log_scale`` the hypercube and the returned variables are log(t)."""
     f = tp.free
-    X = qmc.scale(qmc.LatinHypercube(d=int(f.sum()), seed=seed).random(pop_size), tp.lower[f], tp.upper[f])
+    lo, hi = (np.log(tp.lower[f]), np.log(tp.upper[f])) if log_scale else (tp.lower[f], tp.upper[f])
+    X = qmc.scale(qmc.LatinHypercube(d=int(f.sum()), seed=seed).random(pop_size), lo, hi)
     S = [tp.as_array(s)[f] for s in seeds]
     for i, s in enumerate(S[:pop_size]):
-        X[i] = np.clip(s, tp.lower[f], tp.upper[f])
+        s = np.clip(s, tp.lower[f], tp.upper[f])
+        X[i] = np.log(s) if log_scale else s
     return X
 
 

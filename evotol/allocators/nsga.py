@@ -61,27 +61,38 @@ class ParetoFront:
 
 
 class _FrontProblem(Problem):
-    def __init__(self, tp: ToleranceProblem, rows: ConstraintRows | None):
+    """Variables are log(t) when ``log_scale`` (tolerance ranges spanning decades), else t."""
+
+    def __init__(self, tp: ToleranceProblem, rows: ConstraintRows | None, log_scale: bool):
         f = tp.free
-        super().__init__(n_var=int(f.sum()), n_obj=2, xl=tp.lower[f], xu=tp.upper[f])
-        self.tp, self.rows = tp, rows
+        lo, hi = (np.log(tp.lower[f]), np.log(tp.upper[f])) if log_scale else (tp.lower[f], tp.upper[f])
+        super().__init__(n_var=int(f.sum()), n_obj=2, xl=lo, xu=hi)
+        self.tp, self.rows, self.log_scale = tp, rows, log_scale
+
+    def tolerances(self, X):
+        return self.tp.full(np.exp(X) if self.log_scale else X)
 
     def _evaluate(self, X, out, *args, **kwargs):
-        T = self.tp.full(X)
+        T = self.tolerances(X)
         err = self.rows.normalised_error(T) if self.rows is not None else self.tp.evaluate(T).violation + 1
         out["F"] = np.stack([self.tp.cost(T), err], axis=1)
 
 
 def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
-                   seeds=(), n_check: int = 5, progress: bool | None = None) -> ParetoFront:
-    """NSGA-II cost vs. normalised error (see module docstring)."""
+                   seeds=(), n_check: int = 5, progress: bool | None = None,
+                   log_scale: bool | None = None) -> ParetoFront:
+    """NSGA-II cost vs. normalised error (see module docstring). ``log_scale``: search log(t)
+    (default: when some tolerance range spans more than two decades)."""
     t0 = time.perf_counter()
     for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1)):
         if not isinstance(v, (int, np.integer)) or v < lo:
             raise ValidationError(name, v, f"an integer >= {lo}")
     rows = ConstraintRows(problem, seed=seed) if problem.requirement.measure in ("worst_case", "rss") else None
-    fp = _FrontProblem(problem, rows)
-    X0 = initial_population(problem, pop_size, seed, seeds)
+    f = problem.free
+    if log_scale is None:
+        log_scale = bool(np.any(problem.upper[f] / problem.lower[f] > 100))
+    fp = _FrontProblem(problem, rows, log_scale)
+    X0 = initial_population(problem, pop_size, seed, seeds, log_scale=log_scale)
     algo = NSGA2(pop_size=pop_size, sampling=X0, eliminate_duplicates=True)
     algo.setup(fp, termination=get_termination("n_gen", n_gen), seed=seed, verbose=False)
     rng = np.random.default_rng(seed)
@@ -95,10 +106,10 @@ def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int
             if rows is not None and rows.measure == "worst_case":
                 X = algo.opt.get("X")
                 pick = rng.choice(len(X), size=min(n_check, len(X)), replace=False)
-                _, added = rows.check(problem.full(X[pick]))
+                _, added = rows.check(fp.tolerances(X[pick]))
                 if added:  # re-score the population with the new rows
                     F = algo.pop.get("F")
-                    F[:, 1] = rows.normalised_error(problem.full(algo.pop.get("X")))
+                    F[:, 1] = rows.normalised_error(fp.tolerances(algo.pop.get("X")))
                     algo.pop.set("F", F)
             F = algo.opt.get("F")
             hist.append({"generation": algo.n_gen - 1, "front_size": len(F), "min_cost": float(F[:, 0].min()),
@@ -108,8 +119,7 @@ def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int
         pass
     finally:
         bar.close()
-    X = algo.pop.get("X")
-    T = problem.full(X)
+    T = fp.tolerances(algo.pop.get("X"))
     ev = problem.evaluate(T, top_only=True)
     err = ev.violation + 1
     cost = problem.cost(T)

@@ -1,0 +1,103 @@
+"""Cost–tolerance models: closed forms, derivatives vs finite differences, validation, fitting."""
+import numpy as np
+import pytest
+
+import cost_models as cm
+from evotol.errors import ValidationError
+
+ALL = [cm.ExponentialCost(1.9, 0.5, scale=1e-5), cm.PowerCost(2.0, 1.3, scale=1e-5), cm.ReciprocalCost(0.2, 1.5, scale=1e-5),
+       cm.ReciprocalSquareCost(0.1, 2.0, scale=1e-5), cm.ExpReciprocalCost(1.0, 0.5, 0.2, scale=1e-5),
+       cm.Polynomial3Cost(10.0, -3.0, 0.3, -0.01, scale=1e-5), cm.Polynomial4Cost(12.0, -4.0, 0.6, -0.04, 0.0009, scale=1e-5),
+       cm.LinearExponentialCost(0.5, -0.01, 3.0, 0.4, scale=1e-5),
+       cm.SumCost(cm.ExponentialCost(1.0, 0.5, scale=1e-5), cm.ReciprocalCost(0.0, 0.5, scale=1e-5))]
+
+
+def test_yao2013_eq13_table_costs():
+    """Yao 2013 eq. 13 with (1.9, 0.5) for lengths and (1.1, 0.6) for joints reproduces Tables 1–2 costs."""
+    L, J = cm.ExponentialCost(1.9, 0.5, scale=1e-5), cm.ExponentialCost(1.1, 0.6, scale=1e-5)
+    t1 = np.array([4.94, 4.81, 4.96]), np.array([2.94, 2.93, 2.97, 2.95, 2.96, 2.94, 2.98, 2.93, 2.89])
+    t2 = np.array([1.38] * 3), np.array([2.21, 2.19, 2.17, 4.29, 4.34, 4.31, 4.30, 4.37, 4.32])
+    c1 = L.cost(t1[0] * 1e-5).sum() + J.cost(t1[1] * 1e-5).sum()
+    c2 = L.cost(t2[0] * 1e-5).sum() + J.cost(t2[1] * 1e-5).sum()
+    assert c1 == pytest.approx(2.1837, abs=2e-3)
+    assert c2 == pytest.approx(4.2391, abs=2e-3)
+
+
+@pytest.mark.parametrize("model", ALL, ids=lambda m: m.name)
+def test_conformance_and_derivatives(model):
+    """Every built-in passes check_cost_model: dcost matches central differences, cost vectorised."""
+    rep = cm.check_cost_model(model, 0.5e-5, 8e-5)
+    assert rep["dcost_fd_relative_error"] < 1e-5
+    t = np.linspace(1e-5, 5e-5, 7)
+    h = 1e-10
+    d2 = (model.dcost(t + h) - model.dcost(t - h)) / (2 * h)
+    np.testing.assert_allclose(model.d2cost(t), d2, rtol=1e-3, atol=1e-3 * np.max(np.abs(d2)))
+
+
+def test_closed_forms():
+    t = np.array([1e-5, 3e-5])
+    np.testing.assert_allclose(cm.PowerCost(2.0, 1.5, scale=1e-5).cost(t), 2.0 * np.array([1, 3]) ** -1.5)
+    np.testing.assert_allclose(cm.ReciprocalCost(1.0, 2.0, scale=1e-5).cost(t), 1 + 2 / np.array([1, 3]))
+    np.testing.assert_allclose(cm.ReciprocalSquareCost(1.0, 2.0, scale=1e-5).cost(t), 1 + 2 / np.array([1, 9]))
+    np.testing.assert_allclose(cm.ExpReciprocalCost(2.0, 1.0, 0.5, scale=1e-5).cost(t), 2 / np.array([1, 3]) * np.exp(-0.5 * np.array([1, 3])))
+
+
+@pytest.mark.parametrize("cls,params,field", [
+    (cm.ExponentialCost, (1.0, -0.5), "exponential.a1"),
+    (cm.ExponentialCost, (-1.0, 0.5), "exponential.a0"),
+    (cm.PowerCost, (1.0, 0.0), "power.a1"),
+    (cm.ReciprocalCost, (1.0, -2.0), "reciprocal.a1"),
+])
+def test_bad_parameters_are_named(cls, params, field):
+    with pytest.raises(ValidationError) as e:
+        cls(*params)
+    assert field in str(e.value)
+
+
+def test_range_rejects_negative_or_increasing_cost():
+    # reciprocal with a0 < 0 goes negative for large t
+    with pytest.raises(ValidationError, match="non-negative"):
+        cm.ReciprocalCost(-1.0, 1.0, scale=1e-5, t_max=5e-5)
+    # a cubic that turns upward inside the range
+    with pytest.raises(ValidationError, match="does not increase"):
+        cm.Polynomial3Cost(10.0, -3.0, 0.35, 0.0, scale=1e-5, t_max=10e-5)
+    with pytest.raises(ValidationError, match="scale"):
+        cm.ExponentialCost(1, 1, scale=0)
+    with pytest.raises(ValidationError, match="a real number"):
+        cm.ExponentialCost("x", 1)
+
+
+def test_fit_recovers_parameters_of_noise_free_data():
+    t = np.linspace(0.5e-5, 8e-5, 15)
+    for model in [cm.ExponentialCost(1.9, 0.5, scale=1e-5), cm.PowerCost(2.0, 1.3, scale=1e-5),
+                  cm.ReciprocalSquareCost(0.1, 2.0, scale=1e-5), cm.ExpReciprocalCost(1.0, 0.5, 0.2, scale=1e-5)]:
+        fit = cm.fit(model.name, t, model.cost(t), scale=1e-5)
+        np.testing.assert_allclose(fit.model.p, model.p, rtol=1e-5)
+        assert fit.r2 > 1 - 1e-10
+
+
+def test_fit_reports_quality_on_noisy_data():
+    rng = np.random.default_rng(0)
+    t = np.linspace(1e-5, 1e-4, 20)
+    c = 3 * np.exp(-0.4 * t / 1e-5) * (1 + 0.02 * rng.normal(size=t.size))
+    good = cm.fit("index", t, c, scale=1e-5)
+    bad = cm.fit("reciprocal", t, c, scale=1e-5)
+    assert good.r2 > 0.99 and good.r2 > bad.r2
+    assert "R²" in good.summary()
+    with pytest.raises(ValidationError, match="at least"):
+        cm.fit("exponential", t[:2], c[:2])
+    with pytest.raises(ValidationError, match="tolerances"):
+        cm.fit("exponential", -t, c)
+
+
+def test_user_models_callable_registry_and_dict():
+    m = cm.CallableCost(lambda x: 5.0 / (1 + x), name="shop", scale=1e-5, t_min=1e-6, t_max=1e-4)
+    cm.check_cost_model(m, 1e-6, 1e-4)
+    assert m.cost(1e-5) == pytest.approx(2.5)
+    assert cm.get("index") is cm.ExponentialCost
+    built = cm.from_dict({"model": "power", "a0": 2, "a1": 1.5, "scale": 1e-3})
+    assert isinstance(built, cm.PowerCost) and built.scale == 1e-3
+    with pytest.raises(ValidationError, match="cost model"):
+        cm.get("no-such-model")
+    with pytest.raises(ValidationError, match="a callable"):
+        cm.CallableCost(3.0)

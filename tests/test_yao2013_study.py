@@ -1,0 +1,51 @@
+"""The yao2013 study end to end (quick run): JSON keys of the issue, paper numbers, HTML offline."""
+import json
+
+import pytest
+
+from evotol.cli import main
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    out = tmp_path_factory.mktemp("yao")
+    assert main(["reproduce", "yao2013", "--out", str(out), "--quick"]) == 0
+    return out, json.loads((out / "yao2013.json").read_text())
+
+
+def test_json_has_the_issue_keys(study):
+    _, d = study
+    assert d["paper_table1_cost"] == pytest.approx(2.18, abs=0.01)
+    assert d["paper_table2_cost"] == pytest.approx(4.24, abs=0.01)
+    assert d["ga_seconds"] > 0
+    for variant in ("paper", "verified"):
+        v = d["variants"][variant]
+        assert v["accuracy_measure"] == "rss"
+        for k in ("ga_cost", "sensitivity_cost", "optimum_cost"):
+            assert v[k] > 0
+        for k in ("ga", "sensitivity", "optimum"):
+            assert len(v["tolerances"][k]) == 12
+        for k in ("paper_table1", "paper_table2", "ga", "sensitivity", "optimum"):
+            for m in ("worst_case_error", "rss_error", "mc_max_exceed_rate"):
+                assert v[k][m] >= 0
+        assert v["ga_cost"] <= v["optimum_cost"] * 1.005
+
+
+def test_paper_comparison_under_the_paper_model(study):
+    """Sensitivity (collective lengths, the rule behind Table 2) / GA ≈ the paper's 1.94."""
+    _, d = study
+    v = d["variants"]["paper"]
+    assert v["sensitivity_collective_lengths_cost"] == pytest.approx(4.2391, rel=0.02)
+    assert 1.8 < v["sensitivity_collective_over_ga"] < 2.3
+    # the paper's Table 1 sits on the RSS boundary of its own model (within 2 %)
+    assert v["paper_table1"]["rss_error"] == pytest.approx(5e-5, rel=0.02)
+    # and does not hold under the verified model
+    assert d["variants"]["verified"]["paper_table1"]["rss_error"] > 2 * 5e-5
+
+
+def test_html_is_offline_and_indexed(study):
+    out, _ = study
+    html = (out / "yao2013.html").read_text()
+    assert "<script src=\"http" not in html and "Plotly" in html   # plotly.js embedded, no CDN
+    assert "Convergence" in html and "exceed rate" in html
+    assert "yao2013.html" in (out / "index.html").read_text()
