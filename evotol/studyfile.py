@@ -1,0 +1,123 @@
+"""``evotol run STUDY.toml``: a user's own allocation study, with the same outputs as the seeds.
+
+See ``reports/studies/ucr3_example.toml`` for every field. Units are SI (m, rad); a cost model's
+``scale`` is the unit its coefficients were fitted in.
+"""
+from __future__ import annotations
+
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+import cost_models
+from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
+                               allocate_sensitivity)
+from evotol.errors import ValidationError
+from evotol.montecarlo import verify
+from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.reporting import Report, write_json
+from robots import registry
+
+METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
+           "equal": allocate_equal, "lagrange": allocate_lagrange}
+
+
+def load_problem(spec: dict) -> ToleranceProblem:
+    """Build the problem from a parsed study file (dict)."""
+    rs = dict(spec.get("robot", {}))
+    if "model" not in rs:
+        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3'")
+    cls = registry.get(rs.pop("model"))
+    try:
+        robot = cls(**rs)
+    except TypeError as exc:
+        raise ValidationError("robot", rs, f"parameters accepted by {cls.__name__} ({exc})") from None
+    ps = spec.get("poses", {"grid": 5})
+    if "grid" in ps:
+        poses = robot.workspace.grid(ps["grid"])
+    elif "latin_hypercube" in ps:
+        poses = robot.workspace.latin_hypercube(int(ps["latin_hypercube"]), seed=spec.get("seed", 0))
+    elif "list" in ps:
+        poses = np.asarray(ps["list"], dtype=float)
+    else:
+        raise ValidationError("poses", ps, "one of grid = [n, ...], latin_hypercube = n, list = [[...], ...]")
+    bounds = spec.get("bounds", {})
+    costs = spec.get("cost", {})
+    overrides = spec.get("sources", {})
+    unknown = set(overrides) - set(robot.source_names)
+    if unknown:
+        raise ValidationError(f"sources.{sorted(unknown)[0]}", sorted(unknown)[0], f"a source of {robot.name}: {list(robot.source_names)}")
+    tol = {}
+    for s in robot.sources:
+        o = overrides.get(s.name, {})
+        cspec = o.get("cost", costs.get(s.name, costs.get(s.group, costs.get("default"))))
+        if cspec is None:
+            raise ValidationError(f"cost.{s.group}", None, f"a cost model for source {s.name} (by name, group or 'default')")
+        tol[s.name] = Tolerance(cost_models.from_dict(cspec), float(o.get("lower", bounds.get("lower", 1e-6))),
+                                float(o.get("upper", bounds.get("upper", 1e-3))), o.get("locked"),
+                                o.get("distribution", "uniform"))
+    req = Requirement(**spec.get("requirement", {}))
+    return ToleranceProblem(robot, tol, req, poses)
+
+
+def run_study_file(path, out=None, seed=None) -> dict:
+    path = Path(path)
+    if not path.exists():
+        raise ValidationError("study file", str(path), "an existing TOML file")
+    try:
+        spec = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ValidationError("study file", str(path), f"valid TOML ({exc})") from None
+    t0 = time.perf_counter()
+    seed = spec.get("seed", 0) if seed is None else seed
+    name = spec.get("name", path.stem)
+    out = Path(out) if out else path.parent
+    problem = load_problem(spec)
+    methods = spec.get("methods", {"sensitivity": {}, "optimum": {}, "ga": {}})
+    results, front = {}, None
+    for m, kw in methods.items():
+        if m == "nsga2":
+            front = allocate_nsga2(problem, seed=seed, **kw)
+            continue
+        if m not in METHODS:
+            raise ValidationError(f"methods.{m}", m, f"one of {sorted(METHODS) + ['nsga2']}")
+        kw = dict(kw)
+        if m == "ga":
+            kw.setdefault("seed", seed)
+        results[m] = METHODS[m](problem, **kw)
+    vspec = spec.get("verify", {"n_samples": 1000})
+    checks = {m: verify(problem, r.t, seed=seed, **vspec).to_dict() for m, r in results.items()}
+    summary = {"name": name, "problem": problem.describe(), "seed": seed,
+               "results": {m: r.to_dict() for m, r in results.items()}, "monte_carlo": checks,
+               "seconds": time.perf_counter() - t0}
+    if front is not None:
+        summary["pareto_front"] = front.table.to_dict(orient="list")
+    rep = Report(f"evotol study: {name}", f"{problem.robot.name}, {problem.n_poses} poses, measure {problem.requirement.measure}")
+    rep.heading("Allocations")
+    rows = [[n] + [results[m].tolerances[n] for m in results] for n in problem.names]
+    rows.append(["cost"] + [results[m].cost for m in results])
+    rows.append(["feasible"] + [results[m].feasible for m in results])
+    rows.append(["MC max exceed rate"] + [checks[m]["max_exceed_rate"] for m in results])
+    rep.table(rows, ["source (SI)"] + list(results))
+    for m, r in results.items():
+        rep.heading(f"Contributors at the worst pose: {m}")
+        c = r.contributions()
+        rep.table(c.values.tolist(), list(c.columns))
+        if r.history is not None and len(r.history):
+            import plotly.graph_objects as go
+            fig = go.Figure()
+            fig.add_scatter(x=r.history["generation"], y=r.history["best_fitness"], name="best")
+            fig.add_scatter(x=r.history["generation"], y=r.history["mean_fitness"], name="mean")
+            fig.update_layout(title=f"{m} convergence", xaxis_title="generation", yaxis_title="fitness", yaxis_type="log")
+            rep.figure(fig)
+    if front is not None:
+        import plotly.graph_objects as go
+        fig = go.Figure(go.Scatter(x=front.error, y=front.cost, mode="markers", name="NSGA-II"))
+        fig.update_layout(title="Cost vs. normalised error", xaxis_title="max error / bound", yaxis_title="cost")
+        rep.figure(fig)
+    html = rep.write(out / f"{name}.html")
+    js = write_json(out / f"{name}.json", summary)
+    summary.update({"html": str(html), "json": str(js)})
+    return summary

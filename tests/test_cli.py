@@ -1,0 +1,42 @@
+"""Command line: user study files (evotol run), listing, and clear errors for bad input."""
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from evotol.cli import main
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "reports" / "studies" / "ucr3_example.toml"
+
+
+def test_run_example_study_file(tmp_path):
+    text = EXAMPLE.read_text().replace("grid = [5, 5, 3]", "grid = [3, 3, 2]").replace("n_gen = 60", "n_gen = 15")
+    f = tmp_path / "s.toml"
+    f.write_text(text)
+    assert main(["run", str(f), "--out", str(tmp_path)]) == 0
+    d = json.loads((tmp_path / "ucr3_example.json").read_text())
+    assert d["results"]["optimum"]["feasible"]
+    assert d["results"]["ga"]["cost"] <= d["results"]["optimum"]["cost"] * 1.01
+    assert d["results"]["optimum"]["tolerances"]["R1"] == pytest.approx(2e-5)   # locked
+    assert (tmp_path / "ucr3_example.html").exists()
+
+
+@pytest.mark.parametrize("edit,message", [
+    (("measure = \"rss\"", "measure = \"maximum\""), "requirement.measure"),
+    (("model = \"ucr3\"", "model = \"hexapod\""), "robot.model"),
+    (("[sources.R1]", "[sources.R9]"), "sources.R9"),
+    (("a1 = 0.5", "a1 = -0.5"), "exponential.a1"),
+])
+def test_bad_study_files_get_named_errors(tmp_path, capsys, edit, message):
+    f = tmp_path / "bad.toml"
+    f.write_text(EXAMPLE.read_text().replace(*edit))
+    assert main(["run", str(f)]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_unknown_study_and_list(capsys):
+    assert main(["reproduce", "nope", "--out", "/tmp/evotol-nope"]) == 2
+    assert "one of" in capsys.readouterr().err
+    assert main(["list"]) == 0
+    assert "yao2013" in capsys.readouterr().out
