@@ -148,8 +148,15 @@ class DeltaRobot(RobotErrorModel):
 
     name = "delta"
 
-    def __init__(self, geometry: DeltaGeometry | None = None, workspace: Workspace | None = None,
+    def __init__(self, geometry: DeltaGeometry | dict | None = None, workspace: Workspace | None = None,
                  *, newton_tol: float = 1e-14, max_iter: int = 60):
+        if isinstance(geometry, dict):  # e.g. from a study file: geometry = {La = 0.26, Lb = 0.48}
+            unknown = set(geometry) - {"La", "Lb", "Ra", "Rb", "d"}
+            if unknown:
+                raise ValidationError("DeltaRobot geometry", sorted(unknown), "keys among La, Lb, Ra, Rb, d (m)")
+            geometry = DeltaGeometry(**{k: float(v) for k, v in geometry.items()})
+        if geometry is not None and not isinstance(geometry, DeltaGeometry):
+            raise ValidationError("DeltaRobot geometry", geometry, "a DeltaGeometry or a dict of lengths (m)")
         self.geometry = geometry or DeltaGeometry()
         self.workspace = workspace or Workspace(("x", "y", "z"), (-0.1, -0.1, 0.25), (0.1, 0.1, 0.5),
                                                 ("m", "m", "m"), ("mm", "mm", "mm"), (1e3, 1e3, 1e3))

@@ -153,3 +153,23 @@ def test_bad_input_raises_named_errors():
     with pytest.raises(ValidationError, match="DeltaGeometry.La"):
         from robots.delta import DeltaGeometry
         DeltaGeometry(La=-1.0)
+    with pytest.raises(ValidationError, match="geometry"):
+        DeltaRobot(geometry={"Lc": 0.3})
+    # a study file passes the geometry as a table of lengths (m)
+    assert DeltaRobot(geometry={"La": 0.25}).geometry.La == 0.25
+
+
+def test_delta_from_a_study_file_spec():
+    # evotol run STUDY.toml builds robots by registry name; Δd_i and Δq2_i (no first-order effect)
+    # must be locked for the sensitivity rule
+    from evotol.studyfile import load_problem
+
+    um, mdeg = 1e-6, float(np.radians(1e-3))
+    spec = {"robot": {"model": "delta", "geometry": {"La": 0.26}}, "poses": {"latin_hypercube": 20},
+            "bounds": {"lower": 0.5 * um, "upper": 100 * um},
+            "cost": {"linear": {"model": "reciprocal", "a0": 1.0, "a1": 10.0, "scale": um},
+                     "angular": {"model": "reciprocal", "a0": 1.0, "a1": 10.0, "scale": mdeg}},
+            "sources": {f"{p}_{i}": {"locked": 100 * um} for p in ("d", "q2") for i in (1, 2, 3)},
+            "requirement": {"position": 2e-4}}
+    prob = load_problem(spec)
+    assert prob.n_sources == 47 and prob.n_poses == 20 and int((~prob.free).sum()) == 6
