@@ -26,6 +26,7 @@ from scipy.stats import qmc, truncnorm
 
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
+from evotol.threads import single_threaded_blas
 
 METHODS = ("lhs", "mc")
 RADIAL = ("uniform", "area")
@@ -99,6 +100,7 @@ class MonteCarloResult:
         return d
 
 
+@single_threaded_blas
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
            nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
            progress: bool | None = None) -> MonteCarloResult:

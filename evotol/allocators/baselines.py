@@ -30,6 +30,7 @@ from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
 from evotol.result import make_result
+from evotol.threads import single_threaded_blas
 
 
 def _scale_exact(problem: ToleranceProblem, t: np.ndarray, rows: ConstraintRows | None = None) -> np.ndarray:
@@ -128,16 +129,19 @@ def lagrange_design(problem: ToleranceProblem, measure: str | None = None) -> np
     return _t_of_lambda(problem, s, np.exp(loglam), measure)
 
 
+@single_threaded_blas
 def allocate_equal(problem: ToleranceProblem):
     t0 = time.perf_counter()
     return make_result(problem, "equal tolerance", equal_design(problem), seconds=time.perf_counter() - t0)
 
 
+@single_threaded_blas
 def allocate_proportional(problem: ToleranceProblem, weights=None):
     t0 = time.perf_counter()
     return make_result(problem, "proportional scaling", proportional_design(problem, weights), seconds=time.perf_counter() - t0)
 
 
+@single_threaded_blas
 def allocate_lagrange(problem: ToleranceProblem, measure: str | None = None):
     t0 = time.perf_counter()
     t = lagrange_design(problem, measure)

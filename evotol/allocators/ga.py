@@ -46,6 +46,7 @@ from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
 from evotol.result import make_result
+from evotol.threads import single_threaded_blas
 
 
 # --- the paper's operators --------------------------------------------------------------------------
@@ -196,6 +197,7 @@ def initial_population(tp: ToleranceProblem, pop_size: int, seed: int, seeds=(),
     return X
 
 
+@single_threaded_blas
 def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
                 operators: str = "pymoo", repair: bool | None = None, penalty: float | None = None,
                 seeds=None, seed_with_baselines: bool = True, budget: float | None = None,

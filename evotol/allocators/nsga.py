@@ -23,6 +23,7 @@ from evotol.allocators.ga import initial_population
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
+from evotol.threads import single_threaded_blas
 
 
 @dataclass
@@ -78,6 +79,7 @@ class _FrontProblem(Problem):
         out["F"] = np.stack([self.tp.cost(T), err], axis=1)
 
 
+@single_threaded_blas
 def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
                    seeds=(), n_check: int = 5, progress: bool | None = None,
                    log_scale: bool | None = None) -> ParetoFront:

@@ -31,6 +31,7 @@ from evotol.constraints import ConstraintRows
 from evotol.errors import ConvergenceError, ValidationError
 from evotol.problem import ToleranceProblem
 from evotol.result import make_result
+from evotol.threads import single_threaded_blas
 
 
 def _check_convex(problem: ToleranceProblem) -> None:
@@ -160,6 +161,7 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
     return t_new, res
 
 
+@single_threaded_blas
 def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, tol: float = 1e-9,
                      max_rounds: int = 60, max_rows: int = 400):
     """Certified optimum (min cost at the requirement, or best accuracy at ``budget``)."""

@@ -18,6 +18,7 @@ import numpy as np
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
 from evotol.result import make_result
+from evotol.threads import single_threaded_blas
 
 
 def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> np.ndarray:
@@ -67,6 +68,7 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
     return t
 
 
+@single_threaded_blas
 def allocate_sensitivity(problem: ToleranceProblem, measure: str | None = None, collective_groups=()):
     """Equal-effect allocation (see module docstring); ``measure`` defaults to the requirement's.
     ``collective_groups``: see :func:`aggregated_sensitivity`."""
