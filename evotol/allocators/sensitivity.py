@@ -5,7 +5,8 @@ Rule (documented exactly): let s_j = max over poses and constrained components o
 free source receives the same share of the error budget:
   * worst-case measure:  s_j t_j = (1 − Σ_locked s_k t_k) / m         (linear stack-up);
   * RSS measure:         s_j t_j = sqrt((1 − Σ_locked (s_k t_k)²) / m)  (root-sum-square stack-up);
-m = number of free sources. Tolerances are then clipped to their bounds. The allocation holds
+m = number of free sources that move the end-effector (sources with no effect get their upper
+bound). Tolerances are then clipped to their bounds. The allocation holds
 the requirement by construction (sum/RSS of per-source maxima bounds the true error) but ignores
 cost entirely.
 """
@@ -52,9 +53,12 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
     free, m = problem.free, int(problem.free.sum())
     t = problem.locked_values.copy()
     locked = ~free
-    if np.any(s[free] <= 0):
-        bad = problem.names[int(np.flatnonzero(free & (s <= 0))[0])]
-        raise ValidationError(f"sensitivity of {bad}", 0.0, "a source that moves the end-effector (zero effect: give it its upper bound by locking)")
+    idle = free & (s <= 0)          # sources with no effect on the error: loosest tolerance
+    t[idle] = problem.upper[idle]
+    free = free & ~idle
+    m = int(free.sum())
+    if m == 0:
+        return t
     if measure == "worst_case":
         budget = 1 - float(np.sum(s[locked] * t[locked]))
         share = budget / m
