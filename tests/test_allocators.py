@@ -144,3 +144,23 @@ def test_bad_inputs_are_named():
     nonconvex = {**good, "s0": Tolerance(cm.CallableCost(lambda x: 2 - np.tanh(x), scale=1e-3), 1e-5, 1e-2)}
     with pytest.raises(ValidationError, match="convex"):
         allocate_optimum(ToleranceProblem(r, nonconvex, req, [[0.5]]))
+
+
+def test_mc_quantile_measure_and_ga_with_checkpoint(tmp_path):
+    """The Monte Carlo quantile measure lies below the worst case and above zero, grows linearly with
+    the tolerances, and the GA optimises it (no convex optimum for it: a clear error)."""
+    P = toy_problem("rss", poses=[[0.0], [1.0]])
+    Q = P.with_requirement(measure="mc_quantile", quantile=0.9, mc_samples=400)
+    t = allocate_optimum(P).t
+    q = Q.evaluate(t[None]).position[0]
+    wc = P.evaluate(t[None], "worst_case").position[0]
+    assert np.all(q > 0) and np.all(q < wc)
+    np.testing.assert_allclose(Q.evaluate(2 * t[None]).position[0], 2 * q, rtol=1e-12)
+    with pytest.raises(ValidationError, match="mc_quantile"):
+        allocate_optimum(Q)
+    ck = tmp_path / "ga.json"
+    ga = allocate_ga(Q, pop_size=12, n_gen=6, seed=0, checkpoint=ck, checkpoint_every=2)
+    assert ga.feasible and ck.exists()
+    import json
+    saved = json.loads(ck.read_text())
+    assert saved["generation"] == 6 and saved["best"] is not None

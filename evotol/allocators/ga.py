@@ -217,10 +217,10 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1)):
         if not isinstance(v, (int, np.integer)) or v < lo:
             raise ValidationError(name, v, f"an integer >= {lo}")
-    if repair is None:
-        repair = operators == "pymoo" and budget is None
     measure = problem.requirement.measure
     rows = ConstraintRows(problem, seed=seed) if measure in ("worst_case", "rss") else None
+    if repair is None:
+        repair = operators == "pymoo" and budget is None and rows is not None
     if repair and rows is None:
         raise ValidationError("repair", True, "the worst_case or rss measure (mc_quantile has no boundary scaling)")
     if penalty is None:
