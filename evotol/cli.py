@@ -55,9 +55,20 @@ def cmd_reproduce(args) -> int:
             failed.append(name)
             print(f"[evotol] {name} failed: {exc}", file=sys.stderr)
             continue
+        except Exception:  # a bug in one study must not stop the others: report it and go on
+            if len(names) == 1:
+                raise
+            import traceback
+
+            failed.append(name)
+            traceback.print_exc()
+            print(f"[evotol] {name} failed (bug, traceback above); continuing with the other studies", file=sys.stderr)
+            continue
         print(f"[evotol] {name} done in {time.perf_counter() - t0:.1f} s -> {out / (name + '.html')}", flush=True)
     index = _write_index(out, summaries)
     print(f"[evotol] index: {index}")
+    if failed:
+        print(f"[evotol] failed: {', '.join(failed)}", file=sys.stderr)
     return 1 if failed else 0
 
 
