@@ -164,3 +164,21 @@ def test_mc_quantile_measure_and_ga_with_checkpoint(tmp_path):
     import json
     saved = json.loads(ck.read_text())
     assert saved["generation"] == 6 and saved["best"] is not None
+
+
+def test_position_and_orientation_requirements_together():
+    """Both bounds: the optimum meets both; the binding one is at its bound; a planar robot (x, y, θz)
+    uses a circle of directions and the z axis alone, and stays exact."""
+    for planar in (False, True):
+        r = ToyRobot(planar=planar, seed=4)
+        tol = {s.name: Tolerance(cm.ReciprocalCost(0.1, 1.0, scale=1e-3), 1e-6, 1e-2) for s in r.sources}
+        P = ToleranceProblem(r, tol, Requirement(position=1e-3, orientation=2e-3, measure="worst_case"), [[0.0], [1.0]])
+        opt = allocate_optimum(P)
+        assert opt.feasible
+        ratios = [opt.max_error("position") / 1e-3, opt.max_error("orientation") / 2e-3]
+        assert max(ratios) == pytest.approx(1.0, abs=1e-6)
+        assert opt.certificate["gap"] < 1e-5
+        if planar:  # exactness for the 1-D orientation: sum of |effects|
+            B = [b[:, 2] for b in P.blocks["orientation"]]
+            closed = sum(opt.t[j] * np.linalg.norm(B[j], axis=1) for j in range(len(B)))
+            np.testing.assert_allclose(opt.errors.orientation[0], closed, rtol=1e-12)
