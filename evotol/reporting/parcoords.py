@@ -161,10 +161,11 @@ def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, t
         cb_vals += [0.875, 1.0]
         cb_text += [PARETO, KNEE]
     line = dict(color=c, colorscale=scale, cmin=0.0, cmax=1.0, showscale=True,
-                colorbar=dict(title=dict(text=ca.label or color), tickvals=cb_vals, ticktext=cb_text))
+                colorbar=dict(title=dict(text=ca.label or color, side="right"), tickvals=cb_vals, ticktext=cb_text,
+                              x=1.04, xpad=16, len=0.95, thickness=18))
     fig = go.Figure(go.Parcoords(line=line, dimensions=dims, labelangle=-20, labelside="top",
                                  unselected=dict(line=dict(color="#d9d9d9", opacity=0.25))))
-    fig.update_layout(height=height, margin=dict(l=70, r=40, t=110, b=40),
+    fig.update_layout(height=height, margin=dict(l=80, r=130, t=120, b=40),
                       title=dict(text=title) if title else None)
     return fig
 
