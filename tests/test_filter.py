@@ -116,3 +116,12 @@ def test_cli_filter_on_a_csv_needs_or_infers_columns(tmp_path, study, capsys):
     assert code == 0
     assert f"{study.filter('p_max_mm >= 0.1').count} of 512" in capsys.readouterr().out
     assert main(["filter", str(tmp_path / "missing.parquet"), "p_max <= 1"]) == 2
+
+
+def test_cli_filter_writes_a_report_of_the_kept_entries(tmp_path, study):
+    paths = study.save(tmp_path / "entries")
+    out = tmp_path / "kept.html"
+    assert main(["filter", str(paths["parquet"]), "p_max <= 0.05", "--html", str(out), "--show", "0"]) == 0
+    html = out.read_text()
+    n = study.filter("p_max <= 0.05").count
+    assert f'<span id="pc-count-n">{n}</span> of {n} entries kept' in html

@@ -77,14 +77,21 @@ def log_ticks(lo: float, hi: float) -> tuple[list[float], list[str]]:
     return vals, [format_tick(10 ** v) for v in vals]
 
 
-def default_axes(study: DesignStudy, log_objectives: Sequence[str] = ()) -> list[Axis]:
-    """Inputs then objectives; factors with ``log=True`` and ``log_objectives`` on log10."""
+def default_axes(study: DesignStudy, log_objectives: Sequence[str] | None = None) -> list[Axis]:
+    """Inputs then objectives; factors with ``log=True`` on log10; objectives on log10 when listed
+    in ``log_objectives`` or, by default, when positive and spanning more than two decades."""
     axes = []
     for c in study.inputs:
         f = study.factors.get(c)
         axes.append(Axis(c, f.label if f else c, bool(f and f.log)))
     for c in study.objectives:
-        axes.append(Axis(c, c, c in log_objectives))
+        if log_objectives is None:
+            v = pd.to_numeric(study.entries[c], errors="coerce").to_numpy(float)
+            v = v[np.isfinite(v)]
+            log = bool(v.size and v.min() > 0 and v.max() / v.min() > 100)
+        else:
+            log = c in log_objectives
+        axes.append(Axis(c, c, log))
     return axes
 
 
@@ -272,7 +279,7 @@ gd.setAttribute('data-ready', '1');
 
 def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = None, color: str | None = None,
                   presets: Sequence[Preset] | None = None, extra: pd.DataFrame | None = None,
-                  among: pd.DataFrame | None = None, log_objectives: Sequence[str] = (),
+                  among: pd.DataFrame | None = None, log_objectives: Sequence[str] | None = None,
                   table_rows: int = 50, div_id: str = "pc", title: str = "", height: int = 600) -> dict:
     """Add the interactive parallel-coordinate section to ``report`` (an :class:`html.Report`).
 
