@@ -15,7 +15,6 @@ per level, averaged over all other inputs): the data behind the report's finding
 """
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path

@@ -30,6 +30,7 @@ loci, where the clearance errors grow without bound).
 from __future__ import annotations
 
 import math
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -328,6 +329,7 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
     from evotol.reporting.parcoords import Axis, add_parcoords, format_tick, preset_table_rows
 
     t0 = time.perf_counter()
+    scheduler = scheduler or os.environ.get("EVOTOL_DASK_SCHEDULER") or None   # `evotol reproduce` on a cluster
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     ev = IRSBot2DesignEvaluator(n_grid=n_grid or (81 if quick else 161), pose_errors=pose_errors)
