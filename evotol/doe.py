@@ -490,12 +490,14 @@ def knee_points(F: np.ndarray, log: Sequence[bool] | None = None) -> np.ndarray:
 
 def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[Objective], *,
           pop_size: int = 64, n_gen: int = 40, seed: int = 0, constraint: str | None = None,
-          initial: pd.DataFrame | None = None, progress: bool = False) -> pd.DataFrame:
+          initial: pd.DataFrame | None = None, progress: bool = False, workers: int = 1,
+          scheduler: str | None = None) -> pd.DataFrame:
     """NSGA-II (pymoo) on the factors' continuous ranges; returns the final Pareto entries.
 
     Decision variables are the factors in [0, 1] mapped by :meth:`Factor.to_unit` (log-uniform
     where ``log``: a tolerance from 1e-4 to 1e-1 mm is searched per decade, not per mm). Each
-    generation's whole population is one evaluator call. ``constraint`` is a column of the
+    generation's whole population is one evaluator call (``workers`` > 1 or ``scheduler``: split
+    into one chunk per worker, run by :func:`evaluate`). ``constraint`` is a column of the
     evaluator output that must be <= 0 for a feasible entry (besides ``feasible``). ``initial``
     seeds the population with known entries (e.g. the best grid entries).
 
@@ -523,7 +525,12 @@ def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[
 
         def _evaluate(self, U, out, *args, **kwargs):
             X = to_frame(U)
-            Y = _evaluate_chunk(evaluator, X)
+            if workers > 1 or scheduler is not None:
+                Y = evaluate(X, evaluator, workers=workers, scheduler=scheduler, progress=False,
+                             chunk_size=max(1, math.ceil(len(X) / max(workers, 1))))
+                Y = Y.drop(columns=list(X.columns))
+            else:
+                Y = _evaluate_chunk(evaluator, X)
             seen.append(pd.concat([X, Y], axis=1))
             F = np.column_stack([o.sense * Y[o.column].to_numpy(dtype=float) for o in objectives])
             bad = ~Y[FEASIBLE].to_numpy(bool)

@@ -213,3 +213,12 @@ def test_knee_of_a_convex_front():
     F = np.column_stack([x, 1 / x])
     knees = doe.knee_points(F, log=[True, True])
     assert 20 in knees
+
+
+def test_nsga2_on_local_processes_equals_in_process():
+    """Splitting each generation over worker processes changes nothing (same seed, same front)."""
+    f = [Factor(f"t{j}_mm", low=1e-4, high=1e-1, log=True) for j in range(3)]
+    objs = [Objective("cost", 1, log=True), Objective("p_max_mm", 1, log=True)]
+    a = doe.nsga2(f, CostAndError(), objs, pop_size=12, n_gen=3, seed=2)
+    b = doe.nsga2(f, CostAndError(), objs, pop_size=12, n_gen=3, seed=2, workers=2)
+    pd.testing.assert_frame_equal(a, b)
