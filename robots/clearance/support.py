@@ -28,6 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 
 _STEPS = 0.5 ** np.arange(12)
+_CENTRED = 1e-2
+_PRED = np.array([1.0, 0.75, 0.5, 0.25, 0.0])
+_TRACE = False
+_LS = np.array([1.0, 0.5, 0.25, 0.12])
 #: work counters (Newton iterations summed over problems), read by benchmarks
 STATS = {"newton": 0, "problems": 0}
 
@@ -100,15 +104,47 @@ def _barrier_terms(Y: np.ndarray, nd: int, tau: np.ndarray):
     return Yd, Yi, td, ti, qd, qi
 
 
+def _merge_groups(groups):
+    """Merge row groups whose columns are a subset of another group's (fewer, larger blocks)."""
+    groups = [(np.asarray(d, int), np.asarray(i, int), np.asarray(c, int)) for d, i, c in groups]
+    merged = True
+    while merged and len(groups) > 1:
+        merged = False
+        for a_ in range(len(groups)):
+            for b_ in range(len(groups)):
+                if a_ != b_ and set(groups[a_][2]) <= set(groups[b_][2]):
+                    d = np.concatenate([groups[b_][0], groups[a_][0]])
+                    i = np.concatenate([groups[b_][1], groups[a_][1]])
+                    groups[b_] = (d, i, groups[b_][2])
+                    del groups[a_]
+                    merged = True
+                    break
+            if merged:
+                break
+    return tuple(groups)
+
+
+def _barrier_value(Y: np.ndarray, nd: int, tau: np.ndarray) -> np.ndarray:
+    """Reduced barrier sum_c q_c - log(1 + q_c), q_c = sqrt(1 + tau^2 |y_c|^2); Y (k, T, R), tau (k,)."""
+    k, T = Y.shape[:2]
+    t2 = (tau ** 2)[:, None, None]
+    qd = np.sqrt(1.0 + t2 * (Y[..., :2 * nd].reshape(k, T, nd, 2) ** 2).sum(-1))
+    qi = np.sqrt(1.0 + t2 * Y[..., 2 * nd:] ** 2)
+    return (qd - np.log1p(qd)).sum(-1) + (qi - np.log1p(qi)).sum(-1)
+
+
 def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | float, mu0: np.ndarray | None = None,
                   gap0: np.ndarray | float | None = None, max_iter: int = 100, gram_inv: np.ndarray | None = None,
-                  growth: float = 8.0, rtol: float = 0.0) -> SupportResult:
+                  growth: float = 8.0, rtol: float = 0.0, groups=None, stop_below=None) -> SupportResult:
     """Solve the batched support-function problems (see module docstring).
 
     a: (K, R) scaled linear terms; B: (K, R, m) scaled loop maps (rows: ``nd`` disks as pairs,
     then intervals); tol: absolute duality-gap target per problem (K,) or scalar; mu0: warm
     start (K, m); rtol: also stop when the gap is below ``rtol * upper``; gap0: barrier gap to start the path from (default 10 % of f(mu0));
-    gram_inv: optional precomputed ``pinv(B^T B)`` (K, m, m).
+    gram_inv: optional precomputed ``pinv(B^T B)`` (K, m, m); groups: optional block sparsity
+    of B (:attr:`robots.clearance.model.PoseMaps.groups`): the Newton systems are then
+    assembled group by group; stop_below: (K,) stop as soon as the certified upper bound is below
+    this value (enough for a branch-and-bound vertex far from the maximum).
 
     Method: the dual ``min_mu sum_c ||y_c||`` (``y = a + B mu``) is written as the SOCP
     ``min sum_c t_c, ||y_c|| <= t_c`` and solved by a primal log-barrier path-following method:
@@ -123,13 +159,18 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     K, R = a.shape
     m = B.shape[-1]
     tol = np.broadcast_to(np.asarray(tol, float), (K,)).copy()
+    if stop_below is not None:
+        stop_below = np.broadcast_to(np.asarray(stop_below, float), (K,))
     n_cones = nd + (R - 2 * nd)
     if m == 0:
         sigma, lower = recover_primal(a, a, B, nd, np.zeros(K))
         return SupportResult(true_dual(a, nd), lower, sigma, np.zeros((K, 0)), 0)
     if gram_inv is None:
         gram_inv = _gram_pinv(B)
-    mu = np.zeros((K, m)) if mu0 is None else np.array(mu0, float)
+    if mu0 is None:       # least-squares start: minimises sum_c |y_c|^2, a good guess for sum_c |y_c|
+        mu = -(gram_inv @ (np.swapaxes(B, 1, 2) @ a[..., None]))[..., 0]
+    else:
+        mu = np.array(mu0, float)
     Y = a + (B @ mu[..., None])[..., 0]
     upper = true_dual(Y, nd)
     g0 = 0.1 * upper if gap0 is None else np.broadcast_to(np.asarray(gap0, float), (K,))
@@ -138,6 +179,22 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     sigma = np.zeros((K, R))
     lower = np.full(K, -np.inf)
     best_mu = mu.copy()
+    if not groups:
+        groups = ((np.arange(nd), np.arange(2 * nd, R), np.arange(m)),)
+    groups = _merge_groups(groups)
+    # permute the cones so that every group's disks and intervals are contiguous (views, no copies)
+    dperm = np.concatenate([g[0] for g in groups] + [np.setdiff1d(np.arange(nd), np.concatenate([g[0] for g in groups]))]).astype(int)
+    iperm = np.concatenate([g[1] for g in groups] + [np.setdiff1d(np.arange(2 * nd, R), np.concatenate([g[1] for g in groups]))]).astype(int)
+    perm = np.concatenate([np.stack([2 * dperm, 2 * dperm + 1], 1).ravel(), iperm]).astype(int)
+    inv = np.empty_like(perm)
+    inv[perm] = np.arange(R)
+    a, B, Y = a[:, perm], B[:, perm], Y[:, perm]
+    grows, d0, i0 = [], 0, 2 * nd
+    for dcone, irows, cols in groups:
+        dn, inn = len(dcone), len(irows)
+        grows.append((slice(2 * d0, 2 * d0 + 2 * dn), slice(i0, i0 + inn), np.asarray(cols, int), slice(d0, d0 + dn)))
+        d0, i0 = d0 + dn, i0 + inn
+    gB = [(B[:, dr][:, :, cols], B[:, ir][:, :, cols]) for dr, ir, cols, _ in grows]
     # working set (compacted when it shrinks)
     idx = np.arange(K)
     wB, wa, wmu, wtau, wgi, wY = B, a, mu.copy(), tau, gram_inv, Y
@@ -151,15 +208,23 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         Yd, Yi, td, ti, qd, qi = _barrier_terms(wY, nd, wtau)
         tc = wtau[:, None]
         sig = np.concatenate([(Yd / td[..., None]).reshape(k, 2 * nd), Yi / ti], axis=1)
-        g = tc * (sig[:, None, :] @ wB)[:, 0, :]
         wd = tc / td
         wi = (tc / ti) * (1.0 - tc * Yi ** 2 / (ti * qi))
         wrow = np.concatenate([np.repeat(wd, 2, axis=1), wi], axis=1)
-        H = np.swapaxes(wB * wrow[..., None], 1, 2) @ wB
-        if nd:
-            cd = np.sqrt(tc ** 2 / (td ** 2 * qd))
-            Gd = (Yd[:, :, None, :] @ wB[:, :2 * nd].reshape(k, nd, 2, m))[:, :, 0, :] * cd[..., None]
-            H -= np.swapaxes(Gd, 1, 2) @ Gd
+        cd = np.sqrt(tc ** 2 / (td ** 2 * qd)) if nd else None
+        g = np.zeros((k, m))
+        H = np.zeros((k, m, m))
+        for (dr, ir, cols, dcone), (Bgd, Bgi) in zip(grows, gB):
+            s_ = len(cols)
+            gg = (sig[:, None, dr] @ Bgd)[:, 0, :] + (sig[:, None, ir] @ Bgi)[:, 0, :]
+            Hg = np.swapaxes(Bgd * wrow[:, dr, None], 1, 2) @ Bgd + np.swapaxes(Bgi * wrow[:, ir, None], 1, 2) @ Bgi
+            ndg = dcone.stop - dcone.start
+            if ndg:
+                Gd = (Yd[:, dcone, None, :] @ Bgd.reshape(k, ndg, 2, s_))[:, :, 0, :] * cd[:, dcone, None]
+                Hg -= np.swapaxes(Gd, 1, 2) @ Gd
+            g[:, cols] += gg
+            H[:, cols[:, None], cols[None, :]] += Hg
+        g *= tc
         H += (np.trace(H, axis1=1, axis2=2) / m + 1e-300)[:, None, None] * reg
         try:
             d = -np.linalg.solve(H, g[..., None])[..., 0]
@@ -167,10 +232,33 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             d = -(np.linalg.pinv(H, hermitian=True) @ g[..., None])[..., 0]
         lam2 = np.maximum(-(g * d).sum(-1), 0.0)
         lam = np.sqrt(lam2)
-        step = np.where(lam > 0.25, 1.0 / (1.0 + lam), 1.0)
+        BD = np.zeros((k, R))
+        for (dr, ir, cols, _), (Bgd, Bgi) in zip(grows, gB):
+            dc = d[:, cols, None]
+            BD[:, dr] = (Bgd @ dc)[..., 0]
+            BD[:, ir] = (Bgi @ dc)[..., 0]
+        # backtracking line search on the reduced barrier F = sum_c q_c - log(1 + q_c),
+        # q_c = sqrt(1 + tau^2 |y_c|^2); never shorter than the damped step 1/(1+lambda), which
+        # self-concordance guarantees to decrease F
+        damped = np.where(lam > 0.25, 1.0 / (1.0 + lam), 1.0)
+        step = damped.copy()
+        bi = np.nonzero(lam > 0.25)[0]
+        if bi.size:
+            F0 = _barrier_value(wY[bi, None, :], nd, wtau[bi])[:, 0]
+            pending = np.ones(bi.size, bool)
+            for t in _LS:              # progressive backtracking: most problems accept t = 1
+                if t <= 0 or not pending.any():
+                    break
+                pi = bi[pending]
+                Ft = _barrier_value((wY[pi] + t * BD[pi])[:, None, :], nd, wtau[pi])[:, 0]
+                ok = Ft <= F0[pending] - 0.1 * t * lam2[pi]
+                acc = np.nonzero(pending)[0][ok]
+                step[bi[acc]] = np.maximum(t, damped[bi[acc]])
+                pending[acc] = False
         wmu = wmu + step[:, None] * d
-        wY = wY + step[:, None] * (wB @ d[..., None])[..., 0]
-        centred = np.nonzero(lam2 < 1e-2)[0]
+        wY = wY + step[:, None] * BD
+        centred = np.nonzero(lam2 < _CENTRED)[0]
+        if _TRACE: print("it", it, "k", k, "lam2 med %.3g" % np.median(lam2), "tau med %.3g" % np.median(wtau))
         if centred.size:
             c_idx = idx[centred]
             Yc = wY[centred]
@@ -196,18 +284,41 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             sigma[c_idx[imp]] = s_new[imp]
             lower[c_idx] = np.maximum(lower[c_idx], lo_new)
             wtau = wtau.copy()
-            wtau[centred] = np.minimum(tcen * growth, 4.0 * n_cones / tgt)
+            tnew = np.minimum(tcen * growth, 4.0 * n_cones / tgt)
+            wtau[centred] = tnew
+            # predictor: follow the tangent of the central path, d mu / d tau = -H^-1 dg/dtau
+            tc2 = tcen[:, None]
+            rdc = np.sqrt((Ydc ** 2).sum(-1))
+            qdc, qic = np.sqrt(1 + (tc2 * rdc) ** 2), np.sqrt(1 + (tc2 * Yic) ** 2)
+            cfd = (2 * tc2 * (1 + qdc) - tc2 ** 3 * rdc ** 2 / qdc) / (1 + qdc) ** 2
+            cfi = (2 * tc2 * (1 + qic) - tc2 ** 3 * Yic ** 2 / qic) / (1 + qic) ** 2
+            dY = np.concatenate([(Ydc * cfd[..., None]).reshape(len(c_idx), 2 * nd), Yic * cfi], axis=1)
+            dg = (dY[:, None, :] @ Bc)[:, 0, :]
+            try:
+                dmu = -np.linalg.solve(H[centred], dg[..., None])[..., 0] * (tnew - tcen)[:, None]
+                dYp = (Bc @ dmu[..., None])[..., 0]
+                trial = Yc[:, None, :] + _PRED[None, :, None] * dYp[:, None, :]
+                Fp = _barrier_value(trial, nd, tnew)
+                best = np.argmin(Fp, axis=1)
+                sc = _PRED[best]
+                wmu[centred] = wmu[centred] + sc[:, None] * dmu
+                wY[centred] = Yc + sc[:, None] * dYp
+            except np.linalg.LinAlgError:
+                pass
         gap = upper[idx] - lower[idx]
         keep = gap > np.maximum(tol[idx], rtol * upper[idx])
+        if stop_below is not None:
+            keep &= upper[idx] > stop_below[idx]
         if not keep.all():
             mu[idx] = wmu
             if keep.sum() < 0.8 * len(idx):
                 wB, wa, wmu, wtau, wgi, wY = (x[keep] for x in (wB, wa, wmu, wtau, wgi, wY))
+                gB = [(x[keep], y[keep]) for x, y in gB]
                 idx = idx[keep]
             elif not keep.any():
                 idx = idx[keep]
     mu[idx] = wmu if len(wmu) == len(idx) else mu[idx]
-    return SupportResult(upper, lower, sigma, best_mu, it)
+    return SupportResult(upper, lower, sigma[:, inv], best_mu, it)
 
 
 def _project_free(sigma: np.ndarray, Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, gram_inv: np.ndarray,
@@ -225,8 +336,10 @@ def _project_free(sigma: np.ndarray, Y: np.ndarray, a: np.ndarray, B: np.ndarray
     s = np.where(act, unit, sigma)
     Bf = B * (~act)[..., None]
     r = np.einsum("kr,krm->km", s, B)
-    G = np.linalg.pinv(np.swapaxes(Bf, 1, 2) @ Bf, rcond=1e-12, hermitian=True)
-    s = s - np.einsum("krm,km->kr", Bf, np.einsum("kmn,kn->km", G, r))
+    G = np.swapaxes(Bf, 1, 2) @ Bf
+    m = G.shape[-1]
+    G += (1e-10 * np.trace(G, axis1=1, axis2=2) / max(m, 1) + 1e-300)[:, None, None] * np.eye(m)
+    s = s - (Bf @ np.linalg.solve(G, r[..., None]))[..., 0]   # the small remainder is removed below
     return _project(s, a, B, nd, gram_inv)
 
 
