@@ -428,6 +428,25 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
                     for _, t in thesis.iterrows())
         + f"; {'both are' if all(in_front) else ('one is' if any(in_front) else 'neither is')} on the Pareto front "
         f"of our 243 designs ({len(grid_front)} non-dominated designs).")
+    relaxed = study.filter("area_mm2 >= 3e4 and p_max_mm <= 15")
+    facts["fig16_without_r"] = relaxed.to_dict()
+    if relaxed.count:
+        findings.append(
+            f"Without its r_max bound, Fig. VII.16's filter keeps {relaxed.count} designs: "
+            + "; ".join(f"{v.split('_')[0]} ∈ {{{', '.join(f'{x:g}' for x in relaxed.ranges[v]['levels'])}}}"
+                        for v in study.inputs)
+            + f" (their r_max is {relaxed.objective_ranges['r_max_deg']['min']:.3g}-"
+              f"{relaxed.objective_ranges['r_max_deg']['max']:.3g}°; the smallest r_max of any design with "
+              f"f_a ≥ 3e4 mm² is {ok.loc[ok['area_mm2'] >= 3e4, 'r_max_deg'].min():.3g}°).")
+    where_p = ok[["p_rd_mm", "p_c_mm", "p_lu_mm"]].to_numpy().argmax(1)
+    where_r = ok[["r_rd_deg", "r_c_deg", "r_lu_deg"]].to_numpy().argmax(1)
+    names = ("right-down corner", "centre", "left-up corner")
+    facts["p_max_at"] = {n: int((where_p == i).sum()) for i, n in enumerate(names)}
+    facts["r_max_at"] = {n: int((where_r == i).sum()) for i, n in enumerate(names)}
+    findings.append("Where the maximum occurs among the three points of Fig. VII.10: p_max at the "
+                    + ", ".join(f"{n} for {int((where_p == i).sum())}" for i, n in enumerate(names))
+                    + " designs; r_max at the " + ", ".join(f"{n} for {int((where_r == i).sum())}" for i, n in enumerate(names))
+                    + " (thesis, Sec. VIII.1: the rotational error is large at the centre).")
     findings.append("Knees of our grid's Pareto front (best compromises, no thresholds): "
                     + "; ".join(f"{d2s(r[[x.name for x in f]].to_numpy())} -> {r['area_mm2']:.3g} mm², "
                                 f"{r['p_max_mm']:.3g} mm, {r['r_max_deg']:.3g}°" for _, r in grid_knees.iterrows()) + ".")
