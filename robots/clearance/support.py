@@ -174,10 +174,12 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     Y = a + (B @ mu[..., None])[..., 0]
     upper = true_dual(Y, nd)
     g0 = 0.1 * upper if gap0 is None else np.broadcast_to(np.asarray(gap0, float), (K,))
-    target = np.maximum(np.maximum(tol, rtol * upper), 1e-300)
-    tau = np.minimum(2.0 * n_cones / np.maximum(g0, 1e-300), 4.0 * n_cones / target)
+    floor = 1e-13 * np.maximum(upper, 1e-200)        # relative precision floor (no tau overflow)
+    target = np.maximum(np.maximum(tol, rtol * upper), floor)
+    tau = np.minimum(2.0 * n_cones / np.maximum(g0, floor), 4.0 * n_cones / target)
     sigma = np.zeros((K, R))
     lower = np.full(K, -np.inf)
+    lower[upper <= 1e-300] = 0.0                      # all-zero problem: sigma = 0 is optimal
     best_mu = mu.copy()
     if not groups:
         groups = ((np.arange(nd), np.arange(2 * nd, R), np.arange(m)),)
@@ -198,6 +200,11 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     # working set (compacted when it shrinks)
     idx = np.arange(K)
     wB, wa, wmu, wtau, wgi, wY = B, a, mu.copy(), tau, gram_inv, Y
+    if np.any(lower >= upper):             # trivial problems leave at once
+        keep0 = lower < upper
+        idx = idx[keep0]
+        wB, wa, wmu, wtau, wgi, wY = (x[keep0] for x in (wB, wa, wmu, wtau, wgi, wY))
+        gB = [(x[keep0], y[keep0]) for x, y in gB]
     it = 0
     reg = np.eye(m) * 1e-14
     STATS["problems"] += K
@@ -271,7 +278,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             s0 = np.concatenate([(Ydc / tdc[..., None]).reshape(len(c_idx), 2 * nd), Yic / tic], axis=1)
             ac, Bc = wa[centred], wB[centred]
             s_new, lo_new = _project(s0, ac, Bc, nd, wgi[centred])
-            tgt = np.maximum(np.maximum(tol[c_idx], rtol * upper[c_idx]), 1e-250)
+            tgt = np.maximum(np.maximum(tol[c_idx], rtol * upper[c_idx]), floor[c_idx])
             # complementary-slackness repair once the barrier gap is no longer what limits us
             weak = (upper[c_idx] - lo_new > tgt) & (2.0 * n_cones / tcen < 0.2 * (upper[c_idx] - lo_new))
             if weak.any():
