@@ -384,19 +384,23 @@ def _open_store(path: Path, key: str, n: int, chunk_size: int) -> dict[int, pd.D
 
 
 def _run_processes(workers, evaluator, entries, bounds, todo, done) -> None:
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        pending = {pool.submit(_evaluate_chunk, evaluator, entries.iloc[bounds[i][0]:bounds[i][1]]): i
-                   for i in todo}
-        try:
-            while pending:
-                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in finished:
-                    done(pending.pop(fut), fut.result())
-        except BaseException:
-            for fut in pending:
-                fut.cancel()
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
+    pool = ProcessPoolExecutor(max_workers=workers)
+    pending = {pool.submit(_evaluate_chunk, evaluator, entries.iloc[bounds[i][0]:bounds[i][1]]): i for i in todo}
+    try:
+        while pending:
+            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in finished:
+                done(pending.pop(fut), fut.result())
+    except BaseException:
+        # interrupted (Ctrl-C) or a chunk failed: the finished chunks are saved; stop the running
+        # ones now instead of waiting for them (they are evaluated again on resume)
+        for fut in pending:
+            fut.cancel()
+        for proc in list(getattr(pool, "_processes", {}).values()):
+            proc.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
 
 
 def _run_dask(scheduler, evaluator, entries, bounds, todo, done) -> None:
