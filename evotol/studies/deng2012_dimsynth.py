@@ -20,12 +20,12 @@ the distal link spans ``(a1 - a2) cos beta`` across the elbow plane, so
 kept as :func:`l2eq_printed`.
 
 Working mode: elbows outward (leg 1's elbow left of the line O_1 -> P, leg 2's right of O_2 -> P),
-the IRSBot-2's operating branch of eqs. II.5-II.6. Assembly mode: the platform below the
-elbows with the distal links forming a V (sin(psi_1 - psi_2) of a fixed sign); the Type 2
-singularity (distal links parallel, Sec. II.4) bounds it. Type 1 singularities (proximal and
-distal link aligned) bound the reachable set. A grid point is kept when both sines exceed
-``sin(margin)`` in magnitude (default margin 2 deg: the sub-workspace stays off the singular
-loci, where the clearance errors grow without bound).
+the IRSBot-2's operating branch of eqs. II.5-II.6 (the engine's ``modes=(-1, -1)``). Assembly
+mode: the distal links forming a V (sin(psi_1 - psi_2) < 0); the Type 2 singularity (distal links
+parallel, Sec. II.4) bounds it. Type 1 singularities (proximal and distal link aligned) bound the
+reachable set. A grid point below the base (z < -e: the robot hangs from its base) is kept when
+both sines exceed ``sin(margin)`` in magnitude (default margin 2 deg: the sub-workspace stays off
+the singular loci, where the clearance errors grow without bound).
 """
 from __future__ import annotations
 
@@ -176,19 +176,24 @@ class SubWorkspace:
         return np.array([[x1, z0], [(x0 + x1) / 2, (z0 + z1) / 2], [x0, z1]])
 
 
-def singularity_free_rectangle(robot: PlanarIRSBot2, *, n: int = 161, margin_deg: float = 2.0) -> SubWorkspace:
-    """Largest rectangle of the x-z plane kept by the working-mode, reachability and singularity
-    criteria (module doc), by discretising the reachable disk's bounding box with n x n points."""
+def singularity_free_rectangle(robot: PlanarIRSBot2, *, n: int = 161, margin_deg: float = 2.0,
+                               below_elbows: bool = False) -> SubWorkspace:
+    """Largest rectangle of the x-z plane below the base (z < -e) in which the robot is assembled in
+    its working mode, on the V side of the Type 2 singularity and at least ``margin_deg`` away from
+    both singularity types (module doc), by discretising the reachable region with n x n points.
+    ``below_elbows``: also require the platform below both elbows (a stricter variant)."""
     reach = robot.base_x + robot.l1 + robot.l2eq
-    depth = robot.l1 + robot.l2eq + robot.e
+    depth = robot.l1 + robot.l2eq
     xs = np.linspace(-reach, reach, n)
-    zs = np.linspace(-depth - robot.e, robot.l1 + robot.l2eq - robot.e, n)
+    zs = np.linspace(-depth - robot.e, -robot.e, n)
     step = max(xs[1] - xs[0], zs[1] - zs[0])
     X, Z = np.meshgrid(xs, zs)                                   # rows: z, columns: x
     g = robot.legs(X, Z)
     s = math.sin(math.radians(margin_deg))
     keep = (g["reachable"] & (g["sin_t2"] <= -s) & (np.abs(g["sin_t1_1"]) >= s) & (np.abs(g["sin_t1_2"]) >= s)
-            & (np.sin(g["psi1"]) > 0) & (np.sin(g["psi2"]) > 0))
+            & (Z < -robot.e))
+    if below_elbows:
+        keep &= (np.sin(g["psi1"]) > 0) & (np.sin(g["psi2"]) > 0)
     area, r0, r1, c0, c1 = largest_rectangle(keep)
     if c1 < c0 or area == 0:
         return SubWorkspace(0.0, (0.0, 0.0), (0.0, 0.0), float(step), int(keep.sum()))
@@ -497,7 +502,7 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
     rep.text(f"NSGA-II: {len(pareto)} Pareto designs from {pareto.attrs['evotol']['n_evaluations']} evaluations ({t_nsga:.1f} s); knees:")
     rep.table(knees[cols].to_numpy().tolist(), [x.label for x in f] + ["area (mm²)", "p_max (mm)", "r_max (deg)"], digits=4)
     rep.text(f"Workspace: the largest axis-aligned rectangle of x-z points (grid {ev.n_grid} x {ev.n_grid} over the reach) "
-             f"in the elbows-out working mode with the platform below the elbows, the distal links forming a V, and "
+             f"below the base in the elbows-out working mode, with the distal links forming a V and "
              f"|sin| of the Type 1 and Type 2 singularity angles ≥ sin {ev.margin_deg:g}°. Pose errors at its right-down "
              f"corner, centre and left-up corner (Fig. VII.10), largest taken.", note=True)
     rep.write(out_dir / f"{NAME}.html")
