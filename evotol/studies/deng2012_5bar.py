@@ -53,9 +53,14 @@ def _heatmaps(title, x_mm, y_mm, P, R, locus_mm, unit_p="mm"):
 
     fig = make_subplots(rows=1, cols=2, subplot_titles=(f"maximum positional error ({unit_p})", "maximum rotational error (rad)"),
                         horizontal_spacing=0.12)
-    fig.add_trace(go.Heatmap(x=x_mm, y=y_mm, z=P, colorscale="Viridis", colorbar=dict(x=0.44, title=unit_p),
+    def rng(Z):   # a constant map (e.g. an open leg's rotation) must not show round-off as colour
+        Z = np.asarray(Z, float)
+        lo, hi = np.nanmin(Z), np.nanmax(Z)
+        return dict(zmin=lo * (1 - 1e-3), zmax=hi * (1 + 1e-3)) if hi - lo <= 1e-9 * max(abs(hi), 1e-300) else {}
+
+    fig.add_trace(go.Heatmap(x=x_mm, y=y_mm, z=P, colorscale="Viridis", **rng(P), colorbar=dict(x=0.44, title=unit_p),
                              hovertemplate="x=%{x:.1f} mm<br>y=%{y:.1f} mm<br>p_max=%{z:.4g} " + unit_p + "<extra></extra>"), 1, 1)
-    fig.add_trace(go.Heatmap(x=x_mm, y=y_mm, z=R, colorscale="Cividis", colorbar=dict(x=1.0, title="rad"),
+    fig.add_trace(go.Heatmap(x=x_mm, y=y_mm, z=R, colorscale="Cividis", **rng(R), colorbar=dict(x=1.0, title="rad"),
                              hovertemplate="x=%{x:.1f} mm<br>y=%{y:.1f} mm<br>r_max=%{z:.4g} rad<extra></extra>"), 1, 2)
     if len(locus_mm):
         for col in (1, 2):

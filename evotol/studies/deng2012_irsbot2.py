@@ -70,9 +70,14 @@ def _maps_figure(title, x_mm, z_mm, P, R, sing):
 
     fig = make_subplots(rows=1, cols=2, subplot_titles=("maximum positional error (mm)", "maximum rotational error (rad)"),
                         horizontal_spacing=0.12)
-    fig.add_trace(go.Heatmap(x=x_mm, y=z_mm, z=P, colorscale="Viridis", colorbar=dict(x=0.44, title="mm"),
+    def rng(Z):   # a constant map (e.g. an open leg's rotation) must not show round-off as colour
+        Z = np.asarray(Z, float)
+        lo, hi = np.nanmin(Z), np.nanmax(Z)
+        return dict(zmin=lo * (1 - 1e-3), zmax=hi * (1 + 1e-3)) if hi - lo <= 1e-9 * max(abs(hi), 1e-300) else {}
+
+    fig.add_trace(go.Heatmap(x=x_mm, y=z_mm, z=P, colorscale="Viridis", **rng(P), colorbar=dict(x=0.44, title="mm"),
                              hovertemplate="x=%{x:.1f} mm<br>z=%{y:.1f} mm<br>p_max=%{z:.4g} mm<extra></extra>"), 1, 1)
-    fig.add_trace(go.Heatmap(x=x_mm, y=z_mm, z=R, colorscale="Cividis", colorbar=dict(x=1.0, title="rad"),
+    fig.add_trace(go.Heatmap(x=x_mm, y=z_mm, z=R, colorscale="Cividis", **rng(R), colorbar=dict(x=1.0, title="rad"),
                              hovertemplate="x=%{x:.1f} mm<br>z=%{y:.1f} mm<br>r_max=%{z:.4g} rad<extra></extra>"), 1, 2)
     xs, zs, S = sing
     for col in (1, 2):

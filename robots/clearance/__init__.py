@@ -26,12 +26,23 @@ block only sees ``beta_z, b_xy``, the out-of-plane block only ``beta_xy, b_z``) 
     res = ev.evaluate(bounds)                          # all sets at pose 0 (pose_index=0)
     res.p_max, res.p_upper, res.r_max, res.r_upper     # (n_sets,) arrays; res.gap <= 1e-3
 
+Cost: the 5-bar's 32 768 tolerance combinations of the thesis's Sec. VII.1.2 at (0, 70) mm take
+~2 s (dedup leaves 1 024 in-plane + 32 out-of-plane problems) with ``beta_xy`` fixed, and a few
+minutes when ``beta_xy = b_xy / h`` varies with every set (then every set is a new
+out-of-plane problem); the per-set bracket is ``[res.p_max, res.p_upper]``. Results are
+arrays in the order of ``bounds``; ``res.p_screws[i]`` are the maximising joint screws.
+
 ``bounds`` is an array ``(n_sets, n_joints, 4)`` with columns ``[beta_xy (rad), beta_z (rad),
 b_xy (m), b_z (m)]`` (Deng eqs. III.3-III.6); ``pose_index`` (int or (n_sets,) array) picks the
 pose of each set. ``ev.evaluate_poses(bounds)`` evaluates one bound set (or one per pose) at
 every pose. For a design (dimension) sweep build one mechanism per design, e.g.
 ``IRSBot2(l1=..., l2=...).clearance_mechanism(...)``, and call ``max_pose_error`` on its few
 poses; the cost is dominated by the number of (pose, bound-set) cases.
+
+Other entry points: ``grid.grid_max_pose_error(mech, poses, workers=None, scheduler=None)``
+(local processes or a Dask cluster), ``sample_max_errors`` (what plain Monte Carlo of the
+clearances would report -- it falls short of the worst case), ``max_pose_error(...,
+extra=(J, t))`` (clearances plus other interval sources, e.g. ``robots.fivebar.combined_max_pose_error``).
 
 Modules: :mod:`.kinematics` (modified DH / Khalil-Kleinfinger frames, adjoints),
 :mod:`.model` (clearance bounds, joints, chains, bodies, error mapping matrices, loop
@@ -41,11 +52,12 @@ equations), :mod:`.support` (per-direction convex problem with a duality certifi
 :mod:`.grid` (grid studies on local cores or a Dask cluster).
 """
 from robots.clearance.kinematics import DHFrame, DHTree, adjoint, kk_transform
-from robots.clearance.maxerror import ClearanceEvaluator, MaxPoseError, evaluate_cases, max_pose_error
+from robots.clearance.maxerror import (ClearanceEvaluator, MaxPoseError, evaluate_cases, max_pose_error,
+                                       sample_max_errors)
 from robots.clearance.model import (BOUND_NAMES, Chain, ClearanceBounds, ClearanceMechanism, Joint, PoseMaps,
                                     twist_between)
 from robots.clearance.multistart import MultistartResult, multistart_max_pose_error
 
 __all__ = ["BOUND_NAMES", "Chain", "ClearanceBounds", "ClearanceEvaluator", "ClearanceMechanism", "DHFrame", "DHTree",
            "Joint", "MaxPoseError", "MultistartResult", "PoseMaps", "adjoint", "evaluate_cases", "kk_transform",
-           "max_pose_error", "multistart_max_pose_error", "twist_between"]
+           "max_pose_error", "multistart_max_pose_error", "sample_max_errors", "twist_between"]
