@@ -165,3 +165,27 @@ def test_quick_dimsynth_on_the_engine(tmp_path):
     assert 1 < saved["objective_ranges"]["p_max_mm"][0] and saved["objective_ranges"]["p_max_mm"][1] < 100
     assert 1 < saved["objective_ranges"]["r_max_deg"][0] and saved["objective_ranges"]["r_max_deg"][1] < 60
     assert len(saved["thesis_designs"]) == 2
+
+
+def test_thesis_range_endpoints_are_values_of_our_factorial(ev):
+    """Fig. VII.2's endpoints are taken by specific entries of ours: p_max 0.0038 mm (Δb_xy,E = 1e-3,
+    others 1e-4; the second smallest value, reached when a sample misses the 8 entries below it),
+    p_max 1.41 mm (all Δb_xy = 0.1, Δb_z = 0.1 on A, C, E), r_max 0.0024° (Δb_xy,B = 1e-3, others
+    1e-4) and r_max 1.38° (all Δb_xy = 0.1)."""
+    X = pd.DataFrame([entry([1e-4, 1e-4, 1e-4, 1e-4, 1e-3], 1e-3),
+                      entry(0.1, [0.1, 0.1, 1e-3, 1e-3, 0.1]),
+                      entry([1e-4, 1e-4, 1e-3, 1e-4, 1e-4], 1e-3)])
+    out = ev(X)
+    assert out.loc[0, "p_max_mm"] == pytest.approx(0.0038, rel=0.01)
+    assert out.loc[1, "p_max_mm"] == pytest.approx(1.41, rel=0.001)
+    assert out.loc[2, "r_max_deg"] == pytest.approx(0.0024, rel=0.03)
+
+
+def test_thesis_endpoints_probability_of_missing_the_extremes():
+    """P(a 1000-of-N sample misses k given entries) = prod_{i<k} (N - 1000 - i) / (N - i)."""
+    N = 32768
+    v = np.r_[np.full(8, 0.0034), np.full(24, 0.0038), np.linspace(0.01, 1.3, N - 32 - 1), 1.38]
+    df = pd.DataFrame({"p_max_mm": v, "r_max_deg": v})
+    e = ts.thesis_endpoints(df)["p_max_mm_min"]
+    assert e["ours_nearest"] == pytest.approx(0.0038) and e["n_entries_beyond"] == 8 and e["rank_from_the_end"] == 2
+    assert e["probability_sample_misses_those_beyond"] == pytest.approx((1 - 1000 / N) ** 8, rel=1e-3)
