@@ -141,7 +141,8 @@ def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, t
         v = a.values(frame[a.column])
         lo, hi = float(np.nanmin(v)), float(np.nanmax(v))
         pad = 0.02 * (hi - lo) if hi > lo else (0.5 if a.log else max(abs(lo) * 0.02, 1e-12))
-        d = dict(label=a.label or a.column, values=v, range=[lo - pad, hi + pad])
+        lo_r = lo - pad if (a.log or lo < 0) else max(lo - pad, 0.0)   # no negative ticks on a positive axis
+        d = dict(label=a.label or a.column, values=v, range=[lo_r, hi + pad])
         if a.log:
             d["tickvals"], d["ticktext"] = log_ticks(lo - pad, hi + pad)
         dims.append(d)
