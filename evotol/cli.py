@@ -43,6 +43,10 @@ def cmd_reproduce(args) -> int:
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.scheduler:
+        import os
+
+        os.environ["EVOTOL_DASK_SCHEDULER"] = args.scheduler  # read by the grid/design studies
     names = list(studies.available()) if args.study == "all" else [studies.get(args.study).name]
     summaries, failed = {}, []
     for name in names:
@@ -97,6 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--out", default="reports", help="output folder (default: reports)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--quick", action="store_true", help="smaller run for a fast look")
+    r.add_argument("--scheduler", default=None,
+                   help="Dask scheduler address (tcp://host:port) for the large grid/design studies; default: local cores")
     r.set_defaults(func=cmd_reproduce)
 
     u = sub.add_parser("run", help="run a user study described in a TOML file")
