@@ -88,7 +88,7 @@ def main(argv=None):
             continue
         b = mech.thesis_bounds(b_xy=BXY, b_z=BZ, **kw)
         t = time.perf_counter()
-        r = ev.evaluate(b)
+        r = ev.evaluate(b, workers=args.workers)
         print(f"{label}: {time.perf_counter() - t:.1f} s for {len(b)} sets ({r.n_solves} convex solves after "
               f"deduplication), largest gap {r.gap.max():.2e}")
 

@@ -125,7 +125,7 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
     }
 
     # --- plain Monte Carlo sampling of the clearances falls short ------------------------------
-    n_mc = 10 ** 4 if quick else 10 ** 6
+    n_mc = 2000 if quick else 10 ** 6
     mc_poses = [(0.0, 0.060), (0.020, 0.030), (0.0, 0.050)]
     mc_rows, mc = [], []
     for pose in mc_poses:
@@ -142,7 +142,7 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
 
     # --- the thesis's method on a few points ------------------------------------------------
     base_poses = np.array([[0.0, 0.07]]) if quick else np.array([[0.0, 0.07], [0.01, 0.05], [-0.02, 0.03]])
-    n_starts = 4 if quick else 10
+    n_starts = 2 if quick else 10
     ms = multistart_max_pose_error(variants["closed"], base_poses, n_starts=n_starts, seed=seed)
     ours = max_pose_error(variants["closed"], base_poses)
     base_rows, baseline = [], []

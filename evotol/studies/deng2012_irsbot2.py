@@ -134,7 +134,7 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = No
     }
 
     # --- the thesis's method on one point ------------------------------------------------------
-    n_starts = 2 if quick else 6
+    n_starts = 1 if quick else 6
     base_pose = poses[[len(poses) // 2]]
     ms = {k: multistart_max_pose_error(cases[k], base_pose, n_starts=n_starts, seed=seed) for k in cases}
     ours = {k: max_pose_error(cases[k], base_pose) for k in cases}

@@ -440,6 +440,11 @@ def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float =
     return evaluate_cases(mech, maps, idx, np.broadcast_to(b, (len(poses),) + b.shape[-2:]), tol=tol, extra=extra)
 
 
+def _evaluate_chunk(args):
+    mech, maps, idx, b, tol = args
+    return evaluate_cases(mech, maps, idx, b, tol=tol)
+
+
 class ClearanceEvaluator:
     """Evaluate many clearance-bound sets at fixed poses; the per-pose maps are computed once.
 
@@ -454,12 +459,25 @@ class ClearanceEvaluator:
         self.maps = mech.pose_maps(self.poses)
         self.tol = tol
 
-    def evaluate(self, bounds, pose_index=0) -> MaxPoseError:
+    def evaluate(self, bounds, pose_index=0, *, workers: int = 1, scheduler=None, chunk_size: int = 4096) -> MaxPoseError:
+        """All bound sets at their poses. ``workers > 1`` (local processes) or ``scheduler`` (a
+        Dask address or Client) split the sets into chunks of ``chunk_size`` solved in parallel;
+        results come back in order."""
         b = _as_bounds(self.mech, bounds, 0)
         b = b.reshape((-1,) + b.shape[-2:])
         idx = np.broadcast_to(np.asarray(pose_index, int), (len(b),))
         if idx.size and (idx.min() < 0 or idx.max() >= len(self.poses)):
             raise ValidationError("pose_index", pose_index, f"indices in [0, {len(self.poses)})")
+        if (workers is None or workers > 1 or scheduler is not None) and len(b) > chunk_size:
+            from robots.clearance.grid import concat_results, parallel_map
+            import time
+
+            t0 = time.perf_counter()
+            items = [(self.mech, self.maps, idx[s:s + chunk_size], b[s:s + chunk_size], self.tol)
+                     for s in range(0, len(b), chunk_size)]
+            out = concat_results(parallel_map(_evaluate_chunk, items, workers=workers, scheduler=scheduler))
+            out.seconds = time.perf_counter() - t0
+            return out
         return evaluate_cases(self.mech, self.maps, idx, b, tol=self.tol)
 
     def evaluate_poses(self, bounds=None) -> MaxPoseError:
