@@ -84,6 +84,9 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
     t_start = time.perf_counter()
     out_dir = Path(out_dir)
     n = n_grid or (9 if quick else 41)
+    if scheduler is None:        # `evotol reproduce --scheduler ADDRESS` passes the Dask address this way
+        import os
+        scheduler = os.environ.get("EVOTOL_DASK_SCHEDULER") or None
     fb, variants = _variants(b_mm)
     x, y, poses = _grid(n)
     results, secs = {}, {}

@@ -102,6 +102,9 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = No
     t_start = time.perf_counter()
     out_dir = Path(out_dir)
     n = n_grid or (7 if quick else 41)
+    if scheduler is None:        # `evotol reproduce --scheduler ADDRESS` passes the Dask address this way
+        import os
+        scheduler = os.environ.get("EVOTOL_DASK_SCHEDULER") or None
     W = MAP_WORKSPACE
     x = np.linspace(W.low[0], W.high[0], n)
     z = np.linspace(W.low[1], W.high[1], n)
