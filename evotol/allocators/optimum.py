@@ -43,6 +43,14 @@ def _check_convex(problem: ToleranceProblem) -> None:
                                   f"{problem.upper[j]:.3g}] for the certified optimum (use allocate_ga instead)")
 
 
+def _locked_part(problem: ToleranceProblem, M: np.ndarray, power: int) -> np.ndarray:
+    """Row values of the locked tolerances: M[:, locked] @ t_locked**power (zeros if none)."""
+    lk = ~problem.free
+    if not lk.any():
+        return np.zeros(M.shape[0])
+    return M[:, lk] @ problem.locked_values[lk] ** power
+
+
 def _select(values: np.ndarray, k: int) -> np.ndarray:
     if values.size <= k:
         return np.arange(values.size)
@@ -139,13 +147,13 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
         if rows.A.shape[0]:
             sel = _select(rows.A @ t_cur, max_rows)
             A = rows.A[sel]
-            Af, off = A[:, f] * hi, 1 - A[:, ~problem.free] @ locked[~problem.free] if (~problem.free).any() else np.ones(len(sel))
+            Af, off = A[:, f] * hi, 1 - _locked_part(problem, A, 1)
             cons.append({"type": "ineq", "fun": lambda y, Af=Af, off=off: off - Af @ y, "jac": lambda y, Af=Af: -Af})
         if rows.B.shape[0]:
             sel = _select(rows.B @ t_cur ** 2, max_rows)
             B = rows.B[sel]
             Bf = B[:, f] * hi ** 2
-            off = 1 - (B[:, ~problem.free] @ locked[~problem.free] ** 2 if (~problem.free).any() else 0)
+            off = 1 - _locked_part(problem, B, 2)
             cons.append({"type": "ineq", "fun": lambda y, Bf=Bf, off=off: off - Bf @ y ** 2,
                          "jac": lambda y, Bf=Bf: -2 * Bf * y})
         y0 = np.clip(t_cur[f] / hi, lo / hi, 1.0)
@@ -227,14 +235,14 @@ def _best_accuracy(problem, rows, budget, t0, tol, max_rounds, max_rows):
         if rows.A.shape[0]:
             sel = _select(rows.A @ tz, max_rows)
             A = rows.A[sel]
-            Af, off = A[:, f] * hi, A[:, ~problem.free] @ locked[~problem.free] if (~problem.free).any() else np.zeros(len(sel))
+            Af, off = A[:, f] * hi, _locked_part(problem, A, 1)
             cons.append({"type": "ineq", "fun": lambda z, Af=Af, off=off: z[-1] - off - Af @ z[:-1],
                          "jac": lambda z, Af=Af: np.hstack([-Af, np.ones((Af.shape[0], 1))])})
         if rows.B.shape[0]:
             sel = _select(rows.B @ tz ** 2, max_rows)
             B = rows.B[sel]
             Bf = B[:, f] * hi ** 2
-            off = B[:, ~problem.free] @ locked[~problem.free] ** 2 if (~problem.free).any() else np.zeros(len(sel))
+            off = _locked_part(problem, B, 2)
             cons.append({"type": "ineq", "fun": lambda z, Bf=Bf, off=off: z[-1] ** 2 - off - Bf @ z[:-1] ** 2,
                          "jac": lambda z, Bf=Bf: np.hstack([-2 * Bf * z[:-1], 2 * z[-1] * np.ones((Bf.shape[0], 1))])})
         with warnings.catch_warnings():

@@ -301,9 +301,19 @@ class ClearanceMechanism:
     def error_mapping(self, poses: np.ndarray, chain: str | Chain) -> tuple[np.ndarray, np.ndarray]:
         """Error mapping matrices of one chain (eqs. III.22-III.24, V.1): ``M`` (n, 6, 6 n_joints)
         for its joints' screws and ``M^e`` (n, 6, 6) for the start body's twist."""
-        c = chain if isinstance(chain, Chain) else {c.name: c for c in self.chains}[chain]
         W = self.world(poses)
-        return self._chain_maps(W, c)
+        return self._chain_maps(W, self._chain(chain))
+
+    def _chain(self, chain: str | Chain) -> Chain:
+        return chain if isinstance(chain, Chain) else {c.name: c for c in self.chains}[chain]
+
+    def _chain_transforms(self, poses: np.ndarray, chain: str | Chain):
+        """(chain, n_poses, local transforms, world transforms) at the nominal joint values."""
+        poses = np.atleast_2d(np.asarray(poses, float))
+        n = len(poses)
+        values = self.joint_values(poses)
+        return (self._chain(chain), n, self.tree.local_transforms(values, n),
+                self.tree.world_transforms(values, n))
 
     def error_mapping_thesis(self, poses: np.ndarray, chain: str | Chain) -> np.ndarray:
         """The thesis's literal eq. III.24 for a chain starting at the base:
@@ -311,12 +321,7 @@ class ClearanceMechanism:
         transforms along the chain's path, then ``N`` = the end frame's orientation in the base).
         Kept to check :meth:`error_mapping` (which uses world poses) against the thesis."""
         from robots.clearance.kinematics import adjoint
-        c = chain if isinstance(chain, Chain) else {c.name: c for c in self.chains}[chain]
-        poses = np.atleast_2d(np.asarray(poses, float))
-        n = len(poses)
-        values = self.joint_values(poses)
-        local = self.tree.local_transforms(values, n)
-        W = self.tree.world_transforms(values, n)
+        c, n, local, W = self._chain_transforms(poses, chain)
         end_frame = c.path_end or self.bodies[c.end]
         path = self.tree.path(end_frame)
         # the path's transforms after each frame, plus the constant cut offset to the end body
@@ -536,12 +541,7 @@ class ClearanceMechanism:
         (``T_j -> T_j exp([s_j])``, s_j in frame j) and an optional start-body twist
         ``[dtheta; dp]`` (base axes, at the start body's point). Used to check the error
         mapping matrices against finite differences."""
-        c = chain if isinstance(chain, Chain) else {c.name: c for c in self.chains}[chain]
-        poses = np.atleast_2d(np.asarray(poses, float))
-        n = len(poses)
-        values = self.joint_values(poses)
-        local = self.tree.local_transforms(values, n)
-        W = self.tree.world_transforms(values, n)
+        c, n, local, W = self._chain_transforms(poses, chain)
         start_frame = self.bodies[c.start]
         end_frame = c.path_end or self.bodies[c.end]
         path = self.tree.path(end_frame)
