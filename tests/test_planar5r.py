@@ -70,6 +70,30 @@ def test_forward_of_inverse_is_identity_over_usable_workspace(name, d):
     assert np.all(err * lci < 1e-14)
 
 
+EXTENDED = np.finfo(np.longdouble).eps < 1e-18
+
+
+@pytest.mark.skipif(not EXTENDED, reason="np.longdouble is not 80-bit extended on this platform")
+@pytest.mark.parametrize("name,d", ALL)
+@pytest.mark.parametrize("n", [201, 301])
+def test_forward_of_inverse_in_long_double_holds_1e12_on_whole_usable_workspace(name, d, n):
+    """Forward(inverse(p)) = p to 1e-12 at every grid point of the usable workspace, border included.
+
+    The kinematics keep the dtype of their input; in long double the error stays at eps_ld / LCI."""
+    uw = K.usable_workspace(d.r1, d.r2, d.r3, n=n)
+    P = uw.points().astype(np.longdouble)
+    th = K.inverse_kinematics(P, d.r1, d.r2, d.r3)
+    assert th.dtype == np.longdouble
+    back = K.forward_kinematics(th, d.r1, d.r2, d.r3)
+    assert back.dtype == np.longdouble
+    err = np.max(np.abs(back - P), axis=1).astype(float)
+    lci = K.local_conditioning_index(P.astype(float), d.r1, d.r2, d.r3)
+    assert err.max() < 1e-12
+    assert np.all(err * lci < 100 * np.finfo(np.longdouble).eps)
+    # the float64 path is unchanged by the dtype handling
+    assert K.inverse_kinematics(P.astype(float), d.r1, d.r2, d.r3).dtype == np.float64
+
+
 @pytest.mark.parametrize("name,d", ALL)
 def test_both_branches_satisfy_constraints_and_are_mirror_images(name, d):
     uw = K.usable_workspace(d.r1, d.r2, d.r3, n=61)

@@ -23,6 +23,11 @@ of eqs. 16-19); type II (parallel) where ``B_1, B_2, P`` are aligned (``det J_x 
 
 Everything works with lengths in any unit (non-dimensional in the paper, metres in the robot
 error model); angles in radians. Arrays broadcast; nothing loops in Python.
+
+Precision: positions and angles keep their floating dtype. ``float64`` is the default; pass
+``np.longdouble`` arrays (80-bit extended on x86-64, eps = 1.1e-19) when you need the round trip
+``forward(inverse(p))`` to hold near the type II border, where the forward problem amplifies the
+rounding of ``theta`` by the condition number ``1 / LCI`` (docs/planar5r.md, "Round trip").
 """
 from __future__ import annotations
 
@@ -52,7 +57,7 @@ def _check_assembly(assembly) -> int:
 
 def _as_points(p, field="p") -> np.ndarray:
     try:
-        arr = np.asarray(p, dtype=float)
+        arr = _as_float(p)
     except (TypeError, ValueError) as exc:
         raise ValidationError(field, p, "an array (..., 2) of numbers") from exc
     if arr.ndim == 0 or arr.shape[-1] != 2:
@@ -60,6 +65,20 @@ def _as_points(p, field="p") -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise ValidationError(field, arr[~np.all(np.isfinite(arr), axis=-1)][0].tolist(), "finite numbers")
     return arr
+
+
+def _as_float(x) -> np.ndarray:
+    """``x`` as a floating array: float64 unless it already is a wider float (long double)."""
+    arr = np.asarray(x)
+    return arr.astype(np.result_type(arr.dtype, np.float64), copy=False)
+
+
+def _common_float(*xs) -> list[np.ndarray]:
+    """``xs`` as arrays of their widest floating dtype (so that lengths given as Python floats
+    are squared in long double when the poses are long double, not rounded to float64 first)."""
+    arrs = [np.asarray(x) for x in xs]
+    dtype = np.result_type(np.float64, *(a.dtype for a in arrs))
+    return [a.astype(dtype, copy=False) for a in arrs]
 
 
 def cross2(ax, ay, bx, by):
@@ -79,6 +98,7 @@ def inverse_kinematics_raw(px, py, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE
     Returns ``theta1, theta2, reachable`` (unreachable entries hold a clipped, meaningless value).
     """
     m1, m2 = working_mode_signs(working_mode)
+    px, py, r1, r2, r3 = _common_float(px, py, r1, r2, r3)
     out = []
     ok = np.ones(np.broadcast(px, py).shape, dtype=bool)
     for ax, m in ((-r3, m1), (r3, m2)):
@@ -127,7 +147,7 @@ def circle_intersection(c1x, c1y, rho1, c2x, c2y, rho2, assembly=1):
 
 def crank_points(theta, r1, r3) -> np.ndarray:
     """Elbows ``B_i = A_i + r1 (cos theta_i, sin theta_i)``, shape (..., 2 chains, 2)."""
-    theta = np.asarray(theta, dtype=float)
+    theta = _as_float(theta)
     bx = np.stack([-r3 + r1 * np.cos(theta[..., 0]), r3 + r1 * np.cos(theta[..., 1])], axis=-1)
     by = r1 * np.sin(theta)
     return np.stack([bx, by], axis=-1)
@@ -142,7 +162,8 @@ def forward_kinematics(theta, r1, r2, r3, assembly=1) -> np.ndarray:
     Raises :class:`KinematicsError` when the couplers cannot close the loop.
     """
     assembly = _check_assembly(assembly)
-    theta = np.asarray(theta, dtype=float)
+    theta = _as_float(theta)
+    theta, r1, r2, r3 = _common_float(theta, r1, r2, r3)
     B = crank_points(theta, r1, r3)
     px, py, h2 = circle_intersection(B[..., 0, 0], B[..., 0, 1], r2, B[..., 1, 0], B[..., 1, 1], r2, assembly)
     bad = ~(h2 >= 0)
