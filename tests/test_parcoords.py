@@ -17,8 +17,8 @@ from evotol import doe
 from evotol.filtering import DesignStudy, Preset
 from evotol.reporting.headless import HeadlessChromium, find_chromium
 from evotol.reporting.html import Report
-from evotol.reporting.parcoords import (KNEE, PARETO, Axis, add_parcoords, format_tick, log_ticks,
-                                        parcoords_figure, parcoords_frame, preset_table_rows)
+from evotol.reporting.parcoords import (KNEE, PARETO, Axis, add_parcoords, default_axes, drawn_lines, format_tick,
+                                        log_ticks, parcoords_figure, parcoords_frame, preset_table_rows)
 
 LEVELS_XY, LEVELS_Z = (1e-4, 1e-3, 1e-2, 1e-1), (1e-3, 1e-1)
 
@@ -131,3 +131,61 @@ def test_preset_button_in_headless_chromium_shows_the_python_count(tmp_path):
         # 'all entries' clears every constraint
         page.evaluate("document.querySelector('button[data-preset=\"\"]').click()")
         page.wait_for(f"document.getElementById('pc-count-n').textContent === '{n_lines}'")
+
+
+def test_drawn_sample_keeps_nsga_entries_preset_entries_and_axis_ends():
+    st = make_study(3)
+    extra = pareto_like(st)
+    frame = parcoords_frame(st, extra=extra)
+    axes = default_axes(st, ["p_max_mm", "r_max_deg"])
+    presets = list(st.presets.values())
+    idx = drawn_lines(frame, axes, presets, st, max_drawn=100, seed=0)
+    assert len(idx) == 100 and np.all(np.diff(idx) > 0)
+    assert np.array_equal(idx, drawn_lines(frame, axes, presets, st, max_drawn=100, seed=0))   # seeded
+    assert set(np.flatnonzero(frame["source"].to_numpy() != "level grid")) <= set(idx)        # every NSGA-II line
+    share = 100 // (2 * (len(presets) + 1))
+    for p in presets:                                     # each preset: all its kept entries, or at least a share
+        kept = set(st.filter(p, among=frame).kept.index)
+        assert len(kept & set(idx)) >= min(len(kept), share)
+    for a in axes:                                        # both ends of every axis are drawn
+        v = a.values(frame[a.column])
+        assert v[idx].min() == v.min() and v[idx].max() == v.max()
+    assert np.array_equal(drawn_lines(frame, axes, presets, st, max_drawn=None), np.arange(len(frame)))
+    with pytest.raises(Exception, match="max_drawn"):
+        drawn_lines(frame, axes, presets, st, max_drawn=0)
+
+
+N_TRACE_LINES = ("(function(v){ return v.bdata ? atob(v.bdata).length / 8 : v.length; })"
+                 "(document.getElementById('pc').data[0].dimensions[1].values)")
+
+
+@pytest.mark.skipif(find_chromium() is None, reason="headless Chromium is not installed (CI installs the chromium package)")
+def test_page_draws_a_sample_but_counts_every_entry_and_can_draw_all(tmp_path):
+    st = make_study(3)
+    extra = pareto_like(st)
+    rep = Report("toy parcoords, sampled", "")
+    info = add_parcoords(rep, st, extra=extra, log_objectives=["p_max_mm", "r_max_deg"], div_id="pc", max_drawn=100)
+    n_lines = len(st.entries) + len(extra)
+    assert info["n_drawn"] == 100 and info["n_lines"] == n_lines
+    path = rep.write(tmp_path / "sampled.html")
+    with HeadlessChromium() as browser:
+        page = browser.open(path)
+        page.wait_for("document.getElementById('pc') && document.getElementById('pc').getAttribute('data-ready')")
+        renderer = page.evaluate("document.getElementById('pc').getAttribute('data-renderer')")
+        software = re.search("swiftshader|llvmpipe|software", renderer, re.I) is not None
+        drawn = 100 if software else n_lines          # a hardware renderer draws every line by itself
+        assert int(page.evaluate("document.getElementById('pc').getAttribute('data-drawn')")) == drawn
+        assert int(page.evaluate(N_TRACE_LINES)) == drawn
+        for name in ["p_max ≤ 0.05 mm", "r_max ≤ 0.01°"]:
+            ms = page.evaluate(f"window.evotolParcoords['pc'].apply({name!r})")
+            assert ms > 0
+            assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == info["presets"][name]
+        note = page.evaluate("document.getElementById('pc-drawn').innerText")
+        assert (f"sample of 100 of {n_lines} lines" in note) if software else (f"All {n_lines} lines drawn" in note)
+        # draw every line: the trace now holds all of them, the brushes and the count stay
+        page.evaluate("document.querySelector('#pc-drawn button[data-draw=\"all\"]') ? "
+                      "window.evotolParcoords['pc'].setDraw(true).then(function(){ return 1; }) : 1")
+        assert int(page.evaluate(N_TRACE_LINES)) == n_lines
+        assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == info["presets"]["r_max ≤ 0.01°"]
+        assert page.evaluate("document.getElementById('pc').data[0].dimensions.some(function(d){ return d.constraintrange; })")
+        assert f"All {n_lines} lines drawn" in page.evaluate("document.getElementById('pc-drawn').innerText")

@@ -25,11 +25,17 @@ from pathlib import Path
 from evotol.errors import EvotolError
 
 #: flags that keep a headless Chromium quiet, offline and deterministic
-CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                  # WebGL (plotly Parcoords) falls back to the SwiftShader software rasteriser
-                  "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
                   "--window-size=1400,1000")
+
+#: WebGL back ends for machines without a GPU: flags and environment. ``swiftshader`` is
+#: Chromium's own CPU rasteriser; ``llvmpipe`` is Mesa's (package libgl1-mesa-dri), through ANGLE
+#: on a surfaceless EGL display.
+WEBGL_BACKENDS = {
+    "swiftshader": (("--disable-gpu", "--enable-unsafe-swiftshader", "--use-angle=swiftshader"), {}),
+    "llvmpipe": (("--use-gl=angle", "--use-angle=gl-egl", "--ignore-gpu-blocklist"), {"EGL_PLATFORM": "surfaceless"}),
+}
 
 
 def find_chromium() -> str | None:
@@ -79,10 +85,13 @@ class Page:
 class HeadlessChromium:
     """A headless Chromium process spoken to over ``--remote-debugging-pipe``."""
 
-    def __init__(self, executable: str | None = None, extra_flags: tuple[str, ...] = ()):
+    def __init__(self, executable: str | None = None, extra_flags: tuple[str, ...] = (), webgl: str = "swiftshader"):
         self.executable = executable or find_chromium()
         if self.executable is None:
             raise BrowserError("no chromium executable found on PATH")
+        if webgl not in WEBGL_BACKENDS:
+            raise BrowserError(f"webgl={webgl!r}: expected one of {sorted(WEBGL_BACKENDS)}")
+        self.webgl = webgl
         self.extra_flags = tuple(extra_flags)
         self._proc = None
         self._next_id = 0
@@ -106,10 +115,12 @@ class HeadlessChromium:
             os.dup2(cmd_r, 3)
             os.dup2(out_w, 4)
 
-        args = [self.executable, *CHROMIUM_FLAGS, *self.extra_flags, "--remote-debugging-pipe",
+        gl_flags, gl_env = WEBGL_BACKENDS[self.webgl]
+        args = [self.executable, *CHROMIUM_FLAGS, *gl_flags, *self.extra_flags, "--remote-debugging-pipe",
                 f"--user-data-dir={self._profile.name}", "about:blank"]
         self._proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.DEVNULL, pass_fds=(3, 4), preexec_fn=_child_fds)
+                                      stderr=subprocess.DEVNULL, pass_fds=(3, 4), preexec_fn=_child_fds,
+                                      env={**os.environ, **gl_env})
         os.close(cmd_r)
         os.close(out_w)
         self._write, self._read = cmd_w, out_r

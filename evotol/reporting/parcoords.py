@@ -12,10 +12,19 @@ the range each axis keeps and a table of the kept entries. Brushing an axis by h
 same read-outs. A static table beside it lists every preset's count computed in Python by
 :meth:`evotol.filtering.DesignStudy.filter` (the numbers the page must reproduce).
 
+Level of detail. Every entry is filtered, counted and tabulated, but plotly draws a parcoords
+line with WebGL, which a machine without a GPU emulates on the CPU (SwiftShader, llvmpipe): there
+each brush move or preset redraws every line and took 1.5 s with 32 768 lines, 0.25 s with 1 000
+(``benchmarks/bench_synthesis.py``). So when there are more than ``max_drawn`` lines the page draws
+a fixed sample of them (every NSGA-II entry, each preset's kept entries up to a share, the entries
+at each axis' ends, then a seeded random fill), says so above the plot, and offers a button that
+draws all of them; with a hardware WebGL renderer it draws all of them at once by itself.
+
 The report reads results; it computes no physics (STYLE.md).
 """
 from __future__ import annotations
 
+import base64
 import html
 import json
 import math
@@ -32,6 +41,10 @@ from evotol.filtering import DesignStudy, Preset
 GRID, PARETO, KNEE = "level grid", "NSGA-II", "knee"
 _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 _GRID_TOP = 0.75          # grid entries use [0, 0.75] of the colour scale; NSGA-II and knees the rest
+#: lines drawn by default when WebGL may be software-rendered (the thesis's own figures draw 1 000)
+DEFAULT_MAX_DRAWN = 1000
+#: with a hardware WebGL renderer the page draws all lines up to this many
+GPU_MAX_DRAWN = 200_000
 
 
 @dataclass(frozen=True)
@@ -178,6 +191,48 @@ def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, t
     return fig
 
 
+def drawn_lines(frame: pd.DataFrame, axes: Sequence[Axis], presets: Sequence[Preset], study: DesignStudy,
+                max_drawn: int, seed: int = 0) -> np.ndarray:
+    """Positions (into ``frame``) of the lines to draw when there are more than ``max_drawn``.
+
+    In this order, until ``max_drawn`` are chosen: every NSGA-II / knee line; for each preset, up to
+    ``max_drawn // (2 (presets + 1))`` of the entries it keeps (all of them when fewer), so a preset
+    that keeps few entries shows all of them; the entries at both ends of every axis; then a seeded
+    uniform sample of the rest. Returns all positions when ``len(frame) <= max_drawn``.
+    """
+    n = len(frame)
+    if max_drawn is None or n <= max_drawn:
+        return np.arange(n)
+    if int(max_drawn) < 1:
+        raise ValidationError("max_drawn", max_drawn, "a positive number of lines")
+    rng = np.random.default_rng(seed)
+    chosen = np.zeros(n, dtype=bool)
+    src = frame[SOURCE].to_numpy() if SOURCE in frame else np.full(n, GRID)
+    chosen[src != GRID] = True
+    share = max(1, int(max_drawn) // (2 * (len(presets) + 1)))
+    for p in presets:
+        kept = np.flatnonzero(frame.index.isin(study.filter(p, among=frame).kept.index))
+        kept = kept[~chosen[kept]]
+        if len(kept) > share:
+            kept = rng.choice(kept, share, replace=False)
+        chosen[kept] = True
+    for a in axes:
+        v = a.values(frame[a.column])
+        chosen[[int(np.nanargmin(v)), int(np.nanargmax(v))]] = True
+    rest = np.flatnonzero(~chosen)
+    room = int(max_drawn) - int(chosen.sum())
+    if room > 0:
+        chosen[rng.choice(rest, min(room, len(rest)), replace=False)] = True
+    return np.flatnonzero(chosen)
+
+
+def _b64(a: np.ndarray) -> dict:
+    """A numpy array as plotly.js's typed-array JSON form ``{dtype, bdata}``."""
+    a = np.ascontiguousarray(a)
+    code = {np.dtype("float64"): "f8", np.dtype("float32"): "f4", np.dtype("int32"): "i4"}[a.dtype]
+    return {"dtype": code, "bdata": base64.b64encode(a.tobytes()).decode("ascii")}
+
+
 def _preset_ranges(preset: Preset, axes: Sequence[Axis], offset: int, frame: pd.DataFrame) -> list:
     """Constraint ranges ``[dim index, low, high]`` (plotted units) that a preset sets."""
     idx = {a.column: i for i, a in enumerate(axes)}
@@ -207,7 +262,38 @@ function decode(v){ // plotly.py sends numpy arrays as {dtype, bdata} (base64)
   var bin = atob(v.bdata), buf = new ArrayBuffer(bin.length), u8 = new Uint8Array(buf);
   for(var i=0;i<bin.length;i++) u8[i] = bin.charCodeAt(i);
   return new TYPES[v.dtype](buf); }
-function vals(k){ if(!(k in cache)) cache[k] = decode(gd.data[0].dimensions[k].values); return cache[k]; }
+function vals(k){ if(!(k in cache)) cache[k] = decode(P.full[k]); return cache[k]; }   // every entry
+var sample = decode(P.drawn), inSample = new Uint8Array(P.n), drawAll = sample.length === P.n;
+for(var s=0;s<sample.length;s++) inSample[sample[s]] = 1;
+function renderer(){ try { var c = document.createElement('canvas'), gl = c.getContext('webgl');
+    if(!gl) return 'no WebGL'; var e = gl.getExtension('WEBGL_debug_renderer_info');
+    return String(e ? gl.getParameter(e.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER)); }
+  catch(err){ return 'unknown'; } }
+var GL = renderer(), SOFTWARE = /swiftshader|llvmpipe|softpipe|software|basic render|no webgl|unknown/i.test(GL);
+function drawnNote(keep){
+  var el = q('drawn'); if(!el) return;
+  if(drawAll){ el.innerHTML = 'All ' + P.n + ' lines drawn (WebGL: ' + GL + ').' +
+      (sample.length < P.n ? ' <button type="button" data-draw="sample">draw the ' + sample.length + '-line sample</button>' : '');
+    return; }
+  var kd = 0; for(var t=0;t<keep.length;t++) kd += inSample[keep[t]];
+  el.innerHTML = 'Drawing a sample of ' + sample.length + ' of ' + P.n + ' lines (' + kd + ' of the ' + keep.length +
+    ' kept entries); counts, kept ranges and the table cover all ' + P.n + ' entries. WebGL: ' + GL +
+    (SOFTWARE ? ' (software rendering: every redraw is slow with many lines)' : '') +
+    '. <button type="button" data-draw="all">draw all ' + P.n + ' lines</button>'; }
+function setDraw(all){
+  // swap the drawn lines (values of every axis and the colours) and keep the brushes
+  if(all === drawAll) return Promise.resolve();
+  var upd = {}, dims = gd.data[0].dimensions, n = all ? P.n : sample.length;
+  for(var k=0;k<dims.length;k++){ var v = vals(k), out = new Float64Array(n);
+    for(var i=0;i<n;i++) out[i] = v[all ? i : sample[i]];
+    upd['dimensions[' + k + '].values'] = [out]; }
+  var cf = decode(P.color), co = new Float64Array(n);
+  for(var i=0;i<n;i++) co[i] = cf[all ? i : sample[i]];
+  upd['line.color'] = [co];
+  drawAll = all;
+  gd.setAttribute('data-drawn', n);
+  return Plotly.restyle(gd, upd, [0]).then(function(){ update(); });
+}
 function fmt(v){ if(!isFinite(v)) return String(v); var a=Math.abs(v);
   if(a===0) return '0'; if(a>=1e-4 && a<1e5) return String(Number(v.toPrecision(4)));
   return v.toExponential(3); }
@@ -249,6 +335,7 @@ function update(R){
   q('table').innerHTML = t;
   q('table-note').textContent = keep.length > P.tableRows ? ('first ' + P.tableRows + ' of ' + keep.length + ' kept entries, sorted by ' + dims[ck].label) : (keep.length + ' kept entries, sorted by ' + dims[ck].label);
   gd.setAttribute('data-kept', keep.length);
+  drawnNote(keep);
 }
 function apply(name){
   // the read-outs (count, kept ranges, table) are computed from the preset first and painted
@@ -268,12 +355,18 @@ function apply(name){
   }, 0); }); });
 }
 window.evotolParcoords = window.evotolParcoords || {};
-window.evotolParcoords[P.div] = {apply: apply, update: update, keptRows: keptRows};
+window.evotolParcoords[P.div] = {apply: apply, update: update, keptRows: keptRows, setDraw: setDraw};
 q('controls').addEventListener('click', function(ev){ var b = ev.target.closest('button[data-preset]');
   if(b){ apply(b.getAttribute('data-preset')); } });
+q('drawn').addEventListener('click', function(ev){ var b = ev.target.closest('button[data-draw]');
+  if(b){ setDraw(b.getAttribute('data-draw') === 'all'); } });
 gd.on('plotly_restyle', function(){ update(); });
+gd.setAttribute('data-drawn', sample.length);
+gd.setAttribute('data-renderer', GL);
 update();
-gd.setAttribute('data-ready', '1');
+// a hardware WebGL renderer draws every line at once; software rendering keeps the sample
+var ready = (!drawAll && !SOFTWARE && P.n <= P.gpuMax) ? setDraw(true) : Promise.resolve();
+ready.then(function(){ gd.setAttribute('data-ready', '1'); });
 })();
 """
 
@@ -281,7 +374,8 @@ gd.setAttribute('data-ready', '1');
 def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = None, color: str | None = None,
                   presets: Sequence[Preset] | None = None, extra: pd.DataFrame | None = None,
                   among: pd.DataFrame | None = None, log_objectives: Sequence[str] | None = None,
-                  table_rows: int = 50, div_id: str = "pc", title: str = "", height: int = 600) -> dict:
+                  table_rows: int = 50, div_id: str = "pc", title: str = "", height: int = 600,
+                  max_drawn: int | None = DEFAULT_MAX_DRAWN, seed: int = 0) -> dict:
     """Add the interactive parallel-coordinate section to ``report`` (an :class:`html.Report`).
 
     study: the evaluated entries; among: draw only these entries (e.g. a filtered subset);
@@ -289,7 +383,11 @@ def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = N
     presets: filters shown as buttons (default: the study's presets); color: objective column
     colouring the lines (default: the first objective).
 
-    Returns ``{"n_lines", "presets": {name: count}}`` -- the Python counts the page shows.
+    max_drawn: above this many lines the page first draws the sample :func:`drawn_lines` picks
+    (seeded by ``seed``) and draws all of them on request or when WebGL is hardware-accelerated;
+    ``None`` always draws all of them.
+
+    Returns ``{"n_lines", "n_drawn", "presets": {name: count}}`` -- the Python counts the page shows.
     """
     axes = list(axes) if axes is not None else default_axes(study, log_objectives)
     color = color or study.objectives[0]
@@ -304,9 +402,18 @@ def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = N
     counts = {}
     for p in presets:
         counts[p.name] = study.filter(p, among=frame).count
+    # every line's values go to the page; the figure holds the drawn sample (all lines when few)
+    full = [_b64(np.asarray(d.values, dtype=float)) for d in fig.data[0].dimensions]
+    color_full = np.asarray(fig.data[0].line.color, dtype=float)
+    drawn = drawn_lines(frame, axes, presets, study, max_drawn, seed)
+    if len(drawn) < len(frame):
+        for d in fig.data[0].dimensions:
+            d.values = np.asarray(d.values)[drawn]
+        fig.data[0].line.color = color_full[drawn]
     log_flags = ([False] * offset) + [a.log for a in axes]
     payload = {
         "div": div_id, "n": int(len(frame)), "first": offset, "log": log_flags,
+        "full": full, "color": _b64(color_full), "drawn": _b64(drawn.astype(np.int32)), "gpuMax": GPU_MAX_DRAWN,
         "colorDim": offset + [a.column for a in axes].index(color),
         "cols": list(range(offset, offset + len(axes))), "tableRows": int(table_rows),
         "grid": GRID, "discrete": ([False] * offset) + [bool(a.column in study.factors and study.factors[a.column].is_discrete) for a in axes],
@@ -327,14 +434,14 @@ def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = N
         f'<div id="{div_id}-controls"><b>Presets:</b> {"".join(buttons)}</div>'
         f'<p class="ev-count"><span id="{div_id}-count-n">{len(frame)}</span> of {len(frame)} entries kept '
         f'(preset: <span id="{div_id}-preset">none</span>). Drag along any axis to filter by hand; click an '
-        f'axis filter bar to remove it.</p>')
+        f'axis filter bar to remove it.</p><p class="meta" id="{div_id}-drawn"></p>')
     report.figure(fig, div_id=div_id)
     report.html(f'<div style="display:flex;gap:2em;flex-wrap:wrap"><div><b>Kept range per axis</b>'
                 f'<table class="ev" id="{div_id}-ranges"></table></div><div><b>Kept entries</b> '
                 f'<span class="meta" id="{div_id}-table-note"></span><table class="ev" id="{div_id}-table"></table>'
                 f'</div></div>')
     report.html(f'<script type="text/javascript">{_JS % {"payload": json.dumps(payload)}}</script>')
-    return {"n_lines": int(len(frame)), "presets": counts}
+    return {"n_lines": int(len(frame)), "n_drawn": int(len(drawn)), "presets": counts}
 
 
 def preset_table_rows(study: DesignStudy, presets: Sequence[Preset] | None = None,

@@ -515,6 +515,7 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
         "objective_ranges": {k: [v["min"], v["max"]] for k, v in rng.items()}, "thesis_ranges": THESIS_RANGES,
         "presets": {k: {"count": v.count, "ranges": v.ranges, "query": v.resolved_query} for k, v in pres.items()},
         "presets_shown_in_report": pc["presets"],
+        "report_lines": {"entries": pc["n_lines"], "drawn_by_default": pc["n_drawn"]},
         "good_designs": good[cols].to_dict(orient="records"),
         "grid_pareto_designs": grid_front[cols].to_dict(orient="records"),
         "grid_knees": grid_knees[cols].to_dict(orient="records"),

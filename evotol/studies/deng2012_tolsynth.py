@@ -330,6 +330,7 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
         "presets": {k: {"count": v.count, "ranges": v.ranges, "query": v.resolved_query} for k, v in pres.items()},
         "presets_sample": {k: {"count": v.count, "ranges": v.ranges} for k, v in pres_sample.items()},
         "presets_shown_in_report": pc["presets"],
+        "report_lines": {"entries": pc["n_lines"], "drawn_by_default": pc["n_drawn"]},
         "findings": findings, "facts": facts,
         "certificate_gap_max": gap,
         "evaluation": {"seconds": log.seconds, "backend": log.backend, "chunks": log.n_chunks,
