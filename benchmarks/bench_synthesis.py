@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import tempfile
@@ -140,7 +141,9 @@ def bench_browser(entries: pd.DataFrame | None, out: Path, renderers=("swiftshad
     if report is not None:      # a study's own report (e.g. reports/deng2012-tolsynth.html)
         print(f"  {report}: default sample vs all lines; this machine has no GPU, so WebGL is emulated on the CPU "
               f"(times in s; 'step' = one mouse move while brushing):")
-        _measure_and_print(report, preset, None, renderers)
+        meta = report.with_suffix(".json")      # the study's JSON holds the counts Python computed
+        python_count = json.loads(meta.read_text()).get("presets_shown_in_report", {}).get(preset) if meta.exists() else None
+        _measure_and_print(report, preset, python_count, renderers)
         return
     study = DesignStudy(entries, objectives=["p_max_mm", "r_max_deg", "cost"],
                         presets=[Preset(preset, {"p_max_mm": (None, 0.05)}, "Fig. VII.4")])
