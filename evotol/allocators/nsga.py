@@ -57,7 +57,8 @@ class ParetoFront:
         cn = (c - c.min()) / max(np.ptp(c), 1e-300)
         en = (e - e.min()) / max(np.ptp(e), 1e-300)
         a, b = np.array([cn[0], en[0]]), np.array([cn[-1], en[-1]])
-        d = np.abs(np.cross(b - a, np.stack([cn, en], 1) - a)) / max(np.linalg.norm(b - a), 1e-300)
+        u, w = b - a, np.stack([cn, en], 1) - a           # distance to the line = |u x w| / |u| (planar cross)
+        d = np.abs(u[0] * w[:, 1] - u[1] * w[:, 0]) / max(np.linalg.norm(u), 1e-300)
         return int(np.argmax(d))
 
 
