@@ -88,6 +88,8 @@ class FilterResult:
     def describe(self) -> str:
         """Plain-text summary, one line per input (what ``evotol filter`` prints)."""
         lines = [f"{self.resolved_query}: {self.count} of {self.total} entries kept"]
+        if not self.count:
+            return lines[0] + " (no entry satisfies the query; no ranges to report)"
         for name, r in self.ranges.items():
             if r.get("levels") is not None:
                 lines.append(f"  {name:24s} levels {', '.join(f'{v:g}' for v in r['levels'])}")

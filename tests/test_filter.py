@@ -125,3 +125,12 @@ def test_cli_filter_writes_a_report_of_the_kept_entries(tmp_path, study):
     html = out.read_text()
     n = study.filter("p_max <= 0.05").count
     assert f'<span id="pc-count-n">{n}</span> of {n} entries kept' in html
+
+
+def test_cli_filter_keeping_nothing_says_so_and_writes_no_report(tmp_path, study, capsys):
+    paths = study.save(tmp_path / "entries")
+    out = tmp_path / "none.html"
+    assert main(["filter", str(paths["parquet"]), "p_max_mm < 0", "--html", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "0 of 512 entries kept (no entry satisfies the query" in text
+    assert "no report written" in text and not out.exists()

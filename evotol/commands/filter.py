@@ -48,7 +48,9 @@ def cmd_filter(args) -> int:
     if args.json:
         write_json(args.json, {"entries": str(args.entries), **res.to_dict()})
         print(f"[evotol] summary -> {args.json}")
-    if args.html:
+    if args.html and not res.count:
+        print(f"[evotol] no report written to {args.html}: the query keeps no entry")
+    elif args.html:
         from evotol.reporting.html import Report
         from evotol.reporting.parcoords import add_parcoords
 

@@ -397,6 +397,8 @@ def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = N
         if missing:
             raise ValidationError("extra (NSGA-II) entries columns", missing, "every axis column")
     frame = parcoords_frame(study, among, extra)
+    if frame.empty:
+        raise ValidationError("entries to draw", 0, "at least one feasible entry (the filter or study keeps none)")
     fig = parcoords_figure(frame, axes, color, title=title, height=height)
     offset = 1 if fig.data[0].dimensions[0].label == "source" else 0
     counts = {}
