@@ -14,8 +14,8 @@ same read-outs. A static table beside it lists every preset's count computed in 
 
 Level of detail. Every entry is filtered, counted and tabulated, but plotly draws a parcoords
 line with WebGL, which a machine without a GPU emulates on the CPU (SwiftShader, llvmpipe): there
-each brush move or preset redraws every line and took 1.5 s with 32 768 lines, 0.25 s with 1 000
-(``benchmarks/bench_synthesis.py``). So when there are more than ``max_drawn`` lines the page draws
+each brush move redraws every line: 1.3-1.6 s per mouse move with 32 768 lines, 0.1-0.3 s with
+1 000 (``benchmarks/bench_synthesis.py``, docs/synthesis.md). So when there are more than ``max_drawn`` lines the page draws
 a fixed sample of them (every NSGA-II entry, each preset's kept entries up to a share, the entries
 at each axis' ends, then a seeded random fill), says so above the plot, and offers a button that
 draws all of them; with a hardware WebGL renderer it draws all of them at once by itself.
@@ -292,7 +292,7 @@ function setDraw(all){
   upd['line.color'] = [co];
   drawAll = all;
   gd.setAttribute('data-drawn', n);
-  return Plotly.restyle(gd, upd, [0]).then(function(){ update(); });
+  return Plotly.restyle(gd, upd, [0]);     // its plotly_restyle event refreshes the read-outs
 }
 function fmt(v){ if(!isFinite(v)) return String(v); var a=Math.abs(v);
   if(a===0) return '0'; if(a>=1e-4 && a<1e5) return String(Number(v.toPrecision(4)));
