@@ -267,7 +267,9 @@ var sample = decode(P.drawn), inSample = new Uint8Array(P.n), drawAll = sample.l
 for(var s=0;s<sample.length;s++) inSample[sample[s]] = 1;
 function renderer(){ try { var c = document.createElement('canvas'), gl = c.getContext('webgl');
     if(!gl) return 'no WebGL'; var e = gl.getExtension('WEBGL_debug_renderer_info');
-    return String(e ? gl.getParameter(e.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER)); }
+    var name = String(e ? gl.getParameter(e.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
+    var lose = gl.getExtension('WEBGL_lose_context'); if(lose) lose.loseContext();   // free the probe context
+    return name; }
   catch(err){ return 'unknown'; } }
 var GL = renderer(), SOFTWARE = /swiftshader|llvmpipe|softpipe|software|basic render|no webgl|unknown/i.test(GL);
 function drawnNote(keep){
