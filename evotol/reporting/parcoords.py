@@ -29,7 +29,7 @@ import html
 import json
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -192,13 +192,14 @@ def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, t
 
 
 def drawn_lines(frame: pd.DataFrame, axes: Sequence[Axis], presets: Sequence[Preset], study: DesignStudy,
-                max_drawn: int, seed: int = 0) -> np.ndarray:
+                max_drawn: int, seed: int = 0, kept: Mapping[str, pd.Index] | None = None) -> np.ndarray:
     """Positions (into ``frame``) of the lines to draw when there are more than ``max_drawn``.
 
     In this order, until ``max_drawn`` are chosen: every NSGA-II / knee line; for each preset, up to
     ``max_drawn // (2 (presets + 1))`` of the entries it keeps (all of them when fewer), so a preset
     that keeps few entries shows all of them; the entries at both ends of every axis; then a seeded
     uniform sample of the rest. Returns all positions when ``len(frame) <= max_drawn``.
+    ``kept``: each preset's kept index in ``frame``, when the caller has filtered already.
     """
     n = len(frame)
     if max_drawn is None or n <= max_drawn:
@@ -211,11 +212,12 @@ def drawn_lines(frame: pd.DataFrame, axes: Sequence[Axis], presets: Sequence[Pre
     chosen[src != GRID] = True
     share = max(1, int(max_drawn) // (2 * (len(presets) + 1)))
     for p in presets:
-        kept = np.flatnonzero(frame.index.isin(study.filter(p, among=frame).kept.index))
-        kept = kept[~chosen[kept]]
-        if len(kept) > share:
-            kept = rng.choice(kept, share, replace=False)
-        chosen[kept] = True
+        index = kept[p.name] if kept is not None else study.filter(p, among=frame).kept.index
+        pos = np.flatnonzero(frame.index.isin(index))
+        pos = pos[~chosen[pos]]
+        if len(pos) > share:
+            pos = rng.choice(pos, share, replace=False)
+        chosen[pos] = True
     for a in axes:
         v = a.values(frame[a.column])
         chosen[[int(np.nanargmin(v)), int(np.nanargmax(v))]] = True
@@ -403,13 +405,12 @@ def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = N
         raise ValidationError("entries to draw", 0, "at least one feasible entry (the filter or study keeps none)")
     fig = parcoords_figure(frame, axes, color, title=title, height=height)
     offset = 1 if fig.data[0].dimensions[0].label == "source" else 0
-    counts = {}
-    for p in presets:
-        counts[p.name] = study.filter(p, among=frame).count
+    filtered = {p.name: study.filter(p, among=frame) for p in presets}
+    counts = {name: r.count for name, r in filtered.items()}
     # every line's values go to the page; the figure holds the drawn sample (all lines when few)
     full = [_b64(np.asarray(d.values, dtype=float)) for d in fig.data[0].dimensions]
     color_full = np.asarray(fig.data[0].line.color, dtype=float)
-    drawn = drawn_lines(frame, axes, presets, study, max_drawn, seed)
+    drawn = drawn_lines(frame, axes, presets, study, max_drawn, seed, kept={n: r.kept.index for n, r in filtered.items()})
     if len(drawn) < len(frame):
         for d in fig.data[0].dimensions:
             d.values = np.asarray(d.values)[drawn]

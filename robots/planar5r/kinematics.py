@@ -162,7 +162,6 @@ def forward_kinematics(theta, r1, r2, r3, assembly=1) -> np.ndarray:
     Raises :class:`KinematicsError` when the couplers cannot close the loop.
     """
     assembly = _check_assembly(assembly)
-    theta = _as_float(theta)
     theta, r1, r2, r3 = _common_float(theta, r1, r2, r3)
     B = crank_points(theta, r1, r3)
     px, py, h2 = circle_intersection(B[..., 0, 0], B[..., 0, 1], r2, B[..., 1, 0], B[..., 1, 1], r2, assembly)
