@@ -205,23 +205,24 @@ class Mechanism:
         """Every DH entry as ``"<frame>.<entry>"`` (e.g. ``"A.theta"``, ``"C.d"``)."""
         return [f"{f.name}.{k}" for f in self.frames for k in DH_FIELDS]
 
-    def candidate_sources(self) -> list[str]:
-        """Names a tolerance may be put on: design parameters, then DH entries of joint frames and fixed frames."""
-        return list(self.lengths) + list(self.angles) + self.entry_names()
+    def candidate_sources(self, actuated: Sequence[str] = ()) -> list[str]:
+        """Names a tolerance may be put on: design parameters, actuated joint variables (actuator
+        offsets), then every DH entry."""
+        return list(self.lengths) + list(self.angles) + list(actuated) + self.entry_names()
 
-    def select_sources(self, patterns: Sequence[str] | None = None) -> list[str]:
+    def select_sources(self, patterns: Sequence[str] | None = None, actuated: Sequence[str] = ()) -> list[str]:
         """Source names matching ``patterns`` (fnmatch: ``"*.d"``, ``"A*.theta"``, ``"L?"``), in
         candidate order. A pattern that matches nothing is an error (a typo would silently drop a
         tolerance otherwise)."""
         patterns = list(self.sources if patterns is None else patterns)
-        cands = self.candidate_sources()
+        cands = self.candidate_sources(actuated)
         out = []
         for p in patterns:
             if not isinstance(p, str):
                 raise ValidationError("tolerances.sources", p, "a name or pattern string")
             hit = [c for c in cands if fnmatch.fnmatchcase(c, p)]
             if not hit:
-                raise ValidationError("tolerances.sources", p, f"a parameter ({sorted(self.parameters)}) or a DH entry "
+                raise ValidationError("tolerances.sources", p, f"a parameter ({sorted(self.parameters)}), an actuated joint variable {list(actuated)} or a DH entry "
                                                                 f"'<frame>.<gamma|b|alpha|d|theta|r>' of frames {[f.name for f in self.frames]}")
             out += [h for h in hit if h not in out]
         return out
@@ -298,8 +299,6 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
                      sources=tuple(tol.get("sources", ())), clearance=clearance, description=spec.get("description", ""),
                      path=str(path))
-    if mech.sources:
-        mech.select_sources()
     return mech
 
 

@@ -49,17 +49,21 @@ class MechanismModel(RobotErrorModel):
             names=tuple(c.name for c in cs), low=tuple(c.low for c in cs), high=tuple(c.high for c in cs),
             units=tuple(c.unit for c in cs), display_units=tuple(c.display or c.unit for c in cs),
             display_scale=tuple(1.0 / UNIT_SCALE[c.display or c.unit] for c in cs))
+        act = self.kin.actuated
         if sources is None and not mech.sources:
-            act = [f"{f.name}.{f.joint_field}" for f in mech.frames if f.actuated]
             names = list(mech.parameters) + act
         else:
-            names = mech.select_sources(sources)
+            names = mech.select_sources(sources, act)
         if not names:
             raise ValidationError(f"{mech.name} sources", names, "at least one toleranced parameter or DH entry")
         self.columns, specs = [], []
         frames = mech.frame
         for nm in names:
-            if nm in mech.parameters:
+            if nm in act:
+                unit = "m" if any(frames[fr].joint == "prismatic" for fr, k in self.kin.uses[nm]) else "rad"
+                self.columns.append(nm)
+                specs.append(SourceSpec(nm, 1, unit, "actuator", f"actuator offset / encoder error of joint variable {nm}"))
+            elif nm in mech.parameters:
                 unit = "m" if nm in mech.lengths else "rad"
                 fields = {k for fr, k in self.kin.uses.get(nm, ())}
                 if not fields:
@@ -87,7 +91,7 @@ class MechanismModel(RobotErrorModel):
         return self.kin.inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
 
     def _param_names(self):
-        return [c for c in self.columns if isinstance(c, str)]
+        return [c for c in self.columns if isinstance(c, str)]  # parameters and actuated variables
 
     def _maps(self, poses):
         q = self.kin.inverse_geometry(poses)
@@ -146,6 +150,8 @@ class MechanismModel(RobotErrorModel):
         """Parameter overrides and DH-entry offsets for flat errors (N, n_sources)."""
         params, offsets = {}, {}
         for c, col in enumerate(self.columns):
+            if col in self.kin.actuated:
+                continue
             if isinstance(col, str):
                 params[col] = self.mechanism.parameters[col] + errors[:, c]
             else:
@@ -164,7 +170,11 @@ class MechanismModel(RobotErrorModel):
         q = self.kin.inverse_geometry(poses)
         T0 = self.kin.state(q, n, twists=False).world[self.mechanism.end_effector]
         qq = {k: np.repeat(v, m) for k, v in q.items()}
-        params, offsets = self._perturbation(errors.reshape(n * m, -1))
+        flat = errors.reshape(n * m, -1)
+        for c, col in enumerate(self.columns):
+            if col in self.kin.actuated:
+                qq[col] = qq[col] + flat[:, c]
+        params, offsets = self._perturbation(flat)
         qq, st, res = self.kin.solve_passive(qq, n * m, params=params, offsets=offsets)
         bad = ~(res < 1e-9)
         if bad.any():
