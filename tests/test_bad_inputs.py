@@ -9,6 +9,7 @@ that the error comes before any long computation starts.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -35,7 +36,7 @@ def no_computation(monkeypatch):
     monkeypatch.setattr(evotol.studyfile, "METHODS", {m: _sentinel for m in evotol.studyfile.METHODS})
     monkeypatch.setattr(evotol.studyfile, "allocate_nsga2", _sentinel)
     monkeypatch.setattr(evotol.studyfile, "verify", _sentinel)
-    fake = {n: evotol.studies.Study(n, s.title, _sentinel, s.seed_paper)
+    fake = {n: dataclasses.replace(s, compute=_sentinel, legacy_run=_sentinel if s.legacy_run else None)
             for n, s in evotol.studies.available().items()}
     monkeypatch.setattr(evotol.studies, "available", lambda: fake)
 
