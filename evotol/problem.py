@@ -14,11 +14,11 @@ from typing import Mapping
 import numpy as np
 
 from cost_models.base import CostModel
-from evotol import measures
+from evotol import distributions, measures
 from evotol.errors import ValidationError
 from robots.base import RobotErrorModel
 
-DISTRIBUTIONS = ("uniform", "normal")
+DISTRIBUTIONS = distributions.KINDS
 
 
 @dataclass(frozen=True)
@@ -28,16 +28,17 @@ class Tolerance:
     cost: cost model of this tolerance (takes t in SI units).
     lower, upper: allowed range of the tolerance (SI: m or rad), 0 < lower <= upper.
     locked: if given, the tolerance is fixed at this value (SI) and not optimised.
-    distribution: how Monte Carlo samples the source inside its tolerance: ``"uniform"``
-        (uniform value in [-t, t]; a disk/ball clearance as Yao 2013 eq. 12: uniform direction,
-        uniform radius <= t) or ``"normal"`` (t = 3σ, truncated at t).
+    distribution: how the source is distributed inside its tolerance (Monte Carlo and the
+        ``yield`` measure): a kind name (``"uniform"``, ``"normal"`` with t = 3σ,
+        ``"truncated_normal"``, ``"contact"``) or an :class:`evotol.distributions.Distribution`
+        (``sigma_k``, ``mean_shift``); conventions in :mod:`evotol.distributions`.
     """
 
     cost: CostModel
     lower: float
     upper: float
     locked: float | None = None
-    distribution: str = "uniform"
+    distribution: "str | distributions.Distribution" = "uniform"
 
     def validate(self, name: str) -> None:
         if not isinstance(self.cost, CostModel):
@@ -50,8 +51,7 @@ class Tolerance:
             raise ValidationError(f"tolerances[{name!r}].lower", self.lower, f"<= upper ({self.upper})")
         if self.locked is not None and not (np.isfinite(self.locked) and self.locked > 0):
             raise ValidationError(f"tolerances[{name!r}].locked", self.locked, "a positive tolerance (SI) or None")
-        if self.distribution not in DISTRIBUTIONS:
-            raise ValidationError(f"tolerances[{name!r}].distribution", self.distribution, f"one of {DISTRIBUTIONS}")
+        distributions.as_distribution(self.distribution, f"tolerances[{name!r}].distribution")
         self.cost.validate_range(min(self.lower, self.locked or self.lower), max(self.upper, self.locked or self.upper))
 
 
@@ -132,6 +132,9 @@ class ToleranceProblem:
             tolerances[n].validate(n)
         self.robot, self.requirement = robot, requirement
         self.tolerances = {n: tolerances[n] for n in names}
+        self.distributions = [distributions.as_distribution(self.tolerances[s.name].distribution,
+                                                            f"tolerances[{s.name!r}].distribution", s.dim)
+                              for s in robot.sources]
         self.names = names
         self.poses = robot.check_poses(poses)
         self.n_directions = int(n_directions)
@@ -277,10 +280,9 @@ class ToleranceProblem:
 
     def _mc_quantile(self, comp: str, T: np.ndarray) -> np.ndarray:
         """Quantile of |error| over common Latin-hypercube samples of the linear model, per pose."""
-        from evotol.montecarlo import unit_samples
-
         if self._mc_cache is None:
-            self._mc_cache = unit_samples(self, self.requirement.mc_samples, method="lhs", seed=self.requirement.seed)
+            self._mc_cache = distributions.unit_samples([s.dim for s in self.robot.sources], self.distributions,
+                                                        self.requirement.mc_samples, method="lhs", seed=self.requirement.seed)
         Z = self._mc_cache                       # list over sources of (n_samples, dim)
         out = np.empty((T.shape[0], self.n_poses))
         for i, t in enumerate(T):
