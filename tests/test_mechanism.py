@@ -231,3 +231,36 @@ def test_check_mechanism_command_prints_sources_and_fd(capsys):
     assert main(["check-mechanism", "fivebar", "--poses", "4"]) == 0
     out = capsys.readouterr().out
     assert "theta1" in out and "finite differences" in out and "loop-closure residual" in out
+
+
+def test_study_file_with_a_description_runs_end_to_end(tmp_path):
+    """docs/mechanisms.md tutorial: a study file naming a description file, no Python."""
+    import json
+
+    from evotol.studyfile import run_study_file
+
+    (tmp_path / "my_3rrr.toml").write_text((HERE / "planar3rrr.toml").read_text())
+    (tmp_path / "study.toml").write_text('''name = "t3rrr"
+[robot]
+mechanism = "my_3rrr.toml"
+sources = ["l1_*", "q?"]
+[poses]
+grid = [2, 2, 1]
+[requirement]
+position = 1e-4
+[cost.default]
+model = "exponential"
+a0 = 1.9
+a1 = 0.5
+scale = 1e-5
+[methods]
+sensitivity = {}
+optimum = {}
+[verify]
+n_samples = 20
+''')
+    summary = run_study_file(tmp_path / "study.toml", out=tmp_path)
+    data = json.loads(Path(summary["json"]).read_text())
+    assert set(data["results"]["optimum"]["tolerances"]) == {"l1_1", "l1_2", "l1_3", "q1", "q2", "q3"}
+    assert data["results"]["optimum"]["cost"] <= data["results"]["sensitivity"]["cost"] * (1 + 1e-9)
+    assert data["monte_carlo"]["optimum"]["max_exceed_rate"] <= 0.1
