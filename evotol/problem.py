@@ -463,6 +463,12 @@ class ToleranceProblem:
                 c += self.tolerances[n].cost_of(T2[:, j])
         return float(c[0]) if single else c
 
+    def free_cost(self, t: np.ndarray) -> float:
+        """Cost of the sources driven by a variable at one design t (n_sources,), summed one scalar
+        at a time (what the optimum's objective uses; the locked part is a constant)."""
+        return sum(float(self.tolerances[n].cost_of(t[j])) for j, n in enumerate(self.names)
+                   if self.cost_weight[j] and not self.locked[j])
+
     def source_costs(self, t) -> np.ndarray:
         t = self.as_array(t)
         return np.array([float(self.tolerances[n].cost_of(t[j])) * self.cost_weight[j] for j, n in enumerate(self.names)])
@@ -493,6 +499,8 @@ class ToleranceProblem:
 
     def support_row(self, component: str, pose: int, u: np.ndarray) -> tuple[np.ndarray, float]:
         """The worst-case row at one pose and direction u: h(u) = row·t + const (SI)."""
+        if self.shape.plain:
+            return np.array([np.linalg.norm(B[pose].T @ u) for B in self.blocks[component]]), 0.0
         blocks = [B[pose:pose + 1] for B in self.blocks[component]]
         row = measures.support_coefficients(blocks, u[None], None if self.shape.plain else self.shape)[0, 0]
         const = 0.0 if self.shape.plain else float(measures.support_constant(blocks, u[None], self.shape)[0, 0])

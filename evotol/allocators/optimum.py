@@ -135,7 +135,7 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
         return problem.full((y * hi)[None])[0]
 
     def obj(y):
-        return float(problem.cost(T(y), include_locked=False)) / c0
+        return problem.free_cost(T(y)) / c0
 
     def jac(y):
         return problem.variable_dcost(T(y)) * hi / c0
