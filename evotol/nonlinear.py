@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
-from evotol import measures
+from evotol import distributions, measures
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
 from evotol.threads import single_threaded_blas
@@ -58,15 +58,13 @@ def uniform_interval_samples(problem: ToleranceProblem, t, n_samples: int, seed:
     """(n_samples, n_columns) errors uniform in every interval [offset − minus·t, offset + plus·t]
     (Latin hypercube, one column per interval source; disks/balls: uniform direction, radius
     uniform in [0, t] as :mod:`evotol.montecarlo`)."""
-    from evotol.montecarlo import _draw
-
     t = problem.as_array(t)
     dims = [s.dim for s in problem.robot.sources]
     U = qmc.LatinHypercube(d=sum(dims), seed=seed).random(int(n_samples))
     if all(d == 1 for d in dims):
         iv = problem.intervals(t)
         return iv[:, 0] + U * (iv[:, 1] - iv[:, 0])
-    Z = _draw(U, dims, ["uniform"] * len(dims), "uniform")
+    Z = distributions.draw(U, dims, ["uniform"] * len(dims), "uniform")
     return np.concatenate(problem.source_errors(Z, t), axis=1)
 
 

@@ -25,11 +25,11 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from cost_models.base import CostModel
-from evotol import measures
+from evotol import distributions, measures, statistical
 from evotol.errors import InfeasibleError, ValidationError
 from robots.base import RobotErrorModel
 
-DISTRIBUTIONS = ("uniform", "normal")
+DISTRIBUTIONS = distributions.KINDS
 COST_WIDTHS = ("half", "full")
 SHARED_COSTS = ("part", "variable")
 
@@ -41,9 +41,12 @@ class Tolerance:
     cost: cost model of this tolerance, or None for a fixed source (:meth:`fixed`).
     lower, upper: allowed range of the tolerance t, 0 < lower <= upper.
     locked: if given, the tolerance is fixed at this value and not optimised (its cost counts).
-    distribution: how Monte Carlo samples the source inside its interval: ``"uniform"``
-        (uniform value in the interval; a disk/ball clearance as Yao 2013 eq. 12: uniform direction,
-        uniform radius <= t) or ``"normal"`` (half-width = 3σ about the centre, truncated at the ends).
+    distribution: how the source is distributed inside its tolerance (Monte Carlo and the
+        ``yield`` measure): a kind name (``"uniform"``, ``"normal"`` with t = 3σ,
+        ``"truncated_normal"``, ``"contact"``) or an :class:`evotol.distributions.Distribution`
+        (``sigma_k``, ``mean_shift``); conventions in :mod:`evotol.distributions`. For an
+        asymmetric interval the distribution is placed on the interval: centre
+        offset + (plus − minus)/2·t, half-width (minus + plus)/2·t.
     offset, minus, plus (interval sources only): the error lies in
         ``[offset − minus·t, offset + plus·t]``; ``offset`` is a fixed mean shift (SI),
         ``minus``/``plus`` fixed ratios (>= 0, not both 0). Default: the centred interval ±t.
@@ -59,7 +62,7 @@ class Tolerance:
     lower: float
     upper: float
     locked: float | None = None
-    distribution: str = "uniform"
+    distribution: "str | distributions.Distribution" = "uniform"
     offset: float = 0.0
     minus: float = 1.0
     plus: float = 1.0
@@ -123,8 +126,7 @@ class Tolerance:
         if self.locked is not None and not (isinstance(self.locked, (int, float, np.floating))
                                             and np.isfinite(self.locked) and self.locked > 0):
             raise ValidationError(f"{f0}.locked", self.locked, "a positive tolerance (SI) or None")
-        if self.distribution not in DISTRIBUTIONS:
-            raise ValidationError(f"{f0}.distribution", self.distribution, f"one of {DISTRIBUTIONS}")
+        distributions.as_distribution(self.distribution, f"{f0}.distribution")
         for f in ("offset", "minus", "plus"):
             v = getattr(self, f)
             if not isinstance(v, (int, float, np.floating)) or not np.isfinite(v) or (f != "offset" and v < 0):
@@ -157,7 +159,11 @@ class Requirement:
     position: bound on |δp| (m), or None; orientation: bound on |δθ| (rad), or None.
     measure: ``"worst_case"`` (exact for the linear model, see :mod:`evotol.measures`),
         ``"rss"`` (root sum square of the sources' worst-case effects), or ``"mc_quantile"``
-        (the ``quantile`` of |δp| over ``mc_samples`` Latin-hypercube samples, linear model).
+        (the ``quantile`` of |δp| over ``mc_samples`` Latin-hypercube samples, linear model), or
+        ``"yield"``: at every pose P(|δp| ≤ position and |δθ| ≤ orientation) ≥ ``probability``
+        for the first-order model (:mod:`evotol.statistical`; Bonferroni bound for both).
+    probability: required yield of the ``yield`` measure in (0, 1) (default 0.9973 = 3σ), or
+    ppm: the same given as allowed defects per million (probability = 1 − ppm·1e-6).
     """
 
     position: float | None = None
@@ -166,6 +172,15 @@ class Requirement:
     quantile: float = 0.95
     mc_samples: int = 2000
     seed: int = 0
+    probability: float | None = None
+    ppm: float | None = None
+
+    @property
+    def required_yield(self) -> float:
+        """The yield the ``yield`` measure requires (from ``probability`` or ``ppm``)."""
+        if self.ppm is not None:
+            return 1.0 - float(self.ppm) * 1e-6
+        return 0.9973 if self.probability is None else float(self.probability)
 
     def validate(self) -> None:
         if self.position is None and self.orientation is None:
@@ -178,6 +193,12 @@ class Requirement:
             raise ValidationError("requirement.measure", self.measure, f"one of {measures.MEASURES}")
         if not 0 < self.quantile < 1:
             raise ValidationError("requirement.quantile", self.quantile, "a probability in (0, 1)")
+        if self.probability is not None and self.ppm is not None:
+            raise ValidationError("requirement.ppm", self.ppm, "None when requirement.probability is given (one of the two)")
+        if self.probability is not None:
+            statistical.required_probability(self.probability)
+        if self.ppm is not None and not (isinstance(self.ppm, (int, float, np.floating)) and 0 < self.ppm < 1e6):
+            raise ValidationError("requirement.ppm", self.ppm, "defects per million in (0, 1e6)")
         if int(self.mc_samples) < 10:
             raise ValidationError("requirement.mc_samples", self.mc_samples, "at least 10 samples")
 
@@ -195,6 +216,8 @@ class Evaluation:
     position_direction: np.ndarray | None = None  # (n_designs, n_poses, 3) worst direction
     orientation_direction: np.ndarray | None = None
     violation: np.ndarray = field(default=None)   # (n_designs,) max normalised error − 1
+    probability: np.ndarray | None = None         # yield measure: (n_designs, n_poses) lower bound of the yield
+    exact: bool = True                            # yield measure: False when sources were moment-matched (CLT)
 
 
 class ToleranceProblem:
@@ -234,6 +257,9 @@ class ToleranceProblem:
             tolerances[n].validate(n, src.dim)
         self.robot, self.requirement = robot, requirement
         self.tolerances = {n: tolerances[n] for n in names}
+        self.distributions = [distributions.as_distribution(self.tolerances[s.name].distribution,
+                                                            f"tolerances[{s.name!r}].distribution", s.dim)
+                              for s in robot.sources]
         self.names = names
         self.poses = self._check_pose_set(poses)
         self.n_directions = int(n_directions)
@@ -253,6 +279,7 @@ class ToleranceProblem:
             raise ValidationError("tolerances", "all locked", "at least one source free to optimise")
         self._coeff_cache: dict[str, tuple] = {}
         self._mc_cache = None
+        self._yield_cache = None
 
     def _check_pose_set(self, poses) -> np.ndarray:
         if poses is None or (hasattr(poses, "__len__") and len(poses) == 0):
@@ -358,6 +385,7 @@ class ToleranceProblem:
         new.requirement = dataclasses.replace(self.requirement, **changes)
         new.requirement.validate()
         new._mc_cache = None
+        new._yield_cache = None
         return new
 
     def with_poses(self, idx) -> "ToleranceProblem":
@@ -378,6 +406,7 @@ class ToleranceProblem:
         new._coeff_cache = {k: (v[0][idx],) + tuple(v[1:3]) + ((v[3][idx],) if len(v) > 3 else ())
                             for k, v in self._coeff_cache.items()}
         new._mc_cache = None
+        new._yield_cache = None
         return new
 
     def with_added_poses(self, poses) -> "ToleranceProblem":
@@ -391,6 +420,7 @@ class ToleranceProblem:
         new._set_jacobian(np.concatenate([self.jacobian, J], axis=0))
         new._coeff_cache = {}
         new._mc_cache = None
+        new._yield_cache = None
         return new
 
     def full(self, X_free: np.ndarray) -> np.ndarray:
@@ -513,6 +543,12 @@ class ToleranceProblem:
         T = np.atleast_2d(self.as_array(T))
         measure = measure or self.requirement.measure
         ev = Evaluation(None, None)
+        if measure == "yield":
+            if not self.shape.plain:
+                raise ValidationError("requirement.measure", "yield", "'worst_case', 'rss' or 'mc_quantile' for "
+                                      "asymmetric intervals (offset/minus/plus); the yield measure takes centred "
+                                      "tolerances with a distribution mean_shift")
+            return self._evaluate_yield(T)
         viol = np.full(T.shape[0], -np.inf)
         plain = self.shape.plain
         for comp in ("position", "orientation"):
@@ -546,6 +582,21 @@ class ToleranceProblem:
         ev.violation = viol
         return ev
 
+    def first_order_yield(self) -> statistical.FirstOrderYield:
+        """Cached moments of the linear model for the ``yield`` measure."""
+        if getattr(self, "_yield_cache", None) is None:
+            self._yield_cache = statistical.FirstOrderYield(self.blocks, self.distributions, dict(self.components))
+        return self._yield_cache
+
+    def _evaluate_yield(self, T: np.ndarray) -> Evaluation:
+        y = self.first_order_yield().evaluate(T, self.requirement.required_yield)
+        ev = Evaluation(None, None, violation=y.violation, probability=y.probability, exact=y.exact)
+        for c in y.miss:
+            setattr(ev, c, y.equivalent[c])
+            setattr(ev, f"{c}_bound", y.equivalent[c])
+            setattr(ev, f"{c}_contrib", y.contributions[c])
+        return ev
+
     def max_errors(self, T, measure: str | None = None) -> dict[str, np.ndarray]:
         """Largest error over the poses, per constrained component: name -> (n_designs,)."""
         ev = self.evaluate(T, measure)
@@ -568,10 +619,9 @@ class ToleranceProblem:
 
     def _mc_quantile(self, comp: str, T: np.ndarray) -> np.ndarray:
         """Quantile of |error| over common Latin-hypercube samples of the linear model, per pose."""
-        from evotol.montecarlo import unit_samples
-
         if self._mc_cache is None:
-            self._mc_cache = unit_samples(self, self.requirement.mc_samples, method="lhs", seed=self.requirement.seed)
+            self._mc_cache = distributions.unit_samples([s.dim for s in self.robot.sources], self.distributions,
+                                                        self.requirement.mc_samples, method="lhs", seed=self.requirement.seed)
         Z = self._mc_cache                       # list over sources of (n_samples, dim)
         out = np.empty((T.shape[0], self.n_poses))
         for i, t in enumerate(T):

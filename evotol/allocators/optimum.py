@@ -175,7 +175,7 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
     t0 = time.perf_counter()
     if problem.requirement.measure not in ("worst_case", "rss"):
         raise ValidationError("requirement.measure", problem.requirement.measure,
-                              "'worst_case' or 'rss' for the exact optimum (mc_quantile is not convex: use allocate_ga)")
+                              "'worst_case' or 'rss' for the exact optimum (mc_quantile and yield have no convex rows: use allocate_ga)")
     if problem.requirement.measure == "rss" and problem.asymmetric:
         raise ValidationError("requirement.measure", "rss", "'worst_case' for the exact optimum of asymmetric "
                               "intervals (|shift| + RSS rows are not quadratic: use allocate_ga)")
