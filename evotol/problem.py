@@ -51,6 +51,9 @@ class Tolerance:
             raise ValidationError(f"tolerances[{name!r}].lower", self.lower, f"<= upper ({self.upper})")
         if self.locked is not None and not (np.isfinite(self.locked) and self.locked > 0):
             raise ValidationError(f"tolerances[{name!r}].locked", self.locked, "a positive tolerance (SI) or None")
+        if self.locked is not None and not (self.lower * (1 - 1e-12) <= self.locked <= self.upper * (1 + 1e-12)):
+            raise ValidationError(f"tolerances[{name!r}].locked", self.locked,   # issue 15: was silently used
+                                  f"a value within [lower, upper] = [{self.lower:.6g}, {self.upper:.6g}]")
         distributions.as_distribution(self.distribution, f"tolerances[{name!r}].distribution")
         self.cost.validate_range(min(self.lower, self.locked or self.lower), max(self.upper, self.locked or self.upper))
 

@@ -85,12 +85,25 @@ class AllocationResult:
 
 
 def make_result(problem: ToleranceProblem, method: str, t, *, history=None, certificate=None,
-                seconds: float = 0.0, info=None, feas_rtol: float = 1e-9) -> AllocationResult:
-    """Evaluate design ``t`` exactly and wrap it as an :class:`AllocationResult`."""
+                seconds: float = 0.0, info=None, feas_rtol: float = 1e-9, budget: float | None = None) -> AllocationResult:
+    """Evaluate design ``t`` exactly and wrap it as an :class:`AllocationResult`.
+
+    ``feasible``: within the bounds and meeting the requirement; in budget mode (``budget`` given)
+    within the bounds and the budget -- the requirement is then reported as
+    ``info["meets_requirement"]`` (issue 15: "feasible" must mean what it says).
+    """
     t = np.asarray(problem.as_array(t), dtype=float)
     ev = problem.evaluate(t[None])
     f = problem.free
     in_bounds = bool(np.all(t[f] >= problem.lower[f] * (1 - 1e-9)) and np.all(t[f] <= problem.upper[f] * (1 + 1e-9)))
-    feasible = bool(ev.violation[0] <= feas_rtol) and in_bounds
-    return AllocationResult(method, problem, dict(zip(problem.names, t.tolist())), float(problem.cost(t)),
-                            feasible, ev, history, certificate, seconds, dict(info or {}))
+    cost = float(problem.cost(t))
+    meets = bool(ev.violation[0] <= feas_rtol)
+    info = dict(info or {})
+    if budget is None:
+        feasible = meets and in_bounds
+    else:
+        within = bool(cost <= budget * (1 + feas_rtol))
+        feasible = within and in_bounds
+        info.update({"budget": float(budget), "within_budget": within, "meets_requirement": meets})
+    return AllocationResult(method, problem, dict(zip(problem.names, t.tolist())), cost,
+                            feasible, ev, history, certificate, seconds, info)

@@ -14,6 +14,7 @@ import numpy as np
 import cost_models
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
+from evotol.allocators.budget import check_budget
 from evotol.errors import ValidationError
 from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
@@ -40,7 +41,7 @@ def load_problem(spec: dict) -> ToleranceProblem:
     if "grid" in ps:
         poses = robot.workspace.grid(ps["grid"])
     elif "latin_hypercube" in ps:
-        poses = robot.workspace.latin_hypercube(int(ps["latin_hypercube"]), seed=spec.get("seed", 0))
+        poses = robot.workspace.latin_hypercube(ps["latin_hypercube"], seed=spec.get("seed", 0))
     elif "list" in ps:
         poses = np.asarray(ps["list"], dtype=float)
     else:
@@ -86,6 +87,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
         if m != "nsga2" and m not in METHODS:
             raise ValidationError(f"methods.{m}", m, unknown_key_message(m, sorted(METHODS) + ["nsga2"]))
         check_keywords(allocate_nsga2 if m == "nsga2" else METHODS[m], kw, f"methods.{m}", exclude=("problem",))
+        if "budget" in kw:
+            check_budget(problem, kw["budget"], field=f"methods.{m}.budget")
     check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
     results, front, stopped, skipped = {}, None, [], []
     with CtrlC() as ctrl_c:
