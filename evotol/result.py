@@ -9,6 +9,14 @@ import pandas as pd
 from evotol.problem import Evaluation, ToleranceProblem
 
 
+#: info entries that are a solver's raw diagnostics, not results: ``to_dict`` nests them under
+#: ``"diagnostics"`` so they are not read as the verdict
+DIAGNOSTICS = ("solver_message",)
+#: a certificate with relative duality gap and KKT residual at most these is reported "certified optimal"
+CERTIFIED_GAP = 1e-6
+CERTIFIED_KKT = 1e-4
+
+
 @dataclass
 class AllocationResult:
     """Tolerances (SI), cost, accuracy at every pose, feasibility, history, contributors.
@@ -71,13 +79,39 @@ class AllocationResult:
                 d[f"max_{comp}_error_bound"] = float(np.max(b))
         if self.certificate:
             d["certificate"] = self.certificate
-        d.update({k: v for k, v in self.info.items() if np.isscalar(v) or isinstance(v, (list, dict, str))})
+        info = {k: v for k, v in self.info.items() if np.isscalar(v) or isinstance(v, (list, dict, str))}
+        diagnostics = {k: info.pop(k) for k in DIAGNOSTICS if k in info}
+        d.update(info)
+        if self.verdict is not None:
+            d["verdict"] = self.verdict
+        if diagnostics:
+            d["diagnostics"] = diagnostics
         return d
+
+    @property
+    def verdict(self) -> str | None:
+        """The certificate read as a sentence (None without a duality-gap certificate).
+
+        The certificate, not the solver's exit message, decides: SLSQP often ends with
+        "Positive directional derivative for linesearch" at a point whose proven lower bound
+        matches the cost to 1e-13 (issue 15); that message is kept under ``diagnostics``.
+        """
+        c = self.certificate or {}
+        if "gap" not in c or "lower_bound" not in c:
+            return None
+        gap, kkt = float(c["gap"]), float(c.get("kkt_residual", 0.0))
+        if gap <= CERTIFIED_GAP and kkt <= CERTIFIED_KKT:
+            return (f"certified optimal: cost equals the proven lower bound {float(c['lower_bound']):.6g} "
+                    f"to {abs(gap):.1e} (relative gap)")
+        return (f"not certified: relative gap {gap:.2e} to the proven lower bound {float(c['lower_bound']):.6g}"
+                f", KKT residual {kkt:.1e}")
 
     def summary(self) -> str:
         lines = [f"{self.method}: cost {self.cost:.5g}, feasible {self.feasible}"]
         for comp, lim in self.problem.components:
             lines.append(f"  max {comp} error {self.max_error(comp):.4g} (bound {lim:.4g})")
+        if self.verdict is not None:
+            lines.append(f"  {self.verdict}")
         if self.certificate:
             lines.append("  certificate: " + ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
                                                     for k, v in self.certificate.items()))

@@ -21,6 +21,7 @@ from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report, write_json
+from evotol.units import units_block
 from robots import registry
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
@@ -125,7 +126,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
                 stopped.append(f"verify {m}")
     summary = {"name": name, "problem": problem.describe(), "seed": seed,
                "results": {m: r.to_dict() for m, r in results.items()}, "monte_carlo": checks,
-               "seconds": time.perf_counter() - t0, "interrupted": bool(stopped)}
+               "seconds": time.perf_counter() - t0, "interrupted": bool(stopped),
+               "units": units_block(problem)}   # docs/units.md
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
     if front is not None:
