@@ -160,9 +160,16 @@ class AssemblyFunction(RobotErrorModel):
 
     def jacobian(self, points) -> np.ndarray:
         """∂f_k/∂x_j at points (n, n_dims), with the method chosen at construction."""
+        P = np.atleast_2d(np.asarray(points, dtype=float))
+        with np.errstate(all="ignore"):
+            y = np.asarray(self.evaluate(P), dtype=float)
+        bad = ~np.all(np.isfinite(y), axis=-1)
+        if bad.any():  # outside the function's domain: complex step would return a finite but meaningless number
+            raise ValidationError(f"{self.name} dimensions", dict(zip(self.dimension_names, P[bad][0].tolist())),
+                                  "a point where every response is finite")
         if self.derivative_method == "complex step":
-            return self.complex_step(points)
-        return self.central_differences(points)
+            return self.complex_step(P)
+        return self.central_differences(P)
 
     def _derive(self, P):
         fd = self.central_differences(P)

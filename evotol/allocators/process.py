@@ -544,7 +544,7 @@ def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 100, n_gen: int =
 
     def callback(algorithm):
         opt = algorithm.opt
-        hist.append(float(opt.get("F")[0, 0]) if opt.get("feasible")[0, 0] else float("nan"))
+        hist.append(float(opt.get("F")[0, 0]) if opt.get("CV")[0, 0] <= 0 else float("nan"))
 
     alg = GA(pop_size=pop_size, repair=_Rep() if repair else None, eliminate_duplicates=True)
     res = minimize(_P(), alg, ("n_gen", n_gen), seed=seed, verbose=False, callback=callback)
