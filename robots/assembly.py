@@ -271,3 +271,22 @@ def resolve(spec: str) -> Callable:
     if not callable(f):
         raise ValidationError("robot.assembly", spec, "a callable")
     return f
+
+
+def assembly_from_spec(spec: Mapping) -> AssemblyFunction:
+    """The ``[robot]`` table of a study file that names an assembly function:
+
+    ``assembly = "module:function"``, ``nominal = {dim = value (SI), ...}``,
+    ``limits = {response = allowed deviation, ...}``, optional ``name``, ``units``, ``groups``.
+    """
+    spec = dict(spec)
+    known = {"assembly", "nominal", "limits", "name", "units", "groups"}
+    extra = sorted(set(spec) - known)
+    if extra:
+        raise ValidationError(f"robot.{extra[0]}", spec[extra[0]], f"one of {sorted(known)} for an assembly")
+    for key in ("nominal", "limits"):
+        if not isinstance(spec.get(key), Mapping):
+            raise ValidationError(f"robot.{key}", spec.get(key), "a table, e.g. {a = 0.027, c = 0.011}")
+    f = resolve(spec["assembly"])
+    return AssemblyFunction(f, spec["nominal"], spec["limits"], name=spec.get("name", spec["assembly"]),
+                            units=spec.get("units"), groups=spec.get("groups"))

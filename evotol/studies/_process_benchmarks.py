@@ -90,3 +90,109 @@ def stack_problem(measure: str = "worst_case", n_dims: int | None = None, limit:
     asm = LinearStack(signs, {"gap": limit}, name="shaft-housing stack")
     procs = {n: [process(p, size[n]) for p in names] for n in asm.source_names}
     return assembly_problem(asm, processes=procs, measure=measure)
+
+
+# --- the studies' compute and render (shared by chase1990_clutch and process_stack) -------------------
+def _mm(d: dict) -> dict:
+    return {k: v / MM for k, v in d.items()}
+
+
+def _mc_nonlinear(pp: ProcessProblem, tolerances: dict, n: int, seed: int) -> dict:
+    """Nonlinear Monte Carlo of the responses at a design: uniform in ±t (worst case) or normal with
+    t = 3σ (RSS); returns the largest |Δy|/L and the fraction of assemblies outside the limits."""
+    asm = pp.robot
+    t = np.array([tolerances[s] for s in asm.source_names])
+    rng = np.random.default_rng(seed)
+    if pp.requirement.measure == "rss":
+        E = rng.normal(0.0, t / 3.0, size=(n, t.size))
+    else:
+        E = rng.uniform(-t, t, size=(n, t.size))
+    K = len(asm.response_names)
+    out = asm.pose_error(asm.response_poses, np.broadcast_to(E, (K, n, t.size)))[..., 2]   # (K, n) in units of L
+    return {"n_samples": n, "max_abs_normalised": float(np.max(np.abs(out))),
+            "fraction_outside": float(np.mean(np.any(np.abs(out) > 1, axis=0))),
+            "sampling": "normal, t = 3 sigma" if pp.requirement.measure == "rss" else "uniform in [-t, t]"}
+
+
+def run_case(pp: ProcessProblem, config: dict, enumerate_all: bool) -> dict:
+    """Exact optimum (branch and bound; enumeration too when asked), GA, baselines, NSGA-II front."""
+    import time
+
+    from evotol.allocators.process import (allocate_process_baselines, allocate_process_ga,
+                                           allocate_process_optimum, process_front)
+
+    t0 = time.perf_counter()
+    bb = allocate_process_optimum(pp)
+    case = {"n_combinations": pp.n_combinations, "optimum_cost": bb.cost, "n_nodes": bb.n_nodes,
+            "n_convex_solves": bb.n_convex_solves, "optimum_seconds": bb.seconds,
+            "optimum": {"processes": bb.processes, "tolerances_mm": _mm(bb.tolerances), "cost": bb.cost,
+                        "normalised_error": bb.normalised_error, "feasible": bb.feasible, "certificate": bb.certificate}}
+    if enumerate_all:
+        en = allocate_process_optimum(pp, "enumerate")
+        case["enumeration"] = {"cost": en.cost, "n_convex_solves": en.n_convex_solves, "processes": en.processes,
+                               "seconds": en.seconds, "same_optimum": bool(abs(en.cost - bb.cost) <= 1e-9 * bb.cost)}
+    ga = allocate_process_ga(pp, pop_size=config["pop_size"], n_gen=config["n_gen"], seed=config["seed"])
+    case.update(ga_cost=ga.cost, ga_over_optimum=ga.cost / bb.cost - 1, ga_seconds=ga.seconds,
+                ga={"processes": ga.processes, "tolerances_mm": _mm(ga.tolerances), "cost": ga.cost,
+                    "normalised_error": ga.normalised_error, "feasible": ga.feasible, "history": ga.history})
+    case["baselines"] = {k: {"method": r.method, "processes": r.processes, "tolerances_mm": _mm(r.tolerances),
+                             "cost": r.cost, "over_optimum": r.cost / bb.cost - 1, "feasible": r.feasible,
+                             "normalised_error": r.normalised_error}
+                         for k, r in allocate_process_baselines(pp).items()}
+    front = process_front(pp, pop_size=config["pop_size"], n_gen=config["n_gen"], seed=config["seed"])
+    case["front"] = {"cost": front.cost.tolist(), "normalised_error": front.normalised_error.tolist()}
+    case["mc_nonlinear_at_optimum"] = _mc_nonlinear(pp, bb.tolerances, config["n_mc"], config["seed"])
+    case["seconds"] = time.perf_counter() - t0
+    return case
+
+
+def summarise(cases: dict, published: dict, primary: str) -> dict:
+    p = cases[primary]
+    return {"published": published, "primary_case": primary, "optimum_cost": p["optimum_cost"], "ga_cost": p["ga_cost"],
+            "ga_over_optimum": p["ga_over_optimum"], "n_nodes": p["n_nodes"], "n_convex_solves": p["n_convex_solves"],
+            "cases": cases}
+
+
+def render_cases(title: str, subtitle: str, summary: dict, problems_text: dict):
+    """Report: published data, then per case the methods' processes, tolerances and costs, and the front."""
+    import plotly.graph_objects as go
+
+    from evotol.reporting import Report
+
+    rep = Report(title, subtitle)
+    rep.heading("Published data")
+    pub = summary["published"]
+    rep.table([[k, v if not isinstance(v, (dict, list)) else str(v)] for k, v in pub.items()], ["item", "value"],
+              table_id="published")
+    for label, case in summary["cases"].items():
+        rep.heading(f"{label}: {problems_text.get(label, '')}")
+        opt = case["optimum"]["cost"]
+        rows = [["exact (branch and bound)", case["optimum"]["processes"], case["optimum"]["tolerances_mm"], opt, 0.0,
+                 case["optimum"]["feasible"]],
+                ["GA (pymoo)", case["ga"]["processes"], case["ga"]["tolerances_mm"], case["ga_cost"],
+                 100 * case["ga_over_optimum"], case["ga"]["feasible"]]]
+        for b in case["baselines"].values():
+            rows.append([b["method"], b["processes"], b["tolerances_mm"], b["cost"], 100 * b["over_optimum"], b["feasible"]])
+        rep.table([[m, ", ".join(f"{k}: {v}" for k, v in p.items()), ", ".join(f"{k}: {v:.4g}" for k, v in t.items()), c, r, f]
+                   for m, p, t, c, r, f in rows],
+                  ["method", "processes", "tolerances (mm)", "cost", "above optimum (%)", "feasible"], table_id=f"methods_{label}")
+        cert = case["optimum"]["certificate"]
+        txt = (f"{case['n_combinations']} process combinations; branch and bound visited {case['n_nodes']} nodes and "
+               f"solved {case['n_convex_solves']} convex subproblems (leaf duality gap {cert['leaf_gap']:.2e}).")
+        if "enumeration" in case:
+            e = case["enumeration"]
+            txt += (f" Full enumeration solved {e['n_convex_solves']} subproblems and found the same optimum: "
+                    f"{e['same_optimum']}.")
+        mc = case["mc_nonlinear_at_optimum"]
+        txt += (f" Nonlinear Monte Carlo at the optimum ({mc['n_samples']} samples, {mc['sampling']}): largest "
+                f"|Δy|/L = {mc['max_abs_normalised']:.4f}, fraction outside the limit {mc['fraction_outside']:.4%}.")
+        rep.text(txt, note=True)
+        fig = go.Figure()
+        fig.add_scatter(x=case["front"]["normalised_error"], y=case["front"]["cost"], mode="markers", name="NSGA-II front")
+        fig.add_scatter(x=[case["optimum"]["normalised_error"]], y=[opt], mode="markers", marker=dict(size=12, symbol="star"),
+                        name="exact optimum")
+        fig.add_scatter(x=[case["ga"]["normalised_error"]], y=[case["ga_cost"]], mode="markers", marker=dict(size=9, symbol="x"),
+                        name="GA")
+        fig.update_layout(xaxis_title="max error / limit", yaxis_title="cost", height=420)
+        rep.figure(fig, div_id=f"front_{label}")
+    return rep
