@@ -102,7 +102,8 @@ class AssemblyFunction(RobotErrorModel):
         X = np.asarray(X)
         if X.shape[-1] != len(self.dimension_names):
             raise ValidationError("assembly dimensions shape", X.shape, f"(..., {len(self.dimension_names)})")
-        out = self.function(**{n: X[..., j] for j, n in enumerate(self.dimension_names)})
+        cols = np.moveaxis(X, -1, 0).copy()          # one contiguous array per dimension
+        out = self.function(**{n: cols[j] for j, n in enumerate(self.dimension_names)})
         if isinstance(out, Mapping):
             out = [out[n] for n in self.response_names]
         if isinstance(out, (tuple, list)):
