@@ -26,6 +26,7 @@ from evotol import distributions
 from evotol.distributions import METHODS
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
+from evotol.statistical import pose_error_nan
 from evotol.threads import single_threaded_blas
 
 RADIAL = distributions.RADIAL
@@ -45,6 +46,15 @@ class MonteCarloResult:
     linearisation_error: float | None = None      # max |nonlinear − linear| / max |linear|
     max_error_over_worst_case: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
+    yield_linear: np.ndarray | None = None        # (n_poses,) fraction of samples inside every bound
+    yield_nonlinear: np.ndarray | None = None     # the same on robot.pose_error (unassembled = miss)
+    yield_check: dict = field(default_factory=dict)
+
+    @property
+    def requirement_missed(self) -> bool:
+        """True when the Monte Carlo shows, at the stated confidence, that the yield requirement
+        is missed at some pose (nonlinear model where the robot has one)."""
+        return self.yield_check.get("verdict") == "missed"
 
     def max_exceed_rate(self, nonlinear: bool = False) -> float:
         rates = self.nonlinear_exceed_rate if nonlinear and self.nonlinear_exceed_rate else self.exceed_rate
@@ -56,14 +66,43 @@ class MonteCarloResult:
              "max_error_over_worst_case": self.max_error_over_worst_case}
         if self.nonlinear_exceed_rate:
             d["max_exceed_rate_nonlinear"] = self.max_exceed_rate(True)
+        if self.yield_check:
+            d["yield"] = dict(self.yield_check)
         return d
+
+
+def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: float = 0.95,
+                model: str = "linear") -> dict:
+    """Clopper-Pearson interval (exact binomial, via scipy.stats.beta quantiles) of the yield at the worst pose and the
+    verdict against ``required``: "met" (lower bound >= required at every pose), "missed" (upper
+    bound < required at some pose) or "undecided". inside: (n_poses,) fractions of n samples.
+    The interval assumes independent samples (exact for method="mc"; Latin hypercube samples
+    usually vary less, so the interval is then conservative)."""
+    from scipy.stats import beta
+
+    k = np.rint(np.asarray(inside) * n).astype(int)
+    a = 1 - confidence
+    lo = np.where(k > 0, beta.ppf(a / 2, np.maximum(k, 1), n - k + 1), 0.0)
+    hi = np.where(k < n, beta.ppf(1 - a / 2, k + 1, np.maximum(n - k, 1)), 1.0)
+    worst = int(np.argmin(k))
+    out = {"model": model, "n_samples": int(n), "confidence": confidence, "worst_pose": worst,
+           "estimate": float(k[worst] / n), "lower": float(lo[worst]), "upper": float(hi[worst]),
+           "required": required}
+    if required is not None:
+        out["verdict"] = ("missed" if np.any(hi < required) else "met" if np.all(lo >= required) else "undecided")
+    return out
 
 
 @single_threaded_blas
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
            nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
-           progress: bool | None = None) -> MonteCarloResult:
-    """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose."""
+           progress: bool | None = None, confidence: float = 0.95) -> MonteCarloResult:
+    """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose.
+
+    Besides exceedance rates, reports the yield (fraction of samples inside every bound) per pose,
+    on the linear and, where the robot has one, the nonlinear model, with the Clopper-Pearson
+    interval at the worst pose (``confidence``) and, for a ``yield`` requirement, the verdict
+    (:func:`yield_check`; ``requirement_missed`` flags a requirement the robot misses)."""
     t0 = time.perf_counter()
     if method not in METHODS:
         raise ValidationError("method", method, f"one of {METHODS}")
@@ -82,6 +121,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     exceed_nl = {c: np.zeros(P) for c, _ in comps} if (nonlinear and robot.has_nonlinear_model) else {}
     maxerr = {c: np.zeros(P) for c, _ in comps}
     q95 = {c: np.zeros(P) for c, _ in comps}
+    inside_lin = np.zeros(P)
+    inside_nl = np.zeros(P) if exceed_nl else None
     lin_err, lin_scale = 0.0, 0.0
     rows = {"position": slice(0, 3), "orientation": slice(3, 6)}
     from tqdm.auto import tqdm
@@ -94,21 +135,34 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
             Z = distributions.draw(distributions.uniforms(n_samples, sum(dims), method, seeds[p]), dims, dists, radial)
             E[a] = np.concatenate([z * tj for z, tj in zip(Z, t)], axis=1)
         lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
+        ok = np.ones(lin.shape[:2], dtype=bool)
         for c, lim in comps:
             nrm = np.linalg.norm(lin[:, :, rows[c]], axis=2)
+            ok &= nrm <= lim
             exceed[c][idx] = np.mean(nrm > lim, axis=1)
             maxerr[c][idx] = nrm.max(axis=1)
             q95[c][idx] = np.quantile(nrm, 0.95, axis=1)
+        inside_lin[idx] = ok.mean(axis=1)
         if exceed_nl:
-            nl = robot.pose_error(problem.poses[idx], E)
-            lin_err = max(lin_err, float(np.max(np.abs(nl - lin))))
+            nl = pose_error_nan(robot, problem.poses[idx], E)
+            assembled = np.all(np.isfinite(nl), axis=2)
+            if assembled.any():
+                lin_err = max(lin_err, float(np.max(np.abs(nl - lin)[assembled])))
             lin_scale = max(lin_scale, float(np.max(np.abs(lin))))
+            ok = np.ones(lin.shape[:2], dtype=bool)
             for c, lim in comps:
-                exceed_nl[c][idx] = np.mean(np.linalg.norm(nl[:, :, rows[c]], axis=2) > lim, axis=1)
+                nrm = np.linalg.norm(nl[:, :, rows[c]], axis=2)
+                ok &= nrm <= lim                                 # NaN (not assembled) is a miss
+                exceed_nl[c][idx] = np.mean(~(nrm <= lim), axis=1)
+            inside_nl[idx] = ok.mean(axis=1)
         bar.update(idx.size)
     bar.close()
     res = MonteCarloResult(method, int(n_samples), seed, exceed, maxerr, q95, exceed_nl,
                            (lin_err / lin_scale) if exceed_nl and lin_scale > 0 else None)
+    res.yield_linear, res.yield_nonlinear = inside_lin, inside_nl
+    req = problem.requirement.required_yield if problem.requirement.measure == "yield" else None
+    res.yield_check = yield_check(inside_nl if inside_nl is not None else inside_lin, n_samples, req, confidence,
+                                  "nonlinear" if inside_nl is not None else "linear")
     ev = problem.evaluate(t[None], "worst_case")
     for c, _ in comps:
         res.max_error_over_worst_case[c] = float(np.max(maxerr[c] / np.maximum(getattr(ev, c)[0], 1e-300)))
