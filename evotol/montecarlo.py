@@ -73,21 +73,30 @@ class MonteCarloResult:
 
 def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: float = 0.95,
                 model: str = "linear") -> dict:
-    """Clopper-Pearson interval (exact binomial, via scipy.stats.beta quantiles) of the yield at the worst pose and the
-    verdict against ``required``: "met" (lower bound >= required at every pose), "missed" (upper
-    bound < required at some pose) or "undecided". inside: (n_poses,) fractions of n samples.
+    """Clopper-Pearson interval (exact binomial, via scipy.stats.beta quantiles) of the yield at the
+    worst pose and the verdict against ``required``: "met" (lower bound >= required at every pose),
+    "missed" (upper bound < required at some pose) or "undecided". inside: (n_poses,) fractions of
+    n samples. The verdict holds for all poses together at ``confidence``: each pose's interval
+    is taken at level 1 − (1 − confidence)/n_poses (Bonferroni), since the smallest of many
+    estimates at the bound is biased low. The reported interval is the worst pose's at
+    ``confidence``.
     The interval assumes independent samples (exact for method="mc"; Latin hypercube samples
     usually vary less, so the interval is then conservative)."""
     from scipy.stats import beta
 
     k = np.rint(np.asarray(inside) * n).astype(int)
-    a = 1 - confidence
-    lo = np.where(k > 0, beta.ppf(a / 2, np.maximum(k, 1), n - k + 1), 0.0)
-    hi = np.where(k < n, beta.ppf(1 - a / 2, k + 1, np.maximum(n - k, 1)), 1.0)
+
+    def interval(a):
+        lo = np.where(k > 0, beta.ppf(a / 2, np.maximum(k, 1), n - k + 1), 0.0)
+        hi = np.where(k < n, beta.ppf(1 - a / 2, k + 1, np.maximum(n - k, 1)), 1.0)
+        return lo, hi
+
+    lo, hi = interval(1 - confidence)
     worst = int(np.argmin(k))
     out = {"model": model, "n_samples": int(n), "confidence": confidence, "worst_pose": worst,
            "estimate": float(k[worst] / n), "lower": float(lo[worst]), "upper": float(hi[worst]),
            "required": required}
+    lo, hi = interval((1 - confidence) / len(k))
     if required is not None:
         out["verdict"] = ("missed" if np.any(hi < required) else "met" if np.all(lo >= required) else "undecided")
     return out

@@ -196,3 +196,25 @@ def test_nonlinear_yield_of_the_planar_5r_agrees_with_an_independent_verificatio
     loose = verify(P, t * 2, 2000, method="mc", seed=7)
     assert loose.requirement_missed and loose.yield_check["model"] == "nonlinear"
     assert P.evaluate((2 * t)[None]).violation[0] > 0
+
+
+def test_study_file_keys_for_statistical_tolerancing():
+    """The example study file's keys reach the problem; a bad sigma_k is named."""
+    import tomllib
+    from pathlib import Path
+
+    from evotol.studyfile import load_problem
+
+    spec = tomllib.loads((Path(__file__).parents[1] / "reports/studies/ucr3_yield.toml").read_text())
+    spec["poses"] = {"grid": [2, 2, 2]}
+    P = load_problem(spec)
+    assert P.requirement.measure == "yield" and P.requirement.required_yield == 0.9973
+    d = dict(zip(P.names, P.distributions))
+    assert d["l1"] == Distribution("normal", 4.0, 0.25) and d["R2"] == Distribution("normal", 3.0, 0.0)
+    spec["sources"]["l1"]["sigma_k"] = -1
+    with pytest.raises(ValidationError, match=r"tolerances\['l1'\]\.distribution\.sigma_k = -1"):
+        load_problem(spec)
+    spec["sources"]["l1"]["sigma_k"] = 3
+    spec["requirement"]["ppm"] = 10
+    with pytest.raises(ValidationError, match=r"requirement\.ppm"):
+        load_problem(spec)
