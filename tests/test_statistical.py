@@ -218,3 +218,28 @@ def test_study_file_keys_for_statistical_tolerancing():
     spec["requirement"]["ppm"] = 10
     with pytest.raises(ValidationError, match=r"requirement\.ppm"):
         load_problem(spec)
+
+
+def test_calibrate_scale_gives_the_largest_certified_factor():
+    """calibrate_scale: at the returned factor every pose's one-sided 95 % Clopper-Pearson upper
+    bound of the miss probability (fresh samples, nonlinear model) is within 1 − p; 3 % more is not."""
+    from scipy.stats import beta
+
+    from evotol.montecarlo import calibrate_scale
+    from evotol.statistical import SampledYield
+
+    P = _planar5r_problem("nonlinear", 512)
+    t = np.array([3e-5] * 6 + [1.6e-3] * 2 + [4e-5] * 4)
+    cal = calibrate_scale(P, t, 2000, seed=11)
+    assert cal["certified"] and 0.3 < cal["scale"] < 3
+    np.testing.assert_allclose(cal["tolerances"][:6], 3e-5)          # locked lengths keep their value
+    model = SampledYield(P.robot, P.poses, P.distributions, dict(P.components), 2000, 11)
+
+    def upper(T):
+        k = np.rint((1 - model.evaluate(T[None], 0.99).probability[0]) * 2000)
+        return np.max(beta.ppf(0.95, k + 1, 2000 - k))
+
+    assert upper(cal["tolerances"]) <= 0.01
+    T = cal["tolerances"].copy()
+    T[6:] *= 1.03
+    assert upper(T) > 0.01
