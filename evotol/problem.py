@@ -552,10 +552,6 @@ class ToleranceProblem:
         measure = measure or self.requirement.measure
         ev = Evaluation(None, None)
         if measure == "yield":
-            if not self.shape.plain:
-                raise ValidationError("requirement.measure", "yield", "'worst_case', 'rss' or 'mc_quantile' for "
-                                      "asymmetric intervals (offset/minus/plus); the yield measure takes centred "
-                                      "tolerances with a distribution mean_shift")
             return self._evaluate_yield(T)
         viol = np.full(T.shape[0], -np.inf)
         plain = self.shape.plain
@@ -594,11 +590,13 @@ class ToleranceProblem:
         """Cached moments of the linear model for the ``yield`` measure."""
         if getattr(self, "_yield_cache", None) is None:
             r = self.requirement
+            shift = None if self.shape.plain else (self.shape.rho, self.shape.kappa, self.shape.offset)
             if r.model == "nonlinear":
                 self._yield_cache = statistical.SampledYield(self.robot, self.poses, self.distributions,
-                                                             dict(self.components), r.mc_samples, r.seed)
+                                                             dict(self.components), r.mc_samples, r.seed, shift=shift)
             else:
-                self._yield_cache = statistical.FirstOrderYield(self.blocks, self.distributions, dict(self.components))
+                self._yield_cache = statistical.FirstOrderYield(self.blocks, self.distributions, dict(self.components),
+                                                                shift=shift)
         return self._yield_cache
 
     def _evaluate_yield(self, T: np.ndarray) -> Evaluation:

@@ -221,19 +221,25 @@ class FirstOrderYield:
 
     blocks: component -> list over sources of (n_poses, 3, dim_j) sensitivity blocks;
     dists: per-source :class:`evotol.distributions.Distribution`; bounds: component -> E;
-    offsets: optional (n_sources,) fixed mean offsets (SI) of interval sources.
+    shift: optional (rho, kappa, offset) per source of asymmetric intervals (``docs/tolerances.md``):
+    the unit distribution is placed on [offset + (κ − ρ)t, offset + (κ + ρ)t], i.e.
+    e = offset + t (κ + ρ z): mean offset + t (κ + ρ m), variance t² ρ² v.
     """
 
     _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
-    def __init__(self, blocks: dict, dists, bounds: dict, radial: str = "uniform", offsets=None):
+    def __init__(self, blocks: dict, dists, bounds: dict, radial: str = "uniform", shift=None):
         from evotol.distributions import unit_moments
 
         self.bounds = {c: float(E) for c, E in bounds.items() if E is not None}
         dims = [B.shape[2] for B in next(iter(blocks.values()))]
         mom = np.array([unit_moments(d, dim, radial) for d, dim in zip(dists, dims)])
-        self.unit_mean, self.unit_var = mom[:, 0], mom[:, 1]
-        self.offsets = np.zeros(len(dims)) if offsets is None else np.asarray(offsets, dtype=float)
+        n = len(dims)
+        rho, kappa, offset = (np.ones(n), np.zeros(n), np.zeros(n)) if shift is None else \
+            (np.asarray(a, dtype=float) for a in shift)
+        self.unit_mean = kappa + rho * mom[:, 0]
+        self.unit_var = rho ** 2 * mom[:, 1]
+        self.offsets = offset
         contributing = [j for j in range(len(dims)) if any(np.any(blocks[c][j]) for c in self.bounds)]
         self.exact = all(dists[j].is_normal for j in contributing)
         self.G, self.Bmean, self.frob = {}, {}, {}
@@ -341,7 +347,7 @@ class SampledYield:
             out = ~(nrm[c] <= E)                                   # NaN (not assembled) is a miss
             miss[c] = out.mean(axis=2)
             joint = out if joint is None else joint | out
-            eq[c] = np.quantile(np.where(np.isnan(nrm[c]), np.inf, nrm[c]), probability, axis=2)
+            eq[c] = np.quantile(np.where(np.isnan(nrm[c]), np.inf, nrm[c]), probability, axis=2, method="inverted_cdf")
         q = joint.mean(axis=2)
         viol = np.max(k_req / np.maximum(k_equivalent(q), 1e-3), axis=1) - 1
         return YieldResult(miss, 1.0 - q, eq, viol, {}, False)

@@ -243,3 +243,23 @@ def test_calibrate_scale_gives_the_largest_certified_factor():
     T = cal["tolerances"].copy()
     T[6:] *= 1.03
     assert upper(T) > 0.01
+
+
+def test_yield_with_asymmetric_intervals_matches_1e6_monte_carlo():
+    """Asymmetric intervals (offset, minus/plus; docs/tolerances.md) with normal sources: the unit
+    distribution sits on the interval's centre with its half-width; analytic miss vs 10^6 MC."""
+    r = ToyRobot(dims=(1, 1, 2), planar=True)
+    tol = {"s0": Tolerance(cost=cm.ExponentialCost(1, 1, scale=1e-3), lower=1e-5, upper=1e-2, distribution="normal",
+                           offset=1e-4, minus=0.5, plus=1.5),
+           "s1": Tolerance(cost=cm.ExponentialCost(1, 1, scale=1e-3), lower=1e-5, upper=1e-2, distribution="normal"),
+           "s2": Tolerance(cost=cm.ExponentialCost(1, 1, scale=1e-3), lower=1e-5, upper=1e-2, distribution="normal")}
+    P = ToleranceProblem(r, tol, Requirement(position=6e-4, measure="yield", probability=0.99), [[0.0], [0.6]])
+    t = np.full(3, 3e-4)
+    q = 1 - P.evaluate(t[None]).probability[0]
+    dims = [s.dim for s in r.sources]
+    Z = draw(uniforms(1_000_000, sum(dims), "mc", 4), dims, P.distributions)
+    E = np.concatenate(P.source_errors(Z, t), axis=1)
+    assert np.mean(E[:, 0]) == pytest.approx(1e-4 + 0.5 * 3e-4, abs=1e-6)     # centre offset + κ t
+    for p, J in enumerate(P.jacobian):
+        k = int(np.sum(np.linalg.norm(E @ J[0:3].T, axis=1) > 6e-4))
+        assert 1e-3 < q[p] < 0.2 and _within_ci(k, 1_000_000, q[p]), (p, q[p], k)

@@ -153,8 +153,13 @@ def _from_variables(problem, V: np.ndarray) -> np.ndarray:
 
 
 def allocate_case(case: str, cfg: dict, seed: int, pareto: bool, grid: int, p_max: float = 0.01,
-                  radius: float = 0.2e-3) -> dict:
-    """GA on the core yield problem, calibration on fresh samples, verification, NSGA-II, grid."""
+                  radius: float = 0.2e-3, seed_designs=()) -> dict:
+    """GA on the core yield problem, calibration on fresh samples, verification, NSGA-II, grid.
+
+    The GA starts from the tightest design (every tolerance at its lower bound: feasible whenever
+    anything is), the Lagrange baseline and ``seed_designs`` (e.g. the worst-case optimum, whose
+    exceedance is 0); its search runs on the tolerances themselves (the feasible region of case a
+    is a small corner of the box)."""
     from scipy.stats import beta
 
     from evotol.allocators import allocate_ga, allocate_nsga2
@@ -171,8 +176,16 @@ def allocate_case(case: str, cfg: dict, seed: int, pareto: bool, grid: int, p_ma
     from evotol.errors import InfeasibleError
 
     T_lo = P.full(P.lower[P.free][None])
+    from evotol.allocators import allocate_lagrange
+    from evotol.errors import EvotolError
+
+    seeds = [T_lo[0]] + [np.asarray(d, dtype=float) for d in seed_designs]
     try:
-        ga = allocate_ga(P, pop_size=cfg["pop"], n_gen=cfg["n_gen"], seed=seed, progress=False)
+        seeds.append(allocate_lagrange(P).t)
+    except EvotolError:                            # no Lagrange design meets the requirement
+        pass
+    try:
+        ga = allocate_ga(P, pop_size=cfg["pop"], n_gen=cfg["n_gen"], seed=seed, progress=False, seeds=seeds)
         message = "no design met the requirement within the bounds"
     except InfeasibleError as exc:                 # even the tightest tolerances miss the requirement
         ga, message = None, str(exc)
@@ -234,7 +247,8 @@ def worst_case_case(case: str, seed: int) -> dict:
     return {"tolerances": {n: float(v) for n, v in res.tolerances.items()}, "cost": float(res.cost),
             "feasible": bool(res.feasible), "max_position_error": res.max_error("position"),
             "certificate": res.certificate, "as_variables": _as_variables(Pw, T),
-            "p_exceed_probabilistic_model": float(1 - Pp.evaluate(T[None]).probability.min()), "sigma_multiple": SIGMA_K}
+            "p_exceed_probabilistic_model": float(1 - Pp.evaluate(T[None]).probability.min()), "sigma_multiple": SIGMA_K,
+            "_design": T}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -407,11 +421,14 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
 
     alloc = {}
     for c in cfg["alloc_cases"]:
-        alloc[c] = allocate_case(c, cfg, seed, pareto=c == "b", grid=cfg["alloc_grid"] if c == "b" else 0)
         try:
-            alloc[c]["worst_case"] = worst_case_case(c, seed)
+            wc = worst_case_case(c, seed)
         except EvotolError as exc:      # e.g. the fixed link-length tolerances alone break the requirement
-            alloc[c]["worst_case"] = {"feasible": False, "message": str(exc)[:300]}
+            wc = {"feasible": False, "message": str(exc)[:300]}
+        start = [wc.pop("_design")] if "_design" in wc else []
+        alloc[c] = allocate_case(c, cfg, seed, pareto=c == "b", grid=cfg["alloc_grid"] if c == "b" else 0,
+                                 seed_designs=start)
+        alloc[c]["worst_case"] = wc
     t_alloc = time.perf_counter() - t0 - t_cases - t_conv
 
     summary = {
