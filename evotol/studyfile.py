@@ -14,6 +14,7 @@ import numpy as np
 import cost_models
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
+from evotol.allocators.budget import check_budget
 from evotol.distributions import Distribution
 from evotol.errors import ValidationError
 from evotol.interrupt import CtrlC
@@ -21,27 +22,33 @@ from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report, write_json
+from evotol.units import units_block
 from robots import registry
+from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange}
 
 
-def load_problem(spec: dict) -> ToleranceProblem:
-    """Build the problem from a parsed study file (dict)."""
+def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
+    """Build the problem from a parsed study file (dict); ``base_dir``: where relative files
+    (``[robot] mechanism = "my_robot.toml"``) are looked up."""
     rs = dict(spec.get("robot", {}))
-    if "model" not in rs:
-        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3'")
-    cls = registry.get(rs.pop("model"))
-    try:
-        robot = cls(**rs)
-    except TypeError as exc:
-        raise ValidationError("robot", rs, f"parameters accepted by {cls.__name__} ({exc})") from None
+    if "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
+        robot = model_from_table(rs, base_dir)
+    elif "model" not in rs:
+        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', or mechanism = 'my_robot.toml'")
+    else:
+        cls = registry.get(rs.pop("model"))
+        try:
+            robot = cls(**rs)
+        except TypeError as exc:
+            raise ValidationError("robot", rs, f"parameters accepted by {cls.__name__} ({exc})") from None
     ps = spec.get("poses", {"grid": 5})
     if "grid" in ps:
         poses = robot.workspace.grid(ps["grid"])
     elif "latin_hypercube" in ps:
-        poses = robot.workspace.latin_hypercube(int(ps["latin_hypercube"]), seed=spec.get("seed", 0))
+        poses = robot.workspace.latin_hypercube(ps["latin_hypercube"], seed=spec.get("seed", 0))
     elif "list" in ps:
         poses = np.asarray(ps["list"], dtype=float)
     else:
@@ -82,13 +89,15 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     seed = spec.get("seed", 0) if seed is None else seed
     name = spec.get("name", path.stem)
     out = Path(out) if out else path.parent
-    problem = load_problem(spec)
+    problem = load_problem(spec, base_dir=path.parent)
     methods = spec.get("methods", {"sensitivity": {}, "optimum": {}, "ga": {}})
     vspec = spec.get("verify", {"n_samples": 1000})
     for m, kw in methods.items():           # every table checked before the first method runs
         if m != "nsga2" and m not in METHODS:
             raise ValidationError(f"methods.{m}", m, unknown_key_message(m, sorted(METHODS) + ["nsga2"]))
         check_keywords(allocate_nsga2 if m == "nsga2" else METHODS[m], kw, f"methods.{m}", exclude=("problem",))
+        if "budget" in kw:
+            check_budget(problem, kw["budget"], field=f"methods.{m}.budget")
     check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
     results, front, stopped, skipped = {}, None, [], []
     with CtrlC() as ctrl_c:
@@ -125,7 +134,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
                 stopped.append(f"verify {m}")
     summary = {"name": name, "problem": problem.describe(), "seed": seed,
                "results": {m: r.to_dict() for m, r in results.items()}, "monte_carlo": checks,
-               "seconds": time.perf_counter() - t0, "interrupted": bool(stopped)}
+               "seconds": time.perf_counter() - t0, "interrupted": bool(stopped),
+               "units": units_block(problem)}   # docs/units.md
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
     if front is not None:
