@@ -94,8 +94,8 @@ def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: 
     lo, hi = interval(1 - confidence)
     worst = int(np.argmin(k))
     out = {"model": model, "n_samples": int(n), "confidence": confidence, "worst_pose": worst,
-           "estimate": float(k[worst] / n), "lower": float(lo[worst]), "upper": float(hi[worst]),
-           "required": required}
+           "yield_estimate": float(k[worst] / n), "yield_lower": float(lo[worst]), "yield_upper": float(hi[worst]),
+           "yield_required": required}
     lo, hi = interval((1 - confidence) / len(k))
     if required is not None:
         out["verdict"] = ("missed" if np.any(hi < required) else "met" if np.all(lo >= required) else "undecided")

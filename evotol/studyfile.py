@@ -153,8 +153,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     rows.append(["MC max exceed rate"] + [checks[m]["max_exceed_rate"] if m in checks else "not run" for m in results])
     if problem.requirement.measure == "yield":
         rows.append(["MC yield at the worst pose [95 % interval] verdict"] +
-                    [f"{checks[m]['yield']['estimate']:.5f} [{checks[m]['yield']['lower']:.5f}, "
-                     f"{checks[m]['yield']['upper']:.5f}] {checks[m]['yield']['verdict']} ({checks[m]['yield']['model']})"
+                    [f"{checks[m]['yield']['yield_estimate']:.5f} [{checks[m]['yield']['yield_lower']:.5f}, "
+                     f"{checks[m]['yield']['yield_upper']:.5f}] {checks[m]['yield']['verdict']} ({checks[m]['yield']['model']})"
                      if m in checks else "not run" for m in results])
     rep.table(rows, ["source (SI)"] + list(results))
     for m, r in results.items():

@@ -154,7 +154,7 @@ def test_clopper_pearson_interval_matches_scipy_binomtest():
     inside = np.array([0.995, 0.98, 1.0])
     out = yield_check(inside, 2000, 0.99)
     ref = stats.binomtest(1960, 2000).proportion_ci(0.95, method="exact")
-    assert out["worst_pose"] == 1 and out["lower"] == pytest.approx(ref.low) and out["upper"] == pytest.approx(ref.high)
+    assert out["worst_pose"] == 1 and out["yield_lower"] == pytest.approx(ref.low) and out["yield_upper"] == pytest.approx(ref.high)
     assert out["verdict"] == "missed"            # upper bound of pose 1 < 0.99
     assert yield_check(np.array([1.0, 1.0]), 2000, 0.99)["verdict"] == "met"
     assert yield_check(np.array([0.99]), 2000, 0.99)["verdict"] == "undecided"
