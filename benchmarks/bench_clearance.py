@@ -6,7 +6,12 @@ Prints, in one run:
   pose, speed-up of the certified engine, agreement of the values, starts stuck at local maxima;
 * the IRSBot-2 41 x 41 maps, distal module (78 variables) and distal + parallelograms (114
   variables, target < 2 min), with the thesis's method on two points;
-* 32 768 clearance-bound sets of the 5-bar at one pose (the tolerance-synthesis workload).
+* 32 768 clearance-bound sets of the 5-bar at one pose (the tolerance-synthesis workload);
+* issue 13: the engine against its settings before issue 13 (``legacy_engine()``) on the same
+  IRSBot-2 points in one process: time and Newton-iteration ratios, agreement of the brackets.
+
+Absolute times depend on the load of this shared 2-core machine (printed with ``uptime``'s load
+average); compare ratios measured in one run.
 
 Run: ``python benchmarks/bench_clearance.py`` (``--quick`` for a smaller run).
 """
@@ -29,6 +34,9 @@ def main(argv=None):
     from robots.clearance.grid import grid_max_pose_error
     from robots.fivebar import FiveBar
     from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+    import os
+
+    print(f"load average at start: {os.getloadavg()[0]:.1f} ({os.cpu_count()} cores)")
 
     n = 21 if args.quick else 41
     starts = 5 if args.quick else 20
@@ -74,6 +82,30 @@ def main(argv=None):
         print(f"   thesis's method, {3 if args.quick else 6} starts: {per_ms2:.1f} s per pose vs {r2.seconds / len(grid) * 1e3:.1f} ms "
               f"(x{per_ms2 / (r2.seconds / len(grid)):.0f}); best local p / certified p = "
               f"{np.round(ms2.p_max / o2.p_max, 4).tolist()}, r: {np.round(ms2.r_max / o2.r_max, 4).tolist()}")
+
+    print(f"\n== issue 13: engine vs its settings before issue 13, IRSBot-2, same points, one process ==")
+    from robots.clearance import support
+    from robots.clearance.maxerror import legacy_engine
+    sub = grid[:: 40 if args.quick else 8]
+    for par, label in ((False, "distal module"), (True, "distal + parallelograms")):
+        m2 = robot.clearance_mechanism(parallelograms=par)
+        out = {}
+        for name in ("legacy", "new", "legacy again"):
+            n0 = support.STATS["newton"]
+            t = time.perf_counter()
+            if name.startswith("legacy"):
+                with legacy_engine():
+                    r = max_pose_error(m2, sub)
+            else:
+                r = max_pose_error(m2, sub)
+            out[name] = (time.perf_counter() - t, support.STATS["newton"] - n0, r)
+        (tl, nl, rl), (tn, nn, rn), (tl2, _, _) = out["legacy"], out["new"], out["legacy again"]
+        overlap = bool(np.all(rn.p_max <= rl.p_upper * (1 + 1e-12)) and np.all(rl.p_max <= rn.p_upper * (1 + 1e-12))
+                       and np.all(rn.r_max <= rl.r_upper * (1 + 1e-12)) and np.all(rl.r_max <= rn.r_upper * (1 + 1e-12)))
+        print(f"{label}, {len(sub)} poses: before {tl:.1f} s / {tl2:.1f} s (two runs), now {tn:.1f} s -> "
+              f"x{2 * tn / (tl + tl2):.2f} of the time; Newton iterations {nl} -> {nn} (x{nn / nl:.2f}); "
+              f"convex solves {rl.n_solves} -> {rn.n_solves}; largest gap {rl.gap.max():.1e} -> {rn.gap.max():.1e}; "
+              f"brackets overlap at every pose: {overlap}; max |p_now/p_before - 1| = {np.abs(rn.p_max / rl.p_max - 1).max():.1e}")
 
     print("\n== 5-bar tolerance-synthesis workload: 32 768 bound sets at (0, 70) mm ==")
     ev = ClearanceEvaluator(mech, [[0.0, 0.07]])

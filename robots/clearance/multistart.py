@@ -19,8 +19,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import qr
-from scipy.optimize import minimize
 
 from robots.clearance.model import ClearanceMechanism, PoseMaps
 
@@ -41,6 +39,8 @@ def _spatial_maps(mech: ClearanceMechanism, poses) -> PoseMaps:
 
 def _local_problem(C: np.ndarray, B: np.ndarray, D: np.ndarray, nd: int):
     """Scaled, equality-free form: returns (Ct, Z, cone index lists)."""
+    from scipy.linalg import qr      # imported here: scipy costs ~1-2 s at import of robots.clearance (issue 13)
+
     Bt = B * D[:, None]
     keep = D > 0                      # zero bounds: the component is fixed at 0
     Bk = Bt[keep]
@@ -63,6 +63,8 @@ def _local_problem(C: np.ndarray, B: np.ndarray, D: np.ndarray, nd: int):
 
 def multistart_max(C: np.ndarray, B: np.ndarray, D: np.ndarray, nd: int, n_starts: int, rng) -> tuple[float, np.ndarray]:
     """Best local maximum of ||C s|| over the clearance set by SLSQP from ``n_starts`` starts."""
+    from scipy.optimize import minimize
+
     Ct, Z, cones = _local_problem(C, B, D, nd)
     v = Z.shape[1]
     A = Ct @ Z                                     # objective ||A z||^2
