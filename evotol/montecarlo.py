@@ -25,6 +25,7 @@ import numpy as np
 from evotol import distributions
 from evotol.distributions import METHODS
 from evotol.errors import ValidationError
+from evotol.nonlinear import verify_nonlinear
 from evotol.problem import ToleranceProblem
 from evotol.threads import single_threaded_blas
 
@@ -62,8 +63,15 @@ class MonteCarloResult:
 @single_threaded_blas
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
            nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
-           progress: bool | None = None) -> MonteCarloResult:
-    """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose."""
+           progress: bool | None = None, model: str = "linear") -> MonteCarloResult:
+    """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose.
+
+    ``model="nonlinear"``: the worst-vertex check and interval Monte Carlo through the robot's
+    ``pose_error`` instead (:func:`evotol.nonlinear.verify_nonlinear`, returns its NonlinearCheck)."""
+    if model == "nonlinear":
+        return verify_nonlinear(problem, tolerances, n_samples=n_samples, seed=seed, chunk_poses=chunk_poses)
+    if model != "linear":
+        raise ValidationError("model", model, "'linear' (first-order samples, plus nonlinear exceed rates) or 'nonlinear'")
     t0 = time.perf_counter()
     if method not in METHODS:
         raise ValidationError("method", method, f"one of {METHODS}")
