@@ -21,6 +21,7 @@ import cost_models
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
 from evotol.allocators.budget import check_budget
+from evotol.distributions import Distribution
 from evotol.errors import ValidationError
 from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
@@ -34,7 +35,7 @@ from robots.mechanism.model import model_from_table
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange}
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
-            "methods", "verify")
+            "methods", "verify", "distribution", "sigma_k")
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
@@ -79,15 +80,17 @@ def refine_option(spec: dict):
     return dict(ref) if isinstance(ref, dict) else bool(ref)
 
 
-def _tolerance(s, o: dict, bounds: dict, costs: dict) -> Tolerance:
+def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict) -> Tolerance:
     """One source's :class:`Tolerance` from its ``[sources.NAME]`` table and the defaults."""
     shape = {k: o.get(k, bounds.get(k)) for k in ("cost_width", "contains_nominal") if k in o or k in bounds}
     shape.update({k: float(o[k]) if isinstance(o[k], (int, float)) and not isinstance(o[k], bool) else o[k]
                   for k in ("offset", "minus", "plus") if k in o})
-    dist = o.get("distribution", bounds.get("distribution", "uniform"))
-    if "sigma_k" in o or "mean_shift" in o:
-        base = dist if isinstance(dist, dict) else {"kind": dist}
-        dist = {**base, **{k: o[k] for k in ("sigma_k", "mean_shift") if k in o}}
+    # distribution, sigma_k (t = k·σ) and mean_shift (fraction of t): per source, else top level
+    dist = o.get("distribution", bounds.get("distribution", spec.get("distribution", "uniform")))
+    if isinstance(dist, dict):
+        dist = {"sigma_k": spec.get("sigma_k", 3.0), **dist}
+    else:
+        dist = Distribution(dist, o.get("sigma_k", spec.get("sigma_k", 3.0)), o.get("mean_shift", 0.0))
     if "fixed" in o:
         extra = sorted(set(o) & {"lower", "upper", "locked", "cost"})
         if extra:
@@ -132,7 +135,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     if unknown:
         u = sorted(unknown)[0]
         raise ValidationError(f"sources.{u}", u, f"a source of {robot.name}: " + unknown_key_message(u, robot.source_names))
-    tol = {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs) for s in robot.sources}
+    tol = {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec) for s in robot.sources}
     req = Requirement(**spec.get("requirement", {}))
     shared = spec.get("shared")
     return ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"))
@@ -217,6 +220,11 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     rows.append(["cost"] + [results[m].cost for m in results])
     rows.append(["feasible"] + [results[m].feasible for m in results])
     rows.append(["MC max exceed rate"] + [checks[m]["max_exceed_rate"] if m in checks else "not run" for m in results])
+    if problem.requirement.measure == "yield":
+        rows.append(["MC yield at the worst pose [95 % interval] verdict"] +
+                    [f"{checks[m]['yield']['yield_estimate']:.5f} [{checks[m]['yield']['yield_lower']:.5f}, "
+                     f"{checks[m]['yield']['yield_upper']:.5f}] {checks[m]['yield']['verdict']} ({checks[m]['yield']['model']})"
+                     if m in checks else "not run" for m in results])
     rep.table(rows, ["source (SI)"] + list(results))
     for m, r in results.items():
         rep.heading(f"Contributors at the worst pose: {m}")
