@@ -110,44 +110,11 @@ def engine_pose_errors(robot: IRSBot2, points: np.ndarray) -> tuple[np.ndarray, 
 
 
 def engine_pose_errors_batch(robots: list, points: list) -> list[tuple[np.ndarray, np.ndarray]]:
-    """:func:`engine_pose_errors` for many designs in one engine call.
+    """:func:`engine_pose_errors` for many designs in one engine call
+    (:func:`robots.clearance.stacked.max_pose_error_stacked`: the designs share joints and chains)."""
+    from robots.clearance.stacked import max_pose_error_stacked
 
-    All designs share the joints and chains (only dimensions differ), so their per-pose maps
-    (``mech.pose_maps``) stack along the pose axis and the engine solves every (design, point)
-    case in one vectorised :func:`robots.clearance.evaluate_cases` call -- the same numbers as one
-    call per design (test), at a lower cost per case. Falls back to one call per design if the
-    maps do not stack."""
-    from dataclasses import replace
-
-    from robots.clearance import evaluate_cases
-
-    if not robots:
-        return []
-    mechs = [engine_mechanism(r) for r in robots]
-    maps = [m.pose_maps(np.asarray(pt, float)) for m, pt in zip(mechs, points)]
-
-    def same(a, b):
-        return (a.block == b.block and a.n_disk == b.n_disk and np.array_equal(a.cols, b.cols)
-                and np.array_equal(a.cone_joint, b.cone_joint) and np.array_equal(a.cone_kind, b.cone_kind)
-                and a.B.shape[1:] == b.B.shape[1:] and a.C_pos.shape[1:] == b.C_pos.shape[1:]
-                and a.C_rot.shape[1:] == b.C_rot.shape[1:])
-
-    ref = mechs[0]
-    stackable = all(len(mp) == len(maps[0]) and all(same(a, b) for a, b in zip(mp, maps[0])) for mp in maps) and \
-        all(np.array_equal(m.default_bounds(), ref.default_bounds()) for m in mechs)
-    if not stackable:
-        return [engine_pose_errors(r, pt) for r, pt in zip(robots, points)]
-    merged = [replace(pm, C_pos=np.concatenate([mp[k].C_pos for mp in maps]),
-                      C_rot=np.concatenate([mp[k].C_rot for mp in maps]),
-                      B=np.concatenate([mp[k].B for mp in maps])) for k, pm in enumerate(maps[0])]
-    n = sum(len(pt) for pt in points)
-    b = ref.default_bounds()
-    res = evaluate_cases(ref, merged, np.arange(n), np.broadcast_to(b, (n,) + b.shape))
-    out, s = [], 0
-    for pt in points:
-        out.append((res.p_max[s:s + len(pt)], res.r_max[s:s + len(pt)]))
-        s += len(pt)
-    return out
+    return max_pose_error_stacked([engine_mechanism(r) for r in robots], points)
 
 
 @dataclass(frozen=True)
