@@ -13,9 +13,10 @@ two pure functions:
 (``--quick``; used by tests) and by the caller's overrides (``seed``, ``workers``, ...). The
 framework adds ``out_dir`` (where the resumable design studies keep their chunk store).
 
-Files are written in one place, :func:`reproduce`: ``OUT/NAME.html``, ``OUT/NAME.json`` and
-``OUT/NAME_<table>.csv`` / ``.parquet`` for every table. ``evotol reproduce NAME --out DIR`` and
-``Study.run`` both go through it.
+Files are written in one place, :func:`write_outputs`: ``OUT/NAME.html``, ``OUT/NAME.json`` and
+``OUT/NAME_<table>.csv`` / ``.parquet`` for every table. :func:`reproduce` (behind
+``evotol reproduce NAME --out DIR`` and ``Study.run``) and ``evotol run STUDY.toml``
+(:mod:`evotol.studyfile`) both go through it.
 """
 from __future__ import annotations
 
@@ -26,7 +27,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
+from evotol.doe import save_entries
 from evotol.errors import ValidationError
+from evotol.reporting.html import write_json
 
 
 @dataclass
@@ -76,20 +79,27 @@ def reproduce(study: Study, out_dir, config: dict) -> StudyResult:
     The one place where study files are written. ``summary["seconds"]`` is set here when the
     study did not time itself (wall time of ``compute``).
     """
-    from evotol.doe import save_entries
-    from evotol.reporting.html import write_json
-
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     config = {**config, "out_dir": str(out_dir)}
     t0 = time.perf_counter()
     result = study.compute(config)
     result.summary.setdefault("seconds", time.perf_counter() - t0)
-    for key, table in result.tables.items():
-        save_entries(table, out_dir / f"{study.name}_{key}")
-    study.render(result).write(out_dir / f"{study.name}.html")
-    write_json(out_dir / f"{study.name}.json", result.summary)
+    write_outputs(study.name, out_dir, result, study.render(result))
     return result
+
+
+def write_outputs(name: str, out_dir, result: StudyResult, report) -> dict[str, Path]:
+    """Write ``NAME_<table>.csv``/``.parquet`` for every table, ``NAME.html`` and ``NAME.json``;
+    returns the paths by kind (``html``, ``json``, ``<table>_parquet``, ``<table>_csv``)."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {}
+    for key, table in result.tables.items():
+        for kind, path in save_entries(table, out_dir / f"{name}_{key}").items():
+            paths[f"{key}_{kind}"] = path
+    paths["html"] = report.write(out_dir / f"{name}.html")
+    paths["json"] = write_json(out_dir / f"{name}.json", result.summary)
+    return paths
 
 
 def available() -> dict[str, Study]:
