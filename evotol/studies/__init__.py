@@ -16,11 +16,13 @@ framework adds ``out_dir`` (where the resumable design studies keep their chunk 
 Files are written in one place, :func:`write_outputs`: ``OUT/NAME.html``, ``OUT/NAME.json`` and
 ``OUT/NAME_<table>.csv`` / ``.parquet`` for every table. :func:`reproduce` (behind
 ``evotol reproduce NAME --out DIR`` and ``Study.run``) and ``evotol run STUDY.toml``
-(:mod:`evotol.studyfile`) both go through it.
+(:mod:`evotol.studyfile`) both go through it. :func:`reproduce` renders the report from the
+summary read back from the written JSON: a page shows nothing its JSON does not hold.
 """
 from __future__ import annotations
 
 import importlib
+import json
 import pkgutil
 import time
 from dataclasses import dataclass, field
@@ -76,29 +78,33 @@ class Study:
 def reproduce(study: Study, out_dir, config: dict) -> StudyResult:
     """Run ``study`` with ``config`` and write its report, JSON and tables into ``out_dir``.
 
-    The one place where study files are written. ``summary["seconds"]`` is set here when the
-    study did not time itself (wall time of ``compute``).
+    ``summary["seconds"]`` is set here when the study did not time itself (wall time of
+    ``compute``). The report is rendered from the summary *as written to JSON* (read back), so
+    a page can only show what its JSON holds. Returns the result with that summary.
     """
     out_dir = Path(out_dir)
     config = {**config, "out_dir": str(out_dir)}
     t0 = time.perf_counter()
     result = study.compute(config)
     result.summary.setdefault("seconds", time.perf_counter() - t0)
-    write_outputs(study.name, out_dir, result, study.render(result))
+    paths = write_outputs(study.name, out_dir, result)
+    result = StudyResult(json.loads(paths["json"].read_text(encoding="utf-8")), result.tables)
+    study.render(result).write(paths["html"])
     return result
 
 
-def write_outputs(name: str, out_dir, result: StudyResult, report) -> dict[str, Path]:
-    """Write ``NAME_<table>.csv``/``.parquet`` for every table, ``NAME.html`` and ``NAME.json``;
-    returns the paths by kind (``html``, ``json``, ``<table>_parquet``, ``<table>_csv``)."""
+def write_outputs(name: str, out_dir, result: StudyResult, report=None) -> dict[str, Path]:
+    """The one writer of study files: ``NAME_<table>.csv``/``.parquet`` for every table,
+    ``NAME.json`` and, given a ``report``, ``NAME.html``. Returns the paths by kind (``json``,
+    ``html`` -- also when no report was given --, ``<table>_parquet``, ``<table>_csv``)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {}
     for key, table in result.tables.items():
         for kind, path in save_entries(table, out_dir / f"{name}_{key}").items():
             paths[f"{key}_{kind}"] = path
-    paths["html"] = report.write(out_dir / f"{name}.html")
     paths["json"] = write_json(out_dir / f"{name}.json", result.summary)
+    paths["html"] = report.write(out_dir / f"{name}.html") if report is not None else out_dir / f"{name}.html"
     return paths
 
 
