@@ -37,6 +37,7 @@ from evotol.doe import Factor, Objective
 from evotol.errors import EvotolError
 from evotol.filtering import DesignStudy, Preset
 from evotol.studies import Study, StudyResult
+from evotol.studies._design_report import PRESET_HEADER, parcoords_counts, parcoords_section
 
 NAME = "deng2012-tolsynth"
 MM = 1e-3
@@ -241,8 +242,6 @@ def compute(config: dict) -> StudyResult:
     """Evaluate the full factorial (``n_entries``: a random sample), read off the thesis's sample,
     apply the presets, derive the findings and run NSGA-II on continuous tolerances. ``out_dir``
     holds the resumable chunk store."""
-    from evotol.reporting.parcoords import DEFAULT_MAX_DRAWN, drawn_lines, parcoords_frame
-
     t0 = time.perf_counter()
     quick, seed = config["quick"], config["seed"]
     scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None   # `evotol reproduce` on a cluster
@@ -280,11 +279,6 @@ def compute(config: dict) -> StudyResult:
     gap = float(np.max(np.maximum(df["p_upper_mm"] / df["p_max_mm"], df["r_upper_deg"] / df["r_max_deg"]) - 1))
     rng_full = study.objective_ranges()
     rng_sample = study.objective_ranges(among=sample)
-    # what the report's parallel coordinates show (same frame, filters and sample as add_parcoords)
-    frame = parcoords_frame(study, None, pareto)
-    shown = {p.name: study.filter(p, among=frame) for p in study.presets.values()}
-    drawn = drawn_lines(frame, _axes(f), list(study.presets.values()), study, DEFAULT_MAX_DRAWN, 0,
-                        kept={n: r.kept.index for n, r in shown.items()})
     summary = {
         "study": NAME, "quick": quick, "seed": seed, "n_entries": len(df), "pose_mm": list(POSE_MM),
         "h_mm": H_MM, "h_mm_matching_thesis_r_max": h_fit, "thesis_endpoints": endpoints,
@@ -294,8 +288,7 @@ def compute(config: dict) -> StudyResult:
         "thesis_ranges": THESIS_RANGES,
         "presets": {k: {"count": v.count, "ranges": v.ranges, "query": v.resolved_query} for k, v in pres.items()},
         "presets_sample": {k: {"count": v.count, "ranges": v.ranges} for k, v in pres_sample.items()},
-        "presets_shown_in_report": {n: r.count for n, r in shown.items()},
-        "report_lines": {"entries": int(len(frame)), "drawn_by_default": int(len(drawn))},
+        **parcoords_counts(study, pareto, _axes(f)),
         "findings": findings, "facts": facts,
         "certificate_gap_max": gap,
         "evaluation": {"seconds": log.seconds, "backend": log.backend, "chunks": log.n_chunks,
@@ -314,7 +307,7 @@ def render(result: StudyResult):
     """Findings, the parallel coordinates with the presets of Figs. VII.3-VII.8, ranges vs the
     thesis, main effects and the NSGA-II knees."""
     from evotol.reporting.html import Report
-    from evotol.reporting.parcoords import add_parcoords, format_tick, preset_table_rows
+    from evotol.reporting.parcoords import format_tick, preset_table_rows
 
     s, df, pareto = result.summary, result.tables["entries"], result.tables["pareto"]
     f = factors()
@@ -326,15 +319,13 @@ def render(result: StudyResult):
                  f"({POSE_MM[0]:g}, {POSE_MM[1]:g}) mm; h = {H_MM:g} mm; evaluated in {ev['seconds']:.1f} s ({ev['backend']})")
     rep.heading("Findings (computed from the entries below)")
     rep.html("<ul>" + "".join(f"<li>{x}</li>" for x in s["findings"]) + "</ul>")
-    rep.heading("Parallel coordinates")
-    rep.text("One line per entry (level grid) plus the NSGA-II Pareto entries (orange) and their knee points (red). "
-             "Tolerance axes are log10 with tick labels in mm. Presets apply the filters of Figs. VII.3-VII.8.")
-    add_parcoords(rep, study, axes=_axes(f), color="p_max_mm", extra=pareto, div_id="pc")
-    rep.heading("Presets (Figs. VII.3-VII.8): kept entries and kept input levels")
-    rep.table(preset_table_rows(study), ["preset", "thesis", "query", "kept", "kept levels (mm)"])
+    parcoords_section(rep, study, pareto, _axes(f),
+                      "One line per entry (level grid) plus the NSGA-II Pareto entries (orange) and their knee points "
+                      "(red). Tolerance axes are log10 with tick labels in mm. Presets apply the filters of Figs. "
+                      "VII.3-VII.8.", "Presets (Figs. VII.3-VII.8): kept entries and kept input levels")
     rep.text(f"The same filters on our {len(sample)}-entry random sample (seed {s['seed']}), the size the thesis plots "
              f"(its sample is unknown, so its readings are compared with both):")
-    rep.table(preset_table_rows(study, among=sample), ["preset", "thesis", "query", "kept", "kept levels (mm)"])
+    rep.table(preset_table_rows(study, among=sample), PRESET_HEADER)
     rep.heading("Objective ranges vs the thesis")
     rows = []
     rng_full, rng_sample = s["objective_ranges"], s["objective_ranges_sample"]
