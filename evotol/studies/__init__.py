@@ -48,13 +48,11 @@ class Study:
 
     name: str
     title: str
-    compute: Callable[[dict], StudyResult] | None = None
-    render: Callable[[StudyResult], Any] | None = None
-    config: Mapping[str, Any] = field(default_factory=dict)
+    compute: Callable[[dict], StudyResult]
+    render: Callable[[StudyResult], Any]
+    config: Mapping[str, Any]
     quick: Mapping[str, Any] = field(default_factory=dict)
     seed_paper: str = ""
-    #: transition only: a study not yet split into compute/render writes its own files
-    legacy_run: Callable[..., dict] | None = None
 
     def make_config(self, quick: bool = False, **overrides) -> dict:
         """The full-run config, updated by the quick config (``quick=True``) and then ``overrides``."""
@@ -70,8 +68,6 @@ class Study:
 
     def run(self, out_dir, quick: bool = False, seed: int = 0, **overrides) -> dict:
         """Compute, render and write the study into ``out_dir``; returns the JSON summary."""
-        if self.legacy_run is not None:
-            return self.legacy_run(out_dir, quick=quick, seed=seed, **overrides)
         return reproduce(self, out_dir, self.make_config(quick, seed=seed, **overrides)).summary
 
 
