@@ -29,13 +29,13 @@ from robots.assembly import AssemblyFunction, LinearStack  # noqa: E402
 
 
 def ga_vs_optimum():
-    print("== GA vs. exact optimum on the shipped process-selection problems (pop 100, 150 generations, seed 0) ==")
+    print("== GA vs. exact optimum on the shipped process-selection problems (defaults: pop 60, 100 generations, seed 0) ==")
     print(f"{'problem':28s} {'combos':>7s} {'optimum':>10s} {'GA':>10s} {'GA/opt':>9s} {'GA s':>6s} {'B&B s':>6s}  target")
     for label, make in (("clutch, worst case", lambda: clutch_problem("worst_case")), ("clutch, RSS", lambda: clutch_problem("rss")),
                         ("stack, worst case", lambda: stack_problem("worst_case")), ("stack, RSS", lambda: stack_problem("rss"))):
         pp = make()
         opt = allocate_process_optimum(pp)
-        ga = allocate_process_ga(pp, pop_size=100, n_gen=150, seed=0)
+        ga = allocate_process_ga(pp, seed=0)
         ratio = ga.cost / opt.cost
         ok = ratio <= 1.01 and ga.seconds < 10 and ga.feasible
         print(f"{label:28s} {pp.n_combinations:7d} {opt.cost:10.5f} {ga.cost:10.5f} {ratio:9.6f} {ga.seconds:6.2f} {opt.seconds:6.2f}  "

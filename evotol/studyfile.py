@@ -21,6 +21,7 @@ from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report, write_json
 from robots import registry
+from robots.assembly import assembly_from_spec
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange}
@@ -29,13 +30,18 @@ METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga
 def load_problem(spec: dict) -> ToleranceProblem:
     """Build the problem from a parsed study file (dict)."""
     rs = dict(spec.get("robot", {}))
-    if "model" not in rs:
-        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3'")
-    cls = registry.get(rs.pop("model"))
-    try:
-        robot = cls(**rs)
-    except TypeError as exc:
-        raise ValidationError("robot", rs, f"parameters accepted by {cls.__name__} ({exc})") from None
+    if "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
+        robot = assembly_from_spec(rs)
+        spec = {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),
+                "requirement": {"position": 1.0, **spec.get("requirement", {})}}
+    else:
+        if "model" not in rs:
+            raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', or assembly = 'module:function'")
+        cls = registry.get(rs.pop("model"))
+        try:
+            robot = cls(**rs)
+        except TypeError as exc:
+            raise ValidationError("robot", rs, f"parameters accepted by {cls.__name__} ({exc})") from None
     ps = spec.get("poses", {"grid": 5})
     if "grid" in ps:
         poses = robot.workspace.grid(ps["grid"])

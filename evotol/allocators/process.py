@@ -515,7 +515,7 @@ def _repair(pp, rows, X, iters: int = 25):
 
 
 @single_threaded_blas
-def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 100, n_gen: int = 150, seed: int = 0,
+def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0,
                         repair: bool = True) -> ProcessResult:
     """pymoo GA over process choices and tolerances (encoding and repair: module docstring)."""
     from pymoo.algorithms.soo.nonconvex.ga import GA
@@ -555,7 +555,7 @@ def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 100, n_gen: int =
 
 
 @single_threaded_blas
-def process_front(pp: ProcessProblem, *, pop_size: int = 100, n_gen: int = 150, seed: int = 0) -> pd.DataFrame:
+def process_front(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0) -> pd.DataFrame:
     """NSGA-II front of cost vs. normalised error (max error / bound), with the processes chosen."""
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.core.problem import Problem
