@@ -218,6 +218,22 @@ class ProcessProblem:
         """Exact max error / bound over poses and components (<= 1: feasible)."""
         return self.base.evaluate(np.atleast_2d(T), top_only=True).violation + 1
 
+    def judge(self, processes: Mapping[str, str], tolerances: Mapping[str, float]) -> dict:
+        """Recompute a published design: its cost, its normalised error (max error / bound; > 1
+        means the requirement is violated) and whether each tolerance lies in its process's range."""
+        ch = self.choice_index(processes)
+        missing = [n for n in self.names if n not in tolerances]
+        if missing:
+            raise ValidationError("tolerances", sorted(tolerances), f"a tolerance for every source; missing {missing}")
+        t = np.array([float(tolerances[n]) for n in self.names])
+        if not np.all(np.isfinite(t)) or np.any(t <= 0):
+            raise ValidationError("tolerances", t.tolist(), "positive finite tolerances (SI)")
+        idx = np.arange(self.n_sources)
+        outside = [n for n, ok in zip(self.names, (t >= self.lo[idx, ch] * (1 - 1e-9)) & (t <= self.hi[idx, ch] * (1 + 1e-9))) if not ok]
+        ne = float(self.normalised_error(t)[0])
+        return {"cost": float(self.cost(ch, t)[0]), "normalised_error": ne, "holds_requirement": bool(ne <= 1 + 1e-9),
+                "outside_process_range": outside}
+
     def describe(self) -> str:
         lines = [f"ProcessProblem: {self.robot.name}, {self.n_sources} sources, {self.n_combinations} process combinations, "
                  f"measure {self.requirement.measure}"]
