@@ -24,21 +24,26 @@ from evotol.reporting import Report, write_json
 from evotol.units import units_block
 from robots import registry
 from robots.assembly import assembly_from_spec
+from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange}
 
 
-def load_problem(spec: dict) -> ToleranceProblem:
-    """Build the problem from a parsed study file (dict)."""
+def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
+    """Build the problem from a parsed study file (dict); ``base_dir``: where relative files
+    (``[robot] mechanism = "my_robot.toml"``) are looked up."""
     rs = dict(spec.get("robot", {}))
     if "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
         robot = assembly_from_spec(rs)
         spec = {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),
                 "requirement": {"position": 1.0, **spec.get("requirement", {})}}
+    elif "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
+        robot = model_from_table(rs, base_dir)
+    elif "model" not in rs:
+        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', mechanism = 'my_robot.toml' "
+                              "or assembly = 'module:function'")
     else:
-        if "model" not in rs:
-            raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', or assembly = 'module:function'")
         cls = registry.get(rs.pop("model"))
         try:
             robot = cls(**rs)
@@ -87,7 +92,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     seed = spec.get("seed", 0) if seed is None else seed
     name = spec.get("name", path.stem)
     out = Path(out) if out else path.parent
-    problem = load_problem(spec)
+    problem = load_problem(spec, base_dir=path.parent)
     methods = spec.get("methods", {"sensitivity": {}, "optimum": {}, "ga": {}})
     vspec = spec.get("verify", {"n_samples": 1000})
     for m, kw in methods.items():           # every table checked before the first method runs
