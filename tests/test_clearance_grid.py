@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from robots.clearance.grid import grid_max_pose_error, parallel_map
+from evotol.executor import parallel_map
+from robots.clearance.grid import grid_max_pose_error
 from robots.fivebar import FiveBar
 
 
