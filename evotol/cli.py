@@ -54,7 +54,8 @@ def cmd_reproduce(args) -> int:
         print(f"[evotol] reproducing {name}: {study.title}", flush=True)
         t0 = time.perf_counter()
         try:
-            summaries[name] = study.run(out, quick=args.quick, seed=args.seed)
+            extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
+            summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
         except EvotolError as exc:
             failed.append(name)
             print(f"[evotol] {name} failed: {exc}", file=sys.stderr)

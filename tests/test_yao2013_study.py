@@ -49,3 +49,11 @@ def test_html_is_offline_and_indexed(study):
     assert "<script src=\"http" not in html and "Plotly" in html   # plotly.js embedded, no CDN
     assert "Convergence" in html and "exceed rate" in html
     assert "yao2013.html" in (out / "index.html").read_text()
+
+
+def test_report_is_drawn_from_the_json_alone(study):
+    """render() reads only the written JSON: redrawing from it gives the same page, byte for byte."""
+    from evotol.studies import StudyResult, get
+
+    out, d = study
+    assert get("yao2013").render(StudyResult(d)).render() == (out / "yao2013.html").read_text()

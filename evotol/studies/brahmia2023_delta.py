@@ -674,4 +674,4 @@ def _write_report(path: Path, s: dict, variants, ver_t3, ver_ta, ta, full, front
 
 
 STUDY = Study(name=NAME, title="Delta robot geometric-tolerance synthesis (KK error model) and cost-optimal allocation",
-              run=run, seed_paper="Brahmia et al. 2023, Appl. Sci. 13:10703 (seed 000)")
+              legacy_run=run, seed_paper="Brahmia et al. 2023, Appl. Sci. 13:10703 (seed 000)")

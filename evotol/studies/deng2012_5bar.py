@@ -273,4 +273,4 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
 
 
 STUDY = Study(name="deng2012-5bar", title="5-bar linkage: certified maximum pose error due to joint clearances (Deng 2012 Ch. IV)",
-              run=run, seed_paper="004_fe1111236e25a595 (Deng 2012, Ch. III-IV)")
+              legacy_run=run, seed_paper="004_fe1111236e25a595 (Deng 2012, Ch. III-IV)")

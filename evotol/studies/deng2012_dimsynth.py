@@ -535,4 +535,4 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
 
 
 STUDY = Study(name=NAME, title="IRSBot-2 dimension synthesis on parallel coordinates + NSGA-II (Deng 2012 Sec. VII.2)",
-              run=run, seed_paper="004 Deng 2012 (thesis), Ch. VII")
+              legacy_run=run, seed_paper="004 Deng 2012 (thesis), Ch. VII")

@@ -241,4 +241,4 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = No
 
 
 STUDY = Study(name="deng2012-irsbot2", title="IRSBot-2: certified maximum pose error due to joint clearances (Deng 2012 Ch. VI)",
-              run=run, seed_paper="004_fe1111236e25a595 (Deng 2012, Ch. II, V-VI)")
+              legacy_run=run, seed_paper="004_fe1111236e25a595 (Deng 2012, Ch. II, V-VI)")

@@ -392,4 +392,4 @@ def _write_report(out_dir: Path, summary: dict, cases: dict, conv: dict, alloc: 
 
 
 STUDY = Study(name=NAME, title="Planar 5R under clearances and uncertainties: workspace, MIC, LCI, MC/LHS, allocation",
-              run=run, seed_paper="Lara-Molina, Koroishi, Policarpo, Steffen (COBEM 2019), 001_661fb1681958f265")
+              legacy_run=run, seed_paper="Lara-Molina, Koroishi, Policarpo, Steffen (COBEM 2019), 001_661fb1681958f265")

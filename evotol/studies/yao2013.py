@@ -9,7 +9,6 @@ checked against finite differences) and two accuracy measures (RSS, exact worst 
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -18,8 +17,8 @@ from evotol.allocators import (allocate_ga, allocate_lagrange, allocate_nsga2, a
                                allocate_sensitivity)
 from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
-from evotol.reporting import Report, write_json
-from evotol.studies import Study
+from evotol.reporting import Report
+from evotol.studies import Study, StudyResult
 from robots.ucr3 import UCR3
 
 UNIT = 1e-5  # the paper's tolerance unit (m)
@@ -31,6 +30,8 @@ E_POS = 5e-5  # allowed position error (m), Sec. 5
 PAPER_TABLE1 = np.array([4.94, 4.81, 4.96, 2.95, 2.96, 2.94, 2.94, 2.93, 2.97, 2.98, 2.93, 2.89]) * UNIT
 PAPER_TABLE2 = np.array([1.38, 1.38, 1.38, 4.29, 4.34, 4.31, 2.21, 2.19, 2.17, 4.30, 4.37, 4.32]) * UNIT
 PAPER_COSTS = {"table1": 2.1837, "table2": 4.2391}
+#: the allocations checked by Monte Carlo (keys of each variant's summary)
+_DESIGNS = ("paper_table1", "paper_table2", "ga", "sensitivity", "optimum")
 
 
 def yao2013_problem(variant: str, measure: str = "rss", grid=(11, 11, 6), lower=0.1 * UNIT, upper=20 * UNIT) -> ToleranceProblem:
@@ -49,15 +50,19 @@ def _plane(problem: ToleranceProblem, zc: float) -> ToleranceProblem:
     return ToleranceProblem(problem.robot, problem.tolerances, problem.requirement, problem.poses[idx])
 
 
-def run(out_dir, quick: bool = False, seed: int = 0) -> dict:
+CONFIG = {"seed": 0, "grid": (11, 11, 6), "pop_size": 100, "n_gen": 200, "n_mc": 1000}
+QUICK = {"grid": (5, 5, 3), "pop_size": 40, "n_gen": 40, "n_mc": 200}
+
+
+def compute(config: dict) -> StudyResult:
+    """Both error models: GA (pymoo and paper operators), sensitivity, Lagrange, certified optimum
+    (RSS and worst case), NSGA-II front and Monte Carlo checks of every allocation (Sec. 5)."""
     t_start = time.perf_counter()
-    out_dir = Path(out_dir)
-    grid = (5, 5, 3) if quick else (11, 11, 6)
-    pop, gens = (40, 40) if quick else (100, 200)
-    n_mc = 200 if quick else 1000
+    seed, grid = config["seed"], tuple(config["grid"])
+    pop, gens, n_mc = config["pop_size"], config["n_gen"], config["n_mc"]
     summary = {"paper_table1_cost": None, "paper_table2_cost": None, "variants": {}, "paper_reported_costs": PAPER_COSTS,
                "grid": list(grid), "requirement_position_m": E_POS, "seed": seed}
-    figs, tables, ga_seconds = {}, {}, {}
+    figures, ga_seconds = {}, {}
     for variant in ("paper", "verified"):
         prob = yao2013_problem(variant, "rss", grid)
         prob_wc = prob.with_requirement(measure="worst_case")
@@ -75,8 +80,7 @@ def run(out_dir, quick: bool = False, seed: int = 0) -> dict:
         sens_wc = allocate_sensitivity(prob_wc)
         front = allocate_nsga2(prob, pop_size=pop, n_gen=gens, seed=seed)
         ga_seconds[variant] = ga.seconds
-        designs = {"paper_table1": PAPER_TABLE1, "paper_table2": PAPER_TABLE2, "ga": ga.t, "sensitivity": sens.t,
-                   "optimum": opt.t}
+        designs = dict(zip(_DESIGNS, (PAPER_TABLE1, PAPER_TABLE2, ga.t, sens.t, opt.t)))
         plane = _plane(prob, prob.poses[:, 2].max())
         checks = {}
         for name, t in designs.items():
@@ -90,7 +94,11 @@ def run(out_dir, quick: bool = False, seed: int = 0) -> dict:
                             "linearisation_error": mc_nl.linearisation_error,
                             "mc_max_over_worst_case": mc.max_error_over_worst_case["position"]}
             if name == "ga":
-                figs[(variant, "fig5")] = (plane.poses, mc_nl)
+                fig5 = {"alpha_deg": np.unique(np.degrees(plane.poses[:, 0])).tolist(),
+                        "beta_deg": np.unique(np.degrees(plane.poses[:, 1])).tolist(),
+                        "z_c_m": float(plane.poses[0, 2]), "n_samples": mc_nl.n_samples,
+                        "exceed_rate_linear": np.asarray(mc_nl.exceed_rate["position"]).tolist(),
+                        "exceed_rate_nonlinear": np.asarray(mc_nl.nonlinear_exceed_rate["position"]).tolist()}
         summary["variants"][variant] = {
             "accuracy_measure": "rss",
             "ga_cost": ga.cost, "ga_paper_operators_cost": ga_paper.cost, "sensitivity_cost": sens.cost,
@@ -110,17 +118,25 @@ def run(out_dir, quick: bool = False, seed: int = 0) -> dict:
             "pareto_front": front.table[["cost", "normalised_error"]].to_dict(orient="list"),
             "contributions_ga_worst_pose": ga.contributions().to_dict(orient="list"),
         }
-        tables[variant] = (prob, ga, ga_paper, sens, sens_c, opt, opt_wc, front, checks, ga_cold)
+        figures[variant] = {
+            "ga_max_rss_error": ga.max_error(),
+            "convergence_lhs_start": ga_cold.history[["generation", "best_fitness", "mean_fitness"]].to_dict(orient="list"),
+            "convergence_paper_operators": ga_paper.history[["generation", "best_feasible"]].to_dict(orient="list"),
+            "fig5_ga": fig5,
+        }
     summary["ga_seconds"] = ga_seconds["paper"]
     summary["ga_seconds_by_variant"] = ga_seconds
+    summary["figures"] = figures
     summary["seconds"] = time.perf_counter() - t_start
-    _report(out_dir / "yao2013.html", summary, tables, figs)
-    write_json(out_dir / "yao2013.json", summary)
-    return summary
+    return StudyResult(summary)
 
 
-def _report(path: Path, summary: dict, tables: dict, figs: dict) -> None:
+def render(result: StudyResult) -> Report:
+    """The report: what holds, costs, Tables 1-2 with ours, Figs. 4-5 and the NSGA-II front."""
     import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+
+    summary = result.summary
 
     rep = Report("Yao et al. 2013 — accuracy synthesis of a 3-UCR parallel robot",
                  "Seed 002: 3-UCR telescope secondary-mirror support; exponential cost model; |δp| ≤ 5e-5 m over "
@@ -174,63 +190,72 @@ def _report(path: Path, summary: dict, tables: dict, figs: dict) -> None:
              "Newton) agrees with the verified first-order model to finite-difference accuracy (tests: relative mismatch "
              "< 1e-6) and disagrees with the printed one by O(1). J_p agrees with the paper's.")
     for variant in ("paper", "verified"):
-        prob, ga, ga_paper, sens, sens_c, opt, opt_wc, front, checks, ga_cold = tables[variant]
+        v, figs = summary["variants"][variant], summary["figures"][variant]
+        tols, wc = v["tolerances"], v["worst_case_measure"]
+        names = list(tols["ga"])
+        rows = [[n, PAPER_TABLE1[j] / UNIT, tols["ga"][n] / UNIT, tols["optimum"][n] / UNIT, PAPER_TABLE2[j] / UNIT,
+                 tols["sensitivity"][n] / UNIT, tols["sensitivity_collective"][n] / UNIT,
+                 wc["optimum_tolerances"][n] / UNIT] for j, n in enumerate(names)]
+        rows.append(["cost", summary["paper_table1_cost"], v["ga_cost"], v["optimum_cost"], summary["paper_table2_cost"],
+                     v["sensitivity_cost"], v["sensitivity_collective_lengths_cost"], wc["optimum_cost"]])
         rep.heading(f"Tolerances (1e-5 m), {variant} model, RSS measure — Tables 1–2 with ours")
-        rows = [[n, PAPER_TABLE1[j] / UNIT, ga.t[j] / UNIT, opt.t[j] / UNIT, PAPER_TABLE2[j] / UNIT, sens.t[j] / UNIT,
-                 sens_c.t[j] / UNIT, opt_wc.t[j] / UNIT] for j, n in enumerate(prob.names)]
-        rows.append(["cost", summary["paper_table1_cost"], ga.cost, opt.cost, summary["paper_table2_cost"], sens.cost,
-                     sens_c.cost, opt_wc.cost])
         rep.table(rows, ["source", "paper Table 1", "our GA", "certified optimum", "paper Table 2", "sensitivity",
                          "sensitivity (collective lengths)", "optimum, worst-case measure"], table_id=f"tol-{variant}")
-        c = ga.contributions()
+        c = v["contributions_ga_worst_pose"]
         rep.text(f"Contributors at the GA's worst pose ({variant} model): " +
-                 ", ".join(f"{r.source} {r.percent:.1f} %" for r in c.itertuples() if r.percent >= 1) + ".")
+                 ", ".join(f"{src} {pc:.1f} %" for src, pc in zip(c["source"], c["percent"]) if pc >= 1) + ".")
+        opt_cost = v["optimum_cost"]
         fig = go.Figure()
-        h = ga_cold.history
+        h = figs["convergence_lhs_start"]
         fig.add_scatter(x=h["generation"], y=h["best_fitness"], name="best (pymoo GA + boundary repair, LHS start)")
         fig.add_scatter(x=h["generation"], y=h["mean_fitness"], name="population mean", line=dict(dash="dot"))
-        hp = ga_paper.history
+        hp = figs["convergence_paper_operators"]
         fig.add_scatter(x=hp["generation"], y=hp["best_feasible"], name="best feasible (paper operators, penalty eq. 15, baseline seeds)")
-        fig.add_hline(y=opt.cost, line_dash="dash", annotation_text=f"certified optimum {opt.cost:.4f}")
+        fig.add_hline(y=opt_cost, line_dash="dash", annotation_text=f"certified optimum {opt_cost:.4f}")
         fig.update_layout(title=f"Convergence of the manufacturing cost (Fig. 4), {variant} model",
                           xaxis_title="generation", yaxis_title="cost", height=420,
-                          yaxis_range=[opt.cost * 0.95, max(opt.cost * 1.6, float(h["best_fitness"].iloc[0]) * 1.05)])
+                          yaxis_range=[opt_cost * 0.95, max(opt_cost * 1.6, float(h["best_fitness"][0]) * 1.05)])
         rep.figure(fig)
-        poses, mc = figs[(variant, "fig5")]
-        from plotly.subplots import make_subplots
-        au, bu = np.unique(np.degrees(poses[:, 0])), np.unique(np.degrees(poses[:, 1]))
+        f5 = figs["fig5_ga"]
+        au, bu = np.asarray(f5["alpha_deg"]), np.asarray(f5["beta_deg"])
         fig = make_subplots(rows=1, cols=2, subplot_titles=(f"first-order {variant} model (the paper's check)",
                                                             "nonlinear kinematics (the real robot)"))
-        for col, rate in ((1, mc.exceed_rate["position"]), (2, mc.nonlinear_exceed_rate["position"])):
-            fig.add_trace(go.Heatmap(x=au, y=bu, z=100 * rate.reshape(len(au), len(bu)).T, coloraxis="coloraxis"), 1, col)
-        fig.update_layout(title=f"Monte Carlo exceed rate (%) of the GA allocation at Z_c = {poses[0, 2]:.3f} m (Fig. 5), "
-                                f"{mc.n_samples} LHS samples per pose", coloraxis=dict(colorscale="Viridis", cmin=0),
+        for col, rate in ((1, f5["exceed_rate_linear"]), (2, f5["exceed_rate_nonlinear"])):
+            z = 100 * np.asarray(rate, float).reshape(len(au), len(bu)).T
+            fig.add_trace(go.Heatmap(x=au, y=bu, z=z, coloraxis="coloraxis"), 1, col)
+        fig.update_layout(title=f"Monte Carlo exceed rate (%) of the GA allocation at Z_c = {f5['z_c_m']:.3f} m (Fig. 5), "
+                                f"{f5['n_samples']} LHS samples per pose", coloraxis=dict(colorscale="Viridis", cmin=0),
                           height=430)
         fig.update_xaxes(title_text="α (deg)")
         fig.update_yaxes(title_text="β (deg)")
         rep.figure(fig)
         fig = go.Figure()
-        fig.add_scatter(x=front.table["normalised_error"] * E_POS, y=front.cost, mode="markers", name="NSGA-II front")
+        front = v["pareto_front"]
+        fig.add_scatter(x=np.asarray(front["normalised_error"], float) * E_POS, y=front["cost"], mode="markers",
+                        name="NSGA-II front")
         for key, label in (("paper_table1", "paper Table 1"), ("paper_table2", "paper Table 2")):
-            fig.add_scatter(x=[checks[key]["rss_error"]], y=[checks[key]["cost"]], mode="markers+text", text=[label],
+            fig.add_scatter(x=[v[key]["rss_error"]], y=[v[key]["cost"]], mode="markers+text", text=[label],
                             textposition="top center", marker=dict(size=12, symbol="diamond"), name=label)
-        fig.add_scatter(x=[ga.max_error()], y=[ga.cost], mode="markers", marker=dict(size=10, symbol="x"), name="our GA")
+        fig.add_scatter(x=[figs["ga_max_rss_error"]], y=[v["ga_cost"]], mode="markers", marker=dict(size=10, symbol="x"),
+                        name="our GA")
         fig.add_vline(x=E_POS, line_dash="dash", annotation_text="requirement")
         fig.update_layout(title=f"Cost vs. max RSS position error (NSGA-II), {variant} model", xaxis_title="max RSS error (m)",
                           yaxis_title="cost", xaxis_type="log", yaxis_type="log", height=450)
         rep.figure(fig)
+    checks = {variant: {k: summary["variants"][variant][k] for k in _DESIGNS} for variant in ("paper", "verified")}
     rep.heading("Monte Carlo and the worst case")
     rep.text(f"Sampled errors (1000 LHS samples per pose) reach at most "
-             f"{100 * max(c['mc_max_over_worst_case'] for c in tables['verified'][8].values()):.0f} % of the exact worst case: "
+             f"{100 * max(c['mc_max_over_worst_case'] for c in checks['verified'].values()):.0f} % of the exact worst case: "
              "sampling alone cannot verify a worst-case requirement. The linearisation error of the verified model "
-             f"(nonlinear vs first order) is {tables['verified'][8]['ga']['linearisation_error']:.2e} relative; "
-             f"of the paper's model, {tables['paper'][8]['ga']['linearisation_error']:.2f}.")
+             f"(nonlinear vs first order) is {checks['verified']['ga']['linearisation_error']:.2e} relative; "
+             f"of the paper's model, {checks['paper']['ga']['linearisation_error']:.2f}.")
     rep.heading("GA robustness")
     rep.text("Started from a Latin hypercube only (no baseline seeds), the GA reaches " + "; ".join(
         f"{v}: {d['ga_unseeded_cost']:.5f} ({100 * d['ga_unseeded_over_optimum']:+.4f} % vs the optimum, first generation's best "
         f"{d['ga_unseeded_initial_best']:.4f})" for v, d in summary["variants"].items()) + ".")
-    rep.write(path)
+    return rep
 
 
 STUDY = Study(name="yao2013", title="3-UCR accuracy synthesis by GA vs. sensitivity vs. certified optimum",
-              run=run, seed_paper="Yao, Wang, Zhou & Zhou 2013 (JATIT 53(1))")
+              compute=compute, render=render, config=CONFIG, quick=QUICK,
+              seed_paper="Yao, Wang, Zhou & Zhou 2013 (JATIT 53(1))")
