@@ -40,14 +40,16 @@ def _write_index(out: Path, summaries: dict[str, dict]) -> Path:
 
 def cmd_reproduce(args) -> int:
     from evotol import studies
+    from evotol.arguments import check_scheduler_answers
+    from evotol.outputs import output_folder
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    names = list(studies.available()) if args.study == "all" else [studies.get(args.study).name]
+    out = output_folder(args.out, "--out")          # before any computation (issue 15)
     if args.scheduler:
         import os
 
+        check_scheduler_answers(args.scheduler)
         os.environ["EVOTOL_DASK_SCHEDULER"] = args.scheduler  # read by the grid/design studies
-    names = list(studies.available()) if args.study == "all" else [studies.get(args.study).name]
     summaries, failed = {}, []
     for name in names:
         study = studies.get(name)
@@ -78,9 +80,12 @@ def cmd_reproduce(args) -> int:
 
 
 def cmd_run(args) -> int:
+    from evotol.outputs import input_file, output_folder
     from evotol.studyfile import run_study_file
 
-    summary = run_study_file(args.study_file, out=args.out, seed=args.seed)
+    study_file = input_file(args.study_file, "study file", "a study TOML file")
+    out = output_folder(args.out if args.out is not None else study_file.parent, "--out")
+    summary = run_study_file(study_file, out=out, seed=args.seed)
     print(f"[evotol] wrote {summary['html']} and {summary['json']}")
     return 0
 
@@ -94,22 +99,24 @@ def cmd_list(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from evotol import arguments
+
     p = argparse.ArgumentParser(prog="evotol", description="Cost-optimal tolerance allocation for robots.")
     sub = p.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("reproduce", help="reproduce a seed study (or 'all') into HTML + JSON")
     r.add_argument("study", help="study name (see 'evotol list') or 'all'")
     r.add_argument("--out", default="reports", help="output folder (default: reports)")
-    r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    r.add_argument("--seed", type=arguments.seed, default=0, help="random seed, a non-negative integer (default 0)")
     r.add_argument("--quick", action="store_true", help="smaller run for a fast look")
-    r.add_argument("--scheduler", default=None,
+    r.add_argument("--scheduler", type=arguments.scheduler, default=None,
                    help="Dask scheduler address (tcp://host:port) for the large grid/design studies; default: local cores")
     r.set_defaults(func=cmd_reproduce)
 
     u = sub.add_parser("run", help="run a user study described in a TOML file")
     u.add_argument("study_file")
     u.add_argument("--out", default=None, help="output folder (default: next to the TOML file)")
-    u.add_argument("--seed", type=int, default=None, help="override the study's seed")
+    u.add_argument("--seed", type=arguments.seed, default=None, help="override the study's seed (non-negative integer)")
     u.set_defaults(func=cmd_run)
 
     ls = sub.add_parser("list", help="list the reproducible studies")
@@ -138,6 +145,9 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("evotol: interrupted; results saved so far are kept", file=sys.stderr)
         return 130
+    except BrokenPipeError:               # `evotol describe ucr3 | head`: the reader left, not an error
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":

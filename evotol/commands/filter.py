@@ -29,12 +29,27 @@ def register(subparsers) -> None:
 def cmd_filter(args) -> int:
     import pandas as pd
 
-    from evotol.filtering import DesignStudy
+    from evotol.errors import ValidationError
+    from evotol.filtering import DesignStudy, load_entries
+    from evotol.outputs import input_file, output_file
     from evotol.reporting.html import write_json
 
+    input_file(args.entries, "entries", "an entries file (.parquet or .csv)")
+    for flag in ("out", "json", "html"):              # before loading and filtering (issue 15)
+        if getattr(args, flag):
+            output_file(getattr(args, flag), f"--{flag}")
     split = (lambda s: [c.strip() for c in s.split(",") if c.strip()] if s else None)
-    study = DesignStudy.load(args.entries, inputs=split(args.inputs), objectives=split(args.objectives),
-                             name=Path(args.entries).stem)
+    entries = load_entries(args.entries)
+    try:
+        study = DesignStudy(entries, inputs=split(args.inputs), objectives=split(args.objectives),
+                            name=Path(args.entries).stem)
+    except ValidationError as exc:
+        if exc.field != "inputs/objectives":
+            raise
+        raise ValidationError("--inputs/--objectives", None,
+                              f"the input and/or objective columns of {args.entries}, which carries no evotol "
+                              f"metadata: pass --inputs a,b and/or --objectives c,d (its columns: "
+                              f"{', '.join(map(str, entries.columns))})") from None
     res = study.filter(args.query)
     print(res.describe())
     if args.show and res.count:

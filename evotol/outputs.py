@@ -1,0 +1,73 @@
+"""Check where results will go *before* any computation starts.
+
+A run that computes for minutes and then cannot write its report loses all of it (issue 15:
+``evotol run study.toml --out /proc/x`` died with a traceback after 8 s). ``run``,
+``reproduce`` and ``filter --html`` call these checks at the command-line boundary, so a bad
+location is a one-line :class:`~evotol.errors.ValidationError` naming the option and the path.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from evotol.errors import ValidationError
+
+
+def _probe_writable(folder: Path, field: str, shown) -> None:
+    """Create and delete a small file in ``folder``: the only test that ``os.access`` cannot fool
+    (read-only mounts, /proc, ACLs)."""
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".evotol-write-test-"):
+            pass
+    except OSError as exc:
+        raise ValidationError(field, shown, f"a writable folder ({exc.strerror or exc})") from None
+
+
+def output_folder(path, field: str = "--out", shown=None) -> Path:
+    """Make sure ``path`` is a folder evotol can write into; create it (and parents) if missing.
+
+    Raises ValidationError naming ``field`` and ``path`` when ``path`` is an existing file, cannot
+    be created, or is not writable. Returns the folder as a Path.
+    """
+    shown = str(path) if shown is None else shown
+    if not str(path).strip():
+        raise ValidationError(field, shown, "a folder path")
+    p = Path(path).expanduser()
+    if p.exists() and not p.is_dir():
+        raise ValidationError(field, shown, "a folder, not an existing file")
+    if not p.exists():
+        try:
+            p.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ValidationError(field, shown, f"a folder that can be created ({exc.strerror or exc})") from None
+    _probe_writable(p, field, shown)
+    return p
+
+
+def output_file(path, field: str) -> Path:
+    """Make sure the file ``path`` can be written: not a folder, its folder exists or can be
+    created and is writable. Creates the folder; does not create the file."""
+    shown = str(path)
+    if not shown.strip():
+        raise ValidationError(field, shown, "a file path")
+    p = Path(path).expanduser()
+    if p.is_dir() or shown.endswith(os.sep):
+        raise ValidationError(field, shown, "a file name, not a folder")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise ValidationError(field, shown, "a writable file (the existing file is read-only)")
+    output_folder(p.parent, field=field, shown=shown)   # Path("kept.html").parent is Path(".")
+    return p
+
+
+def input_file(path, field: str, expected: str = "an existing file") -> Path:
+    """An existing, readable regular file (not a folder)."""
+    shown = str(path)
+    p = Path(path).expanduser()
+    if not p.exists():
+        raise ValidationError(field, shown, f"{expected} (no such file)")
+    if p.is_dir():
+        raise ValidationError(field, shown, f"{expected}, not a folder")
+    if not os.access(p, os.R_OK):
+        raise ValidationError(field, shown, f"{expected} that can be read (permission denied)")
+    return p

@@ -1,0 +1,156 @@
+"""Issue 15: every mistake gets a one-line answer before any work is done.
+
+A table of bad inputs across the command line, study files and the Python API. For each case the
+test asserts the exception class (API) or the exit code (CLI), that the message names the field
+and the offending value, that no traceback is printed, and -- by replacing every allocator,
+the Monte Carlo check and every seed study with a sentinel that fails the test when called --
+that the error comes before any long computation starts.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from pathlib import Path
+
+import pytest
+
+import evotol.studies
+import evotol.studyfile
+from evotol.cli import main
+from evotol.errors import ValidationError
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "reports" / "studies" / "ucr3_example.toml"
+
+
+class ComputationStarted(AssertionError):
+    """Raised by the sentinels: the bad input was not caught before the computation."""
+
+
+def _sentinel(*args, **kwargs):
+    raise ComputationStarted("a long computation started before the bad input was reported")
+
+
+@pytest.fixture
+def no_computation(monkeypatch):
+    """Every allocator, Monte Carlo and seed study fails the test if it is reached."""
+    monkeypatch.setattr(evotol.studyfile, "METHODS", {m: _sentinel for m in evotol.studyfile.METHODS})
+    monkeypatch.setattr(evotol.studyfile, "allocate_nsga2", _sentinel)
+    monkeypatch.setattr(evotol.studyfile, "verify", _sentinel)
+    fake = {n: dataclasses.replace(s, compute=_sentinel, legacy_run=_sentinel if s.legacy_run else None)
+            for n, s in evotol.studies.available().items()}
+    monkeypatch.setattr(evotol.studies, "available", lambda: fake)
+
+
+def _run_cli(argv, capsys) -> tuple[int, str]:
+    """Exit code and stderr of ``evotol ARGV`` (argparse errors exit via SystemExit)."""
+    try:
+        code = main(argv)
+    except SystemExit as exc:
+        code = exc.code
+    captured = capsys.readouterr()
+    return code, captured.err
+
+
+def _study(tmp_path: Path, *edits: tuple[str, str], append: str = "") -> str:
+    """The example study file with text replacements (each must match), written to tmp_path."""
+    text = EXAMPLE.read_text()
+    for old, new in edits:
+        assert old in text, old
+        text = text.replace(old, new)
+    f = tmp_path / "study.toml"
+    f.write_text(text + append)
+    return str(f)
+
+
+def _entries_csv(tmp_path: Path) -> str:
+    f = tmp_path / "plain.csv"
+    f.write_text("a,b,p_max\n1,2,0.1\n2,3,0.2\n")
+    return str(f)
+
+
+# --- command line ---------------------------------------------------------------------------
+# each case: argv builder (tmp_path -> argv), expected exit code, strings the message must name
+CLI_CASES = {
+    "run a folder": (lambda d: ["run", str(d)], 2, ["study file", "{d}", "not a folder"]),
+    "run a missing file": (lambda d: ["run", str(d / "nope.toml")], 2, ["study file", "nope.toml"]),
+    "run --out under /proc": (lambda d: ["run", str(EXAMPLE), "--out", "/proc/evotol-x"], 2, ["--out", "/proc/evotol-x"]),
+    "run --out an existing file": (lambda d: ["run", str(EXAMPLE), "--out", str(EXAMPLE)], 2, ["--out", "ucr3_example.toml", "not an existing file"]),
+    "run --seed -1": (lambda d: ["run", str(EXAMPLE), "--seed", "-1"], 2, ["--seed", "'-1'"]),
+    "run --seed 1.5": (lambda d: ["run", str(EXAMPLE), "--seed", "1.5"], 2, ["--seed", "'1.5'"]),
+    "run --seed abc": (lambda d: ["run", str(EXAMPLE), "--seed", "abc"], 2, ["--seed", "'abc'"]),
+    "run --seed 2**32": (lambda d: ["run", str(EXAMPLE), "--seed", str(2 ** 32)], 2, ["--seed", str(2 ** 32)]),
+    "reproduce --out a file": (lambda d: ["reproduce", "yao2013", "--out", str(EXAMPLE)], 2, ["--out", "ucr3_example.toml"]),
+    "reproduce --out under /proc": (lambda d: ["reproduce", "yao2013", "--out", "/proc/evotol-x"], 2, ["--out", "/proc/evotol-x"]),
+    "reproduce --seed -3": (lambda d: ["reproduce", "yao2013", "--seed", "-3"], 2, ["--seed", "'-3'"]),
+    "reproduce unknown study": (lambda d: ["reproduce", "yao2031", "--out", str(d)], 2, ["study", "'yao2031'", "yao2013"]),
+    "reproduce --scheduler notaurl": (lambda d: ["reproduce", "yao2013", "--scheduler", "notaurl"], 2, ["--scheduler", "'notaurl'", "tcp://host:port"]),
+    "reproduce --scheduler without port": (lambda d: ["reproduce", "yao2013", "--scheduler", "tcp://localhost"], 2, ["--scheduler", "'tcp://localhost'"]),
+    "reproduce --scheduler http": (lambda d: ["reproduce", "yao2013", "--scheduler", "http://localhost:8786"], 2, ["--scheduler", "http://localhost:8786"]),
+    "reproduce --scheduler bad port": (lambda d: ["reproduce", "yao2013", "--scheduler", "tcp://localhost:99999"], 2, ["--scheduler", "tcp://localhost:99999"]),
+    "reproduce --scheduler nobody there": (lambda d: ["reproduce", "yao2013", "--out", str(d), "--scheduler", "tcp://127.0.0.1:1"], 2,
+                                           ["--scheduler", "tcp://127.0.0.1:1", "Dask scheduler"]),
+    "filter missing entries": (lambda d: ["filter", str(d / "none.parquet"), "a > 1"], 2, ["entries", "none.parquet"]),
+    "filter CSV without metadata": (lambda d: ["filter", _entries_csv(d), "a > 1"], 2, ["--inputs", "--objectives", "plain.csv", "p_max"]),
+    "filter --html under /proc": (lambda d: ["filter", _entries_csv(d), "a > 1", "--inputs", "a,b", "--html", "/proc/x/kept.html"], 2,
+                                  ["--html", "/proc/x/kept.html"]),
+    "filter --html a folder": (lambda d: ["filter", _entries_csv(d), "a > 1", "--inputs", "a,b", "--html", str(d)], 2, ["--html", "{d}", "not a folder"]),
+    "filter --out under /proc": (lambda d: ["filter", _entries_csv(d), "a > 1", "--inputs", "a,b", "--out", "/proc/x/kept.csv"], 2,
+                                 ["--out", "/proc/x/kept.csv"]),
+    "describe unknown robot": (lambda d: ["describe", "hexapod"], 2, ["robot.model", "'hexapod'", "ucr3"]),
+    "describe --set unknown argument": (lambda d: ["describe", "ucr3", "--set", "colour=1"], 2, ["--set", "colour", "UCR3"]),
+    "describe --set without =": (lambda d: ["describe", "ucr3", "--set", "variant"], 2, ["--set", "'variant'", "KEY=VALUE"]),
+    "describe --set bad variant": (lambda d: ["describe", "ucr3", "--set", "variant=papr"], 2, ["variant", "'papr'"]),
+}
+
+
+@pytest.mark.parametrize("case", list(CLI_CASES))
+def test_cli_bad_input(case, tmp_path, capsys, no_computation):
+    build, code, names = CLI_CASES[case]
+    got, err = _run_cli(build(tmp_path), capsys)
+    assert got == code, err
+    assert "Traceback" not in err
+    message = err.strip().splitlines()[-1]            # the one-line answer is the last line
+    for name in names:
+        assert name.format(d=tmp_path) in message, (name, message)
+
+
+# --- study files ----------------------------------------------------------------------------
+STUDY_CASES = {
+    "unknown measure": ((("measure = \"rss\"", "measure = \"maximum\""),), ["requirement.measure", "'maximum'"]),
+    "unknown robot": ((("model = \"ucr3\"", "model = \"hexapod\""),), ["robot.model", "'hexapod'", "ucr3"]),
+    "unknown source": ((("[sources.R1]", "[sources.R9]"),), ["sources.R9", "'R9'", "R1"]),
+    "negative cost coefficient": ((("a1 = 0.5", "a1 = -0.5"),), ["exponential.a1", "-0.5"]),
+    "unknown cost model": ((("model = \"exponential\"\na0 = 1.9", "model = \"expo\"\na0 = 1.9"),), ["model", "'expo'"]),
+    "unknown method": ((("sensitivity = {}", "sensitivty = {}"),), ["methods.sensitivty", "sensitivity"]),
+    "negative position requirement": ((("position = 5e-5", "position = -5e-5"),), ["requirement.position", "-5e-05"]),
+    "lower above upper": ((("lower = 1e-6", "lower = 3e-4"),), ["lower", "0.0003"]),
+    "robot argument typo": ((("variant = \"verified\"", "variant = \"verifed\""),), ["variant", "'verifed'"]),
+    "poses without a kind": ((("grid = [5, 5, 3]", "grud = [5, 5, 3]"),), ["poses", "grud"]),
+    "grid of wrong length": ((("grid = [5, 5, 3]", "grid = [5, 5]"),), ["grid", "[5, 5]"]),
+    "pose outside the workspace": ((("grid = [5, 5, 3]", "list = [[0.0, 0.0, 9.0]]"),), ["pose", "9.0"]),
+    "invalid TOML": ((("name = \"ucr3_example\"", "name = ucr3_example"),), ["study file", "valid TOML"]),
+}
+
+
+@pytest.mark.parametrize("case", list(STUDY_CASES))
+def test_study_file_bad_input(case, tmp_path, capsys, no_computation):
+    edits, names = STUDY_CASES[case]
+    code, err = _run_cli(["run", _study(tmp_path, *edits), "--out", str(tmp_path)], capsys)
+    assert code == 2, err
+    assert "Traceback" not in err
+    message = err.strip().splitlines()[-1]
+    assert message.startswith("evotol: error: "), message
+    for name in names:
+        assert name in message, (name, message)
+
+
+def test_argparse_type_errors_are_argument_type_errors():
+    """The --seed/--scheduler types raise argparse's own error class, so argparse prints usage + one line."""
+    from evotol import arguments
+
+    with pytest.raises(argparse.ArgumentTypeError, match="'-1'"):
+        arguments.seed("-1")
+    with pytest.raises(argparse.ArgumentTypeError, match="notaurl"):
+        arguments.scheduler("notaurl")
+    assert arguments.seed("7") == 7
+    assert arguments.parse_scheduler("tcp://10.0.0.5:8786") == ("tcp", "10.0.0.5", 8786)
