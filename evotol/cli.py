@@ -85,8 +85,14 @@ def cmd_run(args) -> int:
 
     study_file = input_file(args.study_file, "study file", "a study TOML file")
     out = output_folder(args.out if args.out is not None else study_file.parent, "--out")
-    summary = run_study_file(study_file, out=out, seed=args.seed)
+    summary = run_study_file(study_file, out=out, seed=args.seed, keep_going=args.keep_going)
     print(f"[evotol] wrote {summary['html']} and {summary['json']}")
+    if summary.get("interrupted"):
+        what = summary["interruption"]
+        print(f"evotol: interrupted (Ctrl-C): stopped {', '.join(what['stopped'])}"
+              + (f", skipped {', '.join(what['skipped'])}" if what["skipped"] else "")
+              + f"; the results computed until then are in {summary['json']}", file=sys.stderr)
+        return 0 if args.keep_going else 130
     return 0
 
 
@@ -117,6 +123,9 @@ def build_parser() -> argparse.ArgumentParser:
     u.add_argument("study_file")
     u.add_argument("--out", default=None, help="output folder (default: next to the TOML file)")
     u.add_argument("--seed", type=arguments.seed, default=None, help="override the study's seed (non-negative integer)")
+    u.add_argument("--keep-going", action="store_true",
+                   help="Ctrl-C stops only the running method (a GA keeps its best design so far); the "
+                        "remaining methods still run and the exit code is 0 (default: stop, exit code 130)")
     u.set_defaults(func=cmd_run)
 
     ls = sub.add_parser("list", help="list the reproducible studies")

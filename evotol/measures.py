@@ -26,7 +26,7 @@ from functools import lru_cache
 
 import numpy as np
 
-MEASURES = ("worst_case", "rss", "mc_quantile")
+MEASURES = ("worst_case", "rss", "mc_quantile", "yield")   # yield: evotol.statistical
 
 
 @lru_cache(maxsize=16)

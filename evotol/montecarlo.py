@@ -2,12 +2,11 @@
 every pose, propagate them (first-order map and, where the robot has one, the nonlinear model),
 and report the rate at which the end-effector error exceeds the requirement (Yao 2013 Sec. 5).
 
-Sampling (per source, ``Tolerance.distribution``), unit tolerance then scaled by t_j:
-  * interval, uniform: e ~ U(-t, t);  normal: e ~ N(0, (t/3)²) truncated at ±t;
-  * disk (revolute clearance, Yao 2013 eq. 12): direction α ~ U(0, 2π), radius r ~ U(0, t)
-    (``radial="uniform"``, the paper's reading) or r = t·sqrt(U) (``radial="area"``, uniform over
-    the disk); normal: r = |N(0, (t/3)²)| truncated at t;
-  * ball: uniform direction on the sphere, radius as for the disk.
+Sampling (per source, ``Tolerance.distribution``; conventions in :mod:`evotol.distributions`):
+unit-tolerance errors drawn by inverse CDF from Latin-hypercube or plain uniforms, then scaled
+by t_j -- uniform, normal (t = k·σ), truncated normal, contact (clearances), process mean shift;
+disk/ball radius r ~ U(0, t) (``radial="uniform"``, Yao 2013 eq. 12) or uniform over the
+disk/ball (``radial="area"``).
 Latin hypercube (scipy.stats.qmc.LatinHypercube) or plain Monte Carlo, independent per pose,
 reproducible from ``seed``. Vectorised over all poses × samples; poses are processed in chunks.
 
@@ -22,54 +21,14 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import qmc, truncnorm
 
+from evotol import distributions
+from evotol.distributions import METHODS
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
 from evotol.threads import single_threaded_blas
 
-METHODS = ("lhs", "mc")
-RADIAL = ("uniform", "area")
-
-
-def _uniforms(n: int, d: int, method: str, seed) -> np.ndarray:
-    if method == "lhs":
-        return qmc.LatinHypercube(d=d, seed=seed).random(n)
-    return np.random.default_rng(seed).random((n, d))
-
-
-def _draw(U: np.ndarray, dims, dists, radial: str) -> list[np.ndarray]:
-    """Unit-tolerance errors per source from uniforms U (n, Σdims)."""
-    out, k = [], 0
-    for dim, dist in zip(dims, dists):
-        if dim == 1:
-            u = U[:, k]
-            z = 2 * u - 1 if dist == "uniform" else truncnorm.ppf(u, -3, 3) / 3
-            out.append(z[:, None])
-            k += 1
-            continue
-        if dist == "normal":
-            r = truncnorm.ppf(U[:, k], 0, 3) / 3
-        else:
-            r = U[:, k] if radial == "uniform" else np.sqrt(U[:, k])
-        if dim == 2:
-            a = 2 * np.pi * U[:, k + 1]
-            d = np.stack([np.cos(a), np.sin(a)], 1)
-        else:
-            zc = 2 * U[:, k + 1] - 1
-            a = 2 * np.pi * U[:, k + 2]
-            s = np.sqrt(1 - zc ** 2)
-            d = np.stack([s * np.cos(a), s * np.sin(a), zc], 1)
-        out.append(r[:, None] * d)
-        k += dim
-    return out
-
-
-def unit_samples(problem: ToleranceProblem, n: int, method: str = "lhs", seed: int = 0, radial: str = "uniform") -> list[np.ndarray]:
-    """One set of unit-tolerance samples shared by all poses (used by the mc_quantile measure)."""
-    dims = [s.dim for s in problem.robot.sources]
-    dists = [problem.tolerances[nm].distribution for nm in problem.names]
-    return _draw(_uniforms(n, sum(dims), method, seed), dims, dists, radial)
+RADIAL = distributions.RADIAL
 
 
 @dataclass
@@ -115,7 +74,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     t = problem.as_array(tolerances)
     robot = problem.robot
     dims = [s.dim for s in robot.sources]
-    dists = [problem.tolerances[nm].distribution for nm in problem.names]
+    dists = problem.distributions
     comps = problem.components
     seeds = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(problem.n_poses)]
     P = problem.n_poses
@@ -132,7 +91,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
         idx = np.arange(start, min(start + chunk_poses, P))
         E = np.empty((idx.size, n_samples, robot.n_columns))
         for a, p in enumerate(idx):
-            Z = _draw(_uniforms(n_samples, sum(dims), method, seeds[p]), dims, dists, radial)
+            Z = distributions.draw(distributions.uniforms(n_samples, sum(dims), method, seeds[p]), dims, dists, radial)
             E[a] = np.concatenate([z * tj for z, tj in zip(Z, t)], axis=1)
         lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
         for c, lim in comps:

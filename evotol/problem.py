@@ -14,11 +14,11 @@ from typing import Mapping
 import numpy as np
 
 from cost_models.base import CostModel
-from evotol import measures
+from evotol import distributions, measures, statistical
 from evotol.errors import ValidationError
 from robots.base import RobotErrorModel
 
-DISTRIBUTIONS = ("uniform", "normal")
+DISTRIBUTIONS = distributions.KINDS
 
 
 @dataclass(frozen=True)
@@ -28,16 +28,17 @@ class Tolerance:
     cost: cost model of this tolerance (takes t in SI units).
     lower, upper: allowed range of the tolerance (SI: m or rad), 0 < lower <= upper.
     locked: if given, the tolerance is fixed at this value (SI) and not optimised.
-    distribution: how Monte Carlo samples the source inside its tolerance: ``"uniform"``
-        (uniform value in [-t, t]; a disk/ball clearance as Yao 2013 eq. 12: uniform direction,
-        uniform radius <= t) or ``"normal"`` (t = 3σ, truncated at t).
+    distribution: how the source is distributed inside its tolerance (Monte Carlo and the
+        ``yield`` measure): a kind name (``"uniform"``, ``"normal"`` with t = 3σ,
+        ``"truncated_normal"``, ``"contact"``) or an :class:`evotol.distributions.Distribution`
+        (``sigma_k``, ``mean_shift``); conventions in :mod:`evotol.distributions`.
     """
 
     cost: CostModel
     lower: float
     upper: float
     locked: float | None = None
-    distribution: str = "uniform"
+    distribution: "str | distributions.Distribution" = "uniform"
 
     def validate(self, name: str) -> None:
         if not isinstance(self.cost, CostModel):
@@ -50,8 +51,7 @@ class Tolerance:
             raise ValidationError(f"tolerances[{name!r}].lower", self.lower, f"<= upper ({self.upper})")
         if self.locked is not None and not (np.isfinite(self.locked) and self.locked > 0):
             raise ValidationError(f"tolerances[{name!r}].locked", self.locked, "a positive tolerance (SI) or None")
-        if self.distribution not in DISTRIBUTIONS:
-            raise ValidationError(f"tolerances[{name!r}].distribution", self.distribution, f"one of {DISTRIBUTIONS}")
+        distributions.as_distribution(self.distribution, f"tolerances[{name!r}].distribution")
         self.cost.validate_range(min(self.lower, self.locked or self.lower), max(self.upper, self.locked or self.upper))
 
 
@@ -62,7 +62,11 @@ class Requirement:
     position: bound on |δp| (m), or None; orientation: bound on |δθ| (rad), or None.
     measure: ``"worst_case"`` (exact for the linear model, see :mod:`evotol.measures`),
         ``"rss"`` (root sum square of the sources' worst-case effects), or ``"mc_quantile"``
-        (the ``quantile`` of |δp| over ``mc_samples`` Latin-hypercube samples, linear model).
+        (the ``quantile`` of |δp| over ``mc_samples`` Latin-hypercube samples, linear model), or
+        ``"yield"``: at every pose P(|δp| ≤ position and |δθ| ≤ orientation) ≥ ``probability``
+        for the first-order model (:mod:`evotol.statistical`; Bonferroni bound for both).
+    probability: required yield of the ``yield`` measure in (0, 1) (default 0.9973 = 3σ), or
+    ppm: the same given as allowed defects per million (probability = 1 − ppm·1e-6).
     """
 
     position: float | None = None
@@ -71,6 +75,15 @@ class Requirement:
     quantile: float = 0.95
     mc_samples: int = 2000
     seed: int = 0
+    probability: float | None = None
+    ppm: float | None = None
+
+    @property
+    def required_yield(self) -> float:
+        """The yield the ``yield`` measure requires (from ``probability`` or ``ppm``)."""
+        if self.ppm is not None:
+            return 1.0 - float(self.ppm) * 1e-6
+        return 0.9973 if self.probability is None else float(self.probability)
 
     def validate(self) -> None:
         if self.position is None and self.orientation is None:
@@ -83,6 +96,12 @@ class Requirement:
             raise ValidationError("requirement.measure", self.measure, f"one of {measures.MEASURES}")
         if not 0 < self.quantile < 1:
             raise ValidationError("requirement.quantile", self.quantile, "a probability in (0, 1)")
+        if self.probability is not None and self.ppm is not None:
+            raise ValidationError("requirement.ppm", self.ppm, "None when requirement.probability is given (one of the two)")
+        if self.probability is not None:
+            statistical.required_probability(self.probability)
+        if self.ppm is not None and not (isinstance(self.ppm, (int, float, np.floating)) and 0 < self.ppm < 1e6):
+            raise ValidationError("requirement.ppm", self.ppm, "defects per million in (0, 1e6)")
         if int(self.mc_samples) < 10:
             raise ValidationError("requirement.mc_samples", self.mc_samples, "at least 10 samples")
 
@@ -100,6 +119,8 @@ class Evaluation:
     position_direction: np.ndarray | None = None  # (n_designs, n_poses, 3) worst direction
     orientation_direction: np.ndarray | None = None
     violation: np.ndarray = field(default=None)   # (n_designs,) max normalised error − 1
+    probability: np.ndarray | None = None         # yield measure: (n_designs, n_poses) lower bound of the yield
+    exact: bool = True                            # yield measure: False when sources were moment-matched (CLT)
 
 
 class ToleranceProblem:
@@ -132,6 +153,9 @@ class ToleranceProblem:
             tolerances[n].validate(n)
         self.robot, self.requirement = robot, requirement
         self.tolerances = {n: tolerances[n] for n in names}
+        self.distributions = [distributions.as_distribution(self.tolerances[s.name].distribution,
+                                                            f"tolerances[{s.name!r}].distribution", s.dim)
+                              for s in robot.sources]
         self.names = names
         self.poses = robot.check_poses(poses)
         self.n_directions = int(n_directions)
@@ -151,6 +175,7 @@ class ToleranceProblem:
             raise ValidationError("tolerances", "all locked", "at least one source free to optimise")
         self._coeff_cache: dict[str, tuple] = {}
         self._mc_cache = None
+        self._yield_cache = None
 
     # --- basic properties ---------------------------------------------------------------------
     @property
@@ -186,6 +211,7 @@ class ToleranceProblem:
         new.requirement = dataclasses.replace(self.requirement, **changes)
         new.requirement.validate()
         new._mc_cache = None
+        new._yield_cache = None
         return new
 
     def full(self, X_free: np.ndarray) -> np.ndarray:
@@ -245,6 +271,8 @@ class ToleranceProblem:
         T = np.atleast_2d(self.as_array(T))
         measure = measure or self.requirement.measure
         ev = Evaluation(None, None)
+        if measure == "yield":
+            return self._evaluate_yield(T)
         viol = np.full(T.shape[0], -np.inf)
         for comp in ("position", "orientation"):
             if measure == "worst_case":
@@ -270,6 +298,21 @@ class ToleranceProblem:
         ev.violation = viol
         return ev
 
+    def first_order_yield(self) -> statistical.FirstOrderYield:
+        """Cached moments of the linear model for the ``yield`` measure."""
+        if getattr(self, "_yield_cache", None) is None:
+            self._yield_cache = statistical.FirstOrderYield(self.blocks, self.distributions, dict(self.components))
+        return self._yield_cache
+
+    def _evaluate_yield(self, T: np.ndarray) -> Evaluation:
+        y = self.first_order_yield().evaluate(T, self.requirement.required_yield)
+        ev = Evaluation(None, None, violation=y.violation, probability=y.probability, exact=y.exact)
+        for c in y.miss:
+            setattr(ev, c, y.equivalent[c])
+            setattr(ev, f"{c}_bound", y.equivalent[c])
+            setattr(ev, f"{c}_contrib", y.contributions[c])
+        return ev
+
     def max_errors(self, T, measure: str | None = None) -> dict[str, np.ndarray]:
         """Largest error over the poses, per constrained component: name -> (n_designs,)."""
         ev = self.evaluate(T, measure)
@@ -277,10 +320,9 @@ class ToleranceProblem:
 
     def _mc_quantile(self, comp: str, T: np.ndarray) -> np.ndarray:
         """Quantile of |error| over common Latin-hypercube samples of the linear model, per pose."""
-        from evotol.montecarlo import unit_samples
-
         if self._mc_cache is None:
-            self._mc_cache = unit_samples(self, self.requirement.mc_samples, method="lhs", seed=self.requirement.seed)
+            self._mc_cache = distributions.unit_samples([s.dim for s in self.robot.sources], self.distributions,
+                                                        self.requirement.mc_samples, method="lhs", seed=self.requirement.seed)
         Z = self._mc_cache                       # list over sources of (n_samples, dim)
         out = np.empty((T.shape[0], self.n_poses))
         for i, t in enumerate(T):

@@ -15,6 +15,8 @@ import cost_models
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
 from evotol.errors import ValidationError
+from evotol.interrupt import CtrlC
+from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report, write_json
@@ -62,7 +64,10 @@ def load_problem(spec: dict) -> ToleranceProblem:
     return ToleranceProblem(robot, tol, req, poses)
 
 
-def run_study_file(path, out=None, seed=None) -> dict:
+def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
+    """Run the study; Ctrl-C stops the running method (GA/NSGA-II keep their best so far), skips the
+    remaining ones unless ``keep_going``, and the partial results are still written, marked
+    ``"interrupted": true`` in the JSON and in the report's header (issue 15)."""
     path = Path(path)
     if not path.exists():
         raise ValidationError("study file", str(path), "an existing TOML file")
@@ -76,30 +81,63 @@ def run_study_file(path, out=None, seed=None) -> dict:
     out = Path(out) if out else path.parent
     problem = load_problem(spec)
     methods = spec.get("methods", {"sensitivity": {}, "optimum": {}, "ga": {}})
-    results, front = {}, None
-    for m, kw in methods.items():
-        if m == "nsga2":
-            front = allocate_nsga2(problem, seed=seed, **kw)
-            continue
-        if m not in METHODS:
-            raise ValidationError(f"methods.{m}", m, f"one of {sorted(METHODS) + ['nsga2']}")
-        kw = dict(kw)
-        if m == "ga":
-            kw.setdefault("seed", seed)
-        results[m] = METHODS[m](problem, **kw)
     vspec = spec.get("verify", {"n_samples": 1000})
-    checks = {m: verify(problem, r.t, seed=seed, **vspec).to_dict() for m, r in results.items()}
+    for m, kw in methods.items():           # every table checked before the first method runs
+        if m != "nsga2" and m not in METHODS:
+            raise ValidationError(f"methods.{m}", m, unknown_key_message(m, sorted(METHODS) + ["nsga2"]))
+        check_keywords(allocate_nsga2 if m == "nsga2" else METHODS[m], kw, f"methods.{m}", exclude=("problem",))
+    check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
+    results, front, stopped, skipped = {}, None, [], []
+    with CtrlC() as ctrl_c:
+        for m, kw in methods.items():
+            if ctrl_c.count and not keep_going:
+                skipped.append(m)
+                continue
+            print(f"[evotol] {m} ...", flush=True)
+            before = ctrl_c.count
+            try:
+                if m == "nsga2":
+                    front = allocate_nsga2(problem, seed=seed, **kw)
+                    continue
+                kw = dict(kw)
+                if m == "ga":
+                    kw.setdefault("seed", seed)
+                results[m] = METHODS[m](problem, **kw)
+            except KeyboardInterrupt:
+                ctrl_c.count = max(ctrl_c.count, before + 1)
+            finally:
+                if ctrl_c.count > before:
+                    stopped.append(m)
+        checks = {}
+        for m, r in results.items():
+            if ctrl_c.count and not keep_going:     # the user asked to stop: no Monte Carlo
+                skipped.append(f"verify {m}")
+                continue
+            before = ctrl_c.count
+            try:
+                checks[m] = verify(problem, r.t, seed=seed, **vspec).to_dict()
+            except KeyboardInterrupt:
+                ctrl_c.count = max(ctrl_c.count, before + 1)
+            if ctrl_c.count > before:
+                stopped.append(f"verify {m}")
     summary = {"name": name, "problem": problem.describe(), "seed": seed,
                "results": {m: r.to_dict() for m, r in results.items()}, "monte_carlo": checks,
-               "seconds": time.perf_counter() - t0}
+               "seconds": time.perf_counter() - t0, "interrupted": bool(stopped)}
+    if stopped:
+        summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
     if front is not None:
         summary["pareto_front"] = front.table.to_dict(orient="list")
     rep = Report(f"evotol study: {name}", f"{problem.robot.name}, {problem.n_poses} poses, measure {problem.requirement.measure}")
+    if stopped:
+        rep.text(f"Interrupted (Ctrl-C): stopped {', '.join(stopped)}"
+                 + (f"; not run: {', '.join(skipped)}" if skipped else "")
+                 + ". The results below are what was computed until then; a GA or NSGA-II that was "
+                   "stopped reports its best design so far.")
     rep.heading("Allocations")
     rows = [[n] + [results[m].tolerances[n] for m in results] for n in problem.names]
     rows.append(["cost"] + [results[m].cost for m in results])
     rows.append(["feasible"] + [results[m].feasible for m in results])
-    rows.append(["MC max exceed rate"] + [checks[m]["max_exceed_rate"] for m in results])
+    rows.append(["MC max exceed rate"] + [checks[m]["max_exceed_rate"] if m in checks else "not run" for m in results])
     rep.table(rows, ["source (SI)"] + list(results))
     for m, r in results.items():
         rep.heading(f"Contributors at the worst pose: {m}")

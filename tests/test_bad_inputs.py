@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import inspect
 from pathlib import Path
 
 import pytest
@@ -30,12 +31,20 @@ def _sentinel(*args, **kwargs):
     raise ComputationStarted("a long computation started before the bad input was reported")
 
 
+def _sentinel_like(func):
+    """A sentinel with ``func``'s signature (the study file's keyword checks read it)."""
+    def sentinel(*args, **kwargs):
+        _sentinel()
+    sentinel.__signature__ = inspect.signature(func)
+    return sentinel
+
+
 @pytest.fixture
 def no_computation(monkeypatch):
     """Every allocator, Monte Carlo and seed study fails the test if it is reached."""
-    monkeypatch.setattr(evotol.studyfile, "METHODS", {m: _sentinel for m in evotol.studyfile.METHODS})
-    monkeypatch.setattr(evotol.studyfile, "allocate_nsga2", _sentinel)
-    monkeypatch.setattr(evotol.studyfile, "verify", _sentinel)
+    monkeypatch.setattr(evotol.studyfile, "METHODS", {m: _sentinel_like(f) for m, f in evotol.studyfile.METHODS.items()})
+    monkeypatch.setattr(evotol.studyfile, "allocate_nsga2", _sentinel_like(evotol.studyfile.allocate_nsga2))
+    monkeypatch.setattr(evotol.studyfile, "verify", _sentinel_like(evotol.studyfile.verify))
     fake = {n: dataclasses.replace(s, compute=_sentinel, legacy_run=_sentinel if s.legacy_run else None)
             for n, s in evotol.studies.available().items()}
     monkeypatch.setattr(evotol.studies, "available", lambda: fake)
@@ -121,7 +130,14 @@ STUDY_CASES = {
     "unknown source": ((("[sources.R1]", "[sources.R9]"),), ["sources.R9", "'R9'", "R1"]),
     "negative cost coefficient": ((("a1 = 0.5", "a1 = -0.5"),), ["exponential.a1", "-0.5"]),
     "unknown cost model": ((("model = \"exponential\"\na0 = 1.9", "model = \"expo\"\na0 = 1.9"),), ["model", "'expo'"]),
-    "unknown method": ((("sensitivity = {}", "sensitivty = {}"),), ["methods.sensitivty", "sensitivity"]),
+    "unknown method": ((("sensitivity = {}", "sensitivty = {}"),), ["methods.sensitivty", "did you mean 'sensitivity'"]),
+    "GA keyword typo": ((("ga = { pop_size = 60", "ga = { pop_sise = 60"),), ["methods.ga.pop_sise", "60", "did you mean 'pop_size'"]),
+    "NSGA-II keyword typo": ((("nsga2 = { pop_size = 60, n_gen = 60 }", "nsga2 = { pop_size = 60, ngen = 60 }"),),
+                             ["methods.nsga2.ngen", "60", "did you mean 'n_gen'"]),
+    "optimum keyword typo": ((("optimum = {}", "optimum = { max_round = 5 }"),), ["methods.optimum.max_round", "5", "did you mean 'max_rounds'"]),
+    "method not a table": ((("optimum = {}", "optimum = 3"),), ["methods.optimum", "3", "a table"]),
+    "verify keyword typo": ((("n_samples = 500", "n_sample = 500"),), ["verify.n_sample", "500", "did you mean 'n_samples'"]),
+    "verify sets the seed": ((("method = \"lhs\"", "seed = 3"),), ["verify.seed", "3"]),
     "negative position requirement": ((("position = 5e-5", "position = -5e-5"),), ["requirement.position", "-5e-05"]),
     "lower above upper": ((("lower = 1e-6", "lower = 3e-4"),), ["lower", "0.0003"]),
     "robot argument typo": ((("variant = \"verified\"", "variant = \"verifed\""),), ["variant", "'verifed'"]),

@@ -5,7 +5,8 @@ import pytest
 import cost_models as cm
 from evotol.allocators import allocate_optimum
 from evotol.errors import ValidationError
-from evotol.montecarlo import _draw, _uniforms, verify
+from evotol.distributions import draw as _draw, uniforms as _uniforms
+from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studies.yao2013 import yao2013_problem
 from tests.toy_robot import ToyRobot
@@ -22,7 +23,7 @@ def test_eq12_disk_samples_have_uniform_direction_and_radius():
     assert np.abs(z_int).max() <= 1 and abs(np.var(z_int) - 1 / 3) < 0.01
     z_area = _draw(U, [1, 2], ["uniform", "uniform"], "area")[1]
     assert abs(np.mean(np.linalg.norm(z_area, axis=1)) - 2 / 3) < 0.01  # uniform over the disk area
-    z_norm = _draw(U, [1, 2], ["normal", "normal"], "uniform")[0]
+    z_norm = _draw(U, [1, 2], ["truncated_normal", "truncated_normal"], "uniform")[0]
     assert np.abs(z_norm).max() <= 1 and abs(np.std(z_norm) - 1 / 3) < 0.02
 
 

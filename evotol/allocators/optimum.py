@@ -176,7 +176,7 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
     t0 = time.perf_counter()
     if problem.requirement.measure not in ("worst_case", "rss"):
         raise ValidationError("requirement.measure", problem.requirement.measure,
-                              "'worst_case' or 'rss' for the exact optimum (mc_quantile is not convex: use allocate_ga)")
+                              "'worst_case' or 'rss' for the exact optimum (mc_quantile and yield have no convex rows: use allocate_ga)")
     _check_convex(problem)
     rows = ConstraintRows(problem)
     if budget is not None:

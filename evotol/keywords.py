@@ -1,0 +1,52 @@
+"""Check keyword arguments taken from a study file against a function's signature, with a
+"did you mean" for typos (``pop_sise`` -> ``pop_size``), before anything runs.
+
+Python's own ``TypeError: got an unexpected keyword argument`` arrives only when the function is
+called -- after the earlier methods of a study have computed -- and names neither the table nor
+the valid keys (issue 15).
+"""
+from __future__ import annotations
+
+import difflib
+import inspect
+from typing import Callable, Iterable, Mapping
+
+from evotol.errors import ValidationError
+
+
+def nearest(name: str, valid: Iterable[str]) -> str | None:
+    """The valid name closest to ``name`` (difflib ratio >= 0.6), or None."""
+    close = difflib.get_close_matches(str(name), list(valid), n=1, cutoff=0.6)
+    return close[0] if close else None
+
+
+def unknown_key_message(key: str, valid: Iterable[str]) -> str:
+    """'a key among [...]' with 'did you mean ...?' when one is close."""
+    valid = sorted(valid)
+    guess = nearest(key, valid)
+    return (f"did you mean {guess!r}? " if guess else "") + f"a key among {valid}"
+
+
+def keywords_of(func: Callable, exclude: Iterable[str] = ()) -> list[str] | None:
+    """Keyword names ``func`` accepts (None if it takes ``**kwargs``: anything goes)."""
+    params = inspect.signature(func).parameters.values()
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params):
+        return None
+    skip = set(exclude)
+    return [p.name for p in params
+            if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+            and p.name not in skip]
+
+
+def check_keywords(func: Callable, kwargs: Mapping, field: str, exclude: Iterable[str] = ()) -> None:
+    """ValidationError ``field.KEY = value: expected did you mean 'x'? a key among [...]`` for the
+    first key of ``kwargs`` that ``func`` does not accept (or that is in ``exclude``, i.e. set by
+    evotol itself); also when ``kwargs`` is not a table."""
+    if not isinstance(kwargs, Mapping):
+        raise ValidationError(field, kwargs, "a table of keyword arguments, e.g. { pop_size = 60 }")
+    valid = keywords_of(func, exclude)
+    if valid is None:
+        return
+    for key, value in kwargs.items():
+        if key not in valid:
+            raise ValidationError(f"{field}.{key}", value, unknown_key_message(key, valid))

@@ -1,0 +1,148 @@
+"""The ``yield`` measure (evotol.statistical): closed forms, 10^6-sample Monte Carlo of the same
+linear model, Bonferroni, the k-sigma violation and bad input."""
+import numpy as np
+import pytest
+from scipy import stats
+
+import cost_models as cm
+from evotol.distributions import Distribution, draw, uniforms, unit_moments
+from evotol.errors import ValidationError
+from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.statistical import k_equivalent, miss_probability, sym3_eigenvalues
+from tests.toy_robot import ToyRobot
+
+
+def _c6(S):
+    return np.array([S[0, 0], S[1, 1], S[2, 2], S[0, 1], S[0, 2], S[1, 2]])
+
+
+def test_miss_probability_closed_forms():
+    """Isotropic Σ = σ²I: P(|x| > E) = S_χ3(E/σ) (Maxwell); rank 1: 2Φ(−E/σ); rank 2 isotropic:
+    exp(−E²/2σ²) (Rayleigh); 1-D with mean μ: Φ(−(E−μ)/σ) + Φ(−(E+μ)/σ)."""
+    for k in (2.0, 3.0, 5.0, 6.5):          # miss <= 0.14: relative error < 1e-4 with the 8x8 rule
+        assert miss_probability(_c6(np.eye(3))[None], k)[0] == pytest.approx(stats.chi.sf(k, 3), rel=1e-10)
+        R = np.linalg.qr(np.random.default_rng(int(k)).normal(size=(3, 3)))[0]
+        S1 = R @ np.diag([4.0, 0, 0]) @ R.T
+        assert miss_probability(_c6(S1)[None], 2 * k)[0] == pytest.approx(2 * stats.norm.sf(k), rel=1e-4)
+        S2 = R @ np.diag([1.0, 1.0, 0]) @ R.T
+        assert miss_probability(_c6(S2)[None], k)[0] == pytest.approx(np.exp(-k * k / 2), rel=1e-4)
+        mu = R @ np.array([0.7, 0, 0])
+        exact = stats.norm.sf(k - 0.7) + stats.norm.cdf(-k - 0.7)
+        assert miss_probability(_c6(S1 / 4)[None], k, mu[None])[0] == pytest.approx(exact, rel=1e-4)
+
+
+def test_eigenvalues_closed_form_against_numpy():
+    A = np.random.default_rng(0).normal(size=(500, 3, 3))
+    S = A @ A.transpose(0, 2, 1)
+    S6 = np.stack([_c6(s) for s in S])
+    np.testing.assert_allclose(sym3_eigenvalues(S6), np.linalg.eigvalsh(S)[:, ::-1], atol=1e-12 * S.max())
+
+
+def _toy_problem(dists, E=2.5e-3, p=0.9973, orientation=None, planar=False):
+    r = ToyRobot(dims=(1, 1, 2, 3, 1), planar=planar)
+    tol = {s.name: Tolerance(cm.ExponentialCost(1, 1, scale=1e-3), 1e-5, 1e-2, distribution=d)
+           for s, d in zip(r.sources, dists)}
+    return ToleranceProblem(r, tol, Requirement(position=E, orientation=orientation, measure="yield", probability=p),
+                            [[0.0], [0.6]])
+
+
+def _mc_miss(problem, t, n=1_000_000, seed=3):
+    """Plain Monte Carlo of the same first-order model: miss rate per pose and component."""
+    dims = [s.dim for s in problem.robot.sources]
+    Z = draw(uniforms(n, sum(dims), "mc", seed), dims, problem.distributions)
+    E = np.concatenate([z * tj for z, tj in zip(Z, t)], axis=1)
+    out = {}
+    for c, lim in problem.components:
+        rows = slice(0, 3) if c == "position" else slice(3, 6)
+        out[c] = np.array([np.mean(np.linalg.norm(E @ J[rows].T, axis=1) > lim) for J in problem.jacobian])
+    return out
+
+
+def _within_ci(k_count, n, p, z=4.0):
+    lo, hi = stats.binomtest(int(k_count), n).proportion_ci(0.99993)  # ~4 sigma Clopper-Pearson
+    return lo <= p <= hi
+
+
+def test_yield_matches_1e6_monte_carlo_of_the_linear_model_normal_sources():
+    """Normal sources (exact case), mean shift on one interval: the analytic miss probability lies
+    inside the 99.993 % Clopper-Pearson interval of 10^6 Monte Carlo samples at every pose."""
+    dists = [Distribution("normal"), Distribution("normal", sigma_k=4.0, mean_shift=0.3), "normal", "normal",
+             Distribution("normal", sigma_k=2.0)]
+    P = _toy_problem(dists, E=1e-3, orientation=1.3e-3)
+    t = np.full(P.n_sources, 3e-4)
+    ev = P.evaluate(t[None])
+    assert ev.exact
+    mc = _mc_miss(P, t)
+    y = P.first_order_yield().evaluate(t[None], 0.9973)
+    for c, _ in P.components:
+        assert np.all(y.miss[c][0] > 1e-3)           # a regime where 10^6 samples resolve it
+        for p, q in enumerate(y.miss[c][0]):
+            assert _within_ci(mc[c][p] * 1_000_000, 1_000_000, q), (c, p, q, mc[c][p])
+    # Bonferroni: the joint lower bound is 1 − Σ miss
+    np.testing.assert_allclose(ev.probability[0], 1 - y.miss["position"][0] - y.miss["orientation"][0])
+
+
+def test_yield_of_non_normal_sources_is_the_moment_matched_normal():
+    """Uniform, truncated-normal, contact and uniform-radius disk/ball sources: flagged inexact;
+    the moment-matched normal stays within 5 % of 10^6-sample Monte Carlo at ~1 % miss (CLT)."""
+    dists = ["uniform", "truncated_normal", "contact", "uniform", "uniform"]
+    P = _toy_problem(dists, E=6.5e-4, planar=True)
+    t = np.full(P.n_sources, 2e-4)
+    assert not P.evaluate(t[None]).exact
+    y = P.first_order_yield().evaluate(t[None], 0.99)
+    mc = _mc_miss(P, t)["position"]
+    assert np.all(mc > 3e-3)
+    np.testing.assert_allclose(y.miss["position"][0], mc, rtol=0.25)
+
+
+def test_unit_moments_match_sampled_moments():
+    """Closed-form variances per unit tolerance (module docstring) against 4·10^5 LHS samples."""
+    for dim in (1, 2, 3):
+        for d in ("uniform", "normal", "truncated_normal", Distribution("normal", sigma_k=2.0)) + (("contact",) if dim > 1 else ()):
+            dist = Distribution(d) if isinstance(d, str) else d
+            z = draw(uniforms(400_000, dim, "lhs", 1), [dim], [dist])[0]
+            m, v = unit_moments(dist, dim)
+            assert np.var(z[:, 0]) == pytest.approx(v, rel=0.01), (dim, dist)
+            assert np.mean(z[:, 0]) == pytest.approx(m, abs=0.01)
+    z = draw(uniforms(400_000, 1, "lhs", 1), [1], [Distribution("uniform", mean_shift=0.25)])[0]
+    assert z.min() >= -0.75 and z.max() <= 1.25 and np.mean(z) == pytest.approx(0.25, abs=1e-3)
+
+
+def test_violation_is_the_k_sigma_stack_up_for_one_normal_source():
+    """One normal source moving the tip along x only: violation = k_req·σ/E − 1, linear in t."""
+    r = ToyRobot(dims=(1,), planar=True)
+    r._A[:] = 0
+    r._B[:] = 0
+    r._A[0, 0] = 2.0                                   # δx = 2 e
+    tol = {"s0": Tolerance(cm.ExponentialCost(1, 1, scale=1e-3), 1e-5, 1e-2, distribution="normal")}
+    P = ToleranceProblem(r, tol, Requirement(position=1e-3, measure="yield", ppm=2699.796), [[0.0]])
+    assert P.requirement.required_yield == pytest.approx(1 - 2 * stats.norm.sf(3), abs=1e-9)
+    t = np.array([[1e-4], [5e-4], [1.5e-3]])           # σ = t/3 → σ_x = 2t/3
+    ev = P.evaluate(t)
+    np.testing.assert_allclose(ev.violation, 3 * 2 * t[:, 0] / 3 / 1e-3 - 1, atol=5e-4)   # 8x8 rule, rank 1
+    np.testing.assert_allclose(ev.position[:, 0], 2 * t[:, 0], rtol=2e-3)   # k_req σ_x (miss 1e-50 at the first design)
+    assert k_equivalent(0.0) == np.inf
+
+
+@pytest.mark.parametrize("kw, field", [(dict(probability=1.0), "requirement.probability"),
+                                       (dict(probability=0.0), "requirement.probability"),
+                                       (dict(ppm=-3), "requirement.ppm"),
+                                       (dict(probability=0.99, ppm=100), "requirement.ppm")])
+def test_bad_yield_probability(kw, field):
+    with pytest.raises(ValidationError, match=field.replace(".", r"\.")):
+        Requirement(position=1e-3, measure="yield", **kw).validate()
+
+
+@pytest.mark.parametrize("dist, field", [(Distribution("normal", sigma_k=0), "sigma_k"),
+                                         (Distribution("uniform", mean_shift=1.5), "mean_shift"),
+                                         ("gauss", "kind")])
+def test_bad_distribution(dist, field):
+    with pytest.raises(ValidationError, match=field):
+        _toy_problem([dist, "uniform", "uniform", "uniform", "uniform"])
+
+
+def test_mean_shift_or_contact_must_suit_the_source_shape():
+    with pytest.raises(ValidationError, match=r"tolerances\['s2'\]\.distribution\.mean_shift"):
+        _toy_problem(["uniform", "uniform", Distribution("uniform", mean_shift=0.1), "uniform", "uniform"])
+    with pytest.raises(ValidationError, match=r"tolerances\['s0'\]\.distribution\.kind"):
+        _toy_problem(["contact", "uniform", "uniform", "uniform", "uniform"])
