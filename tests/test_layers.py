@@ -4,7 +4,8 @@ Lower layers never import higher ones -- also not by an import inside a function
 hides a cycle. From the bottom:
 
 0. foundation: ``evotol.errors``, ``evotol.threads``, ``evotol.executor``, ``evotol.pareto``,
-   ``evotol.outputs`` (no physics, no problem; anyone may use them);
+   ``evotol.outputs``, ``evotol.interrupt``, ``evotol.keywords`` (no physics, no problem; anyone
+   may use them);
 1. models: ``cost_models``, ``robots``;
 2. problem and measures: ``evotol.problem``, ``measures``, ``constraints``, ``result``, ``distributions``;
 3. allocators and design-space search: ``evotol.allocators``, ``evotol.doe``, ``evotol.filtering``;
@@ -30,7 +31,7 @@ PACKAGES = ("evotol", "cost_models", "robots")
 #: (prefix, layer); the longest matching prefix wins
 LAYERS = {
     "evotol": 0, "evotol.errors": 0, "evotol.threads": 0, "evotol.executor": 0, "evotol.pareto": 0,
-    "evotol.outputs": 0,
+    "evotol.outputs": 0, "evotol.interrupt": 0, "evotol.keywords": 0,
     "cost_models": 1, "robots": 1,
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2,
     "evotol.distributions": 2,
