@@ -1,0 +1,19 @@
+"""Your own mechanism from a description file: modified-DH frames, loops, end-effector, sources.
+
+>>> from robots.mechanism import MechanismModel
+>>> robot = MechanismModel("robots/mechanisms/fivebar.toml")    # a RobotErrorModel
+>>> robot.sensitivity(robot.workspace.grid(5)).shape            # (25, 6, n_sources)
+>>> robot.clearance_mechanism()                                 # for robots.clearance.max_pose_error
+
+Modules: :mod:`.expressions` (safe entry expressions, complex-step derivatives),
+:mod:`.description` (dataclasses and the TOML loader), :mod:`.kinematics` (forward kinematics,
+exact first-order maps, continued Newton inverse geometry), :mod:`.model` (the error model and the
+clearance mechanism). ``docs/mechanisms.md`` documents the file format.
+"""
+from robots.mechanism.description import (ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Mechanism,
+                                          load_mechanism, mechanism_from_dict)
+from robots.mechanism.kinematics import Kinematics
+from robots.mechanism.model import MechanismModel
+
+__all__ = ["ClearanceChain", "ClearanceSpec", "Coordinate", "Frame", "Kinematics", "Loop", "Mechanism", "MechanismModel",
+           "load_mechanism", "mechanism_from_dict"]

@@ -1,0 +1,340 @@
+"""A mechanism described as data: modified-DH frames, loops, end-effector, tolerances, clearances.
+
+The description is plain frozen dataclasses (:class:`Mechanism` and its parts); a TOML file with
+the same fields is read by :func:`load_mechanism` (``docs/mechanisms.md`` is the reference and the
+tutorial). Every number is SI (m, rad); an entry may also be an expression
+(:mod:`robots.mechanism.expressions`) such as ``"-L0/2"``, ``"100*mm"``, ``"q1 - pi"``.
+
+Frames follow Khalil & Kleinfinger (1986), the convention of Deng 2012 Tabs. II.1, IV.1 and of
+Brahmia 2023 Tab. 1: frame ``j`` with antecedent ``a(j)`` is placed by
+``Rot(z, gamma) Trans(z, b) Rot(x, alpha) Trans(x, d) Rot(z, theta) Trans(z, r)``; a revolute
+joint turns about its ``z`` axis (``theta`` holds its variable), a prismatic joint slides along it
+(``r`` holds its variable), a ``fixed`` frame is a rigid offset. Universal and spherical joints
+are two or three revolute frames with concurrent axes (``d = r = 0``).
+
+A closed mechanism is a tree of frames plus **loops**: pairs of frames that must coincide (the cut
+joints). The **end-effector** is a frame; its pose coordinates (a subset of ``x, y, z`` of its
+origin in the base frame, optionally a target orientation) define the workspace box.
+"""
+from __future__ import annotations
+
+import fnmatch
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from evotol.errors import ValidationError
+from robots.clearance.kinematics import DH_FIELDS
+from robots.clearance.model import BOUND_NAMES, ClearanceBounds
+from robots.mechanism.expressions import CONSTANTS, FUNCTIONS, Expression
+
+JOINT_TYPES = ("revolute", "prismatic", "fixed")
+LENGTH_FIELDS = ("b", "d", "r")
+ANGLE_FIELDS = ("gamma", "alpha", "theta")
+AXES = ("x", "y", "z")
+LOOP_COMPONENTS = ("all", "position")
+UNIT_SCALE = {"m": 1.0, "mm": 1e-3, "rad": 1.0, "deg": np.pi / 180}
+
+
+def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
+    if not isinstance(table, Mapping):
+        raise ValidationError(where, table, f"a table with keys among {list(allowed)}")
+    for k in table:
+        if k not in allowed:
+            raise ValidationError(f"{where}.{k}", table[k], f"a known key: one of {list(allowed)}")
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One row of the modified-DH (Khalil-Kleinfinger) table. Entries: numbers (m, rad) or
+    expression strings. ``joint``: revolute / prismatic / fixed; ``actuated``: a motor drives it."""
+
+    name: str
+    antecedent: str
+    joint: str = "fixed"
+    actuated: bool = False
+    gamma: float | str = 0.0
+    b: float | str = 0.0
+    alpha: float | str = 0.0
+    d: float | str = 0.0
+    theta: float | str = 0.0
+    r: float | str = 0.0
+    description: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name or "." in self.name:
+            raise ValidationError("frame.name", self.name, "a non-empty name without '.'")
+        if self.joint not in JOINT_TYPES:
+            raise ValidationError(f"frame {self.name!r}.joint", self.joint, f"one of {JOINT_TYPES}")
+        if self.actuated and self.joint == "fixed":
+            raise ValidationError(f"frame {self.name!r}.actuated", True, "false for a fixed frame (only joints are actuated)")
+
+    @property
+    def joint_field(self) -> str | None:
+        return {"revolute": "theta", "prismatic": "r"}.get(self.joint)
+
+    @property
+    def sigma(self) -> int:
+        return JOINT_TYPES.index(self.joint)
+
+
+@dataclass(frozen=True)
+class Loop:
+    """A cut joint: frames ``a`` and ``b`` coincide (``components="all"``: pose, 6 equations; or
+    ``"position"``: only their origins, 3 equations -- a spherical cut joint). In a planar
+    mechanism only the in-plane components (x, y, rotation about z) are used."""
+
+    a: str
+    b: str
+    components: str = "all"
+
+    def __post_init__(self):
+        if self.components not in LOOP_COMPONENTS:
+            raise ValidationError(f"loop {self.a}-{self.b}.components", self.components, f"one of {LOOP_COMPONENTS}")
+
+
+@dataclass(frozen=True)
+class Coordinate:
+    """A pose coordinate: ``axis`` x/y/z of the end-effector origin in the base frame (m), or
+    ``"angle"`` (rad; used only in the end-effector's target ``orientation``). ``low, high``: the
+    workspace box in SI; ``display``: the unit shown in reports (mm, deg)."""
+
+    name: str
+    axis: str
+    low: float
+    high: float
+    display: str = ""
+
+    def __post_init__(self):
+        if self.axis not in AXES + ("angle",):
+            raise ValidationError(f"coordinate {self.name!r}.axis", self.axis, "x, y, z or angle")
+        if not (np.isfinite(self.low) and np.isfinite(self.high) and self.low <= self.high):
+            raise ValidationError(f"coordinate {self.name!r} range", (self.low, self.high), "finite low <= high (SI units)")
+        if self.display and self.display not in UNIT_SCALE:
+            raise ValidationError(f"coordinate {self.name!r}.display", self.display, f"one of {sorted(UNIT_SCALE)}")
+
+    @property
+    def unit(self) -> str:
+        return "rad" if self.axis == "angle" else "m"
+
+
+@dataclass(frozen=True)
+class ClearanceChain:
+    """A serial chain of joints with clearance between two bodies (Deng 2012 Ch. III, V); see
+    :class:`robots.clearance.model.Chain`."""
+
+    name: str
+    start: str
+    end: str
+    joints: tuple[str, ...]
+    path_end: str | None = None
+
+
+@dataclass(frozen=True)
+class ClearanceSpec:
+    """Joint clearances: bodies (name -> frame), chains, and the bounds of each joint (by joint frame
+    name; ``default`` / ``actuated`` / ``passive`` apply to the rest)."""
+
+    bodies: Mapping[str, str]
+    chains: tuple[ClearanceChain, ...]
+    end_effector: str
+    bounds: Mapping[str, ClearanceBounds]
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """A whole description (see the module docstring)."""
+
+    name: str
+    frames: tuple[Frame, ...]
+    end_effector: str
+    coordinates: tuple[Coordinate, ...]
+    loops: tuple[Loop, ...] = ()
+    lengths: Mapping[str, float] = field(default_factory=dict)
+    angles: Mapping[str, float] = field(default_factory=dict)
+    orientation: tuple[tuple[str, str], ...] = ()
+    planar: bool = False
+    assembly_pose: tuple[float, ...] = ()
+    assembly_joints: Mapping[str, float] = field(default_factory=dict)
+    sources: tuple[str, ...] = ()
+    clearance: ClearanceSpec | None = None
+    description: str = ""
+    path: str = ""
+
+    def __post_init__(self):
+        names = [f.name for f in self.frames]
+        if len(set(names)) != len(names):
+            dup = sorted({n for n in names if names.count(n) > 1})
+            raise ValidationError("frame.name", dup[0], "unique frame names")
+        if "0" in names:
+            raise ValidationError("frame.name", "0", "a name other than '0' (the base frame)")
+        known = set(names) | {"0"}
+        for f in self.frames:
+            if f.antecedent not in known:
+                raise ValidationError(f"frame {f.name!r}.antecedent", f.antecedent, f"'0' (the base) or a frame of the table: {names}")
+        for lp in self.loops:
+            for x in (lp.a, lp.b):
+                if x not in known:
+                    raise ValidationError(f"loop {lp.a}-{lp.b}", x, f"a frame of the table: {names}")
+        if self.end_effector not in names:
+            raise ValidationError("end_effector.frame", self.end_effector, f"a frame of the table: {names}")
+        if not self.coordinates or not any(c.axis in AXES for c in self.coordinates):
+            raise ValidationError("end_effector.coordinates", self.coordinates, "at least one of x, y, z")
+        params = set(self.lengths) | set(self.angles)
+        clash = params & (set(CONSTANTS) | set(FUNCTIONS))
+        if clash:
+            raise ValidationError("parameter name", sorted(clash)[0], f"a name other than {sorted(CONSTANTS) + sorted(FUNCTIONS)}")
+        if set(self.lengths) & set(self.angles):
+            raise ValidationError("parameter name", sorted(set(self.lengths) & set(self.angles))[0], "in [lengths] or [angles], not both")
+        if self.assembly_pose and len(self.assembly_pose) != len(self.coordinates):
+            raise ValidationError("assembly.pose", self.assembly_pose, f"{len(self.coordinates)} numbers, one per coordinate")
+
+    # ------------------------------------------------------------------ names
+    @property
+    def parameters(self) -> dict[str, float]:
+        return {**self.lengths, **self.angles}
+
+    @property
+    def frame(self) -> dict[str, Frame]:
+        return {f.name: f for f in self.frames}
+
+    def entry_names(self) -> list[str]:
+        """Every DH entry as ``"<frame>.<entry>"`` (e.g. ``"A.theta"``, ``"C.d"``)."""
+        return [f"{f.name}.{k}" for f in self.frames for k in DH_FIELDS]
+
+    def candidate_sources(self, actuated: Sequence[str] = ()) -> list[str]:
+        """Names a tolerance may be put on: design parameters, actuated joint variables (actuator
+        offsets), then every DH entry."""
+        return list(self.lengths) + list(self.angles) + list(actuated) + self.entry_names()
+
+    def select_sources(self, patterns: Sequence[str] | None = None, actuated: Sequence[str] = ()) -> list[str]:
+        """Source names matching ``patterns`` (fnmatch: ``"*.d"``, ``"A*.theta"``, ``"L?"``), in
+        candidate order. A pattern that matches nothing is an error (a typo would silently drop a
+        tolerance otherwise)."""
+        patterns = list(self.sources if patterns is None else patterns)
+        cands = self.candidate_sources(actuated)
+        out = []
+        for p in patterns:
+            if not isinstance(p, str):
+                raise ValidationError("tolerances.sources", p, "a name or pattern string")
+            hit = [c for c in cands if fnmatch.fnmatchcase(c, p)]
+            if not hit:
+                raise ValidationError("tolerances.sources", p, f"a parameter ({sorted(self.parameters)}), an actuated joint variable {list(actuated)} or a DH entry "
+                                                                f"'<frame>.<gamma|b|alpha|d|theta|r>' of frames {[f.name for f in self.frames]}")
+            out += [h for h in hit if h not in out]
+        return out
+
+
+# ---------------------------------------------------------------------------------------- TOML
+TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "loop", "end_effector", "assembly",
+            "tolerances", "clearance")
+
+
+def _number(v, where: str) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float, str)):
+        raise ValidationError(where, v, "a number (SI) or a constant expression such as '100*mm'")
+    e = Expression.parse(v, where)
+    if not e.is_constant:
+        raise ValidationError(where, v, f"a constant (names {sorted(e.names)} are not known here)")
+    return float(e({}))
+
+
+def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
+    """Build a :class:`Mechanism` from a parsed TOML document (dict); errors name the field."""
+    _check_keys(spec, TOP_KEYS, "mechanism")
+    name = spec.get("name") or (Path(path).stem if path else "mechanism")
+    lengths = {k: _number(v, f"lengths.{k}") for k, v in dict(spec.get("lengths", {})).items()}
+    angles = {k: _number(v, f"angles.{k}") for k, v in dict(spec.get("angles", {})).items()}
+    frames = []
+    raw_frames = spec.get("frame", [])
+    if not isinstance(raw_frames, list) or not raw_frames:
+        raise ValidationError("frame", raw_frames, "a list of [[frame]] tables (the modified-DH rows)")
+    fkeys = ("name", "antecedent", "joint", "actuated", "description") + DH_FIELDS
+    for i, fr in enumerate(raw_frames):
+        _check_keys(fr, fkeys, f"frame[{i}]")
+        for k in ("name", "antecedent"):
+            if k not in fr:
+                raise ValidationError(f"frame[{i}].{k}", None, "a frame name (antecedent '0' is the base)")
+        kw = {k: fr[k] for k in DH_FIELDS if k in fr}
+        for k, v in kw.items():
+            Expression.parse(v, f"frame {fr['name']!r}.{k}")
+        frames.append(Frame(str(fr["name"]), str(fr["antecedent"]), fr.get("joint", "fixed"), bool(fr.get("actuated", False)),
+                            description=fr.get("description", ""), **kw))
+    loops = []
+    for i, lp in enumerate(spec.get("loop", [])):
+        _check_keys(lp, ("frames", "components"), f"loop[{i}]")
+        fr = lp.get("frames")
+        if not isinstance(fr, list) or len(fr) != 2:
+            raise ValidationError(f"loop[{i}].frames", fr, "two frame names that coincide (the cut joint)")
+        loops.append(Loop(str(fr[0]), str(fr[1]), lp.get("components", "all")))
+    ee = spec.get("end_effector")
+    if ee is None:
+        raise ValidationError("end_effector", None, "a table with frame and coordinates")
+    _check_keys(ee, ("frame", "coordinates", "orientation"), "end_effector")
+    coords = []
+    for i, c in enumerate(ee.get("coordinates", [])):
+        _check_keys(c, ("name", "axis", "low", "high", "display"), f"end_effector.coordinates[{i}]")
+        if "name" not in c or "low" not in c or "high" not in c:
+            raise ValidationError(f"end_effector.coordinates[{i}]", c, "name, axis, low and high")
+        coords.append(Coordinate(str(c["name"]), c.get("axis", c["name"]), _number(c["low"], f"coordinate {c['name']}.low"),
+                                 _number(c["high"], f"coordinate {c['name']}.high"), c.get("display", "")))
+    orient = []
+    for i, o in enumerate(ee.get("orientation", [])):
+        if not (isinstance(o, list) and len(o) == 2 and o[0] in AXES):
+            raise ValidationError(f"end_effector.orientation[{i}]", o, "a pair [axis x|y|z, angle expression]")
+        Expression.parse(o[1], f"end_effector.orientation[{i}]")
+        orient.append((o[0], str(o[1])))
+    asm = spec.get("assembly", {})
+    _check_keys(asm, ("pose", "joints"), "assembly")
+    pose = tuple(_number(v, "assembly.pose") for v in asm.get("pose", ()))
+    joints = {k: _number(v, f"assembly.joints.{k}") for k, v in dict(asm.get("joints", {})).items()}
+    tol = spec.get("tolerances", {})
+    _check_keys(tol, ("sources",), "tolerances")
+    clearance = _clearance_from_dict(spec["clearance"]) if "clearance" in spec else None
+    mech = Mechanism(name=str(name), frames=tuple(frames), end_effector=str(ee.get("frame", "")), coordinates=tuple(coords),
+                     loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
+                     planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
+                     sources=tuple(tol.get("sources", ())), clearance=clearance, description=spec.get("description", ""),
+                     path=str(path))
+    return mech
+
+
+def _bounds(b, where: str) -> ClearanceBounds:
+    _check_keys(b, BOUND_NAMES, where)
+    missing = [k for k in BOUND_NAMES if k not in b]
+    if missing:
+        raise ValidationError(f"{where}.{missing[0]}", None, f"all of {BOUND_NAMES} (rad, rad, m, m)")
+    return ClearanceBounds(*(_number(b[k], f"{where}.{k}") for k in BOUND_NAMES))
+
+
+def _clearance_from_dict(c: Mapping) -> ClearanceSpec:
+    _check_keys(c, ("bodies", "chain", "end_effector", "bounds"), "clearance")
+    chains = []
+    for i, ch in enumerate(c.get("chain", [])):
+        _check_keys(ch, ("name", "start", "end", "joints", "path_end"), f"clearance.chain[{i}]")
+        for k in ("name", "start", "end", "joints"):
+            if k not in ch:
+                raise ValidationError(f"clearance.chain[{i}].{k}", None, "name, start and end bodies, joints (frame names)")
+        chains.append(ClearanceChain(str(ch["name"]), str(ch["start"]), str(ch["end"]), tuple(map(str, ch["joints"])),
+                                     ch.get("path_end")))
+    if not chains:
+        raise ValidationError("clearance.chain", [], "at least one [[clearance.chain]]")
+    bounds = {k: _bounds(v, f"clearance.bounds.{k}") for k, v in dict(c.get("bounds", {})).items()}
+    bodies = {str(k): str(v) for k, v in dict(c.get("bodies", {})).items()}
+    return ClearanceSpec(bodies=bodies, chains=tuple(chains), end_effector=str(c.get("end_effector", next(iter(bodies), ""))),
+                         bounds=bounds)
+
+
+def load_mechanism(path) -> Mechanism:
+    """Read a mechanism description file (TOML); errors name the file and the field."""
+    p = Path(path)
+    if not p.is_file():
+        raise ValidationError("mechanism file", str(p), "an existing TOML file")
+    try:
+        spec = tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ValidationError("mechanism file", str(p), f"valid TOML ({exc})") from None
+    return mechanism_from_dict(spec, path=str(p))

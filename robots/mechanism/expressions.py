@@ -1,0 +1,83 @@
+"""Safe arithmetic expressions for the entries of a mechanism description (DH parameters, pose targets).
+
+An entry of a modified-DH table may be a number or a string such as ``"-L0/2"``, ``"q1 - pi"``,
+``"a1*sin(beta)/tan(alpha_d)"``. The string is parsed with :mod:`ast` and only numbers, names,
+``+ - * / **``, unary minus and the functions ``sin cos tan asin acos atan sqrt exp log`` are
+allowed (no attribute access, no calls of anything else), so a description file cannot run code.
+
+Constants available in every expression: ``pi``, ``deg`` (= pi/180, so ``"30*deg"``), ``mm``
+(= 1e-3, so ``"100*mm"``). Everything else is a name of the description: a design parameter
+(``[lengths]``/``[angles]``), a joint variable or a pose coordinate.
+
+Derivatives are taken by the complex step (Squire & Trapp 1998): ``df/dx = Im f(x + i h) / h``
+with ``h = 1e-30`` -- exact to machine precision for these analytic functions, no subtraction.
+"""
+from __future__ import annotations
+
+import ast
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from evotol.errors import ValidationError
+
+FUNCTIONS = {"sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin, "acos": np.arccos,
+             "atan": np.arctan, "sqrt": np.sqrt, "exp": np.exp, "log": np.log}
+CONSTANTS = {"pi": np.pi, "deg": np.pi / 180, "mm": 1e-3}
+_ALLOWED = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Constant, ast.Name, ast.Load, ast.Call,
+            ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub, ast.UAdd)
+STEP = 1e-30
+
+
+@dataclass(frozen=True)
+class Expression:
+    """A parsed entry: ``text`` (as written), ``names`` (the names it uses, constants excluded)."""
+
+    text: str
+    names: frozenset
+    code: object
+
+    @classmethod
+    def parse(cls, text, field: str) -> "Expression":
+        if isinstance(text, bool) or not isinstance(text, (str, int, float)):
+            raise ValidationError(field, text, "a number or an expression string such as '-L0/2' or 'q1 - pi'")
+        if not isinstance(text, str):
+            if not np.isfinite(text):
+                raise ValidationError(field, text, "a finite number")
+            text = repr(float(text))
+        try:
+            tree = ast.parse(text.strip(), mode="eval")
+        except SyntaxError:
+            raise ValidationError(field, text, "an arithmetic expression (numbers, names, + - * / **, sin cos ...)") from None
+        names = set()
+        for node in ast.walk(tree):
+            if not isinstance(node, _ALLOWED):
+                raise ValidationError(field, text, f"only numbers, names, + - * / ** and {sorted(FUNCTIONS)} "
+                                                   f"(found {type(node).__name__})")
+            if isinstance(node, ast.Call):
+                if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS or node.keywords or len(node.args) != 1:
+                    raise ValidationError(field, text, f"calls of one argument to one of {sorted(FUNCTIONS)}")
+            elif isinstance(node, ast.Name) and node.id not in FUNCTIONS and node.id not in CONSTANTS:
+                names.add(node.id)
+            elif isinstance(node, ast.Constant) and not isinstance(node.value, (int, float)):
+                raise ValidationError(field, text, "numbers, not strings")
+        return cls(text, frozenset(names), compile(tree, f"<{field}>", "eval"))
+
+    @property
+    def is_constant(self) -> bool:
+        return not self.names
+
+    def __call__(self, env: Mapping[str, object]):
+        return eval(self.code, {"__builtins__": {}}, {**FUNCTIONS, **CONSTANTS, **env})  # noqa: S307 (ast-checked)
+
+    def value_and_gradient(self, env: Mapping[str, np.ndarray], wrt) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Value and the derivatives with respect to the names in ``wrt`` that the expression uses
+        (complex step, exact to rounding). Arrays broadcast over poses."""
+        val = np.real(self(env))
+        grad = {}
+        for name in self.names & set(wrt):
+            e = dict(env)
+            e[name] = np.asarray(env[name]) + 1j * STEP
+            grad[name] = np.imag(self(e)) / STEP
+        return val, grad

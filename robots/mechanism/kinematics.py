@@ -1,0 +1,349 @@
+"""Kinematics computed from a :class:`~robots.mechanism.description.Mechanism`.
+
+* **Forward kinematics** of the frame tree: ``^0T_j = ^0T_{a(j)} Rot(z,gamma) Trans(z,b) Rot(x,alpha)
+  Trans(x,d) Rot(z,theta) Trans(z,r)`` (Khalil & Kleinfinger 1986), vectorised over poses.
+* **First-order maps**: a change of any DH entry of frame ``j`` moves every frame downstream of
+  ``j`` by the *spatial twist* of that elementary motion (``[omega; v_0]``, ``v_0`` the velocity of
+  the point at the base origin): rotation about ``z_{a(j)}`` through ``O_{a(j)}`` for ``gamma``,
+  translation along it for ``b``, rotation/translation along the intermediate ``x`` axis for
+  ``alpha``/``d``, rotation/translation along ``z_j`` for ``theta``/``r``. A frame ``k`` then moves
+  by ``[dp_k; dphi] = [v_0 + omega x p_k; omega]``. Derivatives of expression entries (``"q1 - pi"``,
+  ``"-L0/2"``) come from the complex step, so every Jacobian here is exact to rounding --
+  nothing is derived by hand.
+* **Inverse geometry**: Gauss-Newton (min-norm steps, batched over poses) on the loop-closure
+  equations plus the end-effector coordinate equations, with *all* joint variables free and the
+  pose fixed; seeded at the description's assembly configuration and continued along straight
+  paths from the assembly pose to every target pose in steps, so the working mode does not jump.
+
+Twists here are ordered ``[translation; rotation]`` like :mod:`robots.base` (the clearance engine
+uses the thesis's ``[rotation; translation]``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evotol.errors import KinematicsError, ValidationError
+from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, kk_transform, rot_x, rot_z, rotation_vector, trans
+from robots.mechanism.description import AXES, ANGLE_FIELDS, Mechanism
+from robots.mechanism.expressions import Expression
+
+IN_PLANE = (0, 1, 5)            # x, y, rotation about z
+_AXIS_ROT = {"x": rot_x, "y": None, "z": rot_z}
+
+
+def _rot_y(a):
+    a = np.asarray(a, float)
+    c, s = np.cos(a), np.sin(a)
+    T = np.zeros(a.shape + (4, 4))
+    T[..., 0, 0], T[..., 0, 2], T[..., 2, 0], T[..., 2, 2] = c, s, -s, c
+    T[..., 1, 1] = T[..., 3, 3] = 1
+    return T
+
+
+_AXIS_ROT["y"] = _rot_y
+
+
+@dataclass
+class State:
+    """Kinematic state at ``n`` configurations: world transforms, entry derivatives, entry twists."""
+
+    n: int
+    world: dict            # frame -> (n, 4, 4)
+    grads: dict            # (frame, field) -> {name: (n,) d entry / d name}
+    twists: dict           # (frame, field) -> (n, 6) spatial twist [omega; v0] of a unit change
+
+
+class Kinematics:
+    """Kinematics of a described mechanism (see the module docstring)."""
+
+    def __init__(self, mech: Mechanism):
+        self.mech = mech
+        self.tree = DHTree([DHFrame(f.name, f.antecedent, sigma=f.sigma, mu=int(f.actuated)) for f in mech.frames])
+        self.order = self.tree.order
+        self.paths = {k: set(self.tree.path(k)) for k in self.tree.frames}
+        self.paths["0"] = set()
+        self.expr = {}
+        used = []
+        for f in mech.frames:
+            for k in DH_FIELDS:
+                e = Expression.parse(getattr(f, k), f"frame {f.name!r}.{k}")
+                self.expr[(f.name, k)] = e
+                used += [x for x in sorted(e.names) if x not in used]
+        params = mech.parameters
+        coords = {c.name for c in mech.coordinates}
+        bad = [x for x in used if x in coords]
+        if bad:
+            raise ValidationError("DH entry name", bad[0], "a parameter or a joint variable (pose coordinates may only "
+                                                            "appear in end_effector.orientation)")
+        self.variables = [x for x in used if x not in params]
+        in_joint = {x for f in mech.frames if f.joint_field for x in self.expr[(f.name, f.joint_field)].names}
+        for x in self.variables:
+            if x not in in_joint:
+                raise ValidationError("DH entry name", x, f"a parameter ({sorted(params)}) or a joint variable "
+                                                          "(a name in the theta of a revolute / r of a prismatic frame)")
+        self.actuated = []
+        for f in mech.frames:
+            if f.actuated:
+                vs = [x for x in self.expr[(f.name, f.joint_field)].names if x in self.variables]
+                if len(vs) != 1:
+                    raise ValidationError(f"frame {f.name!r}.{f.joint_field}", getattr(f, f.joint_field),
+                                          "exactly one joint variable for an actuated joint")
+                if vs[0] not in self.actuated:
+                    self.actuated.append(vs[0])
+        self.passive = [x for x in self.variables if x not in self.actuated]
+        self.uses = {}
+        for (fr, k), e in self.expr.items():
+            for x in e.names:
+                self.uses.setdefault(x, []).append((fr, k))
+        self.orientation = [(ax, Expression.parse(t, "end_effector.orientation")) for ax, t in mech.orientation]
+        for _, e in self.orientation:
+            unknown = e.names - coords - set(params)
+            if unknown:
+                raise ValidationError("end_effector.orientation", sorted(unknown)[0], f"pose coordinates {sorted(coords)} or parameters")
+        lengths = [abs(v) for v in mech.lengths.values() if v != 0]
+        self.length_scale = float(max(lengths)) if lengths else 1.0
+        self.coord_axes = [(i, AXES.index(c.axis)) for i, c in enumerate(mech.coordinates) if c.axis in AXES]
+        self._check_loops_actuated()
+        self._assembly = None
+        self._cache = {}
+
+    # ------------------------------------------------------------------ structure checks
+    def _cycle(self, lp) -> set:
+        a, b = self.paths[lp.a], self.paths[lp.b]
+        return a ^ b
+
+    def _check_loops_actuated(self) -> None:
+        """Every group of loops that share frames must contain an actuated joint (else it cannot be driven)."""
+        loops = list(self.mech.loops)
+        if not loops:
+            return
+        cycles = [self._cycle(lp) for lp in loops]
+        for lp, c in zip(loops, cycles):
+            if not c:
+                raise ValidationError(f"loop {lp.a}-{lp.b}", (lp.a, lp.b), "two frames on different branches of the tree (a cut joint)")
+        group = list(range(len(loops)))
+
+        def root(i):
+            while group[i] != i:
+                i = group[i]
+            return i
+
+        for i in range(len(loops)):
+            for j in range(i):
+                if cycles[i] & cycles[j]:
+                    group[root(i)] = root(j)
+        act = {f.name for f in self.mech.frames if f.actuated}
+        coupled = {fr for x in self.actuated for fr, k in self.uses.get(x, [])}
+        for r in {root(i) for i in range(len(loops))}:
+            frames = set().union(*(cycles[i] for i in range(len(loops)) if root(i) == r))
+            if not frames & (act | coupled):
+                lp = loops[r]
+                raise ValidationError(f"loop {lp.a}-{lp.b}", sorted(frames), "a loop (or group of loops sharing links) with an actuated joint")
+
+    # ------------------------------------------------------------------ forward kinematics
+    def env(self, q: dict, n: int, params: dict | None = None) -> dict:
+        env = {k: v for k, v in self.mech.parameters.items()}
+        if params:
+            env.update(params)
+        for x in self.variables:
+            env[x] = np.broadcast_to(np.asarray(q[x], float), (n,))
+        return env
+
+    def state(self, q: dict, n: int, *, wrt=(), params: dict | None = None, offsets: dict | None = None,
+              twists: bool = True) -> State:
+        """Evaluate the tree at ``n`` configurations. q: joint variables (n,) arrays; params:
+        overrides of design parameters (scalars or (n,) arrays); offsets: additive errors of DH
+        entries ``{(frame, field): (n,) array}``; wrt: names whose derivatives are wanted."""
+        env = self.env(q, n, params)
+        world = {"0": np.broadcast_to(np.eye(4), (n, 4, 4))}
+        grads, tw = {}, {}
+        wrt = set(wrt)
+        for fname in self.order:
+            f = self.tree.frames[fname]
+            vals = []
+            for k in DH_FIELDS:
+                e = self.expr[(fname, k)]
+                if e.is_constant and not offsets:
+                    v = float(e({}))
+                elif wrt & e.names:
+                    v, g = e.value_and_gradient(env, wrt)
+                    grads[(fname, k)] = {x: np.broadcast_to(gx, (n,)) for x, gx in g.items()}
+                else:
+                    v = np.real(e(env)) if not e.is_constant else float(e({}))
+                if offsets and (fname, k) in offsets:
+                    v = v + offsets[(fname, k)]
+                vals.append(np.broadcast_to(np.asarray(v, float), (n,)))
+            Ta = world[f.antecedent]
+            g_, b_, al, d_, th, r_ = vals
+            G1 = Ta @ rot_z(g_) @ trans(z=b_)
+            G2 = G1 @ rot_x(al) @ trans(x=d_)
+            world[fname] = G2 @ rot_z(th) @ trans(z=r_)
+            if twists:
+                za, pa = Ta[:, :3, 2], Ta[:, :3, 3]
+                x1, p1 = G1[:, :3, 0], G1[:, :3, 3]
+                z2, p2 = G2[:, :3, 2], G2[:, :3, 3]
+                zero = np.zeros((n, 3))
+                for k, (w, v) in zip(DH_FIELDS, ((za, np.cross(pa, za)), (zero, za), (x1, np.cross(p1, x1)),
+                                                 (zero, x1), (z2, np.cross(p2, z2)), (zero, z2))):
+                    tw[(fname, k)] = np.concatenate([w, v], axis=1)
+        return State(n, world, grads, tw)
+
+    def frame_jacobian(self, st: State, frame: str, columns) -> np.ndarray:
+        """Motion ``[dp_k; dphi]`` (n, 6, n_columns) of frame ``k`` per unit change of each column:
+        a name (joint variable or parameter, through every entry that uses it) or a DH entry
+        ``(frame, field)``."""
+        path = self.paths[frame]
+        n = st.n
+        S = np.zeros((n, 6, len(columns)))          # spatial twists [omega; v0]
+        for c, col in enumerate(columns):
+            if isinstance(col, tuple):
+                if col[0] in path:
+                    S[:, :, c] += st.twists[col]
+            else:
+                for key in self.uses.get(col, ()):
+                    if key[0] in path and key in st.grads and col in st.grads[key]:
+                        S[:, :, c] += st.twists[key] * st.grads[key][col][:, None]
+        p = st.world[frame][:, :3, 3]
+        out = np.empty_like(S)
+        out[:, 3:] = S[:, :3]
+        out[:, :3] = S[:, 3:] + np.cross(S[:, :3], p[:, None, :], axisa=1, axisb=2, axisc=1)
+        return out
+
+    # ------------------------------------------------------------------ loop equations
+    def loop_rows(self, lp) -> list[int]:
+        comps = [0, 1, 2, 3, 4, 5] if lp.components == "all" else [0, 1, 2]
+        return [c for c in comps if c in IN_PLANE] if self.mech.planar else comps
+
+    def loop_residual(self, st: State) -> np.ndarray:
+        """Closure error of every loop (n, m): [p_b - p_a; rotation vector of R_b R_a^T] (m, rad)."""
+        out = []
+        for lp in self.mech.loops:
+            Ta, Tb = st.world[lp.a], st.world[lp.b]
+            r = np.concatenate([Tb[:, :3, 3] - Ta[:, :3, 3],
+                                rotation_vector(Tb[:, :3, :3] @ np.swapaxes(Ta[:, :3, :3], 1, 2))], axis=1)
+            out.append(r[:, self.loop_rows(lp)])
+        return np.concatenate(out, axis=1) if out else np.zeros((st.n, 0))
+
+    def loop_jacobian(self, st: State, columns) -> np.ndarray:
+        out = []
+        for lp in self.mech.loops:
+            J = self.frame_jacobian(st, lp.b, columns) - self.frame_jacobian(st, lp.a, columns)
+            out.append(J[:, self.loop_rows(lp)])
+        return np.concatenate(out, axis=1) if out else np.zeros((st.n, 0, len(columns)))
+
+    def loop_row_is_length(self) -> np.ndarray:
+        return np.array([r < 3 for lp in self.mech.loops for r in self.loop_rows(lp)], bool)
+
+    # ------------------------------------------------------------------ inverse geometry
+    def _target_orientation(self, poses: np.ndarray) -> np.ndarray | None:
+        if not self.orientation:
+            return None
+        env = {**self.mech.parameters, **{c.name: poses[:, i] for i, c in enumerate(self.mech.coordinates)}}
+        R = np.broadcast_to(np.eye(4), (len(poses), 4, 4))
+        for ax, e in self.orientation:
+            R = R @ _AXIS_ROT[ax](np.broadcast_to(np.real(e(env)), (len(poses),)))
+        return R[:, :3, :3]
+
+    def _ig_system(self, q: dict, poses: np.ndarray, Rt):
+        n = len(poses)
+        st = self.state(q, n, wrt=self.variables)
+        F = [self.loop_residual(st)]
+        J = [self.loop_jacobian(st, self.variables)]
+        Je = self.frame_jacobian(st, self.mech.end_effector, self.variables)
+        p = st.world[self.mech.end_effector][:, :3, 3]
+        for i, ax in self.coord_axes:
+            F.append((p[:, ax] - poses[:, i])[:, None])
+            J.append(Je[:, ax:ax + 1])
+        if Rt is not None:
+            R = st.world[self.mech.end_effector][:, :3, :3]
+            F.append(rotation_vector(R @ np.swapaxes(Rt, 1, 2)))
+            J.append(Je[:, 3:])
+        is_len = np.concatenate([self.loop_row_is_length(), np.ones(len(self.coord_axes), bool),
+                                 np.zeros(3 if Rt is not None else 0, bool)])
+        return np.concatenate(F, axis=1), np.concatenate(J, axis=1), is_len
+
+    def _newton(self, q: dict, names, system, n: int, max_iter: int, tol: float = 1e-12):
+        """Gauss-Newton with min-norm steps on ``system(q) -> (F, J over all variables, is_length)``
+        for the unknowns ``names``; returns (q, scaled residual (n,))."""
+        idx = [self.variables.index(x) for x in names]
+        q = {k: np.array(np.broadcast_to(v, (n,)), float) for k, v in q.items()}
+        res = np.full(n, np.inf)
+        for it in range(max_iter + 1):
+            F, J, is_len = system(q)
+            w = np.where(is_len, 1.0 / self.length_scale, 1.0)
+            Fs, Js = F * w, J[:, :, idx] * w[:, None]
+            res = np.abs(Fs).max(axis=1) if Fs.shape[1] else np.zeros(n)
+            if np.all(res < tol) or it == max_iter:
+                break
+            step = np.einsum("nij,nj->ni", np.linalg.pinv(Js, rcond=1e-12), Fs)
+            for c, x in enumerate(names):
+                q[x] = q[x] - step[:, c]
+        return q, res
+
+    def assembly(self) -> tuple[np.ndarray, dict]:
+        """The declared assembly configuration, closed by Newton at the assembly pose."""
+        if self._assembly is None:
+            m = self.mech
+            pose = np.array(m.assembly_pose if m.assembly_pose else [(c.low + c.high) / 2 for c in m.coordinates], float)[None]
+            q0 = {x: np.array([float(m.assembly_joints.get(x, 0.0))]) for x in self.variables}
+            unknown = set(m.assembly_joints) - set(self.variables)
+            if unknown:
+                raise ValidationError("assembly.joints", sorted(unknown)[0], f"a joint variable: {self.variables}")
+            Rt = self._target_orientation(pose)
+            q, res = self._newton(q0, self.variables, lambda q: self._ig_system(q, pose, Rt), 1, 100)
+            if res[0] > 1e-9:
+                raise KinematicsError(f"{m.name}: the loops do not close at the assembly pose {pose[0].tolist()} from the "
+                                      f"declared assembly joints (scaled residual {res[0]:.2g}); check the frames, the loops "
+                                      "and [assembly]", poses=pose)
+            self._assembly = (pose[0], {k: float(v[0]) for k, v in q.items()})
+        return self._assembly
+
+    def inverse_geometry(self, poses, max_step: float = 0.1) -> dict:
+        """All joint variables (n,) at poses (n, n_coordinates) in SI units, continued from the
+        assembly configuration along straight paths in steps of at most ``max_step`` of the
+        workspace box. Raises KinematicsError naming the first pose where the loops cannot close
+        (out of reach) or the Newton system is singular."""
+        poses = np.atleast_2d(np.asarray(poses, float))
+        key = poses.tobytes()
+        if key in self._cache:
+            return self._cache[key]
+        x0, q0 = self.assembly()
+        n = len(poses)
+        span = np.array([max(c.high - c.low, 1e-12) for c in self.mech.coordinates])
+        dist = np.abs((poses - x0) / span).max() if n else 0.0
+        K = int(np.clip(np.ceil(dist / max_step), 1, 200))
+        q = {k: np.full(n, v) for k, v in q0.items()}
+        for s in np.linspace(1.0 / K, 1.0, K):
+            target = x0 + s * (poses - x0)
+            Rt = self._target_orientation(target)
+            q, res = self._newton(q, self.variables, lambda q: self._ig_system(q, target, Rt), n, 8 if s < 1 else 40)
+        bad = ~(res < 1e-9)
+        if bad.any():
+            raise KinematicsError(f"{self.mech.name}: the loops cannot close at pose {poses[bad][0].tolist()} "
+                                  f"({', '.join(c.name for c in self.mech.coordinates)}, SI): out of reach or singular "
+                                  f"(scaled residual {res[bad][0]:.2g})", poses=poses[bad])
+        if len(self._cache) > 8:
+            self._cache.clear()
+        self._cache[key] = q
+        return q
+
+    def solve_passive(self, q: dict, n: int, *, params=None, offsets=None, max_iter: int = 40):
+        """Close the loops with the actuated joints held (forward geometry with errors): Newton on
+        the passive joints from ``q``; returns (q, state, scaled residual)."""
+        def system(qq):
+            st = self.state(qq, n, wrt=self.passive, params=params, offsets=offsets)
+            return self.loop_residual(st), self._full(self.loop_jacobian(st, self.passive)), self.loop_row_is_length()
+
+        if self.mech.loops and self.passive:
+            q, res = self._newton(q, self.passive, system, n, max_iter)
+        else:
+            res = np.zeros(n)
+        return q, self.state(q, n, params=params, offsets=offsets, twists=False), res
+
+    def _full(self, Jp: np.ndarray) -> np.ndarray:
+        """Embed a Jacobian over the passive variables into one over all variables."""
+        J = np.zeros(Jp.shape[:2] + (len(self.variables),))
+        J[:, :, [self.variables.index(x) for x in self.passive]] = Jp
+        return J

@@ -1,0 +1,244 @@
+"""The error model of a described mechanism: a :class:`robots.base.RobotErrorModel` built from data.
+
+Sources (intervals) are generated from the description by name or pattern
+(:meth:`Mechanism.select_sources`): a **design parameter** of ``[lengths]``/``[angles]`` (its error
+enters every DH entry that uses it -- one shared tolerance, e.g. ``L0`` moves both base joints of
+the 5-bar), or a **DH entry** ``"<frame>.<gamma|b|alpha|d|theta|r>"`` (``"A.theta"`` of an actuated
+frame is the actuator offset / encoder error).
+
+Sensitivity (first order, loop constraints eliminated): with the actuated joints held, the loop
+equations ``h(q_p, e) = 0`` give ``dq_p = -H_p^+ H_e de`` and the end-effector moves by
+``J_e de + J_p dq_p``, so ``S = J_e - J_p H_p^+ H_e`` -- every matrix from
+:meth:`Kinematics.frame_jacobian` (exact derivatives of the DH tree). Where the passive joints do
+not determine the end-effector (a type-2 / parallel singularity) or a source would open a loop
+that no passive joint can close (an over-constrained loop), a :class:`KinematicsError` names the
+pose. ``pose_error`` re-solves the loops with the perturbed description (Newton on the passive
+joints, actuated joints held), so :func:`robots.base.check_robot` compares the two.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from evotol.errors import KinematicsError, ValidationError
+from robots.base import RobotErrorModel, SourceSpec, Workspace
+from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, rotation_vector
+from robots.clearance.model import Chain, ClearanceMechanism, Joint
+from robots.mechanism.description import LENGTH_FIELDS, UNIT_SCALE, Mechanism, load_mechanism
+from robots.mechanism.kinematics import IN_PLANE, Kinematics
+
+OUT_OF_PLANE_FIELDS = ("b", "alpha", "r")
+
+
+class MechanismModel(RobotErrorModel):
+    """Geometric error model of a described mechanism (see the module docstring).
+
+    mechanism: a :class:`Mechanism` or the path of its TOML file; sources: names/patterns
+    (default: the description's ``[tolerances] sources``, else every design parameter and every
+    actuator offset); workspace: override of the description's box.
+    """
+
+    def __init__(self, mechanism: Mechanism | str | Path, sources=None, workspace: Workspace | None = None):
+        mech = mechanism if isinstance(mechanism, Mechanism) else load_mechanism(mechanism)
+        self.mechanism = mech
+        self.name = mech.name
+        self.kin = Kinematics(mech)
+        cs = mech.coordinates
+        self.workspace = workspace or Workspace(
+            names=tuple(c.name for c in cs), low=tuple(c.low for c in cs), high=tuple(c.high for c in cs),
+            units=tuple(c.unit for c in cs), display_units=tuple(c.display or c.unit for c in cs),
+            display_scale=tuple(1.0 / UNIT_SCALE[c.display or c.unit] for c in cs))
+        act = self.kin.actuated
+        if sources is None and not mech.sources:
+            names = list(mech.parameters) + act
+        else:
+            names = mech.select_sources(sources, act)
+        if not names:
+            raise ValidationError(f"{mech.name} sources", names, "at least one toleranced parameter or DH entry")
+        self.columns, specs = [], []
+        frames = mech.frame
+        for nm in names:
+            if nm in act:
+                unit = "m" if any(frames[fr].joint == "prismatic" for fr, k in self.kin.uses[nm]) else "rad"
+                self.columns.append(nm)
+                specs.append(SourceSpec(nm, 1, unit, "actuator", f"actuator offset / encoder error of joint variable {nm}"))
+            elif nm in mech.parameters:
+                unit = "m" if nm in mech.lengths else "rad"
+                fields = {k for fr, k in self.kin.uses.get(nm, ())}
+                if not fields:
+                    raise ValidationError(f"{mech.name} source", nm, "a parameter used by at least one DH entry")
+                if mech.planar and fields & set(OUT_OF_PLANE_FIELDS):
+                    raise ValidationError(f"{mech.name} source", nm, "a parameter of in-plane entries only (gamma, d, theta) "
+                                                                     "in a planar mechanism")
+                self.columns.append(nm)
+                specs.append(SourceSpec(nm, 1, unit, "length" if unit == "m" else "angle", f"design parameter {nm}"))
+            else:
+                fr, k = nm.split(".")
+                if mech.planar and k in OUT_OF_PLANE_FIELDS:
+                    raise ValidationError(f"{mech.name} source", nm, "an in-plane entry (gamma, d, theta) in a planar "
+                                                                     "mechanism: out-of-plane errors open its over-constrained loops")
+                unit = "m" if k in LENGTH_FIELDS else "rad"
+                f = frames[fr]
+                group = "actuator" if f.actuated and k == f.joint_field else ("length" if unit == "m" else "angle")
+                self.columns.append((fr, k))
+                specs.append(SourceSpec(nm, 1, unit, group, f"{'actuator offset of' if group == 'actuator' else k + ' of'} frame {fr}"))
+        self.sources = tuple(specs)
+
+    # ------------------------------------------------------------------ helpers
+    def joint_values(self, poses) -> dict:
+        """All joint variables at poses (SI), from the continued Newton inverse geometry."""
+        return self.kin.inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
+
+    def _param_names(self):
+        return [c for c in self.columns if isinstance(c, str)]  # parameters and actuated variables
+
+    def _maps(self, poses):
+        q = self.kin.inverse_geometry(poses)
+        n = len(poses)
+        st = self.kin.state(q, n, wrt=set(self.kin.passive) | set(self._param_names()))
+        return q, st
+
+    def sensitivity(self, poses) -> np.ndarray:
+        """First-order map (n, 6, n_sources): ``[dp (m); dphi (rad)]`` of the end-effector frame."""
+        poses = self.check_poses(poses)
+        q, st = self._maps(poses)
+        kin = self.kin
+        Je = kin.frame_jacobian(st, self.mechanism.end_effector, self.columns)
+        if not (self.mechanism.loops and kin.passive):
+            return self._planar(Je)
+        Jp = kin.frame_jacobian(st, self.mechanism.end_effector, kin.passive)
+        Hp = kin.loop_jacobian(st, kin.passive)
+        He = kin.loop_jacobian(st, self.columns)
+        w = np.where(kin.loop_row_is_length(), 1.0 / kin.length_scale, 1.0)
+        Hp, He = Hp * w[:, None], He * w[:, None]
+        U, s, Vt = np.linalg.svd(Hp, full_matrices=True)
+        smax = np.maximum(s[:, :1], 1e-300)
+        keep = s > 1e-10 * smax
+        sinv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
+        k = s.shape[1]
+        pinv = np.einsum("nji,nj,nkj->nik", Vt[:, :k, :], sinv, U[:, :, :k])
+        dq = -pinv @ He                                            # (n, n_p, n_s)
+        out = Je + Jp @ dq
+        # passive motions the loops leave free must not move the end-effector (type-2 singularity)
+        null = np.ones(Vt.shape[:2], bool)
+        null[:, :k] = ~keep
+        if null.any():
+            free = Vt * null[:, :, None]
+            move = np.abs(Jp @ np.swapaxes(free, 1, 2)).max(axis=(1, 2))
+            bad = move > 1e-8 * np.maximum(np.abs(Jp).max(axis=(1, 2)), 1e-300)
+            if bad.any():
+                i = int(np.nonzero(bad)[0][0])
+                raise KinematicsError(f"{self.name}: the actuated joints do not determine the end-effector at pose "
+                                      f"{poses[i].tolist()} (parallel singularity)", poses=poses[bad])
+        leftover = np.abs(Hp @ dq + He).max(axis=(1, 2))
+        bad = leftover > 1e-8 * np.maximum(np.abs(He).max(axis=(1, 2)), 1.0)
+        if bad.any():
+            i = int(np.nonzero(bad)[0][0])
+            col = int(np.argmax(np.abs(Hp[i] @ dq[i] + He[i]).max(axis=0)))
+            raise KinematicsError(f"{self.name}: source {self.source_names[col]} opens a loop that no passive joint can "
+                                  f"close at pose {poses[i].tolist()} (over-constrained loop)", poses=poses[bad])
+        return self._planar(out)
+
+    def _planar(self, J):
+        if self.mechanism.planar:
+            J = J.copy()
+            J[:, [r for r in range(6) if r not in IN_PLANE]] = 0.0
+        return J
+
+    def _perturbation(self, errors: np.ndarray):
+        """Parameter overrides and DH-entry offsets for flat errors (N, n_sources)."""
+        params, offsets = {}, {}
+        for c, col in enumerate(self.columns):
+            if col in self.kin.actuated:
+                continue
+            if isinstance(col, str):
+                params[col] = self.mechanism.parameters[col] + errors[:, c]
+            else:
+                offsets[col] = offsets.get(col, 0.0) + errors[:, c]
+        return params, offsets
+
+    def pose_error(self, poses, errors) -> np.ndarray:
+        """Nonlinear end-effector error (n, m, 6) for source errors (n, m, n_sources): the loops
+        re-closed with the perturbed description, actuated joints held at their nominal values."""
+        poses = self.check_poses(poses)
+        errors = np.asarray(errors, float)
+        n = len(poses)
+        if errors.ndim != 3 or errors.shape[0] != n or errors.shape[2] != self.n_columns:
+            raise ValidationError("errors shape", errors.shape, f"({n}, n_samples, {self.n_columns})")
+        m = errors.shape[1]
+        q = self.kin.inverse_geometry(poses)
+        T0 = self.kin.state(q, n, twists=False).world[self.mechanism.end_effector]
+        qq = {k: np.repeat(v, m) for k, v in q.items()}
+        flat = errors.reshape(n * m, -1)
+        for c, col in enumerate(self.columns):
+            if col in self.kin.actuated:
+                qq[col] = qq[col] + flat[:, c]
+        params, offsets = self._perturbation(flat)
+        qq, st, res = self.kin.solve_passive(qq, n * m, params=params, offsets=offsets)
+        bad = ~(res < 1e-9)
+        if bad.any():
+            i = int(np.nonzero(bad)[0][0]) // m
+            raise KinematicsError(f"{self.name}: the loops do not close with the given errors at pose {poses[i].tolist()}",
+                                  poses=poses[i:i + 1])
+        T = st.world[self.mechanism.end_effector].reshape(n, m, 4, 4)
+        out = np.concatenate([T[..., :3, 3] - T0[:, None, :3, 3],
+                              rotation_vector(T[..., :3, :3] @ np.swapaxes(T0[:, None, :3, :3], -1, -2))], axis=-1)
+        return self._planar(out.reshape(n * m, 6, 1)).reshape(n, m, 6) if self.mechanism.planar else out
+
+    # ------------------------------------------------------------------ checks and clearances
+    def closure_residual(self, poses=None) -> float:
+        """Largest loop-closure and pose residual (m or rad) of the inverse geometry at poses."""
+        poses = self.workspace.latin_hypercube(20, seed=0) if poses is None else self.check_poses(poses)
+        q = self.kin.inverse_geometry(poses)
+        Rt = self.kin._target_orientation(poses)
+        F, _, _ = self.kin._ig_system(q, poses, Rt)
+        return float(np.abs(F).max()) if F.size else 0.0
+
+    def clearance_mechanism(self) -> ClearanceMechanism:
+        """The description's joint clearances as a :class:`ClearanceMechanism` (Deng 2012 Ch. III-V)
+        for the certified engine (``robots.clearance.max_pose_error``); joint values come from the
+        Newton inverse geometry."""
+        spec = self.mechanism.clearance
+        if spec is None:
+            raise ValidationError(f"{self.name} clearance", None, "a [clearance] table in the description")
+        kin = self.kin
+        rows = []
+        variable_entries = []
+        for f in self.mechanism.frames:
+            kw = {}
+            for k in DH_FIELDS:
+                e = kin.expr[(f.name, k)]
+                if e.is_constant or not (e.names & set(kin.variables)):
+                    kw[k] = float(np.real(e(self.mechanism.parameters)))
+                else:
+                    kw[k] = f"{f.name}.{k}"
+                    variable_entries.append((f.name, k))
+            rows.append(DHFrame(f.name, f.antecedent, sigma=f.sigma, mu=int(f.actuated), **kw))
+        tree = DHTree(rows)
+
+        def joint_values(poses):
+            poses = np.atleast_2d(np.asarray(poses, float))
+            q = kin.inverse_geometry(poses)
+            env = kin.env(q, len(poses))
+            return {f"{fr}.{k}": np.broadcast_to(np.real(kin.expr[(fr, k)](env)), (len(poses),)) for fr, k in variable_entries}
+
+        frames = self.mechanism.frame
+        names = []
+        for ch in spec.chains:
+            for j in ch.joints:
+                if j not in frames or frames[j].joint == "fixed":
+                    raise ValidationError(f"clearance chain {ch.name!r} joint", j, "a revolute or prismatic frame")
+                if j not in names:
+                    names.append(j)
+        joints = []
+        for j in names:
+            f = frames[j]
+            b = spec.bounds.get(j) or spec.bounds.get("actuated" if f.actuated else "passive") or spec.bounds.get("default")
+            if b is None:
+                raise ValidationError(f"clearance.bounds.{j}", None, "bounds for the joint (or 'actuated'/'passive'/'default')")
+            joints.append(Joint(j, j, f.actuated, b))
+        chains = [Chain(c.name, c.start, c.end, c.joints, c.path_end) for c in spec.chains]
+        return ClearanceMechanism(name=self.name, tree=tree, joints=joints, bodies=dict(spec.bodies), chains=chains,
+                                  end_effector=spec.end_effector, joint_values=joint_values, planar=self.mechanism.planar,
+                                  pose_names=self.workspace.names)
