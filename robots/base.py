@@ -27,9 +27,10 @@ from typing import Sequence
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
+from robots.checks import check_robot, robot_checks  # noqa: F401  (the one-call conformance API)
+from robots.units import UNITS
 
 SHAPES = {1: "interval", 2: "disk", 3: "ball"}
-UNITS = ("m", "rad")
 
 
 @dataclass(frozen=True)

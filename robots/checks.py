@@ -15,18 +15,22 @@ from __future__ import annotations
 
 import functools
 import pickle
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
 from evotol.errors import KinematicsError
-from robots.base import UNITS, RobotErrorModel
+from robots.units import UNITS
+
+#: any object following :class:`robots.base.RobotErrorModel`'s contract (robots.base imports this
+#: module -- ``check_robot`` is part of the protocol's API -- so the class is not imported here)
+Robot = Any
 
 
 class _Settings:
     """What every check of one robot shares: the poses and the finite-difference settings."""
 
-    def __init__(self, robot: RobotErrorModel, poses, step: float, rtol: float, atol: float):
+    def __init__(self, robot: Robot, poses, step: float, rtol: float, atol: float):
         self.robot = robot
         self.poses = robot.check_poses(robot.workspace.latin_hypercube(8, seed=1) if poses is None else poses)
         self.step, self.rtol, self.atol = step, rtol, atol
@@ -74,13 +78,15 @@ def check_pose_subset_invariance(s: _Settings) -> dict:
     Jsub = np.asarray(r.sensitivity(P[idx]))
     scale = max(float(np.abs(J).max()), 1e-300)
     gap = float(np.abs(Jsub - J[idx]).max())
-    assert gap <= 1e-12 * scale, f"{r.name}: sensitivity of poses {idx.tolist()} differs from the full call by {gap:.3g}"
+    assert gap <= 1e-10 * scale, f"{r.name}: sensitivity of poses {idx.tolist()} differs from the full call by {gap:.3g}"
     if r.has_nonlinear_model:
+        # errors of 1e-6 (m, rad): a pose error leaking between poses would be of that order;
+        # iterative solvers may differ by round-off of the pose itself (~1e-15), < 1e-6 of it
         E = np.random.default_rng(0).normal(size=(len(P), 2, r.n_columns)) * 1e-6
         full = np.asarray(r.pose_error(P, E))
         sub = np.asarray(r.pose_error(P[idx], E[idx]))
         gap_e = float(np.abs(sub - full[idx]).max())
-        assert gap_e <= 1e-12 * max(float(np.abs(full).max()), 1e-300), \
+        assert gap_e <= 1e-6 * max(float(np.abs(full).max()), 1e-300), \
             f"{r.name}: pose_error of poses {idx.tolist()} differs from the full call by {gap_e:.3g}"
     return {}
 
@@ -139,7 +145,7 @@ CHECKS = (check_sources_declared, check_units_declared, check_sensitivity_shape,
           check_pose_subset_invariance, check_pickle_round_trip, check_out_of_reach_raises)
 
 
-def robot_checks(robot: RobotErrorModel, poses=None, *, step: float = 1e-7, rtol: float = 1e-4,
+def robot_checks(robot: Robot, poses=None, *, step: float = 1e-7, rtol: float = 1e-4,
                  atol: float = 1e-9) -> Iterator[tuple[str, Callable[[], dict]]]:
     """The named checks of ``robot`` at ``poses`` (default: 8 Latin-hypercube poses of its
     workspace); ``step`` (SI) and ``rtol``/``atol`` set the finite-difference Jacobian check."""
@@ -148,7 +154,7 @@ def robot_checks(robot: RobotErrorModel, poses=None, *, step: float = 1e-7, rtol
         yield c.__name__, functools.partial(c, settings)
 
 
-def check_robot(robot: RobotErrorModel, poses=None, *, step: float = 1e-7, rtol: float = 1e-4,
+def check_robot(robot: Robot, poses=None, *, step: float = 1e-7, rtol: float = 1e-4,
                 atol: float = 1e-9) -> dict:
     """Run every check of :func:`robot_checks` (like sklearn's ``check_estimator``); returns the
     merged measurements (e.g. ``fd_relative_mismatch``).
