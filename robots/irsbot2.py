@@ -22,12 +22,14 @@ in :func:`IRSBot2.loop_residual`):
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
 from robots.base import Workspace
+from robots.geometry import largest_centred_rectangle, largest_rectangle
 from robots.clearance.kinematics import DHFrame, DHTree
 from robots.clearance.model import Chain, ClearanceBounds, ClearanceMechanism, Joint, twist_between
 
@@ -74,7 +76,8 @@ class IRSBot2:
             raise ValidationError("IRSBot2.l2eq_variant", self.l2eq_variant, "'corrected' or 'printed'")
         if tuple(self.modes) not in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
             raise ValidationError("IRSBot2.modes", self.modes, "a pair of +1/-1")
-        if self.l2eq ** 2 <= 0:
+        c = np.cos(self.beta) ** 2 if self.l2eq_variant == "corrected" else np.cos(self.beta)
+        if not self.l2 ** 2 - (self.a1 - self.a2) ** 2 * c > 0:
             raise ValidationError("IRSBot2.l2", self.l2, "l2 > |a1 - a2| cos(beta)")
 
     @classmethod
@@ -88,7 +91,50 @@ class IRSBot2:
         c = np.cos(self.beta) ** 2 if self.l2eq_variant == "corrected" else np.cos(self.beta)
         return float(np.sqrt(self.l2 ** 2 - (self.a1 - self.a2) ** 2 * c))
 
+    @property
+    def base_x(self) -> float:
+        """|x| of the equivalent planar base points O_1, O_2 (eqs. II.3-II.4: b - a1 sin(beta) - p), m."""
+        return self.b - self.a1 * math.sin(self.beta) - self.p
+
     # ------------------------------------------------------------------ inverse geometry
+    def planar_legs(self, x, z) -> dict[str, np.ndarray]:
+        """The equivalent planar mechanism (Sec. II.2.1, Fig. II.3) at platform points (x, z) (arrays, m),
+        without raising where a point is out of reach -- for sampling a workspace.
+
+        Leg i is a planar 2R chain from ``O_i = (-+base_x, -e)`` with proximal length l1 and distal
+        length l2eq to P. Returns ``reachable`` (eqs. II.5-II.6: A_i² + B_i² >= C_i²), elbow points
+        ``E1``, ``E2`` (..., 2) of the elbows-out working mode (``modes=(-1, -1)``), ``q1``, ``q2``
+        (actuated angles, x = ... + l1 cos q, z = ... - l1 sin q), ``psi1``, ``psi2`` (eqs. II.7-II.8),
+        ``sin_t2`` = sin(psi_1 - psi_2) (Type 2 measure, det A of eq. II.38 / (2 l2eq)²) and
+        ``sin_t1_1``, ``sin_t1_2`` = sin(q_i - psi_i) (Type 1 measures, eq. II.37).
+        """
+        if tuple(self.modes) != (-1, -1):
+            raise ValidationError("IRSBot2.modes", self.modes, "(-1, -1) (elbows out) for planar_legs")
+        x, z = np.broadcast_arrays(np.asarray(x, float), np.asarray(z, float))
+        L1, L2 = self.l1, self.l2eq
+        out = {"reachable": np.ones(x.shape, bool)}
+        for i, (ox, side) in enumerate(((-self.base_x, 1.0), (self.base_x, -1.0)), start=1):
+            dx, dz = x - ox, z + self.e
+            d2 = dx * dx + dz * dz
+            d = np.sqrt(d2)
+            # elbow on circle(O_i, L1) ∩ circle(P, L2): foot along O->P, offset perpendicular
+            a = (d2 + L1 * L1 - L2 * L2) / (2 * np.where(d > 0, d, 1.0))
+            h2 = L1 * L1 - a * a
+            ok = (h2 >= 0) & (d > 0)
+            h = np.sqrt(np.where(ok, h2, 0.0))
+            ux, uz = dx / np.where(d > 0, d, 1.0), dz / np.where(d > 0, d, 1.0)
+            # elbows outward: leg 1's elbow on the right-hand normal of O_1 -> P (to the left
+            # when P is straight below), leg 2's on the left-hand normal (mirror image)
+            nx, nz = side * uz, -side * ux
+            ex, ez = ox + a * ux + h * nx, -self.e + a * uz + h * nz
+            out[f"E{i}"] = np.stack([ex, ez], -1)
+            out[f"q{i}"] = np.arctan2(-(ez + self.e), ex - ox)
+            out[f"psi{i}"] = np.arctan2(-(z - ez), x - ex)
+            out[f"sin_t1_{i}"] = np.sin(out[f"q{i}"] - out[f"psi{i}"])
+            out["reachable"] &= ok
+        out["sin_t2"] = np.sin(out["psi1"] - out["psi2"])
+        return out
+
     def inverse_geometry(self, poses) -> dict[str, np.ndarray]:
         """Actuated angles q1, q2 (II.5-II.6), psi1, psi2 (II.7-II.8) and the universal-joint
         angles of the four distal chains (II.18-II.35), for poses (n, 2) = (x, z) in metres."""
@@ -335,3 +381,70 @@ class IRSBot2:
 #: the thesis's (Fig. VI.2), crossed by the parallel singularity.
 MAP_WORKSPACE = Workspace(names=("x", "z"), low=(-30 * MM, -70 * MM), high=(30 * MM, -10 * MM), units=("m", "m"),
                           display_units=("mm", "mm"), display_scale=(1e3, 1e3))
+
+
+# --------------------------------------------------------------------------- sub-workspaces
+@dataclass(frozen=True)
+class SubWorkspace:
+    """A singularity-free rectangle of the x-z plane (SI units) and its Fig. VII.10 points."""
+
+    area: float                 # m²
+    x: tuple[float, float]      # (x_min, x_max), m
+    z: tuple[float, float]      # (z_min, z_max), m
+    step: float                 # grid step, m
+    n_kept: int                 # kept grid points
+
+    @property
+    def points(self) -> np.ndarray:
+        """Right-down corner, centre and left-up corner (Fig. VII.10), shape (3, 2) [x, z] in m."""
+        (x0, x1), (z0, z1) = self.x, self.z
+        return np.array([[x1, z0], [(x0 + x1) / 2, (z0 + z1) / 2], [x0, z1]])
+
+
+def singularity_free_rectangle(robot: IRSBot2, *, n: int = 161, margin_deg: float = 2.0,
+                               below_elbows: bool = False) -> SubWorkspace:
+    """Largest rectangle of the x-z plane below the base (z < -e) in which the robot is assembled in
+    its working mode, on the V side of the Type 2 singularity (sin(psi_1 - psi_2) < 0) and at least
+    ``margin_deg`` away from both singularity types, by discretising the reachable region with
+    n x n points -- the "cuboid-shaped sub-workspace" of Deng 2012 Sec. VII.2.1 ([BPC10]).
+    ``below_elbows``: also require the platform below both elbows (a stricter variant)."""
+    reach = robot.base_x + robot.l1 + robot.l2eq
+    depth = robot.l1 + robot.l2eq
+    xs = np.linspace(-reach, reach, n)
+    zs = np.linspace(-depth - robot.e, -robot.e, n)
+    step = max(xs[1] - xs[0], zs[1] - zs[0])
+    X, Z = np.meshgrid(xs, zs)                                   # rows: z, columns: x
+    g = robot.planar_legs(X, Z)
+    s = math.sin(math.radians(margin_deg))
+    keep = (g["reachable"] & (g["sin_t2"] <= -s) & (np.abs(g["sin_t1_1"]) >= s) & (np.abs(g["sin_t1_2"]) >= s)
+            & (Z < -robot.e))
+    if below_elbows:
+        keep &= (np.sin(g["psi1"]) > 0) & (np.sin(g["psi2"]) > 0)
+    area, r0, r1, c0, c1 = largest_rectangle(keep)
+    if c1 < c0 or area == 0:
+        return SubWorkspace(0.0, (0.0, 0.0), (0.0, 0.0), float(step), int(keep.sum()))
+    dx, dz = xs[1] - xs[0], zs[1] - zs[0]
+    return SubWorkspace(float(area * dx * dz), (float(xs[c0]), float(xs[c1])), (float(zs[r0]), float(zs[r1])),
+                        float(step), int(keep.sum()))
+
+
+def centred_singularity_free_rectangle(robot: IRSBot2, margin: float = 0.2, step: float = 1e-3, x_max: float = 0.2,
+                                       z_range=(-0.3, 0.0)) -> dict[str, float]:
+    """Largest rectangle ``[-w, w] x [z_low, z_high]`` (m) symmetric about x = 0 inside the reachable
+    workspace with ``|sin(psi1 - psi2)| >= margin`` and ``min_i |sin(q_i - psi_i)| >= margin``, on a
+    grid of ``step`` (the rectangle of Deng 2012 Figs. VI.4-VI.5, whose criterion the thesis does
+    not state). Returns ``half_width``, ``z_low``, ``z_high`` and ``area`` (m, m²)."""
+    xs = np.arange(0.0, x_max + step / 2, step)
+    zs = np.arange(z_range[0], z_range[1] + step / 2, step)
+    X, Z = np.meshgrid(np.concatenate([-xs[:0:-1], xs]), zs)
+    pts = np.stack([X.ravel(), Z.ravel()], 1)
+    ok = robot.reachable(pts)
+    good = np.zeros(len(pts), bool)
+    if ok.any():
+        q = pts[ok]
+        good[np.nonzero(ok)[0]] = (np.abs(robot.parallel_singularity(q)) >= margin) & (robot.serial_singularity(q) >= margin)
+    area, r0, r1, half = largest_centred_rectangle(good.reshape(X.shape), len(xs) - 1)
+    if area == 0:
+        raise KinematicsError(f"no rectangle about x = 0 with singularity margin {margin} in x <= {x_max} m, "
+                              f"z in {tuple(z_range)} m", poses=pts[:0])
+    return {"half_width": half * step, "z_low": zs[r0], "z_high": zs[r1], "area": (2 * half * step) * ((r1 - r0) * step)}

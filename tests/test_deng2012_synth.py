@@ -17,13 +17,15 @@ import pytest
 
 from evotol.studies import deng2012_dimsynth as ds
 from evotol.studies import deng2012_tolsynth as ts
+from robots.geometry import largest_centred_rectangle, largest_rectangle
+from robots.irsbot2 import IRSBot2, singularity_free_rectangle
 
 MM = 1e-3
 TAB_VI_5 = dict(l1=50 * MM, l2=50 * MM, a1=30 * MM, a2=15 * MM, p=25 * MM)
 
 
 def robot(**kw):
-    return ds.PlanarIRSBot2(**{**TAB_VI_5, **kw})
+    return ds.design_robot(**{**TAB_VI_5, **kw})
 
 
 def test_l2eq_verified_form_eq_II_1():
@@ -31,10 +33,12 @@ def test_l2eq_verified_form_eq_II_1():
     |(l2eq cos psi, (a1 - a2) cos beta, -l2eq sin psi)| = l2 -- the printed eq. II.1 (cos beta not
     squared) violates it."""
     l2, a1, a2, beta = 0.1, 0.05, 0.015, math.pi / 4
+    verified = IRSBot2.thesis("VI.4", l2=l2, a1=a1, a2=a2, beta=beta).l2eq
+    printed = IRSBot2.thesis("VI.4", l2=l2, a1=a1, a2=a2, beta=beta, l2eq_variant="printed").l2eq
     for psi in (0.3, 1.2, 2.5):
-        v = np.array([ds.l2eq(l2, a1, a2, beta) * math.cos(psi), (a1 - a2) * math.cos(beta), -ds.l2eq(l2, a1, a2, beta) * math.sin(psi)])
+        v = np.array([verified * math.cos(psi), (a1 - a2) * math.cos(beta), -verified * math.sin(psi)])
         assert np.linalg.norm(v) == pytest.approx(l2, rel=1e-14)
-    assert abs(np.hypot(ds.l2eq_printed(l2, a1, a2, beta), (a1 - a2) * math.cos(beta)) - l2) > 1e-4
+    assert abs(np.hypot(printed, (a1 - a2) * math.cos(beta)) - l2) > 1e-4
 
 
 def test_planar_inverse_geometry_closes_the_loops_eqs_II_3_II_4():
@@ -42,7 +46,7 @@ def test_planar_inverse_geometry_closes_the_loops_eqs_II_3_II_4():
     x = np.linspace(-0.04, 0.04, 9)
     z = np.linspace(-0.085, -0.045, 9)
     X, Z = np.meshgrid(x, z)
-    g = r.legs(X, Z)
+    g = r.planar_legs(X, Z)
     assert g["reachable"].all()
     sb = r.a1 * math.sin(r.beta)
     # eq. II.3 (leg 1) and II.4 (leg 2), closed with the returned q_i and psi_i
@@ -53,7 +57,7 @@ def test_planar_inverse_geometry_closes_the_loops_eqs_II_3_II_4():
     for a, b in ((x1, X), (z1, Z), (x2, X), (z2, Z)):
         np.testing.assert_allclose(a, b, atol=1e-12)
     # elbows outward: leg 1's elbow left of its base point, leg 2's right (for P straight below)
-    g0 = r.legs(0.0, -0.07)
+    g0 = r.planar_legs(0.0, -0.07)
     assert g0["E1"][0] < -r.base_x and g0["E2"][0] > r.base_x
 
 
@@ -61,7 +65,7 @@ def test_actuated_angle_matches_closed_form_eq_II_5():
     """q1 = 2 atan((-B1 ± sqrt(B1² + A1² - C1²)) / (C1 - A1)) -- ours is one of the two roots."""
     r = robot()
     for x, z in ((0.0, -0.07), (0.03, -0.08), (-0.02, -0.06)):
-        g = r.legs(x, z)
+        g = r.planar_legs(x, z)
         u = x + r.b - r.p - r.a1 * math.sin(r.beta)
         A, B = -2 * r.l1 * u, 2 * r.l1 * (z + r.e)
         C = u ** 2 + (z + r.e) ** 2 + r.l1 ** 2 - r.l2eq ** 2
@@ -74,7 +78,7 @@ def test_type2_measure_is_det_A_of_eq_II_38():
     """det A = (2 l2eq)² (cos psi1 sin psi2 - sin psi1 cos psi2) = -(2 l2eq)² sin(psi1 - psi2)."""
     r = robot()
     X, Z = np.meshgrid(np.linspace(-0.05, 0.05, 7), np.linspace(-0.09, -0.03, 7))
-    g = r.legs(X, Z)
+    g = r.planar_legs(X, Z)
     L = r.l2eq
     detA = (2 * L * np.cos(g["psi1"])) * (2 * L * np.sin(g["psi2"])) - (2 * L * np.sin(g["psi1"])) * (2 * L * np.cos(g["psi2"]))
     ok = g["reachable"]
@@ -90,29 +94,45 @@ def test_largest_rectangle_matches_brute_force():
             for c0, c1 in itertools.combinations_with_replacement(range(9), 2):
                 if m[r0:r1 + 1, c0:c1 + 1].all():
                     best = max(best, (r1 - r0) * (c1 - c0))
-        area, r0, r1, c0, c1 = ds.largest_rectangle(m)
+        area, r0, r1, c0, c1 = largest_rectangle(m)
         assert area == best
         if area:
             assert m[r0:r1 + 1, c0:c1 + 1].all() and (r1 - r0) * (c1 - c0) == area
 
 
+def test_centred_rectangle_matches_brute_force():
+    """Largest rectangle symmetric about a column, against trying every (rows, half-width)."""
+    rng = np.random.default_rng(5)
+    for _ in range(30):
+        m = rng.random((8, 11)) < 0.8
+        best = 0
+        for r0, r1 in itertools.combinations_with_replacement(range(8), 2):
+            for hw in range(6):
+                if m[r0:r1 + 1, 5 - hw:5 + hw + 1].all():
+                    best = max(best, 2 * hw * (r1 - r0))
+        area, r0, r1, hw = largest_centred_rectangle(m, 5)
+        assert area == best
+        if area:
+            assert m[r0:r1 + 1, 5 - hw:5 + hw + 1].all() and 2 * hw * (r1 - r0) == area
+
+
 def test_sub_workspace_is_symmetric_singularity_free_and_grows_with_the_links():
     r = robot()
-    w = ds.singularity_free_rectangle(r, n=121)
+    w = singularity_free_rectangle(r, n=121)
     assert w.area > 0
     assert w.x[0] == pytest.approx(-w.x[1], abs=w.step)                # the robot is symmetric in x
     # every grid point of the rectangle is reachable and off the singular loci
     xs = np.linspace(*w.x, 15)
     zs = np.linspace(*w.z, 15)
     X, Z = np.meshgrid(xs, zs)
-    g = r.legs(X, Z)
+    g = r.planar_legs(X, Z)
     s = math.sin(math.radians(2.0))
     assert g["reachable"].all() and (g["sin_t2"] <= -s + 1e-9).all()
     assert (np.abs(g["sin_t1_1"]) >= s - 1e-9).all() and (np.abs(g["sin_t1_2"]) >= s - 1e-9).all()
     # Fig. VII.10: right-down corner, centre, left-up corner
     np.testing.assert_allclose(w.points, [[w.x[1], w.z[0]], [0.0, (w.z[0] + w.z[1]) / 2], [w.x[0], w.z[1]]], atol=1e-12)
     # longer links, larger sub-workspace (Fig. VII.12: l1 = l2 = 200 mm give the largest)
-    big = ds.singularity_free_rectangle(robot(l1=0.2, l2=0.2), n=121)
+    big = singularity_free_rectangle(robot(l1=0.2, l2=0.2), n=121)
     assert big.area > 4 * w.area
 
 
@@ -124,7 +144,7 @@ def serial_standin(robot, points):
 
 
 def test_dimsynth_pipeline_with_a_closed_form_standin(tmp_path):
-    s = ds.run(tmp_path, quick=True, workers=1, pose_errors=serial_standin, progress=False)
+    s = ds.STUDY.run(tmp_path, quick=True, workers=1, pose_errors=serial_standin, progress=False)
     saved = json.loads((tmp_path / "deng2012-dimsynth.json").read_text())
     df = pd.read_parquet(tmp_path / saved["files"]["entries_parquet"])
     assert len(df) == 8 and s["seconds"] > 0

@@ -100,35 +100,29 @@ def test_quick_study_writes_json_entries_and_report(tmp_path):
 
 
 # --------------------------------------------------------------------------- IRSBot-2 (Sec. VII.2.2)
-def _irsbot2():
-    return pytest.importorskip("robots.irsbot2", reason="the IRSBot-2 clearance engine (issue 6) is not in this checkout")
-
-
-def test_planar_geometry_agrees_with_the_engines_irsbot2():
-    """Two independent inverse geometries (ours: circle intersection; engine: eqs. II.5-II.8)."""
-    irs = _irsbot2()
+def test_planar_geometry_agrees_with_the_inverse_geometry():
+    """Two independent inverse geometries of one model: IRSBot2.planar_legs (circle intersection)
+    and IRSBot2.inverse_geometry (eqs. II.5-II.8)."""
     from evotol.studies import deng2012_dimsynth as ds
+    from robots.irsbot2 import singularity_free_rectangle
 
     rng = np.random.default_rng(1)
     for d in [(50, 50, 30, 15, 25), (200, 100, 50, 15, 15), (100, 200, 10, 30, 40)]:
-        mine = ds.PlanarIRSBot2(*(np.array(d) * MM))
-        eng = irs.IRSBot2(b=mine.b, d=ds.TAB_VI_4["d"], alpha_d=ds.TAB_VI_4["alpha_d"], beta=mine.beta, e=mine.e,
-                          l1=mine.l1, l2=mine.l2, a1=mine.a1, a2=mine.a2, p=mine.p)
-        assert eng.l2eq == pytest.approx(mine.l2eq, rel=1e-14)
-        w = ds.singularity_free_rectangle(mine, n=81)
+        robot = ds.design_robot(*(np.array(d) * MM))
+        w = singularity_free_rectangle(robot, n=81)
         P = np.column_stack([rng.uniform(*w.x, 20), rng.uniform(*w.z, 20)])
-        g, h = mine.legs(P[:, 0], P[:, 1]), eng.inverse_geometry(P)
+        g, h = robot.planar_legs(P[:, 0], P[:, 1]), robot.inverse_geometry(P)
         for k in ("q1", "q2", "psi1", "psi2"):
             np.testing.assert_allclose(np.angle(np.exp(1j * (g[k] - h[k]))), 0, atol=1e-12)
-        np.testing.assert_allclose(g["sin_t2"], eng.parallel_singularity(P), atol=1e-12)
+        np.testing.assert_allclose(g["sin_t2"], robot.parallel_singularity(P), atol=1e-12)
 
 
 def test_batched_engine_call_equals_one_call_per_design():
-    _irsbot2()
     from evotol.studies import deng2012_dimsynth as ds
+    from robots.irsbot2 import singularity_free_rectangle
 
-    robots = [ds.PlanarIRSBot2(*(np.array(d) * MM)) for d in [(50, 50, 30, 15, 25), (200, 100, 50, 5, 15)]]
-    pts = [ds.singularity_free_rectangle(r, n=81).points for r in robots]
+    robots = [ds.design_robot(*(np.array(d) * MM)) for d in [(50, 50, 30, 15, 25), (200, 100, 50, 5, 15)]]
+    pts = [singularity_free_rectangle(r, n=81).points for r in robots]
     batch = ds.engine_pose_errors_batch(robots, pts)
     for r, pt, (pb, rb) in zip(robots, pts, batch):
         p1, r1 = ds.engine_pose_errors(r, pt)
@@ -137,25 +131,15 @@ def test_batched_engine_call_equals_one_call_per_design():
     # clearances in the parallelograms add error sources (Sec. VI.3): distal-only is never larger
     from robots.clearance import max_pose_error
 
-    distal_only = max_pose_error(_distal_only(robots[0]), pts[0])
+    distal, _, _ = ds.clearance_bounds()
+    distal_only = max_pose_error(robots[0].clearance_mechanism(parallelograms=False, distal=distal), pts[0])
     assert (distal_only.p_max <= batch[0][0] * (1 + 2e-3)).all()
 
 
-def _distal_only(robot):
-    irs = _irsbot2()
-    from evotol.studies import deng2012_dimsynth as ds
-
-    model = irs.IRSBot2(b=robot.b, d=ds.TAB_VI_4["d"], alpha_d=ds.TAB_VI_4["alpha_d"], beta=robot.beta, e=robot.e,
-                        l1=robot.l1, l2=robot.l2, a1=robot.a1, a2=robot.a2, p=robot.p)
-    distal, _, _ = ds.clearance_bounds()
-    return model.clearance_mechanism(parallelograms=False, distal=distal)
-
-
 def test_quick_dimsynth_on_the_engine(tmp_path):
-    _irsbot2()
     from evotol.studies import deng2012_dimsynth as ds
 
-    s = ds.run(tmp_path, quick=True, workers=1, progress=False)
+    s = ds.STUDY.run(tmp_path, quick=True, workers=1, progress=False)
     saved = json.loads((tmp_path / f"{ds.NAME}.json").read_text())
     df = pd.read_parquet(tmp_path / saved["files"]["entries_parquet"])
     assert len(df) == 8 and df["feasible"].all() and s["seconds"] > 0

@@ -60,3 +60,12 @@ def test_never_below_multistart_and_html_offline(study):
         assert pt["p_max_mm"] >= pt["multistart_p_mm"] * (1 - 1e-3)
     html = (out / "deng2012-5bar.html").read_text()
     assert "<script src=\"http" not in html and "parallel singularity" in html
+
+
+def test_report_is_drawn_from_the_json_alone(study):
+    """render() reads only the written JSON: redrawing from it gives the same page, byte for byte."""
+    from evotol.studies import StudyResult, get
+
+    out, _ = study
+    d = json.loads((out / "deng2012-5bar.json").read_text())
+    assert get("deng2012-5bar").render(StudyResult(d)).render() == (out / "deng2012-5bar.html").read_text()

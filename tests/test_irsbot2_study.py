@@ -53,3 +53,11 @@ def test_multistart_never_above_certified_bound(study):
     for v in d["multistart_baseline"].values():
         assert v["multistart_p_mm"] <= v["p_upper_mm"] * (1 + 1e-9)
         assert v["multistart_r"] <= v["r_upper"] * (1 + 1e-9)
+
+
+def test_report_is_drawn_from_the_json_alone(study):
+    """render() reads only the written JSON: redrawing from it gives the same page, byte for byte."""
+    from evotol.studies import StudyResult, get
+
+    out, d = study
+    assert get("deng2012-irsbot2").render(StudyResult(d)).render() == (out / "deng2012-irsbot2.html").read_text()

@@ -14,12 +14,11 @@ points.
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 
-from evotol.reporting.html import Report, write_json
-from evotol.studies import Study
+from evotol.reporting.html import Report
+from evotol.studies import Study, StudyResult
 
 MM = 1e-3
 
@@ -73,20 +72,23 @@ def _heatmaps(title, x_mm, y_mm, P, R, locus_mm, unit_p="mm"):
     return fig
 
 
-def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, workers: int | None = None,
-        scheduler=None, n_grid: int | None = None) -> dict:
-    import plotly.graph_objects as go
+CONFIG = {"seed": 0, "b_mm": 0.1, "n_grid": 41, "workers": None, "scheduler": None, "n_mc": 10 ** 6,
+          "n_starts": 10, "baseline_poses_m": ((0.0, 0.07), (0.01, 0.05), (-0.02, 0.03))}
+QUICK = {"n_grid": 9, "n_mc": 2000, "n_starts": 2, "baseline_poses_m": ((0.0, 0.07),)}
+
+
+def compute(config: dict) -> StudyResult:
+    """Four certified maps, the singular locus, symmetry, Monte Carlo shortfall and the multistart baseline."""
+    import os
 
     from robots.clearance import max_pose_error, multistart_max_pose_error
     from robots.clearance.grid import grid_max_pose_error
     from robots.clearance.maxerror import sample_max_errors
 
     t_start = time.perf_counter()
-    out_dir = Path(out_dir)
-    n = n_grid or (9 if quick else 41)
-    if scheduler is None:        # `evotol reproduce --scheduler ADDRESS` passes the Dask address this way
-        import os
-        scheduler = os.environ.get("EVOTOL_DASK_SCHEDULER") or None
+    n, quick, seed, b_mm, workers = config["n_grid"], config["quick"], config["seed"], config["b_mm"], config["workers"]
+    # `evotol reproduce --scheduler ADDRESS` passes the Dask address in the config (or the environment)
+    scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None
     fb, variants = _variants(b_mm)
     x, y, poses = _grid(n)
     results, secs = {}, {}
@@ -128,7 +130,7 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
     }
 
     # --- plain Monte Carlo sampling of the clearances falls short ------------------------------
-    n_mc = 2000 if quick else 10 ** 6
+    n_mc = config["n_mc"]
     mc_poses = [(0.0, 0.060), (0.020, 0.030), (0.0, 0.050)]
     mc_rows, mc = [], []
     for pose in mc_poses:
@@ -144,8 +146,8 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
     worst_mc = min(min(r["uniform_p_ratio"], r["boundary_p_ratio"]) for r in mc)
 
     # --- the thesis's method on a few points ------------------------------------------------
-    base_poses = np.array([[0.0, 0.07]]) if quick else np.array([[0.0, 0.07], [0.01, 0.05], [-0.02, 0.03]])
-    n_starts = 2 if quick else 10
+    base_poses = np.array(config["baseline_poses_m"], float)
+    n_starts = config["n_starts"]
     ms = multistart_max_pose_error(variants["closed"], base_poses, n_starts=n_starts, seed=seed)
     ours = max_pose_error(variants["closed"], base_poses)
     base_rows, baseline = [], []
@@ -190,7 +192,29 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
         "grid": n, "quick": quick,
     }
 
-    # --- HTML ---------------------------------------------------------------------------------
+    data["figures"] = {
+        "locus_mm": (locus / MM).tolist(),
+        "min_max": {k: {"p_max_mm": [float(r.p_max.min() / MM), float(r.p_max.max() / MM)],
+                        "r_max_rad": [float(r.r_max.min()), float(r.r_max.max())], "gap_max": float(r.gap.max()),
+                        "seconds": r.seconds} for k, r in results.items()},
+        "closed_p_max_largest": {"p_max_mm": float(closed.p_max.max() / MM),
+                                 "at_mm": (poses[np.argmax(closed.p_max)] / MM).tolist()},
+        "singular_rows": sing_rows, "monte_carlo_rows": mc_rows, "baseline_rows": base_rows,
+        "multistart_n_variables": ms.n_variables,
+    }
+    data["seconds"] = time.perf_counter() - t_start
+    return StudyResult(data)
+
+
+def render(result: StudyResult) -> Report:
+    """Figs. IV.5-IV.6, IV.9-IV.14 with the singular locus, the thesis's statements and the checks."""
+    import plotly.graph_objects as go
+
+    data = result.summary
+    fg = data["figures"]
+    n, b_mm = data["grid"], data["clearances"]["b_xy_mm"]
+    gap_max, mm = data["gap_max"], fg["min_max"]
+    secs = {k: v["seconds"] for k, v in mm.items()}
     rep = Report("deng2012-5bar: 5-bar linkage, maximum pose error due to joint clearances",
                  "Deng 2012 (seed 004), Ch. IV: Tabs. IV.1-IV.2, Figs. IV.5-IV.6, IV.9-IV.14")
     rep.text(f"Global maximum positional error p_max and rotational error r_max over a {n} x {n} grid of "
@@ -200,34 +224,39 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
              f"by a certified upper bound; the largest relative gap over all maps is {gap_max:.2e} (target 1e-3). "
              f"The closed-loop map took {secs['closed']:.1f} s here; the thesis reports several days (200 local "
              f"solves per pose).")
-    xm, ym = x / MM, y / MM
-    lm = locus / MM
+    xm, ym = np.asarray(data["x"]), np.asarray(data["y"])
+    lm = np.asarray(fg["locus_mm"], float).reshape(-1, 2)
     labels = {"closed": "Closed loop (Figs. IV.5-IV.6)", "leg1": "Open serial leg 1, A-C (Figs. IV.9-IV.10)",
               "leg2": "Open serial leg 2, B-D-E (Figs. IV.11-IV.12)",
               "redundant": "Actuation redundancy, C and D actuated (Figs. IV.13-IV.14)"}
-    for name, res in results.items():
+    for name in labels:
+        maps = data if name == "closed" else data[name]
         rep.heading(labels[name])
-        rep.figure(_heatmaps(labels[name], xm, ym, as_map(res.p_max, 1e3), as_map(res.r_max), lm if name in ("closed", "redundant") else np.zeros((0, 2))))
-        rep.table([[float(res.p_max.min() / MM), float(res.p_max.max() / MM), float(res.r_max.min()), float(res.r_max.max()),
-                    float(res.gap.max()), res.seconds]],
+        rep.figure(_heatmaps(labels[name], xm, ym, np.asarray(maps["p_max"], float), np.asarray(maps["r_max"], float),
+                             lm if name in ("closed", "redundant") else np.zeros((0, 2))))
+        m = mm[name]
+        rep.table([[*m["p_max_mm"], *m["r_max_rad"], m["gap_max"], m["seconds"]]],
                   header=["p_max min (mm)", "p_max max (mm)", "r_max min (rad)", "r_max max (rad)", "largest gap", "seconds"])
-    fig3d = go.Figure(go.Surface(x=xm, y=ym, z=P, colorscale="Viridis", colorbar=dict(title="mm")))
+    fig3d = go.Figure(go.Surface(x=xm, y=ym, z=np.asarray(data["p_max"], float), colorscale="Viridis", colorbar=dict(title="mm")))
     fig3d.update_layout(title="Closed loop: p_max surface (perspective view of Fig. IV.5a)", height=520,
                         scene=dict(xaxis_title="x (mm)", yaxis_title="y (mm)", zaxis_title="p_max (mm)"))
     rep.figure(fig3d)
 
     rep.heading("Thesis statements checked")
     tc = data["thesis_claims"]
+    sg = data["singularity"]
+    top = fg["closed_p_max_largest"]
     rep.table([
         ["leg 1 rotational maximum constant, 0.02 rad (Fig. IV.10)", f"{tc['leg1_r_max_constant_rad'][0]:.6f} .. {tc['leg1_r_max_constant_rad'][1]:.6f}"],
         ["leg 2 rotational maximum constant, 0.03 rad (Fig. IV.12)", f"{tc['leg2_r_max_constant_rad'][0]:.6f} .. {tc['leg2_r_max_constant_rad'][1]:.6f}"],
         ["redundant actuation: rotational maximum 0.02 rad (Fig. IV.14)", f"{tc['redundant_r_max_rad'][0]:.6f} .. {tc['redundant_r_max_rad'][1]:.6f}"],
         ["closed loop largest at the parallel singularity (Sec. IV.3)",
-         f"p_max = {closed.p_max.max() / MM:.4f} mm at ({poses[np.argmax(closed.p_max), 0] / MM:.0f}, {poses[np.argmax(closed.p_max), 1] / MM:.0f}) mm; "
-         f"{closed.p_max[i_sing] / MM:.4f} mm on the locus at ({poses[i_sing, 0] / MM:.0f}, {poses[i_sing, 1] / MM:.0f}) mm"],
+         f"p_max = {top['p_max_mm']:.4f} mm at ({top['at_mm'][0]:.0f}, {top['at_mm'][1]:.0f}) mm; "
+         f"{sg['p_max_at_most_singular_grid_point_mm']:.4f} mm on the locus at ({sg['most_singular_grid_point_mm'][0]:.0f}, "
+         f"{sg['most_singular_grid_point_mm'][1]:.0f}) mm"],
         ["redundancy is the most accurate variant (Sec. IV.4)",
-         f"max p_max: closed {closed.p_max.max() / MM:.3f}, leg 1 {results['leg1'].p_max.max() / MM:.3f}, leg 2 "
-         f"{results['leg2'].p_max.max() / MM:.3f}, redundant {results['redundant'].p_max.max() / MM:.3f} mm"],
+         f"max p_max: closed {mm['closed']['p_max_mm'][1]:.3f}, leg 1 {mm['leg1']['p_max_mm'][1]:.3f}, leg 2 "
+         f"{mm['leg2']['p_max_mm'][1]:.3f}, redundant {mm['redundant']['p_max_mm'][1]:.3f} mm"],
     ], header=["thesis", "evotol"])
 
     rep.heading("Parallel singularity")
@@ -236,41 +265,43 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, b_mm: float = 0.1, worke
              f"(+-20, {np.sqrt(50 ** 2 - 20 ** 2):.2f}) mm to (0, 50) mm. The linear clearance model stays finite there "
              "(the idle rotations are bounded by beta_z), so the maps have values, not NaN, on the locus. The grid points "
              "closest to the locus:")
-    rep.table(sing_rows, header=["pose (mm)", "|sin angle(CE, DE)|", "p_max (mm)", "p_upper (mm)", "r_max (rad)", "r_upper (rad)"])
+    rep.table(fg["singular_rows"], header=["pose (mm)", "|sin angle(CE, DE)|", "p_max (mm)", "p_upper (mm)", "r_max (rad)", "r_upper (rad)"])
 
+    symmetry = data["symmetry"]
     rep.heading("Symmetry about x = 0")
-    rep.text(f"Rotational map: largest difference between mirrored points {r_sym:.2e} rad (symmetric within the certified "
+    rep.text(f"Rotational map: largest difference between mirrored points {symmetry['r_max_abs_difference_rad']:.2e} rad (symmetric within the certified "
              f"tolerance). Positional map: only nearly symmetric -- joint E belongs to leg 2, so its radial clearance moves P "
              f"relative to link L4 but not L2 -- largest relative difference {symmetry['p_max_relative_difference']:.2%} "
              f"({symmetry['p_max_abs_difference_mm']:.4f} mm) at ({symmetry['p_max_largest_asymmetry_at_mm'][0]:.0f}, "
              f"{symmetry['p_max_largest_asymmetry_at_mm'][1]:.0f}) mm; at {symmetry['p_asymmetry_certified_points']} grid "
              f"points the certified brackets of mirrored points do not overlap, i.e. the asymmetry is proven, not numerical.")
 
+    n_mc, worst_mc = data["monte_carlo"]["n_samples"], data["monte_carlo"]["worst_ratio"]
     rep.heading("Plain Monte Carlo sampling falls short of the worst case")
     rep.text(f"{n_mc:.0e} random clearance states per pose (each joint's screw drawn in its clearance set -- uniformly "
              f"inside, or on the boundary: every clearance taken up fully in a random direction -- then projected onto "
              f"the loop equations and scaled back into the set, so every sample is a feasible assembly). The largest "
              f"sampled error divided by the certified maximum:", note=False)
-    rep.table(mc_rows, header=["pose (mm)", "p_max (mm)", "uniform: p ratio", "boundary: p ratio", "r_max (rad)",
-                               "uniform: r ratio", "boundary: r ratio"])
+    rep.table(fg["monte_carlo_rows"], header=["pose (mm)", "p_max (mm)", "uniform: p ratio", "boundary: p ratio", "r_max (rad)",
+                                              "uniform: r ratio", "boundary: r ratio"])
     rep.text(f"Sampling reached as little as {worst_mc:.0%} of the worst case. Do not verify worst-case accuracy by "
              f"sampling clearances alone: use the certified maximum.", note=True)
 
+    ms = data["multistart_baseline"]
+    n_starts, per_pose_ms, per_pose_ours = ms["n_starts"], ms["seconds_per_pose"], ms["ours_seconds_per_pose"]
     rep.heading("The thesis's method on the same points")
-    rep.text(f"QR elimination of the loop equations (eqs. III.29-III.48, {ms.n_variables} variables, eq. IV.26) and SLSQP "
+    rep.text(f"QR elimination of the loop equations (eqs. III.29-III.48, {fg['multistart_n_variables']} variables, eq. IV.26) and SLSQP "
              f"from {n_starts} random feasible starts per pose and per quantity: {per_pose_ms:.1f} s per pose "
              f"({per_pose_ms * 200 / n_starts:.0f} s with the thesis's 200 starts), against "
              f"{per_pose_ours * 1e3:.1f} ms per pose for the certified map here (speed-up x{per_pose_ms / per_pose_ours:.0f} "
              f"at {n_starts} starts, x{per_pose_ms * 200 / n_starts / per_pose_ours:.0f} at 200). "
              f"The last column counts starts that stopped at a local maximum more than 0.1 % below the global one.")
-    rep.table(base_rows, header=["pose (mm)", "multistart p (mm)", "p_max (mm)", "p_upper (mm)", "multistart r (rad)",
-                                 "r_max (rad)", "r_upper (rad)", "starts below"])
-    data["seconds"] = time.perf_counter() - t_start
+    rep.table(fg["baseline_rows"], header=["pose (mm)", "multistart p (mm)", "p_max (mm)", "p_upper (mm)", "multistart r (rad)",
+                                           "r_max (rad)", "r_upper (rad)", "starts below"])
     rep.text(f"Total study time {data['seconds']:.1f} s.", note=False)
-    rep.write(out_dir / "deng2012-5bar.html")
-    write_json(out_dir / "deng2012-5bar.json", data)
-    return data
+    return rep
 
 
 STUDY = Study(name="deng2012-5bar", title="5-bar linkage: certified maximum pose error due to joint clearances (Deng 2012 Ch. IV)",
-              legacy_run=run, seed_paper="004_fe1111236e25a595 (Deng 2012, Ch. III-IV)")
+              compute=compute, render=render, config=CONFIG, quick=QUICK,
+              seed_paper="004_fe1111236e25a595 (Deng 2012, Ch. III-IV)")

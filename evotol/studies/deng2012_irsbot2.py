@@ -10,58 +10,19 @@
   beta_z = 0.4 rad (Tab. VI.6), parallelogram joints Tabs. VI.7-VI.9, at the four corners and the
   centre of the largest rectangle of the workspace. The thesis does not state the rectangle's
   criterion; we take the largest rectangle symmetric about x = 0 in which the robot is at least
-  ``margin`` away from both singularity types (|sin(psi1 - psi2)| and min |sin(q_i - psi_i)|).
+  ``margin`` away from both singularity types (|sin(psi1 - psi2)| and min |sin(q_i - psi_i)|),
+  :func:`robots.irsbot2.centred_singularity_free_rectangle`.
 """
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 
-from evotol.reporting.html import Report, write_json
-from evotol.studies import Study
+from evotol.reporting.html import Report
+from evotol.studies import Study, StudyResult
 
 MM = 1e-3
-
-
-def largest_rectangle(robot, margin: float = 0.2, step: float = 1e-3, x_max: float = 0.2, z_range=(-0.3, 0.0)):
-    """Largest axis-aligned rectangle ``[-w, w] x [z1, z2]`` (m) inside the reachable workspace with
-    ``|sin(psi1 - psi2)| >= margin`` and ``min_i |sin(q_i - psi_i)| >= margin``."""
-    xs = np.arange(0.0, x_max + step / 2, step)
-    zs = np.arange(z_range[0], z_range[1] + step / 2, step)
-    X, Z = np.meshgrid(np.concatenate([-xs[:0:-1], xs]), zs)
-    pts = np.stack([X.ravel(), Z.ravel()], 1)
-    ok = robot.reachable(pts)
-    good = np.zeros(len(pts), bool)
-    if ok.any():
-        q = pts[ok]
-        good[np.nonzero(ok)[0]] = (np.abs(robot.parallel_singularity(q)) >= margin) & (robot.serial_singularity(q) >= margin)
-    G = good.reshape(X.shape)
-    c = len(xs) - 1                                       # column of x = 0
-    # half-width of the valid run around x = 0 in each row
-    w = np.zeros(len(zs), int)
-    for j in range(len(zs)):
-        if not G[j, c]:
-            continue
-        k = 0
-        while c + k + 1 < G.shape[1] and c - k - 1 >= 0 and G[j, c + k + 1] and G[j, c - k - 1]:
-            k += 1
-        w[j] = k
-    best = (0.0, None)
-    for i in range(len(zs)):
-        m = 10 ** 9
-        for j in range(i, len(zs)):
-            if not G[j, c]:
-                break
-            m = min(m, w[j])
-            area = (2 * m * step) * ((j - i) * step)
-            if area > best[0]:
-                best = (area, (m * step, zs[i], zs[j]))
-    if best[1] is None:
-        raise ValueError("no singularity-free rectangle found")
-    hw, z1, z2 = best[1]
-    return {"half_width": hw, "z_low": z1, "z_high": z2, "area": best[0]}
 
 
 def _maps_figure(title, x_mm, z_mm, P, R, sing):
@@ -91,20 +52,23 @@ def _maps_figure(title, x_mm, z_mm, P, R, sing):
     return fig
 
 
-def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = None, scheduler=None,
-        n_grid: int | None = None, margin: float = 0.2) -> dict:
-    import plotly.graph_objects as go
+CONFIG = {"seed": 0, "n_grid": 41, "workers": None, "scheduler": None, "margin": 0.2, "rectangle_step": 1e-3,
+          "n_starts": 6}
+QUICK = {"n_grid": 7, "rectangle_step": 2e-3, "n_starts": 1}
+
+
+def compute(config: dict) -> StudyResult:
+    """The two error maps, the five points of the largest rectangle and the multistart baseline."""
+    import os
 
     from robots.clearance import ClearanceBounds, max_pose_error, multistart_max_pose_error
     from robots.clearance.grid import grid_max_pose_error
-    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2, centred_singularity_free_rectangle
 
     t_start = time.perf_counter()
-    out_dir = Path(out_dir)
-    n = n_grid or (7 if quick else 41)
-    if scheduler is None:        # `evotol reproduce --scheduler ADDRESS` passes the Dask address this way
-        import os
-        scheduler = os.environ.get("EVOTOL_DASK_SCHEDULER") or None
+    n, quick, seed, margin, workers = config["n_grid"], config["quick"], config["seed"], config["margin"], config["workers"]
+    # `evotol reproduce --scheduler ADDRESS` passes the Dask address in the config (or the environment)
+    scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None
     W = MAP_WORKSPACE
     x = np.linspace(W.low[0], W.high[0], n)
     z = np.linspace(W.low[1], W.high[1], n)
@@ -126,7 +90,7 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = No
 
     # --- 5-point comparison (Figs. VI.4-VI.5) ---------------------------------------------------
     robot4 = IRSBot2.thesis("VI.4")
-    rect = largest_rectangle(robot4, margin=margin, step=2e-3 if quick else 1e-3)
+    rect = centred_singularity_free_rectangle(robot4, margin=margin, step=config["rectangle_step"])
     hw, z1, z2 = rect["half_width"], rect["z_low"], rect["z_high"]
     pts = np.array([[-hw, z2], [hw, z2], [0.0, (z1 + z2) / 2], [-hw, z1], [hw, z1]])
     labels = ["upper left", "upper right", "centre", "lower left", "lower right"]
@@ -137,7 +101,7 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = No
     }
 
     # --- the thesis's method on one point ------------------------------------------------------
-    n_starts = 1 if quick else 6
+    n_starts = config["n_starts"]
     base_pose = poses[[len(poses) // 2]]
     ms = {k: multistart_max_pose_error(cases[k], base_pose, n_starts=n_starts, seed=seed) for k in cases}
     ours = {k: max_pose_error(cases[k], base_pose) for k in cases}
@@ -174,11 +138,32 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = No
                             "r_max_relative_difference": float(np.max(np.abs(as_map(r.r_max) - as_map(r.r_max)[:, ::-1]) / as_map(r.r_max)))}
                         for k, r in results.items()}
 
-    # --- HTML -----------------------------------------------------------------------------------
+    data["figures"] = {"margin": margin, "singularity_contour": {"x_mm": (xs / MM).tolist(), "z_mm": (zs / MM).tolist(),
+                                                                  "sin_psi1_minus_psi2": S.tolist()},
+                       "min_max": {k: {"p_max_mm": [float(r.p_max.min() / MM), float(r.p_max.max() / MM)],
+                                       "r_max_rad": [float(r.r_max.min()), float(r.r_max.max())]} for k, r in results.items()}}
+    data["seconds"] = time.perf_counter() - t_start
+    return StudyResult(data)
+
+
+def render(result: StudyResult) -> Report:
+    """Figs. VI.1/VI.3 maps with the singular locus, the five points of Figs. VI.4-VI.5, the baseline."""
+    import plotly.graph_objects as go
+
+    data = result.summary
+    fg = data["figures"]
+    margin, mm = fg["margin"], fg["min_max"]
+    x_mm, z_mm = np.asarray(data["x"]), np.asarray(data["z"])
+    sc = fg["singularity_contour"]
+    sing = (np.asarray(sc["x_mm"]), np.asarray(sc["z_mm"]), np.asarray(sc["sin_psi1_minus_psi2"], float))
+    n = data["grid"]
+    fp = data["five_points"]
+    labels, pts_mm = fp["labels"], np.asarray(fp["points_mm"])
+    hw_mm, (z1_mm, z2_mm) = fp["rectangle_mm"]["x"][1], fp["rectangle_mm"]["z"]
     rep = Report("deng2012-irsbot2: IRSBot-2, maximum pose error due to joint clearances",
                  "Deng 2012 (seed 004), Ch. II, V-VI: Tabs. II.1-II.2, VI.1-VI.9, Figs. VI.1-VI.5")
     rep.text(f"Certified global maximum positional and rotational errors of the IRSBot-2 on a {n} x {n} grid of "
-             f"x in [{W.low[0] / MM:.0f}, {W.high[0] / MM:.0f}] mm, z in [{W.low[1] / MM:.0f}, {W.high[1] / MM:.0f}] mm "
+             f"x in [{x_mm[0]:.0f}, {x_mm[-1]:.0f}] mm, z in [{z_mm[0]:.0f}, {z_mm[-1]:.0f}] mm "
              f"(Tabs. VI.1-VI.2: b = d = l1 = l2 = 50, a1 = 30, a2 = 15, p = 25 mm, alpha_d = beta = pi/6, elbows out). "
              f"Largest relative gap between attained value and certified bound: {data['gap_max']:.2e}. Map times: "
              + ", ".join(f"{k} {v:.1f} s ({data[k]['n_variables']} variables)" for k, v in data["map_seconds"].items())
@@ -189,38 +174,40 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = No
              "Tab. II.2 (alpha sign), eq. II.1 (cos^2), eq. II.8 (leg-2 terms).", note=True)
     titles = {"distal": "Clearances in the distal module (Figs. VI.1 and VI.3; Tab. VI.3)",
               "distal_parallelograms": "Clearances in the distal module and the parallelograms (Tabs. VI.7-VI.9)"}
-    for k, res in results.items():
+    for k in titles:
+        d = data[k]
         rep.heading(titles[k])
-        rep.figure(_maps_figure(titles[k], x / MM, z / MM, as_map(res.p_max, 1e3), as_map(res.r_max), (xs / MM, zs / MM, S)))
-        rep.table([[float(res.p_max.min() / MM), float(res.p_max.max() / MM), float(res.r_max.min()), float(res.r_max.max()),
-                    float(res.gap.max()), res.seconds, data[k]["n_variables"],
+        rep.figure(_maps_figure(titles[k], x_mm, z_mm, np.asarray(d["p_max"], float), np.asarray(d["r_max"], float), sing))
+        rep.table([[*mm[k]["p_max_mm"], *mm[k]["r_max_rad"], d["gap_max"], d["seconds"], d["n_variables"],
                     data["symmetry"][k]["p_max_relative_difference"], data["symmetry"][k]["r_max_relative_difference"]]],
                   header=["p_max min (mm)", "p_max max (mm)", "r_max min (rad)", "r_max max (rad)", "largest gap", "seconds",
                           "variables (thesis v)", "asymmetry p (rel.)", "asymmetry r (rel.)"])
-    surf = go.Figure(go.Surface(x=x / MM, y=z / MM, z=as_map(results["distal"].p_max, 1e3), colorscale="Viridis"))
+    surf = go.Figure(go.Surface(x=x_mm, y=z_mm, z=np.asarray(data["distal"]["p_max"], float), colorscale="Viridis"))
     surf.update_layout(title="Distal module: p_max surface (perspective view of Fig. VI.1a)", height=520,
                        scene=dict(xaxis_title="x (mm)", yaxis_title="z (mm)", zaxis_title="p_max (mm)"))
     rep.figure(surf)
 
     rep.heading("Five points of the largest rectangle (Figs. VI.4-VI.5; Tabs. VI.4-VI.9)")
     rep.text(f"beta = pi/4, distal beta_z = 0.4 rad, actuated joints beta_z = 0.001 rad, passive parallelogram joints "
-             f"0.2 rad (the captions of Tabs. VI.8 and VI.9 are swapped in the thesis). Rectangle: x in +-{hw / MM:.1f} mm, "
-             f"z in [{z1 / MM:.1f}, {z2 / MM:.1f}] mm, the largest symmetric rectangle with both singularity measures "
+             f"0.2 rad (the captions of Tabs. VI.8 and VI.9 are swapped in the thesis). Rectangle: x in +-{hw_mm:.1f} mm, "
+             f"z in [{z1_mm:.1f}, {z2_mm:.1f}] mm, the largest symmetric rectangle with both singularity measures "
              f">= {margin} (our criterion; the thesis does not state its own).")
+    five = {k: fp[k] for k in ("distal", "distal_parallelograms")}
     rows = []
     for i, lab in enumerate(labels):
-        rows.append([lab, f"({pts[i, 0] / MM:.1f}, {pts[i, 1] / MM:.1f})", five["distal"].p_max[i] / MM,
-                     five["distal_parallelograms"].p_max[i] / MM, five["distal"].r_max[i], five["distal_parallelograms"].r_max[i]])
+        rows.append([lab, f"({pts_mm[i, 0]:.1f}, {pts_mm[i, 1]:.1f})", five["distal"]["p_max_mm"][i],
+                     five["distal_parallelograms"]["p_max_mm"][i], five["distal"]["r_max_rad"][i],
+                     five["distal_parallelograms"]["r_max_rad"][i]])
     rep.table(rows, header=["point", "(x, z) mm", "p_max distal (mm)", "p_max + parallelograms (mm)", "r_max distal (rad)",
                             "r_max + parallelograms (rad)"])
     bar = go.Figure()
     for k, nm in (("distal", "distal module"), ("distal_parallelograms", "distal + parallelograms")):
-        bar.add_trace(go.Bar(x=labels, y=five[k].p_max / MM, name=f"p_max, {nm}"))
+        bar.add_trace(go.Bar(x=labels, y=five[k]["p_max_mm"], name=f"p_max, {nm}"))
     bar.update_layout(barmode="group", title="Maximum positional error at the five points (mm)", height=380)
     rep.figure(bar)
     bar2 = go.Figure()
     for k, nm in (("distal", "distal module"), ("distal_parallelograms", "distal + parallelograms")):
-        bar2.add_trace(go.Bar(x=labels, y=five[k].r_max, name=f"r_max, {nm}"))
+        bar2.add_trace(go.Bar(x=labels, y=five[k]["r_max_rad"], name=f"r_max, {nm}"))
     bar2.update_layout(barmode="group", title="Maximum rotational error at the five points (rad)", height=380)
     rep.figure(bar2)
 
@@ -229,16 +216,15 @@ def run(out_dir, quick: bool = False, seed: int = 0, *, workers: int | None = No
     for k, v in data["multistart_baseline"].items():
         brows.append([k, v["n_variables"], v["multistart_p_mm"], v["p_max_mm"], v["p_upper_mm"], v["multistart_r"], v["r_max"],
                       v["r_upper"], v["seconds_multistart"], v["seconds_ours"]])
-    rep.text(f"QR elimination + SLSQP from {n_starts} random starts (thesis: fmincon, up to 200 starts) at "
-             f"({base_pose[0, 0] / MM:.1f}, {base_pose[0, 1] / MM:.1f}) mm.")
+    b0 = data["multistart_baseline"]["distal"]
+    rep.text(f"QR elimination + SLSQP from {b0['n_starts']} random starts (thesis: fmincon, up to 200 starts) at "
+             f"({b0['pose_mm'][0]:.1f}, {b0['pose_mm'][1]:.1f}) mm.")
     rep.table(brows, header=["case", "variables", "multistart p (mm)", "p_max (mm)", "p_upper (mm)", "multistart r (rad)",
                              "r_max (rad)", "r_upper (rad)", "multistart s", "certified s"])
-    data["seconds"] = time.perf_counter() - t_start
     rep.text(f"Total study time {data['seconds']:.1f} s.")
-    rep.write(out_dir / "deng2012-irsbot2.html")
-    write_json(out_dir / "deng2012-irsbot2.json", data)
-    return data
+    return rep
 
 
 STUDY = Study(name="deng2012-irsbot2", title="IRSBot-2: certified maximum pose error due to joint clearances (Deng 2012 Ch. VI)",
-              legacy_run=run, seed_paper="004_fe1111236e25a595 (Deng 2012, Ch. II, V-VI)")
+              compute=compute, render=render, config=CONFIG, quick=QUICK,
+              seed_paper="004_fe1111236e25a595 (Deng 2012, Ch. II, V-VI)")

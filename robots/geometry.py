@@ -1,0 +1,49 @@
+"""Plane-geometry helpers shared by the robot models: largest rectangles in a sampled workspace."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int, int]:
+    """Largest axis-aligned all-True rectangle of grid points in a 2-D boolean array.
+
+    Returns ``(area_in_cells, r0, r1, c0, c1)`` with inclusive row/column indices; the area
+    counts cell spans ``(r1 - r0) * (c1 - c0)`` (point grid: the rectangle's corners are grid
+    points that are all kept). Histogram-stack algorithm (largest rectangle under a histogram,
+    row by row), O(rows x cols); of equal areas, the first found (lowest last row) is kept.
+    """
+    mask = np.asarray(mask, bool)
+    nr, nc = mask.shape
+    best = (0, 0, -1, 0, -1)
+    heights = np.zeros(nc, int)
+    for r in range(nr):
+        heights = np.where(mask[r], heights + 1, 0)
+        stack: list[int] = []
+        hs = heights.tolist() + [0]
+        for c in range(nc + 1):
+            while stack and hs[stack[-1]] >= hs[c]:
+                top = stack.pop()
+                hgt = hs[top]
+                left = stack[-1] + 1 if stack else 0
+                w = c - left
+                area = (hgt - 1) * (w - 1)
+                if hgt > 0 and area > best[0]:
+                    best = (area, r - hgt + 1, r, left, c - 1)
+            stack.append(c)
+    return best
+
+
+def largest_centred_rectangle(mask: np.ndarray, column: int) -> tuple[int, int, int, int]:
+    """Largest all-True rectangle of ``mask`` symmetric about ``column``.
+
+    Returns ``(area_in_cells, r0, r1, half_width)``: rows ``r0..r1`` and columns
+    ``column - half_width .. column + half_width`` (inclusive); area ``2 half_width (r1 - r0)``
+    cell spans. Reduces to :func:`largest_rectangle` on the mask of half-widths: entry ``(r, k)``
+    is True when row ``r`` is True from ``column - k`` to ``column + k``, a prefix in ``k``, so
+    its largest rectangle starts at ``k = 0``.
+    """
+    mask = np.asarray(mask, bool)
+    half = min(column, mask.shape[1] - 1 - column)
+    both = mask[:, column:column + half + 1] & mask[:, column::-1][:, :half + 1]
+    area, r0, r1, _, c1 = largest_rectangle(np.logical_and.accumulate(both, axis=1))
+    return 2 * area, r0, r1, c1
