@@ -9,6 +9,13 @@ worst grid direction at a few probe designs and grows whenever an exact evaluati
 (:meth:`ToleranceProblem.evaluate`, refined direction) finds a row the set misses. The working set
 gives a *lower* estimate of the violation, exact on the rows it holds; ``check`` makes it exact for
 the designs it is given. Optimisers must judge their final answers with ``ToleranceProblem.evaluate``.
+
+Asymmetric intervals (offsets, minus != plus; :mod:`evotol.measures`): a worst-case row becomes
+affine, a·t + a0 <= 1 with a0 = u·Σ_j B_j offset_j / E (``A0``); directions cover the full sphere.
+RSS rows with a mean shift, |s_p(t)|/E + sqrt(b·t²) <= 1, are not in ``B`` (they are not
+quadratic): ``violation`` evaluates them exactly through the problem.
+Rows are in *source* space (one coefficient per source); optimisers map them to the free
+variables with :meth:`ToleranceProblem.to_variables` (shared tolerances).
 """
 from __future__ import annotations
 
@@ -25,9 +32,11 @@ class ConstraintRows:
             raise ValueError("ConstraintRows needs the worst_case or rss measure")
         self.measure = measure
         n = problem.n_sources
-        self.A = np.zeros((0, n))    # linear rows  a·t <= 1
+        self.A = np.zeros((0, n))    # linear rows  a·t + a0 <= 1
+        self.A0 = np.zeros(0)        # their constants (offsets of asymmetric intervals)
         self.B = np.zeros((0, n))    # quadratic rows b·t² <= 1
         self._keys: set = set()
+        self.shifted_rss = measure == "rss" and problem.asymmetric
         if measure == "rss":
             rows = [(problem.sensitivities[c] / lim) ** 2 for c, lim in problem.components]
             self.B = np.unique(np.concatenate(rows, axis=0), axis=0)
@@ -38,22 +47,28 @@ class ConstraintRows:
             probes = np.concatenate([probes, np.sqrt(problem.lower * problem.upper)[None], problem.upper[None]])
             probes = problem.full(probes[:, problem.free])
             for comp, lim in problem.components:
-                c, D, _ = problem.coefficients(comp)
+                coef = problem.coefficients(comp)
+                c, D = coef[0], coef[1]
+                const = coef[3] if len(coef) > 3 else None
                 grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ probes.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)
+                if const is not None:
+                    grid = grid + const[None]
                 k = np.argmax(grid, axis=2)                              # (n_probe, n_poses)
                 flat = np.unique((np.arange(problem.n_poses)[None, :] * D.shape[0] + k).ravel())
                 pp, dd = np.divmod(flat, D.shape[0])
-                self._add_linear(c[pp, dd, :] / lim, [(comp, int(a), int(b)) for a, b in zip(pp, dd)])
+                self._add_linear(c[pp, dd, :] / lim, [(comp, int(a), int(b)) for a, b in zip(pp, dd)],
+                                 None if const is None else const[pp, dd] / lim)
             self.check(probes)
             self.prune(probes)
 
     # --- rows ------------------------------------------------------------------------------
-    def _add_linear(self, rows: np.ndarray, keys) -> int:
+    def _add_linear(self, rows: np.ndarray, keys, consts=None) -> int:
         new = [i for i, k in enumerate(keys) if k not in self._keys]
         if not new:
             return 0
         self._keys.update(keys[i] for i in new)
         self.A = np.concatenate([self.A, rows[new]], axis=0)
+        self.A0 = np.concatenate([self.A0, np.zeros(len(new)) if consts is None else np.asarray(consts, float)[new]])
         return len(new)
 
     @property
@@ -66,7 +81,9 @@ class ConstraintRows:
         T = np.atleast_2d(T)
         v = np.full(T.shape[0], -np.inf)
         if self.A.shape[0]:
-            v = np.maximum(v, np.max(T @ self.A.T, axis=1) - 1)
+            v = np.maximum(v, np.max(T @ self.A.T + self.A0, axis=1) - 1)
+        if self.shifted_rss:
+            return self.problem.evaluate(T, "rss").violation
         if self.B.shape[0]:
             v = np.maximum(v, np.sqrt(np.max((T ** 2) @ self.B.T, axis=1)) - 1)
         return v
@@ -89,9 +106,9 @@ class ConstraintRows:
             p = np.argmax(val, axis=1)                       # worst pose per design
             for i, pi in enumerate(p):
                 uu = u[i, pi]
-                row = np.array([np.linalg.norm(B[pi].T @ uu) for B in self.problem.blocks[comp]]) / lim
+                row, const = self.problem.support_row(comp, int(pi), uu)
                 key = (comp, int(pi), tuple(np.round(uu, 9)))
-                added += self._add_linear(row[None], [key])
+                added += self._add_linear(row[None] / lim, [key], [const / lim])
         return ev.violation, added
 
     def prune(self, T: np.ndarray, keep_ratio: float = 0.8) -> int:
@@ -101,18 +118,20 @@ class ConstraintRows:
         row that becomes the maximum. Returns the number of rows dropped."""
         if self.A.shape[0] == 0:
             return 0
-        V = np.atleast_2d(T) @ self.A.T
+        V = np.atleast_2d(T) @ self.A.T + self.A0
         keep = np.any(V >= keep_ratio * V.max(axis=1, keepdims=True), axis=0)
         dropped = int((~keep).sum())
         if dropped:
             self.A = self.A[keep]
+            self.A0 = self.A0[keep]
             self._keys = set()  # keys no longer match rows; duplicates are harmless
         return dropped
 
     # --- helpers for optimisers --------------------------------------------------------------
     def scale_to_boundary(self, T: np.ndarray, iters: int = 40) -> np.ndarray:
         """Scale each design's free tolerances by one factor so it meets the working rows with
-        equality (within bounds), by bisection on the factor; locked tolerances are kept."""
+        equality (within bounds), by bisection on the factor; locked tolerances are kept (the
+        error is nondecreasing in the factor, offsets included, so bisection is exact)."""
         p = self.problem
         T = np.atleast_2d(np.array(T, dtype=float))
         free = p.free
@@ -120,8 +139,7 @@ class ConstraintRows:
         hi_f = np.full(T.shape[0], 1.0)
         # grow hi until infeasible or upper bounds reached
         for _ in range(30):
-            Th = T.copy()
-            Th[:, free] = np.clip(T[:, free] * hi_f[:, None], p.lower[free], p.upper[free])
+            Th = p.full(np.clip(T[:, free] * hi_f[:, None], p.lower[free], p.upper[free]))
             feas = self.violation(Th) <= 0
             at_top = np.all(Th[:, free] >= p.upper[free], axis=1)
             grow = feas & ~at_top
@@ -131,11 +149,8 @@ class ConstraintRows:
             hi_f = np.where(grow, hi_f * 2, hi_f)
         for _ in range(iters):
             mid = 0.5 * (lo_f + hi_f)
-            Tm = T.copy()
-            Tm[:, free] = np.clip(T[:, free] * mid[:, None], p.lower[free], p.upper[free])
+            Tm = p.full(np.clip(T[:, free] * mid[:, None], p.lower[free], p.upper[free]))
             feas = self.violation(Tm) <= 0
             lo_f = np.where(feas, mid, lo_f)
             hi_f = np.where(feas, hi_f, mid)
-        out = T.copy()
-        out[:, free] = np.clip(T[:, free] * lo_f[:, None], p.lower[free], p.upper[free])
-        return out
+        return p.full(np.clip(T[:, free] * lo_f[:, None], p.lower[free], p.upper[free]))

@@ -29,3 +29,13 @@ class KinematicsError(EvotolError):
 
 class ConvergenceError(EvotolError):
     """A numerical solver did not reach the requested tolerance."""
+
+
+class InfeasibleError(EvotolError):
+    """No allowed design meets the requirement: names the requirement, the smallest achievable
+    error (every tolerance at its lower bound) and the pose where it occurs."""
+
+    def __init__(self, requirement: str, smallest_error: float, pose, detail: str = ""):
+        self.requirement, self.smallest_error, self.pose = requirement, smallest_error, pose
+        super().__init__(f"infeasible: {requirement} cannot be met; with every free tolerance at its lower bound the "
+                         f"error is {smallest_error:.6g} at pose {pose}" + (f" ({detail})" if detail else ""))

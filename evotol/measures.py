@@ -18,6 +18,19 @@ For a planar output (one non-zero row) the same formulas hold with a circle of d
 RSS (statistical). ``rss = sqrt(Σ_j (t_j ‖B_j‖₂)²)``: the root sum square of every source's
 worst-case contribution (‖B_j‖₂ = largest singular value). It is the usual statistical stack-up
 with each tolerance taken as the same multiple of its standard deviation.
+
+Asymmetric intervals (``docs/tolerances.md``). An interval source j may sit in
+[offset_j − minus_j t_j, offset_j + plus_j t_j]: its centre is c_j = offset_j + κ_j t_j
+(κ = (plus − minus)/2) and its half-width ρ_j t_j (ρ = (plus + minus)/2). The error set is then
+s(t) + K with the mean shift s(t) = Σ_j B_j c_j and K the centred set of half-widths ρ_j t_j; it
+is no longer centrally symmetric, so the support function
+    h(u) = u·s(t) + Σ_j ρ_j t_j ‖B_jᵀu‖
+is maximised over the **full** sphere (both halves of the direction grid). h is still convex and
+positively homogeneous in u, so the same ascent, attained value and proven bound hold (the
+covering angle of the full grid equals that of ±hemisphere). For fixed u, h is affine in t:
+the rows of :mod:`evotol.constraints` gain a constant term u·Σ_j B_j offset_j. RSS with a shift:
+``|s(t)| + sqrt(Σ_j (ρ_j t_j ‖B_j‖₂)²)`` (mean shift added linearly to the RSS of the variation,
+the CETOL/3DCS convention for a mean shift).
 """
 from __future__ import annotations
 
@@ -56,14 +69,20 @@ def circle(n: int = 360) -> tuple[np.ndarray, float]:
     return np.stack([np.cos(a), np.sin(a), np.zeros(n)], 1), np.pi / (2 * n)
 
 
-def directions_for(blocks: np.ndarray, n: int = 600) -> tuple[np.ndarray, float]:
-    """Pick sphere or circle directions for position/orientation blocks (..., 3, k)."""
+def directions_for(blocks: np.ndarray, n: int = 600, full_sphere: bool = False) -> tuple[np.ndarray, float]:
+    """Pick sphere or circle directions for position/orientation blocks (..., 3, k).
+
+    ``full_sphere``: both halves (±D), for error sets that are not centrally symmetric."""
     active = np.any(np.abs(blocks) > 0, axis=tuple(i for i in range(blocks.ndim) if i != blocks.ndim - 2))
     if not active[2] and active[:2].any():
-        return circle(max(n // 2, 90))
-    if not active[0] and not active[1] and active[2]:
-        return np.array([[0.0, 0.0, 1.0]]), 0.0
-    return hemisphere(n)
+        D, delta = circle(max(n // 2, 90))
+    elif not active[0] and not active[1] and active[2]:
+        D, delta = np.array([[0.0, 0.0, 1.0]]), 0.0
+    else:
+        D, delta = hemisphere(n)
+    if full_sphere:
+        D = np.concatenate([D, -D])
+    return D, delta
 
 
 @dataclass(frozen=True)
@@ -73,16 +92,73 @@ class WorstCase:
     value: np.ndarray       # (..., n_poses) attained maximum |error|
     bound: np.ndarray       # (..., n_poses) proven upper bound
     direction: np.ndarray   # (..., n_poses, 3) worst direction u*
-    contributions: np.ndarray  # (..., n_poses, n_sources) t_j ‖B_jᵀu*‖ / h(u*)
+    contributions: np.ndarray  # (..., n_poses, n_sources) share of h(u*), mean shift included
 
 
-def support_coefficients(blocks: list[np.ndarray], D: np.ndarray) -> np.ndarray:
-    """c[p, d, j] = ‖B_jᵀ u_d‖ for blocks B_j (n_poses, 3, dim_j); shape (n_poses, n_dir, n_src)."""
+@dataclass(frozen=True)
+class IntervalShape:
+    """Where each source's interval sits (see module docstring): error of interval source j in
+    [offset_j + (κ_j − ρ_j) t_j, offset_j + (κ_j + ρ_j) t_j]; disks/balls have ρ = 1, κ = offset = 0.
+
+    rho, kappa: (n_src,) dimensionless; offset: (n_src,) SI (m or rad)."""
+
+    rho: np.ndarray
+    kappa: np.ndarray
+    offset: np.ndarray
+
+    @classmethod
+    def symmetric_unit(cls, n: int) -> "IntervalShape":
+        return cls(np.ones(n), np.zeros(n), np.zeros(n))
+
+    @property
+    def centred(self) -> bool:
+        """True when every interval is centred on zero (the error set is centrally symmetric)."""
+        return not (np.any(self.kappa != 0) or np.any(self.offset != 0))
+
+    @property
+    def plain(self) -> bool:
+        """Centred with ρ = 1: the classical symmetric tolerance ±t."""
+        return self.centred and bool(np.all(self.rho == 1))
+
+
+def _interval_columns(blocks: list[np.ndarray]) -> list[int]:
+    return [j for j, B in enumerate(blocks) if B.shape[2] == 1]
+
+
+def mean_shift(blocks: list[np.ndarray], shape: IntervalShape, T: np.ndarray) -> np.ndarray:
+    """s(t) = Σ_j B_j (offset_j + κ_j t_j) over interval sources, shape (n_designs, n_poses, 3)."""
+    T = np.atleast_2d(T)
+    out = np.zeros((T.shape[0], blocks[0].shape[0], 3))
+    for j in _interval_columns(blocks):
+        if shape.offset[j] != 0 or shape.kappa[j] != 0:
+            c = shape.offset[j] + shape.kappa[j] * T[:, j]                 # (n,)
+            out += c[:, None, None] * blocks[j][None, :, :, 0]
+    return out
+
+
+def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalShape | None = None) -> np.ndarray:
+    """c[p, d, j] = ρ_j ‖B_jᵀ u_d‖ + κ_j u_d·b_j for blocks B_j (n_poses, 3, dim_j); shape
+    (n_poses, n_dir, n_src). With the default shape (ρ = 1, κ = 0): ‖B_jᵀ u_d‖."""
     out = np.empty((blocks[0].shape[0], D.shape[0], len(blocks)))
     for j, B in enumerate(blocks):
         proj = np.matmul(np.swapaxes(B, 1, 2), D.T)          # (p, k, d)
         out[:, :, j] = np.sqrt(np.sum(proj * proj, axis=1))
+        if shape is not None:
+            if shape.rho[j] != 1:
+                out[:, :, j] *= shape.rho[j]
+            if B.shape[2] == 1 and shape.kappa[j] != 0:
+                out[:, :, j] += shape.kappa[j] * proj[:, 0, :]
     return out
+
+
+def support_constant(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalShape | None) -> np.ndarray:
+    """u_d·Σ_j B_j offset_j, shape (n_poses, n_dir): the part of h that does not scale with t."""
+    s0 = np.zeros((blocks[0].shape[0], 3))
+    if shape is not None:
+        for j in _interval_columns(blocks):
+            if shape.offset[j] != 0:
+                s0 += shape.offset[j] * blocks[j][:, :, 0]
+    return s0 @ D.T
 
 
 def _stack(blocks: list[np.ndarray]):
@@ -92,71 +168,109 @@ def _stack(blocks: list[np.ndarray]):
     return Bcat, owner
 
 
-def _h_and_grad(Bcat, owner, starts, t, u):
-    """h(u) and ∇h(u) for designs t (n, n_src), directions u (n, p, 3)."""
+def _h_and_grad(Bcat, owner, starts, t, u, shift=None):
+    """h(u) and ∇h(u) for half-widths t (n, n_src), directions u (n, p, 3), mean shift (n, p, 3)."""
     w = np.matmul(u[:, :, None, :], Bcat[None])[:, :, 0, :]            # (n, p, K) = B_jᵀ u
     nw = np.sqrt(np.add.reduceat(w * w, starts, axis=2))              # (n, p, n_src)
     h = np.einsum("npj,nj->np", nw, t)
     scale = np.where(nw > 0, t[:, None, :] / np.where(nw > 0, nw, 1.0), 0.0)[:, :, owner]
     grad = np.matmul(Bcat[None], (w * scale)[..., None])[..., 0]      # (n, p, 3)
+    if shift is not None:
+        h = h + np.einsum("npi,npi->np", u, shift)
+        grad = grad + shift
     return h, grad, nw
 
 
-def refine_direction(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray, iters: int = 60) -> tuple[np.ndarray, np.ndarray]:
-    """Ascent u ← ∇h/‖∇h‖ on h(u) = Σ_j t_j ‖B_jᵀu‖, vectorised over designs and poses.
+def refine_direction(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray, iters: int = 60,
+                     shift: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Ascent u ← ∇h/‖∇h‖ on h(u) = u·s + Σ_j t_j ‖B_jᵀu‖, vectorised over designs and poses.
 
-    blocks: list of (n_poses, 3, dim); t: (n_designs, n_src); u: (n_designs, n_poses, 3).
+    blocks: list of (n_poses, 3, dim); t: (n_designs, n_src) half-widths; u: (n_designs, n_poses, 3);
+    shift: optional mean shift s (n_designs, n_poses, 3).
     Returns (u*, h(u*)) with shapes (n_designs, n_poses, 3) and (n_designs, n_poses).
     """
     Bcat, owner = _stack(blocks)
     starts = np.concatenate([[0], np.cumsum([B.shape[2] for B in blocks])[:-1]])
     h_prev = None
     for _ in range(iters):
-        h, grad, _ = _h_and_grad(Bcat, owner, starts, t, u)
+        h, grad, _ = _h_and_grad(Bcat, owner, starts, t, u, shift)
         g = np.linalg.norm(grad, axis=-1, keepdims=True)
         u_new = np.where(g > 0, grad / np.where(g > 0, g, 1.0), u)
-        if h_prev is not None and np.max(np.abs(h - h_prev)) <= 1e-14 * max(np.max(h), 1e-300):
+        if h_prev is not None and np.max(np.abs(h - h_prev)) <= 1e-14 * max(np.max(np.abs(h)), 1e-300):
             break
         u, h_prev = u_new, h
-    h, _, _ = _h_and_grad(Bcat, owner, starts, t, u)
+    h, _, _ = _h_and_grad(Bcat, owner, starts, t, u, shift)
     return u, h
 
 
 def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
-               coefficients: tuple[np.ndarray, np.ndarray, float] | None = None, top_only: bool = False) -> WorstCase:
+               coefficients: tuple | None = None, top_only: bool = False,
+               shape: IntervalShape | None = None, n_starts: int = 8) -> WorstCase:
     """Exact worst-case error norm at every pose for designs ``t`` (n_designs, n_src) or (n_src,).
 
-    ``coefficients`` = (c, D, δ) from :func:`support_coefficients` may be passed to reuse them.
+    ``coefficients`` = (c, D, δ[, const]) from :func:`support_coefficients` /
+    :func:`support_constant` may be passed to reuse them (they must match ``shape``).
     ``top_only``: refine only the poses that can hold the maximum (others keep their grid value,
     a lower estimate) -- enough for the largest error, much faster on many poses.
+    ``shape``: asymmetric intervals (:class:`IntervalShape`); the maximum is then taken over the
+    full sphere of directions, and the ascent is also started from ``n_starts`` − 1 other good
+    grid directions (h has more separated local maxima without central symmetry).
     """
     t = np.asarray(t, dtype=float)
     single = t.ndim == 1
     T = np.atleast_2d(t)
+    plain = shape is None or shape.plain
     if coefficients is None:
-        D, delta = directions_for(np.concatenate(blocks, axis=2), n_directions)
-        c = support_coefficients(blocks, D)
+        D, delta = directions_for(np.concatenate(blocks, axis=2), n_directions,
+                                  full_sphere=not (shape is None or shape.centred))
+        c = support_coefficients(blocks, D, None if plain else shape)
+        const = None if plain else support_constant(blocks, D, shape)
     else:
-        c, D, delta = coefficients
+        c, D, delta = coefficients[:3]
+        const = coefficients[3] if len(coefficients) > 3 else None
     grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ T.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)  # (n, p, d)
+    if const is not None:
+        grid = grid + const[None]
     k = np.argmax(grid, axis=2)
     gmax = np.take_along_axis(grid, k[..., None], axis=2)[..., 0]
     u0 = D[k]
+    if plain:
+        Th, shift = T, None
+    else:
+        Th, shift = T * shape.rho, mean_shift(blocks, shape, T)
     if top_only:
         # poses whose proven bound is below the best attained grid value cannot hold the maximum
         keep = np.flatnonzero(np.any(gmax / np.cos(delta) >= gmax.max(axis=1, keepdims=True), axis=0))
         u, h = u0.copy(), gmax.copy()
         if keep.size:
-            u_k, h_k = refine_direction([B[keep] for B in blocks], T, u0[:, keep])
+            u_k, h_k = refine_direction([B[keep] for B in blocks], Th, u0[:, keep],
+                                        shift=None if shift is None else shift[:, keep])
             u[:, keep], h[:, keep] = u_k, h_k
     else:
-        u, h = refine_direction(blocks, T, u0)
+        u, h = refine_direction(blocks, Th, u0, shift=shift)
+    if not plain and n_starts > 1 and grid.shape[2] > 1:
+        # a non-centred set has more separated local maxima of h: also ascend from the best grid
+        # direction of each of a few cones around other good grid points, keep the largest
+        keep_all = np.flatnonzero(np.any(gmax / np.cos(delta) >= gmax.max(axis=1, keepdims=True), axis=0)) \
+            if top_only else np.arange(grid.shape[1])
+        g = grid[:, keep_all]                                            # (n, k, d)
+        order = np.argsort(-g, axis=2)[:, :, :max(4 * n_starts, 16)]
+        for s_ in range(1, n_starts):
+            pick = order[:, :, min(s_ * order.shape[2] // n_starts, order.shape[2] - 1)]
+            u_s, h_s = refine_direction([B[keep_all] for B in blocks], Th, D[pick],
+                                        shift=None if shift is None else shift[:, keep_all])
+            better = h_s > h[:, keep_all]
+            hk, uk = h[:, keep_all], u[:, keep_all]
+            hk[better], uk[better] = h_s[better], u_s[better]
+            h[:, keep_all], u[:, keep_all] = hk, uk
     h = np.maximum(h, gmax)
     bound = np.maximum(gmax / np.cos(delta), h)
     contrib = np.empty(T.shape[:1] + (blocks[0].shape[0], len(blocks)))
     for j, B in enumerate(blocks):
         w = np.einsum("pik,npi->npk", B, u)
-        contrib[:, :, j] = T[:, j:j + 1] * np.sqrt(np.einsum("npk,npk->np", w, w))
+        contrib[:, :, j] = Th[:, j:j + 1] * np.sqrt(np.einsum("npk,npk->np", w, w))
+        if not plain and B.shape[2] == 1:
+            contrib[:, :, j] += (shape.offset[j] + shape.kappa[j] * T[:, j:j + 1]) * w[:, :, 0]
     contrib /= np.where(h > 0, h, 1.0)[..., None]
     res = WorstCase(h, bound, u, contrib)
     if single:
@@ -164,16 +278,23 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
     return res
 
 
-def worst_case_errors(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray) -> list[np.ndarray]:
-    """The explicit source errors that attain h(u) at each pose: e_j = t_j B_jᵀu/‖B_jᵀu‖.
+def worst_case_errors(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray,
+                      shape: IntervalShape | None = None) -> list[np.ndarray]:
+    """The explicit source errors that attain h(u) at each pose: e_j = c_j + ρ_j t_j B_jᵀu/‖B_jᵀu‖
+    (c_j: the interval's centre, 0 for centred tolerances; for an interval source this is the end
+    of the interval on the side of u).
 
-    t: (n_src,), u: (n_poses, 3); returns a list of (n_poses, dim_j) arrays.
+    t: (n_src,), u: (n_poses, 3); returns a list of (n_poses, dim_j) arrays (SI).
     """
     out = []
     for j, B in enumerate(blocks):
         w = np.einsum("pik,pi->pk", B, u)
         nw = np.linalg.norm(w, axis=1, keepdims=True)
-        out.append(np.where(nw > 0, t[j] * w / np.where(nw > 0, nw, 1.0), 0.0))
+        r = t[j] if shape is None else shape.rho[j] * t[j]
+        e = np.where(nw > 0, r * w / np.where(nw > 0, nw, 1.0), 0.0)
+        if shape is not None and B.shape[2] == 1:
+            e = e + shape.offset[j] + shape.kappa[j] * t[j]
+        out.append(e)
     return out
 
 
@@ -183,7 +304,11 @@ def spectral_norms(blocks: list[np.ndarray]) -> np.ndarray:
                      for B in blocks], axis=1)
 
 
-def rss(sens: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """RSS error sqrt(Σ_j (t_j s_pj)²) for sensitivities (n_poses, n_src) and t (..., n_src) -> (..., n_poses)."""
+def rss(sens: np.ndarray, t: np.ndarray, shift_norm: np.ndarray | None = None) -> np.ndarray:
+    """RSS error sqrt(Σ_j (t_j s_pj)²) for sensitivities (n_poses, n_src) and t (..., n_src) -> (..., n_poses).
+
+    ``shift_norm`` (..., n_poses): |mean shift|, added linearly (``|s| + RSS``, module docstring);
+    pass half-widths ρ_j t_j as ``t`` for asymmetric intervals."""
     t = np.asarray(t, dtype=float)
-    return np.sqrt(np.einsum("pj,...j->...p", sens ** 2, t ** 2))
+    out = np.sqrt(np.einsum("pj,...j->...p", sens ** 2, t ** 2))
+    return out if shift_norm is None else out + shift_norm

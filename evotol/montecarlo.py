@@ -92,7 +92,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
         E = np.empty((idx.size, n_samples, robot.n_columns))
         for a, p in enumerate(idx):
             Z = distributions.draw(distributions.uniforms(n_samples, sum(dims), method, seeds[p]), dims, dists, radial)
-            E[a] = np.concatenate([z * tj for z, tj in zip(Z, t)], axis=1)
+            E[a] = np.concatenate(problem.source_errors(Z, t), axis=1)   # inside shifted intervals too
         lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
         for c, lim in comps:
             nrm = np.linalg.norm(lin[:, :, rows[c]], axis=2)

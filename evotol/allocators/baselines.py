@@ -59,29 +59,39 @@ def _scale_exact(problem: ToleranceProblem, t: np.ndarray, rows: ConstraintRows 
 
 
 def equal_design(problem: ToleranceProblem, rows: ConstraintRows | None = None) -> np.ndarray:
-    t = problem.locked_values.copy()
     f = problem.free
-    t[f] = np.sqrt(problem.lower[f] * problem.upper[f]).min()
+    t = problem.full(np.full(int(f.sum()), np.sqrt(problem.lower[f] * problem.upper[f]).min())[None])[0]
     return _scale_exact(problem, t, rows)
 
 
 def proportional_design(problem: ToleranceProblem, weights=None) -> np.ndarray:
-    t = problem.locked_values.copy()
     f = problem.free
     w = problem.upper if weights is None else problem.as_array(weights)
     if np.any(w[f] <= 0):
         raise ValidationError("weights", w.tolist(), "positive weights for the free sources")
-    t[f] = w[f] / np.max(w[f]) * problem.upper[f].min()
+    t = problem.full((w[f] / np.max(w[f]) * problem.upper[f].min())[None])[0]
     return _scale_exact(problem, t)
 
 
 def _t_of_lambda(problem: ToleranceProblem, s: np.ndarray, lam: float, measure: str) -> np.ndarray:
     t = problem.locked_values.copy()
+    M = problem.variable_matrix
+    members = {j: np.flatnonzero(M[:, v]) for v, j in enumerate(np.flatnonzero(problem.free))}
     for j in np.flatnonzero(problem.free):
-        cm = problem.tolerances[problem.names[j]].cost
+        tol = problem.tolerances[problem.names[j]]
+        cm = tol.cost
         lo, hi = problem.lower[j], problem.upper[j]
         sig = cm.scale
-        if isinstance(cm, ExponentialCost):
+        simple = members[j].size == 1 and tol.width_factor == 1 and problem.cost_weight[j] == 1
+        if not simple:   # shared variable or cost on a scaled width: bisection on the collected derivative
+            mem = members[j]
+            sv = float(np.sum(s[mem])) if measure == "worst_case" else float(np.sum(s[mem] ** 2))
+
+            def g(x):
+                dc = sum(problem.cost_weight[k] * float(problem.tolerances[problem.names[k]].dcost_of(x)) for k in mem)
+                return dc + lam * (sv if measure == "worst_case" else 2 * sv * x)
+            tj = lo if g(lo) >= 0 else hi if g(hi) <= 0 else brentq(g, lo, hi, xtol=1e-15 * hi)
+        elif isinstance(cm, ExponentialCost):
             a0, a1 = cm.p
             if measure == "worst_case":
                 arg = a0 * a1 / (sig * lam * s[j])
@@ -105,7 +115,7 @@ def _t_of_lambda(problem: ToleranceProblem, s: np.ndarray, lam: float, measure: 
             else:
                 tj = brentq(g, lo, hi, xtol=1e-15 * hi)
         t[j] = np.clip(tj, lo, hi)
-    return t
+    return problem.full(t[problem.free][None])[0]
 
 
 def lagrange_design(problem: ToleranceProblem, measure: str | None = None) -> np.ndarray:

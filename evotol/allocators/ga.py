@@ -127,8 +127,7 @@ def boundary_scale(rows: ConstraintRows, T: np.ndarray, iters: int = 20) -> np.n
     active = np.arange(T.shape[0])
     for _ in range(iters):
         ne = rows.normalised_error(T[active])
-        Tn = T[active].copy()
-        Tn[:, f] = np.clip(Tn[:, f] / ne[:, None], P.lower[f], P.upper[f])
+        Tn = P.full(np.clip(T[active][:, f] / ne[:, None], P.lower[f], P.upper[f]))
         moved = np.any(np.abs(Tn - T[active]) > 1e-12 * np.abs(T[active]), axis=1) & (np.abs(ne - 1) > 1e-12)
         T[active] = Tn
         active = active[moved]
@@ -214,10 +213,12 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     t0 = time.perf_counter()
     if operators not in ("pymoo", "paper"):
         raise ValidationError("operators", operators, "'pymoo' or 'paper'")
-    for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1)):
+    for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1), ("seed", seed, 0)):
         if not isinstance(v, (int, np.integer)) or v < lo:
             raise ValidationError(name, v, f"an integer >= {lo}")
     measure = problem.requirement.measure
+    if budget is None:
+        problem.check_feasible()
     rows = ConstraintRows(problem, seed=seed) if measure in ("worst_case", "rss") else None
     if repair is None:
         repair = operators == "pymoo" and budget is None and rows is not None

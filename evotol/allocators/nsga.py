@@ -131,7 +131,7 @@ def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int
     """NSGA-II cost vs. normalised error (see module docstring). ``log_scale``: search log(t)
     (default: when some tolerance range spans more than two decades)."""
     t0 = time.perf_counter()
-    for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1)):
+    for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1), ("seed", seed, 0)):
         if not isinstance(v, (int, np.integer)) or v < lo:
             raise ValidationError(name, v, f"an integer >= {lo}")
     rows = ConstraintRows(problem, seed=seed) if problem.requirement.measure in ("worst_case", "rss") else None

@@ -17,6 +17,11 @@ only lowers it); each inner problem is one-dimensional and convex (solved by bis
 derivative). **gap** = (cost(t*) − q(λ)) / cost(t*).
 
 Best accuracy at a fixed budget B (``budget=``): min s s.t. a_r·t <= s, b_p·t² <= s², Σ c_j(t_j) <= B.
+
+Shared tolerances and asymmetric intervals: the program is solved over the free *variables* x
+(t = full(x); a shared variable collects its members' row coefficients and costs), and the
+worst-case rows are affine, a_r·t + a0_r <= 1 (offsets); the dual bound keeps the constants:
+q(λ) = min_x [c(x) + Σ λ_r (a_r·t(x) + a0_r − 1)] (+ μ terms), still a proven lower bound.
 """
 from __future__ import annotations
 
@@ -35,20 +40,18 @@ from evotol.threads import single_threaded_blas
 
 
 def _check_convex(problem: ToleranceProblem) -> None:
-    for j in np.flatnonzero(problem.free):
+    for j in np.flatnonzero(~problem.locked & (problem.cost_weight > 0)):
         n = problem.names[j]
-        cm = problem.tolerances[n].cost
-        if not cm.is_convex(problem.lower[j], problem.upper[j]):
+        tol = problem.tolerances[n]
+        cm, w = tol.cost, tol.width_factor
+        if not cm.is_convex(w * problem.lower[j], w * problem.upper[j]):
             raise ValidationError(f"tolerances[{n!r}].cost", cm, f"a cost model convex on [{problem.lower[j]:.3g}, "
                                   f"{problem.upper[j]:.3g}] for the certified optimum (use allocate_ga instead)")
 
 
 def _locked_part(problem: ToleranceProblem, M: np.ndarray, power: int) -> np.ndarray:
     """Row values of the locked tolerances: M[:, locked] @ t_locked**power (zeros if none)."""
-    lk = ~problem.free
-    if not lk.any():
-        return np.zeros(M.shape[0])
-    return M[:, lk] @ problem.locked_values[lk] ** power
+    return problem.locked_part(M, power)
 
 
 def _select(values: np.ndarray, k: int) -> np.ndarray:
@@ -58,13 +61,14 @@ def _select(values: np.ndarray, k: int) -> np.ndarray:
 
 
 def _min_1d(problem: ToleranceProblem, w: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """argmin over [lo, hi] of c_j(t) + w_j t + v_j t² for every free source (bisection on the derivative)."""
+    """argmin over [lo, hi] of c_v(x) + w_v x + v_v x² for every free variable (bisection on the
+    derivative); w, v are per source and are collected per variable."""
     f = np.flatnonzero(problem.free)
     lo, hi = problem.lower[f].copy(), problem.upper[f].copy()
-    models = [problem.tolerances[problem.names[j]].cost for j in f]
+    wv, vv = problem.to_variables(w), problem.to_variables(v)
 
     def deriv(t):
-        return np.array([float(m.dcost(x)) for m, x in zip(models, t)]) + w[f] + 2 * v[f] * t
+        return problem.variable_dcost(problem.full(t[None])[0]) + wv + 2 * vv * t
 
     d_lo, d_hi = deriv(lo), deriv(hi)
     a, b = lo.copy(), hi.copy()
@@ -85,11 +89,10 @@ def dual_bound(problem: ToleranceProblem, rows: ConstraintRows, lam: np.ndarray,
     w = rows.A.T @ lam if lam.size else np.zeros(problem.n_sources)
     v = rows.B.T @ mu if mu.size else np.zeros(problem.n_sources)
     tf = _min_1d(problem, w, v)
-    t = problem.locked_values.copy()
-    t[f] = tf
+    t = problem.full(tf[None])[0]
     lag = problem.cost(t) - lam.sum() - mu.sum()
     if lam.size:
-        lag += float(lam @ (rows.A @ t))
+        lag += float(lam @ (rows.A @ t + rows.A0))
     if mu.size:
         lag += float(mu @ (rows.B @ t ** 2))
     return float(lag)
@@ -98,13 +101,15 @@ def dual_bound(problem: ToleranceProblem, rows: ConstraintRows, lam: np.ndarray,
 def certificate(problem: ToleranceProblem, rows: ConstraintRows, t: np.ndarray, active_tol: float = 1e-6) -> dict:
     """KKT residual and duality gap of design t on the working rows (see module docstring)."""
     f = problem.free
-    grad = problem.dcost(t)
-    ga = rows.A @ t if rows.A.shape[0] else np.zeros(0)
+    grad = problem.variable_dcost(t)
+    ga = rows.A @ t + rows.A0 if rows.A.shape[0] else np.zeros(0)
     gb = rows.B @ t ** 2 if rows.B.shape[0] else np.zeros(0)
     act_a = np.flatnonzero(ga >= 1 - active_tol)
     act_b = np.flatnonzero(gb >= 1 - 2 * active_tol)
-    interior = f & (t > problem.lower * (1 + 1e-9)) & (t < problem.upper * (1 - 1e-9))
-    M = np.concatenate([rows.A[act_a].T, (2 * rows.B[act_b] * t).T], axis=1)[interior]
+    tf = t[f]
+    interior = (tf > problem.lower[f] * (1 + 1e-9)) & (tf < problem.upper[f] * (1 - 1e-9))
+    M = np.concatenate([problem.to_variables(rows.A[act_a]).T,
+                        problem.to_variables(2 * rows.B[act_b] * t).T], axis=1)[interior]
     rhs = -grad[interior]
     if M.shape[1] and M.shape[0]:
         coef, res = nnls(M, rhs, maxiter=50 * M.shape[1])
@@ -124,35 +129,29 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
     f = np.flatnonzero(problem.free)
     hi = problem.upper[f]
     lo = problem.lower[f]
-    locked = problem.locked_values.copy()
-    models = [problem.tolerances[problem.names[j]].cost for j in f]
     c0 = max(float(problem.cost(t_start)), 1e-300)
 
     def T(y):
-        t = locked.copy()
-        t[f] = y * hi
-        return t
+        return problem.full((y * hi)[None])[0]
 
     def obj(y):
-        t = y * hi
-        return sum(float(m.cost(x)) for m, x in zip(models, t)) / c0
+        return problem.free_cost(T(y)) / c0
 
     def jac(y):
-        t = y * hi
-        return np.array([float(m.dcost(x)) for m, x in zip(models, t)]) * hi / c0
+        return problem.variable_dcost(T(y)) * hi / c0
 
     t_cur = t_start.copy()
     for _ in range(20):
         cons = []
         if rows.A.shape[0]:
-            sel = _select(rows.A @ t_cur, max_rows)
+            sel = _select(rows.A @ t_cur + rows.A0, max_rows)
             A = rows.A[sel]
-            Af, off = A[:, f] * hi, 1 - _locked_part(problem, A, 1)
+            Af, off = problem.to_variables(A) * hi, 1 - _locked_part(problem, A, 1) - rows.A0[sel]
             cons.append({"type": "ineq", "fun": lambda y, Af=Af, off=off: off - Af @ y, "jac": lambda y, Af=Af: -Af})
         if rows.B.shape[0]:
             sel = _select(rows.B @ t_cur ** 2, max_rows)
             B = rows.B[sel]
-            Bf = B[:, f] * hi ** 2
+            Bf = problem.to_variables(B) * hi ** 2
             off = 1 - _locked_part(problem, B, 2)
             cons.append({"type": "ineq", "fun": lambda y, Bf=Bf, off=off: off - Bf @ y ** 2,
                          "jac": lambda y, Bf=Bf: -2 * Bf * y})
@@ -177,7 +176,11 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
     if problem.requirement.measure not in ("worst_case", "rss"):
         raise ValidationError("requirement.measure", problem.requirement.measure,
                               "'worst_case' or 'rss' for the exact optimum (mc_quantile and yield have no convex rows: use allocate_ga)")
+    if problem.requirement.measure == "rss" and problem.asymmetric:
+        raise ValidationError("requirement.measure", "rss", "'worst_case' for the exact optimum of asymmetric "
+                              "intervals (|shift| + RSS rows are not quadratic: use allocate_ga)")
     _check_convex(problem)
+    problem.check_feasible()
     rows = ConstraintRows(problem)
     if budget is not None:
         return _best_accuracy(problem, rows, float(budget), t0, tol, max_rounds, max_rows)
@@ -213,35 +216,30 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
 def _best_accuracy(problem, rows, budget, t0, tol, max_rounds, max_rows):
     f = np.flatnonzero(problem.free)
     lo, hi = problem.lower[f], problem.upper[f]
-    locked = problem.locked_values.copy()
-    models = [problem.tolerances[problem.names[j]].cost for j in f]
-    locked_cost = sum(float(problem.tolerances[problem.names[j]].cost.cost(locked[j])) for j in np.flatnonzero(~problem.free))
-    min_cost = locked_cost + sum(float(m.cost(h)) for m, h in zip(models, hi))
+    min_cost = float(problem.cost(problem.full(hi[None])[0]))
     if budget < min_cost:
         raise ValidationError("budget", budget, f">= {min_cost:.6g}, the cost with every free tolerance at its upper bound")
 
     def T(y):
-        t = locked.copy()
-        t[f] = y * hi
-        return t
+        return problem.full((y * hi)[None])[0]
 
     y = np.clip(sensitivity_design(problem)[f] / hi, lo / hi, 1)
     s0 = float(rows.normalised_error(T(y)[None])[0])
     z = np.concatenate([y, [s0]])
     for rounds in range(1, max_rounds + 1):
-        cons = [{"type": "ineq", "fun": lambda z: (budget - locked_cost - sum(float(m.cost(x)) for m, x in zip(models, z[:-1] * hi))) / budget,
-                 "jac": lambda z: np.concatenate([-np.array([float(m.dcost(x)) for m, x in zip(models, z[:-1] * hi)]) * hi, [0.0]]) / budget}]
+        cons = [{"type": "ineq", "fun": lambda z: (budget - float(problem.cost(T(z[:-1])))) / budget,
+                 "jac": lambda z: np.concatenate([-problem.variable_dcost(T(z[:-1])) * hi, [0.0]]) / budget}]
         tz = T(z[:-1])
         if rows.A.shape[0]:
-            sel = _select(rows.A @ tz, max_rows)
+            sel = _select(rows.A @ tz + rows.A0, max_rows)
             A = rows.A[sel]
-            Af, off = A[:, f] * hi, _locked_part(problem, A, 1)
+            Af, off = problem.to_variables(A) * hi, _locked_part(problem, A, 1) + rows.A0[sel]
             cons.append({"type": "ineq", "fun": lambda z, Af=Af, off=off: z[-1] - off - Af @ z[:-1],
                          "jac": lambda z, Af=Af: np.hstack([-Af, np.ones((Af.shape[0], 1))])})
         if rows.B.shape[0]:
             sel = _select(rows.B @ tz ** 2, max_rows)
             B = rows.B[sel]
-            Bf = B[:, f] * hi ** 2
+            Bf = problem.to_variables(B) * hi ** 2
             off = _locked_part(problem, B, 2)
             cons.append({"type": "ineq", "fun": lambda z, Bf=Bf, off=off: z[-1] ** 2 - off - Bf @ z[:-1] ** 2,
                          "jac": lambda z, Bf=Bf: np.hstack([-2 * Bf * z[:-1], 2 * z[-1] * np.ones((Bf.shape[0], 1))])})

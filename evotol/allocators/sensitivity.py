@@ -6,7 +6,10 @@ free source receives the same share of the error budget:
   * worst-case measure:  s_j t_j = (1 − Σ_locked s_k t_k) / m         (linear stack-up);
   * RSS measure:         s_j t_j = sqrt((1 − Σ_locked (s_k t_k)²) / m)  (root-sum-square stack-up);
 m = number of free sources that move the end-effector (sources with no effect get their upper
-bound). Tolerances are then clipped to their bounds. The allocation holds
+bound). Tolerances are then clipped to their bounds. Shared tolerances: a variable's sensitivity
+is the sum (worst case) or root sum square (RSS) of its members'. Asymmetric intervals: s_j is
+taken per unit t of the interval's farthest end, s_j (ρ_j + |κ_j|), and the fixed offsets'
+largest effect max_p |Σ_j B_j offset_j| / E is taken off the budget first. The allocation holds
 the requirement by construction (sum/RSS of per-source maxima bounds the true error) but ignores
 cost entirely.
 """
@@ -16,6 +19,7 @@ import time
 
 import numpy as np
 
+from evotol import measures
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
 from evotol.result import make_result
@@ -50,26 +54,40 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
     if measure not in ("worst_case", "rss"):
         measure = "rss"
     s = aggregated_sensitivity(problem, collective_groups)
-    free, m = problem.free, int(problem.free.sum())
+    sh = problem.shape
+    if not sh.plain:
+        s = s * (sh.rho + np.abs(sh.kappa))
+    if problem.follower.any():      # a shared variable carries its members' sensitivities
+        M = problem.variable_matrix
+        sv = M.T @ s if measure == "worst_case" else np.sqrt(M.T @ s ** 2)
+        s = s.copy()
+        s[problem.free] = sv
+    free = problem.free
     t = problem.locked_values.copy()
-    locked = ~free
+    locked = problem.locked
     idle = free & (s <= 0)          # sources with no effect on the error: loosest tolerance
     t[idle] = problem.upper[idle]
     free = free & ~idle
     m = int(free.sum())
     if m == 0:
-        return t
+        return problem.full(t[problem.free][None])[0]
+    offset_part = 0.0
+    if np.any(sh.offset != 0):
+        offset_part = max(float(np.max(np.linalg.norm(measures.mean_shift(
+            problem.blocks[c], measures.IntervalShape(sh.rho, 0 * sh.kappa, sh.offset), np.zeros((1, t.size)))[0], axis=-1))) / lim
+            for c, lim in problem.components)
     if measure == "worst_case":
-        budget = 1 - float(np.sum(s[locked] * t[locked]))
+        budget = 1 - offset_part - float(np.sum(s[locked] * t[locked]))
         share = budget / m
     else:
-        budget = 1 - float(np.sum((s[locked] * t[locked]) ** 2))
+        budget = (1 - offset_part) ** 2 - float(np.sum((s[locked] * t[locked]) ** 2)) if offset_part else \
+            1 - float(np.sum((s[locked] * t[locked]) ** 2))
         share = np.sqrt(max(budget, 0.0) / m)
     if budget <= 0:
         raise ValidationError("locked tolerances", {n: problem.locked_values[i] for i, n in enumerate(problem.names) if locked[i]},
-                              "locked values that leave some error budget for the free sources")
+                              "locked values and offsets that leave some error budget for the free sources")
     t[free] = np.clip(share / s[free], problem.lower[free], problem.upper[free])
-    return t
+    return problem.full(t[problem.free][None])[0]
 
 
 @single_threaded_blas

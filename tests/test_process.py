@@ -1,0 +1,134 @@
+"""Process selection (evotol/allocators/process.py): branch and bound against full enumeration
+and an independent grid search, the dual bound, the GA and baselines, bad input."""
+import itertools
+
+import numpy as np
+import pytest
+
+from cost_models import PowerCost, ReciprocalCost
+from evotol.allocators.process import (Process, ProcessProblem, allocate_process_baselines, allocate_process_ga,
+                                       allocate_process_optimum, assembly_problem, cheapest_feasible_processes,
+                                       process_front)
+from evotol.errors import ValidationError
+from evotol.problem import Requirement
+from evotol.studies._process_benchmarks import MM, clutch_problem, process, stack_problem
+from robots.assembly import LinearStack
+
+
+@pytest.fixture(scope="module")
+def clutch_wc():
+    pp = clutch_problem("worst_case")
+    return pp, allocate_process_optimum(pp, "enumerate")
+
+
+@pytest.mark.parametrize("measure", ["worst_case", "rss"])
+def test_branch_and_bound_finds_the_enumeration_optimum_with_fewer_solves(measure):
+    pp = stack_problem(measure, n_dims=4, names=("turn", "grind", "hone"))
+    enum = allocate_process_optimum(pp, "enumerate")
+    bb = allocate_process_optimum(pp)
+    assert bb.cost == pytest.approx(enum.cost, rel=1e-9)
+    assert bb.processes == enum.processes
+    assert bb.feasible and enum.feasible
+    assert bb.n_convex_solves < enum.n_convex_solves
+    assert enum.n_combinations == 3 ** 4
+
+
+def test_clutch_optimum_against_independent_grid_search(clutch_wc):
+    """Worst case: Σ s_j t_j <= L is one linear row; for every process combination eliminate t_e
+    on the active row and scan (t_a, t_c) on a 400 × 400 log grid: never below the optimum, and
+    within 0.1 % of it."""
+    pp, opt = clutch_wc
+    s = np.abs(pp.robot.gradient[0]) / pp.robot.limits[0]
+    best = np.inf
+    for choice in itertools.product(*[range(k) for k in pp.n_processes]):
+        P = [pp.processes[n][k] for n, k in zip(pp.names, choice)]
+        ta, tc = np.meshgrid(np.geomspace(P[0].lower, P[0].upper, 400), np.geomspace(P[1].lower, P[1].upper, 400))
+        te = np.minimum((1 - s[0] * ta - s[1] * tc) / s[2], P[2].upper)
+        ok = te >= P[2].lower
+        if ok.any():
+            cost = P[0].total(ta) + P[1].total(tc) + P[2].total(np.where(ok, te, P[2].lower))
+            best = min(best, float(np.min(cost[ok])))
+    assert opt.cost <= best * (1 + 1e-9)
+    assert best <= opt.cost * 1.001
+
+
+def test_node_bound_at_the_root_is_a_lower_bound(clutch_wc):
+    pp, opt = clutch_wc
+    bb = allocate_process_optimum(pp)
+    assert bb.cost == pytest.approx(opt.cost, rel=1e-9)
+    assert bb.certificate["leaf_gap"] < 1e-6
+    if bb.certificate["smallest_pruned_bound"] is not None:
+        assert bb.certificate["smallest_pruned_bound"] >= opt.cost * (1 - 1e-7)
+
+
+def test_ga_finds_a_feasible_design_within_five_percent_and_never_below_the_optimum(clutch_wc):
+    pp, opt = clutch_wc
+    ga = allocate_process_ga(pp, pop_size=40, n_gen=40, seed=1)
+    assert ga.feasible
+    assert opt.cost * (1 - 1e-9) <= ga.cost <= 1.05 * opt.cost
+
+
+def test_baselines_are_feasible_processes_and_cost_at_least_the_optimum(clutch_wc):
+    pp, opt = clutch_wc
+    ch = cheapest_feasible_processes(pp)
+    assert pp.normalised_error(pp.lo[np.arange(pp.n_sources), ch])[0] <= 1
+    for r in allocate_process_baselines(pp).values():
+        if r.feasible:
+            assert r.cost >= opt.cost * (1 - 1e-9)
+    lag = allocate_process_baselines(pp)["lagrange"]
+    assert lag.feasible
+
+
+def test_nsga_front_feasible_points_cost_at_least_the_optimum(clutch_wc):
+    pp, opt = clutch_wc
+    df = process_front(pp, pop_size=30, n_gen=30, seed=0)
+    feas = df[df.normalised_error <= 1]
+    assert len(feas) > 0
+    assert feas.cost.min() >= opt.cost * (1 - 1e-9)
+    assert np.all(np.diff(df.cost) >= 0)
+
+
+def _stack():
+    return LinearStack({"x1": 1.0, "x2": -1.0}, {"gap": 1e-4})
+
+
+def _pp(processes, **kw):
+    return ProcessProblem(_stack(), processes, Requirement(position=1.0), _stack().response_poses, **kw)
+
+
+GOOD = [process("turn"), process("grind")]
+
+
+@pytest.mark.parametrize("processes, field_part", [
+    ({"x1": [], "x2": GOOD}, "processes['x1']"),
+    ({"x1": GOOD}, "processes"),
+    ({"x1": GOOD, "x2": GOOD, "x3": GOOD}, "processes['x3']"),
+    ({"x1": GOOD, "x2": ["grind"]}, "processes['x2'] entry"),
+    ({"x1": GOOD, "x2": [process("turn"), process("turn")]}, "processes['x2'] name"),
+    ({"x1": GOOD, "x2": [Process("lap", PowerCost(1.0, 1.0, scale=MM), 2e-5, 1e-5)]}, "processes['x2']['lap']"),
+    ({"x1": GOOD, "x2": [Process("lap", PowerCost(1.0, 1.0, scale=MM), 1e-6, 1e-5, fixed_cost=-1.0)]},
+     "processes['x2']['lap'].fixed_cost"),
+    # a rough process that costs more than the fine one over all of its range: a unit slip
+    ({"x1": GOOD, "x2": [Process("fine", ReciprocalCost(1.0, 0.01, scale=MM), 1e-6, 1e-4),
+                         Process("rough", ReciprocalCost(1.0, 0.01, scale=1e-2), 2e-5, 8e-5)]},
+     "processes['x2']['rough']"),
+])
+def test_bad_process_input_names_source_and_process(processes, field_part):
+    with pytest.raises(ValidationError) as err:
+        _pp(processes)
+    assert field_part in err.value.field
+
+
+def test_dominated_process_accepted_when_check_is_off():
+    pp = _pp({"x1": GOOD, "x2": [Process("fine", ReciprocalCost(1.0, 0.01, scale=MM), 1e-6, 1e-4),
+                                 Process("rough", ReciprocalCost(1.0, 0.01, scale=1e-2), 2e-5, 8e-5)]},
+             check_dominance=False)
+    r = allocate_process_optimum(pp)
+    assert r.processes["x2"] == "fine"
+
+
+def test_no_process_fine_enough_is_a_validation_error():
+    stack = LinearStack({"x1": 1.0, "x2": -1.0}, {"gap": 1e-6})
+    pp = assembly_problem(stack, processes={"x1": [process("mill")], "x2": [process("mill")]})
+    with pytest.raises(ValidationError, match="hold the requirement"):
+        allocate_process_optimum(pp)
