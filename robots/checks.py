@@ -47,13 +47,15 @@ def check_sources_declared(s: _Settings) -> dict:
 
 
 def check_units_declared(s: _Settings) -> dict:
-    """Every source and every workspace coordinate declares an SI unit (m or rad), and the
-    display scales (to mm, deg...) are positive numbers, one per coordinate."""
+    """Every source declares an SI unit (m or rad), every workspace coordinate one too (m, rad,
+    or "1" when dimensionless), and the display scales (to mm, deg...) are positive numbers."""
     r, ws = s.robot, s.robot.workspace
     bad = [x.name for x in r.sources if x.unit not in UNITS]
     assert not bad, f"{r.name}: sources {bad} have no SI unit (one of {UNITS})"
-    assert len(ws.units) == ws.dim and all(u in UNITS for u in ws.units), \
-        f"{r.name}: workspace units {ws.units}, expected one of {UNITS} per coordinate {ws.names}"
+    # a workspace coordinate may also be a dimensionless SI quantity ("1": an index, a ratio)
+    allowed = UNITS + ("1",)
+    assert len(ws.units) == ws.dim and all(u in allowed for u in ws.units), \
+        f"{r.name}: workspace units {ws.units}, expected one of {allowed} per coordinate {ws.names}"
     assert len(ws.display_scale) == ws.dim and all(np.isfinite(ws.display_scale)) and min(ws.display_scale) > 0, \
         f"{r.name}: workspace display_scale {ws.display_scale}"
     return {}
