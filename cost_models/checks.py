@@ -24,6 +24,7 @@ import numpy as np
 from cost_models.base import CostModel
 from cost_models.compound import SumCost
 from cost_models.registry import ALIASES, available, from_dict
+from evotol.conformance import run_checks
 
 
 def _grid(t_min: float, t_max: float, n: int = 50) -> np.ndarray:
@@ -140,12 +141,4 @@ def check_cost_model(model: CostModel, t_min: float | None = None, t_max: float 
     """Run every check of :func:`cost_model_checks`; returns the merged measurements.
 
     Raises one ``AssertionError`` listing every failed check (not only the first)."""
-    report, failures = {}, []
-    for name, check in cost_model_checks(model, t_min, t_max, rtol):
-        try:
-            report.update(check())
-        except Exception as exc:    # every failure is reported, whatever its type
-            failures.append(f"{name}: {type(exc).__name__}: {exc}")
-    if failures:
-        raise AssertionError(f"{getattr(model, 'name', model)!s} fails {len(failures)} check(s):\n  " + "\n  ".join(failures))
-    return report
+    return run_checks(str(getattr(model, 'name', model)), cost_model_checks(model, t_min, t_max, rtol))

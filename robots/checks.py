@@ -19,6 +19,7 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
+from evotol.conformance import run_checks
 from evotol.errors import KinematicsError
 from robots.units import UNITS
 
@@ -162,12 +163,4 @@ def check_robot(robot: Robot, poses=None, *, step: float = 1e-7, rtol: float = 1
     merged measurements (e.g. ``fd_relative_mismatch``).
 
     Raises one ``AssertionError`` listing every failed check (not only the first)."""
-    report, failures = {}, []
-    for name, check in robot_checks(robot, poses, step=step, rtol=rtol, atol=atol):
-        try:
-            report.update(check())
-        except Exception as exc:    # every failure is reported, whatever its type
-            failures.append(f"{name}: {type(exc).__name__}: {exc}")
-    if failures:
-        raise AssertionError(f"{robot.name} fails {len(failures)} check(s):\n  " + "\n  ".join(failures))
-    return report
+    return run_checks(str(robot.name), robot_checks(robot, poses, step=step, rtol=rtol, atol=atol))

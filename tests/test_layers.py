@@ -4,13 +4,13 @@ Lower layers never import higher ones -- also not by an import inside a function
 hides a cycle. From the bottom:
 
 0. foundation: ``evotol.errors``, ``evotol.threads``, ``evotol.executor``, ``evotol.pareto``,
-   ``evotol.outputs``, ``evotol.interrupt``, ``evotol.keywords`` (no physics, no problem; anyone
+   ``evotol.outputs``, ``evotol.interrupt``, ``evotol.keywords``, ``evotol.conformance`` (no physics, no problem; anyone
    may use them);
 1. models: ``cost_models``, ``robots``;
 2. problem and measures: ``evotol.problem``, ``measures``, ``constraints``, ``result``,
    ``distributions``, ``statistical`` (the first-order yield measure);
 3. allocators and design-space search: ``evotol.allocators``, ``evotol.doe``, ``evotol.filtering``;
-4. verification: ``evotol.montecarlo``;
+4. verification: ``evotol.montecarlo``, ``evotol.nonlinear``;
 5. reporting: ``evotol.reporting`` (the HTML toolkit a study's ``render`` and the CLI use; it
    imports no study, so a report cannot compute one);
 6. studies: ``evotol.studies``, ``evotol.studyfile``;
@@ -33,11 +33,12 @@ PACKAGES = ("evotol", "cost_models", "robots")
 LAYERS = {
     "evotol": 0, "evotol.errors": 0, "evotol.threads": 0, "evotol.executor": 0, "evotol.pareto": 0,
     "evotol.outputs": 0, "evotol.interrupt": 0, "evotol.keywords": 0,
+    "evotol.conformance": 0,
     "cost_models": 1, "robots": 1,
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2,
     "evotol.distributions": 2, "evotol.statistical": 2,
     "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3,
-    "evotol.montecarlo": 4,
+    "evotol.montecarlo": 4, "evotol.nonlinear": 4,
     "evotol.reporting": 5,
     "evotol.studies": 6, "evotol.studyfile": 6,
     "evotol.cli": 7, "evotol.commands": 7, "evotol.arguments": 7, "evotol.__main__": 7,
