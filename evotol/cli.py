@@ -42,6 +42,7 @@ def cmd_reproduce(args) -> int:
     from evotol import studies
     from evotol.arguments import check_scheduler_answers
     from evotol.outputs import output_folder
+    from evotol.progress import Heartbeat
 
     names = list(studies.available()) if args.study == "all" else [studies.get(args.study).name]
     out = output_folder(args.out, "--out")          # before any computation (issue 15)
@@ -57,7 +58,8 @@ def cmd_reproduce(args) -> int:
         t0 = time.perf_counter()
         try:
             extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
-            summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
+            with Heartbeat(name):          # progress lines in a log file (no terminal, no tqdm)
+                summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
         except EvotolError as exc:
             failed.append(name)
             print(f"[evotol] {name} failed: {exc}", file=sys.stderr)
@@ -99,8 +101,11 @@ def cmd_run(args) -> int:
 def cmd_list(args) -> int:
     from evotol import studies
 
+    from evotol.progress import expected
+
     for name, s in studies.available().items():
-        print(f"{name:28s} {s.title}")
+        print(f"{name:28s} {expected(name) or 'not measured':>12s}  {s.title}")
+    print("(times: a full run on a 2-core machine; --quick is much shorter)")
     return 0
 
 

@@ -21,10 +21,10 @@ def nearest(name: str, valid: Iterable[str]) -> str | None:
 
 
 def unknown_key_message(key: str, valid: Iterable[str]) -> str:
-    """'a key among [...]' with 'did you mean ...?' when one is close."""
+    """'a key among [...]' with '(did you mean ...?)' when one is close."""
     valid = sorted(valid)
     guess = nearest(key, valid)
-    return (f"did you mean {guess!r}? " if guess else "") + f"a key among {valid}"
+    return f"a key among {valid}" + (f" (did you mean {guess!r}?)" if guess else "")
 
 
 def keywords_of(func: Callable, exclude: Iterable[str] = ()) -> list[str] | None:
@@ -39,7 +39,7 @@ def keywords_of(func: Callable, exclude: Iterable[str] = ()) -> list[str] | None
 
 
 def check_keywords(func: Callable, kwargs: Mapping, field: str, exclude: Iterable[str] = ()) -> None:
-    """ValidationError ``field.KEY = value: expected did you mean 'x'? a key among [...]`` for the
+    """ValidationError ``field.KEY = value: expected a key among [...] (did you mean 'x'?)`` for the
     first key of ``kwargs`` that ``func`` does not accept (or that is in ``exclude``, i.e. set by
     evotol itself); also when ``kwargs`` is not a table."""
     if not isinstance(kwargs, Mapping):

@@ -126,6 +126,9 @@ class Tolerance:
         if self.locked is not None and not (isinstance(self.locked, (int, float, np.floating))
                                             and np.isfinite(self.locked) and self.locked > 0):
             raise ValidationError(f"{f0}.locked", self.locked, "a positive tolerance (SI) or None")
+        if self.locked is not None and not (self.lower * (1 - 1e-12) <= self.locked <= self.upper * (1 + 1e-12)):
+            raise ValidationError(f"{f0}.locked", self.locked,   # issue 15: was silently used
+                                  f"a value within [lower, upper] = [{self.lower:.6g}, {self.upper:.6g}]")
         distributions.as_distribution(self.distribution, f"{f0}.distribution")
         for f in ("offset", "minus", "plus"):
             v = getattr(self, f)

@@ -9,6 +9,14 @@ import pandas as pd
 from evotol.problem import Evaluation, ToleranceProblem
 
 
+#: info entries that are a solver's raw diagnostics, not results: ``to_dict`` nests them under
+#: ``"diagnostics"`` so they are not read as the verdict
+DIAGNOSTICS = ("solver_message",)
+#: a certificate with relative duality gap and KKT residual at most these is reported "certified optimal"
+CERTIFIED_GAP = 1e-6
+CERTIFIED_KKT = 1e-4
+
+
 @dataclass
 class AllocationResult:
     """Tolerances (SI), cost, accuracy at every pose, feasibility, history, contributors.
@@ -71,13 +79,39 @@ class AllocationResult:
                 d[f"max_{comp}_error_bound"] = float(np.max(b))
         if self.certificate:
             d["certificate"] = self.certificate
-        d.update({k: v for k, v in self.info.items() if np.isscalar(v) or isinstance(v, (list, dict, str))})
+        info = {k: v for k, v in self.info.items() if np.isscalar(v) or isinstance(v, (list, dict, str))}
+        diagnostics = {k: info.pop(k) for k in DIAGNOSTICS if k in info}
+        d.update(info)
+        if self.verdict is not None:
+            d["verdict"] = self.verdict
+        if diagnostics:
+            d["diagnostics"] = diagnostics
         return d
+
+    @property
+    def verdict(self) -> str | None:
+        """The certificate read as a sentence (None without a duality-gap certificate).
+
+        The certificate, not the solver's exit message, decides: SLSQP often ends with
+        "Positive directional derivative for linesearch" at a point whose proven lower bound
+        matches the cost to 1e-13 (issue 15); that message is kept under ``diagnostics``.
+        """
+        c = self.certificate or {}
+        if "gap" not in c or "lower_bound" not in c:
+            return None
+        gap, kkt = float(c["gap"]), float(c.get("kkt_residual", 0.0))
+        if gap <= CERTIFIED_GAP and kkt <= CERTIFIED_KKT:
+            return (f"certified optimal: cost equals the proven lower bound {float(c['lower_bound']):.6g} "
+                    f"to {abs(gap):.1e} (relative gap)")
+        return (f"not certified: relative gap {gap:.2e} to the proven lower bound {float(c['lower_bound']):.6g}"
+                f", KKT residual {kkt:.1e}")
 
     def summary(self) -> str:
         lines = [f"{self.method}: cost {self.cost:.5g}, feasible {self.feasible}"]
         for comp, lim in self.problem.components:
             lines.append(f"  max {comp} error {self.max_error(comp):.4g} (bound {lim:.4g})")
+        if self.verdict is not None:
+            lines.append(f"  {self.verdict}")
         if self.certificate:
             lines.append("  certificate: " + ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
                                                     for k, v in self.certificate.items()))
@@ -85,12 +119,25 @@ class AllocationResult:
 
 
 def make_result(problem: ToleranceProblem, method: str, t, *, history=None, certificate=None,
-                seconds: float = 0.0, info=None, feas_rtol: float = 1e-9) -> AllocationResult:
-    """Evaluate design ``t`` exactly and wrap it as an :class:`AllocationResult`."""
+                seconds: float = 0.0, info=None, feas_rtol: float = 1e-9, budget: float | None = None) -> AllocationResult:
+    """Evaluate design ``t`` exactly and wrap it as an :class:`AllocationResult`.
+
+    ``feasible``: within the bounds and meeting the requirement; in budget mode (``budget`` given)
+    within the bounds and the budget -- the requirement is then reported as
+    ``info["meets_requirement"]`` (issue 15: "feasible" must mean what it says).
+    """
     t = np.asarray(problem.as_array(t), dtype=float)
     ev = problem.evaluate(t[None])
     f = problem.free
     in_bounds = bool(np.all(t[f] >= problem.lower[f] * (1 - 1e-9)) and np.all(t[f] <= problem.upper[f] * (1 + 1e-9)))
-    feasible = bool(ev.violation[0] <= feas_rtol) and in_bounds
-    return AllocationResult(method, problem, dict(zip(problem.names, t.tolist())), float(problem.cost(t)),
-                            feasible, ev, history, certificate, seconds, dict(info or {}))
+    cost = float(problem.cost(t))
+    meets = bool(ev.violation[0] <= feas_rtol)
+    info = dict(info or {})
+    if budget is None:
+        feasible = meets and in_bounds
+    else:
+        within = bool(cost <= budget * (1 + feas_rtol))
+        feasible = within and in_bounds
+        info.update({"budget": float(budget), "within_budget": within, "meets_requirement": meets})
+    return AllocationResult(method, problem, dict(zip(problem.names, t.tolist())), cost,
+                            feasible, ev, history, certificate, seconds, info)

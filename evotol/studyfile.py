@@ -14,12 +14,14 @@ import numpy as np
 import cost_models
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
+from evotol.allocators.budget import check_budget
 from evotol.errors import ValidationError
 from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report, write_json
+from evotol.units import units_block
 from robots import registry
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
@@ -40,7 +42,7 @@ def load_problem(spec: dict) -> ToleranceProblem:
     if "grid" in ps:
         poses = robot.workspace.grid(ps["grid"])
     elif "latin_hypercube" in ps:
-        poses = robot.workspace.latin_hypercube(int(ps["latin_hypercube"]), seed=spec.get("seed", 0))
+        poses = robot.workspace.latin_hypercube(ps["latin_hypercube"], seed=spec.get("seed", 0))
     elif "list" in ps:
         poses = np.asarray(ps["list"], dtype=float)
     else:
@@ -86,6 +88,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
         if m != "nsga2" and m not in METHODS:
             raise ValidationError(f"methods.{m}", m, unknown_key_message(m, sorted(METHODS) + ["nsga2"]))
         check_keywords(allocate_nsga2 if m == "nsga2" else METHODS[m], kw, f"methods.{m}", exclude=("problem",))
+        if "budget" in kw:
+            check_budget(problem, kw["budget"], field=f"methods.{m}.budget")
     check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
     results, front, stopped, skipped = {}, None, [], []
     with CtrlC() as ctrl_c:
@@ -122,7 +126,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
                 stopped.append(f"verify {m}")
     summary = {"name": name, "problem": problem.describe(), "seed": seed,
                "results": {m: r.to_dict() for m, r in results.items()}, "monte_carlo": checks,
-               "seconds": time.perf_counter() - t0, "interrupted": bool(stopped)}
+               "seconds": time.perf_counter() - t0, "interrupted": bool(stopped),
+               "units": units_block(problem)}   # docs/units.md
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
     if front is not None:

@@ -97,7 +97,9 @@ class Workspace:
     def grid(self, counts: int | Sequence[int]) -> np.ndarray:
         """Full grid with ``counts`` points per coordinate, shape (prod(counts), dim)."""
         counts = [counts] * self.dim if np.isscalar(counts) else list(counts)
-        if len(counts) != self.dim or any(int(c) < 1 for c in counts):
+        whole = all(isinstance(c, (int, np.integer)) and not isinstance(c, bool) or
+                    isinstance(c, (float, np.floating)) and float(c).is_integer() for c in counts)
+        if len(counts) != self.dim or not whole or any(int(c) < 1 for c in counts):   # 3.5 was truncated to 3
             raise ValidationError("grid counts", counts, f"{self.dim} positive integers")
         axes = [np.linspace(lo, hi, int(c)) if c > 1 else np.array([(lo + hi) / 2])
                 for lo, hi, c in zip(self.low, self.high, counts)]
@@ -108,7 +110,7 @@ class Workspace:
         """``n`` Latin-hypercube poses (scipy.stats.qmc), shape (n, dim), reproducible from seed."""
         from scipy.stats import qmc
 
-        if int(n) < 1:
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:   # 3.5 was truncated to 3
             raise ValidationError("latin_hypercube n", n, "a positive integer")
         u = qmc.LatinHypercube(d=self.dim, seed=seed).random(int(n))
         return qmc.scale(u, self.low, self.high) if self.dim else u

@@ -144,6 +144,15 @@ STUDY_CASES = {
     "poses without a kind": ((("grid = [5, 5, 3]", "grud = [5, 5, 3]"),), ["poses", "grud"]),
     "grid of wrong length": ((("grid = [5, 5, 3]", "grid = [5, 5]"),), ["grid", "[5, 5]"]),
     "pose outside the workspace": ((("grid = [5, 5, 3]", "list = [[0.0, 0.0, 9.0]]"),), ["pose", "9.0"]),
+    "GA budget below the cheapest design": ((("ga = { pop_size = 60", "ga = { budget = 1e-3, pop_size = 60"),),
+                                            ["methods.ga.budget", "0.001", "cheapest design"]),
+    "optimum budget NaN": ((("optimum = {}", "optimum = { budget = nan }"),), ["methods.optimum.budget", "nan"]),
+    "sensitivity budget negative": ((("sensitivity = {}", "sensitivity = { budget = -2.0 }"),), ["methods.sensitivity.budget", "-2.0"]),
+    "locked above upper": ((("locked = 2e-5", "locked = 5e-4"),), ["tolerances['R1'].locked", "0.0005", "0.0002"]),
+    "locked below lower": ((("locked = 2e-5", "locked = 1e-7"),), ["tolerances['R1'].locked", "1e-07"]),
+    "grid = 3.5": ((("grid = [5, 5, 3]", "grid = 3.5"),), ["grid counts", "3.5"]),
+    "grid with a fraction": ((("grid = [5, 5, 3]", "grid = [5, 5, 2.5]"),), ["grid counts", "2.5"]),
+    "latin_hypercube = 20.5": ((("grid = [5, 5, 3]", "latin_hypercube = 20.5"),), ["latin_hypercube n", "20.5"]),
     "invalid TOML": ((("name = \"ucr3_example\"", "name = ucr3_example"),), ["study file", "valid TOML"]),
 }
 
@@ -170,3 +179,104 @@ def test_argparse_type_errors_are_argument_type_errors():
         arguments.scheduler("notaurl")
     assert arguments.seed("7") == 7
     assert arguments.parse_scheduler("tcp://10.0.0.5:8786") == ("tcp", "10.0.0.5", 8786)
+
+
+# --- Python API -------------------------------------------------------------------------------
+def _api_problem(locked=None, measure="worst_case", position=1e-3):
+    import numpy as np
+
+    import cost_models as cm
+    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from tests.toy_robot import ToyRobot
+
+    r = ToyRobot(dims=(1, 1, 2))
+    tol = {s.name: Tolerance(cm.ExponentialCost(1.0, 0.5, scale=1e-3), 1e-5, 1e-2, locked=(locked or {}).get(s.name))
+           for s in r.sources}
+    return ToleranceProblem(r, tol, Requirement(position=position, measure=measure), np.array([[0.0], [1.0]]))
+
+
+def _api(name):
+    """Calls that must fail; imported lazily so a collection error names the case."""
+    import numpy as np
+
+    import cost_models as cm
+    from evotol import allocators as al
+    from evotol.montecarlo import verify
+    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from robots import registry
+    from robots.ucr3 import UCR3
+    from tests.toy_robot import ToyRobot
+
+    P = _api_problem
+    t_ok = {n: 1e-4 for n in ("s0", "s1", "s2")}
+    calls = {
+        "ga budget below cheapest": lambda: al.allocate_ga(P(), budget=1e-3, pop_size=8, n_gen=2),
+        "optimum budget NaN": lambda: al.allocate_optimum(P(), budget=float("nan")),
+        "sensitivity budget below cheapest": lambda: al.allocate_sensitivity(P(), budget=1e-6),
+        "equal budget inf": lambda: al.allocate_equal(P(), budget=float("inf")),
+        "lagrange budget a string": lambda: al.allocate_lagrange(P(), budget="5"),
+        "proportional budget zero": lambda: al.allocate_proportional(P(), budget=0.0),
+        "ga pop_size too small": lambda: al.allocate_ga(P(), pop_size=2),
+        "ga unknown operators": lambda: al.allocate_ga(P(), operators="papr"),
+        "locked above upper": lambda: P(locked={"s0": 0.5}),
+        "negative requirement": lambda: P(position=-1e-3),
+        "unknown measure": lambda: P(measure="max"),
+        "tolerance for an unknown source": lambda: ToleranceProblem(
+            ToyRobot(dims=(1,)), {"s0": Tolerance(cm.ExponentialCost(1.0, 0.5), 1e-5, 1e-2),
+                                  "s9": Tolerance(cm.ExponentialCost(1.0, 0.5), 1e-5, 1e-2)},
+            Requirement(position=1e-3), np.array([[0.5]])),
+        "verify n_samples 0": lambda: verify(P(), t_ok, n_samples=0),
+        "verify unknown method": lambda: verify(P(), t_ok, method="sobol7"),
+        "grid 3.5": lambda: UCR3().workspace.grid(3.5),
+        "negative cost decay": lambda: cm.ExponentialCost(1.0, -0.5),
+        "unknown robot": lambda: registry.get("hexapod"),
+        "pose outside the workspace": lambda: UCR3().check_poses([[0.0, 0.0, 9.0]]),
+    }
+    return calls[name]
+
+
+def _kinematics_error():
+    from evotol.errors import KinematicsError
+    return KinematicsError
+
+
+API_CASES = {   # name: (exception class, strings the message must contain)
+    "ga budget below cheapest": (ValidationError, ["budget", "0.001", "cheapest design"]),
+    "optimum budget NaN": (ValidationError, ["budget", "nan"]),
+    "sensitivity budget below cheapest": (ValidationError, ["budget", "1e-06", "cheapest design"]),
+    "equal budget inf": (ValidationError, ["budget", "inf"]),
+    "lagrange budget a string": (ValidationError, ["budget", "'5'"]),
+    "proportional budget zero": (ValidationError, ["budget", "0.0"]),
+    "ga pop_size too small": (ValidationError, ["pop_size", "2"]),
+    "ga unknown operators": (ValidationError, ["operators", "'papr'"]),
+    "locked above upper": (ValidationError, ["tolerances['s0'].locked", "0.5", "0.01"]),
+    "negative requirement": (ValidationError, ["requirement.position", "-0.001"]),
+    "unknown measure": (ValidationError, ["requirement.measure", "'max'"]),
+    "tolerance for an unknown source": (ValidationError, ["s9", "s0"]),
+    "verify n_samples 0": (ValidationError, ["n_samples", "0"]),
+    "verify unknown method": (ValidationError, ["method", "'sobol7'"]),
+    "grid 3.5": (ValidationError, ["grid counts", "3.5"]),
+    "negative cost decay": (ValidationError, ["a1", "-0.5"]),
+    "unknown robot": (ValidationError, ["robot.model", "'hexapod'", "ucr3"]),
+    "pose outside the workspace": ("KinematicsError", ["pose", "9.0", "Zc"]),
+}
+
+
+@pytest.mark.parametrize("case", list(API_CASES))
+def test_api_bad_input(case, monkeypatch):
+    import evotol.allocators.ga as ga_module
+
+    expected, names = API_CASES[case]
+    expected = _kinematics_error() if expected == "KinematicsError" else expected
+    monkeypatch.setattr(ga_module, "GA", _sentinel)          # the GA must not start
+    with pytest.raises(expected) as info:
+        _api(case)()
+    message = str(info.value)
+    assert "\n" not in message, message
+    for name in names:
+        assert name in message, (name, message)
+
+
+def test_at_least_60_bad_inputs_are_checked():
+    """The issue's 'done when': a table of at least 60 bad inputs across CLI, study files and API."""
+    assert len(CLI_CASES) + len(STUDY_CASES) + len(API_CASES) >= 60

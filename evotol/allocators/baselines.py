@@ -25,6 +25,7 @@ from scipy.special import lambertw
 
 from cost_models.exponential import ExponentialCost
 from cost_models.power import PowerCost
+from evotol.allocators.budget import budget_info, check_budget, scaled_family, spend_budget
 from evotol.allocators.sensitivity import aggregated_sensitivity
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
@@ -139,21 +140,44 @@ def lagrange_design(problem: ToleranceProblem, measure: str | None = None) -> np
     return _t_of_lambda(problem, s, np.exp(loglam), measure)
 
 
+def _at_budget(problem: ToleranceProblem, name: str, budget, t0, family, log_p):
+    """Best accuracy at ``budget`` within a one-parameter family (see :mod:`evotol.allocators.budget`)."""
+    budget = check_budget(problem, budget)
+    t = spend_budget(problem, family, budget, log_p)
+    return make_result(problem, f"{name} (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
+                       info=budget_info(problem, t, budget), budget=budget)
+
+
 @single_threaded_blas
-def allocate_equal(problem: ToleranceProblem):
+def allocate_equal(problem: ToleranceProblem, budget: float | None = None):
+    """Equal tolerances; ``budget``: the smallest common tolerance whose cost fits the budget."""
     t0 = time.perf_counter()
+    if budget is not None:
+        return _at_budget(problem, "equal tolerance", budget, t0, *scaled_family(problem, np.ones(problem.n_sources)))
     return make_result(problem, "equal tolerance", equal_design(problem), seconds=time.perf_counter() - t0)
 
 
 @single_threaded_blas
-def allocate_proportional(problem: ToleranceProblem, weights=None):
+def allocate_proportional(problem: ToleranceProblem, weights=None, budget: float | None = None):
+    """t_j ∝ w_j (default: the upper bounds); ``budget``: scaled down until the cost fits the budget."""
     t0 = time.perf_counter()
+    if budget is not None:
+        w = problem.upper if weights is None else problem.as_array(weights)
+        return _at_budget(problem, "proportional scaling", budget, t0, *scaled_family(problem, w))
     return make_result(problem, "proportional scaling", proportional_design(problem, weights), seconds=time.perf_counter() - t0)
 
 
 @single_threaded_blas
-def allocate_lagrange(problem: ToleranceProblem, measure: str | None = None):
+def allocate_lagrange(problem: ToleranceProblem, measure: str | None = None, budget: float | None = None):
+    """Lagrange closed forms; ``budget``: the multiplier λ chosen so the cost is the budget (the
+    same stationarity condition solves min stack-up s.t. cost <= budget)."""
     t0 = time.perf_counter()
+    if budget is not None:
+        m = measure or problem.requirement.measure
+        m = m if m in ("worst_case", "rss") else "rss"
+        s = aggregated_sensitivity(problem)
+        return _at_budget(problem, "Lagrange closed form", budget, t0,
+                          lambda x: _t_of_lambda(problem, s, np.exp(-x), m), (-50.0, 50.0))
     t = lagrange_design(problem, measure)
     return make_result(problem, "Lagrange closed form", t, seconds=time.perf_counter() - t0,
                        info={"stack_up": measure or problem.requirement.measure})

@@ -42,6 +42,7 @@ from pymoo.operators.selection.tournament import TournamentSelection, compare
 from pymoo.termination import get_termination
 from scipy.stats import qmc
 
+from evotol.allocators.budget import check_budget, cheapest_design
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
@@ -216,6 +217,8 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1), ("seed", seed, 0)):
         if not isinstance(v, (int, np.integer)) or v < lo:
             raise ValidationError(name, v, f"an integer >= {lo}")
+    if budget is not None:           # below the cheapest design: no answer (issue 15)
+        budget = check_budget(problem, budget)
     measure = problem.requirement.measure
     if budget is None:
         problem.check_feasible()
@@ -236,6 +239,8 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
                     seeds.append(fn(problem))
                 except Exception:  # a baseline that does not apply (e.g. all bounds) is just skipped
                     pass
+        elif seed_with_baselines:        # budget mode: the cheapest design always fits the budget
+            seeds.append(cheapest_design(problem))
     gp = _GAProblem(problem, rows, penalty, budget, n_check)
     X0 = initial_population(problem, pop_size, seed, seeds)
     if operators == "pymoo":
@@ -277,7 +282,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
         best = gp.best[1]
     history = pd.DataFrame(hist)
     name = "GA" if budget is None else "GA (best accuracy at budget)"
-    return make_result(problem, name, best, history=history, seconds=time.perf_counter() - t0,
+    return make_result(problem, name, best, history=history, seconds=time.perf_counter() - t0, budget=budget,
                        info={"operators": operators, "repair": bool(repair), "pop_size": pop_size, "n_gen": n_gen,
                              "seed": seed, "penalty": penalty, "interrupted": interrupted,
                              "initial_best": float(history["best_fitness"].iloc[0]) if len(history) else np.nan,

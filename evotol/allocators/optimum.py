@@ -32,6 +32,7 @@ import numpy as np
 from scipy.optimize import minimize, nnls
 
 from evotol.allocators.sensitivity import sensitivity_design
+from evotol.allocators.budget import check_budget
 from evotol.constraints import ConstraintRows
 from evotol.errors import ConvergenceError, ValidationError
 from evotol.problem import ToleranceProblem
@@ -183,7 +184,7 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
     problem.check_feasible()
     rows = ConstraintRows(problem)
     if budget is not None:
-        return _best_accuracy(problem, rows, float(budget), t0, tol, max_rounds, max_rows)
+        return _best_accuracy(problem, rows, check_budget(problem, budget), t0, tol, max_rounds, max_rows)
     t = sensitivity_design(problem)
     rounds, res = 0, None
     for rounds in range(1, max_rounds + 1):
@@ -252,7 +253,7 @@ def _best_accuracy(problem, rows, budget, t0, tol, max_rounds, max_rows):
         if added == 0 and rows.violation(T(z[:-1])[None])[0] <= z[-1] - 1 + tol:
             break
     t = T(np.clip(z[:-1], lo / hi, 1))
-    r = make_result(problem, "optimum (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
+    r = make_result(problem, "optimum (best accuracy at budget)", t, seconds=time.perf_counter() - t0, budget=budget,
                     certificate={"rounds": rounds, "budget": budget, "solver": "SLSQP + cutting planes"},
                     info={"budget": budget, "normalised_error": float(rows.normalised_error(t[None])[0])})
     return r

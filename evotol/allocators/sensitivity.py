@@ -21,6 +21,8 @@ import numpy as np
 
 from evotol import measures
 from evotol.errors import ValidationError
+from evotol.allocators.budget import budget_info, check_budget, spend_budget
+from evotol.allocators.budget import scaled_family as _scaled
 from evotol.problem import ToleranceProblem
 from evotol.result import make_result
 from evotol.threads import single_threaded_blas
@@ -91,10 +93,20 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
 
 
 @single_threaded_blas
-def allocate_sensitivity(problem: ToleranceProblem, measure: str | None = None, collective_groups=()):
+def allocate_sensitivity(problem: ToleranceProblem, measure: str | None = None, collective_groups=(),
+                         budget: float | None = None):
     """Equal-effect allocation (see module docstring); ``measure`` defaults to the requirement's.
-    ``collective_groups``: see :func:`aggregated_sensitivity`."""
+    ``collective_groups``: see :func:`aggregated_sensitivity`. ``budget``: best accuracy at this
+    cost instead -- the equal-effect design t_j ∝ 1/s_j scaled until it costs the budget
+    (:mod:`evotol.allocators.budget`)."""
     t0 = time.perf_counter()
+    if budget is not None:
+        budget = check_budget(problem, budget)
+        s = aggregated_sensitivity(problem, collective_groups)
+        family, log_p = _scaled(problem, np.where(s > 0, 1 / np.where(s > 0, s, 1.0), np.inf))
+        t = spend_budget(problem, family, budget, log_p)
+        return make_result(problem, "sensitivity (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
+                           info=budget_info(problem, t, budget), budget=budget)
     t = sensitivity_design(problem, measure, collective_groups)
     rule = f"equal effect, {measure or problem.requirement.measure} stack-up"
     if collective_groups:
