@@ -4,7 +4,8 @@ Lower layers never import higher ones -- also not by an import inside a function
 hides a cycle. From the bottom:
 
 0. foundation: ``evotol.errors``, ``evotol.threads``, ``evotol.executor``, ``evotol.pareto``,
-   ``evotol.outputs``, ``evotol.interrupt``, ``evotol.keywords``, ``evotol.conformance`` (no physics, no problem; anyone
+   ``evotol.outputs``, ``evotol.interrupt``, ``evotol.keywords``, ``evotol.conformance``,
+   ``evotol.progress``, ``evotol.units`` (no physics, no problem; anyone
    may use them);
 1. models: ``cost_models``, ``robots``;
 2. problem and measures: ``evotol.problem``, ``measures``, ``constraints``, ``result``,
@@ -33,7 +34,7 @@ PACKAGES = ("evotol", "cost_models", "robots")
 LAYERS = {
     "evotol": 0, "evotol.errors": 0, "evotol.threads": 0, "evotol.executor": 0, "evotol.pareto": 0,
     "evotol.outputs": 0, "evotol.interrupt": 0, "evotol.keywords": 0,
-    "evotol.conformance": 0,
+    "evotol.conformance": 0, "evotol.progress": 0, "evotol.units": 0,
     "cost_models": 1, "robots": 1,
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2,
     "evotol.distributions": 2, "evotol.statistical": 2,
