@@ -10,14 +10,17 @@ hides a cycle. From the bottom:
 1. models: ``cost_models``, ``robots``;
 2. problem and measures: ``evotol.problem``, ``measures``, ``constraints``, ``result``,
    ``distributions``, ``statistical`` (the first-order yield measure);
-3. allocators and design-space search: ``evotol.allocators``, ``evotol.doe``, ``evotol.filtering``;
+3. allocators and design-space search: ``evotol.allocators``, ``evotol.doe``, ``evotol.filtering``,
+   ``evotol.refinement`` (workspace refinement the allocators call);
 4. verification: ``evotol.montecarlo``, ``evotol.nonlinear``;
 5. reporting: ``evotol.reporting`` (the HTML toolkit a study's ``render`` and the CLI use; it
    imports no study, so a report cannot compute one);
 6. studies: ``evotol.studies``, ``evotol.studyfile``;
 7. cli: ``evotol.cli``, ``evotol.commands``, ``evotol.arguments``.
 
-A new module must be given a layer here (the test names it), so the map stays complete.
+A module missing from ``LAYERS`` (a new top-level ``evotol`` module) takes the layer of the
+highest module it imports: it cannot import upward itself, and a lower module importing it is
+still caught. Give it an explicit layer when it belongs lower than that.
 """
 from __future__ import annotations
 
@@ -38,7 +41,7 @@ LAYERS = {
     "cost_models": 1, "robots": 1,
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2,
     "evotol.distributions": 2, "evotol.statistical": 2,
-    "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3,
+    "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3, "evotol.refinement": 3,
     "evotol.montecarlo": 4, "evotol.nonlinear": 4,
     "evotol.reporting": 5,
     "evotol.studies": 6, "evotol.studyfile": 6,
@@ -70,7 +73,7 @@ def modules() -> dict[str, Path]:
     return out
 
 
-def layer_of(name: str) -> int | None:
+def explicit_layer(name: str) -> int | None:
     best = None
     for prefix, layer in LAYERS.items():
         if (name == prefix or name.startswith(prefix + ".")) and (best is None or len(prefix) > len(best[0])):
@@ -78,6 +81,18 @@ def layer_of(name: str) -> int | None:
     if best is None or (best[0] == "evotol" and name != "evotol"):
         return None      # a top-level evotol module nobody has placed yet
     return best[1]
+
+
+@lru_cache(maxsize=None)
+def layer_of(name: str, _seen: frozenset = frozenset()) -> int:
+    """The module's layer: explicit in LAYERS, else the highest layer among what it imports."""
+    layer = explicit_layer(name)
+    if layer is not None:
+        return layer
+    if name not in modules():
+        return 0
+    deps = [layer_of(t, _seen | {name}) for t in imports_of(name) if t not in _seen | {name}]
+    return max(deps, default=0)
 
 
 @lru_cache(maxsize=None)
@@ -113,11 +128,6 @@ def imports_in(source: str, name: str, is_package: bool = False) -> frozenset[st
     return frozenset(found)
 
 
-def test_every_module_has_a_layer():
-    missing = [m for m in modules() if layer_of(m) is None]
-    assert not missing, f"give these modules a layer in tests/test_layers.py LAYERS: {missing}"
-
-
 def test_no_upward_import():
     """Each import goes to the same or a lower layer; known exceptions wait on a named issue."""
     bad, still_known = [], set()
@@ -125,7 +135,7 @@ def test_no_upward_import():
         lm = layer_of(m)
         for t in sorted(imports_of(m)):
             lt = layer_of(t)
-            if lm is not None and lt is not None and lt > lm:
+            if lt > lm:
                 key = (m, t)
                 if key in KNOWN:
                     still_known.add(key)
