@@ -287,3 +287,47 @@ def test_ucr3_description_equals_hand_written_all_21_columns_at_50_poses():
     D = np.stack([s * S[:, :, names.index(c)] for c, s in cols], -1)
     assert np.abs(D - H).max() <= 1e-9 * np.abs(H).max()
     assert check_robot(m)["fd_relative_mismatch"] < 1e-6
+
+
+# ---------------------------------------------------------------------------------- Delta
+def test_delta_description_equals_hand_written_for_the_shared_parameters():
+    """Brahmia 2023 Delta: the description (rod-1 branch of Tab. 1 with the parallelogram
+    relations q4 = -q3, q5 = pi - q1 - q2, legs closed at the platform centre, eq. 3) gives the
+    same position rows as robots/delta.py for the 23 parameters both rods share (Ra, Rb, La, Lb,
+    alpha1, alpha5, theta, the actuator offsets q1 and the lower-bar offsets q5), at 50 poses."""
+    from robots.delta import DeltaRobot
+
+    m = MechanismModel(HERE / "delta.toml")
+    r = DeltaRobot()
+    poses = r.workspace.latin_hypercube(50, seed=1)
+    S, H = m.sensitivity(poses), r.sensitivity(poses)
+    hn = list(r.source_names)
+    cols = [hn.index("q5_" + n[2] if n.startswith("5_") else n) for n in m.source_names]
+    assert len(cols) == 23
+    assert np.abs(S[:, :3] - H[:, :3, cols]).max() <= 1e-9 * np.abs(H[:, :3]).max()
+    assert check_robot(m)["fd_relative_mismatch"] < 1e-6
+
+
+def test_delta_rod1_parameters_count_half_at_the_midpoint_closure():
+    """robots/delta.py closes each leg at the midpoint of its two rods' ends, so a rod-1 error
+    (alpha3 -- which enters Tab. 2 as -(pi/2 + dalpha3) --, q3, q4) moves the platform by half of
+    what it does when rod 1 alone carries the leg; d moves neither (the parallelogram stays one)."""
+    from robots.delta import DeltaRobot
+
+    m = MechanismModel(HERE / "delta.toml", sources=["alpha3_?", "3_?.theta", "4_?.theta", "d_?"])
+    r = DeltaRobot()
+    poses = r.workspace.latin_hypercube(20, seed=2)
+    S, H = m.sensitivity(poses), r.sensitivity(poses)
+    hn = list(r.source_names)
+    scale = np.abs(H[:, :3]).max()
+    for c, name in enumerate(m.source_names):
+        if name.startswith("alpha3"):
+            expect, factor = name, -0.5
+        elif name.startswith("d_"):
+            expect, factor = name, 0.0
+        else:
+            expect, factor = f"q{name[0]}_{name[2]}", 0.5
+        h = H[:, :3, hn.index(expect)]
+        assert np.abs(factor * S[:, :3, c] - h).max() <= 1e-9 * scale, name
+        if factor == 0.0:
+            assert np.abs(S[:, :3, c]).max() <= 1e-9 * scale
