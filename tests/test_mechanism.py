@@ -219,7 +219,8 @@ def test_reproduce_mechanisms_fields_quick(tmp_path):
     for e in m.values():
         assert {"fd_rel_error", "builtin_rel_diff", "n_sources", "seconds"} <= set(e)
         assert e["fd_rel_error"] < 1e-6
-    assert m["5-bar"]["builtin_rel_diff"] < 1e-9 and m["IRSBot-2"]["builtin_rel_diff"] < 1e-9
+    for name in ("5-bar", "IRSBot-2", "3-UCR", "Delta"):
+        assert m[name]["builtin_rel_diff"] < 1e-9, name
     fb = m["5-bar"]
     assert fb["p_max_mm"] <= fb["p_upper_mm"] <= fb["p_max_mm"] * (1 + 1e-3)
     assert fb["r_max_rad"] <= fb["r_upper_rad"] <= fb["r_max_rad"] * (1 + 1e-3)
