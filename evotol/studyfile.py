@@ -34,7 +34,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     """Build the problem from a parsed study file (dict); ``base_dir``: where relative files
     (``[robot] mechanism = "my_robot.toml"``) are looked up."""
     rs = dict(spec.get("robot", {}))
-    if "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
+    if "mechanism" in rs or "urdf" in rs:       # a description (robots/mechanism, docs/mechanisms.md)
         robot = model_from_table(rs, base_dir)
     elif "model" not in rs:
         raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', or mechanism = 'my_robot.toml'")
