@@ -27,9 +27,11 @@ from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
-from evotol.reporting import Report, write_json
+from evotol.reporting import Report
+from evotol.studies import StudyResult, write_outputs
 from evotol.units import units_block
 from robots import registry
+from robots.assembly import assembly_from_spec
 from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
@@ -109,10 +111,15 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     (``[robot] mechanism = "my_robot.toml"``) are looked up."""
     check_study_keys(spec)
     rs = dict(spec.get("robot", {}))
-    if "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
-        robot = model_from_table(rs, base_dir)
+    if "mechanism" in rs or "urdf" in rs:       # a description (robots/mechanism, docs/mechanisms.md); its
+        robot = model_from_table(rs, base_dir)  # [robot.assembly] table is the assembly configuration
+    elif "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
+        robot = assembly_from_spec(rs)
+        spec = {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),
+                "requirement": {"position": 1.0, **spec.get("requirement", {})}}
     elif "model" not in rs:
-        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', or mechanism = 'my_robot.toml'")
+        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', mechanism = 'my_robot.toml' "
+                              "or assembly = 'module:function'")
     else:
         cls = registry.get(rs.pop("model"))
         try:
@@ -242,7 +249,6 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
         fig = go.Figure(go.Scatter(x=front.error, y=front.cost, mode="markers", name="NSGA-II"))
         fig.update_layout(title="Cost vs. normalised error", xaxis_title="max error / bound", yaxis_title="cost")
         rep.figure(fig)
-    html = rep.write(out / f"{name}.html")
-    js = write_json(out / f"{name}.json", summary)
-    summary.update({"html": str(html), "json": str(js)})
+    paths = write_outputs(name, out, StudyResult(summary), rep)
+    summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary
