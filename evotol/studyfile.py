@@ -28,6 +28,38 @@ METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga
            "equal": allocate_equal, "lagrange": allocate_lagrange}
 
 
+BOUND_KEYS = ("lower", "upper")
+
+
+def _check_bounds_table(bounds, robot) -> None:
+    """``[bounds]``: ``lower``/``upper`` for every source, and sub-tables by group or source name
+    (``[bounds."U joint"]``, ``[bounds.l1]``) -- sources in m and in rad need their own ranges."""
+    if not isinstance(bounds, dict):
+        raise ValidationError("bounds", bounds, "a table with lower/upper and optional group or source sub-tables")
+    names = {*robot.source_names, *(s.group for s in robot.sources)}
+    for key, value in bounds.items():
+        if key in BOUND_KEYS:
+            continue
+        if key not in names or not isinstance(value, dict):
+            raise ValidationError(f"bounds.{key}", value, unknown_key_message(key, [*BOUND_KEYS, *sorted(names)])
+                                  + " (a group or source name takes a table: [bounds.GROUP] lower = ..., upper = ...)")
+        for k, v in value.items():
+            if k not in BOUND_KEYS:
+                raise ValidationError(f"bounds.{key}.{k}", v, unknown_key_message(k, BOUND_KEYS))
+
+
+def _bound(override: dict, bounds: dict, source, which: str, default: float) -> float:
+    """lower/upper of one source: [sources.NAME] > [bounds.NAME] > [bounds.GROUP] > [bounds] > default."""
+    for field, table in ((f"sources.{source.name}", override), (f"bounds.{source.name}", bounds.get(source.name, {})),
+                         (f"bounds.{source.group}", bounds.get(source.group, {})), ("bounds", bounds)):
+        if which in table:
+            v = table[which]
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ValidationError(f"{field}.{which}", v, "a positive tolerance in SI units (m or rad)")
+            return float(v)
+    return default
+
+
 def load_problem(spec: dict) -> ToleranceProblem:
     """Build the problem from a parsed study file (dict)."""
     rs = dict(spec.get("robot", {}))
@@ -48,6 +80,7 @@ def load_problem(spec: dict) -> ToleranceProblem:
     else:
         raise ValidationError("poses", ps, "one of grid = [n, ...], latin_hypercube = n, list = [[...], ...]")
     bounds = spec.get("bounds", {})
+    _check_bounds_table(bounds, robot)
     costs = spec.get("cost", {})
     overrides = spec.get("sources", {})
     unknown = set(overrides) - set(robot.source_names)
@@ -59,8 +92,8 @@ def load_problem(spec: dict) -> ToleranceProblem:
         cspec = o.get("cost", costs.get(s.name, costs.get(s.group, costs.get("default"))))
         if cspec is None:
             raise ValidationError(f"cost.{s.group}", None, f"a cost model for source {s.name} (by name, group or 'default')")
-        tol[s.name] = Tolerance(cost_models.from_dict(cspec), float(o.get("lower", bounds.get("lower", 1e-6))),
-                                float(o.get("upper", bounds.get("upper", 1e-3))), o.get("locked"),
+        tol[s.name] = Tolerance(cost_models.from_dict(cspec), _bound(o, bounds, s, "lower", 1e-6),
+                                _bound(o, bounds, s, "upper", 1e-3), o.get("locked"),
                                 o.get("distribution", "uniform"))
     req = Requirement(**spec.get("requirement", {}))
     return ToleranceProblem(robot, tol, req, poses)
