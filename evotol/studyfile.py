@@ -23,6 +23,7 @@ from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report, write_json
 from evotol.units import units_block
 from robots import registry
+from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange}
@@ -60,16 +61,20 @@ def _bound(override: dict, bounds: dict, source, which: str, default: float) -> 
     return default
 
 
-def load_problem(spec: dict) -> ToleranceProblem:
-    """Build the problem from a parsed study file (dict)."""
+def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
+    """Build the problem from a parsed study file (dict); ``base_dir``: where relative files
+    (``[robot] mechanism = "my_robot.toml"``) are looked up."""
     rs = dict(spec.get("robot", {}))
-    if "model" not in rs:
-        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3'")
-    cls = registry.get(rs.pop("model"))
-    try:
-        robot = cls(**rs)
-    except TypeError as exc:
-        raise ValidationError("robot", rs, f"parameters accepted by {cls.__name__} ({exc})") from None
+    if "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
+        robot = model_from_table(rs, base_dir)
+    elif "model" not in rs:
+        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', or mechanism = 'my_robot.toml'")
+    else:
+        cls = registry.get(rs.pop("model"))
+        try:
+            robot = cls(**rs)
+        except TypeError as exc:
+            raise ValidationError("robot", rs, f"parameters accepted by {cls.__name__} ({exc})") from None
     ps = spec.get("poses", {"grid": 5})
     if "grid" in ps:
         poses = robot.workspace.grid(ps["grid"])
@@ -114,7 +119,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     seed = spec.get("seed", 0) if seed is None else seed
     name = spec.get("name", path.stem)
     out = Path(out) if out else path.parent
-    problem = load_problem(spec)
+    problem = load_problem(spec, base_dir=path.parent)
     methods = spec.get("methods", {"sensitivity": {}, "optimum": {}, "ga": {}})
     vspec = spec.get("verify", {"n_samples": 1000})
     for m, kw in methods.items():           # every table checked before the first method runs

@@ -30,6 +30,7 @@ from evotol.errors import ValidationError
 from robots.clearance.kinematics import DH_FIELDS
 from robots.clearance.model import BOUND_NAMES, ClearanceBounds
 from robots.mechanism.expressions import CONSTANTS, FUNCTIONS, Expression
+from robots.mechanism.urdf import resolve_urdf, urdf_frames
 
 JOINT_TYPES = ("revolute", "prismatic", "fixed")
 LENGTH_FIELDS = ("b", "d", "r")
@@ -230,7 +231,7 @@ class Mechanism:
 
 # ---------------------------------------------------------------------------------------- TOML
 TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "loop", "end_effector", "assembly",
-            "tolerances", "clearance")
+            "tolerances", "clearance", "urdf", "tip")
 
 
 def _number(v, where: str) -> float:
@@ -250,6 +251,16 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     angles = {k: _number(v, f"angles.{k}") for k, v in dict(spec.get("angles", {})).items()}
     frames = []
     raw_frames = spec.get("frame", [])
+    ee_default = None
+    if "urdf" in spec:                          # a serial arm from URDF (robots/mechanism/urdf.py)
+        if raw_frames:
+            raise ValidationError("frame", raw_frames, "no [[frame]] rows next to urdf (the URDF gives them)")
+        if "tip" not in spec:
+            raise ValidationError("tip", None, "the URDF link or frame that is the end-effector, e.g. 'tool0'")
+        rows, ul, ua, info = urdf_frames(resolve_urdf(str(spec["urdf"]), Path(path).parent if path else None), str(spec["tip"]))
+        raw_frames = rows
+        lengths, angles = {**ul, **lengths}, {**ua, **angles}
+        ee_default = info["tip"]
     if not isinstance(raw_frames, list) or not raw_frames:
         raise ValidationError("frame", raw_frames, "a list of [[frame]] tables (the modified-DH rows)")
     fkeys = ("name", "antecedent", "joint", "actuated", "description") + DH_FIELDS
@@ -294,7 +305,7 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     tol = spec.get("tolerances", {})
     _check_keys(tol, ("sources",), "tolerances")
     clearance = _clearance_from_dict(spec["clearance"]) if "clearance" in spec else None
-    mech = Mechanism(name=str(name), frames=tuple(frames), end_effector=str(ee.get("frame", "")), coordinates=tuple(coords),
+    mech = Mechanism(name=str(name), frames=tuple(frames), end_effector=str(ee.get("frame", ee_default or "")), coordinates=tuple(coords),
                      loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
                      sources=tuple(tol.get("sources", ())), clearance=clearance, description=spec.get("description", ""),

@@ -318,7 +318,9 @@ class Kinematics:
         for s in np.linspace(1.0 / K, 1.0, K):
             target = x0 + s * (poses - x0)
             Rt = self._target_orientation(target)
-            q, res = self._newton(q, self.variables, lambda q: self._ig_system(q, target, Rt), n, 8 if s < 1 else 40)
+            # intermediate steps only track the branch (loose tolerance); the last one converges fully
+            q, res = self._newton(q, self.variables, lambda q: self._ig_system(q, target, Rt), n,
+                                  8 if s < 1 else 40, tol=1e-6 if s < 1 else 1e-12)
         bad = ~(res < 1e-9)
         if bad.any():
             raise KinematicsError(f"{self.mech.name}: the loops cannot close at pose {poses[bad][0].tolist()} "

@@ -242,3 +242,27 @@ class MechanismModel(RobotErrorModel):
         return ClearanceMechanism(name=self.name, tree=tree, joints=joints, bodies=dict(spec.bodies), chains=chains,
                                   end_effector=spec.end_effector, joint_values=joint_values, planar=self.mechanism.planar,
                                   pose_names=self.workspace.names)
+
+
+SHIPPED = Path(__file__).resolve().parents[1] / "mechanisms"
+
+
+def resolve_description(name, base_dir=None) -> Path:
+    """A description file by path (relative to ``base_dir``, then to the working directory) or by
+    the name of a shipped one (``"fivebar"`` -> ``robots/mechanisms/fivebar.toml``)."""
+    p = Path(str(name))
+    for cand in ([Path(base_dir) / p] if base_dir and not p.is_absolute() else []) + [p, SHIPPED / p, SHIPPED / f"{p}.toml"]:
+        if cand.is_file():
+            return cand
+    shipped = sorted(f.stem for f in SHIPPED.glob("*.toml"))
+    raise ValidationError("robot.mechanism", str(name), f"a description file (TOML) or a shipped one: {shipped}")
+
+
+def model_from_table(table: dict, base_dir=None) -> MechanismModel:
+    """The ``[robot]`` table of a study file: ``mechanism = "file.toml"`` (optionally ``sources =
+    [...]`` patterns overriding the file's ``[tolerances]``)."""
+    extra = set(table) - {"mechanism", "sources"}
+    if extra:
+        k = sorted(extra)[0]
+        raise ValidationError(f"robot.{k}", table[k], "only 'mechanism' and 'sources' next to robot.mechanism")
+    return MechanismModel(resolve_description(table["mechanism"], base_dir), sources=table.get("sources"))
