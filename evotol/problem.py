@@ -412,6 +412,51 @@ class ToleranceProblem:
         new._yield_cache = None
         return new
 
+    def at_poses(self, poses) -> "ToleranceProblem":
+        """A copy on other poses (same tolerances and requirement; sensitivities computed for them)."""
+        P = self._check_pose_set(poses)
+        J = np.asarray(self.robot.sensitivity(P), dtype=float)
+        if J.shape != (len(P), 6, self.robot.n_columns) or not np.all(np.isfinite(J)):
+            raise ValidationError(f"{self.robot.name}.sensitivity", P.tolist()[:3], "finite sensitivities at the poses")
+        new = copy.copy(self)
+        new.poses = P
+        new._set_jacobian(J)
+        new._coeff_cache = {}
+        new._mc_cache = None
+        new._yield_cache = None
+        return new
+
+    def with_tolerances(self, **fields) -> "ToleranceProblem":
+        """A copy with some :class:`Tolerance` fields changed for every source (a scalar, or an
+        array/sequence in source order), e.g. ``with_tolerances(offset=c)`` to evaluate interval
+        designs [c − t, c + t]; reuses the sensitivities, re-validates every tolerance."""
+        allowed = ("offset", "minus", "plus", "cost_width", "contains_nominal")
+        for k in fields:
+            if k not in allowed:
+                near = difflib.get_close_matches(k, allowed, n=1)
+                raise ValidationError(f"with_tolerances.{k}", k, f"one of {allowed}" + (f" (did you mean {near[0]!r}?)" if near else ""))
+        n = self.n_sources
+        tols = {}
+        for j, nm in enumerate(self.names):
+            ch = {}
+            for k, v in fields.items():
+                arr = np.asarray(v, dtype=object if isinstance(v, str) else float)
+                ch[k] = (arr.item() if arr.ndim == 0 else (float(arr[j]) if arr.shape == (n,) else None))
+                if ch[k] is None:
+                    raise ValidationError(k, np.shape(v), f"a scalar or one value per source ({n})")
+            tols[nm] = dataclasses.replace(self.tolerances[nm], **ch)
+        for nm, src in zip(self.names, self.robot.sources):
+            tols[nm].validate(nm, src.dim)
+        new = copy.copy(self)
+        new.tolerances = tols
+        new.shape = measures.IntervalShape(np.array([t.rho for t in tols.values()]),
+                                           np.array([t.kappa for t in tols.values()]),
+                                           np.array([float(t.offset) for t in tols.values()]))
+        new._coeff_cache = {}
+        new._mc_cache = None
+        new._yield_cache = None
+        return new
+
     def with_added_poses(self, poses) -> "ToleranceProblem":
         """A copy with more poses appended (sensitivities computed only for the new ones)."""
         P = self.robot.check_poses(poses)

@@ -264,3 +264,48 @@ def test_bad_input_names_field_and_value(case, field, value):
         assert exc.value.value == value or (isinstance(value, list) and list(exc.value.value) == value)
     if case == "tolerance name typo":
         assert "did you mean 's1'" in str(exc.value)
+
+
+def _ucr3_problem(poses=None):
+    from robots.ucr3 import UCR3
+
+    robot = UCR3(variant="verified")
+    tol = {s.name: Tolerance(cost=ExponentialCost(1.9, 0.5, scale=1e-5) if s.group == "length"
+                             else ExponentialCost(1.1, 0.6, scale=1e-5), lower=1e-6, upper=2e-4) for s in robot.sources}
+    ws = robot.workspace
+    centre = (np.asarray(ws.low) + np.asarray(ws.high)) / 2
+    return ToleranceProblem(robot, tol, Requirement(position=5e-5), centre[None] if poses is None else poses)
+
+
+def test_refined_3ucr_optimum_and_ga_hold_on_a_4x_denser_grid():
+    """Workspace refinement (issue 10 item 5): from the centre pose only, the optimum refined on a
+    3-per-axis grid (+ local maximisation) holds 5e-5 m on a 12-per-axis grid, which the
+    unrefined one misses; the GA's final check does the same for its design."""
+    P = _ucr3_problem()
+    dense4 = P.at_poses(P.robot.workspace.grid(12))
+    coarse = allocate_optimum(P)
+    assert dense4.evaluate(coarse.t[None], top_only=True).violation[0] > 0.01
+    ref = allocate_optimum(P, refine={"grid": 3})
+    info = ref.info["refinement"]
+    assert info["holds"] and info["rounds"] >= 2 and info["worst_normalised_error"] <= 1 + 1e-9
+    assert dense4.evaluate(ref.t[None], top_only=True).violation[0] <= 1e-9
+    # the certified lower bound of the refined subset is below the cost of any design feasible on the dense set
+    assert ref.certificate["lower_bound"] <= ref.cost * (1 + 1e-9)
+    ga = allocate_ga(P, seed=0, pop_size=20, n_gen=20, refine={"grid": 3}, progress=False)
+    assert dense4.evaluate(ga.t[None], top_only=True).violation[0] <= 1e-9
+    assert ga.cost >= ref.certificate["lower_bound"] * (1 - 1e-9)
+
+
+def test_refined_delta_optimum_holds_on_a_4x_denser_grid():
+    """Delta (47 sources): the optimum refined from the 15 postures on a 3-per-axis grid of the
+    workspace box (+ local maximisation) holds 0.2 mm on a 12-per-axis grid."""
+    from evotol.studies import brahmia2023_delta as study
+    from robots.delta import DeltaRobot
+
+    robot = DeltaRobot()
+    P = study.tolerance_problem(robot, study.postures_m(), n_directions=100)
+    dense4 = P.at_poses(robot.workspace.grid(12))
+    assert dense4.evaluate(allocate_optimum(P, max_rows=60).t[None], top_only=True).violation[0] > 0.01
+    ref = allocate_optimum(P, max_rows=60, refine={"grid": 3})
+    assert ref.info["refinement"]["holds"]
+    assert dense4.evaluate(ref.t[None], top_only=True).violation[0] <= 1e-9

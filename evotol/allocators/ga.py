@@ -202,7 +202,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
                 operators: str = "pymoo", repair: bool | None = None, penalty: float | None = None,
                 seeds=None, seed_with_baselines: bool = True, budget: float | None = None,
                 n_elite: int = 2, n_check: int = 1, progress: bool | None = None,
-                checkpoint: str | Path | None = None, checkpoint_every: int = 20):
+                checkpoint: str | Path | None = None, checkpoint_every: int = 20, refine: bool | dict = False):
     """GA allocation (see module docstring). Returns an AllocationResult with the history.
 
     budget: if given, minimise the (normalised) error subject to cost <= budget instead.
@@ -210,6 +210,10 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
         sensitivity, Lagrange and equal-tolerance baselines (``seed_with_baselines``).
     progress: tqdm bar over generations (default: only on an interactive terminal).
     checkpoint: JSON file updated every ``checkpoint_every`` generations with the best design.
+    refine: final check over the whole workspace (``True`` or options of
+        :func:`evotol.refinement.hold_on_workspace`): the best design is scaled until it holds at
+        the worst poses found between and beyond the problem's poses; reported in
+        ``result.info["refinement"]``.
     """
     t0 = time.perf_counter()
     if operators not in ("pymoo", "paper"):
@@ -281,12 +285,18 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     else:
         best = gp.best[1]
     history = pd.DataFrame(hist)
+    refinement = None
+    if refine and budget is None:
+        from evotol.refinement import hold_on_workspace
+
+        best, refinement = hold_on_workspace(problem, best, **({} if refine is True else dict(refine)))
     name = "GA" if budget is None else "GA (best accuracy at budget)"
     return make_result(problem, name, best, history=history, seconds=time.perf_counter() - t0, budget=budget,
                        info={"operators": operators, "repair": bool(repair), "pop_size": pop_size, "n_gen": n_gen,
                              "seed": seed, "penalty": penalty, "interrupted": interrupted,
                              "initial_best": float(history["best_fitness"].iloc[0]) if len(history) else np.nan,
-                             **({"budget": budget} if budget is not None else {})})
+                             **({"budget": budget} if budget is not None else {}),
+                             **({"refinement": refinement} if refinement else {})})
 
 
 def _binary_tournament(pop, P, random_state=None, **kwargs):

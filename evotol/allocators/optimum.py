@@ -171,8 +171,23 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
 
 @single_threaded_blas
 def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, tol: float = 1e-9,
-                     max_rounds: int = 60, max_rows: int = 400):
-    """Certified optimum (min cost at the requirement, or best accuracy at ``budget``)."""
+                     max_rounds: int = 60, max_rows: int = 400, refine: bool | dict = False):
+    """Certified optimum (min cost at the requirement, or best accuracy at ``budget``).
+
+    refine: the whole workspace (:mod:`evotol.refinement`): ``True`` or a dict of
+    :func:`evotol.refinement.refine_poses` options (``grid``, ``candidates``, ``local``, ``add``,
+    ``max_rounds``): after each solve, the workspace is searched for the pose of largest
+    normalised error, which is added before solving again, until the requirement holds there.
+    ``result.info["refinement"]`` reports the worst pose, its error and the number of rounds.
+    """
+    if refine:
+        from evotol.refinement import refine_poses
+
+        opts = {} if refine is True else dict(refine)
+        res, info = refine_poses(problem, lambda p: allocate_optimum(p, budget, tol=tol, max_rounds=max_rounds,
+                                                                     max_rows=max_rows), **opts)
+        res.info["refinement"] = {k: v for k, v in info.items() if k != "pose_indices"}
+        return res
     t0 = time.perf_counter()
     if problem.requirement.measure not in ("worst_case", "rss"):
         raise ValidationError("requirement.measure", problem.requirement.measure,

@@ -262,19 +262,19 @@ def tolerance_problem(robot: DeltaRobot, poses, position_mm: float = REQUIRED_MM
                             n_directions=n_directions)
 
 
-def worst_case_with_offsets(problem, lo, hi) -> np.ndarray:
-    """Exact worst-case |δp| (m) per pose for asymmetric intervals [lo, hi] (SI, (47,)).
-
-    The error set is S c + {sum_j t_j s_j S_j, |s_j| <= 1} with c = (lo+hi)/2, t = (hi-lo)/2; its
-    largest norm is max_u |u.Sc| + sum_j t_j |u.S_j|, i.e. the symmetric worst case with one more
-    source (block S c, tolerance 1).
-    """
-    from evotol import measures
-
+def interval_problem(problem, lo, hi):
+    """The problem with every source on its interval [lo_j, hi_j] (SI), stated through the core's
+    asymmetric tolerances: ``Tolerance.offset`` = (lo + hi)/2 and the design t = (hi − lo)/2.
+    Costs follow the core's ``cost_width="half"`` (the cost model sees the half-width), the
+    worst case keeps the offset (full sphere of directions, :mod:`evotol.measures`).
+    Returns (problem, t)."""
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    c, t = (lo + hi) / 2, (hi - lo) / 2
-    blocks = problem.blocks["position"] + [np.einsum("pij,j->pi", problem.jacobian[:, :3], c)[:, :, None]]
-    return measures.worst_case(blocks, np.append(t, 1.0)).value
+    return problem.with_tolerances(offset=(lo + hi) / 2, cost_width="half"), (hi - lo) / 2
+
+
+def table3_problem(problem):
+    """Table 3 of the paper with its printed asymmetric intervals, through the core (SI)."""
+    return interval_problem(problem, *table3_si())
 
 
 def critical_poses(problem, designs, k: int = 8) -> np.ndarray:
@@ -283,99 +283,6 @@ def critical_poses(problem, designs, k: int = 8) -> np.ndarray:
     ev = problem.evaluate(np.atleast_2d(designs), top_only=True)
     val = ev.position
     return np.unique(np.concatenate([np.argsort(-v)[:k] for v in val]))
-
-
-def allocate_over_poses(full, allocate, start_idx, *, max_rounds: int = 5, add: int = 8):
-    """Run ``allocate(sub_problem)`` on a subset of the poses of ``full`` and verify on all of them.
-
-    Poses where the design violates the requirement are added and the allocation is repeated
-    (cutting planes over poses) until the design holds on every pose of ``full``. A lower bound
-    certified on a subset is a lower bound for ``full`` too, so the optimum's certificate carries
-    over. Returns (result on the last subset, pose indices used, rounds).
-    """
-    from evotol.problem import ToleranceProblem
-
-    idx = np.asarray(start_idx)
-    for rnd in range(1, max_rounds + 1):
-        sub = ToleranceProblem(full.robot, full.tolerances, full.requirement, full.poses[idx],
-                               n_directions=full.n_directions)
-        res = allocate(sub)
-        excess = full.evaluate(res.t[None], top_only=True).position[0] / full.requirement.position - 1
-        if excess.max() <= 1e-9:
-            break
-        new = np.argsort(-excess)[:add]
-        idx = np.union1d(idx, new[excess[new] > 1e-9])
-    return res, idx, rnd
-
-
-def scale_into_requirement(full, t) -> np.ndarray:
-    """Scale the free tolerances of ``t`` by one factor (bisection) so the exact worst case over
-    all poses of ``full`` meets the requirement; returns t unchanged if it already does."""
-    t = np.asarray(t, float)
-    f = full.free
-
-    def excess(k):
-        tt = t.copy()
-        tt[f] = np.clip(t[f] * k, full.lower[f], full.upper[f])
-        return full.evaluate(tt[None], top_only=True).violation[0], tt
-
-    v, _ = excess(1.0)
-    if v <= 0:
-        return t
-    lo, hi = 0.5, 1.0
-    while excess(lo)[0] > 0:
-        lo /= 2
-    for _ in range(40):
-        mid = (lo + hi) / 2
-        if excess(mid)[0] <= 0:
-            lo = mid
-        else:
-            hi = mid
-    return excess(lo)[1]
-
-
-def monte_carlo_nonlinear(robot: DeltaRobot, poses, lo, hi, n_samples: int, seed: int = 0) -> dict:
-    """Monte Carlo through the nonlinear forward kinematics with errors.
-
-    Errors are Latin-hypercube samples, uniform in [lo_j, hi_j] (SI), the same samples at every
-    pose. Returns the largest |δp| and its 99.9 % quantile over poses and samples (mm).
-    """
-    from scipy.stats import qmc
-
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    u = qmc.LatinHypercube(d=lo.size, seed=seed).random(int(n_samples))
-    E = lo + u * (hi - lo)                                              # (s, 47)
-    err = np.linalg.norm(robot.pose_error(poses, np.broadcast_to(E, (len(poses),) + E.shape))[..., :3], axis=-1)
-    return {"max_mm": float(err.max() * 1e3), "q999_mm": float(np.quantile(err, 0.999) * 1e3),
-            "n_samples": int(n_samples), "n_poses": int(len(poses))}
-
-
-def worst_vertex_nonlinear(robot: DeltaRobot, problem, lo, hi) -> np.ndarray:
-    """|δp| (mm) of the nonlinear model at each pose's worst-case error vector of the linear model.
-
-    The linear worst case at a pose is attained by e_j = c_j + t_j sign(u*.S_j) (u*: worst
-    direction); pushing that vertex through the nonlinear forward kinematics measures the
-    linearisation error of the worst case.
-    """
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    c, t = (lo + hi) / 2, (hi - lo) / 2
-    S = problem.jacobian[:, :3]                                   # (p, 3, 47)
-    shift = np.einsum("pij,j->pi", S, c)
-    # the worst direction: maximise u.Sc + sum t_j |u.S_j| over a direction grid, then refine by
-    # the fixed point of the support function (never decreases it, see evotol.measures)
-    from evotol import measures
-
-    D, _ = measures.hemisphere(400)
-    D = np.concatenate([D, -D])
-    h = np.einsum("dk,pk->pd", D, shift) + np.abs(np.einsum("pkj,dk->pdj", S, D)) @ t
-    u = D[np.argmax(h, axis=1)]
-    for _ in range(50):
-        s = np.sign(np.einsum("pkj,pk->pj", S, u))
-        v = shift + np.einsum("pkj,pj->pk", S, s * t)
-        u = v / np.linalg.norm(v, axis=1, keepdims=True)
-    s = np.sign(np.einsum("pkj,pk->pj", S, u))
-    E = c + s * t                                                  # (p, 47) attaining vertex
-    return np.linalg.norm(robot.pose_error(problem.poses, E[:, None, :])[:, 0, :3], axis=-1) * 1e3
 
 
 # --- the study ----------------------------------------------------------------------------------------
@@ -403,6 +310,8 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
     """Reproduce Brahmia et al. 2023 and allocate its tolerances by cost; writes HTML + JSON."""
     from evotol.allocators import allocate_ga, allocate_nsga2, allocate_optimum, allocate_sensitivity
     from evotol.montecarlo import verify
+    from evotol.nonlinear import verify_nonlinear
+    from evotol.refinement import refine_poses, scale_into_requirement
     from evotol.result import make_result
     from robots.delta import cylinder_poses
 
@@ -457,12 +366,18 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
                                                     k=4 if quick else 8))
     tick("problem + screening", t0)
     t0 = time.perf_counter()
-    opt_sub, opt_idx, opt_rounds = allocate_over_poses(full, lambda p: allocate_optimum(p, max_rows=120), crit)
+    # whole-workspace refinement by the core: allocate on the critical poses, add the dense poses
+    # where the design misses 0.2 mm, repeat (evotol.refinement.refine_poses, index mode)
+    pose_rounds = dict(start=crit, local=False, add=8, max_rounds=5, dense=full)
+    opt_sub, ref = refine_poses(full, lambda p: allocate_optimum(p, max_rows=120), **pose_rounds)
+    opt_idx, opt_rounds = ref["pose_indices"], ref["rounds"]
     opt = make_result(full, "optimum", opt_sub.t, certificate=opt_sub.certificate,
                       info={"pose_rounds": opt_rounds, "poses_in_last_round": int(len(opt_idx))})
-    wc_t3 = float(worst_case_with_offsets(full, t3_lo, t3_hi).max())
+    t3_problem, t3_half = table3_problem(full)
+    wc_t3 = float(t3_problem.evaluate(t3_half[None], top_only=True).position.max())
     full_eq = full.with_requirement(position=wc_t3)
-    eq_sub, _, _ = allocate_over_poses(full_eq, lambda p: allocate_optimum(p, max_rows=120), opt_idx)
+    eq_sub, _ = refine_poses(full_eq, lambda p: allocate_optimum(p, max_rows=120),
+                             **{**pose_rounds, "start": opt_idx, "dense": full_eq})
     opt_eq = make_result(full_eq, "optimum at Table 3's accuracy", eq_sub.t, certificate=eq_sub.certificate)
     tick("certified optimum (x2)", t0)
     t0 = time.perf_counter()
@@ -483,15 +398,17 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
     t0 = time.perf_counter()
     sym = {"sensitivity": sens.t, "optimum": opt.t, "optimum at Table 3's accuracy": opt_eq.t, "GA": ga.t}
     designs = {**interval_designs, **{k: (-v, v) for k, v in sym.items()}}
-    mc_poses = dense[opt_idx]
     mc_problem = opt_sub.problem
     allocations = {}
+    n_mc = 100 if quick else 1000
     for name, (dlo, dhi) in designs.items():
-        wc = worst_case_with_offsets(full, dlo, dhi)
-        half = (dhi - dlo) / 2
-        mc = monte_carlo_nonlinear(robot, mc_poses, dlo, dhi, n_samples=100 if quick else 1000, seed=seed)
-        vertex = worst_vertex_nonlinear(robot, mc_problem, dlo, dhi)
-        allocations[name] = {"cost": float(full.cost(half)), "worst_case_error_mm": float(wc.max() * 1e3),
+        design_problem, half = interval_problem(full, dlo, dhi)
+        wc = design_problem.evaluate(half[None], top_only=True).position[0]
+        chk = verify_nonlinear(design_problem.with_poses(opt_idx), half, n_samples=n_mc, seed=seed)
+        vertex = chk.worst_vertex["position"] * 1e3
+        mc = {"max_mm": chk.mc_max["position"] * 1e3, "q999_mm": chk.mc_q999["position"] * 1e3,
+              "n_samples": int(n_mc), "n_poses": int(len(opt_idx))}
+        allocations[name] = {"cost": float(design_problem.cost(half)), "worst_case_error_mm": float(wc.max() * 1e3),
                              "meets_0.2mm": bool(wc.max() * 1e3 <= req_mm * (1 + 1e-9)),
                              "nonlinear_at_worst_vertex_mm": float(vertex.max()), "mc": mc,
                              "tolerances_si": {n: [float(a), float(b)] for n, a, b in zip(PARAMETER_NAMES, dlo, dhi)}}
@@ -628,8 +545,9 @@ def _write_report(path: Path, s: dict, variants, ver_t3, ver_ta, ta, full, front
              f"or mdeg; Δd_i and Δq2_i, which have no first-order effect, are locked at the upper bound. Requirement: "
              f"worst-case |δp| ≤ 0.2 mm at every one of {s['n_dense_poses']} poses (the 15 postures + Halton points of the "
              f"cylinder r ≤ 100 mm, 250 ≤ z ≤ 500 mm). Allocators run on {s['n_critical_poses']} critical poses and every "
-             "design is judged exactly on all poses; an asymmetric interval [lo, hi] costs as its half-width and its "
-             "offset is kept in the worst case.")
+             "design is judged exactly on all poses; an asymmetric interval [lo, hi] is stated through the core as "
+             "Tolerance(offset=(lo+hi)/2) with t = (hi−lo)/2, priced on its half-width (cost_width='half') and "
+             "its offset kept in the worst case (docs/tolerances.md).")
     rows = []
     for name, a in s["allocations"].items():
         core = a.get("mc_core", {})
