@@ -130,14 +130,18 @@ def uniforms(n: int, d: int, method: str = "lhs", seed=0) -> np.ndarray:
     return np.random.default_rng(seed).random((n, d))
 
 
+def _truncnorm_ppf(u: np.ndarray, a: float, b: float) -> np.ndarray:
+    """Quantile of N(0, 1) truncated to [a, b] (same values as scipy.stats.truncnorm.ppf, faster)."""
+    lo, hi = special.ndtr(a), special.ndtr(b)
+    return np.clip(special.ndtri(lo + u * (hi - lo)), a, b)
+
+
 def _radius(u: np.ndarray, dist: Distribution, dim: int, radial: str) -> np.ndarray:
     k = float(dist.sigma_k)
     if dist.kind == "contact":
         return np.ones_like(u)
-    if dist.kind == "normal":          # |N(0, I/k²)| in dim dimensions: chi distribution
-        return stats.chi.ppf(u, dim) / k
     if dist.kind == "truncated_normal":
-        return stats.truncnorm.ppf(u, 0, k) / k
+        return _truncnorm_ppf(u, 0.0, k) / k
     return u if radial == "uniform" else u ** (1.0 / dim)
 
 
@@ -146,7 +150,7 @@ def draw(U: np.ndarray, dims, dists, radial: str = "uniform") -> list[np.ndarray
 
     dims: source dimensions (1, 2, 3); dists: :class:`Distribution` or kind names, one per source.
     Each source uses ``dim_j`` columns of U (interval: the value; disk: radius, angle; ball:
-    radius, cos(polar angle), azimuth).
+    radius, cos(polar angle), azimuth; a normal disk/ball: one column per component).
     """
     if radial not in RADIAL:
         raise ValidationError("radial", radial, f"one of {RADIAL}")
@@ -161,9 +165,13 @@ def draw(U: np.ndarray, dims, dists, radial: str = "uniform") -> list[np.ndarray
             elif dist.kind == "normal":
                 z = special.ndtri(np.clip(u, 1e-300, 1 - 1e-16)) / k
             else:
-                z = stats.truncnorm.ppf(u, -k, k) / k
+                z = _truncnorm_ppf(u, -k, k) / k
             out.append((z + dist.mean_shift)[:, None])
             c += 1
+            continue
+        if dist.kind == "normal":          # circular / spherical normal: each component N(0, 1/k²)
+            out.append(special.ndtri(np.clip(U[:, c:c + dim], 1e-300, 1 - 1e-16)) / k)
+            c += dim
             continue
         r = _radius(U[:, c], dist, dim, radial)
         if dim == 2:

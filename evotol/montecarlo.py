@@ -26,6 +26,7 @@ from evotol import distributions
 from evotol.distributions import METHODS
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
+from evotol.statistical import pose_error_nan
 from evotol.threads import single_threaded_blas
 
 RADIAL = distributions.RADIAL
@@ -45,6 +46,15 @@ class MonteCarloResult:
     linearisation_error: float | None = None      # max |nonlinear − linear| / max |linear|
     max_error_over_worst_case: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
+    yield_linear: np.ndarray | None = None        # (n_poses,) fraction of samples inside every bound
+    yield_nonlinear: np.ndarray | None = None     # the same on robot.pose_error (unassembled = miss)
+    yield_check: dict = field(default_factory=dict)
+
+    @property
+    def requirement_missed(self) -> bool:
+        """True when the Monte Carlo shows, at the stated confidence, that the yield requirement
+        is missed at some pose (nonlinear model where the robot has one)."""
+        return self.yield_check.get("verdict") == "missed"
 
     def max_exceed_rate(self, nonlinear: bool = False) -> float:
         rates = self.nonlinear_exceed_rate if nonlinear and self.nonlinear_exceed_rate else self.exceed_rate
@@ -56,14 +66,52 @@ class MonteCarloResult:
              "max_error_over_worst_case": self.max_error_over_worst_case}
         if self.nonlinear_exceed_rate:
             d["max_exceed_rate_nonlinear"] = self.max_exceed_rate(True)
+        if self.yield_check:
+            d["yield"] = dict(self.yield_check)
         return d
+
+
+def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: float = 0.95,
+                model: str = "linear") -> dict:
+    """Clopper-Pearson interval (exact binomial, via scipy.stats.beta quantiles) of the yield at the
+    worst pose and the verdict against ``required``: "met" (lower bound >= required at every pose),
+    "missed" (upper bound < required at some pose) or "undecided". inside: (n_poses,) fractions of
+    n samples. The verdict holds for all poses together at ``confidence``: each pose's interval
+    is taken at level 1 − (1 − confidence)/n_poses (Bonferroni), since the smallest of many
+    estimates at the bound is biased low. The reported interval is the worst pose's at
+    ``confidence``.
+    The interval assumes independent samples (exact for method="mc"; Latin hypercube samples
+    usually vary less, so the interval is then conservative)."""
+    from scipy.stats import beta
+
+    k = np.rint(np.asarray(inside) * n).astype(int)
+
+    def interval(a):
+        lo = np.where(k > 0, beta.ppf(a / 2, np.maximum(k, 1), n - k + 1), 0.0)
+        hi = np.where(k < n, beta.ppf(1 - a / 2, k + 1, np.maximum(n - k, 1)), 1.0)
+        return lo, hi
+
+    lo, hi = interval(1 - confidence)
+    worst = int(np.argmin(k))
+    out = {"model": model, "n_samples": int(n), "confidence": confidence, "worst_pose": worst,
+           "yield_estimate": float(k[worst] / n), "yield_lower": float(lo[worst]), "yield_upper": float(hi[worst]),
+           "yield_required": required}
+    lo, hi = interval((1 - confidence) / len(k))
+    if required is not None:
+        out["verdict"] = ("missed" if np.any(hi < required) else "met" if np.all(lo >= required) else "undecided")
+    return out
 
 
 @single_threaded_blas
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
            nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
-           progress: bool | None = None) -> MonteCarloResult:
-    """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose."""
+           progress: bool | None = None, confidence: float = 0.95) -> MonteCarloResult:
+    """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose.
+
+    Besides exceedance rates, reports the yield (fraction of samples inside every bound) per pose,
+    on the linear and, where the robot has one, the nonlinear model, with the Clopper-Pearson
+    interval at the worst pose (``confidence``) and, for a ``yield`` requirement, the verdict
+    (:func:`yield_check`; ``requirement_missed`` flags a requirement the robot misses)."""
     t0 = time.perf_counter()
     if method not in METHODS:
         raise ValidationError("method", method, f"one of {METHODS}")
@@ -82,6 +130,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     exceed_nl = {c: np.zeros(P) for c, _ in comps} if (nonlinear and robot.has_nonlinear_model) else {}
     maxerr = {c: np.zeros(P) for c, _ in comps}
     q95 = {c: np.zeros(P) for c, _ in comps}
+    inside_lin = np.zeros(P)
+    inside_nl = np.zeros(P) if exceed_nl else None
     lin_err, lin_scale = 0.0, 0.0
     rows = {"position": slice(0, 3), "orientation": slice(3, 6)}
     from tqdm.auto import tqdm
@@ -94,23 +144,89 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
             Z = distributions.draw(distributions.uniforms(n_samples, sum(dims), method, seeds[p]), dims, dists, radial)
             E[a] = np.concatenate(problem.source_errors(Z, t), axis=1)   # inside shifted intervals too
         lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
+        ok = np.ones(lin.shape[:2], dtype=bool)
         for c, lim in comps:
             nrm = np.linalg.norm(lin[:, :, rows[c]], axis=2)
+            ok &= nrm <= lim
             exceed[c][idx] = np.mean(nrm > lim, axis=1)
             maxerr[c][idx] = nrm.max(axis=1)
             q95[c][idx] = np.quantile(nrm, 0.95, axis=1)
+        inside_lin[idx] = ok.mean(axis=1)
         if exceed_nl:
-            nl = robot.pose_error(problem.poses[idx], E)
-            lin_err = max(lin_err, float(np.max(np.abs(nl - lin))))
+            nl = pose_error_nan(robot, problem.poses[idx], E)
+            assembled = np.all(np.isfinite(nl), axis=2)
+            if assembled.any():
+                lin_err = max(lin_err, float(np.max(np.abs(nl - lin)[assembled])))
             lin_scale = max(lin_scale, float(np.max(np.abs(lin))))
+            ok = np.ones(lin.shape[:2], dtype=bool)
             for c, lim in comps:
-                exceed_nl[c][idx] = np.mean(np.linalg.norm(nl[:, :, rows[c]], axis=2) > lim, axis=1)
+                nrm = np.linalg.norm(nl[:, :, rows[c]], axis=2)
+                ok &= nrm <= lim                                 # NaN (not assembled) is a miss
+                exceed_nl[c][idx] = np.mean(~(nrm <= lim), axis=1)
+            inside_nl[idx] = ok.mean(axis=1)
         bar.update(idx.size)
     bar.close()
     res = MonteCarloResult(method, int(n_samples), seed, exceed, maxerr, q95, exceed_nl,
                            (lin_err / lin_scale) if exceed_nl and lin_scale > 0 else None)
+    res.yield_linear, res.yield_nonlinear = inside_lin, inside_nl
+    req = problem.requirement.required_yield if problem.requirement.measure == "yield" else None
+    res.yield_check = yield_check(inside_nl if inside_nl is not None else inside_lin, n_samples, req, confidence,
+                                  "nonlinear" if inside_nl is not None else "linear")
     ev = problem.evaluate(t[None], "worst_case")
     for c, _ in comps:
         res.max_error_over_worst_case[c] = float(np.max(maxerr[c] / np.maximum(getattr(ev, c)[0], 1e-300)))
     res.seconds = time.perf_counter() - t0
     return res
+
+
+def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=1, confidence: float = 0.95,
+                    iters: int = 40) -> dict:
+    """Largest common factor s applied to the free tolerances of a design such that, at every
+    pose, the one-sided Clopper-Pearson upper bound (``confidence``) of the miss probability on an
+    independent common sample set (``n_samples`` Latin-hypercube rows from ``seed``, nonlinear
+    model where the robot has one) stays within 1 − p of the ``yield`` requirement.
+
+    A GA that optimises a sampled yield sits on its own sample's constraint, so its design is
+    optimistic; this rescales it on fresh samples (geometric bisection; the miss probability
+    grows with every tolerance, so the test is monotone in s). Locked and fixed sources keep their
+    values; s stays within the tolerance bounds. Returns {"scale", "tolerances" (SI array),
+    "certified" (bool), "n_samples", "confidence"}.
+    """
+    from scipy.stats import beta
+
+    from evotol import statistical
+
+    r = problem.requirement
+    if r.measure != "yield":
+        raise ValidationError("requirement.measure", r.measure, "'yield' for calibrate_scale")
+    if not isinstance(n_samples, (int, np.integer)) or n_samples < 10:
+        raise ValidationError("n_samples", n_samples, "an integer >= 10")
+    t = problem.as_array(tolerances)
+    free = np.isnan(problem.locked_values)
+    if not problem.robot.has_nonlinear_model:
+        raise ValidationError("robot", problem.robot.name, "a robot with pose_error (calibration samples the exact model)")
+    model = statistical.SampledYield(problem.robot, problem.poses, problem.distributions, dict(problem.components),
+                                     int(n_samples), seed)
+    p_max = 1.0 - r.required_yield
+
+    def ok(s):
+        T = t.copy()
+        T[free] *= s
+        q = 1.0 - model.evaluate(T[None], r.required_yield).probability[0]
+        k = np.rint(q * n_samples).astype(int)
+        upper = np.where(k >= n_samples, 1.0, beta.ppf(confidence, k + 1, np.maximum(n_samples - k, 1)))
+        return bool(np.max(upper) <= p_max)
+
+    lo = float(np.max(problem.lower[free] / t[free]))
+    hi = float(np.min(problem.upper[free] / t[free]))
+    certified = ok(lo)
+    if certified:
+        if ok(hi):
+            lo = hi
+        else:
+            for _ in range(iters):
+                mid = np.sqrt(lo * hi)
+                lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    T = t.copy()
+    T[free] *= lo
+    return {"scale": lo, "tolerances": T, "certified": certified, "n_samples": int(n_samples), "confidence": confidence}

@@ -167,6 +167,9 @@ class Requirement:
         for the first-order model (:mod:`evotol.statistical`; Bonferroni bound for both).
     probability: required yield of the ``yield`` measure in (0, 1) (default 0.9973 = 3σ), or
     ppm: the same given as allowed defects per million (probability = 1 − ppm·1e-6).
+    model: ``"linear"`` (first-order model, exact probability) or ``"nonlinear"`` (``yield`` only:
+        the robot's ``pose_error`` on ``mc_samples`` common Latin-hypercube samples from ``seed``,
+        :class:`evotol.statistical.SampledYield`).
     """
 
     position: float | None = None
@@ -177,6 +180,7 @@ class Requirement:
     seed: int = 0
     probability: float | None = None
     ppm: float | None = None
+    model: str = "linear"
 
     @property
     def required_yield(self) -> float:
@@ -196,6 +200,10 @@ class Requirement:
             raise ValidationError("requirement.measure", self.measure, f"one of {measures.MEASURES}")
         if not 0 < self.quantile < 1:
             raise ValidationError("requirement.quantile", self.quantile, "a probability in (0, 1)")
+        if self.model not in ("linear", "nonlinear"):
+            raise ValidationError("requirement.model", self.model, "'linear' or 'nonlinear'")
+        if self.model == "nonlinear" and self.measure != "yield":
+            raise ValidationError("requirement.model", self.model, "'linear' unless measure = 'yield'")
         if self.probability is not None and self.ppm is not None:
             raise ValidationError("requirement.ppm", self.ppm, "None when requirement.probability is given (one of the two)")
         if self.probability is not None:
@@ -592,10 +600,6 @@ class ToleranceProblem:
         measure = measure or self.requirement.measure
         ev = Evaluation(None, None)
         if measure == "yield":
-            if not self.shape.plain:
-                raise ValidationError("requirement.measure", "yield", "'worst_case', 'rss' or 'mc_quantile' for "
-                                      "asymmetric intervals (offset/minus/plus); the yield measure takes centred "
-                                      "tolerances with a distribution mean_shift")
             return self._evaluate_yield(T)
         viol = np.full(T.shape[0], -np.inf)
         plain = self.shape.plain
@@ -633,7 +637,14 @@ class ToleranceProblem:
     def first_order_yield(self) -> statistical.FirstOrderYield:
         """Cached moments of the linear model for the ``yield`` measure."""
         if getattr(self, "_yield_cache", None) is None:
-            self._yield_cache = statistical.FirstOrderYield(self.blocks, self.distributions, dict(self.components))
+            r = self.requirement
+            shift = None if self.shape.plain else (self.shape.rho, self.shape.kappa, self.shape.offset)
+            if r.model == "nonlinear":
+                self._yield_cache = statistical.SampledYield(self.robot, self.poses, self.distributions,
+                                                             dict(self.components), r.mc_samples, r.seed, shift=shift)
+            else:
+                self._yield_cache = statistical.FirstOrderYield(self.blocks, self.distributions, dict(self.components),
+                                                                shift=shift)
         return self._yield_cache
 
     def _evaluate_yield(self, T: np.ndarray) -> Evaluation:
@@ -642,7 +653,7 @@ class ToleranceProblem:
         for c in y.miss:
             setattr(ev, c, y.equivalent[c])
             setattr(ev, f"{c}_bound", y.equivalent[c])
-            setattr(ev, f"{c}_contrib", y.contributions[c])
+            setattr(ev, f"{c}_contrib", y.contributions.get(c))
         return ev
 
     def max_errors(self, T, measure: str | None = None) -> dict[str, np.ndarray]:

@@ -221,19 +221,25 @@ class FirstOrderYield:
 
     blocks: component -> list over sources of (n_poses, 3, dim_j) sensitivity blocks;
     dists: per-source :class:`evotol.distributions.Distribution`; bounds: component -> E;
-    offsets: optional (n_sources,) fixed mean offsets (SI) of interval sources.
+    shift: optional (rho, kappa, offset) per source of asymmetric intervals (``docs/tolerances.md``):
+    the unit distribution is placed on [offset + (κ − ρ)t, offset + (κ + ρ)t], i.e.
+    e = offset + t (κ + ρ z): mean offset + t (κ + ρ m), variance t² ρ² v.
     """
 
     _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
-    def __init__(self, blocks: dict, dists, bounds: dict, radial: str = "uniform", offsets=None):
+    def __init__(self, blocks: dict, dists, bounds: dict, radial: str = "uniform", shift=None):
         from evotol.distributions import unit_moments
 
         self.bounds = {c: float(E) for c, E in bounds.items() if E is not None}
         dims = [B.shape[2] for B in next(iter(blocks.values()))]
         mom = np.array([unit_moments(d, dim, radial) for d, dim in zip(dists, dims)])
-        self.unit_mean, self.unit_var = mom[:, 0], mom[:, 1]
-        self.offsets = np.zeros(len(dims)) if offsets is None else np.asarray(offsets, dtype=float)
+        n = len(dims)
+        rho, kappa, offset = (np.ones(n), np.zeros(n), np.zeros(n)) if shift is None else \
+            (np.asarray(a, dtype=float) for a in shift)
+        self.unit_mean = kappa + rho * mom[:, 0]
+        self.unit_var = rho ** 2 * mom[:, 1]
+        self.offsets = offset
         contributing = [j for j in range(len(dims)) if any(np.any(blocks[c][j]) for c in self.bounds)]
         self.exact = all(dists[j].is_normal for j in contributing)
         self.G, self.Bmean, self.frob = {}, {}, {}
@@ -267,3 +273,81 @@ class FirstOrderYield:
         with np.errstate(divide="ignore"):
             viol = np.max(k_req / np.maximum(k_equivalent(q), 1e-3), axis=1) - 1   # finite for q -> 1
         return YieldResult(miss, 1.0 - q, eq, viol, contrib, self.exact)
+
+
+def pose_error_nan(robot, poses: np.ndarray, errors: np.ndarray) -> np.ndarray:
+    """robot.pose_error with samples that cannot be assembled as NaN (they count as misses):
+    robots whose ``pose_error`` accepts ``failures="nan"`` report them per sample."""
+    import inspect
+
+    if "failures" in inspect.signature(robot.pose_error).parameters:
+        return robot.pose_error(poses, errors, failures="nan")
+    return robot.pose_error(poses, errors)
+
+
+class SampledYield:
+    """Yield of the *nonlinear* model (``robot.pose_error``) estimated with common random numbers.
+
+    One set of ``n_samples`` unit-tolerance samples (Latin hypercube by default, ``seed``) is drawn
+    once and rescaled by every design's tolerances, so the estimate is a deterministic function of
+    the design and a GA compares designs without sampling noise. A sample misses when the position
+    or the orientation error exceeds its bound, or when the mechanism cannot be assembled (NaN):
+    the joint yield is counted directly (no Bonferroni bound). Per component, the reported error is
+    the sampled ``probability``-quantile of |error| (m or rad). The violation is
+    k_req/k(miss) − 1 as for the first-order measure (piecewise constant in the design).
+    Sources with a process mean shift or asymmetric interval are sampled as their distributions say.
+    """
+
+    def __init__(self, robot, poses: np.ndarray, dists, bounds: dict, n_samples: int = 1024, seed=0,
+                 method: str = "lhs", radial: str = "uniform", shift=None, max_rows: int = 2_000_000):
+        from evotol.distributions import unit_samples
+
+        if not robot.has_nonlinear_model:
+            raise ValidationError("requirement.model", "nonlinear", f"a robot with pose_error ({robot.name} has none)")
+        self.robot, self.poses = robot, np.asarray(poses, dtype=float)
+        self.bounds = {c: float(E) for c, E in bounds.items() if E is not None}
+        self.dims = [s.dim for s in robot.sources]
+        Z = unit_samples(self.dims, dists, int(n_samples), method, seed, radial)
+        self.unit = np.concatenate(Z, axis=1)                     # (n_samples, n_columns)
+        self.owner = np.repeat(np.arange(len(self.dims)), self.dims)
+        # per-column affine map e = offset + t (kappa + rho z) (asymmetric intervals; 0/1 if none)
+        rho, kappa, offset = (np.ones(len(self.dims)), np.zeros(len(self.dims)), np.zeros(len(self.dims))) \
+            if shift is None else shift
+        self.rho, self.kappa, self.offset = (np.asarray(a, dtype=float)[self.owner] for a in (rho, kappa, offset))
+        self.n_samples = int(n_samples)
+        self.max_rows = int(max_rows)
+
+    def errors(self, t: np.ndarray) -> np.ndarray:
+        """Stacked source errors (n_samples, n_columns) of one design t (n_sources,)."""
+        tc = np.asarray(t, dtype=float)[self.owner]
+        return self.offset + tc * (self.kappa + self.rho * self.unit)
+
+    def norms(self, T: np.ndarray) -> dict:
+        """component -> |error| (n_designs, n_poses, n_samples), NaN where not assembled."""
+        T = np.atleast_2d(np.asarray(T, dtype=float))
+        P, S = len(self.poses), self.n_samples
+        out = {c: np.empty((len(T), P, S)) for c in self.bounds}
+        rows = {"position": slice(0, 3), "orientation": slice(3, 6)}
+        step = max(1, self.max_rows // (P * S))
+        for a in range(0, len(T), step):
+            E = np.concatenate([self.errors(t) for t in T[a:a + step]], axis=0)    # (m·S, cols)
+            err = pose_error_nan(self.robot, self.poses, np.broadcast_to(E, (P,) + E.shape))
+            m = len(T[a:a + step])
+            for c in self.bounds:
+                nrm = np.linalg.norm(err[:, :, rows[c]], axis=2).reshape(P, m, S)
+                out[c][a:a + m] = np.moveaxis(nrm, 1, 0)
+        return out
+
+    def evaluate(self, T: np.ndarray, probability: float) -> YieldResult:
+        k_req = float(k_equivalent(1.0 - required_probability(probability)))
+        nrm = self.norms(T)
+        miss, eq = {}, {}
+        joint = None
+        for c, E in self.bounds.items():
+            out = ~(nrm[c] <= E)                                   # NaN (not assembled) is a miss
+            miss[c] = out.mean(axis=2)
+            joint = out if joint is None else joint | out
+            eq[c] = np.quantile(np.where(np.isnan(nrm[c]), np.inf, nrm[c]), probability, axis=2, method="inverted_cdf")
+        q = joint.mean(axis=2)
+        viol = np.max(k_req / np.maximum(k_equivalent(q), 1e-3), axis=1) - 1
+        return YieldResult(miss, 1.0 - q, eq, viol, {}, False)

@@ -15,6 +15,7 @@ import cost_models
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
 from evotol.allocators.budget import check_budget
+from evotol.distributions import Distribution
 from evotol.errors import ValidationError
 from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
@@ -97,9 +98,11 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         cspec = o.get("cost", costs.get(s.name, costs.get(s.group, costs.get("default"))))
         if cspec is None:
             raise ValidationError(f"cost.{s.group}", None, f"a cost model for source {s.name} (by name, group or 'default')")
+        # distribution, sigma_k (t = k·σ) and mean_shift (fraction of t): per source, else top level
+        dist = Distribution(o.get("distribution", spec.get("distribution", "uniform")),
+                            o.get("sigma_k", spec.get("sigma_k", 3.0)), o.get("mean_shift", 0.0))
         tol[s.name] = Tolerance(cost_models.from_dict(cspec), _bound(o, bounds, s, "lower", 1e-6),
-                                _bound(o, bounds, s, "upper", 1e-3), o.get("locked"),
-                                o.get("distribution", "uniform"))
+                                _bound(o, bounds, s, "upper", 1e-3), o.get("locked"), dist)
     req = Requirement(**spec.get("requirement", {}))
     return ToleranceProblem(robot, tol, req, poses)
 
@@ -181,6 +184,11 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     rows.append(["cost"] + [results[m].cost for m in results])
     rows.append(["feasible"] + [results[m].feasible for m in results])
     rows.append(["MC max exceed rate"] + [checks[m]["max_exceed_rate"] if m in checks else "not run" for m in results])
+    if problem.requirement.measure == "yield":
+        rows.append(["MC yield at the worst pose [95 % interval] verdict"] +
+                    [f"{checks[m]['yield']['yield_estimate']:.5f} [{checks[m]['yield']['yield_lower']:.5f}, "
+                     f"{checks[m]['yield']['yield_upper']:.5f}] {checks[m]['yield']['verdict']} ({checks[m]['yield']['model']})"
+                     if m in checks else "not run" for m in results])
     rep.table(rows, ["source (SI)"] + list(results))
     for m, r in results.items():
         rep.heading(f"Contributors at the worst pose: {m}")

@@ -96,11 +96,11 @@ def test_yield_of_non_normal_sources_is_the_moment_matched_normal():
 
 
 def test_unit_moments_match_sampled_moments():
-    """Closed-form variances per unit tolerance (module docstring) against 4·10^5 LHS samples."""
+    """Closed-form variances per unit tolerance (module docstring) against 10^5 LHS samples."""
     for dim in (1, 2, 3):
         for d in ("uniform", "normal", "truncated_normal", Distribution("normal", sigma_k=2.0)) + (("contact",) if dim > 1 else ()):
             dist = Distribution(d) if isinstance(d, str) else d
-            z = draw(uniforms(400_000, dim, "lhs", 1), [dim], [dist])[0]
+            z = draw(uniforms(100_000, dim, "lhs", 1), [dim], [dist])[0]
             m, v = unit_moments(dist, dim)
             assert np.var(z[:, 0]) == pytest.approx(v, rel=0.01), (dim, dist)
             assert np.mean(z[:, 0]) == pytest.approx(m, abs=0.01)
@@ -146,3 +146,120 @@ def test_mean_shift_or_contact_must_suit_the_source_shape():
         _toy_problem(["uniform", "uniform", Distribution("uniform", mean_shift=0.1), "uniform", "uniform"])
     with pytest.raises(ValidationError, match=r"tolerances\['s0'\]\.distribution\.kind"):
         _toy_problem(["contact", "uniform", "uniform", "uniform", "uniform"])
+
+
+def test_clopper_pearson_interval_matches_scipy_binomtest():
+    from evotol.montecarlo import yield_check
+
+    inside = np.array([0.995, 0.98, 1.0])
+    out = yield_check(inside, 2000, 0.99)
+    ref = stats.binomtest(1960, 2000).proportion_ci(0.95, method="exact")
+    assert out["worst_pose"] == 1 and out["yield_lower"] == pytest.approx(ref.low) and out["yield_upper"] == pytest.approx(ref.high)
+    assert out["verdict"] == "missed"            # upper bound of pose 1 < 0.99
+    assert yield_check(np.array([1.0, 1.0]), 2000, 0.99)["verdict"] == "met"
+    assert yield_check(np.array([0.99]), 2000, 0.99)["verdict"] == "undecided"
+
+
+def _planar5r_problem(model, n=2048):
+    from robots.planar5r import Planar5R
+
+    r = Planar5R("b", D=0.2)
+    tol = {}
+    for s in r.sources:
+        if s.group == "link length":
+            tol[s.name] = Tolerance(cm.ReciprocalCost(1, 1, scale=1e-6), 1e-7, 1e-3, locked=3e-5, distribution="normal")
+        elif s.unit == "rad":
+            tol[s.name] = Tolerance(cm.PowerCost(4, 0.7, scale=1e-3), 1e-5, 1e-2, distribution="normal")
+        else:
+            tol[s.name] = Tolerance(cm.ReciprocalCost(1, 20, scale=1e-6), 1e-6, 1e-4, distribution="contact")
+    req = Requirement(position=2e-4, measure="yield", probability=0.99, model=model, mc_samples=n, seed=1)
+    return ToleranceProblem(r, tol, req, r.miw_poses()[:5])
+
+
+def test_nonlinear_yield_of_the_planar_5r_agrees_with_an_independent_verification():
+    """The nonlinear yield measure (common LHS samples, robot.pose_error) and verify() on fresh
+    plain-MC samples estimate the same probability: within 4 standard errors of the difference of
+    two binomial estimates (2048 and 8000 samples).
+    A design far too loose is flagged as missing the requirement."""
+    from evotol.montecarlo import verify
+
+    P = _planar5r_problem("nonlinear")
+    t = np.array([3e-5] * 6 + [1.6e-3] * 2 + [4e-5] * 4)
+    ev = P.evaluate(t[None])
+    mc = verify(P, t, 8000, method="mc", seed=7, confidence=0.999)
+    assert mc.yield_nonlinear is not None
+    a, b = ev.probability[0], mc.yield_nonlinear
+    pbar = 0.5 * (a + b)
+    se = np.sqrt(pbar * (1 - pbar) * (1 / 2048 + 1 / 8000))
+    assert np.all(np.abs(a - b) <= 4 * se), (a, b, se)
+    assert np.all(a < 1) and np.all(a > 0.95)           # a regime where the check means something
+    loose = verify(P, t * 2, 2000, method="mc", seed=7)
+    assert loose.requirement_missed and loose.yield_check["model"] == "nonlinear"
+    assert P.evaluate((2 * t)[None]).violation[0] > 0
+
+
+def test_study_file_keys_for_statistical_tolerancing():
+    """The example study file's keys reach the problem; a bad sigma_k is named."""
+    import tomllib
+    from pathlib import Path
+
+    from evotol.studyfile import load_problem
+
+    spec = tomllib.loads((Path(__file__).parents[1] / "reports/studies/ucr3_yield.toml").read_text())
+    spec["poses"] = {"grid": [2, 2, 2]}
+    P = load_problem(spec)
+    assert P.requirement.measure == "yield" and P.requirement.required_yield == 0.9973
+    d = dict(zip(P.names, P.distributions))
+    assert d["l1"] == Distribution("normal", 4.0, 0.25) and d["R2"] == Distribution("normal", 3.0, 0.0)
+    spec["sources"]["l1"]["sigma_k"] = -1
+    with pytest.raises(ValidationError, match=r"tolerances\['l1'\]\.distribution\.sigma_k = -1"):
+        load_problem(spec)
+    spec["sources"]["l1"]["sigma_k"] = 3
+    spec["requirement"]["ppm"] = 10
+    with pytest.raises(ValidationError, match=r"requirement\.ppm"):
+        load_problem(spec)
+
+
+def test_calibrate_scale_gives_the_largest_certified_factor():
+    """calibrate_scale: at the returned factor every pose's one-sided 95 % Clopper-Pearson upper
+    bound of the miss probability (fresh samples, nonlinear model) is within 1 − p; 3 % more is not."""
+    from scipy.stats import beta
+
+    from evotol.montecarlo import calibrate_scale
+    from evotol.statistical import SampledYield
+
+    P = _planar5r_problem("nonlinear", 512)
+    t = np.array([3e-5] * 6 + [1.6e-3] * 2 + [4e-5] * 4)
+    cal = calibrate_scale(P, t, 2000, seed=11)
+    assert cal["certified"] and 0.3 < cal["scale"] < 3
+    np.testing.assert_allclose(cal["tolerances"][:6], 3e-5)          # locked lengths keep their value
+    model = SampledYield(P.robot, P.poses, P.distributions, dict(P.components), 2000, 11)
+
+    def upper(T):
+        k = np.rint((1 - model.evaluate(T[None], 0.99).probability[0]) * 2000)
+        return np.max(beta.ppf(0.95, k + 1, 2000 - k))
+
+    assert upper(cal["tolerances"]) <= 0.01
+    T = cal["tolerances"].copy()
+    T[6:] *= 1.03
+    assert upper(T) > 0.01
+
+
+def test_yield_with_asymmetric_intervals_matches_1e6_monte_carlo():
+    """Asymmetric intervals (offset, minus/plus; docs/tolerances.md) with normal sources: the unit
+    distribution sits on the interval's centre with its half-width; analytic miss vs 10^6 MC."""
+    r = ToyRobot(dims=(1, 1, 2), planar=True)
+    tol = {"s0": Tolerance(cost=cm.ExponentialCost(1, 1, scale=1e-3), lower=1e-5, upper=1e-2, distribution="normal",
+                           offset=1e-4, minus=0.5, plus=1.5),
+           "s1": Tolerance(cost=cm.ExponentialCost(1, 1, scale=1e-3), lower=1e-5, upper=1e-2, distribution="normal"),
+           "s2": Tolerance(cost=cm.ExponentialCost(1, 1, scale=1e-3), lower=1e-5, upper=1e-2, distribution="normal")}
+    P = ToleranceProblem(r, tol, Requirement(position=6e-4, measure="yield", probability=0.99), [[0.0], [0.6]])
+    t = np.full(3, 3e-4)
+    q = 1 - P.evaluate(t[None]).probability[0]
+    dims = [s.dim for s in r.sources]
+    Z = draw(uniforms(1_000_000, sum(dims), "mc", 4), dims, P.distributions)
+    E = np.concatenate(P.source_errors(Z, t), axis=1)
+    assert np.mean(E[:, 0]) == pytest.approx(1e-4 + 0.5 * 3e-4, abs=1e-6)     # centre offset + κ t
+    for p, J in enumerate(P.jacobian):
+        k = int(np.sum(np.linalg.norm(E @ J[0:3].T, axis=1) > 6e-4))
+        assert 1e-3 < q[p] < 0.2 and _within_ci(k, 1_000_000, q[p]), (p, q[p], k)

@@ -54,9 +54,7 @@ def _scale_exact(problem: ToleranceProblem, t: np.ndarray, rows: ConstraintRows 
         mid = 0.5 * (lo + hi)
         ok = problem.evaluate(problem.full((t[f] * mid)[None])).violation[0] <= 0
         lo, hi = (mid, hi) if ok else (lo, mid)
-    out = t.copy()
-    out[f] = np.clip(t[f] * lo, problem.lower[f], problem.upper[f])
-    return out
+    return problem.full(np.clip(t[f] * lo, problem.lower[f], problem.upper[f])[None])[0]   # followers of shared groups too
 
 
 def equal_design(problem: ToleranceProblem, rows: ConstraintRows | None = None) -> np.ndarray:

@@ -152,9 +152,15 @@ class Planar5R(RobotErrorModel):
             raise ValidationError("errors shape", errors.shape, f"(..., {self.n_columns}) stacked as {self.source_names}")
         return {k: errors[..., j] for j, k in enumerate(COLUMN_PARAMETERS)}
 
-    def pose_error(self, poses, errors) -> np.ndarray:
+    def pose_error(self, poses, errors, failures: str = "raise") -> np.ndarray:
         """Exact end-effector error (n_poses, n_samples, 6) for stacked source errors
-        (n_poses, n_samples, 16), by re-solving the loop closure (no linearisation)."""
+        (n_poses, n_samples, 16), by re-solving the loop closure (no linearisation).
+
+        failures: a sample whose loop cannot close (the two couplers cannot meet) raises
+        :class:`KinematicsError` naming the pose (``"raise"``) or gives a NaN row (``"nan"``; the
+        core's nonlinear yield counts it as a miss)."""
+        if failures not in ("raise", "nan"):
+            raise ValidationError("failures", failures, "'raise' or 'nan'")
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
         theta = self.nominal_angles(poses)
         errors = np.asarray(errors, dtype=float)
@@ -162,11 +168,13 @@ class Planar5R(RobotErrorModel):
             raise ValidationError("errors shape", errors.shape, f"({len(poses)}, n_samples, {self.n_columns})")
         px, py, h2 = K.perturbed_position(theta[:, None, :], self.r1, self.r2, self.r3, self.errors_dict(errors),
                                           self.assembly)
-        bad = ~np.all(h2 >= 0, axis=1)
-        if bad.any():
+        ok = h2 >= 0
+        bad = ~np.all(ok, axis=1)
+        if bad.any() and failures == "raise":
             raise KinematicsError(f"{self.name}: pose {poses[bad][0].tolist()} cannot be assembled with the given "
                                   f"source errors", poses=poses[bad])
         out = np.zeros(errors.shape[:2] + (6,))
         out[..., 0] = px - poses[:, 0:1]
         out[..., 1] = py - poses[:, 1:2]
+        out[~ok] = np.nan
         return out
