@@ -201,6 +201,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
         if "budget" in kw:
             check_budget(problem, kw["budget"], field=f"methods.{m}.budget")
     check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
+    if any("budget" not in kw for m, kw in methods.items() if m != "nsga2"):
+        problem.check_feasible()            # a requirement no design meets: say so before the first method
     results, front, stopped, skipped = {}, None, [], []
     with CtrlC() as ctrl_c:
         for m, kw in methods.items():
