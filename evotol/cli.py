@@ -51,7 +51,8 @@ def cmd_reproduce(args) -> int:
 
         check_scheduler_answers(args.scheduler)
         os.environ["EVOTOL_DASK_SCHEDULER"] = args.scheduler  # read by the grid/design studies
-    summaries, failed = {}, []
+    summaries, failed, seconds = {}, [], {}
+    t_all = time.perf_counter()
     for name in names:
         study = studies.get(name)
         print(f"[evotol] reproducing {name}: {study.title}", flush=True)
@@ -73,12 +74,29 @@ def cmd_reproduce(args) -> int:
             traceback.print_exc()
             print(f"[evotol] {name} failed (bug, traceback above); continuing with the other studies", file=sys.stderr)
             continue
+        finally:
+            seconds[name] = time.perf_counter() - t0
         print(f"[evotol] {name} done in {time.perf_counter() - t0:.1f} s -> {out / (name + '.html')}", flush=True)
     index = _write_index(out, summaries)
     print(f"[evotol] index: {index}")
+    if len(names) > 1:
+        _print_time_table(seconds, failed, time.perf_counter() - t_all)
     if failed:
         print(f"[evotol] failed: {', '.join(failed)}", file=sys.stderr)
     return 1 if failed else 0
+
+
+def _print_time_table(seconds: dict, failed: list, total: float) -> None:
+    """Per-study wall-clock times (s) at the end of ``evotol reproduce all`` (issue 13), with the
+    machine load: the 2-core machine is often shared, so absolute times are noisy."""
+    import os
+
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    w = max(len(n) for n in seconds) if seconds else 5
+    print(f"[evotol] run times (load average {load:.1f}, {os.cpu_count()} cores):")
+    for name, sec in seconds.items():
+        print(f"  {name:{w}s} {sec:8.1f} s{'  (failed)' if name in failed else ''}")
+    print(f"  {'total':{w}s} {total:8.1f} s", flush=True)
 
 
 def cmd_run(args) -> int:

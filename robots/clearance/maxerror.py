@@ -114,10 +114,11 @@ class _Evaluator:
         self.n_cheap += len(case)
         return true_dual(a + (self.Bt[case] @ mu[..., None])[..., 0], self.nd)
 
-    def polish(self, n_iter: int = 2, rtol: float = 1e-8, cases=None):
+    def polish(self, n_iter: int = 2, rtol: float | None = None, cases=None):
         """Local ascent from the best attained point: u <- x / ||x||, x <- argmax u^T x; monotone
         (||x_new|| >= u^T x_new = h(u) >= u^T x_old = ||x_old||). Tightens the attained value."""
         cases = np.arange(len(self.best)) if cases is None else cases
+        rtol = _POLISH_RTOL if rtol is None else rtol
         for _ in range(n_iter):
             x = np.einsum("kqr,kr->kq", self.Ct[cases], self.sigma[cases])
             nrm = np.linalg.norm(x, axis=-1)
@@ -135,15 +136,33 @@ def _depth(U):
     return _tri_depth(U)
 
 
+def _arc_bound(A, B, HA, HB):
+    """``max u . X`` over the unit vectors ``u`` of the arc from A to B (P, k), where ``A . X = HA``
+    and ``B . X = HB``: with ``X_p = alpha A + beta B`` the projection of X on the plane of the arc
+    (Gram system), the maximum is ``|X_p|`` if ``alpha, beta >= 0`` (X_p points into the arc),
+    else the larger end value."""
+    c = (A * B).sum(-1)
+    det = 1.0 - c * c
+    with np.errstate(all="ignore"):
+        al = (HA - c * HB) / det
+        be = (HB - c * HA) / det
+        inside = (al >= 0) & (be >= 0) & (det > 1e-14)
+        xp = np.sqrt(np.maximum(al * HA + be * HB, 0.0))
+    return np.where(inside, np.maximum(xp, np.maximum(HA, HB)), np.maximum(HA, HB))
+
+
 def _patch_bound(U, H):
     """Certified bound of ``max h(u)`` over the patch (cone) spanned by unit vectors U (P, q, k)
-    with ``h(U_i) <= H_i`` (P, q). Two valid bounds, the smaller is returned:
+    with ``h(U_i) <= H_i`` (P, q).
 
-    * ``max_i H_i / d`` (``d`` = distance from the origin to the flat patch): for ``u`` in the
-      patch ``u = sum l_i U_i / |sum l_i U_i|``, ``l >= 0``, and ``h`` is sublinear;
-    * ``|X|`` with ``U_i . X = H_i``: every ``x`` of the set satisfies ``U_i . x <= H_i``, so for
-      ``u = sum l_i U_i`` (``l >= 0``) ``u . x <= u . X <= |X|`` -- exact when the vertices share
-      their support point (a vertex of the error set), which makes the search stop early.
+    Every ``x`` of the error set satisfies ``U_i . x <= H_i``; for ``u = sum l_i U_i`` (``l >= 0``)
+    therefore ``u . x <= sum l_i H_i = u . X`` with ``U_i . X = H_i``, so
+    ``max_patch h <= max_{u in patch} u . X`` -- the exact value of the sublinearity bound
+    ``sum l_i H_i / |sum l_i U_i|``. It is ``|X|`` when X points into the patch (exact when the
+    vertices share their support point, a vertex of the error set), else the maximum over the
+    patch's edges (:func:`_arc_bound`). Before issue 13 the looser ``min(max_i H_i / d, |X|)``
+    (``d`` = distance from the origin to the flat patch) was used; it is kept as the fall-back
+    for degenerate patches and as a second valid bound (``legacy=True`` returns it alone).
     """
     b1 = H.max(-1) / _depth(U)
     q, k = U.shape[1], U.shape[2]
@@ -152,10 +171,19 @@ def _patch_bound(U, H):
             det = np.linalg.det(U)
             ok = np.abs(det) > 1e-12
             X = np.zeros(H.shape[:-1] + (k,))
+            cX = np.zeros(H.shape[:-1] + (k,))
             if ok.any():
                 X[ok] = np.linalg.solve(U[ok], H[ok][..., None])[..., 0]
-        b2 = np.where(ok, np.linalg.norm(X, axis=-1), np.inf)
-        return np.minimum(b1, b2)
+                cX[ok] = np.linalg.solve(np.swapaxes(U[ok], 1, 2), X[ok][..., None])[..., 0]   # X = sum c_i U_i
+        nX = np.linalg.norm(X, axis=-1)
+        b2 = np.where(ok, nX, np.inf)
+        if _PATCH_BOUND == "legacy":
+            return np.minimum(b1, b2)
+        inside = ok & np.all(cX >= 0, axis=-1)
+        edges = ((0, 1),) if q == 2 else ((0, 1), (1, 2), (2, 0))
+        be = np.max([_arc_bound(U[:, i], U[:, j], H[:, i], H[:, j]) for i, j in edges], axis=0)
+        b3 = np.where(inside, nX, be)
+        return np.minimum(b1, np.where(ok, b3, np.inf))
     return b1
 
 
@@ -170,13 +198,44 @@ def _initial_patches(k: int):
         sign[-1, 1] = -1.0
         tri[-1, 1] = 0
         return verts, tri, sign
-    tris0 = _octa_hemisphere(_LEVEL0)
-    verts, inv = np.unique(np.round(tris0.reshape(-1, 3), 12), axis=0, return_inverse=True)
-    return _normalise(verts), inv.reshape(-1, 3), np.ones((len(tris0), 3))
+    tris0 = _octa_hemisphere(_LEVEL0).reshape(-1, 3)
+    # equator vertices come in antipodal pairs: solve one of each (h(-u) = h(u), mu(-u) = -mu(u))
+    v = np.round(tris0, 12)
+    flip = (v[:, 2] == 0) & ((v[:, 1] < 0) | ((v[:, 1] == 0) & (v[:, 0] < 0)))
+    v[flip] *= -1.0
+    sign = np.where(flip, -1.0, 1.0)
+    if _DEDUP_ANTIPODES == "off":
+        v, sign = np.round(tris0, 12), np.ones(len(tris0))
+    verts, inv = np.unique(v, axis=0, return_inverse=True)
+    return _normalise(verts), inv.reshape(-1, 3), sign.reshape(-1, 3)
 
 
-_STOP_BELOW = 0.01   # B&B vertices certified 1 % below the best value need no more precision
+_STOP_BELOW = 0.03   # B&B vertices certified 3 % below the best value need no more precision (1 % before issue 13)
 _LEVEL0 = 0          # initial subdivision of the half-sphere octants
+_POLISH_RTOL0 = 1e-6  # precision of the ascent from the initial vertices' best point
+_POLISH_RTOL = 1e-6   # precision of the final ascent (1e-8 before issue 13; the gap target is 1e-3)
+_DEDUP_ANTIPODES = "on"  # "off": solve both vertices of an antipodal pair (before issue 13)
+_PATCH_BOUND = "exact"  # "legacy": today's min(max H / d, |X|) (issue 13 comparison)
+
+
+#: the engine's settings before issue 13 (for the agreement test and the benchmark)
+LEGACY_OPTIONS = {"_STOP_BELOW": 0.01, "_POLISH_RTOL": 1e-8, "_DEDUP_ANTIPODES": "off", "_PATCH_BOUND": "legacy"}
+
+
+class legacy_engine:
+    """Context manager running the branch and bound with its settings before issue 13 (looser
+    patch bound, both vertices of antipodal pairs solved, finer vertex and polish precision):
+    ``with legacy_engine(): max_pose_error(...)``. Not thread safe (module settings)."""
+
+    def __enter__(self):
+        g = globals()
+        self._saved = {k: g[k] for k in LEGACY_OPTIONS}
+        g.update(LEGACY_OPTIONS)
+        return self
+
+    def __exit__(self, *exc):
+        globals().update(self._saved)
+        return False
 
 
 def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, groups=None) -> _Target:
@@ -193,7 +252,7 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
     nv, T = len(verts), len(tri)
     up, mu = ev.exact(np.repeat(cases, nv), np.tile(verts, (K, 1)))
     up, mu = up.reshape(K, nv), mu.reshape(K, nv, m)
-    ev.polish(rtol=1e-6)
+    ev.polish(rtol=_POLISH_RTOL0)
     best_before = ev.best.copy()
     pc = np.repeat(cases, T)                                       # patch -> case
     PU = np.tile(verts[tri] * sign[..., None], (K, 1, 1))         # (P, q, k)

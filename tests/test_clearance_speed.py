@@ -1,0 +1,78 @@
+"""Issue 13: the faster branch and bound keeps the certificate and agrees with the engine before it.
+
+* ``_patch_bound`` is the exact sublinearity bound ``max_{l >= 0} sum l_i H_i / |sum l_i U_i|``
+  over a patch: checked against a dense brute-force maximisation over the simplex, and never
+  above the bound used before (``min(max H / d, |X|)``).
+* Maps computed by the new settings and by ``legacy_engine()`` (today's algorithm before issue 13)
+  on the same small grids: every certified bracket ``[max, upper]`` of one overlaps the other's,
+  and both keep the gap <= 0.1 %.
+"""
+import numpy as np
+
+from robots.clearance import max_pose_error
+from robots.clearance import maxerror as me
+
+
+def _brute(U, H, n=400):
+    """max over a dense grid of the simplex of sum l_i H_i / |sum l_i U_i| (one patch)."""
+    q = len(U)
+    if q == 2:
+        l = np.linspace(0, 1, n)[:, None] * np.array([1.0, -1.0]) + np.array([0.0, 1.0])
+    else:
+        a, b = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+        m = a + b <= 1
+        l = np.stack([a[m], b[m], 1 - a[m] - b[m]], 1)
+    return np.max((l @ H) / np.linalg.norm(l @ U, axis=1))
+
+
+def test_patch_bound_is_the_exact_sublinearity_bound_and_never_above_the_old_one():
+    rng = np.random.default_rng(3)
+    for k in (2, 3):
+        for _ in range(60):
+            centre = me._normalise(rng.normal(size=k))
+            U = me._normalise(centre + rng.uniform(0.05, 0.6) * rng.normal(size=(k, k)))
+            if np.min(U @ U.T) <= 0:                     # the branch and bound's patches span < 90 deg
+                continue
+            H = rng.uniform(0.5, 1.5, size=k)
+            new = me._patch_bound(U[None], H[None])[0]
+            with me.legacy_engine():
+                old = me._patch_bound(U[None], H[None])[0]
+            ref = _brute(U, H)
+            assert new >= ref * (1 - 1e-9)               # a valid bound: not below the true sup
+            assert new <= ref * (1 + 2e-3) + 1e-12       # and tight (dense sampling)
+            assert new <= old * (1 + 1e-12)
+
+
+def test_initial_patches_use_one_vertex_of_each_antipodal_pair():
+    verts, tri, sign = me._initial_patches(3)
+    assert len(verts) == 3                                # e_x, e_y, e_z (were 5 with -e_x, -e_y)
+    spanned = verts[tri] * sign[..., None]                # the four octants of the upper half sphere
+    assert sorted(map(tuple, spanned.sum(1).round(12))) == [(-1, -1, 1), (-1, 1, 1), (1, -1, 1), (1, 1, 1)]
+
+
+def _agree(mech, poses):
+    new = max_pose_error(mech, poses)
+    with me.legacy_engine():
+        old = max_pose_error(mech, poses)
+    for r in (new, old):
+        assert r.gap.max() <= 1e-3
+    for a, b in ((new, old), (old, new)):
+        assert np.all(a.p_max <= b.p_upper * (1 + 1e-12))
+        assert np.all(a.r_max <= b.r_upper * (1 + 1e-12))
+    return new, old
+
+
+def test_fivebar_map_agrees_with_the_engine_before_issue_13():
+    from robots.fivebar import FiveBar
+
+    fb = FiveBar()
+    new, old = _agree(fb.clearance_mechanism(), fb.workspace.grid(5))
+    assert np.max(np.abs(new.p_max / old.p_max - 1)) < 1e-3
+
+
+def test_irsbot2_distal_map_agrees_with_the_engine_before_issue_13():
+    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+
+    mech = IRSBot2.thesis("VI.1").clearance_mechanism(parallelograms=False)
+    new, old = _agree(mech, MAP_WORKSPACE.grid(3))
+    assert np.max(np.abs(new.p_max / old.p_max - 1)) < 1e-3
