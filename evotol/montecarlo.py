@@ -25,6 +25,7 @@ import numpy as np
 from evotol import distributions
 from evotol.distributions import METHODS
 from evotol.errors import ValidationError
+from evotol.nonlinear import verify_nonlinear
 from evotol.problem import ToleranceProblem
 from evotol.statistical import pose_error_nan
 from evotol.threads import single_threaded_blas
@@ -105,13 +106,20 @@ def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: 
 @single_threaded_blas
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
            nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
-           progress: bool | None = None, confidence: float = 0.95) -> MonteCarloResult:
+           progress: bool | None = None, confidence: float = 0.95, model: str = "linear") -> MonteCarloResult:
     """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose.
 
     Besides exceedance rates, reports the yield (fraction of samples inside every bound) per pose,
     on the linear and, where the robot has one, the nonlinear model, with the Clopper-Pearson
     interval at the worst pose (``confidence``) and, for a ``yield`` requirement, the verdict
-    (:func:`yield_check`; ``requirement_missed`` flags a requirement the robot misses)."""
+    (:func:`yield_check`; ``requirement_missed`` flags a requirement the robot misses).
+
+    ``model="nonlinear"``: the worst-vertex check and interval Monte Carlo through the robot's
+    ``pose_error`` instead (:func:`evotol.nonlinear.verify_nonlinear`, returns its NonlinearCheck)."""
+    if model == "nonlinear":
+        return verify_nonlinear(problem, tolerances, n_samples=n_samples, seed=seed, chunk_poses=chunk_poses)
+    if model != "linear":
+        raise ValidationError("model", model, "'linear' (first-order samples, plus nonlinear exceed rates) or 'nonlinear'")
     t0 = time.perf_counter()
     if method not in METHODS:
         raise ValidationError("method", method, f"one of {METHODS}")

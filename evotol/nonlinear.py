@@ -89,8 +89,11 @@ class NonlinearCheck:
         return all(np.max(v) <= self.requirement[c] * (1 + 1e-9) for c, v in self.worst_vertex.items())
 
     def to_dict(self) -> dict:
-        d = {"n_samples": self.n_samples, "n_poses": self.n_poses, "seed": self.seed, "seconds": self.seconds,
-             "meets_requirement_nonlinear": self.meets_requirement}
+        d = {"model": "nonlinear", "n_samples": self.n_samples, "n_poses": self.n_poses, "seed": self.seed,
+             "seconds": self.seconds, "meets_requirement_nonlinear": self.meets_requirement,
+             "max_exceed_rate": max(self.mc_exceed_rate.values()),
+             "max_worst_vertex_over_requirement": max(float(np.max(v)) / self.requirement[c]
+                                                      for c, v in self.worst_vertex.items())}
         for c in self.worst_vertex:
             d[f"{c}_worst_vertex_max"] = float(np.max(self.worst_vertex[c]))
             d[f"{c}_linear_worst_case_max"] = float(np.max(self.linear_worst_case[c]))

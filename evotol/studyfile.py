@@ -1,10 +1,16 @@
 """``evotol run STUDY.toml``: a user's own allocation study, with the same outputs as the seeds.
 
 See ``reports/studies/ucr3_example.toml`` for every field. Units are SI (m, rad); a cost model's
-``scale`` is the unit its coefficients were fitted in.
+``scale`` is the unit its coefficients were fitted in. Tolerance specifications
+(``docs/tolerances.md``): per source ``offset``/``minus``/``plus``, ``cost_width``,
+``contains_nominal``, ``fixed = t``, ``distribution`` (+ ``sigma_k``, ``mean_shift``); a
+``[shared]`` table (``legs = ["l1", "l2", "l3"]``) with ``shared_cost = "part" | "variable"``;
+``[poses] refine = true`` (or a table of refinement options) for the whole workspace.
+Every key is checked: an unknown one is an error naming it and the nearest valid key.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 import tomllib
 from pathlib import Path
@@ -28,11 +34,80 @@ from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange}
+TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
+            "methods", "verify", "distribution", "sigma_k")
+POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
+REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
+BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
+SOURCE_KEYS = ("lower", "upper", "locked", "fixed", "cost", "distribution", "sigma_k", "mean_shift", "offset", "minus",
+               "plus", "cost_width", "contains_nominal")
+REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement))
+#: methods that take the whole-workspace refinement option
+REFINING_METHODS = ("optimum", "ga")
+
+
+def _check_keys(table, valid, where: str) -> None:
+    """Unknown key -> ValidationError naming it (``where.key``) and the nearest valid key."""
+    if not isinstance(table, dict):
+        raise ValidationError(where, table, f"a table with keys among {sorted(valid)}")
+    for k in table:
+        if k not in valid:
+            raise ValidationError(f"{where}.{k}" if where else k, k, unknown_key_message(k, valid))
+
+
+def check_study_keys(spec: dict) -> None:
+    """Check every table of a study file whose keys evotol defines (typos like ``lowr`` or
+    ``[requirment]`` are errors, not silently ignored)."""
+    _check_keys(spec, TOP_KEYS, "")
+    _check_keys(spec.get("poses", {}), POSE_KEYS, "poses")
+    ref = spec.get("poses", {}).get("refine")
+    if isinstance(ref, dict):
+        _check_keys(ref, REFINE_KEYS, "poses.refine")
+    elif ref is not None and not isinstance(ref, bool):
+        raise ValidationError("poses.refine", ref, "true, false or a table of refinement options")
+    _check_keys(spec.get("requirement", {}), REQUIREMENT_KEYS, "requirement")
+    _check_keys(spec.get("bounds", {}), BOUND_KEYS, "bounds")
+    for n, o in spec.get("sources", {}).items():
+        _check_keys(o, SOURCE_KEYS, f"sources.{n}")
+    seed = spec.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValidationError("seed", seed, "a non-negative integer")
+
+
+def refine_option(spec: dict):
+    """The ``[poses] refine`` setting as allocator keyword: False, True or a dict of options."""
+    ref = spec.get("poses", {}).get("refine", False)
+    return dict(ref) if isinstance(ref, dict) else bool(ref)
+
+
+def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict) -> Tolerance:
+    """One source's :class:`Tolerance` from its ``[sources.NAME]`` table and the defaults."""
+    shape = {k: o.get(k, bounds.get(k)) for k in ("cost_width", "contains_nominal") if k in o or k in bounds}
+    shape.update({k: float(o[k]) if isinstance(o[k], (int, float)) and not isinstance(o[k], bool) else o[k]
+                  for k in ("offset", "minus", "plus") if k in o})
+    # distribution, sigma_k (t = k·σ) and mean_shift (fraction of t): per source, else top level
+    dist = o.get("distribution", bounds.get("distribution", spec.get("distribution", "uniform")))
+    if isinstance(dist, dict):
+        dist = {"sigma_k": spec.get("sigma_k", 3.0), **dist}
+    else:
+        dist = Distribution(dist, o.get("sigma_k", spec.get("sigma_k", 3.0)), o.get("mean_shift", 0.0))
+    if "fixed" in o:
+        extra = sorted(set(o) & {"lower", "upper", "locked", "cost"})
+        if extra:
+            raise ValidationError(f"sources.{s.name}.{extra[0]}", o[extra[0]], "nothing: a fixed source has no range, lock or cost")
+        return Tolerance.fixed(o["fixed"], distribution=dist, **shape)
+    cspec = o.get("cost", costs.get(s.name, costs.get(s.group, costs.get("default"))))
+    if cspec is None:
+        raise ValidationError(f"cost.{s.group}", None, f"a cost model for source {s.name} (by name, group or 'default')")
+    return Tolerance(cost=cost_models.from_dict(cspec), lower=float(o.get("lower", bounds.get("lower", 1e-6))),
+                     upper=float(o.get("upper", bounds.get("upper", 1e-3))), locked=o.get("locked"),
+                     distribution=dist, **shape)
 
 
 def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     """Build the problem from a parsed study file (dict); ``base_dir``: where relative files
     (``[robot] mechanism = "my_robot.toml"``) are looked up."""
+    check_study_keys(spec)
     rs = dict(spec.get("robot", {}))
     if "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
         robot = model_from_table(rs, base_dir)
@@ -58,20 +133,12 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     overrides = spec.get("sources", {})
     unknown = set(overrides) - set(robot.source_names)
     if unknown:
-        raise ValidationError(f"sources.{sorted(unknown)[0]}", sorted(unknown)[0], f"a source of {robot.name}: {list(robot.source_names)}")
-    tol = {}
-    for s in robot.sources:
-        o = overrides.get(s.name, {})
-        cspec = o.get("cost", costs.get(s.name, costs.get(s.group, costs.get("default"))))
-        if cspec is None:
-            raise ValidationError(f"cost.{s.group}", None, f"a cost model for source {s.name} (by name, group or 'default')")
-        # distribution, sigma_k (t = k·σ) and mean_shift (fraction of t): per source, else top level
-        dist = Distribution(o.get("distribution", spec.get("distribution", "uniform")),
-                            o.get("sigma_k", spec.get("sigma_k", 3.0)), o.get("mean_shift", 0.0))
-        tol[s.name] = Tolerance(cost_models.from_dict(cspec), float(o.get("lower", bounds.get("lower", 1e-6))),
-                                float(o.get("upper", bounds.get("upper", 1e-3))), o.get("locked"), dist)
+        u = sorted(unknown)[0]
+        raise ValidationError(f"sources.{u}", u, f"a source of {robot.name}: " + unknown_key_message(u, robot.source_names))
+    tol = {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec) for s in robot.sources}
     req = Requirement(**spec.get("requirement", {}))
-    return ToleranceProblem(robot, tol, req, poses)
+    shared = spec.get("shared")
+    return ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"))
 
 
 def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
@@ -114,6 +181,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
                 kw = dict(kw)
                 if m == "ga":
                     kw.setdefault("seed", seed)
+                if m in REFINING_METHODS and refine_option(spec):
+                    kw.setdefault("refine", refine_option(spec))
                 results[m] = METHODS[m](problem, **kw)
             except KeyboardInterrupt:
                 ctrl_c.count = max(ctrl_c.count, before + 1)
