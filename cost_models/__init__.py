@@ -5,7 +5,8 @@
 >>> round(float(m.cost(4.94e-5)), 4)
 0.1607
 """
-from cost_models.base import CostModel, check_cost_model
+from cost_models.base import CostModel
+from cost_models.checks import check_cost_model, cost_model_checks
 from cost_models.compound import LinearExponentialCost, SumCost
 from cost_models.exp_reciprocal import ExpReciprocalCost
 from cost_models.exponential import ExponentialCost

@@ -4,7 +4,7 @@ A cost model is a function of one tolerance ``t`` (SI units: m or rad). Coeffici
 quoted for tolerances in a shop unit (e.g. 1e-5 m for Yao et al. 2013, or mm); ``scale`` is that
 unit in SI, so every model evaluates ``f(t / scale)`` with ``f`` the textbook formula.
 
-Contract (see :func:`check_cost_model`): vectorised ``cost(t)`` and ``dcost(t)`` (d cost / d t,
+Contract (see :func:`cost_models.checks.check_cost_model`): vectorised ``cost(t)`` and ``dcost(t)`` (d cost / d t,
 per SI unit), ``params`` (a dict), ``name``; the cost is positive and non-increasing on the
 allowed range ``[t_min, t_max]`` (SI), which :meth:`CostModel.validate_range` checks with a clear
 message naming the model, the parameters and where it fails.
@@ -27,6 +27,9 @@ class CostModel:
     #: True when the model is convex in t for every valid parameter set (allocators then may
     #: certify optima); models whose convexity depends on parameters check it in ``is_convex``.
     convex: ClassVar[bool] = True
+    #: representative parameters (shop units, ``scale = 1e-5`` m) for :meth:`example`, which the
+    #: conformance test builds for every registered model; a plugin sets its own
+    example_params: ClassVar[tuple[float, ...] | None] = None
 
     def __init__(self, *params: float, scale: float = 1.0, t_min: float | None = None,
                  t_max: float | None = None, **kw: float):
@@ -62,6 +65,13 @@ class CostModel:
         self._check_params()
         if t_min is not None or t_max is not None:
             self.validate_range(t_min if t_min is not None else 0.0, t_max)
+
+    @classmethod
+    def example(cls) -> "CostModel":
+        """A representative instance (``example_params``, ``scale = 1e-5`` m, used on 0.5-8 x scale)."""
+        if cls.example_params is None:
+            raise NotImplementedError(f"{cls.__name__} sets no example_params (needed by the conformance test)")
+        return cls(*cls.example_params, scale=1e-5)
 
     # --- to implement ----------------------------------------------------------------------
     def _f(self, x: np.ndarray) -> np.ndarray:  # cost at x = t/scale
@@ -134,32 +144,3 @@ def _range_grid(t_min: float, t_max: float, n: int) -> np.ndarray:
     # t = 0 is excluded: most models are unbounded there and no tolerance is exactly zero.
     lo = t_min if t_min > 0 else t_max * 1e-6
     return np.unique(np.concatenate([np.geomspace(lo, t_max, n), np.linspace(lo, t_max, n)]))
-
-
-def check_cost_model(model: CostModel, t_min: float | None = None, t_max: float | None = None,
-                     rtol: float = 1e-5) -> dict:
-    """Conformance check a plugin author runs in their own tests.
-
-    Checks: a name; ``cost`` vectorised and shape-preserving; positive and non-increasing on the
-    range; ``dcost`` matches central finite differences of ``cost``. Returns measured mismatches.
-    """
-    if not getattr(model, "name", ""):
-        raise AssertionError("cost model has no name")
-    t_max = t_max if t_max is not None else 10 * model.scale
-    t_min = t_min if t_min is not None else 0.05 * model.scale
-    model.validate_range(t_min, t_max)
-    t = np.linspace(t_min, t_max, 50)
-    c = model.cost(t)
-    if c.shape != t.shape:
-        raise AssertionError(f"{model.name}: cost(t) shape {c.shape} != {t.shape}")
-    c2 = model.cost(t.reshape(5, 10))
-    if c2.shape != (5, 10) or not np.allclose(c2.ravel(), c):
-        raise AssertionError(f"{model.name}: cost is not vectorised over arrays")
-    h = 1e-6 * (t_max - t_min)
-    tt = t[1:-1]
-    fd = (model.cost(tt + h) - model.cost(tt - h)) / (2 * h)
-    d = model.dcost(tt)
-    err = float(np.max(np.abs(fd - d)) / max(np.max(np.abs(d)), 1e-300))
-    if err > rtol:
-        raise AssertionError(f"{model.name}: dcost differs from finite differences by {err:.3g} (relative)")
-    return {"dcost_fd_relative_error": err}

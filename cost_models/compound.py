@@ -15,6 +15,7 @@ class LinearExponentialCost(CostModel):
 
     name = "linear_exponential"
     param_names = ("a0", "a1", "a2", "a3")
+    example_params = (0.5, -0.01, 3.0, 0.4)
     formula = "a0 + a1·x + a2·exp(-a3·x)"
 
     def _check_params(self):

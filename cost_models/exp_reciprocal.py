@@ -8,6 +8,7 @@ from evotol.errors import ValidationError
 class ExpReciprocalCost(CostModel):
     name = "exp_reciprocal"
     param_names = ("a0", "a1", "a2")
+    example_params = (1.0, 0.5, 0.2)
     formula = "a0·x^(-a1)·exp(-a2·x)"
 
     def _check_params(self):

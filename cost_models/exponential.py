@@ -8,6 +8,7 @@ from evotol.errors import ValidationError
 class ExponentialCost(CostModel):
     name = "exponential"
     param_names = ("a0", "a1")
+    example_params = (1.9, 0.5)   # Yao et al. 2013 eq. 13, lengths
     formula = "a0·exp(-a1·x)"
 
     def _check_params(self):

@@ -24,10 +24,12 @@ class _Polynomial(CostModel):
 class Polynomial3Cost(_Polynomial):
     name = "polynomial3"
     param_names = ("a0", "a1", "a2", "a3")
+    example_params = (10.0, -3.0, 0.3, -0.01)
     formula = "a0 + a1·x + a2·x² + a3·x³"
 
 
 class Polynomial4Cost(_Polynomial):
     name = "polynomial4"
     param_names = ("a0", "a1", "a2", "a3", "a4")
+    example_params = (12.0, -4.0, 0.6, -0.04, 0.0009)
     formula = "a0 + a1·x + a2·x² + a3·x³ + a4·x⁴"

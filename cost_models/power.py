@@ -8,6 +8,7 @@ from evotol.errors import ValidationError
 class PowerCost(CostModel):
     name = "power"
     param_names = ("a0", "a1")
+    example_params = (2.0, 1.3)
     formula = "a0·x^(-a1)"
 
     def _check_params(self):

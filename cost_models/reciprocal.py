@@ -6,6 +6,7 @@ from evotol.errors import ValidationError
 class ReciprocalCost(CostModel):
     name = "reciprocal"
     param_names = ("a0", "a1")
+    example_params = (0.2, 1.5)
     formula = "a0 + a1/x"
 
     def _check_params(self):

@@ -6,6 +6,7 @@ from evotol.errors import ValidationError
 class ReciprocalSquareCost(CostModel):
     name = "reciprocal_square"
     param_names = ("a0", "a1")
+    example_params = (0.1, 2.0)
     formula = "a0 + a1/x²"
 
     def _check_params(self):

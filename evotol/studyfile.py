@@ -30,6 +30,7 @@ from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report, write_json
 from evotol.units import units_block
 from robots import registry
+from robots.assembly import assembly_from_spec
 from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
@@ -109,10 +110,15 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     (``[robot] mechanism = "my_robot.toml"``) are looked up."""
     check_study_keys(spec)
     rs = dict(spec.get("robot", {}))
-    if "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
+    if "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
+        robot = assembly_from_spec(rs)
+        spec = {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),
+                "requirement": {"position": 1.0, **spec.get("requirement", {})}}
+    elif "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
         robot = model_from_table(rs, base_dir)
     elif "model" not in rs:
-        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', or mechanism = 'my_robot.toml'")
+        raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', mechanism = 'my_robot.toml' "
+                              "or assembly = 'module:function'")
     else:
         cls = registry.get(rs.pop("model"))
         try:

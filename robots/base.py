@@ -27,9 +27,10 @@ from typing import Sequence
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
+from robots.checks import check_robot, robot_checks  # noqa: F401  (the one-call conformance API)
+from robots.units import UNITS
 
 SHAPES = {1: "interval", 2: "disk", 3: "ball"}
-UNITS = ("m", "rad")
 
 
 @dataclass(frozen=True)
@@ -187,46 +188,3 @@ class RobotErrorModel:
                 f"is outside the workspace {list(zip(self.workspace.low, self.workspace.high))}",
                 poses=arr[outside])
         return arr
-
-
-def check_robot(robot: RobotErrorModel, poses: np.ndarray | None = None, *, step: float = 1e-7,
-                rtol: float = 1e-4, atol: float = 1e-9) -> dict:
-    """Conformance check a plugin author runs in their own tests (like sklearn's check_estimator).
-
-    Checks: declared sources and workspace; ``sensitivity`` has shape (n, 6, n_columns) and is
-    finite; if the robot has a nonlinear model, its central finite differences match the
-    first-order map to ``rtol`` relative to the largest entry (+ ``atol``); zero errors give zero
-    pose error. Returns a dict of measured quantities (e.g. the finite-difference mismatch).
-    """
-    if not robot.sources:
-        raise AssertionError(f"{robot.name}: no error sources declared")
-    names = [s.name for s in robot.sources]
-    if len(set(names)) != len(names):
-        raise AssertionError(f"{robot.name}: duplicate source names {names}")
-    if poses is None:
-        poses = robot.workspace.latin_hypercube(8, seed=1)
-    poses = robot.check_poses(poses)
-    J = np.asarray(robot.sensitivity(poses))
-    expected = (poses.shape[0], 6, robot.n_columns)
-    if J.shape != expected:
-        raise AssertionError(f"{robot.name}: sensitivity shape {J.shape}, expected {expected}")
-    if not np.all(np.isfinite(J)):
-        raise AssertionError(f"{robot.name}: sensitivity has non-finite entries")
-    report = {"n_poses": len(poses), "n_columns": robot.n_columns}
-    if robot.has_nonlinear_model:
-        n = robot.n_columns
-        zero = robot.pose_error(poses, np.zeros((len(poses), 1, n)))
-        if np.max(np.abs(zero)) > atol:
-            raise AssertionError(f"{robot.name}: zero source errors give pose error {np.max(np.abs(zero)):.3g}")
-        E = np.concatenate([np.eye(n) * step, -np.eye(n) * step], axis=0)  # (2n, n)
-        E = np.broadcast_to(E, (len(poses), 2 * n, n))
-        out = robot.pose_error(poses, np.ascontiguousarray(E))
-        fd = (out[:, :n, :] - out[:, n:, :]).transpose(0, 2, 1) / (2 * step)
-        scale = np.max(np.abs(J))
-        mismatch = np.max(np.abs(fd - J))
-        report["fd_mismatch"] = float(mismatch)
-        report["fd_relative_mismatch"] = float(mismatch / scale)
-        if mismatch > rtol * scale + atol:
-            raise AssertionError(f"{robot.name}: sensitivity differs from finite differences by "
-                                 f"{mismatch:.3g} (scale {scale:.3g})")
-    return report

@@ -22,6 +22,15 @@ def _load(path: str):
         raise ValidationError("robot.model", path, f"an importable 'module:Class' ({exc})") from None
 
 
+def available() -> dict[str, type]:
+    """Every registered robot class by name: the built-ins and the ``evotol.robots`` entry points."""
+    from importlib.metadata import entry_points
+
+    found = {name: _load(path) for name, path in BUILTIN.items()}
+    found.update({ep.name: ep.load() for ep in entry_points(group="evotol.robots")})
+    return found
+
+
 def get(name: str):
     """The robot class registered as ``name`` (or at import path ``module:Class``)."""
     if ":" in name:

@@ -113,7 +113,13 @@ def test_nsga2_front_brackets_the_optimum():
     best = front.cheapest_feasible()
     # no front design beats the certified lower bound; the front reaches the requirement nearby
     assert opt.certificate["lower_bound"] * (1 - 1e-7) <= best["cost"] <= opt.cost * 1.15
-    assert 0 <= front.knee() < len(front.table)
+    # the knee is the front design nearest to the ideal point (cost and error scaled to [0, 1]);
+    # on this convex front it lies strictly between the two ends
+    k = front.knee()
+    C = front.table[["cost", "normalised_error"]].to_numpy()
+    N = (C - C.min(axis=0)) / np.ptp(C, axis=0)
+    d = np.hypot(N[:, 0], N[:, 1])
+    assert d[k] == d.min() and 0 < k < len(front.table) - 1
 
 
 def test_bad_inputs_are_named():

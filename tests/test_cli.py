@@ -19,7 +19,11 @@ def test_run_example_study_file(tmp_path):
     assert d["results"]["optimum"]["feasible"]
     assert d["results"]["ga"]["cost"] <= d["results"]["optimum"]["cost"] * 1.01
     assert d["results"]["optimum"]["tolerances"]["R1"] == pytest.approx(2e-5)   # locked
-    assert (tmp_path / "ucr3_example.html").exists()
+    # the report loads the plotly.js written once beside it (issue 11 item 7), no inlined 4.8 MB copy
+    from evotol.reporting.html import plotlyjs_name
+    page = (tmp_path / "ucr3_example.html").read_text()
+    assert f'src="{plotlyjs_name()}"' in page and len(page) < 1_000_000
+    assert (tmp_path / plotlyjs_name()).stat().st_size > 1_000_000
 
 
 @pytest.mark.parametrize("edit,message", [

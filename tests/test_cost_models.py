@@ -90,8 +90,13 @@ def test_fit_reports_quality_on_noisy_data():
         cm.fit("exponential", -t, c)
 
 
+def _shop_cost(x):
+    return 5.0 / (1 + x)
+
+
 def test_user_models_callable_registry_and_dict():
-    m = cm.CallableCost(lambda x: 5.0 / (1 + x), name="shop", scale=1e-5, t_min=1e-6, t_max=1e-4)
+    # a module-level function: the model pickles to worker processes (a lambda would not)
+    m = cm.CallableCost(_shop_cost, name="shop", scale=1e-5, t_min=1e-6, t_max=1e-4)
     cm.check_cost_model(m, 1e-6, 1e-4)
     assert m.cost(1e-5) == pytest.approx(2.5)
     assert cm.get("index") is cm.ExponentialCost

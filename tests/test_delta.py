@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import check_robot
+from robots.checks import check_robot
 from robots.delta import (ANGULAR, LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot,
                           cylinder_poses)
 

@@ -19,7 +19,7 @@ def test_study_is_registered_and_writes_html_and_json(quick):
     out, s = quick
     assert "brahmia2023-delta" in studies.available()
     html = (out / "brahmia2023-delta.html").read_text(encoding="utf-8")
-    assert '<script src="http' not in html and "Plotly" in html     # offline report: plotly.js embedded
+    assert '<script src="http' not in html and "Plotly" in html     # offline report: plotly.js beside it
     data = json.loads((out / "brahmia2023-delta.json").read_text())
     for key in ("tolerance_intervals", "verification_error_mm", "table3_cost", "optimum_cost", "ga_cost",
                 "worst_case_error_mm", "seconds"):

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import Workspace, check_robot
+from robots.base import Workspace
+from robots.checks import check_robot
 from robots.clearance import max_pose_error
 from robots.fivebar import FiveBar, FiveBarGeometric, combined_max_pose_error
 

@@ -3,6 +3,7 @@ hybrid legs, certified maximum pose errors (distal module; distal module + paral
 import numpy as np
 import pytest
 
+from evotol.errors import KinematicsError
 from robots.clearance import max_pose_error, multistart_max_pose_error, twist_between
 from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
 
@@ -28,7 +29,7 @@ def test_l2eq_is_the_corrected_II1(robot):
     W = robot.dh_tree().world_transforms(robot.dh_values(POSES), len(POSES))
     assert np.allclose(np.linalg.norm(W["9"][:, :3, 3] - W["7"][:, :3, 3], axis=1), robot.l2, atol=1e-14)
     bad = IRSBot2(l2eq_variant="printed")
-    with pytest.raises(Exception):
+    with pytest.raises(KinematicsError, match=r"\|E F\| != l2"):
         bad.dh_values(POSES)
 
 

@@ -45,7 +45,8 @@ def test_symmetry_and_rectangle(study):
         p = d["five_points"][case]["p_max_mm"]
         assert abs(p[0] - p[1]) <= 2e-3 * p[0] and abs(p[3] - p[4]) <= 2e-3 * p[3]
     r = d["five_points"]["rectangle_mm"]
-    assert r["z"][1] <= 0 and r["x"][0] == -r["x"][1]
+    assert r["z"][0] < r["z"][1] <= 0 and r["x"][0] < 0 < r["x"][1]
+    assert r["area_mm2"] == pytest.approx((r["x"][1] - r["x"][0]) * (r["z"][1] - r["z"][0]), rel=1e-9)
 
 
 def test_multistart_never_above_certified_bound(study):

@@ -177,15 +177,23 @@ def test_lci_closed_form_equals_numpy_condition_number():
     np.testing.assert_allclose(K.local_conditioning_index(P, d.r1, d.r2, d.r3), 1 / np.linalg.cond(J), rtol=1e-9, atol=1e-12)
 
 
-@pytest.mark.parametrize("name,d", ALL)
+def test_type2_locus_exists_exactly_when_its_conditions_hold():
+    """The locus exists when |B1B2| = 2 r2 is reachable (r2 <= r1 + r3) or B1 = B2 is (r1 >= r3);
+    case b (r1 = 0.47, r2 = 1.73, r3 = 0.8) has neither: no type II singularity at all."""
+    for name, d in ALL:
+        L = K.type2_locus(d.r1, d.r2, d.r3, n=400)
+        assert (len(L) > 0) == (d.r2 <= d.r1 + d.r3 or d.r1 >= d.r3), name
+    assert len(K.type2_locus(CASES["b"].r1, CASES["b"].r2, CASES["b"].r3, n=400)) == 0
+
+
+@pytest.mark.parametrize("name,d", [(n, d) for n, d in ALL if n != "b"])
 def test_type2_locus_is_singular(name, d):
     L = K.type2_locus(d.r1, d.r2, d.r3, n=400)
-    if len(L) == 0:
-        return
+    assert len(L) > 0
     t1, t2, ok = K.inverse_kinematics_raw(L[:, 0], L[:, 1], d.r1, d.r2, d.r3)
     th = np.stack([t1, t2], -1)[ok]
     det = K.type2_determinant(L[ok], th, d.r1, d.r3)
-    assert np.max(np.abs(det)) < 1e-9
+    assert ok.any() and np.max(np.abs(det)) < 1e-9
 
 
 def test_type1_circles_are_serial_singularities_eq16_19():

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import check_robot
+from robots.checks import check_robot
 from robots.planar5r import Planar5R
 from robots.planar5r import kinematics as K
 

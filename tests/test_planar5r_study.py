@@ -21,8 +21,8 @@ def test_study_writes_html_and_json_with_issue_keys(quick_run):
     out, summary = quick_run
     html = (out / "laramolina2019-5r.html").read_text()
     data = json.loads((out / "laramolina2019-5r.json").read_text())
-    assert '<script src="http' not in html and "Plotly" in html   # offline: plotly.js embedded, no CDN
-    assert data["seconds"] > 0 and set(data["cases"]) == set("abcd")
+    assert '<script src="http' not in html and "Plotly" in html   # offline: plotly.js beside it, no CDN
+    assert set(data["cases"]) == set("abcd")
     for case in data["cases"].values():
         for key in ("r1", "r2", "r3", "mic_radius", "mic_center_y", "lci_max"):
             assert isinstance(case[key], float)

@@ -132,3 +132,17 @@ def test_no_process_fine_enough_is_a_validation_error():
     pp = assembly_problem(stack, processes={"x1": [process("mill")], "x2": [process("mill")]})
     with pytest.raises(ValidationError, match="hold the requirement"):
         allocate_process_optimum(pp)
+
+
+def test_judge_recomputes_a_design_cost_and_constraint(clutch_wc):
+    """A 'published' design: the optimum's processes with every tolerance 10 % looser costs less
+    (cost curves fall with t) and violates the worst-case limit by 10 % (the stack is linear in t)."""
+    pp, opt = clutch_wc
+    j = pp.judge(opt.processes, opt.tolerances)
+    assert j["cost"] == pytest.approx(opt.cost, rel=1e-12) and j["holds_requirement"]
+    loose = pp.judge(opt.processes, {n: 1.1 * v for n, v in opt.tolerances.items()})
+    assert loose["cost"] < opt.cost
+    assert loose["normalised_error"] == pytest.approx(1.1 * j["normalised_error"], rel=1e-9)
+    assert not loose["holds_requirement"]
+    far = pp.judge(opt.processes, {n: 10 * v for n, v in opt.tolerances.items()})
+    assert far["outside_process_range"]

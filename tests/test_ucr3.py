@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import check_robot
+from robots.checks import check_robot
 from robots.ucr3 import UCR3
 
 

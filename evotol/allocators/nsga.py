@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 from pymoo.algorithms.moo.nsga2 import NSGA2
+from pymoo.core.callback import Callback
 from pymoo.core.problem import Problem
 from pymoo.termination import get_termination
 from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
@@ -22,6 +23,7 @@ from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 from evotol.allocators.ga import initial_population
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
+from evotol.pareto import ideal_point_knee
 from evotol.problem import ToleranceProblem
 from evotol.threads import single_threaded_blas
 
@@ -50,16 +52,9 @@ class ParetoFront:
         return ok.loc[ok["cost"].idxmin()]
 
     def knee(self) -> int:
-        """Index of the knee: the point farthest from the line through the extremes (normalised)."""
-        c, e = self.cost, self.error
-        if len(c) < 3:
-            return 0
-        cn = (c - c.min()) / max(np.ptp(c), 1e-300)
-        en = (e - e.min()) / max(np.ptp(e), 1e-300)
-        a, b = np.array([cn[0], en[0]]), np.array([cn[-1], en[-1]])
-        u, w = b - a, np.stack([cn, en], 1) - a           # distance to the line = |u x w| / |u| (planar cross)
-        d = np.abs(u[0] * w[:, 1] - u[1] * w[:, 0]) / max(np.linalg.norm(u), 1e-300)
-        return int(np.argmax(d))
+        """Row of the knee (:func:`evotol.pareto.ideal_point_knee`: nearest to the ideal point
+        with cost and normalised error each scaled to [0, 1] over the front)."""
+        return ideal_point_knee(np.stack([self.cost, self.error], axis=1))
 
 
 class _FrontProblem(Problem):
@@ -80,6 +75,55 @@ class _FrontProblem(Problem):
         out["F"] = np.stack([self.tp.cost(T), err], axis=1)
 
 
+def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, sampling=None, callback=None,
+              verbose: bool = False, interruptible: bool = False) -> NSGA2:
+    """The one NSGA-II run of evotol: pymoo's ``NSGA2`` (duplicates eliminated) for ``n_gen``
+    generations on a pymoo ``problem``; returns the algorithm (``algo.pop``, ``algo.opt``).
+
+    sampling: initial population (array of decision vectors) or None (pymoo's random sampling).
+    callback: a pymoo ``Callback`` called after every generation (progress, lazy constraint
+        checks) -- pymoo's hook, so the loop itself stays pymoo's ``while has_next(): next()``.
+    interruptible: Ctrl-C ends the run early and keeps the population reached so far.
+    Used by :func:`allocate_nsga2` (tolerance problems) and :func:`evotol.doe.nsga2` (design studies).
+    """
+    kw = {} if sampling is None else {"sampling": sampling}
+    algo = NSGA2(pop_size=pop_size, eliminate_duplicates=True, **kw)
+    hooks = {} if callback is None else {"callback": callback}
+    algo.setup(problem, termination=get_termination("n_gen", int(n_gen)), seed=seed, verbose=verbose, **hooks)
+    try:
+        while algo.has_next():
+            algo.next()
+    except KeyboardInterrupt:
+        if not interruptible:
+            raise
+    return algo
+
+
+class _CheckFront(Callback):
+    """After every generation: check a few front members exactly (lazy worst-case rows; when
+    rows were added, re-score the population), record the front, advance the progress bar."""
+
+    def __init__(self, fp: _FrontProblem, rows: ConstraintRows | None, rng, n_check: int, bar):
+        super().__init__()
+        self.fp, self.rows, self.rng, self.n_check, self.bar = fp, rows, rng, n_check, bar
+        self.history: list[dict] = []
+
+    def notify(self, algo):
+        rows, fp = self.rows, self.fp
+        if rows is not None and rows.measure == "worst_case":
+            X = algo.opt.get("X")
+            pick = self.rng.choice(len(X), size=min(self.n_check, len(X)), replace=False)
+            _, added = rows.check(fp.tolerances(X[pick]))
+            if added:  # re-score the population with the new rows
+                F = algo.pop.get("F")
+                F[:, 1] = rows.normalised_error(fp.tolerances(algo.pop.get("X")))
+                algo.pop.set("F", F)
+        F = algo.opt.get("F")
+        self.history.append({"generation": algo.n_iter, "front_size": len(F), "min_cost": float(F[:, 0].min()),
+                             "min_error": float(F[:, 1].min())})
+        self.bar.update(1)
+
+
 @single_threaded_blas
 def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
                    seeds=(), n_check: int = 5, progress: bool | None = None,
@@ -96,32 +140,12 @@ def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int
         log_scale = bool(np.any(problem.upper[f] / problem.lower[f] > 100))
     fp = _FrontProblem(problem, rows, log_scale)
     X0 = initial_population(problem, pop_size, seed, seeds, log_scale=log_scale)
-    algo = NSGA2(pop_size=pop_size, sampling=X0, eliminate_duplicates=True)
-    algo.setup(fp, termination=get_termination("n_gen", n_gen), seed=seed, verbose=False)
-    rng = np.random.default_rng(seed)
     from tqdm.auto import tqdm
-    bar = tqdm(total=n_gen, desc="NSGA-II", unit="gen", leave=False,
-               disable=(not sys.stderr.isatty()) if progress is None else not progress)
-    hist = []
-    try:
-        while algo.has_next():
-            algo.next()
-            if rows is not None and rows.measure == "worst_case":
-                X = algo.opt.get("X")
-                pick = rng.choice(len(X), size=min(n_check, len(X)), replace=False)
-                _, added = rows.check(fp.tolerances(X[pick]))
-                if added:  # re-score the population with the new rows
-                    F = algo.pop.get("F")
-                    F[:, 1] = rows.normalised_error(fp.tolerances(algo.pop.get("X")))
-                    algo.pop.set("F", F)
-            F = algo.opt.get("F")
-            hist.append({"generation": algo.n_gen - 1, "front_size": len(F), "min_cost": float(F[:, 0].min()),
-                         "min_error": float(F[:, 1].min())})
-            bar.update(1)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        bar.close()
+    with tqdm(total=n_gen, desc="NSGA-II", unit="gen", leave=False,
+              disable=(not sys.stderr.isatty()) if progress is None else not progress) as bar:
+        watch = _CheckFront(fp, rows, np.random.default_rng(seed), n_check, bar)
+        algo = run_nsga2(fp, pop_size=pop_size, n_gen=n_gen, seed=seed, sampling=X0, callback=watch,
+                         interruptible=True)
     T = fp.tolerances(algo.pop.get("X"))
     ev = problem.evaluate(T, top_only=True)
     err = ev.violation + 1
@@ -133,4 +157,4 @@ def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int
         table[f"{comp}_error"] = np.max(getattr(ev, comp)[order], axis=1)
     for j, n in enumerate(problem.names):
         table[n] = T[order, j]
-    return ParetoFront(table.reset_index(drop=True), time.perf_counter() - t0, pd.DataFrame(hist))
+    return ParetoFront(table.reset_index(drop=True), time.perf_counter() - t0, pd.DataFrame(watch.history))

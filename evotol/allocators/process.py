@@ -218,6 +218,22 @@ class ProcessProblem:
         """Exact max error / bound over poses and components (<= 1: feasible)."""
         return self.base.evaluate(np.atleast_2d(T), top_only=True).violation + 1
 
+    def judge(self, processes: Mapping[str, str], tolerances: Mapping[str, float]) -> dict:
+        """Recompute a published design: its cost, its normalised error (max error / bound; > 1
+        means the requirement is violated) and whether each tolerance lies in its process's range."""
+        ch = self.choice_index(processes)
+        missing = [n for n in self.names if n not in tolerances]
+        if missing:
+            raise ValidationError("tolerances", sorted(tolerances), f"a tolerance for every source; missing {missing}")
+        t = np.array([float(tolerances[n]) for n in self.names])
+        if not np.all(np.isfinite(t)) or np.any(t <= 0):
+            raise ValidationError("tolerances", t.tolist(), "positive finite tolerances (SI)")
+        idx = np.arange(self.n_sources)
+        outside = [n for n, ok in zip(self.names, (t >= self.lo[idx, ch] * (1 - 1e-9)) & (t <= self.hi[idx, ch] * (1 + 1e-9))) if not ok]
+        ne = float(self.normalised_error(t)[0])
+        return {"cost": float(self.cost(ch, t)[0]), "normalised_error": ne, "holds_requirement": bool(ne <= 1 + 1e-9),
+                "outside_process_range": outside}
+
     def describe(self) -> str:
         lines = [f"ProcessProblem: {self.robot.name}, {self.n_sources} sources, {self.n_combinations} process combinations, "
                  f"measure {self.requirement.measure}"]
@@ -515,7 +531,7 @@ def _repair(pp, rows, X, iters: int = 25):
 
 
 @single_threaded_blas
-def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 100, n_gen: int = 150, seed: int = 0,
+def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0,
                         repair: bool = True) -> ProcessResult:
     """pymoo GA over process choices and tolerances (encoding and repair: module docstring)."""
     from pymoo.algorithms.soo.nonconvex.ga import GA
@@ -555,7 +571,7 @@ def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 100, n_gen: int =
 
 
 @single_threaded_blas
-def process_front(pp: ProcessProblem, *, pop_size: int = 100, n_gen: int = 150, seed: int = 0) -> pd.DataFrame:
+def process_front(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0) -> pd.DataFrame:
     """NSGA-II front of cost vs. normalised error (max error / bound), with the processes chosen."""
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.core.problem import Problem

@@ -1,7 +1,10 @@
-"""Self-contained, offline HTML reports built from plotly figures and tables.
+"""Offline HTML reports built from plotly figures and tables.
 
-plotly.js is embedded once per file (no CDN), so a report opens from disk on a machine with no
-network. Figures are added with :meth:`Report.figure`, prose with :meth:`Report.text`, tables
+plotly.js (4.8 MB) is written once per folder, as ``plotly-<version>.min.js`` beside the reports
+that use it, and each page loads it with a relative ``<script src>`` (no CDN): the reports of one
+``evotol reproduce all`` share one copy, and the folder opens from disk on a machine with no
+network. ``Report.write(path, inline_plotly=True)`` embeds it instead, for a single file to send
+on its own. Figures are added with :meth:`Report.figure`, prose with :meth:`Report.text`, tables
 with :meth:`Report.table`.
 """
 from __future__ import annotations
@@ -9,6 +12,7 @@ from __future__ import annotations
 import html
 import json
 import math
+import os
 from pathlib import Path
 from typing import Iterable, Sequence
 
@@ -25,6 +29,30 @@ table.ev th{background:#f3f3f3} table.ev td:first-child,table.ev th:first-child{
 .ok{color:#1b7f2a;font-weight:600} .bad{color:#b00020;font-weight:600}
 .meta{color:#666;font-size:.85em}
 """
+
+
+def plotlyjs_name() -> str:
+    """File name of the shared plotly.js bundle, versioned so that reports of different plotly
+    versions in one folder do not overwrite each other's copy."""
+    from plotly.offline import get_plotlyjs_version
+
+    return f"plotly-{get_plotlyjs_version()}.min.js"
+
+
+def write_plotlyjs(folder: str | Path) -> Path:
+    """Write the plotly.js bundle into ``folder`` unless an identical copy is there already
+    (atomic: parallel writers of one folder never leave a half-written file)."""
+    from plotly.offline import get_plotlyjs
+
+    folder = Path(folder)
+    path = folder / plotlyjs_name()
+    js = get_plotlyjs().encode("utf-8")
+    if not (path.exists() and path.stat().st_size == len(js)):
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp = folder / f".{path.name}.{os.getpid()}.tmp"
+        tmp.write_bytes(js)
+        os.replace(tmp, path)
+    return path
 
 
 def _fmt(v, digits: int = 4) -> str:
@@ -83,19 +111,27 @@ class Report:
                                        config={"responsive": True, "displaylogo": False}))
         return self
 
-    def render(self) -> str:
-        from plotly.offline import get_plotlyjs
+    def render(self, inline_plotly: bool = False) -> str:
+        """The page; plotly.js is loaded from :func:`plotlyjs_name` beside it, or embedded."""
+        if inline_plotly:
+            from plotly.offline import get_plotlyjs
 
+            script = f"<script type=\"text/javascript\">{get_plotlyjs()}</script>"
+        else:
+            script = f"<script type=\"text/javascript\" src=\"{plotlyjs_name()}\" charset=\"utf-8\"></script>"
         sub = f'<p class="meta">{html.escape(self.subtitle)}</p>' if self.subtitle else ""
         return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
                 f"<title>{html.escape(self.title)}</title><style>{_CSS}</style>"
-                f"<script type=\"text/javascript\">{get_plotlyjs()}</script></head><body>"
+                f"{script}</head><body>"
                 f"<h1>{html.escape(self.title)}</h1>{sub}" + "\n".join(self._parts) + "</body></html>")
 
-    def write(self, path: str | Path) -> Path:
+    def write(self, path: str | Path, inline_plotly: bool = False) -> Path:
+        """Write the page to ``path`` and, unless ``inline_plotly``, the shared plotly.js beside it."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(self.render(), encoding="utf-8")
+        if not inline_plotly:
+            write_plotlyjs(path.parent)
+        path.write_text(self.render(inline_plotly), encoding="utf-8")
         return path
 
 

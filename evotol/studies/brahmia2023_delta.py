@@ -291,7 +291,7 @@ def _paper_units(name: str) -> str:
 
 
 def _kinematics_checks(robot: DeltaRobot, seed: int) -> dict:
-    from robots.base import check_robot
+    from robots.checks import check_robot
     from robots.delta import cylinder_poses
 
     P = np.vstack([postures_m(), cylinder_poses(200, seed=seed)])

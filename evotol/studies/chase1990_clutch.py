@@ -13,7 +13,7 @@ from __future__ import annotations
 from evotol.studies import Study, StudyResult
 from evotol.studies._process_benchmarks import CLUTCH_PUBLISHED, clutch_problem, render_cases, run_case, summarise
 
-CONFIG = {"seed": 0, "pop_size": 100, "n_gen": 150, "n_mc": 100_000}
+CONFIG = {"seed": 0, "pop_size": 60, "n_gen": 100, "n_mc": 100_000}
 QUICK = {"pop_size": 30, "n_gen": 30, "n_mc": 5_000}
 CASES = {"worst_case": "worst-case limit |Δφ| <= 2° (arithmetic stack)",
          "rss": "statistical limit: RSS of the dimensions' effects <= 2° (t = 3σ)"}

@@ -14,7 +14,7 @@ import numpy as np
 from evotol.studies import Study, StudyResult
 from evotol.studies._process_benchmarks import render_cases, run_case, stack_problem, summarise
 
-CONFIG = {"seed": 0, "pop_size": 100, "n_gen": 150, "n_mc": 100_000}
+CONFIG = {"seed": 0, "pop_size": 60, "n_gen": 100, "n_mc": 100_000}
 QUICK = {"pop_size": 30, "n_gen": 30, "n_mc": 5_000}
 CASES = {"worst_case": "gap within ±0.10 mm, worst case", "rss": "gap within ±0.10 mm, RSS (t = 3σ)"}
 PUBLISHED = {"source": "B. G. Loosli, 'Manufacturing tolerance cost minimization using discrete optimization for alternate "

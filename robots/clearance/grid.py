@@ -5,65 +5,28 @@ each chunk is solved by :func:`robots.clearance.max_pose_error` in a worker, and
 put back in order. Because the chunks do not depend on where they run, a local run and a Dask
 run return identical arrays.
 
-* default: ``concurrent.futures.ProcessPoolExecutor`` with ``workers`` processes (default: the
-  number of CPUs; ``workers=1`` runs in this process);
+The chunks run on evotol's one executor (:func:`evotol.executor.parallel_map`):
+
+* default: local processes, ``workers`` of them (default: the number of CPUs; ``workers=1``
+  runs in this process);
 * ``scheduler="tcp://host:8786"`` (or an ``inproc://`` address, or a ``distributed.Client``):
-  the chunks are submitted with ``Client.map`` and gathered (the existing Dask engine, no
-  home-made cluster).
+  the chunks are submitted to that Dask cluster (the existing Dask engine, no home-made cluster).
 """
 from __future__ import annotations
 
-import os
 import time
-from concurrent.futures import ProcessPoolExecutor
-from typing import Callable, Sequence
 
 import numpy as np
 
 from evotol.errors import ValidationError
+from evotol.executor import parallel_map
 from robots.clearance.maxerror import MaxPoseError, max_pose_error
 from robots.clearance.model import ClearanceMechanism
-
-
-def parallel_map(fn: Callable, items: Sequence, *, workers: int | None = None, scheduler=None) -> list:
-    """``[fn(x) for x in items]`` on local processes or on a Dask cluster; order preserved.
-
-    fn must be picklable (a module-level function or a ``functools.partial`` of one)."""
-    items = list(items)
-    if scheduler is not None:
-        try:
-            from distributed import Client
-        except ImportError as exc:  # pragma: no cover - dask is a declared optional dependency
-            raise ValidationError("scheduler", scheduler, "dask[distributed] installed (pip install evotol[dask])") from exc
-        if isinstance(scheduler, Client):
-            client, own = scheduler, False
-        else:
-            client, own = Client(scheduler), True
-        try:
-            futures = client.map(fn, items, pure=False)
-            return client.gather(futures)
-        finally:
-            if own:
-                client.close()
-    n = (os.cpu_count() or 1) if workers is None else int(workers)
-    if n < 1:
-        raise ValidationError("workers", workers, "a positive number of processes")
-    if n == 1 or len(items) <= 1:
-        return [fn(x) for x in items]
-    with ProcessPoolExecutor(max_workers=min(n, len(items))) as pool:
-        return list(pool.map(fn, items))
 
 
 def _solve_chunk(args):
     mech, poses, bounds, tol = args
     return max_pose_error(mech, poses, bounds, tol=tol)
-
-
-def concat_results(parts: Sequence[MaxPoseError]) -> MaxPoseError:
-    cat = {f: np.concatenate([getattr(p, f) for p in parts]) for f in
-           ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")}
-    return MaxPoseError(**cat, joint_names=parts[0].joint_names, n_solves=sum(p.n_solves for p in parts),
-                        seconds=sum(p.seconds for p in parts))
 
 
 def grid_max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float = 1e-3, chunk_size: int = 256,
@@ -81,6 +44,6 @@ def grid_max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: fl
     per_pose = b.ndim == 3
     items = [(mech, poses[s:s + chunk_size], b[s:s + chunk_size] if per_pose else b, tol) for s in starts]
     parts = parallel_map(_solve_chunk, items, workers=workers, scheduler=scheduler)
-    out = concat_results(parts)
+    out = MaxPoseError.concat(parts)
     out.seconds = time.perf_counter() - t0
     return out

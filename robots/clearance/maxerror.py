@@ -23,11 +23,14 @@ and likewise for the rotation. Their relative gap is at most ``tol`` (default 1e
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from evotol.errors import ConvergenceError, ValidationError
+from evotol.executor import parallel_map
+from evotol.threads import one_blas_thread
 from robots.clearance.model import ClearanceMechanism, PoseMaps
 from robots.clearance.support import _gram_pinv, solve_support, true_dual
 
@@ -342,6 +345,14 @@ class MaxPoseError:
     p_extra: np.ndarray | None = None   # (n, q) values of the extra sources at the p maximiser
     r_extra: np.ndarray | None = None
 
+    @classmethod
+    def concat(cls, parts) -> "MaxPoseError":
+        """The cases of several results in order (chunks of a grid); ``n_solves``, ``seconds`` summed."""
+        cat = {f: np.concatenate([getattr(p, f) for p in parts]) for f in
+               ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")}
+        return cls(**cat, joint_names=parts[0].joint_names, n_solves=sum(p.n_solves for p in parts),
+                   seconds=sum(p.seconds for p in parts))
+
     @property
     def p_gap(self) -> np.ndarray:
         return (self.p_upper - self.p_max) / np.maximum(self.p_upper, 1e-300)
@@ -375,20 +386,11 @@ def _as_bounds(mech: ClearanceMechanism, bounds, n: int) -> np.ndarray:
     return b
 
 
-def _single_blas_thread():
-    """Context limiting BLAS to one thread: the batched 30x30 solves are several times faster
-    without OpenBLAS threading, and grid workers must not oversubscribe the cores."""
-    try:
-        from threadpoolctl import threadpool_limits
-        return threadpool_limits(limits=1, user_api="blas")
-    except ImportError:  # pragma: no cover - optional
-        import contextlib
-        return contextlib.nullcontext()
-
-
 def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: np.ndarray, bounds: np.ndarray, *,
                    tol: float = 1e-3, tol_solve: float = 2e-5, extra=None) -> MaxPoseError:
-    with _single_blas_thread():
+    # the batched 30x30 solves are several times faster without OpenBLAS threading, and grid
+    # workers must not oversubscribe the cores
+    with one_blas_thread():
         return _evaluate_cases(mech, maps, pose_index, bounds, tol=tol, tol_solve=tol_solve, extra=extra)
 
 
@@ -404,7 +406,6 @@ def _evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: 
     actuator tolerances through the geometric sensitivity J_p). The support functions of the
     clearance set and of the box ``|e_k| <= t_k`` add up (Minkowski sum), so the combined
     worst case is computed by the same certified method."""
-    import time
 
     t0 = time.perf_counter()
     pose_index = np.asarray(pose_index, int)
@@ -528,13 +529,10 @@ class ClearanceEvaluator:
         if idx.size and (idx.min() < 0 or idx.max() >= len(self.poses)):
             raise ValidationError("pose_index", pose_index, f"indices in [0, {len(self.poses)})")
         if (workers is None or workers > 1 or scheduler is not None) and len(b) > chunk_size:
-            from robots.clearance.grid import concat_results, parallel_map
-            import time
-
             t0 = time.perf_counter()
             items = [(self.mech, self.maps, idx[s:s + chunk_size], b[s:s + chunk_size], self.tol)
                      for s in range(0, len(b), chunk_size)]
-            out = concat_results(parallel_map(_evaluate_chunk, items, workers=workers, scheduler=scheduler))
+            out = MaxPoseError.concat(parallel_map(_evaluate_chunk, items, workers=workers, scheduler=scheduler))
             out.seconds = time.perf_counter() - t0
             return out
         return evaluate_cases(self.mech, self.maps, idx, b, tol=self.tol)

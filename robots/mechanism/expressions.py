@@ -64,6 +64,11 @@ class Expression:
                 raise ValidationError(field, text, "numbers, not strings")
         return cls(text, frozenset(names), compile(tree, f"<{field}>", "eval"))
 
+    def __reduce__(self):
+        # compiled code does not pickle; robots travel to worker processes and Dask, so an
+        # expression is sent as its text and parsed again (robots.checks.check_pickle_round_trip)
+        return (Expression.parse, (self.text, "expression"))
+
     @property
     def is_constant(self) -> bool:
         return not self.names

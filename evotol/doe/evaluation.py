@@ -1,0 +1,164 @@
+"""Chunked, resumable evaluation of design entries (:func:`evaluate`).
+
+An *evaluator* is a picklable callable ``DataFrame -> DataFrame`` computing the objectives of a
+whole chunk of entries in one vectorised call (STYLE.md "pymoo"). The chunks run on the one
+executor of :mod:`evotol.executor` (local processes, or a Dask cluster with
+``scheduler="tcp://..."``), a tqdm bar counts entries done, and every finished chunk is saved in
+a :class:`~evotol.executor.ChunkStore`: started again on the same entries, only the missing
+chunks run (an interrupted study resumes).
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Mapping
+
+import numpy as np
+import pandas as pd
+
+from evotol.doe.factors import ERROR, FEASIBLE
+from evotol.errors import EvotolError, ValidationError
+from evotol.executor import ChunkStore, run_chunks, worker_count
+
+Evaluator = Callable[[pd.DataFrame], pd.DataFrame]
+
+
+def _evaluate_chunk(evaluator: Evaluator, inputs: pd.DataFrame) -> pd.DataFrame:
+    """Run the evaluator on one chunk; isolate entries that raise an EvotolError.
+
+    Returns the evaluator's output columns plus ``feasible`` and ``error`` (the message of an
+    entry that could not be evaluated, e.g. a pose out of reach; its objectives are NaN and
+    ``feasible`` is False -- the failure is recorded, never silent).
+    """
+    try:
+        out = _as_frame(evaluator(inputs), len(inputs))
+        out[ERROR] = ""
+    except EvotolError:
+        if len(inputs) == 1:
+            raise
+        rows = []
+        for i in range(len(inputs)):
+            try:
+                r = _as_frame(evaluator(inputs.iloc[i:i + 1]), 1)
+                r[ERROR] = ""
+            except EvotolError as exc:
+                r = pd.DataFrame({ERROR: [f"{type(exc).__name__}: {exc}"]})
+            rows.append(r)
+        out = pd.concat(rows, ignore_index=True)
+    out.index = inputs.index
+    objectives = [c for c in out.columns if c not in (FEASIBLE, ERROR)]
+    finite = np.all(np.isfinite(out[objectives].to_numpy(dtype=float)), axis=1) if objectives else np.ones(len(out), bool)
+    if FEASIBLE in out:
+        out[FEASIBLE] = out[FEASIBLE].fillna(False).astype(bool) & finite
+    else:
+        out[FEASIBLE] = finite & (out[ERROR] == "")
+    return out
+
+
+def _as_frame(out, n: int) -> pd.DataFrame:
+    if isinstance(out, Mapping):
+        out = pd.DataFrame({k: np.asarray(v) for k, v in out.items()})
+    if not isinstance(out, pd.DataFrame) or len(out) != n:
+        raise ValidationError("evaluator output", type(out).__name__, f"a DataFrame (or dict of arrays) with {n} rows")
+    return out.reset_index(drop=True)
+
+
+def _fingerprint(entries: pd.DataFrame, evaluator) -> str:
+    h = hashlib.sha1()
+    h.update(pd.util.hash_pandas_object(entries, index=False).to_numpy().tobytes())
+    h.update(",".join(map(str, entries.columns)).encode())
+    key = getattr(evaluator, "cache_key", None)
+    h.update(str(key() if callable(key) else (key if key is not None else repr(evaluator))).encode())
+    return h.hexdigest()
+
+
+@dataclass
+class EvaluationLog:
+    """What :func:`evaluate` did: chunks evaluated now, chunks reused from the store, time."""
+
+    n_entries: int = 0
+    n_chunks: int = 0
+    chunks_evaluated: list[int] = field(default_factory=list)
+    chunks_resumed: list[int] = field(default_factory=list)
+    seconds: float = 0.0
+    backend: str = ""
+
+
+def evaluate(entries: pd.DataFrame, evaluator: Evaluator, *, store: str | Path | None = None,
+             chunk_size: int | None = None, workers: int | None = None, scheduler: str | None = None,
+             progress: bool = True, description: str = "entries", log: EvaluationLog | None = None
+             ) -> pd.DataFrame:
+    """Evaluate every entry; returns inputs + objectives + ``feasible`` + ``error`` columns.
+
+    entries: a DataFrame from :func:`full_factorial` & co. (any columns; all go to the evaluator).
+    evaluator: picklable ``DataFrame -> DataFrame`` computing one chunk in one vectorised call;
+        an optional ``cache_key`` attribute/method identifies its settings for resuming.
+    store: folder for finished chunks (``chunk_00012.parquet``) and a manifest; on a later call
+        with the same entries and evaluator only the missing chunks run (resume after an
+        interruption); a store holding another study's chunks is cleared first.
+    chunk_size: entries per chunk (default: about 8 chunks per worker, at most 2048).
+    workers: local processes (default: all cores; 1 = in this process, no pickling).
+    scheduler: address of a Dask scheduler (``"tcp://host:8786"``); chunks then run on that
+        cluster (dask.distributed) instead of local processes.
+    progress: show a tqdm bar counting entries done.
+    log: an :class:`EvaluationLog` to fill (which chunks ran, which were resumed, time, backend).
+    """
+    from tqdm.auto import tqdm
+
+    if not isinstance(entries, pd.DataFrame) or len(entries) == 0:
+        raise ValidationError("entries", type(entries).__name__, "a non-empty DataFrame")
+    if not callable(evaluator):
+        raise ValidationError("evaluator", evaluator, "a callable DataFrame -> DataFrame")
+    t0 = time.perf_counter()
+    n = len(entries)
+    workers = worker_count(workers)
+    if chunk_size is None:
+        chunk_size = max(1, min(2048, math.ceil(n / (8 * workers))))
+    if not (isinstance(chunk_size, (int, np.integer)) and chunk_size >= 1):
+        raise ValidationError("chunk_size", chunk_size, "a positive integer")
+    entries = entries.reset_index(drop=True)
+    bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
+    log = log if log is not None else EvaluationLog()
+    log.n_entries, log.n_chunks = n, len(bounds)
+
+    results: dict[int, pd.DataFrame] = {}
+    chunks = None
+    if store is not None:
+        chunks = ChunkStore(store, key=_fingerprint(entries, evaluator), n_entries=n, chunk_size=int(chunk_size))
+        results = chunks.open()
+        log.chunks_resumed = sorted(results)
+    todo = [i for i in range(len(bounds)) if i not in results]
+
+    def _done(k: int, out: pd.DataFrame) -> None:
+        i = todo[k]
+        results[i] = out
+        log.chunks_evaluated.append(i)
+        if chunks is not None:
+            chunks.save(i, out)
+        bar.update(len(out))
+
+    initial = sum(len(r) for r in results.values())
+    with tqdm(total=n, initial=initial, unit="entry", desc=description, disable=not progress,
+              dynamic_ncols=True, mininterval=0.5) as bar:
+        if not todo:
+            log.backend = "store"
+        else:
+            log.backend = run_chunks(_evaluate_chunk, [entries.iloc[bounds[i][0]:bounds[i][1]] for i in todo], _done,
+                                     common=(evaluator,), workers=workers, scheduler=scheduler)
+
+    out = pd.concat([results[i] for i in range(len(bounds))], ignore_index=True)
+    out.index = entries.index
+    overlap = [c for c in out.columns if c in entries.columns]
+    if overlap:
+        raise ValidationError("evaluator output columns", overlap, "names different from the input columns")
+    df = pd.concat([entries, out], axis=1)
+    df.attrs = dict(entries.attrs)
+    meta = df.attrs.setdefault("evotol", {})
+    meta["objectives"] = [c for c in out.columns if c not in (FEASIBLE, ERROR)]
+    log.seconds = time.perf_counter() - t0
+    return df
+
+

@@ -1,0 +1,121 @@
+"""NSGA-II beyond the levels: the factors' continuous ranges searched by pymoo (issue "beyond the levels")."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+from pymoo.core.problem import Problem
+
+from evotol.doe.evaluation import Evaluator, _evaluate_chunk, evaluate
+from evotol.doe.factors import FEASIBLE, SOURCE, Factor, _check_factors, from_unit
+from evotol.allocators.nsga import run_nsga2
+from evotol.errors import EvotolError, ValidationError
+from evotol.pareto import knee_points, non_dominated
+
+
+@dataclass(frozen=True)
+class Objective:
+    """An objective column and whether it is minimised (``sense=+1``) or maximised (``-1``)."""
+
+    column: str
+    sense: int = 1
+    log: bool = False     # compare/normalise in log10 (values spanning decades)
+
+    def __post_init__(self):
+        if self.sense not in (1, -1):
+            raise ValidationError(f"Objective({self.column!r}).sense", self.sense, "+1 (minimise) or -1 (maximise)")
+
+
+
+class DesignProblem(Problem):
+    """The factors in [0, 1] (:meth:`Factor.to_unit`) as a pymoo problem; one evaluator call per
+    generation. Defined at module level so that it pickles (to worker processes and Dask).
+
+    F: the objectives times their ``sense`` (pymoo minimises); G: <= 0 for a feasible entry
+    (``feasible`` and, when given, the ``constraint`` column <= 0). ``seen`` keeps every
+    evaluated entry (inputs + evaluator output): the archive the Pareto front is taken from.
+    """
+
+    def __init__(self, factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[Objective], *,
+                 constraint: str | None = None, workers: int = 1, scheduler=None):
+        super().__init__(n_var=len(factors), n_obj=len(objectives), n_ieq_constr=1, xl=0.0, xu=1.0)
+        self.factors, self.evaluator, self.objectives = tuple(factors), evaluator, tuple(objectives)
+        self.constraint, self.workers, self.scheduler = constraint, workers, scheduler
+        self.seen: list[pd.DataFrame] = []
+
+    def to_frame(self, U: np.ndarray) -> pd.DataFrame:
+        return pd.DataFrame({f.name: f.to_unit(U[:, j]) for j, f in enumerate(self.factors)})
+
+    def _evaluate(self, U, out, *args, **kwargs):
+        X = self.to_frame(U)
+        if self.workers > 1 or self.scheduler is not None:
+            Y = evaluate(X, self.evaluator, workers=self.workers, scheduler=self.scheduler, progress=False,
+                         chunk_size=max(1, math.ceil(len(X) / max(self.workers, 1))))
+            Y = Y.drop(columns=list(X.columns))
+        else:
+            Y = _evaluate_chunk(self.evaluator, X)
+        self.seen.append(pd.concat([X, Y], axis=1))
+        F = np.column_stack([o.sense * Y[o.column].to_numpy(dtype=float) for o in self.objectives])
+        bad = ~Y[FEASIBLE].to_numpy(bool)
+        F[bad] = 0.0     # ranked by the constraint violation below, never by F
+        G = np.where(bad, 1.0, -1.0)
+        if self.constraint is not None:
+            G = np.maximum(G, Y[self.constraint].to_numpy(dtype=float))
+        out["F"], out["G"] = F, G[:, None]
+
+
+def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[Objective], *,
+          pop_size: int = 64, n_gen: int = 40, seed: int = 0, constraint: str | None = None,
+          initial: pd.DataFrame | None = None, progress: bool = False, workers: int = 1,
+          scheduler: str | None = None) -> pd.DataFrame:
+    """NSGA-II (pymoo) on the factors' continuous ranges; returns the final Pareto entries.
+
+    Decision variables are the factors in [0, 1] mapped by :meth:`Factor.to_unit` (log-uniform
+    where ``log``: a tolerance from 1e-4 to 1e-1 mm is searched per decade, not per mm). Each
+    generation's whole population is one evaluator call (``workers`` > 1 or ``scheduler``: split
+    into one chunk per worker, run by :func:`evaluate`). ``constraint`` is a column of the
+    evaluator output that must be <= 0 for a feasible entry (besides ``feasible``). ``initial``
+    seeds the population with known entries (e.g. the best grid entries).
+
+    Returns a DataFrame of the non-dominated feasible entries with ``source = "NSGA-II"`` and a
+    boolean ``knee`` column (:func:`knee_points`), sorted by the first objective.
+    """
+    factors = _check_factors(factors)
+    objectives = tuple(objectives)
+    if not objectives:
+        raise ValidationError("objectives", objectives, "at least one Objective")
+    problem = DesignProblem(factors, evaluator, objectives, constraint=constraint, workers=workers,
+                            scheduler=scheduler)
+    sampling = None
+    if initial is not None and len(initial):
+        U0 = np.column_stack([from_unit(f, initial[f.name].to_numpy(float)) for f in factors])
+        rng = np.random.default_rng(seed)
+        fill = rng.random((max(0, pop_size - len(U0)), len(factors)))
+        sampling = np.vstack([U0[:pop_size], fill])
+    run_nsga2(problem, pop_size=pop_size, n_gen=n_gen, seed=seed, sampling=sampling, verbose=progress)
+    seen = problem.seen
+    allx = pd.concat(seen, ignore_index=True)
+    ok = allx[allx[FEASIBLE]].reset_index(drop=True)
+    if constraint is not None:
+        ok = ok[ok[constraint] <= 0].reset_index(drop=True)
+    if ok.empty:
+        raise EvotolError("NSGA-II found no feasible entry")
+    F = np.column_stack([o.sense * ok[o.column].to_numpy(float) for o in objectives])
+    front = non_dominated(F)
+    # every entry NSGA-II evaluated is a candidate: the archive's front is never worse than the
+    # final population's
+    pareto = ok.iloc[front].drop_duplicates(subset=[f.name for f in factors]).reset_index(drop=True)
+    Fp = np.column_stack([o.sense * pareto[o.column].to_numpy(float) for o in objectives])
+    knee = np.zeros(len(pareto), bool)
+    knee[knee_points(Fp, [o.log for o in objectives])] = True
+    pareto[SOURCE] = "NSGA-II"
+    pareto["knee"] = knee
+    pareto = pareto.sort_values(objectives[0].column, ascending=objectives[0].sense > 0).reset_index(drop=True)
+    pareto.attrs["evotol"] = {"factors": [f.to_dict() for f in factors], "design": "NSGA-II",
+                              "pop_size": pop_size, "n_gen": n_gen, "seed": seed,
+                              "n_evaluations": int(len(allx))}
+    return pareto
+

@@ -1,0 +1,109 @@
+"""Where chunks run: in this process, on local processes, or on a Dask cluster.
+
+The chunks do not depend on where they run, so all three return identical results; callers
+choose the chunking (a fixed chunk size keeps local and Dask runs comparable).
+"""
+from __future__ import annotations
+
+import os
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from typing import Any, Callable, Sequence
+
+from evotol.errors import ValidationError
+
+#: ``on_done(index, result)``: called in this process for every finished item
+OnDone = Callable[[int, Any], None]
+
+
+def worker_count(workers: int | None) -> int:
+    """Number of local processes: ``workers``, or all cores when None; a ValidationError below 1."""
+    if workers is None:
+        return os.cpu_count() or 1
+    try:
+        n = int(workers)
+    except (TypeError, ValueError):
+        n = 0
+    if n < 1:
+        raise ValidationError("workers", workers, "a positive number of processes")
+    return n
+
+
+def run_chunks(fn: Callable, items: Sequence, on_done: OnDone, *, common: tuple = (),
+               workers: int | None = None, scheduler=None) -> str:
+    """Call ``fn(*common, items[i])`` for every i and ``on_done(i, result)`` as each finishes.
+
+    fn: picklable (a module-level function) when it runs in other processes.
+    common: arguments shared by all items (e.g. an evaluator); on Dask they are scattered to
+        every worker once instead of travelling with every item.
+    workers: local processes (None: all cores; 1 or a single item: in this process, no pickling).
+    scheduler: a Dask scheduler address (``"tcp://host:8786"``, ``"inproc://..."``) or a
+        ``distributed.Client``; the items then run on that cluster (``workers`` is ignored).
+    Returns a short description of the backend used ("in-process", "2 local processes", "dask ...").
+    """
+    items = list(items)
+    if not items:
+        return "nothing to run"
+    if scheduler is not None:
+        _run_dask(scheduler, fn, common, items, on_done)
+        return f"dask {scheduler}"
+    n = min(worker_count(workers), len(items))
+    if n == 1:
+        for i, x in enumerate(items):
+            on_done(i, fn(*common, x))
+        return "in-process"
+    _run_processes(n, fn, common, items, on_done)
+    return f"{n} local processes"
+
+
+def parallel_map(fn: Callable, items: Sequence, *, common: tuple = (), workers: int | None = None,
+                 scheduler=None) -> list:
+    """``[fn(*common, x) for x in items]`` on local processes or a Dask cluster; order preserved."""
+    items = list(items)
+    out: list = [None] * len(items)
+
+    def keep(i, r):
+        out[i] = r
+
+    run_chunks(fn, items, keep, common=common, workers=workers, scheduler=scheduler)
+    return out
+
+
+def _run_processes(n: int, fn, common, items, on_done: OnDone) -> None:
+    pool = ProcessPoolExecutor(max_workers=n)
+    pending = {pool.submit(fn, *common, x): i for i, x in enumerate(items)}
+    try:
+        while pending:
+            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in finished:
+                on_done(pending.pop(fut), fut.result())
+    except BaseException:
+        # interrupted (Ctrl-C) or an item failed: what finished was handed on; stop the running
+        # items now instead of waiting for them
+        for fut in pending:
+            fut.cancel()
+        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+            proc.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _run_dask(scheduler, fn, common, items, on_done: OnDone) -> None:
+    try:
+        from distributed import Client, as_completed
+    except ImportError as exc:   # pragma: no cover - dask is an optional dependency
+        raise ValidationError("scheduler", scheduler, "dask[distributed] installed (pip install evotol[dask])") from exc
+    own = not isinstance(scheduler, Client)
+    client = Client(scheduler, set_as_default=False) if own else scheduler
+    try:
+        shared = client.scatter(list(common), broadcast=True) if common else []
+        futures = {client.submit(fn, *shared, x, pure=False): i for i, x in enumerate(items)}
+        try:
+            for fut in as_completed(list(futures), loop=client.loop):
+                on_done(futures[fut], fut.result())
+        except BaseException:
+            client.cancel(list(futures))
+            raise
+    finally:
+        if own:
+            client.close()

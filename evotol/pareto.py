@@ -1,0 +1,59 @@
+"""Pareto fronts: the one knee definition used by every NSGA-II front in evotol."""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from evotol.errors import ValidationError
+
+
+def _normalised(F: np.ndarray, log: Sequence[bool] | None) -> np.ndarray:
+    """Every objective scaled to [0, 1] over the front, after log10 where ``log``."""
+    G = np.asarray(F, dtype=float).copy()
+    for j, lg in enumerate(log or [False] * G.shape[1]):
+        if lg:
+            G[:, j] = np.log10(np.maximum(G[:, j], 1e-300))
+    span = G.max(0) - G.min(0)
+    return (G - G.min(0)) / np.where(span > 0, span, 1.0)
+
+
+def ideal_point_knee(F: np.ndarray, log: Sequence[bool] | None = None) -> int:
+    """Index of the knee of a Pareto front ``F`` (n, m), all objectives minimised: the point
+    nearest (Euclidean) to the ideal point after normalising every objective to [0, 1] over the
+    front (log10 first where ``log``). On the front ``y = 1/x`` in log-log axes it is ``x = 1``."""
+    F = np.asarray(F, dtype=float)
+    if F.ndim != 2 or len(F) == 0:
+        raise ValidationError("Pareto front F", F.shape, "a non-empty (n, m) array")
+    return int(np.argmin(np.linalg.norm(_normalised(F, log), axis=1)))
+
+
+def knee_points(F: np.ndarray, log: Sequence[bool] | None = None) -> np.ndarray:
+    """Indices of the knee points of a Pareto front ``F`` (n, m), all objectives minimised.
+
+    Both marks of the one knee definition, deduplicated: :func:`ideal_point_knee` and the high
+    trade-off points of pymoo's ``HighTradeoffPoints`` (Rachmawati & Srinivasan 2009) on the same
+    normalised front.
+    """
+    F = np.asarray(F, dtype=float)
+    if F.ndim != 2 or len(F) == 0:
+        return np.zeros(0, dtype=int)
+    N = _normalised(F, log)
+    knees = {int(np.argmin(np.linalg.norm(N, axis=1)))}
+    if len(F) >= 4:
+        try:
+            from pymoo.mcdm.high_tradeoff import HighTradeoffPoints
+
+            ht = HighTradeoffPoints().do(N)
+            if ht is not None:
+                knees.update(int(i) for i in np.atleast_1d(ht))
+        except (ValueError, IndexError, np.linalg.LinAlgError):   # degenerate fronts
+            pass
+    return np.array(sorted(knees), dtype=int)
+
+
+def non_dominated(F: np.ndarray) -> np.ndarray:
+    """Indices of the non-dominated rows of ``F`` (n, m), all objectives minimised (pymoo's sort)."""
+    from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
+
+    return NonDominatedSorting().do(np.asarray(F, dtype=float), only_non_dominated_front=True)
