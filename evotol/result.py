@@ -72,6 +72,9 @@ class AllocationResult:
         d = {"method": self.method, "tolerances": dict(self.tolerances), "cost": self.cost,
              "feasible": self.feasible, "seconds": self.seconds,
              "measure": self.problem.requirement.measure}
+        if self.problem.shared:   # one value per tolerance variable, and which sources it drives
+            d["shared"] = {g: list(m) for g, m in self.problem.shared.items()}
+            d["shared_cost"] = self.problem.shared_cost
         for comp, _ in self.problem.components:
             d[f"max_{comp}_error"] = self.max_error(comp)
             b = getattr(self.errors, f"{comp}_bound")

@@ -37,6 +37,7 @@ def test_tolerance_specs_example_runs_with_refinement(tmp_path):
     out = run_study_file(f, out=tmp_path)
     r = out["results"]["optimum"]
     assert r["feasible"] and r["refinement"]["holds"] and r["refinement"]["rounds"] >= 1
+    assert r["shared"]["legs"] == ["l1", "l2", "l3"]
 
 
 @pytest.mark.parametrize("mutate, field, nearest", [

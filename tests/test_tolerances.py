@@ -336,3 +336,21 @@ def test_verify_nonlinear_on_the_delta_with_table3_offsets():
     with pytest.raises(ValidationError) as exc:
         verify(t3, half, model="nonlinar")
     assert exc.value.field == "model"
+
+
+def test_budget_mode_and_nsga2_on_shared_asymmetric_problem():
+    """Best accuracy at a budget is the dual of min cost at an accuracy: at the budget of the
+    certified optimum, the best normalised error is 1 (within solver tolerance); NSGA-II keeps
+    shared members equal and its front never beats the optimum (cost below it at error <= 1)."""
+    from evotol.allocators import allocate_nsga2
+
+    P = _asym_problem(seed=11, shared={"a": ["s0", "s2"]})
+    opt = allocate_optimum(P)
+    at_budget = allocate_optimum(P, budget=opt.cost)
+    assert at_budget.info["normalised_error"] == pytest.approx(1.0, abs=1e-5)
+    assert at_budget.cost <= opt.cost * (1 + 1e-9)
+    front = allocate_nsga2(P, pop_size=20, n_gen=15, seed=0, progress=False)
+    tab = front.table
+    assert np.all(tab["s0"] == tab["s2"])
+    ok = tab[tab["normalised_error"] <= 1]
+    assert np.all(ok["cost"] >= opt.certificate["lower_bound"] * (1 - 1e-9))
