@@ -110,12 +110,12 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     (``[robot] mechanism = "my_robot.toml"``) are looked up."""
     check_study_keys(spec)
     rs = dict(spec.get("robot", {}))
-    if "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
+    if "mechanism" in rs or "urdf" in rs:       # a description (robots/mechanism, docs/mechanisms.md); its
+        robot = model_from_table(rs, base_dir)  # [robot.assembly] table is the assembly configuration
+    elif "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
         robot = assembly_from_spec(rs)
         spec = {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),
                 "requirement": {"position": 1.0, **spec.get("requirement", {})}}
-    elif "mechanism" in rs:                       # a description file (robots/mechanism, docs/mechanisms.md)
-        robot = model_from_table(rs, base_dir)
     elif "model" not in rs:
         raise ValidationError("robot.model", None, "a robot name, e.g. 'ucr3', mechanism = 'my_robot.toml' "
                               "or assembly = 'module:function'")

@@ -219,7 +219,8 @@ def test_reproduce_mechanisms_fields_quick(tmp_path):
     for e in m.values():
         assert {"fd_rel_error", "builtin_rel_diff", "n_sources", "seconds"} <= set(e)
         assert e["fd_rel_error"] < 1e-6
-    assert m["5-bar"]["builtin_rel_diff"] < 1e-9 and m["IRSBot-2"]["builtin_rel_diff"] < 1e-9
+    for name in ("5-bar", "IRSBot-2", "3-UCR", "Delta"):
+        assert m[name]["builtin_rel_diff"] < 1e-9, name
     fb = m["5-bar"]
     assert fb["p_max_mm"] <= fb["p_upper_mm"] <= fb["p_max_mm"] * (1 + 1e-3)
     assert fb["r_max_rad"] <= fb["r_upper_rad"] <= fb["r_max_rad"] * (1 + 1e-3)
@@ -264,3 +265,70 @@ n_samples = 20
     assert set(data["results"]["optimum"]["tolerances"]) == {"l1_1", "l1_2", "l1_3", "q1", "q2", "q3"}
     assert data["results"]["optimum"]["cost"] <= data["results"]["sensitivity"]["cost"] * (1 + 1e-9)
     assert data["monte_carlo"]["optimum"]["max_exceed_rate"] <= 0.1
+
+
+# ---------------------------------------------------------------------------------- 3-UCR
+def test_ucr3_description_equals_hand_written_all_21_columns_at_50_poses():
+    """Yao 2013 3-UCR ('verified' J_x of eq. 10): the description gives every column of the
+    hand-written map. Lengths l_i = the actuated prismatic variables; the U-joint disks U_ia
+    (radial, vertical) = the base frame's d and b; U_ib (t_i, w_i x t_i) = U_ia.r and U_ib.d; the
+    platform-joint disks R_i (radial, normal in the platform) = minus the platform row's d and r
+    (they move the platform relative to a_i, i.e. a_i by the opposite amount)."""
+    from robots.ucr3 import UCR3
+
+    m = MechanismModel(HERE / "ucr3.toml")
+    r = UCR3()
+    poses = r.workspace.latin_hypercube(50, seed=1)
+    S, H = m.sensitivity(poses), r.sensitivity(poses)
+    names = list(m.source_names)
+    cols = [("l1", 1), ("l2", 1), ("l3", 1)]
+    cols += [(f"U{i}a.{k}", 1) for i in (1, 2, 3) for k in ("d", "b")]
+    cols += [(c, 1) for i in (1, 2, 3) for c in (f"U{i}a.r", f"U{i}b.d")]
+    cols += [(f"P{i}.{k}", -1) for i in (1, 2, 3) for k in ("d", "r")]
+    D = np.stack([s * S[:, :, names.index(c)] for c, s in cols], -1)
+    assert np.abs(D - H).max() <= 1e-9 * np.abs(H).max()
+    assert check_robot(m)["fd_relative_mismatch"] < 1e-6
+
+
+# ---------------------------------------------------------------------------------- Delta
+def test_delta_description_equals_hand_written_for_the_shared_parameters():
+    """Brahmia 2023 Delta: the description (rod-1 branch of Tab. 1 with the parallelogram
+    relations q4 = -q3, q5 = pi - q1 - q2, legs closed at the platform centre, eq. 3) gives the
+    same position rows as robots/delta.py for the 23 parameters both rods share (Ra, Rb, La, Lb,
+    alpha1, alpha5, theta, the actuator offsets q1 and the lower-bar offsets q5), at 50 poses."""
+    from robots.delta import DeltaRobot
+
+    m = MechanismModel(HERE / "delta.toml")
+    r = DeltaRobot()
+    poses = r.workspace.latin_hypercube(50, seed=1)
+    S, H = m.sensitivity(poses), r.sensitivity(poses)
+    hn = list(r.source_names)
+    cols = [hn.index("q5_" + n[2] if n.startswith("5_") else n) for n in m.source_names]
+    assert len(cols) == 23
+    assert np.abs(S[:, :3] - H[:, :3, cols]).max() <= 1e-9 * np.abs(H[:, :3]).max()
+    assert check_robot(m)["fd_relative_mismatch"] < 1e-6
+
+
+def test_delta_rod1_parameters_count_half_at_the_midpoint_closure():
+    """robots/delta.py closes each leg at the midpoint of its two rods' ends, so a rod-1 error
+    (alpha3 -- which enters Tab. 2 as -(pi/2 + dalpha3) --, q3, q4) moves the platform by half of
+    what it does when rod 1 alone carries the leg; d moves neither (the parallelogram stays one)."""
+    from robots.delta import DeltaRobot
+
+    m = MechanismModel(HERE / "delta.toml", sources=["alpha3_?", "3_?.theta", "4_?.theta", "d_?"])
+    r = DeltaRobot()
+    poses = r.workspace.latin_hypercube(20, seed=2)
+    S, H = m.sensitivity(poses), r.sensitivity(poses)
+    hn = list(r.source_names)
+    scale = np.abs(H[:, :3]).max()
+    for c, name in enumerate(m.source_names):
+        if name.startswith("alpha3"):
+            expect, factor = name, -0.5
+        elif name.startswith("d_"):
+            expect, factor = name, 0.0
+        else:
+            expect, factor = f"q{name[0]}_{name[2]}", 0.5
+        h = H[:, :3, hn.index(expect)]
+        assert np.abs(factor * S[:, :3, c] - h).max() <= 1e-9 * scale, name
+        if factor == 0.0:
+            assert np.abs(S[:, :3, c]).max() <= 1e-9 * scale

@@ -58,3 +58,45 @@ def test_urdf_errors_name_the_field(tmp_path):
     with pytest.raises(ValidationError, match="urdf"):
         mechanism_from_dict({"urdf": str(tmp_path / "missing.urdf"), "tip": "tool0",
                              "end_effector": {"coordinates": [{"name": "x", "axis": "x", "low": 0.3, "high": 0.5}]}})
+
+
+def test_study_file_with_urdf_in_the_robot_table(tmp_path):
+    """[robot] urdf = ... with the description inline: evotol run end to end on the UR5."""
+    import json
+
+    from evotol.studyfile import run_study_file
+
+    (tmp_path / "study.toml").write_text(f'''name = "ur5_inline"
+[robot]
+urdf = "{UR5}"
+tip = "tool0"
+sources = ["elbow_joint_z", "wrist_1_joint_z", "shoulder_lift_joint", "elbow_joint"]
+[robot.end_effector]
+coordinates = [
+  {{ name = "x", axis = "x", low = 0.35, high = 0.45 }},
+  {{ name = "y", axis = "y", low = -0.05, high = 0.05 }},
+  {{ name = "z", axis = "z", low = 0.25, high = 0.35 }},
+]
+orientation = [["x", "pi"]]
+[robot.assembly]
+pose = [0.4, 0.0, 0.3]
+joints = {{ shoulder_lift_joint = -1.2, elbow_joint = 1.6, wrist_1_joint = -1.9, wrist_2_joint = -1.57 }}
+[poses]
+grid = [2, 2, 2]
+[requirement]
+position = 5e-4
+[cost.default]
+model = "exponential"
+a0 = 1.9
+a1 = 0.5
+scale = 1e-5
+[methods]
+optimum = {{}}
+[verify]
+n_samples = 10
+''')
+    summary = run_study_file(tmp_path / "study.toml", out=tmp_path)
+    data = json.loads(Path(summary["json"]).read_text())
+    opt = data["results"]["optimum"]
+    assert set(opt["tolerances"]) == {"elbow_joint_z", "wrist_1_joint_z", "shoulder_lift_joint", "elbow_joint"}
+    assert opt["feasible"]

@@ -146,3 +146,13 @@ def test_judge_recomputes_a_design_cost_and_constraint(clutch_wc):
     assert not loose["holds_requirement"]
     far = pp.judge(opt.processes, {n: 10 * v for n, v in opt.tolerances.items()})
     assert far["outside_process_range"]
+
+
+def test_loose_requirement_is_proved_without_enumerating():
+    """Limit so loose that every source takes its cheapest process at its loosest tolerance: the
+    λ = 0 dual bound (cheapest cost per source) proves it; enumeration would solve all 81."""
+    pp = stack_problem("worst_case", n_dims=4, limit=10e-3, names=("turn", "grind", "hone"))
+    bb = allocate_process_optimum(pp)
+    cheapest = sum(min(float(p.total(p.upper)) for p in pp.processes[n]) for n in pp.names)
+    assert bb.cost == pytest.approx(cheapest, rel=1e-12)
+    assert bb.n_convex_solves <= 2

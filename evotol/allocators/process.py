@@ -323,8 +323,8 @@ class _DualTables:
         self.pp, self.rows, self.scales = pp, rows, scales
         self.tables: list[tuple[np.ndarray, np.ndarray]] = []   # (M (s, j, p), offset (s,))
 
-    def add(self, lam: np.ndarray, mu: np.ndarray) -> None:
-        pp, s = self.pp, self.scales
+    def add(self, lam: np.ndarray, mu: np.ndarray, scales: np.ndarray | None = None) -> None:
+        pp, s = self.pp, (self.scales if scales is None else np.asarray(scales, dtype=float))
         w = self.rows.A.T @ lam if lam.size else np.zeros(pp.n_sources)
         v = self.rows.B.T @ mu if mu.size else np.zeros(pp.n_sources)
         P = pp.lo.shape[1]
@@ -395,6 +395,9 @@ def allocate_process_optimum(pp: ProcessProblem, method: str = "branch_and_bound
     tables = None
     if method == "branch_and_bound":
         tables = _DualTables(pp, rows, np.geomspace(1e-4, 1e4, 81))
+        # λ = 0: the cheapest tolerance per source, ignoring the requirement (prunes everything when
+        # the requirement is loose and the leaf multipliers are all zero)
+        tables.add(np.zeros(rows.A.shape[0]), np.zeros(rows.B.shape[0]), scales=[1.0])
 
     def offer(choice, leaf):
         cost, t, cert, sub = leaf

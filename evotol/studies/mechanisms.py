@@ -7,7 +7,8 @@ nonlinear loop closure (``fd_rel_error``), the largest relative difference from 
 model where there is one (``builtin_rel_diff``: the 5-bar's sensitivities vs
 ``robots.fivebar.FiveBarGeometric`` (Deng 2012 eq. IV.43) at 50 poses and its certified clearance
 maxima vs ``FiveBar().clearance_mechanism()``; the IRSBot-2's inverse geometry and certified
-clearance maxima vs ``robots.irsbot2``), and the wall time. For the 5-bar, ``p_max_mm`` and
+clearance maxima vs ``robots.irsbot2``; the 3-UCR's 21 columns vs ``robots.ucr3``; the Delta's
+position rows for the 23 parameters both rods share vs ``robots.delta``), and the wall time. For the 5-bar, ``p_max_mm`` and
 ``r_max_rad`` at pose (0, 70) mm with the thesis's clearances (all b 0.1 mm, beta_xy 0.01 rad,
 passive beta_z 0.2 rad, actuated 0), each with its certified upper bound, and the time of the
 certified clearance map from the description relative to the hand-written model.
@@ -75,7 +76,39 @@ def _irsbot2(model, cfg) -> dict:
                         "compared_with": "robots.irsbot2 (eqs. II.5-II.35, Tab. VI.3 clearances) at (0, -50) mm"}}
 
 
-BUILTIN = {"5-bar": _fivebar, "IRSBot-2": _irsbot2}
+def _ucr3(model, cfg) -> dict:
+    from robots.ucr3 import UCR3
+
+    r = UCR3()
+    poses = r.workspace.latin_hypercube(50, seed=cfg["seed"])
+    S, H = model.sensitivity(poses), r.sensitivity(poses)
+    names = list(model.source_names)
+    cols = [("l1", 1), ("l2", 1), ("l3", 1)]
+    cols += [(f"U{i}a.{k}", 1) for i in (1, 2, 3) for k in ("d", "b")]
+    cols += [(c, 1) for i in (1, 2, 3) for c in (f"U{i}a.r", f"U{i}b.d")]
+    cols += [(f"P{i}.{k}", -1) for i in (1, 2, 3) for k in ("d", "r")]
+    D = np.stack([sg * S[:, :, names.index(c)] for c, sg in cols], -1)
+    rel = _rel(D, H)
+    return {"builtin_rel_diff": rel,
+            "builtin": {"sensitivity_rel_diff_50_poses_21_columns": rel,
+                        "compared_with": "robots.ucr3 (verified eq. 10; clearance disks = pairs of DH entries)"}}
+
+
+def _delta(model, cfg) -> dict:
+    from robots.delta import DeltaRobot
+
+    r = DeltaRobot()
+    poses = r.workspace.latin_hypercube(50, seed=cfg["seed"])
+    S, H = model.sensitivity(poses), r.sensitivity(poses)
+    hn = list(r.source_names)
+    cols = [hn.index("q5_" + n[2] if n.startswith("5_") else n) for n in model.source_names]
+    rel = _rel(S[:, :3], H[:, :3, cols])
+    return {"builtin_rel_diff": rel,
+            "builtin": {"position_rows_rel_diff_50_poses_shared_parameters": rel, "n_compared": len(cols),
+                        "compared_with": "robots.delta (Brahmia 2023; parameters both rods share)"}}
+
+
+BUILTIN = {"5-bar": _fivebar, "IRSBot-2": _irsbot2, "3-UCR": _ucr3, "Delta": _delta}
 
 
 def compute(cfg: dict) -> StudyResult:

@@ -45,6 +45,15 @@ def _rot_y(a):
 _AXIS_ROT["y"] = _rot_y
 
 
+def _cross(a, b):
+    """Row-wise cross product of (n, 3) arrays (np.cross is slow for small rows)."""
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
 @dataclass
 class State:
     """Kinematic state at ``n`` configurations: world transforms, entry derivatives, entry twists."""
@@ -177,16 +186,30 @@ class Kinematics:
                 vals.append(np.broadcast_to(np.asarray(v, float), (n,)))
             Ta = world[f.antecedent]
             g_, b_, al, d_, th, r_ = vals
-            G1 = Ta @ rot_z(g_) @ trans(z=b_)
-            G2 = G1 @ rot_x(al) @ trans(x=d_)
-            world[fname] = G2 @ rot_z(th) @ trans(z=r_)
+            # closed form of Rot(z,g) Trans(z,b) Rot(x,al) Trans(x,d) Rot(z,th) Trans(z,r)
+            cg, sg, ca, sa, ct, st_ = np.cos(g_), np.sin(g_), np.cos(al), np.sin(al), np.cos(th), np.sin(th)
+            R1 = np.empty((n, 3, 3))                      # Rot(z,g) Rot(x,al)
+            R1[:, 0, 0], R1[:, 0, 1], R1[:, 0, 2] = cg, -sg * ca, sg * sa
+            R1[:, 1, 0], R1[:, 1, 1], R1[:, 1, 2] = sg, cg * ca, -cg * sa
+            R1[:, 2, 0], R1[:, 2, 1], R1[:, 2, 2] = 0.0, sa, ca
+            L = np.zeros((n, 4, 4))
+            L[:, :3, 0] = R1[:, :, 0] * ct[:, None] + R1[:, :, 1] * st_[:, None]
+            L[:, :3, 1] = -R1[:, :, 0] * st_[:, None] + R1[:, :, 1] * ct[:, None]
+            L[:, :3, 2] = R1[:, :, 2]
+            p2 = np.stack([d_ * cg, d_ * sg, b_], axis=1)  # origin after Trans(x, d)
+            L[:, :3, 3] = p2 + r_[:, None] * R1[:, :, 2]
+            L[:, 3, 3] = 1.0
+            world[fname] = Ta @ L
             if twists:
-                za, pa = Ta[:, :3, 2], Ta[:, :3, 3]
-                x1, p1 = G1[:, :3, 0], G1[:, :3, 3]
-                z2, p2 = G2[:, :3, 2], G2[:, :3, 3]
+                Ra, pa = Ta[:, :3, :3], Ta[:, :3, 3]
+                za = Ra[:, :, 2]
+                x1 = Ra[:, :, 0] * cg[:, None] + Ra[:, :, 1] * sg[:, None]
+                p1 = pa + za * b_[:, None]
+                z2 = world[fname][:, :3, 2]
+                q2 = pa + np.einsum("nij,nj->ni", Ra, p2)
                 zero = np.zeros((n, 3))
-                for k, (w, v) in zip(DH_FIELDS, ((za, np.cross(pa, za)), (zero, za), (x1, np.cross(p1, x1)),
-                                                 (zero, x1), (z2, np.cross(p2, z2)), (zero, z2))):
+                for k, (w, v) in zip(DH_FIELDS, ((za, _cross(pa, za)), (zero, za), (x1, _cross(p1, x1)),
+                                                 (zero, x1), (z2, _cross(q2, z2)), (zero, z2))):
                     tw[(fname, k)] = np.concatenate([w, v], axis=1)
         return State(n, world, grads, tw)
 
@@ -208,7 +231,10 @@ class Kinematics:
         p = st.world[frame][:, :3, 3]
         out = np.empty_like(S)
         out[:, 3:] = S[:, :3]
-        out[:, :3] = S[:, 3:] + np.cross(S[:, :3], p[:, None, :], axisa=1, axisb=2, axisc=1)
+        w, v = S[:, :3], S[:, 3:]
+        out[:, 0] = v[:, 0] + w[:, 1] * p[:, 2, None] - w[:, 2] * p[:, 1, None]     # v0 + omega x p
+        out[:, 1] = v[:, 1] + w[:, 2] * p[:, 0, None] - w[:, 0] * p[:, 2, None]
+        out[:, 2] = v[:, 2] + w[:, 0] * p[:, 1, None] - w[:, 1] * p[:, 0, None]
         return out
 
     # ------------------------------------------------------------------ loop equations
@@ -277,7 +303,12 @@ class Kinematics:
             res = np.abs(Fs).max(axis=1) if Fs.shape[1] else np.zeros(n)
             if np.all(res < tol) or it == max_iter:
                 break
-            step = np.einsum("nij,nj->ni", np.linalg.pinv(Js, rcond=1e-12), Fs)
+            # Gauss-Newton step from the damped normal equations (batched small solves; the
+            # damping only matters where some unknowns do not enter, e.g. an idle passive joint)
+            JtJ = np.einsum("nki,nkj->nij", Js, Js)
+            lam = 1e-13 * np.maximum(np.einsum("nii->n", JtJ), 1e-300)
+            JtJ[:, np.arange(len(idx)), np.arange(len(idx))] += lam[:, None]
+            step = np.linalg.solve(JtJ, np.einsum("nki,nk->ni", Js, Fs)[..., None])[..., 0]
             for c, x in enumerate(names):
                 q[x] = q[x] - step[:, c]
         return q, res
@@ -320,7 +351,7 @@ class Kinematics:
             Rt = self._target_orientation(target)
             # intermediate steps only track the branch (loose tolerance); the last one converges fully
             q, res = self._newton(q, self.variables, lambda q: self._ig_system(q, target, Rt), n,
-                                  8 if s < 1 else 40, tol=1e-6 if s < 1 else 1e-12)
+                                  3 if s < 1 else 40, tol=1e-6 if s < 1 else 1e-12)
         bad = ~(res < 1e-9)
         if bad.any():
             raise KinematicsError(f"{self.mech.name}: the loops cannot close at pose {poses[bad][0].tolist()} "

@@ -25,7 +25,7 @@ from evotol.errors import KinematicsError, ValidationError
 from robots.base import RobotErrorModel, SourceSpec, Workspace
 from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, rotation_vector
 from robots.clearance.model import Chain, ClearanceMechanism, Joint
-from robots.mechanism.description import LENGTH_FIELDS, UNIT_SCALE, Mechanism, load_mechanism
+from robots.mechanism.description import LENGTH_FIELDS, UNIT_SCALE, Mechanism, load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import IN_PLANE, Kinematics
 
 OUT_OF_PLANE_FIELDS = ("b", "alpha", "r")
@@ -260,7 +260,13 @@ def resolve_description(name, base_dir=None) -> Path:
 
 def model_from_table(table: dict, base_dir=None) -> MechanismModel:
     """The ``[robot]`` table of a study file: ``mechanism = "file.toml"`` (optionally ``sources =
-    [...]`` patterns overriding the file's ``[tolerances]``)."""
+    [...]`` patterns overriding the file's ``[tolerances]``), or ``urdf = "arm.urdf"`` with the
+    rest of a description inline (``tip``, ``[robot.end_effector]``, ``[robot.assembly]``,
+    ``[robot.tolerances]``)."""
+    if "urdf" in table:
+        spec = {k: v for k, v in table.items() if k != "sources"}
+        where = str(Path(base_dir) / "study.toml") if base_dir else ""
+        return MechanismModel(mechanism_from_dict(spec, path=where), sources=table.get("sources"))
     extra = set(table) - {"mechanism", "sources"}
     if extra:
         k = sorted(extra)[0]
