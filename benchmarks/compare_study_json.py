@@ -4,7 +4,7 @@
 
 Prints every number that differs beyond ``rtol`` (relative) with its JSON path, the keys only one
 side has, and the count of numbers compared. Keys that are wall times (any path component
-containing ``seconds``, ``speedup`` or ``entry/s``) are skipped by default: they are measurements
+containing ``seconds``, ``speedup`` or ``timing``) are skipped by default: they are measurements
 of this machine's load, not results.
 """
 from __future__ import annotations
@@ -14,11 +14,11 @@ import json
 import math
 import sys
 
-TIMING = ("seconds", "speedup", "seconds_per_pose")
+TIMING = ("seconds", "speedup", "timing")
 
 
 def walk(a, b, path, out, rtol, ignore):
-    if any(t in str(path[-1]) for t in ignore) if path else False:
+    if any(t in str(p) for p in path for t in ignore):
         return
     if isinstance(a, dict) and isinstance(b, dict):
         for k in sorted(set(a) | set(b), key=str):

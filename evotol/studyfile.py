@@ -27,7 +27,8 @@ from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
-from evotol.reporting import Report, write_json
+from evotol.reporting import Report
+from evotol.studies import StudyResult, write_outputs
 from evotol.units import units_block
 from robots import registry
 from robots.assembly import assembly_from_spec
@@ -248,7 +249,6 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
         fig = go.Figure(go.Scatter(x=front.error, y=front.cost, mode="markers", name="NSGA-II"))
         fig.update_layout(title="Cost vs. normalised error", xaxis_title="max error / bound", yaxis_title="cost")
         rep.figure(fig)
-    html = rep.write(out / f"{name}.html")
-    js = write_json(out / f"{name}.json", summary)
-    summary.update({"html": str(html), "json": str(js)})
+    paths = write_outputs(name, out, StudyResult(summary), rep)
+    summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary

@@ -23,15 +23,15 @@ in :func:`IRSBot2.loop_residual`):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
 from robots.base import Workspace
-from robots.geometry import largest_centred_rectangle, largest_rectangle
 from robots.clearance.kinematics import DHFrame, DHTree
-from robots.clearance.model import Chain, ClearanceBounds, ClearanceMechanism, Joint, twist_between
+from robots.clearance.model import Chain, ClearanceBounds, ClearanceMechanism, Joint
+from robots.geometry import largest_centred_rectangle, largest_rectangle
 
 MM = 1e-3
 PI = np.pi

@@ -45,7 +45,7 @@ def no_computation(monkeypatch):
     monkeypatch.setattr(evotol.studyfile, "METHODS", {m: _sentinel_like(f) for m, f in evotol.studyfile.METHODS.items()})
     monkeypatch.setattr(evotol.studyfile, "allocate_nsga2", _sentinel_like(evotol.studyfile.allocate_nsga2))
     monkeypatch.setattr(evotol.studyfile, "verify", _sentinel_like(evotol.studyfile.verify))
-    fake = {n: dataclasses.replace(s, compute=_sentinel, legacy_run=_sentinel if s.legacy_run else None)
+    fake = {n: dataclasses.replace(s, compute=_sentinel)
             for n, s in evotol.studies.available().items()}
     monkeypatch.setattr(evotol.studies, "available", lambda: fake)
 

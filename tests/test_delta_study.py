@@ -12,7 +12,7 @@ from robots.delta import DeltaRobot, cylinder_poses
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("delta")
-    return out, study.run(out, quick=True, seed=0)
+    return out, study.STUDY.run(out, quick=True, seed=0)
 
 
 def test_study_is_registered_and_writes_html_and_json(quick):
@@ -27,6 +27,13 @@ def test_study_is_registered_and_writes_html_and_json(quick):
     assert len(data["tolerance_intervals"]) == 47
     assert all(lo <= 0 <= hi for lo, hi in data["tolerance_intervals"].values())
     assert set(data["verification_error_mm"]) == set(study.VERIFICATION_CASES)
+
+
+def test_report_is_drawn_from_the_json_alone(quick):
+    """render() reads only the written JSON: redrawing from it gives the same page, byte for byte."""
+    out, _ = quick
+    d = json.loads((out / "brahmia2023-delta.json").read_text())
+    assert study.STUDY.render(studies.StudyResult(d)).render() == (out / "brahmia2023-delta.html").read_text(encoding="utf-8")
 
 
 def test_sec_4_1_verification_below_0_2_mm_in_all_cases(quick):

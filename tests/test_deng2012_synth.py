@@ -85,35 +85,31 @@ def test_type2_measure_is_det_A_of_eq_II_38():
     np.testing.assert_allclose(detA[ok], -(2 * L) ** 2 * g["sin_t2"][ok], atol=1e-15)
 
 
-def test_largest_rectangle_matches_brute_force():
+def _largest_by_brute_force(m, centre=None) -> int:
+    """Largest all-True rectangle (cell spans) by trying every one; ``centre``: only the rectangles
+    symmetric about that column."""
+    best = 0
+    for r0, r1 in itertools.combinations_with_replacement(range(m.shape[0]), 2):
+        for c0, c1 in itertools.combinations_with_replacement(range(m.shape[1]), 2):
+            if (centre is None or c0 + c1 == 2 * centre) and m[r0:r1 + 1, c0:c1 + 1].all():
+                best = max(best, (r1 - r0) * (c1 - c0))
+    return best
+
+
+@pytest.mark.parametrize("centre", [None, 5])
+def test_largest_rectangle_matches_brute_force(centre):
+    """robots.geometry: the histogram algorithm (and its centred reduction) against every rectangle."""
     rng = np.random.default_rng(3)
     for _ in range(30):
-        m = rng.random((7, 9)) < 0.75
-        best = 0
-        for r0, r1 in itertools.combinations_with_replacement(range(7), 2):
-            for c0, c1 in itertools.combinations_with_replacement(range(9), 2):
-                if m[r0:r1 + 1, c0:c1 + 1].all():
-                    best = max(best, (r1 - r0) * (c1 - c0))
-        area, r0, r1, c0, c1 = largest_rectangle(m)
-        assert area == best
+        m = rng.random((8, 11)) < 0.8
+        if centre is None:
+            area, r0, r1, c0, c1 = largest_rectangle(m)
+        else:
+            area, r0, r1, half = largest_centred_rectangle(m, centre)
+            c0, c1 = centre - half, centre + half
+        assert area == _largest_by_brute_force(m, centre)
         if area:
             assert m[r0:r1 + 1, c0:c1 + 1].all() and (r1 - r0) * (c1 - c0) == area
-
-
-def test_centred_rectangle_matches_brute_force():
-    """Largest rectangle symmetric about a column, against trying every (rows, half-width)."""
-    rng = np.random.default_rng(5)
-    for _ in range(30):
-        m = rng.random((8, 11)) < 0.8
-        best = 0
-        for r0, r1 in itertools.combinations_with_replacement(range(8), 2):
-            for hw in range(6):
-                if m[r0:r1 + 1, 5 - hw:5 + hw + 1].all():
-                    best = max(best, 2 * hw * (r1 - r0))
-        area, r0, r1, hw = largest_centred_rectangle(m, 5)
-        assert area == best
-        if area:
-            assert m[r0:r1 + 1, 5 - hw:5 + hw + 1].all() and 2 * hw * (r1 - r0) == area
 
 
 def test_sub_workspace_is_symmetric_singularity_free_and_grows_with_the_links():

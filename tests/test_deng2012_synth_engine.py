@@ -77,7 +77,7 @@ def test_never_below_the_thesis_multistart_method(ev):
 
 
 def test_quick_study_writes_json_entries_and_report(tmp_path):
-    s = ts.run(tmp_path, quick=True, workers=1, progress=False)
+    s = ts.STUDY.run(tmp_path, quick=True, workers=1, progress=False)
     saved = json.loads((tmp_path / f"{ts.NAME}.json").read_text())
     df = pd.read_parquet(tmp_path / saved["files"]["entries_parquet"])
     # 256 distinct factorial entries, each evaluated once
@@ -93,8 +93,13 @@ def test_quick_study_writes_json_entries_and_report(tmp_path):
     assert any("Δb_z" in line for line in saved["findings"])
     html = (tmp_path / f"{ts.NAME}.html").read_text()
     assert "Fig. VII.5" in html and 'id="pc-count-n"' in html
+    # render() reads only the written JSON and tables: redrawing from them gives the same page
+    from evotol.studies import StudyResult
+
+    tables = {k: pd.read_parquet(tmp_path / f"{ts.NAME}_{k}.parquet") for k in ("entries", "pareto")}
+    assert ts.STUDY.render(StudyResult(saved, tables)).render() == html
     # resuming: a second run reuses every chunk
-    s2 = ts.run(tmp_path, quick=True, workers=1, progress=False)
+    s2 = ts.STUDY.run(tmp_path, quick=True, workers=1, progress=False)
     assert s2["evaluation"]["chunks_resumed"] == s2["evaluation"]["chunks"]
 
 

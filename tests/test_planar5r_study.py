@@ -124,3 +124,11 @@ def test_worst_case_counterpart_through_the_core_holds_for_sampled_extreme_error
     E = np.concatenate(cols, axis=1)
     dp = robot.pose_error(poses, np.broadcast_to(E, (len(poses),) + E.shape))
     assert np.max(np.hypot(dp[..., 0], dp[..., 1])) <= radius * 1.01      # linearisation error < 1 %
+
+
+def test_report_is_drawn_from_the_json_alone(quick_run):
+    """render() reads only the written JSON: redrawing from it gives the same page, byte for byte."""
+    out, _ = quick_run
+    d = json.loads((out / "laramolina2019-5r.json").read_text())
+    page = studies.get("laramolina2019-5r").render(studies.StudyResult(d)).render()
+    assert page == (out / "laramolina2019-5r.html").read_text()

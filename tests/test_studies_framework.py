@@ -63,8 +63,6 @@ def test_reproduce_passes_out_dir_to_compute(tmp_path):
 def test_every_study_declares_the_protocol():
     for name, study in studies.available().items():
         assert study.seed_paper and study.title, name
-        if study.legacy_run is not None:   # not yet split (transition)
-            continue
         assert callable(study.compute) and callable(study.render), name
         assert "seed" in study.config, name
         assert set(study.quick) <= set(study.config), (name, sorted(set(study.quick) - set(study.config)))

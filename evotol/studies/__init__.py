@@ -13,20 +13,25 @@ two pure functions:
 (``--quick``; used by tests) and by the caller's overrides (``seed``, ``workers``, ...). The
 framework adds ``out_dir`` (where the resumable design studies keep their chunk store).
 
-Files are written in one place, :func:`reproduce`: ``OUT/NAME.html``, ``OUT/NAME.json`` and
-``OUT/NAME_<table>.csv`` / ``.parquet`` for every table. ``evotol reproduce NAME --out DIR`` and
-``Study.run`` both go through it.
+Files are written in one place, :func:`write_outputs`: ``OUT/NAME.html``, ``OUT/NAME.json`` and
+``OUT/NAME_<table>.csv`` / ``.parquet`` for every table. :func:`reproduce` (behind
+``evotol reproduce NAME --out DIR`` and ``Study.run``) and ``evotol run STUDY.toml``
+(:mod:`evotol.studyfile`) both go through it. :func:`reproduce` renders the report from the
+summary read back from the written JSON: a page shows nothing its JSON does not hold.
 """
 from __future__ import annotations
 
 import importlib
+import json
 import pkgutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
+from evotol.doe import save_entries
 from evotol.errors import ValidationError
+from evotol.reporting.html import write_json
 
 
 @dataclass
@@ -43,13 +48,11 @@ class Study:
 
     name: str
     title: str
-    compute: Callable[[dict], StudyResult] | None = None
-    render: Callable[[StudyResult], Any] | None = None
-    config: Mapping[str, Any] = field(default_factory=dict)
+    compute: Callable[[dict], StudyResult]
+    render: Callable[[StudyResult], Any]
+    config: Mapping[str, Any]
     quick: Mapping[str, Any] = field(default_factory=dict)
     seed_paper: str = ""
-    #: transition only: a study not yet split into compute/render writes its own files
-    legacy_run: Callable[..., dict] | None = None
 
     def make_config(self, quick: bool = False, **overrides) -> dict:
         """The full-run config, updated by the quick config (``quick=True``) and then ``overrides``."""
@@ -65,31 +68,40 @@ class Study:
 
     def run(self, out_dir, quick: bool = False, seed: int = 0, **overrides) -> dict:
         """Compute, render and write the study into ``out_dir``; returns the JSON summary."""
-        if self.legacy_run is not None:
-            return self.legacy_run(out_dir, quick=quick, seed=seed, **overrides)
         return reproduce(self, out_dir, self.make_config(quick, seed=seed, **overrides)).summary
 
 
 def reproduce(study: Study, out_dir, config: dict) -> StudyResult:
     """Run ``study`` with ``config`` and write its report, JSON and tables into ``out_dir``.
 
-    The one place where study files are written. ``summary["seconds"]`` is set here when the
-    study did not time itself (wall time of ``compute``).
+    ``summary["seconds"]`` is set here when the study did not time itself (wall time of
+    ``compute``). The report is rendered from the summary *as written to JSON* (read back), so
+    a page can only show what its JSON holds. Returns the result with that summary.
     """
-    from evotol.doe import save_entries
-    from evotol.reporting.html import write_json
-
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     config = {**config, "out_dir": str(out_dir)}
     t0 = time.perf_counter()
     result = study.compute(config)
     result.summary.setdefault("seconds", time.perf_counter() - t0)
-    for key, table in result.tables.items():
-        save_entries(table, out_dir / f"{study.name}_{key}")
-    study.render(result).write(out_dir / f"{study.name}.html")
-    write_json(out_dir / f"{study.name}.json", result.summary)
+    paths = write_outputs(study.name, out_dir, result)
+    result = StudyResult(json.loads(paths["json"].read_text(encoding="utf-8")), result.tables)
+    study.render(result).write(paths["html"])
     return result
+
+
+def write_outputs(name: str, out_dir, result: StudyResult, report=None) -> dict[str, Path]:
+    """The one writer of study files: ``NAME_<table>.csv``/``.parquet`` for every table,
+    ``NAME.json`` and, given a ``report``, ``NAME.html``. Returns the paths by kind (``json``,
+    ``html`` -- also when no report was given --, ``<table>_parquet``, ``<table>_csv``)."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = {}
+    for key, table in result.tables.items():
+        for kind, path in save_entries(table, out_dir / f"{name}_{key}").items():
+            paths[f"{key}_{kind}"] = path
+    paths["json"] = write_json(out_dir / f"{name}.json", result.summary)
+    paths["html"] = report.write(out_dir / f"{name}.html") if report is not None else out_dir / f"{name}.html"
+    return paths
 
 
 def available() -> dict[str, Study]:

@@ -21,12 +21,11 @@ poses, verifies them by Monte Carlo through the nonlinear model, and prices the 
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import Bounds, minimize
 
-from evotol.studies import Study
+from evotol.studies import Study, StudyResult
 from evotol.studies._brahmia2023_delta_data import TABLE_3, TABLE_A, TABLE_A_TESTS
 from robots.delta import ANGULAR, LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot
 
@@ -306,8 +305,12 @@ def _kinematics_checks(robot: DeltaRobot, seed: int) -> dict:
             "jacobian_fd_relative_mismatch": fd["fd_relative_mismatch"], "n_poses": int(len(P))}
 
 
-def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
-    """Reproduce Brahmia et al. 2023 and allocate its tolerances by cost; writes HTML + JSON."""
+CONFIG = {"seed": 0}
+QUICK: dict = {}   # the quick run's sizes are set by config["quick"] below
+
+
+def compute(config: dict) -> StudyResult:
+    """Reproduce Brahmia et al. 2023 and allocate its tolerances by cost (JSON-ready summary)."""
     from evotol.allocators import allocate_ga, allocate_nsga2, allocate_optimum, allocate_sensitivity
     from evotol.montecarlo import verify
     from evotol.nonlinear import verify_nonlinear
@@ -316,7 +319,7 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
     from robots.delta import cylinder_poses
 
     t_start = time.perf_counter()
-    out_dir = Path(out_dir)
+    quick, seed = config["quick"], config["seed"]
     robot = DeltaRobot()
     timing: dict[str, float] = {}
 
@@ -448,21 +451,24 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
         "cost_model": {fam: repr(m) for fam, m in family_cost_models().items()},
         "timing_s": timing,
     }
+    summary["figures"] = {
+        "step2_runs": [{"posture": r["posture"], "test": r["test"], "errors": np.asarray(r["errors"]).tolist(),
+                        "residual_mm": r["residual_mm"], "nit": r["nit"]} for r in variants[headline]["runs"]],
+        "rule_on_tables_a_si": [ta_lo.tolist(), ta_hi.tolist()],
+    }
     summary["seconds"] = round(time.perf_counter() - t_start, 2)
-    from evotol.reporting.html import write_json
-
-    _write_report(out_dir / f"{NAME}.html", summary, variants, ver_t3, ver_ta, (ta_lo, ta_hi), full, front,
-                  front_err_mm, opt, sens)
-    summary["seconds"] = round(time.perf_counter() - t_start, 2)
-    write_json(out_dir / f"{NAME}.json", summary)
-    return summary
+    return StudyResult(summary)
 
 
-def _write_report(path: Path, s: dict, variants, ver_t3, ver_ta, ta, full, front, front_err_mm, opt, sens) -> None:
+def render(result: StudyResult):
+    """Model checks, Tables A/3 and Fig. 7 reproduced, and the cost-optimal allocation."""
     import plotly.graph_objects as go
 
     from evotol.reporting.html import Report, table_html
 
+    s = result.summary
+    fg = s["figures"]
+    ta = tuple(np.asarray(x, float) for x in fg["rule_on_tables_a_si"])
     names15 = list(POSTURES_MM)
     head = s["tolerance_intervals_variant"]
     rep = Report("Delta robot: geometric-tolerance synthesis (Brahmia et al. 2023) and cost-optimal allocation",
@@ -495,7 +501,7 @@ def _write_report(path: Path, s: dict, variants, ver_t3, ver_ta, ta, full, front
              "(axis, +x, +y, −x, −y at radius 100 mm) × three heights (250, 375, 500 mm).")
 
     rep.heading("Step 2: problem (12)–(13) per posture and imposed displacement (like Tables A1–A2)")
-    runs = variants[head]["runs"]
+    runs = fg["step2_runs"]
     hdr = ["parameter", "unit"] + [f"{r['posture']} {r['test']}" for r in runs]
     rows = [[n, _paper_units(n)] + [float(r["errors"][j] * TO_PAPER[j]) for r in runs] for j, n in enumerate(PARAMETER_NAMES)]
     rows.append(["shortfall |achieved − ΔP|", "mm"] + [r["residual_mm"] for r in runs])
@@ -507,8 +513,8 @@ def _write_report(path: Path, s: dict, variants, ver_t3, ver_ta, ta, full, front
 
     rep.heading("Step 3: tolerance intervals by the rule of Fig. 4 (Table 3)")
     t3 = table3_si()
-    lo_o, hi_o = variants[head]["lo"], variants[head]["hi"]
-    rows = [[n, _paper_units(n), t3[0][j] * TO_PAPER[j], t3[1][j] * TO_PAPER[j], lo_o[j] * TO_PAPER[j], hi_o[j] * TO_PAPER[j],
+    ours = s["tolerance_intervals"]
+    rows = [[n, _paper_units(n), t3[0][j] * TO_PAPER[j], t3[1][j] * TO_PAPER[j], ours[n][0], ours[n][1],
              ta[0][j] * TO_PAPER[j], ta[1][j] * TO_PAPER[j]] for j, n in enumerate(PARAMETER_NAMES)]
     rep.text("'rule on printed Tables A' applies the Fig. 4 rule to the paper's own Tables A1–A2: it gives the printed "
              "Table 3 only for ΔRa, ΔRb, Δd1, ΔLa1, ΔLb1 and Δθ3.")
@@ -526,17 +532,18 @@ def _write_report(path: Path, s: dict, variants, ver_t3, ver_ta, ta, full, front
     rep.heading("Verification at the 15 postures, 4 cases (Fig. 7)")
     fig = go.Figure()
     colors = ["green", "blue", "black", "red"]
-    for (case, v), col in zip(variants[head]["verification"].items(), colors):
-        fig.add_trace(go.Scatter(x=names15, y=v["closed"], mode="lines+markers", name=f"ours · {case}", line=dict(color=col)))
+    ver_ours, ver_t3 = s["verification_error_mm"], s["table3_verification_error_mm"]
+    for (case, v), col in zip(ver_ours.items(), colors):
+        fig.add_trace(go.Scatter(x=names15, y=v, mode="lines+markers", name=f"ours · {case}", line=dict(color=col)))
     for (case, v), col in zip(ver_t3.items(), colors):
-        fig.add_trace(go.Scatter(x=names15, y=v["closed"], mode="lines", name=f"paper Table 3 · {case}",
+        fig.add_trace(go.Scatter(x=names15, y=v, mode="lines", name=f"paper Table 3 · {case}",
                                  line=dict(color=col, dash="dot")))
     fig.add_hline(y=REQUIRED_MM, line=dict(color="grey", dash="dash"), annotation_text="0.2 mm")
     fig.update_layout(xaxis_title="posture", yaxis_title="position error |P_e − P| (mm)", height=480,
                       legend=dict(font=dict(size=10)))
     rep.figure(fig)
-    rows = [[case] + list(v["closed"]) for case, v in variants[head]["verification"].items()]
-    rows += [[f"Table 3 · {case}"] + list(v["closed"]) for case, v in ver_t3.items()]
+    rows = [[case] + list(v) for case, v in ver_ours.items()]
+    rows += [[f"Table 3 · {case}"] + list(v) for case, v in ver_t3.items()]
     rep.html('<div style="overflow-x:auto">' + table_html(rows, ["case"] + names15, digits=3) + "</div>")
 
     rep.heading("Beyond the paper: cost-optimal allocation over the workspace")
@@ -567,7 +574,8 @@ def _write_report(path: Path, s: dict, variants, ver_t3, ver_ta, ta, full, front
              f"{cert.get('gap', float('nan')):.2e}, KKT residual {cert.get('kkt_residual', float('nan')):.2e}.")
 
     fig = go.Figure()
-    fig.add_trace(go.Scatter(x=front_err_mm, y=front.table["cost"], mode="markers", name="NSGA-II front (exact errors)",
+    fig.add_trace(go.Scatter(x=s["pareto_front"]["worst_case_error_mm"], y=s["pareto_front"]["cost"], mode="markers",
+                             name="NSGA-II front (exact errors)",
                              marker=dict(color="lightslategray")))
     marks = {"paper Table 3": "diamond", "ours: paper's method": "square", "bounds of eq. (13)": "x",
              "sensitivity": "triangle-up", "optimum": "star", "optimum at Table 3's accuracy": "star-diamond", "GA": "circle"}
@@ -583,13 +591,14 @@ def _write_report(path: Path, s: dict, variants, ver_t3, ver_ta, ta, full, front
     unit = np.where(IS_LINEAR, UM, MDEG)
     fig = go.Figure()
     fig.add_trace(go.Bar(x=list(PARAMETER_NAMES), y=t3h / unit, name="paper Table 3 (half-width)"))
-    fig.add_trace(go.Bar(x=list(PARAMETER_NAMES), y=opt.t / unit, name="optimum, 0.2 mm"))
-    fig.add_trace(go.Bar(x=list(PARAMETER_NAMES), y=sens.t / unit, name="sensitivity rule"))
+    half = {k: np.array([s["allocations"][k]["tolerances_si"][n][1] for n in PARAMETER_NAMES]) for k in ("optimum", "sensitivity")}
+    fig.add_trace(go.Bar(x=list(PARAMETER_NAMES), y=half["optimum"] / unit, name="optimum, 0.2 mm"))
+    fig.add_trace(go.Bar(x=list(PARAMETER_NAMES), y=half["sensitivity"] / unit, name="sensitivity rule"))
     fig.update_layout(barmode="group", yaxis_type="log", yaxis_title="tolerance (µm or mdeg)", height=460)
     rep.figure(fig)
     rep.text("Timing (s): " + ", ".join(f"{k} {v}" for k, v in s["timing_s"].items()))
-    rep.write(path)
+    return rep
 
 
 STUDY = Study(name=NAME, title="Delta robot geometric-tolerance synthesis (KK error model) and cost-optimal allocation",
-              legacy_run=run, seed_paper="Brahmia et al. 2023, Appl. Sci. 13:10703 (seed 000)")
+              compute=compute, render=render, config=CONFIG, quick=QUICK, seed_paper="Brahmia et al. 2023, Appl. Sci. 13:10703 (seed 000)")

@@ -34,6 +34,7 @@ from evotol import doe
 from evotol.doe import Factor, Objective
 from evotol.filtering import DesignStudy, Preset
 from evotol.studies import Study, StudyResult
+from evotol.studies._design_report import parcoords_counts, parcoords_section
 from robots.irsbot2 import IRSBot2, singularity_free_rectangle
 
 MM = 1e-3
@@ -110,44 +111,11 @@ def engine_pose_errors(robot: IRSBot2, points: np.ndarray) -> tuple[np.ndarray, 
 
 
 def engine_pose_errors_batch(robots: list, points: list) -> list[tuple[np.ndarray, np.ndarray]]:
-    """:func:`engine_pose_errors` for many designs in one engine call.
+    """:func:`engine_pose_errors` for many designs in one engine call
+    (:func:`robots.clearance.stacked.max_pose_error_stacked`: the designs share joints and chains)."""
+    from robots.clearance.stacked import max_pose_error_stacked
 
-    All designs share the joints and chains (only dimensions differ), so their per-pose maps
-    (``mech.pose_maps``) stack along the pose axis and the engine solves every (design, point)
-    case in one vectorised :func:`robots.clearance.evaluate_cases` call -- the same numbers as one
-    call per design (test), at a lower cost per case. Falls back to one call per design if the
-    maps do not stack."""
-    from dataclasses import replace
-
-    from robots.clearance import evaluate_cases
-
-    if not robots:
-        return []
-    mechs = [engine_mechanism(r) for r in robots]
-    maps = [m.pose_maps(np.asarray(pt, float)) for m, pt in zip(mechs, points)]
-
-    def same(a, b):
-        return (a.block == b.block and a.n_disk == b.n_disk and np.array_equal(a.cols, b.cols)
-                and np.array_equal(a.cone_joint, b.cone_joint) and np.array_equal(a.cone_kind, b.cone_kind)
-                and a.B.shape[1:] == b.B.shape[1:] and a.C_pos.shape[1:] == b.C_pos.shape[1:]
-                and a.C_rot.shape[1:] == b.C_rot.shape[1:])
-
-    ref = mechs[0]
-    stackable = all(len(mp) == len(maps[0]) and all(same(a, b) for a, b in zip(mp, maps[0])) for mp in maps) and \
-        all(np.array_equal(m.default_bounds(), ref.default_bounds()) for m in mechs)
-    if not stackable:
-        return [engine_pose_errors(r, pt) for r, pt in zip(robots, points)]
-    merged = [replace(pm, C_pos=np.concatenate([mp[k].C_pos for mp in maps]),
-                      C_rot=np.concatenate([mp[k].C_rot for mp in maps]),
-                      B=np.concatenate([mp[k].B for mp in maps])) for k, pm in enumerate(maps[0])]
-    n = sum(len(pt) for pt in points)
-    b = ref.default_bounds()
-    res = evaluate_cases(ref, merged, np.arange(n), np.broadcast_to(b, (n,) + b.shape))
-    out, s = [], 0
-    for pt in points:
-        out.append((res.p_max[s:s + len(pt)], res.r_max[s:s + len(pt)]))
-        s += len(pt)
-    return out
+    return max_pose_error_stacked([engine_mechanism(r) for r in robots], points)
 
 
 @dataclass(frozen=True)
@@ -243,8 +211,6 @@ def compute(config: dict) -> StudyResult:
     certified engine (tests plug in closed forms); ``out_dir`` holds the resumable chunk store."""
     from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
-    from evotol.reporting.parcoords import DEFAULT_MAX_DRAWN, drawn_lines, parcoords_frame
-
     t0 = time.perf_counter()
     quick, seed, workers = config["quick"], config["seed"], config["workers"]
     scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None   # `evotol reproduce` on a cluster
@@ -317,19 +283,13 @@ def compute(config: dict) -> StudyResult:
     findings.append(f"Ranges over our designs: p_max [{rng['p_max_mm']['min']:.3g}, {rng['p_max_mm']['max']:.3g}] mm "
                     f"(thesis [7.3, 30.6]), r_max [{rng['r_max_deg']['min']:.3g}, {rng['r_max_deg']['max']:.3g}]° "
                     f"(thesis [5.8, 24.3]), area [{rng['area_mm2']['min']:.3g}, {rng['area_mm2']['max']:.3g}] mm².")
-    # what the report's parallel coordinates show (same frame, filters and sample as add_parcoords)
-    frame = parcoords_frame(study, None, pareto)
-    shown = {p.name: study.filter(p, among=frame) for p in study.presets.values()}
-    drawn = drawn_lines(frame, _axes(f), list(study.presets.values()), study, DEFAULT_MAX_DRAWN, 0,
-                        kept={n: r.kept.index for n, r in shown.items()})
     summary = {
         "study": NAME, "quick": quick, "seed": seed, "n_designs": len(df), "n_feasible": int(df["feasible"].sum()),
         "fixed_parameters_SI": TAB_VI_4,
         "clearance_SI": {**CLEARANCE, "beta_z_active": BETA_Z_ACTIVE, "beta_z_passive": BETA_Z_PASSIVE}, "n_grid": ev.n_grid, "margin_deg": ev.margin_deg,
         "objective_ranges": {k: [v["min"], v["max"]] for k, v in rng.items()}, "thesis_ranges": THESIS_RANGES,
         "presets": {k: {"count": v.count, "ranges": v.ranges, "query": v.resolved_query} for k, v in pres.items()},
-        "presets_shown_in_report": {n: r.count for n, r in shown.items()},
-        "report_lines": {"entries": int(len(frame)), "drawn_by_default": int(len(drawn))},
+        **parcoords_counts(study, pareto, _axes(f)),
         "good_designs": good[cols].to_dict(orient="records"),
         "grid_pareto_designs": grid_front[cols].to_dict(orient="records"),
         "grid_knees": grid_knees[cols].to_dict(orient="records"),
@@ -358,7 +318,7 @@ def render(result: StudyResult):
     """Findings, Tab. VII.2 in our model, the parallel coordinates with the presets of Figs.
     VII.12-VII.16, ranges vs the thesis, the grid's Pareto designs and the NSGA-II knees."""
     from evotol.reporting.html import Report
-    from evotol.reporting.parcoords import add_parcoords, format_tick, preset_table_rows
+    from evotol.reporting.parcoords import format_tick
 
     s, df, pareto = result.summary, result.tables["entries"], result.tables["pareto"]
     f = factors()
@@ -379,12 +339,9 @@ def render(result: StudyResult):
     rep.heading("The thesis's good designs (Tab. VII.2) in our model")
     rep.table(rows, ["(l1, l2, a1, a2, p) mm", "area (mm²)", "p_max (mm)", "r_max (deg)", "kept by Fig. VII.16 filter",
                      "on our grid's Pareto front"])
-    rep.heading("Parallel coordinates")
-    rep.text("One line per design (level grid), NSGA-II Pareto designs on continuous dimensions in orange, knees in red. "
-             "Presets apply the filters of Figs. VII.12-VII.16.")
-    add_parcoords(rep, study, axes=_axes(f), color="p_max_mm", extra=pareto, div_id="pc")
-    rep.heading("Presets (Figs. VII.12-VII.16)")
-    rep.table(preset_table_rows(study), ["preset", "thesis", "query", "kept", "kept levels (mm)"])
+    parcoords_section(rep, study, pareto, _axes(f),
+                      "One line per design (level grid), NSGA-II Pareto designs on continuous dimensions in orange, "
+                      "knees in red. Presets apply the filters of Figs. VII.12-VII.16.", "Presets (Figs. VII.12-VII.16)")
     rep.heading("Objective ranges vs the thesis")
     rep.table([[c, f"[{format_tick(rng[c]['min'])}, {format_tick(rng[c]['max'])}]",
                 f"[{THESIS_RANGES[c][0]:g}, {THESIS_RANGES[c][1]:g}]" if c in THESIS_RANGES else "–"] for c in OBJECTIVES],

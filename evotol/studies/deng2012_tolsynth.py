@@ -36,7 +36,8 @@ from evotol import doe
 from evotol.doe import Factor, Objective
 from evotol.errors import EvotolError
 from evotol.filtering import DesignStudy, Preset
-from evotol.studies import Study
+from evotol.studies import Study, StudyResult
+from evotol.studies._design_report import PRESET_HEADER, parcoords_counts, parcoords_section
 
 NAME = "deng2012-tolsynth"
 MM = 1e-3
@@ -223,30 +224,41 @@ def thesis_endpoints(df: pd.DataFrame, n_sample: int = 1000) -> dict:
     return out
 
 
-def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | None = None,
-        workers: int | None = None, progress: bool = True) -> dict:
-    """Evaluate the full factorial (quick: a 256-entry sample) and write HTML, JSON, entries."""
-    from evotol.reporting.html import Report, write_json
-    from evotol.reporting.parcoords import Axis, add_parcoords, format_tick, preset_table_rows
+CONFIG = {"seed": 0, "n_entries": None, "n_sample": 1000, "pop_size": 64, "n_gen": 40, "workers": None,
+          "scheduler": None, "progress": True}
+#: quick: a 256-entry random sample, its first 64 entries as "the thesis's sample", a tiny NSGA-II
+QUICK = {"n_entries": 256, "n_sample": 64, "pop_size": 16, "n_gen": 3}
+_KCOLS = [f"db_xy_{j}_mm" for j in JOINTS] + [f"db_z_{j}_mm" for j in JOINTS] + ["cost", "p_max_mm", "r_max_deg"]
 
+
+def _axes(f):
+    from evotol.reporting.parcoords import Axis
+
+    return ([Axis(x.name, x.label, True) for x in f]
+            + [Axis("cost", "cost (units)", True), Axis("p_max_mm", "p_max (mm)", True), Axis("r_max_deg", "r_max (deg)", True)])
+
+
+def compute(config: dict) -> StudyResult:
+    """Evaluate the full factorial (``n_entries``: a random sample), read off the thesis's sample,
+    apply the presets, derive the findings and run NSGA-II on continuous tolerances. ``out_dir``
+    holds the resumable chunk store."""
     t0 = time.perf_counter()
-    scheduler = scheduler or os.environ.get("EVOTOL_DASK_SCHEDULER") or None   # `evotol reproduce` on a cluster
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    quick, seed = config["quick"], config["seed"]
+    scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None   # `evotol reproduce` on a cluster
     f = factors()
     ev = FiveBarToleranceEvaluator()
-    entries = doe.random_subset(f, 256, seed=seed) if quick else doe.full_factorial(f)
+    entries = doe.random_subset(f, config["n_entries"], seed=seed) if config["n_entries"] else doe.full_factorial(f)
+    store = Path(config["out_dir"]) / f"{NAME}_store{'_quick' if quick else ''}" if config.get("out_dir") else None
     log = doe.EvaluationLog()
-    df = doe.evaluate(entries, ev, store=out_dir / f"{NAME}_store{'_quick' if quick else ''}",
-                      workers=workers, scheduler=scheduler, progress=progress, log=log,
+    df = doe.evaluate(entries, ev, store=store,
+                      workers=config["workers"], scheduler=scheduler, progress=config["progress"], log=log,
                       chunk_size=None if quick else 4096,   # ~2 ms/entry in chunks of 4096 vs ~5 ms in 256
                       description="5-bar tolerance entries")
     study = DesignStudy(df, objectives=list(OBJECTIVES), presets=presets(), name=NAME)
-    paths = study.save(out_dir / f"{NAME}_entries")
 
     # the thesis's 1000-entry sample, read out of the evaluated factorial (same entry ids)
-    sample_ids = doe.random_subset(f, 1000 if not quick else 64, seed=seed)["entry"]
-    sample = df[df["entry"].isin(sample_ids)] if not quick else df.iloc[:64]
+    sample_ids = doe.random_subset(f, config["n_sample"], seed=seed)["entry"]
+    sample = df[df["entry"].isin(sample_ids)] if not quick else df.iloc[:config["n_sample"]]
     pres = study.preset_results()
     pres_sample = study.preset_results(among=sample)
     findings, facts = _findings(study, pres, "256-entry random sample" if quick else "full factorial")
@@ -260,66 +272,13 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
     cont = [Factor(x.name, low=x.low, high=x.high, log=True, si_scale=MM, label=x.label, group=x.group) for x in f]
     objs = [Objective("cost", 1, log=True), Objective("p_max_mm", 1, log=True), Objective("r_max_deg", 1, log=True)]
     t1 = time.perf_counter()
-    pareto = doe.nsga2(cont, ev, objs, pop_size=16 if quick else 64, n_gen=3 if quick else 40, seed=seed)
+    pareto = doe.nsga2(cont, ev, objs, pop_size=config["pop_size"], n_gen=config["n_gen"], seed=seed)
     t_nsga = time.perf_counter() - t1
     knees = pareto[pareto["knee"]]
 
     gap = float(np.max(np.maximum(df["p_upper_mm"] / df["p_max_mm"], df["r_upper_deg"] / df["r_max_deg"]) - 1))
     rng_full = study.objective_ranges()
     rng_sample = study.objective_ranges(among=sample)
-
-    # ---- report
-    rep = Report("5-bar tolerance synthesis (Deng 2012, Sec. VII.1.2)",
-                 f"{len(df)} entries{' (quick sample)' if quick else ' (full factorial 4^5 x 2^5)'} at pose "
-                 f"({POSE_MM[0]:g}, {POSE_MM[1]:g}) mm; h = {H_MM:g} mm; evaluated in {log.seconds:.1f} s ({log.backend})")
-    rep.heading("Findings (computed from the entries below)")
-    rep.html("<ul>" + "".join(f"<li>{x}</li>" for x in findings) + "</ul>")
-    rep.heading("Parallel coordinates")
-    rep.text("One line per entry (level grid) plus the NSGA-II Pareto entries (orange) and their knee points (red). "
-             "Tolerance axes are log10 with tick labels in mm. Presets apply the filters of Figs. VII.3-VII.8.")
-    axes = ([Axis(x.name, x.label, True) for x in f]
-            + [Axis("cost", "cost (units)", True), Axis("p_max_mm", "p_max (mm)", True), Axis("r_max_deg", "r_max (deg)", True)])
-    pc = add_parcoords(rep, study, axes=axes, color="p_max_mm", extra=pareto, div_id="pc")
-    rep.heading("Presets (Figs. VII.3-VII.8): kept entries and kept input levels")
-    rep.table(preset_table_rows(study), ["preset", "thesis", "query", "kept", "kept levels (mm)"])
-    rep.text(f"The same filters on our {len(sample)}-entry random sample (seed {seed}), the size the thesis plots "
-             f"(its sample is unknown, so its readings are compared with both):")
-    rep.table(preset_table_rows(study, among=sample), ["preset", "thesis", "query", "kept", "kept levels (mm)"])
-    rep.heading("Objective ranges vs the thesis")
-    rows = []
-    for c, lab in (("p_max_mm", "p_max (mm)"), ("r_max_deg", "r_max (deg)")):
-        rows.append([lab, f"[{format_tick(rng_full[c]['min'])}, {format_tick(rng_full[c]['max'])}]",
-                     f"[{format_tick(rng_sample[c]['min'])}, {format_tick(rng_sample[c]['max'])}]",
-                     f"[{THESIS_RANGES[c][0]:g}, {THESIS_RANGES[c][1]:g}]"])
-    rep.table(rows, ["objective", f"ours, {len(df)} entries", f"ours, {len(sample)}-entry sample", "thesis, 1000 entries (Fig. VII.2)"])
-    rep.text(f"Joint length h = {H_MM:g} mm in Δβ_xy = Δb_xy / h (eq. III.2). The thesis gives no h; "
-             f"the h that makes our largest r_max equal the thesis's 1.38° is {h_fit:.2f} mm. "
-             f"Largest relative certificate gap over all entries: {gap:.1e} (attained vs certified bound).")
-    if endpoints:
-        rep.text("Each endpoint of the thesis's ranges is a value our factorial takes: the nearest distinct value "
-                 "of ours, how many entries are more extreme, and the probability that a random 1000-entry "
-                 "sample misses all of them (so that its extreme is this value):")
-        rep.table([[k.replace("_", " "), e["thesis"], e["ours_nearest"], f"{100 * e['relative_difference']:+.1f} %",
-                    e["rank_from_the_end"], e["n_entries_beyond"], e["probability_sample_misses_those_beyond"]]
-                   for k, e in endpoints.items()],
-                  ["endpoint", "thesis", "ours (nearest value)", "difference", "rank of our value from the end",
-                   "entries beyond it", "P(1000-sample misses them)"], digits=4)
-    rep.heading("Main effects (mean log10 objective per level, full factorial)")
-    me_p = study.main_effects("p_max_mm").set_index("input")
-    me_r = study.main_effects("r_max_deg").set_index("input")
-    rep.table([[study.factors[c].label, me_p.loc[c, "effect"], me_r.loc[c, "effect"]] for c in study.inputs],
-              ["input", "effect on p_max (decades)", "effect on r_max (decades)"])
-    rep.heading("NSGA-II on continuous tolerances (cost vs p_max vs r_max)")
-    rep.text(f"{len(pareto)} Pareto entries from {pareto.attrs['evotol']['n_evaluations']} evaluations "
-             f"({t_nsga:.1f} s); knee points (nearest to the ideal point after log-normalising, and pymoo "
-             f"high trade-off points):")
-    kcols = [x.name for x in f] + ["cost", "p_max_mm", "r_max_deg"]
-    rep.table(knees[kcols].to_numpy().tolist(), [x.label for x in f] + ["cost", "p_max (mm)", "r_max (deg)"], digits=3)
-    rep.text("Cost model: " + repr(default_cost_model()) + " per clearance (SI tolerance), summed over the ten "
-             "clearances -- illustrative; the thesis has no cost model.", note=True)
-    rep.write(out_dir / f"{NAME}.html")
-    pareto_paths = doe.save_entries(pareto, out_dir / f"{NAME}_pareto")
-
     summary = {
         "study": NAME, "quick": quick, "seed": seed, "n_entries": len(df), "pose_mm": list(POSE_MM),
         "h_mm": H_MM, "h_mm_matching_thesis_r_max": h_fit, "thesis_endpoints": endpoints,
@@ -329,21 +288,79 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0, *, scheduler: str | N
         "thesis_ranges": THESIS_RANGES,
         "presets": {k: {"count": v.count, "ranges": v.ranges, "query": v.resolved_query} for k, v in pres.items()},
         "presets_sample": {k: {"count": v.count, "ranges": v.ranges} for k, v in pres_sample.items()},
-        "presets_shown_in_report": pc["presets"],
-        "report_lines": {"entries": pc["n_lines"], "drawn_by_default": pc["n_drawn"]},
+        **parcoords_counts(study, pareto, _axes(f)),
         "findings": findings, "facts": facts,
         "certificate_gap_max": gap,
         "evaluation": {"seconds": log.seconds, "backend": log.backend, "chunks": log.n_chunks,
                        "chunks_resumed": len(log.chunks_resumed)},
         "nsga2": {"n_pareto": len(pareto), "n_evaluations": pareto.attrs["evotol"]["n_evaluations"],
-                  "seconds": t_nsga, "knees": knees[kcols].to_dict(orient="records")},
-        "files": {"entries_parquet": paths["parquet"].name, "entries_csv": paths["csv"].name,
-                  "pareto_parquet": pareto_paths["parquet"].name},
+                  "seconds": t_nsga, "knees": knees[_KCOLS].to_dict(orient="records")},
+        "files": {"entries_parquet": f"{NAME}_entries.parquet", "entries_csv": f"{NAME}_entries.csv",
+                  "pareto_parquet": f"{NAME}_pareto.parquet"},
+        "figures": {"sample_entries": sample["entry"].astype(int).tolist()},
         "seconds": time.perf_counter() - t0,
     }
-    write_json(out_dir / f"{NAME}.json", summary)
-    return summary
+    return StudyResult(summary, {"entries": df, "pareto": pareto})
+
+
+def render(result: StudyResult):
+    """Findings, the parallel coordinates with the presets of Figs. VII.3-VII.8, ranges vs the
+    thesis, main effects and the NSGA-II knees."""
+    from evotol.reporting.html import Report
+    from evotol.reporting.parcoords import format_tick, preset_table_rows
+
+    s, df, pareto = result.summary, result.tables["entries"], result.tables["pareto"]
+    f = factors()
+    study = DesignStudy(df, objectives=list(OBJECTIVES), presets=presets(), name=NAME)
+    sample = df[df["entry"].isin(s["figures"]["sample_entries"])]
+    ev = s["evaluation"]
+    rep = Report("5-bar tolerance synthesis (Deng 2012, Sec. VII.1.2)",
+                 f"{len(df)} entries{' (quick sample)' if s['quick'] else ' (full factorial 4^5 x 2^5)'} at pose "
+                 f"({POSE_MM[0]:g}, {POSE_MM[1]:g}) mm; h = {H_MM:g} mm; evaluated in {ev['seconds']:.1f} s ({ev['backend']})")
+    rep.heading("Findings (computed from the entries below)")
+    rep.html("<ul>" + "".join(f"<li>{x}</li>" for x in s["findings"]) + "</ul>")
+    parcoords_section(rep, study, pareto, _axes(f),
+                      "One line per entry (level grid) plus the NSGA-II Pareto entries (orange) and their knee points "
+                      "(red). Tolerance axes are log10 with tick labels in mm. Presets apply the filters of Figs. "
+                      "VII.3-VII.8.", "Presets (Figs. VII.3-VII.8): kept entries and kept input levels")
+    rep.text(f"The same filters on our {len(sample)}-entry random sample (seed {s['seed']}), the size the thesis plots "
+             f"(its sample is unknown, so its readings are compared with both):")
+    rep.table(preset_table_rows(study, among=sample), PRESET_HEADER)
+    rep.heading("Objective ranges vs the thesis")
+    rows = []
+    rng_full, rng_sample = s["objective_ranges"], s["objective_ranges_sample"]
+    for c, lab in (("p_max_mm", "p_max (mm)"), ("r_max_deg", "r_max (deg)")):
+        rows.append([lab, f"[{format_tick(rng_full[c][0])}, {format_tick(rng_full[c][1])}]",
+                     f"[{format_tick(rng_sample[c][0])}, {format_tick(rng_sample[c][1])}]",
+                     f"[{THESIS_RANGES[c][0]:g}, {THESIS_RANGES[c][1]:g}]"])
+    rep.table(rows, ["objective", f"ours, {len(df)} entries", f"ours, {len(sample)}-entry sample", "thesis, 1000 entries (Fig. VII.2)"])
+    h_fit = s["h_mm_matching_thesis_r_max"]
+    rep.text(f"Joint length h = {H_MM:g} mm in Δβ_xy = Δb_xy / h (eq. III.2). The thesis gives no h; "
+             f"the h that makes our largest r_max equal the thesis's 1.38° is {float('nan') if h_fit is None else h_fit:.2f} mm. "
+             f"Largest relative certificate gap over all entries: {s['certificate_gap_max']:.1e} (attained vs certified bound).")
+    if s["thesis_endpoints"]:
+        rep.text("Each endpoint of the thesis's ranges is a value our factorial takes: the nearest distinct value "
+                 "of ours, how many entries are more extreme, and the probability that a random 1000-entry "
+                 "sample misses all of them (so that its extreme is this value):")
+        rep.table([[k.replace("_", " "), e["thesis"], e["ours_nearest"], f"{100 * e['relative_difference']:+.1f} %",
+                    e["rank_from_the_end"], e["n_entries_beyond"], e["probability_sample_misses_those_beyond"]]
+                   for k, e in s["thesis_endpoints"].items()],
+                  ["endpoint", "thesis", "ours (nearest value)", "difference", "rank of our value from the end",
+                   "entries beyond it", "P(1000-sample misses them)"], digits=4)
+    rep.heading("Main effects (mean log10 objective per level, full factorial)")
+    me_p, me_r = s["facts"]["p_main_effects_decades"], s["facts"]["r_main_effects_decades"]
+    rep.table([[study.factors[c].label, me_p[c], me_r[c]] for c in study.inputs],
+              ["input", "effect on p_max (decades)", "effect on r_max (decades)"])
+    ns = s["nsga2"]
+    rep.heading("NSGA-II on continuous tolerances (cost vs p_max vs r_max)")
+    rep.text(f"{ns['n_pareto']} Pareto entries from {ns['n_evaluations']} evaluations "
+             f"({ns['seconds']:.1f} s); knee points (nearest to the ideal point after log-normalising, and pymoo "
+             f"high trade-off points):")
+    rep.table([[k[c] for c in _KCOLS] for k in ns["knees"]], [x.label for x in f] + ["cost", "p_max (mm)", "r_max (deg)"], digits=3)
+    rep.text("Cost model: " + repr(default_cost_model()) + " per clearance (SI tolerance), summed over the ten "
+             "clearances -- illustrative; the thesis has no cost model.", note=True)
+    return rep
 
 
 STUDY = Study(name=NAME, title="5-bar tolerance synthesis on parallel coordinates + NSGA-II (Deng 2012 Sec. VII.1)",
-              legacy_run=run, seed_paper="004 Deng 2012 (thesis), Ch. VII")
+              compute=compute, render=render, config=CONFIG, quick=QUICK, seed_paper="004 Deng 2012 (thesis), Ch. VII")

@@ -6,17 +6,17 @@ circles (Figs. 5/7/9/11; Monte Carlo with Latin hypercube, Table 1 + Sec. 2.5), 
 (Figs. 6/8/10/12); then the measured LHS-vs-MC convergence, and a probabilistic tolerance
 allocation of the joint clearances and actuator accuracy (GA and NSGA-II).
 
-``run(out_dir, quick=False, seed=0)`` writes ``laramolina2019-5r.html`` and ``.json``.
+``compute(config)`` returns the JSON summary (figure data under ``figures``), ``render`` draws
+the report from it; ``evotol reproduce laramolina2019-5r`` writes ``.html`` and ``.json``.
 """
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
 import numpy as np
 
-from evotol.reporting.html import Report, write_json
-from evotol.studies import Study
+from evotol.reporting.html import Report
+from evotol.studies import Study, StudyResult
 from robots.planar5r import kinematics as K
 from robots.planar5r import uncertainty as U
 from robots.planar5r.design import CASES, TABLE2_PRINTED
@@ -27,13 +27,12 @@ POSE_LABELS = tuple("abcdefghi")
 PAPER_LCI = {"b": ("LCI = 0.9 (Sec. 3.2)", 0.9), "d": ("max(LCI) = 0.55 (Sec. 3.4)", 0.55)}
 
 
-def _settings(quick: bool) -> dict:
-    if quick:
-        return dict(grid=61, n_samples=300, cloud=60, conv_sizes=(16, 64), conv_rep=10, conv_ref=2 ** 11,
-                    alloc_cases=("b",), pop=10, n_gen=5, n_alloc_samples=256, n_verify=5000, alloc_grid=6)
-    return dict(grid=201, n_samples=4000, cloud=250, conv_sizes=(16, 32, 64, 128, 256, 512, 1024), conv_rep=100,
+SETTINGS = dict(grid=201, n_samples=4000, cloud=250, conv_sizes=(16, 32, 64, 128, 256, 512, 1024), conv_rep=100,
                 conv_ref=2 ** 16, alloc_cases=("a", "b", "c", "d"), pop=32, n_gen=30, n_alloc_samples=1024,
                 n_verify=200_000, alloc_grid=20)
+CONFIG = {"seed": 0, **SETTINGS}
+QUICK = dict(grid=61, n_samples=300, cloud=60, conv_sizes=(16, 64), conv_rep=10, conv_ref=2 ** 11,
+             alloc_cases=("b",), pop=10, n_gen=5, n_alloc_samples=256, n_verify=5000, alloc_grid=6)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -84,7 +83,8 @@ def analyse_case(case: str, cfg: dict, seed: int, model: U.UncertaintyModel) -> 
                   **{k: v for k, v in stats.items()}},
         "poses_eq24_printed": {k: st24[k] for k in ("rms_dev", "max_dev", "p_exceed")},
         "poses_without_clearance": {k: st0[k] for k in ("rms_dev", "max_dev", "p_exceed")},
-        "_plot": {"uw": uw, "locus": locus, "cloud": dp[:, keep], "cloud_ok": ok[:, keep], "poses": poses},
+        "_plot": {"x": uw.x, "y": uw.y, "usable": uw.mask, "lci": uw.lci, "type1_circles": K.type1_circles(r1, r2, r3),
+                  "type2_locus": locus, "cloud": dp[:, keep], "cloud_ok": ok[:, keep], "poses": poses},
     }
 
 
@@ -259,16 +259,22 @@ def _circle(cx, cy, r, n=181):
     return cx + r * np.cos(a), cy + r * np.sin(a)
 
 
-def _workspace_figure(case: str, res: dict):
+def _plot_arrays(p: dict) -> dict:
+    """A case's figure data (``summary["figures"][case]``) as numpy arrays."""
+    f = lambda k: np.asarray(p[k], float)
+    return {"x": f("x"), "y": f("y"), "usable": np.asarray(p["usable"], bool), "lci": f("lci"),
+            "type1_circles": p["type1_circles"], "locus": f("type2_locus").reshape(-1, 2),
+            "cloud": f("cloud"), "cloud_ok": np.asarray(p["cloud_ok"], bool), "poses": f("poses")}
+
+
+def _workspace_figure(case: str, res: dict, p: dict):
     import plotly.graph_objects as go
 
-    p = res["_plot"]
-    uw, poses = p["uw"], p["poses"]
-    r1, r2, r3 = res["r1"], res["r2"], res["r3"]
+    poses = p["poses"]
     fig = go.Figure()
-    fig.add_trace(go.Heatmap(x=uw.x, y=uw.y, z=np.where(uw.mask, 1.0, np.nan), showscale=False, hoverinfo="skip",
+    fig.add_trace(go.Heatmap(x=p["x"], y=p["y"], z=np.where(p["usable"], 1.0, np.nan), showscale=False, hoverinfo="skip",
                              colorscale=[[0, "#cfe8cf"], [1, "#cfe8cf"]], name="usable workspace"))
-    for c in K.type1_circles(r1, r2, r3):
+    for c in p["type1_circles"]:
         x, y = _circle(c["cx"], 0.0, c["radius"], 361)
         fig.add_trace(go.Scatter(x=x, y=y, mode="lines", line=dict(color="#888", width=1, dash="dot"),
                                  name=f"type I {c['name']}", legendgroup="t1"))
@@ -291,8 +297,8 @@ def _workspace_figure(case: str, res: dict):
     fig.add_trace(go.Scatter(x=px, y=py, mode="markers", marker=dict(size=2, color="#333"), name="sampled end-effector"))
     fig.add_trace(go.Scatter(x=poses[:, 0], y=poses[:, 1], mode="markers+text", text=list(POSE_LABELS),
                              textposition="top right", marker=dict(size=5, color="#e67700"), name="poses a-i"))
-    X, Y = np.meshgrid(uw.x, uw.y)
-    xs, ys = X[uw.mask], Y[uw.mask]
+    X, Y = np.meshgrid(p["x"], p["y"])
+    xs, ys = X[p["usable"]], Y[p["usable"]]
     pad = 0.08 * max(np.ptp(xs), np.ptp(ys))
     fig.update_layout(title=f"Case {case}: usable workspace, singular loci, MIC and Monte Carlo clouds "
                             f"(deviations magnified x{k:.3g}; circles = 0.005)",
@@ -302,11 +308,10 @@ def _workspace_figure(case: str, res: dict):
     return fig
 
 
-def _zoom_figure(case: str, res: dict):
+def _zoom_figure(case: str, res: dict, p: dict):
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
 
-    p = res["_plot"]
     st = res["poses"]
     fig = make_subplots(rows=3, cols=3, subplot_titles=[
         f"{lab}: LCI {st['lci'][i]:.2f}, P(out) {st['p_exceed'][i]:.3f}" for i, lab in enumerate(POSE_LABELS)],
@@ -326,20 +331,19 @@ def _zoom_figure(case: str, res: dict):
     return fig
 
 
-def _lci_figure(case: str, res: dict):
+def _lci_figure(case: str, res: dict, p: dict):
     import plotly.graph_objects as go
 
-    p = res["_plot"]
-    uw, poses = p["uw"], p["poses"]
-    fig = go.Figure(go.Heatmap(x=uw.x, y=uw.y, z=uw.lci, colorscale="Viridis", zmin=0, zmax=1,
+    poses = p["poses"]
+    fig = go.Figure(go.Heatmap(x=p["x"], y=p["y"], z=p["lci"], colorscale="Viridis", zmin=0, zmax=1,
                                colorbar=dict(title="LCI")))
     x, y = _circle(0.0, res["mic_center_y"], res["mic_radius"])
     fig.add_trace(go.Scatter(x=x, y=y, mode="lines", line=dict(color="white", width=2), name="MIC"))
     fig.add_trace(go.Scatter(x=poses[:, 0], y=poses[:, 1], mode="markers+text", text=list(POSE_LABELS),
                              textposition="top right", textfont=dict(color="white"), marker=dict(size=5, color="#e67700"),
                              name="poses"))
-    X, Y = np.meshgrid(uw.x, uw.y)
-    xs, ys = X[uw.mask], Y[uw.mask]
+    X, Y = np.meshgrid(p["x"], p["y"])
+    xs, ys = X[p["usable"]], Y[p["usable"]]
     fig.update_layout(title=f"Case {case}: LCI = 1/cond(J) over the usable workspace (max {res['lci_max']:.3f})",
                       xaxis=dict(title="x", range=[xs.min(), xs.max()]),
                       yaxis=dict(title="y", scaleanchor="x", range=[ys.min(), ys.max()]), height=560, showlegend=False)
@@ -404,12 +408,13 @@ def _grid_figure(alloc: dict):
 # ----------------------------------------------------------------------------------------------
 # study
 # ----------------------------------------------------------------------------------------------
-def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
+def compute(config: dict) -> StudyResult:
+    """Workspace, MIC, LCI and clouds of the four cases, LHS-vs-MC convergence, allocation."""
     from evotol.errors import EvotolError
 
     t0 = time.perf_counter()
-    out_dir = Path(out_dir)
-    cfg = _settings(quick)
+    quick, seed = config["quick"], config["seed"]
+    cfg = {k: config[k] for k in SETTINGS}
     model = U.UncertaintyModel()
     cases = {c: analyse_case(c, cfg, seed + i, model) for i, c in enumerate(CASES)}
     t_cases = time.perf_counter() - t0
@@ -444,13 +449,15 @@ def run(out_dir: Path, quick: bool = False, seed: int = 0) -> dict:
         "allocation": alloc,
     }
     summary["timing"] = {"cases": t_cases, "convergence": t_conv, "allocation": t_alloc}
-    _write_report(out_dir, summary, cases, conv, alloc)
+    summary["figures"] = {c: r["_plot"] for c, r in cases.items()}
     summary["seconds"] = time.perf_counter() - t0
-    write_json(out_dir / f"{NAME}.json", summary)
-    return summary
+    return StudyResult(summary)
 
 
-def _write_report(out_dir: Path, summary: dict, cases: dict, conv: dict, alloc: dict) -> None:
+def render(result: StudyResult) -> Report:
+    """Table 2 with the workspace indices, Figs. 5-12 per case, LHS vs MC, the allocation."""
+    summary = result.summary
+    cases, conv, alloc = summary["cases"], summary["convergence"], summary["allocation"]
     rep = Report("Planar 5R symmetrical mechanism under clearances and uncertainties",
                  f"Reproduction of {STUDY.seed_paper}; evotol study {NAME}"
                  + (" (quick run: small samples and grids)" if summary["quick"] else ""))
@@ -487,10 +494,11 @@ def _write_report(out_dir: Path, summary: dict, cases: dict, conv: dict, alloc: 
              f"{summary['cases']['d']['lci_at_mic_center']:.3f} at the MIC centre. Table 2's printed t for case a (0.08) "
              f"and s for case d (1.80) contradict eqs. 5-6; the link lengths are used.")
     for c, r in cases.items():
+        p = _plot_arrays(summary["figures"][c])
         rep.heading(f"Case {c}: r1 = {r['r1']:g}, r2 = {r['r2']:g}, r3 = {r['r3']:g}")
-        rep.figure(_workspace_figure(c, r))
-        rep.figure(_zoom_figure(c, r))
-        rep.figure(_lci_figure(c, r))
+        rep.figure(_workspace_figure(c, r, p))
+        rep.figure(_zoom_figure(c, r, p))
+        rep.figure(_lci_figure(c, r, p))
         st = r["poses"]
         rows = [[lab, st["x"][i], st["y"][i], st["lci"][i], st["mean_dx"][i], st["mean_dy"][i], st["std_dx"][i],
                  st["std_dy"][i], st["rms_dev"][i], st["max_dev"][i], st["p_exceed"][i], st["p_unassembled"][i],
@@ -553,8 +561,8 @@ def _write_report(out_dir: Path, summary: dict, cases: dict, conv: dict, alloc: 
             rep.figure(_grid_figure(alloc["b"]))
     rep.text(f"Run time: cases {summary['timing']['cases']:.1f} s, convergence {summary['timing']['convergence']:.1f} s, "
              f"allocation {summary['timing']['allocation']:.1f} s.")
-    rep.write(out_dir / f"{NAME}.html")
+    return rep
 
 
 STUDY = Study(name=NAME, title="Planar 5R under clearances and uncertainties: workspace, MIC, LCI, MC/LHS, allocation",
-              legacy_run=run, seed_paper="Lara-Molina, Koroishi, Policarpo, Steffen (COBEM 2019), 001_661fb1681958f265")
+              compute=compute, render=render, config=CONFIG, quick=QUICK, seed_paper="Lara-Molina, Koroishi, Policarpo, Steffen (COBEM 2019), 001_661fb1681958f265")
