@@ -68,7 +68,9 @@ def check_study_keys(spec: dict) -> None:
     elif ref is not None and not isinstance(ref, bool):
         raise ValidationError("poses.refine", ref, "true, false or a table of refinement options")
     _check_keys(spec.get("requirement", {}), REQUIREMENT_KEYS, "requirement")
-    _check_keys(spec.get("bounds", {}), BOUND_KEYS, "bounds")
+    bounds = spec.get("bounds", {})   # sub-tables [bounds.GROUP] are checked once the robot is known
+    _check_keys({k: v for k, v in bounds.items() if not isinstance(v, dict)} if isinstance(bounds, dict) else bounds,
+                BOUND_KEYS, "bounds")
     for n, o in spec.get("sources", {}).items():
         _check_keys(o, SOURCE_KEYS, f"sources.{n}")
     seed = spec.get("seed", 0)
@@ -101,9 +103,41 @@ def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict) -> Tolerance:
     cspec = o.get("cost", costs.get(s.name, costs.get(s.group, costs.get("default"))))
     if cspec is None:
         raise ValidationError(f"cost.{s.group}", None, f"a cost model for source {s.name} (by name, group or 'default')")
-    return Tolerance(cost=cost_models.from_dict(cspec), lower=float(o.get("lower", bounds.get("lower", 1e-6))),
-                     upper=float(o.get("upper", bounds.get("upper", 1e-3))), locked=o.get("locked"),
+    return Tolerance(cost=cost_models.from_dict(cspec), lower=_bound(o, bounds, s, "lower", 1e-6),
+                     upper=_bound(o, bounds, s, "upper", 1e-3), locked=o.get("locked"),
                      distribution=dist, **shape)
+
+
+GROUP_BOUND_KEYS = ("lower", "upper")     # keys of [bounds.GROUP] / [bounds.SOURCE]
+
+
+def _check_bounds_table(bounds, robot) -> None:
+    """``[bounds]``: ``lower``/``upper`` for every source, and sub-tables by group or source name
+    (``[bounds."U joint"]``, ``[bounds.l1]``) -- sources in m and in rad need their own ranges."""
+    if not isinstance(bounds, dict):
+        raise ValidationError("bounds", bounds, "a table with lower/upper and optional group or source sub-tables")
+    names = {*robot.source_names, *(s.group for s in robot.sources)}
+    for key, value in bounds.items():
+        if key in BOUND_KEYS:
+            continue
+        if key not in names or not isinstance(value, dict):
+            raise ValidationError(f"bounds.{key}", value, unknown_key_message(key, [*BOUND_KEYS, *sorted(names)])
+                                  + " (a group or source name takes a table: [bounds.GROUP] lower = ..., upper = ...)")
+        for k, v in value.items():
+            if k not in GROUP_BOUND_KEYS:
+                raise ValidationError(f"bounds.{key}.{k}", v, unknown_key_message(k, GROUP_BOUND_KEYS))
+
+
+def _bound(override: dict, bounds: dict, source, which: str, default: float) -> float:
+    """lower/upper of one source: [sources.NAME] > [bounds.NAME] > [bounds.GROUP] > [bounds] > default."""
+    for field, table in ((f"sources.{source.name}", override), (f"bounds.{source.name}", bounds.get(source.name, {})),
+                         (f"bounds.{source.group}", bounds.get(source.group, {})), ("bounds", bounds)):
+        if which in table:
+            v = table[which]
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ValidationError(f"{field}.{which}", v, "a positive tolerance in SI units (m or rad)")
+            return float(v)
+    return default
 
 
 def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
@@ -136,6 +170,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     else:
         raise ValidationError("poses", ps, "one of grid = [n, ...], latin_hypercube = n, list = [[...], ...]")
     bounds = spec.get("bounds", {})
+    _check_bounds_table(bounds, robot)
     costs = spec.get("cost", {})
     overrides = spec.get("sources", {})
     unknown = set(overrides) - set(robot.source_names)
@@ -173,6 +208,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
         if "budget" in kw:
             check_budget(problem, kw["budget"], field=f"methods.{m}.budget")
     check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
+    if any("budget" not in kw for m, kw in methods.items() if m != "nsga2"):
+        problem.check_feasible()            # a requirement no design meets: say so before the first method
     results, front, stopped, skipped = {}, None, [], []
     with CtrlC() as ctrl_c:
         for m, kw in methods.items():

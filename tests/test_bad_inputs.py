@@ -153,6 +153,18 @@ STUDY_CASES = {
     "grid = 3.5": ((("grid = [5, 5, 3]", "grid = 3.5"),), ["grid counts", "3.5"]),
     "grid with a fraction": ((("grid = [5, 5, 3]", "grid = [5, 5, 2.5]"),), ["grid counts", "2.5"]),
     "latin_hypercube = 20.5": ((("grid = [5, 5, 3]", "latin_hypercube = 20.5"),), ["latin_hypercube n", "20.5"]),
+    "bounds for an unknown group": ((("[bounds]                  #", "[bounds.Ujoint]\nupper = 1e-4\n[bounds]  #"),), ["bounds.Ujoint", "did you mean 'U joint'"]),
+    "bounds key typo": ((("upper = 2e-4", "uper = 2e-4"),), ["bounds.uper", "did you mean 'upper'"]),
+    "bounds group key typo": ((("[bounds]                  #", "[bounds.\"U joint\"]\nlowr = 1e-6\n[bounds]  #"),), ["bounds.U joint.lowr", "did you mean 'lower'"]),
+    "bounds not a number": ((("lower = 1e-6", "lower = \"1e-6\""),), ["bounds.lower", "'1e-6'"]),
+    # issue-10 cases (tolerance specification, landed by "tolspec"): checked here end to end
+    "unknown top-level table": ((("[requirement]", "[requirment]"),), ["requirment", "did you mean 'requirement'"]),
+    "negative seed in the file": ((("seed = 0", "seed = -1"),), ["seed = -1", "non-negative integer"]),
+    "fractional seed in the file": ((("seed = 0", "seed = 1.5"),), ["seed = 1.5", "non-negative integer"]),
+    "empty pose list": ((("grid = [5, 5, 3]", "list = []"),), ["poses", "at least one workspace pose"]),
+    "requirement no design meets": ((("position = 5e-5 ", "position = 1e-8 "), ("locked = 2e-5", "upper = 1e-4")),
+                                    ["infeasible", "1e-08", "lower bound", "pose"]),
+    "source key typo": ((("locked = 2e-5", "lockd = 2e-5"),), ["sources.R1.lockd", "did you mean 'locked'"]),
     "invalid TOML": ((("name = \"ucr3_example\"", "name = ucr3_example"),), ["study file", "valid TOML"]),
 }
 
