@@ -520,9 +520,13 @@ def render(result: StudyResult) -> Report:
     rep.text("Requirement: at each of 17 MIW poses (centre + rings at 0.35 and 0.7 r_MIC), P(|dp| > 0.2 mm) <= 1 % for "
              "D = 0.2 m (0.001 D). Variables: r_c of the actuated joints, r_c of the elbows, actuator error std; link "
              "lengths at Table 1. Costs are illustrative (reciprocal for fits, power law for actuators; the paper has "
-             "none). Exact loop closure, Latin hypercube with common random numbers; the optimum is re-verified on a "
-             "fresh sample. The GA design is first rescaled on a larger independent sample so that every pose's 95 % "
-             "upper confidence bound meets the requirement (calibration factor), then verified on a third sample.",
+             "none). Everything runs through the evotol core: a ToleranceProblem with shared tolerances (one r_c per "
+             "joint pair, one accuracy per motor pair, cost counted per part), link lengths as fixed normal sources "
+             "(Tolerance.fixed, 3 std), contact-mode clearances, and Requirement(measure='yield', model='nonlinear'): "
+             "exact loop closure on common Latin-hypercube rows (unassembled = miss). allocate_ga (seeded with the "
+             "tightest design, the Lagrange baseline and the worst-case optimum), then calibrate_scale rescales the "
+             "design on a larger independent sample so that every pose's 95 % upper confidence bound meets the "
+             "requirement (calibration factor), then verify checks it on a third sample (docs/statistical.md).",
              note=True)
     rows = []
     for c, a in alloc.items():
@@ -537,7 +541,7 @@ def render(result: StudyResult) -> Report:
                      "calibration factor", "verified max P_exceed", "95 % upper bound"])
     rep.text("Deterministic counterpart through the evotol core (ToleranceProblem, exact worst-case measure, "
              "certified allocate_optimum): every admissible error must keep |dp| <= 0.2 mm; actuator errors bounded "
-             "by 3 std, link lengths locked at 3 std of Table 1, one tolerance per joint. Costs on the same models.")
+             "by 3 std, link lengths fixed at 3 std of Table 1, the same shared tolerances. Costs on the same models.")
     rows = []
     for c, a in alloc.items():
         w = a.get("worst_case", {})
