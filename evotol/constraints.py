@@ -154,3 +154,58 @@ class ConstraintRows:
             lo_f = np.where(feas, mid, lo_f)
             hi_f = np.where(feas, hi_f, mid)
         return p.full(np.clip(T[:, free] * lo_f[:, None], p.lower[free], p.upper[free]))
+
+
+class ExactRows(ConstraintRows):
+    """The requirement judged by the problem's exact measure, with no rows: the interface of
+    :class:`ConstraintRows` for a measure that has no convex rows -- the certified worst case of
+    clearance sources (:mod:`evotol.clearances`), which is not convex in the tolerances.
+    ``violation`` is exact (one engine evaluation per call); ``check`` adds nothing."""
+
+    def __init__(self, problem: ToleranceProblem):
+        self.problem = problem
+        self.measure = "exact"
+        n = problem.n_sources
+        self.A, self.A0, self.B = np.zeros((0, n)), np.zeros(0), np.zeros((0, n))
+        self._keys = set()
+        self.shifted_rss = False
+
+    def violation(self, T: np.ndarray) -> np.ndarray:
+        return self.problem.evaluate(np.atleast_2d(T), top_only=True).violation
+
+    def check(self, T: np.ndarray) -> tuple[np.ndarray, int]:
+        return self.violation(T), 0
+
+    def prune(self, T: np.ndarray, keep_ratio: float = 0.8) -> int:
+        return 0
+
+    def boundary_scale(self, T: np.ndarray, iters: int = 4, rtol: float = 1e-6) -> np.ndarray:
+        """Designs scaled onto the requirement's boundary: t <- clip(t / error) on the free
+        tolerances (exact when the measure is positively homogeneous and no bound clips; the
+        engine's attained value is homogeneous to its certificate gap), then shrunk by
+        (1 - rtol) / error until none is outside. A few exact evaluations per call."""
+        p = self.problem
+        f = p.free
+        T = np.atleast_2d(np.array(T, dtype=float))
+        active = np.arange(T.shape[0])
+        for it in range(iters + 8):
+            if active.size == 0:
+                break
+            ne = self.normalised_error(T[active])
+            shrink = (1 - rtol) if it >= iters else 1.0
+            move = (ne > 1) if it >= iters else (np.abs(ne - 1) > rtol)
+            Tn = p.full(np.clip(T[active][:, f] * (shrink / ne[:, None]), p.lower[f], p.upper[f]))
+            moved = np.any(np.abs(Tn - T[active]) > 1e-12 * np.abs(T[active]), axis=1)
+            T[active[move]] = Tn[move]
+            active = active[move & moved]
+        return T
+
+
+def constraint_rows(problem: ToleranceProblem, seed: int = 0) -> ConstraintRows | None:
+    """The requirement as optimisers use it: lazy convex rows for ``worst_case`` / ``rss``,
+    :class:`ExactRows` for clearance sources, None for the sampled measures."""
+    if problem.clearances is not None:
+        return ExactRows(problem)
+    if problem.requirement.measure in ("worst_case", "rss"):
+        return ConstraintRows(problem, seed=seed)
+    return None

@@ -13,6 +13,11 @@ reproducible from ``seed``. Vectorised over all poses × samples; poses are proc
 Plain sampling cannot *verify* a worst-case requirement: the worst case needs every clearance at
 its bound in one particular direction at once, which sampling reaches with vanishing probability.
 ``max_error_over_worst_case`` shows how far sampling falls short.
+
+Clearance sources (:mod:`evotol.clearances`): every sample adds a random consistent clearance
+state -- each joint's screw uniform inside its disks and intervals, projected onto the loop
+equations and scaled back into the set (:func:`evotol.clearances.sample_twists`); first order
+(there is no nonlinear clearance model).
 """
 from __future__ import annotations
 
@@ -22,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from evotol import distributions
+from evotol import clearances, distributions
 from evotol.distributions import METHODS
 from evotol.errors import ValidationError
 from evotol.nonlinear import verify_nonlinear
@@ -152,6 +157,9 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
             Z = distributions.draw(distributions.uniforms(n_samples, sum(dims), method, seeds[p]), dims, dists, radial)
             E[a] = np.concatenate(problem.source_errors(Z, t), axis=1)   # inside shifted intervals too
         lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
+        if problem.clearances is not None:   # consistent clearance states inside the classes' bounds
+            lin = lin + clearances.sample_twists(robot, problem.poses[idx], t[robot.n_geometric:], n_samples,
+                                                 np.random.default_rng([seed, start]))
         ok = np.ones(lin.shape[:2], dtype=bool)
         for c, lim in comps:
             nrm = np.linalg.norm(lin[:, :, rows[c]], axis=2)

@@ -25,7 +25,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from cost_models.base import CostModel
-from evotol import distributions, measures, statistical
+from evotol import clearances as clearance_measure, distributions, measures, statistical
 from evotol.errors import InfeasibleError, ValidationError
 from robots.base import RobotErrorModel
 
@@ -241,16 +241,27 @@ class ToleranceProblem:
     n_directions: hemisphere directions for the worst-case measure (more: tighter bound).
     shared: group name -> member source names; each group is one tolerance variable.
     shared_cost: ``"part"`` (default: cost counted for every member) or ``"variable"`` (once).
+    clearances: :class:`evotol.clearances.ClearanceSources` -- joint-clearance classes allocated
+        with the robot's (interval) sources; their names follow the robot's source names, and the
+        ``worst_case`` measure is then the certified engine's (:func:`evotol.clearances.worst_case`).
+        With tolerances for none of the robot's own sources, the problem allocates clearances only.
     """
 
     def __init__(self, robot: RobotErrorModel, tolerances: Mapping[str, Tolerance], requirement: Requirement,
                  poses, n_directions: int = 600, shared: Mapping[str, Sequence[str]] | None = None,
-                 shared_cost: str = "part"):
+                 shared_cost: str = "part", clearances: "clearance_measure.ClearanceSources | None" = None):
         if not isinstance(robot, RobotErrorModel):
             raise ValidationError("robot", robot, "a robots.base.RobotErrorModel")
         if not isinstance(requirement, Requirement):
             raise ValidationError("requirement", requirement, "an evotol.Requirement")
         requirement.validate()
+        if clearances is not None:
+            if not isinstance(clearances, clearance_measure.ClearanceSources):
+                raise ValidationError("clearances", clearances, "an evotol.clearances.ClearanceSources")
+            # tolerances for none of the robot's own sources: a clearance-only problem
+            geometric = not isinstance(tolerances, Mapping) or any(n in tolerances for n in robot.source_names)
+            robot = clearance_measure.WithClearances(robot, clearances, geometric)
+            self._check_clearance_measure(requirement)
         names = robot.source_names
         if not isinstance(tolerances, Mapping):
             raise ValidationError("tolerances", tolerances, "a mapping source name -> Tolerance")
@@ -358,6 +369,17 @@ class ToleranceProblem:
 
     # --- basic properties ---------------------------------------------------------------------
     @property
+    def clearances(self) -> "clearance_measure.ClearanceSources | None":
+        """The allocated joint-clearance classes, or None."""
+        return self.robot.clearances if isinstance(self.robot, clearance_measure.WithClearances) else None
+
+    @staticmethod
+    def _check_clearance_measure(requirement: Requirement) -> None:
+        if requirement.measure != "worst_case":
+            raise ValidationError("requirement.measure", requirement.measure,
+                                  "'worst_case' with clearance sources (the certified engine's measure)")
+
+    @property
     def n_sources(self) -> int:
         return len(self.names)
 
@@ -395,6 +417,8 @@ class ToleranceProblem:
         new = copy.copy(self)
         new.requirement = dataclasses.replace(self.requirement, **changes)
         new.requirement.validate()
+        if self.clearances is not None:
+            self._check_clearance_measure(new.requirement)
         new._mc_cache = None
         new._yield_cache = None
         return new
@@ -599,6 +623,8 @@ class ToleranceProblem:
         T = np.atleast_2d(self.as_array(T))
         measure = measure or self.requirement.measure
         ev = Evaluation(None, None)
+        if self.clearances is not None:
+            return self._evaluate_clearances(T, measure)
         if measure == "yield":
             return self._evaluate_yield(T)
         viol = np.full(T.shape[0], -np.inf)
@@ -631,6 +657,23 @@ class ToleranceProblem:
             lim = getattr(self.requirement, comp)
             if lim is not None:
                 viol = np.maximum(viol, np.max(val, axis=1) / lim - 1)
+        ev.violation = viol
+        return ev
+
+    def _evaluate_clearances(self, T: np.ndarray, measure: str) -> Evaluation:
+        """The certified worst case of geometric intervals + clearance classes (engine)."""
+        if measure != "worst_case":
+            raise ValidationError("measure", measure, "'worst_case' with clearance sources")
+        if not self.shape.plain:
+            raise ValidationError("tolerances", "offset/minus/plus", "centred intervals ±t next to clearance sources")
+        wc = clearance_measure.worst_case(self.robot, self.poses, self.jacobian, T, [c for c, _ in self.components])
+        ev = Evaluation(None, None)
+        viol = np.full(T.shape[0], -np.inf)
+        for comp, lim in self.components:
+            ev_fields = {"": wc.value, "_bound": wc.bound, "_contrib": wc.contrib, "_direction": wc.direction}
+            for suffix, d in ev_fields.items():
+                setattr(ev, comp + suffix, d[comp])
+            viol = np.maximum(viol, np.max(wc.value[comp], axis=1) / lim - 1)
         ev.violation = viol
         return ev
 

@@ -107,7 +107,7 @@ class AllocationResult:
             return (f"certified optimal: cost equals the proven lower bound {float(c['lower_bound']):.6g} "
                     f"to {abs(gap):.1e} (relative gap)")
         return (f"not certified: relative gap {gap:.2e} to the proven lower bound {float(c['lower_bound']):.6g}"
-                f", KKT residual {kkt:.1e}")
+                + (f", KKT residual {kkt:.1e}" if "kkt_residual" in c else ""))
 
     def summary(self) -> str:
         lines = [f"{self.method}: cost {self.cost:.5g}, feasible {self.feasible}"]

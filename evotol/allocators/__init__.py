@@ -4,13 +4,16 @@
 * :func:`allocate_optimum` – exact optimum of the convex problem, with a certificate;
 * :func:`allocate_ga` – single-objective GA (pymoo) with the penalty fitness of Yao 2013 eq. 15;
 * :func:`allocate_nsga2` – cost vs. accuracy Pareto front (pymoo NSGA-II);
+* :func:`allocate_monotone` – best design + proven lower bound of a monotone, non-convex problem
+  (joint clearances; polyblock outer approximation);
 * :mod:`evotol.allocators.baselines` – equal tolerance, proportional scaling, Lagrange closed forms.
 """
 from evotol.allocators.baselines import allocate_equal, allocate_lagrange, allocate_proportional
 from evotol.allocators.ga import allocate_ga
+from evotol.allocators.monotone import allocate_monotone
 from evotol.allocators.nsga import ParetoFront, allocate_nsga2
 from evotol.allocators.optimum import allocate_optimum
 from evotol.allocators.sensitivity import aggregated_sensitivity, allocate_sensitivity
 
-__all__ = ["allocate_sensitivity", "allocate_optimum", "allocate_ga", "allocate_nsga2", "ParetoFront",
+__all__ = ["allocate_sensitivity", "allocate_optimum", "allocate_ga", "allocate_nsga2", "allocate_monotone", "ParetoFront",
            "allocate_equal", "allocate_proportional", "allocate_lagrange", "aggregated_sensitivity"]

@@ -43,7 +43,7 @@ from pymoo.termination import get_termination
 from scipy.stats import qmc
 
 from evotol.allocators.budget import check_budget, cheapest_design
-from evotol.constraints import ConstraintRows
+from evotol.constraints import ConstraintRows, ExactRows, constraint_rows
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
 from evotol.result import make_result
@@ -122,6 +122,8 @@ class _BoundaryRepair(Repair):
 
 def boundary_scale(rows: ConstraintRows, T: np.ndarray, iters: int = 20) -> np.ndarray:
     """t ← clip(t / error) on the free tolerances, a few fixed-point steps (exact without clipping)."""
+    if isinstance(rows, ExactRows):     # no rows: a few exact evaluations of the engine
+        return rows.boundary_scale(T)
     P = rows.problem
     f = P.free
     T = T.copy()
@@ -226,7 +228,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     measure = problem.requirement.measure
     if budget is None:
         problem.check_feasible()
-    rows = ConstraintRows(problem, seed=seed) if measure in ("worst_case", "rss") else None
+    rows = constraint_rows(problem, seed=seed)
     if repair is None:
         repair = operators == "pymoo" and budget is None and rows is not None
     if repair and rows is None:

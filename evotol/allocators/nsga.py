@@ -21,7 +21,7 @@ from pymoo.termination import get_termination
 from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
 from evotol.allocators.ga import initial_population
-from evotol.constraints import ConstraintRows
+from evotol.constraints import ConstraintRows, constraint_rows
 from evotol.errors import ValidationError
 from evotol.pareto import ideal_point_knee
 from evotol.problem import ToleranceProblem
@@ -134,7 +134,7 @@ def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int
     for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1), ("seed", seed, 0)):
         if not isinstance(v, (int, np.integer)) or v < lo:
             raise ValidationError(name, v, f"an integer >= {lo}")
-    rows = ConstraintRows(problem, seed=seed) if problem.requirement.measure in ("worst_case", "rss") else None
+    rows = constraint_rows(problem, seed=seed)
     f = problem.free
     if log_scale is None:
         log_scale = bool(np.any(problem.upper[f] / problem.lower[f] > 100))

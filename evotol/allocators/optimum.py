@@ -33,6 +33,7 @@ from scipy.optimize import minimize, nnls
 
 from evotol.allocators.sensitivity import sensitivity_design
 from evotol.allocators.budget import check_budget
+from evotol.allocators.monotone import allocate_monotone
 from evotol.constraints import ConstraintRows
 from evotol.errors import ConvergenceError, ValidationError
 from evotol.problem import ToleranceProblem
@@ -179,6 +180,10 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
     ``max_rounds``): after each solve, the workspace is searched for the pose of largest
     normalised error, which is added before solving again, until the requirement holds there.
     ``result.info["refinement"]`` reports the worst pose, its error and the number of rounds.
+
+    With clearance sources (``problem.clearances``) the worst case is not convex: the result is
+    :func:`evotol.allocators.monotone.allocate_monotone`'s best design with a proven lower bound
+    (a bracket, reported "not certified" unless it closes).
     """
     if refine:
         from evotol.refinement import refine_poses
@@ -188,6 +193,11 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
                                                                      max_rows=max_rows), **opts)
         res.info["refinement"] = {k: v for k, v in info.items() if k != "pose_indices"}
         return res
+    if problem.clearances is not None:   # not convex: the monotone polyblock bracket instead
+        if budget is not None or refine:
+            raise ValidationError("budget" if budget is not None else "refine", budget if budget is not None else refine,
+                                  "None with clearance sources (the optimum bracket minimises cost at the requirement)")
+        return allocate_monotone(problem)
     t0 = time.perf_counter()
     if problem.requirement.measure not in ("worst_case", "rss"):
         raise ValidationError("requirement.measure", problem.requirement.measure,

@@ -1,0 +1,331 @@
+"""Joint clearances as allocated tolerances: the certified worst case of geometric tolerances and
+clearance bounds together (Deng 2012 Sec. VII.1 stated as an optimisation; issue 12 item 5).
+
+A **clearance class** is one tolerance t (SI) that sets some clearance bounds of some joints,
+each as ``factor * t``: the thesis's radial clearance of joint A, ``Δb_xy = t`` with its tilt
+``Δβ_xy = t / h`` (eq. III.2), is ``ClearanceClass("bxy_A", ("A",), {"b_xy": 1, "beta_xy": 1/h})``;
+one class may cover several joints (one fit for all passive joints). Bounds no class covers keep
+the mechanism's own values (e.g. the passive joints' idle rotation Δβ_z = 0.2 rad).
+
+Measure. At pose p, the geometric sources (intervals |δ_j| <= t_j through the first-order map J_g)
+and the clearance screws s (each joint's s_k in its set C_k(c), consistent with the loops,
+``B^T s = 0``) move the end-effector by ``J_g δ + C s``. The reachable set is the Minkowski sum
+``P_g(t) + P_c(c)``, and the worst case ``W(t, c) = max |J_g δ + C s|`` is computed by the
+certified engine of :mod:`robots.clearance` (``evaluate_cases(..., extra=(J_g, t))``): a value
+**attained** by explicit screws and source errors, and a **proven upper bound** (relative gap
+<= ``tol``, default 1e-3).
+
+Structure (proved in ``docs/clearance_allocation.md``, checked numerically in the tests):
+  * W is nondecreasing in every t_j and c_k (C_k(c) = c·B_k grows with c, B_k convex and
+    containing 0), and positively homogeneous of degree 1 in (t, c) when no fixed bound is
+    nonzero;
+  * for a fixed direction u the clearance support function h_c(u; c) is *concave* in c (a
+    mixture of two feasible screw sets is feasible for the mixed bounds) -- with loops, W is
+    **not convex** in (t, c): along random segments of the 5-bar's thesis problem it exceeds
+    its chord by up to 150-400 %, and two parallel chains give W = min(c_1, c_2) exactly.
+So the certified optimum's cutting planes do not apply; :mod:`evotol.allocators.monotone` uses
+the monotonicity instead (polyblock outer approximation: a proven lower bound on the cost).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from evotol.errors import ValidationError
+from robots.base import RobotErrorModel, SourceSpec
+
+#: clearance bound components, in the engine's column order (Deng 2012 eqs. III.3-III.6)
+COMPONENTS = ("beta_xy", "beta_z", "b_xy", "b_z")
+#: screw component (row of a joint's [dr; dt] in its frame) -> bound component index
+_SCREW_KIND = (0, 0, 1, 2, 2, 3)
+#: twist order of the engine [dtheta; dp] -> evotol's [dp; dtheta]
+_TO_ENGINE = [3, 4, 5, 0, 1, 2]
+
+
+@dataclass(frozen=True)
+class ClearanceClass:
+    """One allocated clearance tolerance (see the module docstring).
+
+    name: the tolerance's name (a source name of the problem); joints: names of the clearance
+    mechanism's joints it sets; bounds: component (``beta_xy``, ``beta_z``, ``b_xy``, ``b_z``) ->
+    factor, the bound is ``factor * t`` (rad or m); unit: ``"m"`` or ``"rad"`` of t (default: m if
+    a ``b_*`` component has factor 1, else rad); group: the cost-model group (default
+    ``"clearance"``).
+    """
+
+    name: str
+    joints: tuple[str, ...]
+    bounds: Mapping[str, float]
+    unit: str | None = None
+    group: str = "clearance"
+    description: str = ""
+
+    def __post_init__(self):
+        if isinstance(self.joints, str):
+            object.__setattr__(self, "joints", (self.joints,))
+        object.__setattr__(self, "joints", tuple(self.joints))
+        f0 = f"clearance class {self.name!r}"
+        if not self.joints:
+            raise ValidationError(f"{f0}.joints", self.joints, "at least one joint name")
+        if not isinstance(self.bounds, Mapping) or not self.bounds:
+            raise ValidationError(f"{f0}.bounds", self.bounds, f"a mapping component -> factor, components {COMPONENTS}")
+        for k, v in self.bounds.items():
+            if k not in COMPONENTS:
+                raise ValidationError(f"{f0}.bounds.{k}", k, f"one of {COMPONENTS}")
+            if not isinstance(v, (int, float, np.floating)) or not np.isfinite(v) or v <= 0:
+                raise ValidationError(f"{f0}.bounds.{k}", v, "a positive factor (bound = factor * tolerance)")
+        if self.unit is None:
+            unit = "m" if any(k.startswith("b_") and float(v) == 1.0 for k, v in self.bounds.items()) else "rad"
+            object.__setattr__(self, "unit", unit)
+        if self.unit not in ("m", "rad"):
+            raise ValidationError(f"{f0}.unit", self.unit, "'m' or 'rad'")
+
+    @property
+    def source(self) -> SourceSpec:
+        d = self.description or (", ".join(f"{k} = {v:g} t" for k, v in self.bounds.items())
+                                 + f" of joint{'s' if len(self.joints) > 1 else ''} {', '.join(self.joints)}")
+        return SourceSpec(self.name, 1, self.unit, self.group, d)
+
+
+def thesis_classes(joints: Sequence[str], h: float, axial: bool = True) -> list[ClearanceClass]:
+    """Deng 2012 Sec. VII.1.1: per joint a radial class ``bxy_<J>`` (Δb_xy = t, Δβ_xy = t / h,
+    eq. III.2; h: joint length, m) and, with ``axial``, an axial class ``bz_<J>`` (Δb_z = t)."""
+    if not (isinstance(h, (int, float, np.floating)) and h > 0):
+        raise ValidationError("h", h, "a positive joint length (m)")
+    out = [ClearanceClass(f"bxy_{j}", (j,), {"b_xy": 1.0, "beta_xy": 1.0 / h}, "m",
+                          description=f"radial clearance of joint {j} (Δb_xy = t, Δβ_xy = t/h, h = {h:g} m)")
+           for j in joints]
+    if axial:
+        out += [ClearanceClass(f"bz_{j}", (j,), {"b_z": 1.0}, "m", description=f"axial clearance of joint {j} (Δb_z = t)")
+                for j in joints]
+    return out
+
+
+@dataclass
+class ClearanceSources:
+    """Clearance classes of a clearance mechanism (:class:`robots.clearance.ClearanceMechanism`).
+
+    mechanism: the engine's mechanism (e.g. ``MechanismModel(...).clearance_mechanism()``, whose
+    pose coordinates are the robot's); classes: the allocated clearances; base_bounds: the bounds
+    (n_joints, 4) of everything no class sets (default: the joints' own bounds); tol: relative
+    certificate gap of the engine.
+    """
+
+    mechanism: object
+    classes: Sequence[ClearanceClass]
+    base_bounds: np.ndarray | None = None
+    tol: float = 1e-3
+    _maps: dict = field(default_factory=dict, repr=False)
+
+    def __post_init__(self):
+        mech = self.mechanism
+        if not hasattr(mech, "pose_maps") or not hasattr(mech, "joints"):
+            raise ValidationError("clearances.mechanism", mech, "a robots.clearance.ClearanceMechanism")
+        self.classes = tuple(self.classes)
+        if not self.classes:
+            raise ValidationError("clearances.classes", [], "at least one clearance class")
+        names = [j.name for j in mech.joints]
+        seen: dict = {}
+        self.index = []          # per class: (joint indices, component indices, factors)
+        for c in self.classes:
+            if not isinstance(c, ClearanceClass):
+                raise ValidationError("clearances.classes", c, "evotol.clearances.ClearanceClass values")
+            ji = []
+            for j in c.joints:
+                if j not in names:
+                    raise ValidationError(f"clearance class {c.name!r}.joints", j, f"a joint with clearance: {names}")
+                ji.append(names.index(j))
+            for j in ji:
+                for k in c.bounds:
+                    key = (j, COMPONENTS.index(k))
+                    if key in seen:
+                        raise ValidationError(f"clearance class {c.name!r}.bounds.{k}", names[j],
+                                              f"a bound set by one class only (already set by {seen[key]!r})")
+                    seen[key] = c.name
+            self.index.append((np.array(ji), np.array([COMPONENTS.index(k) for k in c.bounds]),
+                               np.array([float(v) for v in c.bounds.values()])))
+        if len({c.name for c in self.classes}) != len(self.classes):
+            raise ValidationError("clearances.classes", [c.name for c in self.classes], "unique class names")
+        base = mech.default_bounds() if self.base_bounds is None else np.asarray(self.base_bounds, float)
+        if base.shape != (mech.n_joints, 4) or not np.all(np.isfinite(base)) or np.any(base < 0):
+            raise ValidationError("clearances.base_bounds", np.shape(base), f"finite bounds >= 0 of shape ({mech.n_joints}, 4)")
+        base = base.copy()
+        for ji, ki, _ in self.index:
+            base[np.ix_(ji, ki)] = 0.0
+        self.base_bounds = base
+        # bound entry (joint, component) -> class index, -1 for a fixed bound
+        self.owner = -np.ones((mech.n_joints, 4), int)
+        for i, (ji, ki, _) in enumerate(self.index):
+            self.owner[np.ix_(ji, ki)] = i
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.classes)
+
+    @property
+    def sources(self) -> tuple[SourceSpec, ...]:
+        return tuple(c.source for c in self.classes)
+
+    @property
+    def homogeneous(self) -> bool:
+        """True when every bound is set by a class (no fixed part): W is then positively
+        homogeneous of degree 1 in (t, c)."""
+        return not np.any(self.base_bounds > 0)
+
+    def bounds(self, C) -> np.ndarray:
+        """Engine bounds (n, n_joints, 4) [beta_xy, beta_z, b_xy, b_z] (rad, m) of class tolerances C (n, n_classes)."""
+        C = np.atleast_2d(np.asarray(C, float))
+        if C.shape[-1] != len(self.classes):
+            raise ValidationError("clearance tolerances shape", C.shape, f"(n, {len(self.classes)})")
+        out = np.broadcast_to(self.base_bounds, (C.shape[0],) + self.base_bounds.shape).copy()
+        for i, (ji, ki, fac) in enumerate(self.index):
+            out[:, ji[:, None], ki[None, :]] = C[:, i, None, None] * fac[None, None, :]
+        return out
+
+    def maps(self, poses: np.ndarray):
+        """The engine's per-pose maps at ``poses`` (cached by the poses' bytes)."""
+        key = np.ascontiguousarray(poses, float).tobytes()
+        if key not in self._maps:
+            self._maps.clear()
+            self._maps[key] = self.mechanism.pose_maps(np.atleast_2d(poses))
+        return self._maps[key]
+
+
+class WithClearances(RobotErrorModel):
+    """A robot's geometric sources followed by clearance classes, for :class:`ToleranceProblem`.
+
+    The clearance classes have no linear column: ``sensitivity`` gives them zero columns, and the
+    problem evaluates them only through the certified engine (:func:`worst_case`). Not a robot to
+    use on its own (its first-order map omits the clearances)."""
+
+    def __init__(self, robot: RobotErrorModel, clearances: ClearanceSources, geometric: bool = True):
+        self.base, self.clearances, self.geometric = robot, clearances, bool(geometric)
+        self.name = f"{robot.name} + clearances" if geometric else f"{robot.name} (clearances)"
+        self.workspace = robot.workspace
+        own = tuple(robot.sources) if geometric else ()
+        clash = {s.name for s in own} & set(clearances.names)
+        if clash:
+            raise ValidationError("clearances.classes", sorted(clash), f"names other than the sources of {robot.name}")
+        for s in own:
+            if s.dim != 1:
+                raise ValidationError(f"{robot.name} source {s.name!r}", s.shape,
+                                      "interval sources only next to clearances (the engine adds intervals)")
+        self.sources = own + clearances.sources
+        self.n_geometric = len(own)
+
+    def sensitivity(self, poses) -> np.ndarray:
+        J = np.asarray(self.base.sensitivity(poses), float) if self.geometric else \
+            np.zeros((len(self.check_poses(poses)), 6, 0))
+        return np.concatenate([J, np.zeros(J.shape[:2] + (len(self.clearances.classes),))], axis=2)
+
+    def pose_error(self, poses, errors) -> np.ndarray:   # pragma: no cover - guarded by has_nonlinear_model
+        raise ValidationError("pose_error", self.name, "geometric sources only: clearances are first order")
+
+    @property
+    def has_nonlinear_model(self) -> bool:
+        return False
+
+
+@dataclass(frozen=True)
+class ClearanceWorstCase:
+    """Certified worst case at every pose of designs (n_designs, n_poses) per component
+    (``"position"`` m, ``"orientation"`` rad): attained value, proven bound, worst direction (unit,
+    base axes, (n, P, 3)) and each source's share of the error at that direction ((n, P, n_src);
+    the shares miss what the fixed, unallocated clearance bounds contribute)."""
+
+    value: dict
+    bound: dict
+    direction: dict
+    contrib: dict
+    n_solves: int
+
+
+def _only(maps, comp: str):
+    """The maps with the other target removed: the engine then skips it (position-only
+    requirements do not pay for the rotational branch and bound)."""
+    import dataclasses
+
+    if comp == "position":
+        return [dataclasses.replace(pm, C_rot=pm.C_rot[:, :0], rot_comps=()) for pm in maps]
+    return [dataclasses.replace(pm, C_pos=pm.C_pos[:, :0], pos_comps=()) for pm in maps]
+
+
+def worst_case(robot: WithClearances, poses: np.ndarray, jacobian: np.ndarray, T,
+               components: Sequence[str] = ("position", "orientation")) -> ClearanceWorstCase:
+    """Certified worst-case position (m) and orientation (rad) error of designs T (n, n_sources)
+    at every pose: the geometric intervals through ``jacobian`` (n_poses, 6, n_sources; the
+    clearance columns are ignored) plus the consistent clearance screws inside the classes' bounds
+    (Minkowski sum; :func:`robots.clearance.evaluate_cases` with ``extra``). Only the listed
+    ``components`` are computed."""
+    from robots.clearance import evaluate_cases
+
+    cl = robot.clearances
+    T = np.atleast_2d(np.asarray(T, float))
+    n, P, g = T.shape[0], len(poses), robot.n_geometric
+    maps = cl.maps(poses)
+    if len(components) == 1:
+        maps = _only(maps, components[0])
+    idx = np.tile(np.arange(P), n)                                   # case = (design, pose)
+    bounds = np.repeat(cl.bounds(T[:, g:]), P, axis=0)
+    extra = None
+    if g:
+        Jg = jacobian[:, _TO_ENGINE, :g]
+        extra = (Jg, np.repeat(T[:, :g], P, axis=0))
+    res = evaluate_cases(cl.mechanism, maps, idx, bounds, tol=cl.tol, extra=extra)
+    out = ClearanceWorstCase({}, {}, {}, {}, res.n_solves)
+    for comp in components:
+        w, rows = ("p", slice(3, 6)) if comp == "position" else ("r", slice(0, 3))
+        val = getattr(res, f"{w}_max")
+        tw = getattr(res, f"{w}_twist")
+        inv = 1.0 / np.where(val > 0, val, 1.0)
+        u = tw[:, rows] * inv[:, None]
+        contrib = np.zeros((n * P, T.shape[1]))
+        if g:   # u·J_j δ_j for the geometric sources at the maximiser
+            contrib[:, :g] = np.einsum("ck,ckj,cj->cj", u, Jg[idx][:, rows], getattr(res, f"{w}_extra"))
+        S = getattr(res, f"{w}_screws").reshape(n * P, -1)
+        for pm in maps:   # u·C_col s_col summed over the columns a class owns
+            C, comps = (pm.C_pos, pm.pos_comps) if w == "p" else (pm.C_rot, pm.rot_comps)
+            if not comps:
+                continue
+            part = np.einsum("ck,ckr,cr->cr", tw[:, list(comps)] * inv[:, None], C[idx], S[:, pm.cols])
+            own = cl.owner[pm.cols // 6, np.array(_SCREW_KIND)[pm.cols % 6]]
+            for r in np.flatnonzero(own >= 0):
+                contrib[:, g + own[r]] += part[:, r]
+        out.value[comp] = val.reshape(n, P)
+        out.bound[comp] = getattr(res, f"{w}_upper").reshape(n, P)
+        out.direction[comp] = u.reshape(n, P, 3)
+        out.contrib[comp] = (contrib * inv[:, None]).reshape(n, P, -1)
+    return out
+
+
+def sample_twists(robot: WithClearances, poses: np.ndarray, c: np.ndarray, n_samples: int, rng,
+                  mode: str = "uniform") -> np.ndarray:
+    """End-effector twists ``[dp; dtheta]`` (n_poses, n_samples, 6) of random consistent clearance
+    states for class tolerances c (n_classes,): every joint's screw drawn uniformly inside (or, with
+    ``mode="boundary"``, on the boundary of) its disks and intervals, projected onto the loop
+    equations ``B^T s = 0`` and scaled back into the set -- the sampling of
+    :func:`robots.clearance.sample_max_errors`, per sample instead of its maximum."""
+    cl = robot.clearances
+    b = cl.bounds(np.asarray(c, float)[None])[0]
+    maps = cl.maps(poses)
+    out = np.zeros((len(poses), n_samples, 6))
+    for p in range(len(poses)):
+        for pm in maps:
+            D = pm.row_bounds(b[None])[0]
+            nd, ni = pm.n_disk, pm.n_rows - 2 * pm.n_disk
+            ang = rng.uniform(0, 2 * np.pi, (n_samples, nd))
+            rad = np.ones((n_samples, nd)) if mode == "boundary" else np.sqrt(rng.uniform(0, 1, (n_samples, nd)))
+            disk = np.stack([rad * np.cos(ang), rad * np.sin(ang)], -1).reshape(n_samples, 2 * nd)
+            inter = rng.choice([-1.0, 1.0], (n_samples, ni)) if mode == "boundary" else rng.uniform(-1, 1, (n_samples, ni))
+            sig = np.concatenate([disk, inter], 1)
+            Bt = pm.B[p] * D[:, None]
+            if Bt.shape[1]:
+                sig = sig - (sig @ Bt) @ np.linalg.pinv(Bt)
+            nrm_d = np.sqrt((sig[:, :2 * nd].reshape(n_samples, nd, 2) ** 2).sum(-1)).max(-1, initial=0.0)
+            nrm_i = np.abs(sig[:, 2 * nd:]).max(-1, initial=0.0)
+            s = sig / np.maximum(np.maximum(nrm_d, nrm_i), 1.0)[:, None] * D
+            out[p][:, [_TO_ENGINE.index(k) for k in pm.pos_comps]] += s @ pm.C_pos[p].T
+            out[p][:, [_TO_ENGINE.index(k) for k in pm.rot_comps]] += s @ pm.C_rot[p].T
+    return out
