@@ -1,0 +1,160 @@
+"""Joint clearances in allocation (issue 12 item 5; Deng 2012 Sec. VII.1 as an optimisation).
+
+Checks the certified measure of geometric + clearance sources against independent routes (the
+core's own worst case of the geometric sources, the engine called with the thesis's bound
+convention), its structure (monotone; *not* convex -- a certified chord violation), the polyblock
+bracket against the certified convex optimum, the GA against the DOE of the same problem, and the
+Monte Carlo inside the clearance sets.
+"""
+import itertools
+
+import numpy as np
+import pytest
+
+from cost_models import ReciprocalCost
+from evotol.allocators import allocate_ga, allocate_monotone, allocate_nsga2, allocate_optimum
+from evotol.allocators.monotone import polyblock
+from evotol.clearances import ClearanceClass, ClearanceSources, sample_twists, thesis_classes
+from evotol.errors import ValidationError
+from evotol.montecarlo import verify
+from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from robots.clearance import ClearanceEvaluator
+from robots.mechanism.model import MechanismModel, resolve_description
+
+H = 0.01                                   # joint length of eq. III.2 (m), as deng2012-tolsynth
+COST = ReciprocalCost(1.0, 1.0, scale=1e-6)
+POSE = [[0.0, 0.07]]                       # Sec. VII.1.2
+
+
+@pytest.fixture(scope="module")
+def fivebar():
+    robot = MechanismModel(resolve_description("fivebar"))
+    mech = robot.clearance_mechanism()
+    cl = ClearanceSources(mech, thesis_classes([j.name for j in mech.joints], h=H))
+    return robot, mech, cl
+
+
+def thesis_problem(robot, cl, position=5e-5):
+    tols = {n: Tolerance(COST, lower=1e-7, upper=1e-4) for n in cl.names}
+    return ToleranceProblem(robot, tols, Requirement(position=position), POSE, clearances=cl)
+
+
+def test_geometric_part_equals_the_core_worst_case(fivebar):
+    """Clearances ~0: the engine's Minkowski-sum worst case equals measures.worst_case of the
+    geometric intervals (an independent method: hemisphere grid + ascent), to the engine's gap."""
+    robot, mech, cl = fivebar
+    names = list(robot.source_names) + list(cl.names)
+    tols = {n: Tolerance(COST, lower=1e-12, upper=1e-4) for n in names}
+    poses = robot.workspace.grid([2, 2])
+    req = Requirement(position=1e-4, orientation=1e-3)
+    mixed = ToleranceProblem(robot, tols, req, poses, clearances=cl)
+    geo = ToleranceProblem(robot, {n: tols[n] for n in robot.source_names}, req, poses)
+    rng = np.random.default_rng(3)
+    T = np.exp(rng.uniform(np.log(1e-7), np.log(1e-4), (3, len(names))))
+    T[:, len(robot.source_names):] = 1e-12
+    a, b = mixed.evaluate(T), geo.evaluate(T[:, :len(robot.source_names)])
+    for comp in ("position", "orientation"):
+        np.testing.assert_allclose(getattr(a, comp), getattr(b, comp), rtol=1.1e-3)
+        assert np.all(getattr(a, f"{comp}_bound") >= getattr(b, comp) * (1 - 1e-9))
+    assert a.position_contrib[..., :len(robot.source_names)].sum(-1) == pytest.approx(1.0, abs=2e-3)
+
+
+def test_clearance_classes_equal_the_thesis_bound_convention(fivebar):
+    """Class tolerances -> bounds: the same as mech.thesis_bounds(b_xy, b_z, h) (eq. III.2) fed
+    to the engine directly, the route of deng2012-tolsynth."""
+    robot, mech, cl = fivebar
+    pr = thesis_problem(robot, cl)
+    rng = np.random.default_rng(0)
+    C = np.exp(rng.uniform(np.log(1e-7), np.log(1e-4), (5, 10)))
+    direct = ClearanceEvaluator(mech, POSE).evaluate(mech.thesis_bounds(b_xy=C[:, :5], b_z=C[:, 5:], h=H))
+    ev = pr.evaluate(C)
+    np.testing.assert_allclose(ev.position[:, 0], direct.p_max, rtol=1e-12)
+    np.testing.assert_allclose(ev.position_bound[:, 0], direct.p_upper, rtol=1e-12)
+    assert np.all(direct.p_upper <= direct.p_max * (1 + 1.01e-3))
+
+
+def test_worst_case_is_monotone_but_not_convex(fivebar):
+    """W never decreases when a clearance grows (the bound at c' >= c is above the value attained
+    at c); along random segments the value *attained* inside exceeds the chord of the *certified
+    bounds* at the ends: proven non-convexity (Deng 2012 Sec. VII.1.2 problem)."""
+    robot, mech, cl = fivebar
+    pr = thesis_problem(robot, cl)
+    rng = np.random.default_rng(1)
+    a = np.exp(rng.uniform(np.log(1e-7), np.log(1e-4), (20, 10)))
+    b = a * np.exp(rng.uniform(0, 1.5, a.shape))          # b >= a componentwise
+    ea, eb = pr.evaluate(a), pr.evaluate(b)
+    assert np.all(eb.position_bound >= ea.position * (1 - 1e-12))
+    assert np.all(eb.position >= ea.position * (1 - 1.01e-3))
+    lam = np.linspace(0, 1, 5)
+    worst = 0.0
+    for k in range(8):
+        x, y = np.exp(rng.uniform(np.log(1e-7), np.log(1e-4), (2, 10)))
+        ev = pr.evaluate((1 - lam)[:, None] * x + lam[:, None] * y)
+        chord = (1 - lam) * ev.position_bound[0, 0] + lam * ev.position_bound[-1, 0]
+        worst = max(worst, float(np.max(ev.position[:, 0] / chord - 1)))
+    assert worst > 0.1     # measured 1.5 (150 % above the chord) on random segments
+
+
+def test_bad_inputs_name_the_field(fivebar):
+    robot, mech, cl = fivebar
+    with pytest.raises(ValidationError, match="requirement.measure"):
+        ToleranceProblem(robot, {n: Tolerance(COST, lower=1e-7, upper=1e-4) for n in cl.names},
+                         Requirement(position=5e-5, measure="rss"), POSE, clearances=cl)
+    with pytest.raises(ValidationError, match="joints"):
+        ClearanceSources(mech, [ClearanceClass("x", ("Q",), {"b_xy": 1.0})])
+    with pytest.raises(ValidationError, match="already set"):
+        ClearanceSources(mech, [ClearanceClass("x", ("A",), {"b_xy": 1.0}), ClearanceClass("y", ("A", "C"), {"b_xy": 1.0})])
+    with pytest.raises(ValidationError, match="bounds.b_q"):
+        ClearanceClass("x", ("A",), {"b_q": 1.0})
+
+
+def test_polyblock_brackets_the_certified_convex_optimum(fivebar):
+    """On a convex (geometric-only) problem the polyblock's lower bound stays below the certified
+    optimum and its best design above it; the bracket closes to the requested gap."""
+    robot, mech, cl = fivebar
+    sub = MechanismModel(resolve_description("fivebar"), sources=["L1", "L3", "theta1"])
+    tols = {n: Tolerance(COST, lower=1e-7, upper=1e-3) for n in sub.source_names}
+    pr = ToleranceProblem(sub, tols, Requirement(position=5e-5), [[0.0, 0.06], [0.01, 0.065]])
+    opt = allocate_optimum(pr)
+    assert opt.verdict.startswith("certified optimal")
+    res = polyblock(pr, rel_gap=0.01, max_evaluations=6000)
+    assert res["lower_bound"] <= opt.cost * (1 + 1e-9)
+    assert res["upper_bound"] >= opt.cost * (1 - 1e-6)
+    assert res["converged"] and res["gap"] <= 0.01
+
+
+def test_ga_beats_the_doe_and_stays_above_the_lower_bound(fivebar):
+    """The GA on the certified measure vs the best entry of a factorial DOE of the same problem
+    (levels as deng2012-tolsynth's, two per class): cheaper and feasible; the polyblock's proven
+    lower bound lies below both."""
+    robot, mech, cl = fivebar
+    pr = thesis_problem(robot, cl)
+    L = np.array(list(itertools.product([1e-6, 1e-5], repeat=5)))
+    Z = np.array(list(itertools.product([1e-6, 1e-4], repeat=5)))
+    T = np.concatenate([np.repeat(L, len(Z), 0), np.tile(Z, (len(L), 1))], 1)
+    ev = pr.evaluate(T)
+    c = np.where(ev.violation <= 1e-9, pr.cost(T), np.inf)
+    doe_best = float(c.min())
+    ga = allocate_ga(pr, pop_size=12, n_gen=6, seed=0, progress=False, seed_with_baselines=False)
+    assert ga.feasible and ga.cost < doe_best
+    mono = allocate_monotone(pr, incumbent=ga.t, max_evaluations=150)
+    assert mono.certificate["lower_bound"] <= ga.cost
+    assert mono.cost <= ga.cost + 1e-12 and mono.feasible
+    front = allocate_nsga2(pr, pop_size=8, n_gen=2, seed=0, progress=False)
+    np.testing.assert_allclose(front.table["position_error"], pr.evaluate(front.table[list(pr.names)].to_numpy()).position[:, 0])
+
+
+def test_monte_carlo_samples_inside_the_clearance_sets(fivebar):
+    """Sampled consistent clearance states never exceed the certified bound, and on the boundary
+    they come within reach of it (the engine's maximiser is one such state)."""
+    robot, mech, cl = fivebar
+    pr = thesis_problem(robot, cl)
+    t = np.full(10, 2e-6)
+    ev = pr.evaluate(t)
+    mc = verify(pr, t, n_samples=400, progress=False)
+    ratio = mc.max_error_over_worst_case["position"]
+    assert 0.2 < ratio <= 1.0
+    tw = sample_twists(pr.robot, pr.poses, t, 20000, np.random.default_rng(0), mode="boundary")
+    p = np.linalg.norm(tw[0, :, :3], axis=1)
+    assert p.max() <= ev.position_bound[0, 0] * (1 + 1e-9)
+    assert p.max() >= 0.5 * ev.position[0, 0]
