@@ -34,6 +34,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
+from evotol.keywords import unknown_key_message
 from robots.base import RobotErrorModel, SourceSpec
 
 #: clearance bound components, in the engine's column order (Deng 2012 eqs. III.3-III.6)
@@ -191,6 +192,42 @@ class ClearanceSources:
             self._maps.clear()
             self._maps[key] = self.mechanism.pose_maps(np.atleast_2d(poses))
         return self._maps[key]
+
+
+CLASS_KEYS = ("name", "joints", "bounds", "unit", "group", "description")
+TABLE_KEYS = ("h", "joints", "axial", "class", "geometric", "tol")
+
+
+def from_table(table: dict, robot) -> ClearanceSources:
+    """The ``[clearances]`` table of a study file: the thesis's classes (``h`` = joint length, m;
+    optional ``joints`` (default: every joint with clearance), ``axial = false`` for radial only)
+    and/or explicit ``[[clearances.class]]`` tables (``name``, ``joints``, ``bounds = {b_xy = 1.0,
+    beta_xy = 100.0}``, optional ``unit``, ``group``). ``robot.clearance_mechanism()`` gives the
+    joints and the fixed bounds (the description's ``[clearance]``)."""
+    if not isinstance(table, dict):
+        raise ValidationError("clearances", table, f"a table with keys among {TABLE_KEYS}")
+    for k in table:
+        if k not in TABLE_KEYS:
+            raise ValidationError(f"clearances.{k}", k, unknown_key_message(k, TABLE_KEYS))
+    if not hasattr(robot, "clearance_mechanism"):
+        raise ValidationError("clearances", robot.name, "a robot with joint clearances (clearance_mechanism())")
+    mech = robot.clearance_mechanism()
+    classes = []
+    if "h" in table:
+        joints = table.get("joints", [j.name for j in mech.joints])
+        classes += thesis_classes(joints, table["h"], bool(table.get("axial", True)))
+    elif "joints" in table or "axial" in table:
+        raise ValidationError("clearances.h", None, "the joint length h (m) of eq. III.2 for the thesis's classes")
+    for i, c in enumerate(table.get("class", [])):
+        if not isinstance(c, dict):
+            raise ValidationError(f"clearances.class[{i}]", c, "a table")
+        for k in c:
+            if k not in CLASS_KEYS:
+                raise ValidationError(f"clearances.class[{i}].{k}", k, unknown_key_message(k, CLASS_KEYS))
+        if "name" not in c or "joints" not in c or "bounds" not in c:
+            raise ValidationError(f"clearances.class[{i}]", sorted(c), "name, joints and bounds")
+        classes.append(ClearanceClass(**{**c, "joints": tuple(np.atleast_1d(c["joints"]).tolist())}))
+    return ClearanceSources(mech, classes, tol=float(table.get("tol", 1e-3)))
 
 
 class WithClearances(RobotErrorModel):

@@ -5,7 +5,9 @@ See ``reports/studies/ucr3_example.toml`` for every field. Units are SI (m, rad)
 (``docs/tolerances.md``): per source ``offset``/``minus``/``plus``, ``cost_width``,
 ``contains_nominal``, ``fixed = t``, ``distribution`` (+ ``sigma_k``, ``mean_shift``); a
 ``[shared]`` table (``legs = ["l1", "l2", "l3"]``) with ``shared_cost = "part" | "variable"``;
-``[poses] refine = true`` (or a table of refinement options) for the whole workspace.
+``[poses] refine = true`` (or a table of refinement options) for the whole workspace;
+``[clearances]`` joint-clearance classes allocated with the geometric sources
+(``docs/clearance_allocation.md``).
 Every key is checked: an unknown one is an error naming it and the nearest valid key.
 """
 from __future__ import annotations
@@ -18,8 +20,9 @@ from pathlib import Path
 import numpy as np
 
 import cost_models
-from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
-                               allocate_sensitivity)
+from evotol import clearances
+from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_monotone, allocate_nsga2,
+                               allocate_optimum, allocate_sensitivity)
 from evotol.allocators.budget import check_budget
 from evotol.distributions import Distribution
 from evotol.errors import ValidationError
@@ -35,9 +38,9 @@ from robots.assembly import assembly_from_spec
 from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
-           "equal": allocate_equal, "lagrange": allocate_lagrange}
+           "equal": allocate_equal, "lagrange": allocate_lagrange, "monotone": allocate_monotone}
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
-            "methods", "verify", "distribution", "sigma_k")
+            "methods", "verify", "distribution", "sigma_k", "clearances")
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
@@ -169,18 +172,23 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         poses = np.asarray(ps["list"], dtype=float)
     else:
         raise ValidationError("poses", ps, "one of grid = [n, ...], latin_hypercube = n, list = [[...], ...]")
+    # [clearances]: joint-clearance classes allocated with (or, geometric = false, instead of) the
+    # robot's sources (docs/clearance_allocation.md)
+    cl = clearances.from_table(spec["clearances"], robot) if "clearances" in spec else None
+    sourced = clearances.WithClearances(robot, cl, spec["clearances"].get("geometric", True)) if cl else robot
     bounds = spec.get("bounds", {})
-    _check_bounds_table(bounds, robot)
+    _check_bounds_table(bounds, sourced)
     costs = spec.get("cost", {})
     overrides = spec.get("sources", {})
-    unknown = set(overrides) - set(robot.source_names)
+    unknown = set(overrides) - set(sourced.source_names)
     if unknown:
         u = sorted(unknown)[0]
-        raise ValidationError(f"sources.{u}", u, f"a source of {robot.name}: " + unknown_key_message(u, robot.source_names))
-    tol = {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec) for s in robot.sources}
+        raise ValidationError(f"sources.{u}", u, f"a source of {sourced.name}: " + unknown_key_message(u, sourced.source_names))
+    tol = {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec) for s in sourced.sources}
     req = Requirement(**spec.get("requirement", {}))
     shared = spec.get("shared")
-    return ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"))
+    return ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"),
+                            clearances=cl)
 
 
 def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:

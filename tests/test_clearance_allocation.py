@@ -158,3 +158,27 @@ def test_monte_carlo_samples_inside_the_clearance_sets(fivebar):
     p = np.linalg.norm(tw[0, :, :3], axis=1)
     assert p.max() <= ev.position_bound[0, 0] * (1 + 1e-9)
     assert p.max() >= 0.5 * ev.position[0, 0]
+
+
+def test_study_file_states_clearances_with_cost_models_per_class(tmp_path):
+    """``[clearances]`` in a study file: the thesis's classes next to the description's sources,
+    costs by group; unknown keys name the field."""
+    import tomllib
+    from pathlib import Path
+
+    from evotol.studyfile import load_problem
+
+    path = Path(__file__).resolve().parents[1] / "reports" / "studies" / "fivebar_clearances.toml"
+    spec = tomllib.loads(path.read_text())
+    pr = load_problem(spec, base_dir=path.parent)
+    assert pr.names[:8] == ("L0", "L1", "L2", "L3", "L4", "L5", "theta1", "theta3")
+    assert pr.names[8:] == tuple(f"bxy_{j}" for j in "ACBDE") + tuple(f"bz_{j}" for j in "ACBDE")
+    assert pr.groups()[8:] == ["clearance"] * 10
+    only = load_problem({**spec, "clearances": {"h": 0.01, "geometric": False, "joints": ["A", "B"], "axial": False}},
+                        base_dir=path.parent)
+    assert only.names == ("bxy_A", "bxy_B")
+    with pytest.raises(ValidationError, match="clearances.hh"):
+        load_problem({**spec, "clearances": {"hh": 0.01}}, base_dir=path.parent)
+    with pytest.raises(ValidationError, match=r"clearances.class\[0\].joint"):
+        load_problem({**spec, "clearances": {"class": [{"name": "f", "joint": ["C"], "bounds": {"b_xy": 1.0}}]}},
+                     base_dir=path.parent)

@@ -52,6 +52,9 @@ def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> n
 
 
 def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, collective_groups=()) -> np.ndarray:
+    if problem.clearances is not None:
+        raise ValidationError("method", "sensitivity", "a problem without clearance classes (a clearance has no "
+                                                      "linear sensitivity: use optimum, ga or nsga2)")
     measure = measure or problem.requirement.measure
     if measure not in ("worst_case", "rss"):
         measure = "rss"
