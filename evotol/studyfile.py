@@ -233,6 +233,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
                 kw = dict(kw)
                 if m == "ga":
                     kw.setdefault("seed", seed)
+                if m == "monotone" and "ga" in results and results["ga"].feasible:   # the GA's design as incumbent
+                    kw.setdefault("incumbent", results["ga"].t)
                 if m in REFINING_METHODS and refine_option(spec):
                     kw.setdefault("refine", refine_option(spec))
                 results[m] = METHODS[m](problem, **kw)

@@ -15,7 +15,11 @@ algorithm, here in x = log t:
     outer point z has W(z) > E attained by explicit errors (the engine's attained value is a
     true lower bound of W), so no t > z is feasible: every vertex v > z is replaced by the n
     vertices v + (z_i - v_i) e_i, and vertices dominated by others are dropped;
-  * vertices whose cost is not below the incumbent's are pruned.
+  * vertices whose cost is not below the incumbent's are pruned, and each box is reduced by the
+    incumbent: a design x <= v cheaper than it has c_i(x_i) < ub - sum_{j != i} c_j(v_j), which
+    gives a lower corner l(v) > lo (closed form through the one-variable costs); a box whose
+    lower corner misses E is dropped, and the projection runs along l(v) -> v (Tuy, Al-Khayyal &
+    Thach 2005's reduction, lower side).
 
 The result is a bracket [lower bound, cost of the best feasible design found]; its relative gap
 is reported in the certificate (a loose bracket is reported as such, never as optimal). A
@@ -71,6 +75,27 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
     def cost(X):
         return problem.cost(design(np.atleast_2d(X)))
 
+    M = problem.variable_matrix
+    w = problem.cost_weight
+
+    def var_costs(X):
+        """Cost carried by each free variable at log-tolerances X (m, n): c_i(x_i)."""
+        T = design(X)
+        C = np.stack([problem.tolerances[nm].cost_of(T[:, j]) * w[j] for j, nm in enumerate(problem.names)], 1)
+        return C @ M
+
+    def lower_corner(v, cv):
+        """Reduction of the boxes [lo, v] by the incumbent: a design x <= v cheaper than ub has
+        c_i(x_i) < ub - sum_{j != i} c_j(v_j) (every other c_j(x_j) >= c_j(v_j)), so x_i is above
+        the root of that equation (bisection on the decreasing one-variable costs)."""
+        r = ub - cv[:, None] + var_costs(v)
+        a, b = np.broadcast_to(lo, v.shape).copy(), v.copy()
+        for _ in range(50):
+            m = 0.5 * (a + b)
+            dear = var_costs(m) >= r
+            a, b = np.where(dear, m, a), np.where(dear, b, m)
+        return np.minimum(a, v)
+
     n_eval = 0
     best_t, ub = None, np.inf
     if incumbent is not None:
@@ -99,18 +124,27 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
         rounds += 1
         pick = np.argsort(cV)[:batch]
         v = V[pick]
-        # bisection on lambda in [0, 1] along lo -> v (monotone), all picked vertices at once
+        base = lower_corner(v, cV[pick]) if np.isfinite(ub) else np.broadcast_to(lo, v.shape).copy()
+        # a box [base, v] whose lower corner already misses E holds no design cheaper than ub
+        empty = rows.violation(design(base)) > 1e-9
+        n_eval += len(v)
+        if empty.any():
+            V = np.delete(V, pick[empty], axis=0)
+            v, base = v[~empty], base[~empty]
+            if not len(v):
+                continue
+        # bisection on lambda in [0, 1] along base -> v (monotone), all picked vertices at once
         a, b = np.zeros(len(v)), np.ones(len(v))
         for _ in range(bisections):
             m = 0.5 * (a + b)
-            ok = rows.violation(design(lo + m[:, None] * (v - lo))) <= 1e-9
+            ok = rows.violation(design(base + m[:, None] * (v - base))) <= 1e-9
             n_eval += len(v)
             a, b = np.where(ok, m, a), np.where(ok, b, m)
-        inner = lo + a[:, None] * (v - lo)
-        outer = lo + b[:, None] * (v - lo)
+        inner = base + a[:, None] * (v - base)
+        outer = base + b[:, None] * (v - base)
         ci = cost(inner)
         i = int(np.argmin(ci))
-        if a[i] > 0 and ci[i] < ub:
+        if ci[i] < ub:
             best_t, ub = design(inner[i:i + 1])[0], float(ci[i])
         # cut every vertex strictly above an outer point (no design there is feasible)
         for z in outer:
