@@ -207,7 +207,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     name = spec.get("name", path.stem)
     out = Path(out) if out else path.parent
     problem = load_problem(spec, base_dir=path.parent)
-    methods = spec.get("methods", {"sensitivity": {}, "optimum": {}, "ga": {}})
+    methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None   # no sensitivity rule
+                       else {"sensitivity": {}, "optimum": {}, "ga": {}})
     vspec = spec.get("verify", {"n_samples": 1000})
     for m, kw in methods.items():           # every table checked before the first method runs
         if m != "nsga2" and m not in METHODS:

@@ -226,3 +226,23 @@ def test_clearalloc_study_quick_redraws_from_its_json(tmp_path):
     assert s["doe"]["cost"] is None or s["ga"]["cost"] <= s["doe"]["cost"]
     assert s["monte_carlo"]["max_exceed_rate"] == 0.0
     assert study.render(StudyResult(s)).render() == (tmp_path / "deng2012-clearalloc.html").read_text()
+
+
+def test_two_parallel_fits_give_the_minimum_not_a_convex_function():
+    """The counterexample of docs/clearance_allocation.md: two coaxial revolute joints in parallel
+    between base and platform, radial plays c_1, c_2 only. The platform moves by s_1 = s_2, so
+    W = min(c_1, c_2) -- the engine reproduces the closed form, and at the midpoint of
+    (1, 3) -> (3, 1) µm W = 2 µm is twice the chord (1 µm): not convex, not quasi-convex."""
+    from robots.clearance import Chain, ClearanceBounds, ClearanceMechanism, DHFrame, DHTree, Joint, evaluate_cases
+
+    tree = DHTree([DHFrame("J1", "0"), DHFrame("J2", "0"), DHFrame("P", "J1", sigma=2)])
+    zero = ClearanceBounds(0.0, 0.0, 0.0, 0.0)
+    mech = ClearanceMechanism(name="two fits", tree=tree, joints=[Joint("J1", "J1", False, zero), Joint("J2", "J2", False, zero)],
+                              bodies={"P": "P"}, chains=[Chain("a", "base", "P", ("J1",)), Chain("b", "base", "P", ("J2",), "J2")],
+                              end_effector="P", joint_values=lambda poses: {}, planar=True)
+    cl = ClearanceSources(mech, [ClearanceClass("c1", ("J1",), {"b_xy": 1.0}), ClearanceClass("c2", ("J2",), {"b_xy": 1.0})])
+    C = np.array([[1e-6, 3e-6], [2e-6, 2e-6], [3e-6, 1e-6], [5e-6, 4e-6]])
+    res = evaluate_cases(mech, cl.maps(np.zeros((1, 2))), np.zeros(len(C), int), cl.bounds(C))
+    np.testing.assert_allclose(res.p_max, C.min(axis=1), rtol=1e-6)
+    np.testing.assert_allclose(res.p_upper, C.min(axis=1), rtol=1.01e-3)
+    assert res.p_max[1] > 1.99 * 0.5 * (res.p_upper[0] + res.p_upper[2])
