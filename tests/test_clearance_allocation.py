@@ -221,6 +221,9 @@ def test_clearalloc_study_quick_redraws_from_its_json(tmp_path):
     study = get("deng2012-clearalloc")
     study.run(tmp_path, quick=True)
     s = json.loads((tmp_path / "deng2012-clearalloc.json").read_text())
+    from evotol.units import numbers_without_unit
+
+    assert numbers_without_unit(s, s["units"]) == []  # docs/units.md (issue 15)
     assert s["ga"]["feasible"] and s["ga"]["p_max_mm"] <= 0.05 * (1 + 1e-9)
     assert s["bracket"]["lower_bound"] <= s["bracket"]["best_cost"] <= s["ga"]["cost"] + 1e-12
     assert s["doe"]["cost"] is None or s["ga"]["cost"] <= s["doe"]["cost"]
