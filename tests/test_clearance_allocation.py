@@ -179,6 +179,8 @@ def test_monte_carlo_samples_inside_the_clearance_sets(fivebar):
     t = np.full(10, 2e-6)
     ev = pr.evaluate(t)
     mc = verify(pr, t, n_samples=400, progress=False)
+    with pytest.raises(ValidationError, match="model"):
+        verify(pr, t, n_samples=10, model="nonlinear")
     ratio = mc.max_error_over_worst_case["position"]
     assert 0.2 < ratio <= 1.0
     tw = sample_twists(pr.robot, pr.poses, t, 20000, np.random.default_rng(0), mode="boundary")
