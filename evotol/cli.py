@@ -41,6 +41,7 @@ def _write_index(out: Path, summaries: dict[str, dict]) -> Path:
 def cmd_reproduce(args) -> int:
     from evotol import studies
     from evotol.arguments import check_scheduler_answers
+    from evotol.interrupt import CtrlC
     from evotol.outputs import output_folder
     from evotol.progress import Heartbeat
 
@@ -52,6 +53,7 @@ def cmd_reproduce(args) -> int:
         check_scheduler_answers(args.scheduler)
         os.environ["EVOTOL_DASK_SCHEDULER"] = args.scheduler  # read by the grid/design studies
     summaries, failed, seconds = {}, [], {}
+    interrupted = None                     # (study, what happened) after Ctrl-C
     t_all = time.perf_counter()
     for name in names:
         study = studies.get(name)
@@ -59,8 +61,11 @@ def cmd_reproduce(args) -> int:
         t0 = time.perf_counter()
         try:
             extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
-            with Heartbeat(name):          # progress lines in a log file (no terminal, no tqdm)
+            with Heartbeat(name), CtrlC() as ctrl_c:   # progress lines in a log file (no terminal, no tqdm)
                 summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
+        except KeyboardInterrupt:
+            interrupted = (name, "stopped before its files were written (files of an earlier run, if any, are untouched)")
+            break
         except EvotolError as exc:
             failed.append(name)
             print(f"[evotol] {name} failed: {exc}", file=sys.stderr)
@@ -77,12 +82,23 @@ def cmd_reproduce(args) -> int:
         finally:
             seconds[name] = time.perf_counter() - t0
         print(f"[evotol] {name} done in {time.perf_counter() - t0:.1f} s -> {out / (name + '.html')}", flush=True)
+        if ctrl_c.count:                   # a GA/NSGA-II caught Ctrl-C and returned its best design so far
+            interrupted = (name, "written, but a method inside it stopped early at Ctrl-C (best design so far)")
+            break
     index = _write_index(out, summaries)
     print(f"[evotol] index: {index}")
     if len(names) > 1:
         _print_time_table(seconds, failed, time.perf_counter() - t_all)
     if failed:
         print(f"[evotol] failed: {', '.join(failed)}", file=sys.stderr)
+    if interrupted is not None:
+        name, what = interrupted
+        done = [n for n in summaries if n != name]
+        skipped = names[names.index(name) + 1:]
+        print(f"evotol: interrupted (Ctrl-C) during {name}: {what}; "
+              f"completed and written: {', '.join(done) or 'none'}; not run: {', '.join(skipped) or 'none'}",
+              file=sys.stderr)
+        return 130
     return 1 if failed else 0
 
 
