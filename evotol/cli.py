@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import html
 import importlib
+import math
 import pkgutil
 import sys
 import time
@@ -122,6 +123,7 @@ def cmd_run(args) -> int:
     study_file = input_file(args.study_file, "study file", "a study TOML file")
     out = output_folder(args.out if args.out is not None else study_file.parent, "--out")
     summary = run_study_file(study_file, out=out, seed=args.seed, keep_going=args.keep_going)
+    _print_results(summary)
     print(f"[evotol] wrote {summary['html']} and {summary['json']}")
     if summary.get("interrupted"):
         what = summary["interruption"]
@@ -130,6 +132,29 @@ def cmd_run(args) -> int:
               + f"; the results computed until then are in {summary['json']}", file=sys.stderr)
         return 0 if args.keep_going else 130
     return 0
+
+
+def _print_results(summary: dict) -> None:
+    """One line per method of ``evotol run``: cost, largest errors (mm, deg), feasibility and the
+    Monte Carlo exceed rate, so the terminal answers "what did I get" without opening the JSON."""
+    import json
+
+    data = json.loads(Path(summary["json"]).read_text(encoding="utf-8"))
+    results, mc = data.get("results") or {}, data.get("monte_carlo") or {}
+    if not results:
+        return
+    print("[evotol] results (cost in the cost models' unit; errors: attained worst value over the poses)")
+    print(f"  {'method':12s} {'cost':>12s} {'position mm':>12s} {'orient. deg':>12s}  {'feasible':8s} {'MC exceed':>9s}")
+    for name, r in results.items():
+        if not isinstance(r, dict) or "cost" not in r:
+            continue
+        p, o = r.get("max_position_error"), r.get("max_orientation_error")
+        rate = (mc.get(name) or {}).get("max_exceed_rate")
+        print(f"  {name:12s} {r['cost']:12.6g} {'-' if p is None else format(p * 1e3, '.5g'):>12s} "
+              f"{'-' if o is None else format(math.degrees(o), '.5g'):>12s}  {str(r.get('feasible')):8s} "
+              f"{'' if rate is None else format(rate, '.2%'):>9s}")
+        if r.get("verdict"):
+            print(f"  {'':12s} {r['verdict']}")
 
 
 def cmd_list(args) -> int:
