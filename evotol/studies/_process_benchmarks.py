@@ -139,8 +139,13 @@ def run_case(pp: ProcessProblem, config: dict, enumerate_all: bool) -> dict:
                              "cost": r.cost, "over_optimum": r.cost / bb.cost - 1, "feasible": r.feasible,
                              "normalised_error": r.normalised_error}
                          for k, r in allocate_process_baselines(pp).items()}
-    front = process_front(pp, pop_size=config["pop_size"], n_gen=config["n_gen"], seed=config["seed"])
+    ga_kw = {k: config[k] for k in ("pop_size", "n_gen", "seed")}
+    front = process_front(pp, **ga_kw)
     case["front"] = {"cost": front.cost.tolist(), "normalised_error": front.normalised_error.tolist()}
+    yfront = process_front(pp, objective="yield", **ga_kw)
+    case["yield_front"] = {"distribution": "normal, t = 3 sigma", "cost": yfront.cost.tolist(),
+                           "yield": yfront["yield"].tolist(),
+                           "yield_at_optimum": float(pp.assembly_yield([[bb.tolerances[n] for n in pp.names]])[0])}
     case["mc_nonlinear_at_optimum"] = _mc_nonlinear(pp, bb.tolerances, config["n_mc"], config["seed"])
     case["seconds"] = time.perf_counter() - t0
     return case
@@ -195,4 +200,13 @@ def render_cases(title: str, subtitle: str, summary: dict, problems_text: dict):
                         name="GA")
         fig.update_layout(xaxis_title="max error / limit", yaxis_title="cost", height=420)
         rep.figure(fig, div_id=f"front_{label}")
+        yf = case.get("yield_front")
+        if yf is not None:
+            fig = go.Figure()
+            fig.add_scatter(x=yf["yield"], y=yf["cost"], mode="markers", name="NSGA-II front (cost vs. yield)")
+            fig.add_scatter(x=[yf["yield_at_optimum"]], y=[opt], mode="markers", marker=dict(size=12, symbol="star"),
+                            name="exact optimum of this case")
+            fig.update_layout(xaxis_title=f"yield P(|Δy| <= L), first-order model, {yf['distribution']}",
+                              yaxis_title="cost", height=420)
+            rep.figure(fig, div_id=f"yield_front_{label}")
     return rep

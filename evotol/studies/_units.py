@@ -37,8 +37,10 @@ _GEOMETRY = {"b": "m", "d": "m", "e": "m", "l1": "m", "l2": "m", "a1": "m", "a2"
 _SYNTHESIS = {"presets_shown_in_report": COUNT, "report_lines": COUNT, "p_max_at": COUNT, "r_max_at": COUNT,
               "total": COUNT, "chunks": COUNT, "sample_entries": "index",
               "dbz_max_effect_on_p_decades": "decades (log10)", "dbz_max_effect_on_r_decades": "decades (log10)"}
+_YIELD = "1: probability every response is within its limit (first-order model)"
 _PROCESS = {"incumbent": COST, "smallest_pruned_bound": COST, "history": COST + " (best fitness per generation)",
-            "leaf_kkt_residual": RELATIVE, "max_abs_normalised": RELATIVE + ": |response error| / limit"}
+            "leaf_kkt_residual": RELATIVE, "max_abs_normalised": RELATIVE + ": |response error| / limit",
+            "yield": _YIELD, "yield_at_optimum": _YIELD}
 
 
 _NORMALISED = "1: length / D, D = (r1_bar + r2_bar + r3_bar) / 3 (Lara-Molina 2019 eqs. 1-2)"
