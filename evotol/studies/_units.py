@@ -28,7 +28,9 @@ _MAPS = {"map_seconds": "s", "p_max": "mm", "p_upper": "mm", "r_max": "rad", "r_
          "margin": "1: fraction of the axis range", "singular_rows": "mixed: see the report's table columns",
          "monte_carlo_rows": "mixed: see the report's table columns",
          "baseline_rows": "mixed: see the report's table columns", "grid_points_on_locus": COUNT,
-         "p_asymmetry_certified_points": COUNT, "multistart_n_variables": COUNT}
+         "p_asymmetry_certified_points": COUNT, "multistart_n_variables": COUNT,
+         "n_solved": COUNT, "n_reused": COUNT, "checked_poses": COUNT,
+         "max_map_residual": RELATIVE, "max_consistency_residual": RELATIVE}
 _GEOMETRY = {"b": "m", "d": "m", "e": "m", "l1": "m", "l2": "m", "a1": "m", "a2": "m", "p": "m",
              "alpha_0": "rad", "alpha_d": "rad", "beta": "rad",
              "b_xy": "m", "b_z": "m", "beta_xy": "rad", "beta_z_active": "rad", "beta_z_passive": "rad"}
