@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import html
 import importlib
+import math
 import pkgutil
 import sys
 import time
@@ -41,6 +42,7 @@ def _write_index(out: Path, summaries: dict[str, dict]) -> Path:
 def cmd_reproduce(args) -> int:
     from evotol import studies
     from evotol.arguments import check_scheduler_answers
+    from evotol.interrupt import CtrlC
     from evotol.outputs import output_folder
     from evotol.progress import Heartbeat
 
@@ -52,6 +54,7 @@ def cmd_reproduce(args) -> int:
         check_scheduler_answers(args.scheduler)
         os.environ["EVOTOL_DASK_SCHEDULER"] = args.scheduler  # read by the grid/design studies
     summaries, failed, seconds = {}, [], {}
+    interrupted = None                     # (study, what happened) after Ctrl-C
     t_all = time.perf_counter()
     for name in names:
         study = studies.get(name)
@@ -59,8 +62,11 @@ def cmd_reproduce(args) -> int:
         t0 = time.perf_counter()
         try:
             extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
-            with Heartbeat(name):          # progress lines in a log file (no terminal, no tqdm)
+            with Heartbeat(name), CtrlC() as ctrl_c:   # progress lines in a log file (no terminal, no tqdm)
                 summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
+        except KeyboardInterrupt:
+            interrupted = (name, "stopped before its files were written (files of an earlier run, if any, are untouched)")
+            break
         except EvotolError as exc:
             failed.append(name)
             print(f"[evotol] {name} failed: {exc}", file=sys.stderr)
@@ -77,12 +83,23 @@ def cmd_reproduce(args) -> int:
         finally:
             seconds[name] = time.perf_counter() - t0
         print(f"[evotol] {name} done in {time.perf_counter() - t0:.1f} s -> {out / (name + '.html')}", flush=True)
+        if ctrl_c.count:                   # a GA/NSGA-II caught Ctrl-C and returned its best design so far
+            interrupted = (name, "written, but a method inside it stopped early at Ctrl-C (best design so far)")
+            break
     index = _write_index(out, summaries)
     print(f"[evotol] index: {index}")
     if len(names) > 1:
         _print_time_table(seconds, failed, time.perf_counter() - t_all)
     if failed:
         print(f"[evotol] failed: {', '.join(failed)}", file=sys.stderr)
+    if interrupted is not None:
+        name, what = interrupted
+        done = [n for n in summaries if n != name]
+        skipped = names[names.index(name) + 1:]
+        print(f"evotol: interrupted (Ctrl-C) during {name}: {what}; "
+              f"completed and written: {', '.join(done) or 'none'}; not run: {', '.join(skipped) or 'none'}",
+              file=sys.stderr)
+        return 130
     return 1 if failed else 0
 
 
@@ -106,6 +123,7 @@ def cmd_run(args) -> int:
     study_file = input_file(args.study_file, "study file", "a study TOML file")
     out = output_folder(args.out if args.out is not None else study_file.parent, "--out")
     summary = run_study_file(study_file, out=out, seed=args.seed, keep_going=args.keep_going)
+    _print_results(summary)
     print(f"[evotol] wrote {summary['html']} and {summary['json']}")
     if summary.get("interrupted"):
         what = summary["interruption"]
@@ -114,6 +132,29 @@ def cmd_run(args) -> int:
               + f"; the results computed until then are in {summary['json']}", file=sys.stderr)
         return 0 if args.keep_going else 130
     return 0
+
+
+def _print_results(summary: dict) -> None:
+    """One line per method of ``evotol run``: cost, largest errors (mm, deg), feasibility and the
+    Monte Carlo exceed rate, so the terminal answers "what did I get" without opening the JSON."""
+    import json
+
+    data = json.loads(Path(summary["json"]).read_text(encoding="utf-8"))
+    results, mc = data.get("results") or {}, data.get("monte_carlo") or {}
+    if not results:
+        return
+    print("[evotol] results (cost in the cost models' unit; errors: attained worst value over the poses)")
+    print(f"  {'method':12s} {'cost':>12s} {'position mm':>12s} {'orient. deg':>12s}  {'feasible':8s} {'MC exceed':>9s}")
+    for name, r in results.items():
+        if not isinstance(r, dict) or "cost" not in r:
+            continue
+        p, o = r.get("max_position_error"), r.get("max_orientation_error")
+        rate = (mc.get(name) or {}).get("max_exceed_rate")
+        print(f"  {name:12s} {r['cost']:12.6g} {'-' if p is None else format(p * 1e3, '.5g'):>12s} "
+              f"{'-' if o is None else format(math.degrees(o), '.5g'):>12s}  {str(r.get('feasible')):8s} "
+              f"{'' if rate is None else format(rate, '.2%'):>9s}")
+        if r.get("verdict"):
+            print(f"  {'':12s} {r['verdict']}")
 
 
 def cmd_list(args) -> int:

@@ -121,6 +121,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
 
     ``model="nonlinear"``: the worst-vertex check and interval Monte Carlo through the robot's
     ``pose_error`` instead (:func:`evotol.nonlinear.verify_nonlinear`, returns its NonlinearCheck)."""
+    if model == "nonlinear" and problem.clearances is not None:
+        raise ValidationError("model", model, "'linear' with clearance sources (the clearance model is first order)")
     if model == "nonlinear":
         return verify_nonlinear(problem, tolerances, n_samples=n_samples, seed=seed, chunk_poses=chunk_poses)
     if model != "linear":

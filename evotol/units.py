@@ -9,12 +9,14 @@
   names (a tolerance is in m or rad depending on the source).
 
 :func:`unit_of` resolves the unit of any number in such a file from its JSON path, so a test can
-check that no number is left without one. ``evotol run`` writes this block; the seed studies are
-being moved to it by their owners (the table in docs/units.md says which already are).
+check that no number is left without one. ``evotol run`` writes this block, and so does every seed
+study (:meth:`evotol.studies.Study.units_block`, with the study's own keys from
+``evotol/studies/_units.py``).
 """
 from __future__ import annotations
 
-from typing import Sequence
+import fnmatch
+from typing import Mapping, Sequence
 
 CONVENTION = ("SI units (m, rad, s) unless the key ends in a unit suffix (_mm, _um, _deg, _percent); "
               "costs in the cost models' unit; ratios are dimensionless; tolerances per source in "
@@ -23,7 +25,7 @@ CONVENTION = ("SI units (m, rad, s) unless the key ends in a unit suffix (_mm, _
 COST = "cost-model unit"
 COUNT = "count"
 RELATIVE = "1 (dimensionless ratio)"
-SUFFIXES = {"_mm": "mm", "_um": "µm", "_deg": "deg", "_percent": "%", "_m": "m", "_rad": "rad", "_s": "s"}
+SUFFIXES = {"_mm2": "mm²", "_mm": "mm", "_um": "µm", "_deg": "deg", "_percent": "%", "_m": "m", "_rad": "rad", "_s": "s"}
 
 #: unit of a number by its key (the last component of its JSON path)
 KEYS = {
@@ -53,29 +55,81 @@ RATIO_PARENTS = {"max_error_over_worst_case": RELATIVE + ": sampled max / worst 
 
 def units_block(problem) -> dict:
     """The ``units`` block of a JSON file about ``problem`` (see the module docstring)."""
-    per_source = dict(zip(problem.names, problem.units()))
-    return {"convention": CONVENTION, "keys": dict(KEYS), "ratio_parents": dict(RATIO_PARENTS),
-            "tolerances": per_source}
+    return make_units_block(tolerances=dict(zip(problem.names, problem.units())))
+
+
+def make_units_block(keys: Mapping[str, str] | None = None, tolerances: Mapping[str, str] | None = None,
+                     tables: Mapping[str, Mapping[str, str]] | None = None) -> dict:
+    """A ``units`` block: the common ``keys`` updated by a writer's own ``keys``, per-source SI
+    units (``tolerances``), tolerance ``tables`` in stated units (key -> {source: unit}) and the
+    generic name rules (``patterns``)."""
+    return {"convention": CONVENTION, "keys": {**KEYS, **dict(keys or {})},
+            "ratio_parents": dict(RATIO_PARENTS), "tolerances": dict(tolerances or {}),
+            "tables": {k: dict(v) for k, v in (tables or {}).items()},
+            "patterns": [list(p) for p in PATTERNS]}
+
+
+#: generic name rules, tried in order on a key when neither ``keys`` nor a suffix names its unit
+#: (fnmatch patterns; documented in docs/units.md)
+PATTERNS = (
+    ("*seconds*", "s"), ("seconds_*", "s"), ("timing*", "s"),
+    ("n_*", COUNT), ("*_count", COUNT), ("count", COUNT), ("index", "index"), ("*_index", "index"),
+    ("seed", COUNT), ("generation", COUNT), ("generations", COUNT), ("*_evaluations", COUNT),
+    ("*cost", COST), ("cost_*", COST), ("*_costs", COST), ("*_cost_*", COST),
+    ("*_over_*", RELATIVE), ("over_*", RELATIVE), ("*relative_difference*", RELATIVE),
+    ("*_resumed", COUNT), ("evaluations", COUNT), ("*_solves", COUNT), ("*_nodes", COUNT), ("*_ratio", RELATIVE), ("ratio*", RELATIVE), ("saving*", RELATIVE),
+    ("*gap*", RELATIVE + ": relative gap"), ("*rtol*", RELATIVE), ("*_rel_*", RELATIVE), ("*rel_error*", RELATIVE),
+    ("*_rate", "1: fraction"), ("*_rate_*", "1: fraction"), ("fraction*", "1: fraction"), ("*_fraction", "1: fraction"),
+    ("*percent*", "%"), ("*share*", "%"),
+)
+SUFFIXES_SI = "_si"
+
+
+def _key_unit(key: str, block: dict, patterns: bool = True) -> str | None:
+    """Unit a key names by itself: ``keys`` entry, unit suffix or (``patterns``) generic name rule."""
+    if key in block.get("keys", {}):
+        return block["keys"][key]
+    for suffix, unit in SUFFIXES.items():
+        if key.endswith(suffix):
+            return unit
+    for pattern, unit in (block.get("patterns", ()) if patterns else ()):
+        if fnmatch.fnmatchcase(key, pattern):
+            return unit
+    return None
 
 
 def unit_of(path: Sequence, block: dict) -> str | None:
     """Unit of the number at JSON ``path`` (list of keys / indices) under ``block``; None if unknown.
 
-    Source names (under a ``tolerances`` table or as columns of ``pareto_front``) take the
-    source's unit; other keys their suffix or ``block["keys"]``.
+    In order: a child of a ``ratio_parents`` key; a source name inside one of ``tables`` (a
+    tolerance table in stated units, e.g. the paper's mm/deg); the number's own key (``keys``,
+    unit suffix, generic ``patterns``); a source name under a key containing ``tolerance``
+    (or ``pareto_front``): the unit suffix of that key if it has one, else the source's SI unit
+    from ``tolerances``; finally the nearest enclosing key that names a unit (by ``keys`` or
+    a suffix, not by a name rule: a list or table of numbers inherits its key's unit,
+    ``verification_error_mm/case 1/3`` is in mm).
     """
     keys = [p for p in path if isinstance(p, str)]
     if not keys:
         return None
     last = keys[-1]
-    if last in block.get("tolerances", {}) and ("tolerances" in keys or "pareto_front" in keys):
-        return block["tolerances"][last]
     if len(keys) >= 2 and keys[-2] in block.get("ratio_parents", {}):
         return block["ratio_parents"][keys[-2]]
-    if last in block.get("keys", {}):
-        return block["keys"][last]
-    for suffix, unit in SUFFIXES.items():
-        if last.endswith(suffix):
+    for parent in reversed(keys[:-1]):
+        table = block.get("tables", {}).get(parent)
+        if table is not None and last in table:
+            return table[last]
+    own = _key_unit(last, block)
+    if own is not None:
+        return own
+    if last in block.get("tolerances", {}):
+        for parent in reversed(keys[:-1]):
+            if "tolerance" in parent or parent == "pareto_front":
+                suffix_unit = next((u for s, u in SUFFIXES.items() if parent.endswith(s)), None)
+                return suffix_unit or block["tolerances"][last]
+    for parent in reversed(keys[:-1]):
+        unit = _key_unit(parent, block, patterns=False)
+        if unit is not None:
             return unit
     return None
 

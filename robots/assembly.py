@@ -234,6 +234,17 @@ class AssemblyFunction(RobotErrorModel):
         return out
 
 
+class _LinearResponses:
+    """``y_k = Σ_j a_kj x_j`` as a picklable callable (robots go to worker processes and Dask)."""
+
+    def __init__(self, dims: tuple[str, ...], matrix: np.ndarray):
+        self.dims, self.matrix = dims, matrix
+
+    def __call__(self, **x):
+        X = np.stack([x[d] for d in self.dims], axis=-1)
+        return tuple(X @ self.matrix[i] for i in range(self.matrix.shape[0]))
+
+
 class LinearStack(AssemblyFunction):
     """A linear tolerance stack ``y_k = Σ_j a_kj x_j``: sensitivities given, nothing to derive.
 
@@ -264,11 +275,7 @@ class LinearStack(AssemblyFunction):
         self.matrix = A
         nominal = dict(nominal or {d: 0.0 for d in dims})
 
-        def stack(**x):
-            X = np.stack([x[d] for d in dims], axis=-1)
-            return tuple(X @ A[i] for i in range(A.shape[0]))
-
-        super().__init__(stack, {d: nominal.get(d, 0.0) for d in dims}, limits, name=name, **kw)
+        super().__init__(_LinearResponses(tuple(dims), A), {d: nominal.get(d, 0.0) for d in dims}, limits, name=name, **kw)
 
 
 def resolve(spec: str) -> Callable:

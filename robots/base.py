@@ -113,7 +113,9 @@ class Workspace:
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:   # 3.5 was truncated to 3
             raise ValidationError("latin_hypercube n", n, "a positive integer")
         u = qmc.LatinHypercube(d=self.dim, seed=seed).random(int(n))
-        return qmc.scale(u, self.low, self.high) if self.dim else u
+        # affine map rather than qmc.scale, which rejects a fixed coordinate (low == high)
+        lo, hi = np.asarray(self.low, float), np.asarray(self.high, float)
+        return lo + u * (hi - lo)
 
     def contains(self, poses: np.ndarray, rtol: float = 1e-9) -> np.ndarray:
         poses = np.atleast_2d(poses)

@@ -376,6 +376,14 @@ class IRSBot2:
                                   joint_values=self.dh_values, planar=False, pose_names=("x", "z"))
 
 
+def mirror_joint_map(mech: ClearanceMechanism) -> list[int]:
+    """Joint ``k`` -> its mirror image under x -> -x: leg 1 <-> leg 2. :meth:`IRSBot2.clearance_mechanism`
+    lists leg 2's joints in the same order as leg 1's, so the map swaps the two halves of the list;
+    :func:`robots.clearance.symmetry.prove_mirror` proves (per pose pair) that it is a symmetry."""
+    n = len(mech.joints)
+    return [(k + n // 2) % n for k in range(n)]
+
+
 #: the Cartesian square of the error maps (Figs. VI.1/VI.3). The thesis's text does not give its
 #: range; this square is centred on the z axis, inside the workspace of Tabs. VI.1-VI.2 and, like
 #: the thesis's (Fig. VI.2), crossed by the parallel singularity.

@@ -179,6 +179,8 @@ def test_monte_carlo_samples_inside_the_clearance_sets(fivebar):
     t = np.full(10, 2e-6)
     ev = pr.evaluate(t)
     mc = verify(pr, t, n_samples=400, progress=False)
+    with pytest.raises(ValidationError, match="model"):
+        verify(pr, t, n_samples=10, model="nonlinear")
     ratio = mc.max_error_over_worst_case["position"]
     assert 0.2 < ratio <= 1.0
     tw = sample_twists(pr.robot, pr.poses, t, 20000, np.random.default_rng(0), mode="boundary")
@@ -211,7 +213,7 @@ def test_study_file_states_clearances_with_cost_models_per_class(tmp_path):
                      base_dir=path.parent)
 
 
-def test_clearalloc_study_quick_redraws_from_its_json(tmp_path):
+def test_clearalloc_study_quick_redraws_from_its_json(tmp_path, fivebar):
     """deng2012-clearalloc --quick: the DOE, GA and bracket are consistent (lower bound <= GA <=
     cheapest feasible DOE entry, when one is feasible), and the page redraws from the JSON alone."""
     import json
@@ -221,11 +223,24 @@ def test_clearalloc_study_quick_redraws_from_its_json(tmp_path):
     study = get("deng2012-clearalloc")
     study.run(tmp_path, quick=True)
     s = json.loads((tmp_path / "deng2012-clearalloc.json").read_text())
+    from evotol.units import numbers_without_unit
+
+    assert numbers_without_unit(s, s["units"]) == []  # docs/units.md (issue 15)
     assert s["ga"]["feasible"] and s["ga"]["p_max_mm"] <= 0.05 * (1 + 1e-9)
     assert s["bracket"]["lower_bound"] <= s["bracket"]["best_cost"] <= s["ga"]["cost"] + 1e-12
     assert s["doe"]["cost"] is None or s["ga"]["cost"] <= s["doe"]["cost"]
     assert s["monte_carlo"]["max_exceed_rate"] == 0.0
     assert study.render(StudyResult(s)).render() == (tmp_path / "deng2012-clearalloc.html").read_text()
+    # the engine's value at the GA's design vs the thesis's own method (QR + SLSQP multistart) on the
+    # same bounds scaled x100 (all bounds, idle rotation included: W scales with them) -- at the raw
+    # micrometre scale SLSQP stops at its absolute tolerance and reports ~1/3 of the maximum
+    from robots.clearance import multistart_max_pose_error
+
+    mech = fivebar[1]
+    t = np.array([s["ga"]["tolerances_mm"][n] for n in s["classes"]]) * 1e-3
+    b = mech.thesis_bounds(b_xy=t[:5], b_z=t[5:], h=H) * 100
+    ms = multistart_max_pose_error(mech, POSE, b, n_starts=8, seed=0)
+    assert s["ga"]["p_max_mm"] * (1 - 1e-3) <= ms.p_max[0] * 1e3 / 100 <= s["ga"]["p_upper_mm"] * (1 + 1e-6)
 
 
 def test_two_parallel_fits_give_the_minimum_not_a_convex_function():

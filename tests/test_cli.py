@@ -10,7 +10,7 @@ from evotol.cli import main
 EXAMPLE = Path(__file__).resolve().parents[1] / "reports" / "studies" / "ucr3_example.toml"
 
 
-def test_run_example_study_file(tmp_path):
+def test_run_example_study_file(tmp_path, capsys):
     text = EXAMPLE.read_text().replace("grid = [5, 5, 3]", "grid = [3, 3, 2]").replace("n_gen = 60", "n_gen = 15")
     f = tmp_path / "s.toml"
     f.write_text(text)
@@ -19,6 +19,11 @@ def test_run_example_study_file(tmp_path):
     assert d["results"]["optimum"]["feasible"]
     assert d["results"]["ga"]["cost"] <= d["results"]["optimum"]["cost"] * 1.01
     assert d["results"]["optimum"]["tolerances"]["R1"] == pytest.approx(2e-5)   # locked
+    # the terminal answers "what did I get": one line per method with its cost and largest error (mm)
+    lines = {ln.split()[0]: ln.split() for ln in capsys.readouterr().out.splitlines() if ln.startswith("  ")}
+    for name, r in d["results"].items():
+        assert float(lines[name][1]) == pytest.approx(r["cost"], rel=1e-5)
+        assert float(lines[name][2]) == pytest.approx(r["max_position_error"] * 1e3, rel=1e-4)
     # the report loads the plotly.js written once beside it (issue 11 item 7), no inlined 4.8 MB copy
     from evotol.reporting.html import plotlyjs_name
     page = (tmp_path / "ucr3_example.html").read_text()

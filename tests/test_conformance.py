@@ -35,6 +35,33 @@ def test_registered_robot(name, check):
     _robot_checks(name)[check]()
 
 
+def _shipped_models():
+    """Robots that are not classes of the registry: every shipped mechanism description (as
+    ``mechanism = NAME`` builds it) and the process-selection studies' assemblies."""
+    from evotol.studies._process_benchmarks import clutch_assembly, stack_problem
+    from robots.mechanism.model import SHIPPED, MechanismModel, resolve_description
+
+    models = {f"mechanism:{p.stem}": (lambda n=p.stem: MechanismModel(resolve_description(n)))
+              for p in sorted(SHIPPED.glob("*.toml"))}
+    models["assembly:clutch"] = clutch_assembly
+    models["assembly:linear-stack"] = lambda: stack_problem().robot
+    return models
+
+
+SHIPPED_MODELS = _shipped_models()
+
+
+@lru_cache(maxsize=None)
+def _shipped_checks(name):
+    return dict(robot_checks(SHIPPED_MODELS[name](), rtol=1e-5))
+
+
+@pytest.mark.parametrize("name, check", [(r, c.__name__) for r in SHIPPED_MODELS for c in CHECKS])
+def test_shipped_description_and_assembly(name, check):
+    """Every shipped mechanism description and assembly model passes the same checks (issue 11)."""
+    _shipped_checks(name)[check]()
+
+
 @pytest.mark.parametrize("name, check", [(m, c) for m in COST_MODELS for c in COST_CHECKS])
 def test_registered_cost_model(name, check):
     """Every registered cost model's ``example()`` on 0.5-8 x its scale."""

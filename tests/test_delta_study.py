@@ -81,3 +81,11 @@ def test_table3_intervals_through_the_core_bound_sampled_vertices_and_match_nonl
     assert np.all(sampled <= wc * (1 + 1e-9))
     v = worst_vertex_errors(t3, half)["position"]
     assert np.allclose(v, wc, rtol=1e-2)
+
+
+def test_every_number_in_the_json_has_a_unit(quick):
+    """docs/units.md: the file's ``units`` block resolves the unit of every number (issue 15)."""
+    from evotol.units import numbers_without_unit
+
+    data = quick[1]
+    assert data["units"]["keys"] and numbers_without_unit(data, data["units"]) == []

@@ -17,6 +17,7 @@ import pytest
 
 from evotol import doe  # noqa: E402
 from evotol.studies import deng2012_tolsynth as ts  # noqa: E402
+from evotol.units import numbers_without_unit  # noqa: E402
 
 MM = 1e-3
 
@@ -79,6 +80,7 @@ def test_never_below_the_thesis_multistart_method(ev):
 def test_quick_study_writes_json_entries_and_report(tmp_path):
     s = ts.STUDY.run(tmp_path, quick=True, workers=1, progress=False)
     saved = json.loads((tmp_path / f"{ts.NAME}.json").read_text())
+    assert numbers_without_unit(saved, saved["units"]) == []  # docs/units.md (issue 15)
     df = pd.read_parquet(tmp_path / saved["files"]["entries_parquet"])
     # 256 distinct factorial entries, each evaluated once
     assert len(df) == 256 and df["entry"].is_unique and s["n_entries"] == 256
@@ -145,6 +147,7 @@ def test_quick_dimsynth_on_the_engine(tmp_path):
 
     ds.STUDY.run(tmp_path, quick=True, workers=1, progress=False)
     saved = json.loads((tmp_path / f"{ds.NAME}.json").read_text())
+    assert numbers_without_unit(saved, saved["units"]) == []  # docs/units.md (issue 15)
     df = pd.read_parquet(tmp_path / saved["files"]["entries_parquet"])
     assert len(df) == 8 and df["feasible"].all() and df["entry"].is_unique
     for name, res in saved["presets"].items():

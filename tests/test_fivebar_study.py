@@ -69,3 +69,11 @@ def test_report_is_drawn_from_the_json_alone(study):
     out, _ = study
     d = json.loads((out / "deng2012-5bar.json").read_text())
     assert get("deng2012-5bar").render(StudyResult(d)).render() == (out / "deng2012-5bar.html").read_text()
+
+
+def test_every_number_in_the_json_has_a_unit(study):
+    """docs/units.md: the file's ``units`` block resolves the unit of every number (issue 15)."""
+    from evotol.units import numbers_without_unit
+
+    data = study[1]
+    assert data["units"]["keys"] and numbers_without_unit(data, data["units"]) == []

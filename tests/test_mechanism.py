@@ -216,6 +216,9 @@ def test_reproduce_mechanisms_fields_quick(tmp_path):
     res = compute(study.make_config(quick=True, map_grid=2))
     m = res.summary["mechanisms"]
     assert {"5-bar", "IRSBot-2"} <= set(m)
+    from evotol.units import numbers_without_unit
+
+    assert numbers_without_unit(res.summary, study.units_block()) == []  # docs/units.md (issue 15)
     for e in m.values():
         assert {"fd_rel_error", "builtin_rel_diff", "n_sources", "seconds"} <= set(e)
         assert e["fd_rel_error"] < 1e-6

@@ -132,3 +132,11 @@ def test_report_is_drawn_from_the_json_alone(quick_run):
     d = json.loads((out / "laramolina2019-5r.json").read_text())
     page = studies.get("laramolina2019-5r").render(studies.StudyResult(d)).render()
     assert page == (out / "laramolina2019-5r.html").read_text()
+
+
+def test_every_number_in_the_json_has_a_unit(quick_run):
+    """docs/units.md: the file's ``units`` block resolves the unit of every number (issue 15)."""
+    from evotol.units import numbers_without_unit
+
+    data = quick_run[1]
+    assert data["units"]["keys"] and numbers_without_unit(data, data["units"]) == []

@@ -156,3 +156,59 @@ def test_loose_requirement_is_proved_without_enumerating():
     cheapest = sum(min(float(p.total(p.upper)) for p in pp.processes[n]) for n in pp.names)
     assert bb.cost == pytest.approx(cheapest, rel=1e-12)
     assert bb.n_convex_solves <= 2
+
+
+def test_assembly_yield_is_the_normal_closed_form():
+    """First-order yield of the statistical machinery vs. 2Φ(−L/σ) with σ² = Σ (∂y/∂x_j · t_j/3)²
+    (normal, t = 3σ); at the RSS optimum the stack is exactly 3σ, yield 0.9973."""
+    from scipy.stats import norm
+
+    pp = clutch_problem("rss")
+    rng = np.random.default_rng(1)
+    T = np.exp(rng.uniform(np.log(pp.lo.min(1)), np.log(np.nanmax(pp.hi, 1)), size=(20, pp.n_sources)))
+    J = pp.robot.sensitivity(pp.robot.response_poses)[0, 2, :]      # d(Δφ/L)/dx_j
+    sigma = np.sqrt(((T * J / 3) ** 2).sum(1))
+    assert pp.assembly_yield(T) == pytest.approx(1 - 2 * norm.sf(1 / sigma), rel=1e-9, abs=1e-12)
+    opt = allocate_process_optimum(pp)
+    t = [[opt.tolerances[n] for n in pp.names]]
+    assert pp.assembly_yield(t)[0] == pytest.approx(2 * norm.cdf(3) - 1, rel=1e-9)
+    # uniform sources in ±t: variance t²/3 instead of t²/9, σ √3 times larger:
+    # moment-matched yield 2Φ(√3) − 1 at the same t
+    assert pp.assembly_yield(t, pp.yield_model("uniform"))[0] == pytest.approx(2 * norm.cdf(np.sqrt(3)) - 1, rel=1e-9)
+    # the 3-D quadrature of evotol.statistical agrees to its accuracy on this rank-one covariance
+    q = pp.yield_model().evaluate(T, 0.9973).miss["position"][:, 0]
+    assert 1 - q == pytest.approx(pp.assembly_yield(T), abs=1e-4)
+
+
+def test_cost_vs_yield_front_trades_cost_for_yield(clutch_wc):
+    """Along the NSGA-II front cost rises with yield; a worst-case-feasible design (the
+    worst-case optimum) has yield 1 − tiny, and no front point reaching that yield is cheaper
+    than the exact optimum of the RSS problem at the same 3σ yield."""
+    pp, opt = clutch_wc
+    df = process_front(pp, objective="yield", pop_size=30, n_gen=30, seed=0)
+    assert {"cost", "yield", "miss_probability"} <= set(df.columns)
+    assert np.all(np.diff(df.cost) >= 0) and np.all(np.diff(df["yield"]) >= -1e-12)
+    rss_opt = allocate_process_optimum(clutch_problem("rss"))
+    at_3sigma = df[df["yield"] >= 2 * __import__("scipy").stats.norm.cdf(3) - 1]
+    assert at_3sigma.empty or at_3sigma.cost.min() >= rss_opt.cost * (1 - 1e-9)
+
+
+def test_front_and_yield_bad_input_are_validation_errors(clutch_wc):
+    pp, _ = clutch_wc
+    with pytest.raises(ValidationError, match="objective"):
+        process_front(pp, objective="cost")
+    with pytest.raises(ValidationError, match="distribution"):
+        pp.yield_model(3.0)
+
+
+def test_ga_and_front_problems_pickle(clutch_wc):
+    """Module-level pymoo problems (parallel evaluation and checkpointing need them picklable)."""
+    import pickle
+
+    from evotol.allocators.process import _ProcessFrontProblem, _ProcessGAProblem
+
+    pp, _ = clutch_wc
+    for prob in (_ProcessGAProblem(pp), _ProcessFrontProblem(pp, "yield", pp.yield_model())):
+        back = pickle.loads(pickle.dumps(prob))
+        X = np.full((1, pp.n_sources), 0.5)
+        assert np.allclose(back.evaluate(X), prob.evaluate(X))

@@ -14,6 +14,9 @@ def test_process_study_writes_html_and_json_with_the_issue_keys(tmp_path, name):
     summary = studies.get(name).run(tmp_path, quick=True)
     assert (tmp_path / f"{name}.html").exists()
     data = json.loads((tmp_path / f"{name}.json").read_text())
+    from evotol.units import numbers_without_unit
+
+    assert numbers_without_unit(data, data["units"]) == []  # docs/units.md (issue 15)
     for k in KEYS:
         assert k in data
     for case in data["cases"].values():

@@ -46,12 +46,16 @@ from __future__ import annotations
 import copy
 import itertools
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 from scipy.optimize import nnls
+
+from pymoo.core.callback import Callback
+from pymoo.core.problem import Problem
+from pymoo.core.repair import Repair
 
 from cost_models.base import CostModel
 from cost_models.power import PowerCost
@@ -217,6 +221,40 @@ class ProcessProblem:
     def normalised_error(self, T) -> np.ndarray:
         """Exact max error / bound over poses and components (<= 1: feasible)."""
         return self.base.evaluate(np.atleast_2d(T), top_only=True).violation + 1
+
+    def yield_model(self, distribution="normal"):
+        """First-order statistical model of the responses (:class:`evotol.statistical.FirstOrderYield`,
+        ``docs/statistical.md``) with every source distributed as ``distribution`` (a kind name or an
+        :class:`evotol.distributions.Distribution`; default normal with t = 3σ)."""
+        from evotol.distributions import Distribution
+
+        if not isinstance(distribution, (str, Distribution)):
+            raise ValidationError("distribution", distribution, "a distribution kind name or evotol.distributions.Distribution")
+        tol = {n: Tolerance(t.cost, t.lower, t.upper, distribution=distribution) for n, t in self.base.tolerances.items()}
+        req = replace(self.requirement, measure="yield", probability=None, ppm=None)
+        return ToleranceProblem(self.robot, tol, req, self.base.poses).first_order_yield()
+
+    def assembly_yield(self, T, model=None) -> np.ndarray:
+        """Yield of designs ``T`` (n, n_sources), SI: P(every response within its limit) of the
+        first-order model, as the Bonferroni bound 1 − Σ_k P(|Δy_k| > L_k) over the responses
+        (poses); exact for one response (the clutch). ``model``: :meth:`yield_model` (default normal).
+
+        The response mean m_k and variance s_k² (in units of L_k) are the model's moments
+        (:meth:`evotol.statistical.FirstOrderYield.moments`); an assembly response is a scalar (row z
+        of the error twist), so P(|Δy_k| > L_k) = Φ((−1 − m_k)/s_k) + Φ((m_k − 1)/s_k) exactly
+        (normal sources; moment-matched normal otherwise, ``model.exact``) -- the 3-D octant rule
+        of :func:`evotol.statistical.miss_probability` is built for full-rank covariances and is off
+        by up to ~1e-4 of the miss probability on this rank-one case.
+        """
+        from scipy.stats import norm
+
+        model = self.yield_model() if model is None else model
+        T = np.atleast_2d(np.asarray(T, dtype=float))
+        S, mean = model.moments("position", T)
+        s = np.sqrt(np.maximum(S[..., 2], 1e-300))
+        m = 0.0 if mean is None else mean[..., 2]
+        miss = (norm.cdf((-1.0 - m) / s) + norm.sf((1.0 - m) / s)).sum(axis=1)
+        return 1.0 - np.minimum(miss, 1.0)
 
     def judge(self, processes: Mapping[str, str], tolerances: Mapping[str, float]) -> dict:
         """Recompute a published design: its cost, its normalised error (max error / bound; > 1
@@ -533,64 +571,110 @@ def _repair(pp, rows, X, iters: int = 25):
     return _encode(k, T, lo, hi)
 
 
+class _ProcessRepair(Repair):
+    """Scale every design's tolerances onto the constraint (see :func:`_repair`)."""
+
+    def __init__(self, pp: ProcessProblem, rows: ConstraintRows):
+        super().__init__()
+        self.pp, self.rows = pp, rows
+
+    def _do(self, problem, X, **kwargs):
+        return _repair(self.pp, self.rows, X)
+
+
+class _ProcessGAProblem(Problem):
+    """One gene per source (process index + position in its range): cost, one constraint max error/bound − 1."""
+
+    def __init__(self, pp: ProcessProblem):
+        super().__init__(n_var=pp.n_sources, n_obj=1, n_ieq_constr=1, xl=np.zeros(pp.n_sources),
+                         xu=pp.n_processes - 1e-9)
+        self.pp = pp
+
+    def _evaluate(self, X, out, *args, **kwargs):
+        k, T, _, _ = _decode(self.pp, X)
+        out["F"] = self.pp.cost(k, T)[:, None]
+        out["G"] = (self.pp.normalised_error(T) - 1)[:, None]
+
+
+class _ProcessFrontProblem(Problem):
+    """Two objectives on the GA's encoding: cost and either the normalised worst-case/RSS error
+    (``objective="error"``) or the miss probability 1 − yield (``objective="yield"``, see
+    :meth:`ProcessProblem.assembly_yield`)."""
+
+    def __init__(self, pp: ProcessProblem, objective: str, yield_model=None):
+        super().__init__(n_var=pp.n_sources, n_obj=2, xl=np.zeros(pp.n_sources), xu=pp.n_processes - 1e-9)
+        self.pp, self.objective, self.yield_model = pp, objective, yield_model
+
+    def second(self, T) -> np.ndarray:
+        if self.objective == "yield":
+            return 1.0 - self.pp.assembly_yield(T, self.yield_model)
+        return self.pp.normalised_error(T)
+
+    def _evaluate(self, X, out, *args, **kwargs):
+        k, T, _, _ = _decode(self.pp, X)
+        out["F"] = np.column_stack([self.pp.cost(k, T), self.second(T)])
+
+
+class _History(Callback):
+    """Best feasible cost after every generation (NaN before the first feasible design)."""
+
+    def __init__(self):
+        super().__init__()
+        self.costs: list[float] = []
+
+    def notify(self, algorithm):
+        opt = algorithm.opt
+        self.costs.append(float(opt.get("F")[0, 0]) if opt.get("CV")[0, 0] <= 0 else float("nan"))
+
+
 @single_threaded_blas
 def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0,
                         repair: bool = True) -> ProcessResult:
     """pymoo GA over process choices and tolerances (encoding and repair: module docstring)."""
     from pymoo.algorithms.soo.nonconvex.ga import GA
-    from pymoo.core.problem import Problem
-    from pymoo.core.repair import Repair
     from pymoo.optimize import minimize
 
     t0 = time.perf_counter()
     rows = ConstraintRows(pp.base)
-
-    class _Rep(Repair):
-        def _do(self, problem, X, **kwargs):
-            return _repair(pp, rows, X)
-
-    class _P(Problem):
-        def __init__(self):
-            super().__init__(n_var=pp.n_sources, n_obj=1, n_ieq_constr=1, xl=np.zeros(pp.n_sources),
-                             xu=pp.n_processes - 1e-9)
-
-        def _evaluate(self, X, out, *args, **kwargs):
-            k, T, _, _ = _decode(pp, X)
-            out["F"] = pp.cost(k, T)[:, None]
-            out["G"] = (pp.normalised_error(T) - 1)[:, None]
-
-    hist = []
-
-    def callback(algorithm):
-        opt = algorithm.opt
-        hist.append(float(opt.get("F")[0, 0]) if opt.get("CV")[0, 0] <= 0 else float("nan"))
-
-    alg = GA(pop_size=pop_size, repair=_Rep() if repair else None, eliminate_duplicates=True)
-    res = minimize(_P(), alg, ("n_gen", n_gen), seed=seed, verbose=False, callback=callback)
+    hist = _History()
+    alg = GA(pop_size=pop_size, repair=_ProcessRepair(pp, rows) if repair else None, eliminate_duplicates=True)
+    res = minimize(_ProcessGAProblem(pp), alg, ("n_gen", n_gen), seed=seed, verbose=False, callback=hist)
     if res.X is None:
         raise ValidationError("processes", pp.describe(), "a feasible design found by the GA (raise n_gen / pop_size)")
     k, T, _, _ = _decode(pp, np.atleast_2d(res.X))
-    return _result(pp, "GA (pymoo, one gene per source)", k[0], T[0], t0, history=hist)
+    return _result(pp, "GA (pymoo, one gene per source)", k[0], T[0], t0, history=hist.costs)
+
+
+FRONT_OBJECTIVES = ("error", "yield")
 
 
 @single_threaded_blas
-def process_front(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0) -> pd.DataFrame:
-    """NSGA-II front of cost vs. normalised error (max error / bound), with the processes chosen."""
-    from pymoo.algorithms.moo.nsga2 import NSGA2
-    from pymoo.core.problem import Problem
-    from pymoo.optimize import minimize
+def process_front(pp: ProcessProblem, *, objective: str = "error", pop_size: int = 60, n_gen: int = 100,
+                  seed: int = 0, distribution="normal") -> pd.DataFrame:
+    """NSGA-II front (:func:`evotol.allocators.nsga.run_nsga2`) of cost vs. a second objective:
 
-    class _P(Problem):
-        def __init__(self):
-            super().__init__(n_var=pp.n_sources, n_obj=2, xl=np.zeros(pp.n_sources), xu=pp.n_processes - 1e-9)
+    * ``objective="error"``: the normalised error (max error / bound, the problem's measure);
+    * ``objective="yield"``: the miss probability 1 − yield of the first-order statistical model
+      (``distribution`` per source, default normal with t = 3σ; :meth:`ProcessProblem.assembly_yield`).
 
-        def _evaluate(self, X, out, *args, **kwargs):
-            k, T, _, _ = _decode(pp, X)
-            out["F"] = np.column_stack([pp.cost(k, T), pp.normalised_error(T)])
+    Returns one row per front member (cost, the objective, the yield when asked, processes, t in m)
+    sorted by cost.
+    """
+    from evotol.allocators.nsga import run_nsga2
 
-    res = minimize(_P(), NSGA2(pop_size=pop_size), ("n_gen", n_gen), seed=seed, verbose=False)
-    k, T, _, _ = _decode(pp, np.atleast_2d(res.X))
-    df = pd.DataFrame({"cost": res.F[:, 0], "normalised_error": res.F[:, 1]})
+    if objective not in FRONT_OBJECTIVES:
+        raise ValidationError("objective", objective, f"one of {FRONT_OBJECTIVES}")
+    model = pp.yield_model(distribution) if objective == "yield" else None
+    prob = _ProcessFrontProblem(pp, objective, model)
+    algo = run_nsga2(prob, pop_size=pop_size, n_gen=n_gen, seed=seed)
+    X, F = algo.opt.get("X"), algo.opt.get("F")
+    k, T, _, _ = _decode(pp, np.atleast_2d(X))
+    df = pd.DataFrame({"cost": F[:, 0]})
+    if objective == "yield":
+        df["miss_probability"] = F[:, 1]
+        df["yield"] = 1.0 - F[:, 1]
+    else:
+        df["normalised_error"] = F[:, 1]
     for j, n in enumerate(pp.names):
         df[f"{n}_process"] = [pp.processes[n][i].name for i in k[:, j]]
         df[f"{n}_t"] = T[:, j]

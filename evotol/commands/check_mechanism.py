@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import json
 
+from robots.mechanism.checks import check_mechanism
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("check-mechanism", help="check a mechanism description: sources, loop closure, FD agreement",
@@ -21,36 +23,6 @@ def register(subparsers) -> None:
     p.add_argument("--rtol", type=float, default=1e-5, help="largest relative FD mismatch accepted (default 1e-5)")
     p.add_argument("--json", action="store_true", help="print the check as JSON")
     p.set_defaults(func=cmd_check_mechanism)
-
-
-def check_mechanism(file, n_poses: int = 20, sources=None) -> dict:
-    """The checks as a JSON-ready dict (also used by the ``mechanisms`` study)."""
-    import time
-
-    import numpy as np
-
-    from robots.base import check_robot
-    from robots.mechanism.model import MechanismModel, resolve_description
-
-    t0 = time.perf_counter()
-    model = MechanismModel(resolve_description(file), sources=sources)
-    poses = model.workspace.latin_hypercube(n_poses, seed=0)
-    residual = model.closure_residual(poses)
-    rep = check_robot(model, poses, rtol=np.inf)   # report the mismatch, do not raise
-    out = {"name": model.name, "file": str(model.mechanism.path), "planar": model.mechanism.planar,
-           "actuated": list(model.kin.actuated), "passive": list(model.kin.passive),
-           "sources": [{"name": s.name, "group": s.group, "unit": s.unit, "description": s.description} for s in model.sources],
-           "n_sources": len(model.sources), "n_poses": len(poses), "closure_residual": residual,
-           "fd_rel_error": rep.get("fd_relative_mismatch"), "max_sensitivity": float(np.abs(model.sensitivity(poses)).max())}
-    if model.mechanism.clearance is not None:
-        from robots.clearance import max_pose_error
-
-        x0, _ = model.kin.assembly()
-        res = max_pose_error(model.clearance_mechanism(), x0[None])
-        out["clearance_at_assembly"] = {"pose": x0.tolist(), "p_max_m": float(res.p_max[0]), "p_upper_m": float(res.p_upper[0]),
-                                        "r_max_rad": float(res.r_max[0]), "r_upper_rad": float(res.r_upper[0])}
-    out["seconds"] = time.perf_counter() - t0
-    return out
 
 
 def cmd_check_mechanism(args) -> int:

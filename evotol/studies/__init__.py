@@ -66,6 +66,13 @@ class Study:
         cfg.update(overrides)
         return cfg
 
+    def units_block(self) -> dict:
+        """The ``units`` block written into ``NAME.json`` (docs/units.md): the common keys and
+        rules plus this study's own keys (``evotol/studies/_units.py``)."""
+        from evotol.studies._units import study_units
+        from evotol.units import make_units_block
+        return make_units_block(**study_units(self.name))
+
     def run(self, out_dir, quick: bool = False, seed: int = 0, **overrides) -> dict:
         """Compute, render and write the study into ``out_dir``; returns the JSON summary."""
         return reproduce(self, out_dir, self.make_config(quick, seed=seed, **overrides)).summary
@@ -83,6 +90,7 @@ def reproduce(study: Study, out_dir, config: dict) -> StudyResult:
     t0 = time.perf_counter()
     result = study.compute(config)
     result.summary.setdefault("seconds", time.perf_counter() - t0)
+    result.summary.setdefault("units", study.units_block())
     paths = write_outputs(study.name, out_dir, result)
     result = StudyResult(json.loads(paths["json"].read_text(encoding="utf-8")), result.tables)
     study.render(result).write(paths["html"])

@@ -54,6 +54,17 @@ CLUTCH_PUBLISHED = {
     "rss_angle_variation_rad": 0.01159,
     "rss_angle_variation_deg": 0.664,
     "tables": None,
+    "sources_located": [
+        "http://adcats.et.byu.edu/Publication/89-4/Proc_Sel_Paper1.html",
+        "https://studylib.net/doc/8782616/least-cost-tolerance-allocation-for-mechanical-assemblies",
+        "https://studylib.net/doc/18266955/manufacturing-tolerance-cost-minimization-using-discrete",
+        "https://scribd.com/document/690411146/singh2004",
+        "http://www.researchgate.net/publication/220583293",
+        "https://www.crystalballservices.com/Research/Articles-on-Analytics-Risk/"
+        "tolerance-analysis-using-worst-case-approach-continued-part-3-13-1"],
+    "sources_note": "located with the search tools; only each page's opening (abstract, introduction) was "
+                    "retrievable, not the example data (docs/process_selection.md, 'Where the published data were "
+                    "looked for')",
     "note": "only the opening of §14.7 was retrievable: the transfer function and the RSS variation of the handbook's "
             "tolerances (0.01159 rad); the nominal tolerances, cost coefficients and the allocated tables were not, "
             "so no published cost can be recomputed here",
@@ -139,8 +150,13 @@ def run_case(pp: ProcessProblem, config: dict, enumerate_all: bool) -> dict:
                              "cost": r.cost, "over_optimum": r.cost / bb.cost - 1, "feasible": r.feasible,
                              "normalised_error": r.normalised_error}
                          for k, r in allocate_process_baselines(pp).items()}
-    front = process_front(pp, pop_size=config["pop_size"], n_gen=config["n_gen"], seed=config["seed"])
+    ga_kw = {k: config[k] for k in ("pop_size", "n_gen", "seed")}
+    front = process_front(pp, **ga_kw)
     case["front"] = {"cost": front.cost.tolist(), "normalised_error": front.normalised_error.tolist()}
+    yfront = process_front(pp, objective="yield", **ga_kw)
+    case["yield_front"] = {"distribution": "normal, t = 3 sigma", "cost": yfront.cost.tolist(),
+                           "yield": yfront["yield"].tolist(),
+                           "yield_at_optimum": float(pp.assembly_yield([[bb.tolerances[n] for n in pp.names]])[0])}
     case["mc_nonlinear_at_optimum"] = _mc_nonlinear(pp, bb.tolerances, config["n_mc"], config["seed"])
     case["seconds"] = time.perf_counter() - t0
     return case
@@ -195,4 +211,13 @@ def render_cases(title: str, subtitle: str, summary: dict, problems_text: dict):
                         name="GA")
         fig.update_layout(xaxis_title="max error / limit", yaxis_title="cost", height=420)
         rep.figure(fig, div_id=f"front_{label}")
+        yf = case.get("yield_front")
+        if yf is not None:
+            fig = go.Figure()
+            fig.add_scatter(x=yf["yield"], y=yf["cost"], mode="markers", name="NSGA-II front (cost vs. yield)")
+            fig.add_scatter(x=[yf["yield_at_optimum"]], y=[opt], mode="markers", marker=dict(size=12, symbol="star"),
+                            name="exact optimum of this case")
+            fig.update_layout(xaxis_title=f"yield P(|Δy| <= L), first-order model, {yf['distribution']}",
+                              yaxis_title="cost", height=420)
+            rep.figure(fig, div_id=f"yield_front_{label}")
     return rep

@@ -112,7 +112,7 @@ BUILTIN = {"5-bar": _fivebar, "IRSBot-2": _irsbot2, "3-UCR": _ucr3, "Delta": _de
 
 
 def compute(cfg: dict) -> StudyResult:
-    from evotol.commands.check_mechanism import check_mechanism
+    from robots.mechanism.checks import check_mechanism
     from robots.mechanism.model import SHIPPED, MechanismModel
 
     rows = {}
