@@ -54,6 +54,17 @@ CLUTCH_PUBLISHED = {
     "rss_angle_variation_rad": 0.01159,
     "rss_angle_variation_deg": 0.664,
     "tables": None,
+    "sources_located": [
+        "http://adcats.et.byu.edu/Publication/89-4/Proc_Sel_Paper1.html",
+        "https://studylib.net/doc/8782616/least-cost-tolerance-allocation-for-mechanical-assemblies",
+        "https://studylib.net/doc/18266955/manufacturing-tolerance-cost-minimization-using-discrete",
+        "https://scribd.com/document/690411146/singh2004",
+        "http://www.researchgate.net/publication/220583293",
+        "https://www.crystalballservices.com/Research/Articles-on-Analytics-Risk/"
+        "tolerance-analysis-using-worst-case-approach-continued-part-3-13-1"],
+    "sources_note": "located with the search tools; only each page's opening (abstract, introduction) was "
+                    "retrievable, not the example data (docs/process_selection.md, 'Where the published data were "
+                    "looked for')",
     "note": "only the opening of §14.7 was retrievable: the transfer function and the RSS variation of the handbook's "
             "tolerances (0.01159 rad); the nominal tolerances, cost coefficients and the allocated tables were not, "
             "so no published cost can be recomputed here",
