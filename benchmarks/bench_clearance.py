@@ -83,12 +83,14 @@ def main(argv=None):
               f"(x{per_ms2 / (r2.seconds / len(grid)):.0f}); best local p / certified p = "
               f"{np.round(ms2.p_max / o2.p_max, 4).tolist()}, r: {np.round(ms2.r_max / o2.r_max, 4).tolist()}")
 
-    print(f"\n== issue 13: engine vs its settings before issue 13, IRSBot-2, same points, one process ==")
+    print(f"\n== issue 13: engine vs its settings before issue 13, same points, one process ==")
     from robots.clearance import support
     from robots.clearance.maxerror import legacy_engine
     sub = grid[:: 40 if args.quick else 8]
-    for par, label in ((False, "distal module"), (True, "distal + parallelograms")):
-        m2 = robot.clearance_mechanism(parallelograms=par)
+    cases = [(robot.clearance_mechanism(parallelograms=False), sub, "IRSBot-2 distal module"),
+             (robot.clearance_mechanism(parallelograms=True), sub, "IRSBot-2 distal + parallelograms"),
+             (mech, poses[:: 4 if args.quick else 8], "5-bar (planar targets)")]
+    for m2, sub, label in cases:
         out = {}
         for name in ("legacy", "new", "legacy again"):
             n0 = support.STATS["newton"]
@@ -123,6 +125,20 @@ def main(argv=None):
         r = ev.evaluate(b, workers=args.workers)
         print(f"{label}: {time.perf_counter() - t:.1f} s for {len(b)} sets ({r.n_solves} convex solves after "
               f"deduplication), largest gap {r.gap.max():.2e}")
+    few = b[:: 64 if args.quick else 16]            # issue 13: same bound sets, legacy settings vs now
+    work = {}
+    for name in ("legacy", "new"):
+        n0, t = support.STATS["newton"], time.perf_counter()
+        if name == "legacy":
+            with legacy_engine():
+                r = ev.evaluate(few)
+        else:
+            r = ev.evaluate(few)
+        work[name] = (time.perf_counter() - t, support.STATS["newton"] - n0, r)
+    (tl, nl, rl), (tn, nn, rn) = work["legacy"], work["new"]
+    print(f"issue 13, {len(few)} of these sets: before {tl:.1f} s, now {tn:.1f} s; Newton iterations {nl} -> {nn} "
+          f"(x{nn / nl:.2f}); largest gap {rl.gap.max():.1e} -> {rn.gap.max():.1e}; "
+          f"max |p_now/p_before - 1| = {np.abs(rn.p_max / rl.p_max - 1).max():.1e}")
 
 
 if __name__ == "__main__":

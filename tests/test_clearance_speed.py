@@ -50,6 +50,15 @@ def test_initial_patches_use_one_vertex_of_each_antipodal_pair():
     assert sorted(map(tuple, spanned.sum(1).round(12))) == [(-1, -1, 1), (-1, 1, 1), (1, -1, 1), (1, 1, 1)]
 
 
+def test_initial_circle_patches_are_four_45_degree_arcs_of_the_half_circle():
+    verts, tri, sign = me._initial_patches(2)
+    arcs = verts[tri] * sign[..., None]                   # (4, 2, 2): ends of each arc
+    assert len(verts) == 4 and len(arcs) == 4             # 0, 45, 90, 135 deg (+ the antipode of 0 deg)
+    cosines = np.einsum("ak,ak->a", arcs[:, 0], arcs[:, 1])
+    assert np.allclose(cosines, np.cos(np.pi / 4))
+    assert np.allclose(arcs[-1, 1], [-1.0, 0.0]) and np.allclose(arcs[0, 0], [1.0, 0.0])
+
+
 def _agree(mech, poses):
     new = max_pose_error(mech, poses)
     with me.legacy_engine():

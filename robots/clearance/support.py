@@ -251,7 +251,8 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         step = damped.copy()
         bi = np.nonzero(lam > 0.25)[0]
         if bi.size:
-            F0 = _barrier_value(wY[bi, None, :], nd, wtau[bi])[:, 0]
+            # F at the current point from the Newton pieces already computed (no second evaluation)
+            F0 = (qd[bi] - np.log1p(qd[bi])).sum(-1) + (qi[bi] - np.log1p(qi[bi])).sum(-1)
             pending = np.ones(bi.size, bool)
             for t in _LS:              # progressive backtracking: most problems accept t = 1
                 if t <= 0 or not pending.any():
