@@ -6,8 +6,9 @@ every ``every`` seconds -- elapsed time and the expected time of a full run -- f
 thread, only when the stream is not a terminal, and stops when the study ends.
 
 ``EXPECTED_SECONDS``: full-run times of the seed studies measured on the project's 2-core
-machine (``evotol reproduce all``, /work/baseline/full.log of main@70c88ca); ``--quick`` runs are
-much shorter. They are a guide, not a promise: the load of the machine changes them.
+machine (``evotol reproduce all`` of a fresh clone, 2026-11-23, load average about 1.4; the
+IRSBot-2 maps after the mirror reuse of issue 13); ``--quick`` runs are much shorter. They are a
+guide, not a promise: the load of the machine changes them.
 """
 from __future__ import annotations
 
@@ -16,8 +17,9 @@ import threading
 import time
 
 EXPECTED_SECONDS = {
-    "brahmia2023-delta": 25, "deng2012-5bar": 15, "deng2012-dimsynth": 57, "deng2012-irsbot2": 160,
-    "deng2012-tolsynth": 63, "laramolina2019-5r": 7, "yao2013": 21,
+    "brahmia2023-delta": 37, "chase1990-clutch": 3, "deng2012-5bar": 21, "deng2012-clearalloc": 17,
+    "deng2012-dimsynth": 74, "deng2012-irsbot2": 160, "deng2012-tolsynth": 109, "laramolina2019-5r": 41,
+    "mechanisms": 5, "process-stack": 3, "yao2013": 35,
 }
 
 
