@@ -6,7 +6,10 @@
   solves of each (enumeration: every combination whose tightest design can hold the requirement;
   target: >= 10x fewer for branch and bound);
 * sensitivities of a 20-dimension assembly function at 10^4 points (target: under 1 s), and their
-  agreement with central differences.
+  agreement with central differences;
+* cost-vs-yield NSGA-II fronts against the exact 3-sigma optimum (for one response, yield >=
+  2 Phi(3) - 1 is RSS <= L, so the RSS optimum is the exact cheapest design at that yield), with
+  the CPU seconds of each front (load-independent-ish; print `uptime` beside it).
 
     python benchmarks/bench_process.py
 """
@@ -22,7 +25,7 @@ import pandas as pd  # noqa: E402
 
 from evotol.allocators.optimum import allocate_optimum  # noqa: E402
 from evotol.allocators.process import allocate_process_ga, allocate_process_optimum  # noqa: E402
-from evotol.allocators.process import assembly_problem  # noqa: E402
+from evotol.allocators.process import assembly_problem, process_front  # noqa: E402
 from evotol.studies._process_benchmarks import MM, clutch_problem, process, stack_problem  # noqa: E402
 from evotol.studies.process_stack import enumeration_solves  # noqa: E402
 from robots.assembly import AssemblyFunction, LinearStack  # noqa: E402
@@ -103,8 +106,27 @@ def jacobian_speed():
           f"{t_fd:.3f} s (ratio {t_fd / t_cs:.2f}); max relative difference {err:.2e}; method {asm.derivative_method!r}")
 
 
+def yield_fronts():
+    from scipy.stats import norm
+
+    y3 = 2 * norm.cdf(3) - 1
+    print("\n== cost vs. yield fronts (NSGA-II pop 60, 100 generations, seed 0; normal, t = 3 sigma) ==")
+    for label, make in (("clutch", clutch_problem), ("stack", stack_problem)):
+        pp = make("rss")
+        opt = allocate_process_optimum(pp)
+        c0 = time.process_time()
+        df = process_front(pp, objective="yield", seed=0)
+        cpu = time.process_time() - c0
+        at = df[df["yield"] >= y3 - 1e-12]
+        best = float(at.cost.min()) if len(at) else float("nan")
+        print(f"{label}: {len(df)} front points, yield {df['yield'].min():.3f}..{df['yield'].max():.6f}; exact optimum at "
+              f"yield {y3:.4f}: {opt.cost:.4f}; cheapest front point there {best:.4f} ({best / opt.cost - 1:+.2%}); "
+              f"front CPU {cpu:.2f} s")
+
+
 if __name__ == "__main__":
     warnings.simplefilter("ignore")
+    yield_fronts()
     jacobian_speed()
     bb_vs_enumeration()
     ga_vs_optimum()

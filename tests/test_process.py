@@ -4,6 +4,7 @@ import itertools
 
 import numpy as np
 import pytest
+from scipy.stats import norm
 
 from cost_models import PowerCost, ReciprocalCost
 from evotol.allocators.process import (Process, ProcessProblem, allocate_process_baselines, allocate_process_ga,
@@ -161,8 +162,6 @@ def test_loose_requirement_is_proved_without_enumerating():
 def test_assembly_yield_is_the_normal_closed_form():
     """First-order yield of the statistical machinery vs. 2Φ(−L/σ) with σ² = Σ (∂y/∂x_j · t_j/3)²
     (normal, t = 3σ); at the RSS optimum the stack is exactly 3σ, yield 0.9973."""
-    from scipy.stats import norm
-
     pp = clutch_problem("rss")
     rng = np.random.default_rng(1)
     T = np.exp(rng.uniform(np.log(pp.lo.min(1)), np.log(np.nanmax(pp.hi, 1)), size=(20, pp.n_sources)))
@@ -188,8 +187,9 @@ def test_cost_vs_yield_front_trades_cost_for_yield(clutch_wc):
     df = process_front(pp, objective="yield", pop_size=30, n_gen=30, seed=0)
     assert {"cost", "yield", "miss_probability"} <= set(df.columns)
     assert np.all(np.diff(df.cost) >= 0) and np.all(np.diff(df["yield"]) >= -1e-12)
+    assert pp.assembly_yield([[opt.tolerances[n] for n in pp.names]])[0] > 1 - 1e-5
     rss_opt = allocate_process_optimum(clutch_problem("rss"))
-    at_3sigma = df[df["yield"] >= 2 * __import__("scipy").stats.norm.cdf(3) - 1]
+    at_3sigma = df[df["yield"] >= 2 * norm.cdf(3) - 1]
     assert at_3sigma.empty or at_3sigma.cost.min() >= rss_opt.cost * (1 - 1e-9)
 
 

@@ -84,7 +84,8 @@ def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, samplin
     callback: a pymoo ``Callback`` called after every generation (progress, lazy constraint
         checks) -- pymoo's hook, so the loop itself stays pymoo's ``while has_next(): next()``.
     interruptible: Ctrl-C ends the run early and keeps the population reached so far.
-    Used by :func:`allocate_nsga2` (tolerance problems) and :func:`evotol.doe.nsga2` (design studies).
+    Used by :func:`allocate_nsga2` (tolerance problems), :func:`evotol.doe.nsga2` (design studies) and
+    :func:`evotol.allocators.process.process_front` (process selection).
     """
     kw = {} if sampling is None else {"sampling": sampling}
     algo = NSGA2(pop_size=pop_size, eliminate_duplicates=True, **kw)
