@@ -350,19 +350,7 @@ def sample_twists(robot: WithClearances, poses: np.ndarray, c: np.ndarray, n_sam
     out = np.zeros((len(poses), n_samples, 6))
     for p in range(len(poses)):
         for pm in maps:
-            D = pm.row_bounds(b[None])[0]
-            nd, ni = pm.n_disk, pm.n_rows - 2 * pm.n_disk
-            ang = rng.uniform(0, 2 * np.pi, (n_samples, nd))
-            rad = np.ones((n_samples, nd)) if mode == "boundary" else np.sqrt(rng.uniform(0, 1, (n_samples, nd)))
-            disk = np.stack([rad * np.cos(ang), rad * np.sin(ang)], -1).reshape(n_samples, 2 * nd)
-            inter = rng.choice([-1.0, 1.0], (n_samples, ni)) if mode == "boundary" else rng.uniform(-1, 1, (n_samples, ni))
-            sig = np.concatenate([disk, inter], 1)
-            Bt = pm.B[p] * D[:, None]
-            if Bt.shape[1]:
-                sig = sig - (sig @ Bt) @ np.linalg.pinv(Bt)
-            nrm_d = np.sqrt((sig[:, :2 * nd].reshape(n_samples, nd, 2) ** 2).sum(-1)).max(-1, initial=0.0)
-            nrm_i = np.abs(sig[:, 2 * nd:]).max(-1, initial=0.0)
-            s = sig / np.maximum(np.maximum(nrm_d, nrm_i), 1.0)[:, None] * D
+            s = pm.sample_screws(p, b, n_samples, rng, mode)
             out[p][:, [_TO_ENGINE.index(k) for k in pm.pos_comps]] += s @ pm.C_pos[p].T
             out[p][:, [_TO_ENGINE.index(k) for k in pm.rot_comps]] += s @ pm.C_rot[p].T
     return out

@@ -137,10 +137,7 @@ def cmd_run(args) -> int:
 def _print_results(summary: dict) -> None:
     """One line per method of ``evotol run``: cost, largest errors (mm, deg), feasibility and the
     Monte Carlo exceed rate, so the terminal answers "what did I get" without opening the JSON."""
-    import json
-
-    data = json.loads(Path(summary["json"]).read_text(encoding="utf-8"))
-    results, mc = data.get("results") or {}, data.get("monte_carlo") or {}
+    results, mc = summary.get("results") or {}, summary.get("monte_carlo") or {}
     if not results:
         return
     print("[evotol] results (cost in the cost models' unit; errors: attained worst value over the poses)")

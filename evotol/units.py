@@ -82,7 +82,6 @@ PATTERNS = (
     ("*_rate", "1: fraction"), ("*_rate_*", "1: fraction"), ("fraction*", "1: fraction"), ("*_fraction", "1: fraction"),
     ("*percent*", "%"), ("*share*", "%"),
 )
-SUFFIXES_SI = "_si"
 
 
 def _key_unit(key: str, block: dict, patterns: bool = True) -> str | None:

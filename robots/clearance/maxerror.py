@@ -24,7 +24,7 @@ and likewise for the rotation. Their relative gap is at most ``tol`` (default 1e
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -355,6 +355,13 @@ class MaxPoseError:
         return cls(**cat, joint_names=parts[0].joint_names, n_solves=sum(p.n_solves for p in parts),
                    seconds=sum(p.seconds for p in parts))
 
+    def take(self, idx) -> "MaxPoseError":
+        """The cases ``idx`` (index array), in that order."""
+        per_case = {f: getattr(self, f)[idx] for f in
+                    ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")}
+        extra = {f: None if getattr(self, f) is None else getattr(self, f)[idx] for f in ("p_extra", "r_extra")}
+        return replace(self, **per_case, **extra)
+
     @property
     def p_gap(self) -> np.ndarray:
         return (self.p_upper - self.p_max) / np.maximum(self.p_upper, 1e-300)
@@ -568,21 +575,7 @@ def sample_max_errors(mech: ClearanceMechanism, pose, bounds=None, *, n_samples:
         left -= n
         tot = {"p": np.zeros(n), "r": np.zeros(n)}
         for pm in maps:
-            D = pm.row_bounds(b[None])[0]
-            nd = pm.n_disk
-            ni = pm.n_rows - 2 * nd
-            ang = rng.uniform(0, 2 * np.pi, (n, nd))
-            rad = np.ones((n, nd)) if mode == "boundary" else np.sqrt(rng.uniform(0, 1, (n, nd)))
-            disk = np.stack([rad * np.cos(ang), rad * np.sin(ang)], -1).reshape(n, 2 * nd)
-            inter = rng.choice([-1.0, 1.0], (n, ni)) if mode == "boundary" else rng.uniform(-1, 1, (n, ni))
-            sig = np.concatenate([disk, inter], 1)
-            Bt = pm.B[0] * D[:, None]
-            if Bt.shape[1]:
-                sig = sig - (sig @ Bt) @ np.linalg.pinv(Bt)      # orthogonal projection onto B^T s = 0
-            nrm_d = np.sqrt((sig[:, :2 * nd].reshape(n, nd, 2) ** 2).sum(-1)).max(-1, initial=0.0)
-            nrm_i = np.abs(sig[:, 2 * nd:]).max(-1, initial=0.0)
-            sig = sig / np.maximum(np.maximum(nrm_d, nrm_i), 1.0)[:, None]
-            s = sig * D
+            s = pm.sample_screws(0, b, n, rng, mode)
             tot["p"] += ((s @ pm.C_pos[0].T) ** 2).sum(-1)
             tot["r"] += ((s @ pm.C_rot[0].T) ** 2).sum(-1)
         for w in ("p", "r"):

@@ -172,6 +172,27 @@ class PoseMaps:
     def take(self, idx) -> "PoseMaps":
         return replace(self, C_pos=self.C_pos[idx], C_rot=self.C_rot[idx], B=self.B[idx])
 
+    def sample_screws(self, i: int, bounds: np.ndarray, n: int, rng, mode: str = "uniform") -> np.ndarray:
+        """``n`` random consistent clearance states at pose ``i``: the rows of the screw vector,
+        (n, n_rows), m and rad. Each joint's screw is drawn in its clearance set (``"uniform"``:
+        uniformly inside the disks and intervals; ``"boundary"``: on their boundaries), the part
+        violating the loop equations is removed (orthogonal projection onto ``B^T s = 0``, rows
+        scaled by their bounds) and the sample is scaled back into the set. ``bounds``: (n_joints, 4)."""
+        D = self.row_bounds(bounds[None])[0]
+        nd = self.n_disk
+        ni = self.n_rows - 2 * nd
+        ang = rng.uniform(0, 2 * np.pi, (n, nd))
+        rad = np.ones((n, nd)) if mode == "boundary" else np.sqrt(rng.uniform(0, 1, (n, nd)))
+        disk = np.stack([rad * np.cos(ang), rad * np.sin(ang)], -1).reshape(n, 2 * nd)
+        inter = rng.choice([-1.0, 1.0], (n, ni)) if mode == "boundary" else rng.uniform(-1, 1, (n, ni))
+        sig = np.concatenate([disk, inter], 1)
+        Bt = self.B[i] * D[:, None]
+        if Bt.shape[1]:
+            sig = sig - (sig @ Bt) @ np.linalg.pinv(Bt)      # orthogonal projection onto B^T s = 0
+        nrm_d = np.sqrt((sig[:, :2 * nd].reshape(n, nd, 2) ** 2).sum(-1)).max(-1, initial=0.0)
+        nrm_i = np.abs(sig[:, 2 * nd:]).max(-1, initial=0.0)
+        return sig / np.maximum(np.maximum(nrm_d, nrm_i), 1.0)[:, None] * D
+
 
 class ClearanceMechanism:
     """A mechanism with joint clearances, built once and evaluated at many poses.

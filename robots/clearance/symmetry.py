@@ -141,21 +141,14 @@ def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflec
         pos_in_solved = {int(i): k for k, i in enumerate(solve)}
         src = np.array([pos_in_solved[int(partner[j])] for j in reuse])
         proof = prove_mirror(mech, poses[partner[reuse]], poses[reuse], joint_map, reflection)
-        parts.append(mirror_maxima(_take(solved, src), proof))
+        parts.append(mirror_maxima(solved.take(src), proof))
         order.append(reuse)
         summary.update(max_map_residual=proof["max_map_residual"], max_consistency_residual=proof["max_consistency_residual"])
     out = MaxPoseError.concat(parts)
     inverse = np.empty(len(poses), int)
     inverse[np.concatenate(order)] = np.arange(len(poses))
-    out = _take(out, inverse)
+    out = out.take(inverse)
     out.n_solves = solved.n_solves
     out.seconds = time.perf_counter() - t0
     return out, summary
 
-
-def _take(res, idx):
-    """The cases ``idx`` of a MaxPoseError."""
-    return replace(res, **{f: getattr(res, f)[idx] for f in
-                           ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")},
-                   p_extra=None if res.p_extra is None else res.p_extra[idx],
-                   r_extra=None if res.r_extra is None else res.r_extra[idx])
