@@ -294,44 +294,57 @@ def test_ucr3_description_equals_hand_written_all_21_columns_at_50_poses():
 
 
 # ---------------------------------------------------------------------------------- Delta
-def test_delta_description_equals_hand_written_for_the_shared_parameters():
-    """Brahmia 2023 Delta: the description (rod-1 branch of Tab. 1 with the parallelogram
-    relations q4 = -q3, q5 = pi - q1 - q2, legs closed at the platform centre, eq. 3) gives the
-    same position rows as robots/delta.py for the 23 parameters both rods share (Ra, Rb, La, Lb,
-    alpha1, alpha5, theta, the actuator offsets q1 and the lower-bar offsets q5), at 50 poses."""
+def test_delta_description_equals_hand_written_for_all_47_parameters():
+    """Brahmia 2023 Delta: the description (both parallelogram rods of Tab. 1, the parallelogram
+    relations as coupled angles, each leg closed at the midpoint of its rods -- a [[point]] --, legs
+    meeting at the platform centre, eq. 3) gives the same position rows as robots/delta.py for all
+    47 parameters of eq. (12) at 50 poses, and the same nonlinear closure with errors."""
+    from evotol.studies.mechanisms import delta_columns
     from robots.delta import DeltaRobot
 
     m = MechanismModel(HERE / "delta.toml")
     r = DeltaRobot()
+    cols = delta_columns(m, r)
+    assert sorted(cols) == list(range(47))
     poses = r.workspace.latin_hypercube(50, seed=1)
     S, H = m.sensitivity(poses), r.sensitivity(poses)
-    hn = list(r.source_names)
-    cols = [hn.index("q5_" + n[2] if n.startswith("5_") else n) for n in m.source_names]
-    assert len(cols) == 23
     assert np.abs(S[:, :3] - H[:, :3, cols]).max() <= 1e-9 * np.abs(H[:, :3]).max()
+    # dq2 (offset of the free passive joint 2) is absorbed and the bar half-width d keeps the
+    # parallelogram one, to first order, in both models; the rod-2 twist alpha6 does act
+    zero = [c for c, n in enumerate(m.source_names) if n.startswith(("dq2", "d_"))]
+    assert np.abs(S[:, :3, zero]).max() <= 1e-12 * np.abs(H[:, :3]).max()
+    assert np.abs(S[:, :3, m.source_names.index("alpha6_1")]).max() > 1e-4 * np.abs(H[:, :3]).max()
+    E = np.random.default_rng(0).uniform(-1e-3, 1e-3, (10, 4, 47))
+    Eh = np.zeros_like(E)
+    Eh[..., cols] = E
+    a, b = m.pose_error(poses[:10], E)[..., :3], r.pose_error(poses[:10], Eh)[..., :3]
+    assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
     assert check_robot(m)["fd_relative_mismatch"] < 1e-6
 
 
-def test_delta_rod1_parameters_count_half_at_the_midpoint_closure():
-    """robots/delta.py closes each leg at the midpoint of its two rods' ends, so a rod-1 error
-    (alpha3 -- which enters Tab. 2 as -(pi/2 + dalpha3) --, q3, q4) moves the platform by half of
-    what it does when rod 1 alone carries the leg; d moves neither (the parallelogram stays one)."""
-    from robots.delta import DeltaRobot
+def test_point_is_the_mean_of_its_frames_and_is_checked():
+    """A [[point]]'s position and motion are the means of its frames'; bad points are refused by name."""
+    import copy
+    import tomllib
 
-    m = MechanismModel(HERE / "delta.toml", sources=["alpha3_?", "3_?.theta", "4_?.theta", "d_?"])
-    r = DeltaRobot()
-    poses = r.workspace.latin_hypercube(20, seed=2)
-    S, H = m.sensitivity(poses), r.sensitivity(poses)
-    hn = list(r.source_names)
-    scale = np.abs(H[:, :3]).max()
-    for c, name in enumerate(m.source_names):
-        if name.startswith("alpha3"):
-            expect, factor = name, -0.5
-        elif name.startswith("d_"):
-            expect, factor = name, 0.0
-        else:
-            expect, factor = f"q{name[0]}_{name[2]}", 0.5
-        h = H[:, :3, hn.index(expect)]
-        assert np.abs(factor * S[:, :3, c] - h).max() <= 1e-9 * scale, name
-        if factor == 0.0:
-            assert np.abs(S[:, :3, c]).max() <= 1e-9 * scale
+    m = MechanismModel(HERE / "delta.toml")
+    kin = m.kin
+    poses = m.workspace.latin_hypercube(5, seed=3)
+    q = kin.inverse_geometry(poses)
+    st = kin.state(q, len(poses), wrt=kin.passive)
+    assert np.allclose(st.world["P2"][:, :3, 3], (st.world["E2"][:, :3, 3] + st.world["Eb2"][:, :3, 3]) / 2, atol=1e-15)
+    J = kin.frame_jacobian(st, "P2", kin.passive)
+    Ja, Jb = kin.frame_jacobian(st, "E2", kin.passive), kin.frame_jacobian(st, "Eb2", kin.passive)
+    assert np.allclose(J[:, :3], (Ja[:, :3] + Jb[:, :3]) / 2, atol=1e-15)
+    spec = tomllib.loads((HERE / "delta.toml").read_text())
+    for change, field in ((lambda s: s["point"][0].update(mean_of=["E1", "nowhere"]), "point 'P1'.mean_of"),
+                          (lambda s: s["point"][0].update(mean_of=["E1"]), "point 'P1'.mean_of"),
+                          (lambda s: s["point"][1].update(name="P1"), "point.name"),
+                          (lambda s: s["loop"][0].update(components="all"), "loop P2-P1.components"),
+                          (lambda s: s["end_effector"].update(orientation=[["z", "0"]]), "end_effector.orientation"),
+                          (lambda s: s["point"][0].update(weights=[1, 1]), "point[0].weights")):
+        bad = copy.deepcopy(spec)
+        change(bad)
+        with pytest.raises(ValidationError) as exc:
+            mechanism_from_dict(bad)
+        assert field in str(exc.value)

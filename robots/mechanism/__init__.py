@@ -10,10 +10,10 @@ Modules: :mod:`.expressions` (safe entry expressions, complex-step derivatives),
 exact first-order maps, continued Newton inverse geometry), :mod:`.model` (the error model and the
 clearance mechanism). ``docs/mechanisms.md`` documents the file format.
 """
-from robots.mechanism.description import (ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Mechanism,
+from robots.mechanism.description import (ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Mechanism, Point,
                                           load_mechanism, mechanism_from_dict)
 from robots.mechanism.kinematics import Kinematics
 from robots.mechanism.model import MechanismModel
 
 __all__ = ["ClearanceChain", "ClearanceSpec", "Coordinate", "Frame", "Kinematics", "Loop", "Mechanism", "MechanismModel",
-           "load_mechanism", "mechanism_from_dict"]
+           "Point", "load_mechanism", "mechanism_from_dict"]

@@ -15,6 +15,12 @@ are two or three revolute frames with concurrent axes (``d = r = 0``).
 A closed mechanism is a tree of frames plus **loops**: pairs of frames that must coincide (the cut
 joints). The **end-effector** is a frame; its pose coordinates (a subset of ``x, y, z`` of its
 origin in the base frame, optionally a target orientation) define the workspace box.
+
+A **point** is the mean of several frames' origins (``[[point]] name = "P1", mean_of = ["E1",
+"E1b"]``), with the orientation of its first frame. It stands where a frame may stand in a
+position loop or as a position-only end-effector: the least-squares closure of an
+over-constrained sub-chain, e.g. Brahmia 2023's Delta, whose leg ends at the midpoint of its two
+parallelogram rods.
 """
 from __future__ import annotations
 
@@ -98,6 +104,22 @@ class Loop:
 
 
 @dataclass(frozen=True)
+class Point:
+    """The mean of the origins of ``frames`` (m), oriented like ``frames[0]``: usable in position
+    loops and as a position-only end-effector (see the module docstring)."""
+
+    name: str
+    frames: tuple[str, ...]
+    description: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name or "." in self.name:
+            raise ValidationError("point.name", self.name, "a non-empty name without '.'")
+        if len(self.frames) < 2 or len(set(self.frames)) != len(self.frames):
+            raise ValidationError(f"point {self.name!r}.mean_of", list(self.frames), "two or more different frame names")
+
+
+@dataclass(frozen=True)
 class Coordinate:
     """A pose coordinate: ``axis`` x/y/z of the end-effector origin in the base frame (m), or
     ``"angle"`` (rad; used only in the end-effector's target ``orientation``). ``low, high``: the
@@ -164,6 +186,7 @@ class Mechanism:
     clearance: ClearanceSpec | None = None
     description: str = ""
     path: str = ""
+    points: tuple[Point, ...] = ()
 
     def __post_init__(self):
         names = [f.name for f in self.frames]
@@ -176,12 +199,23 @@ class Mechanism:
         for f in self.frames:
             if f.antecedent not in known:
                 raise ValidationError(f"frame {f.name!r}.antecedent", f.antecedent, f"'0' (the base) or a frame of the table: {names}")
+        points = [p.name for p in self.points]
+        for p in self.points:
+            if p.name in known or points.count(p.name) > 1:
+                raise ValidationError("point.name", p.name, "a name used by no frame and no other point")
+            for x in p.frames:
+                if x not in names:
+                    raise ValidationError(f"point {p.name!r}.mean_of", x, f"a frame of the table: {names}")
         for lp in self.loops:
             for x in (lp.a, lp.b):
-                if x not in known:
-                    raise ValidationError(f"loop {lp.a}-{lp.b}", x, f"a frame of the table: {names}")
-        if self.end_effector not in names:
-            raise ValidationError("end_effector.frame", self.end_effector, f"a frame of the table: {names}")
+                if x not in known and x not in points:
+                    raise ValidationError(f"loop {lp.a}-{lp.b}", x, f"a frame of the table: {names}" + (f" or a point {points}" if points else ""))
+                if x in points and lp.components != "position":
+                    raise ValidationError(f"loop {lp.a}-{lp.b}.components", lp.components, f"'position' (point {x!r} has no orientation of its own)")
+        if self.end_effector not in names and self.end_effector not in points:
+            raise ValidationError("end_effector.frame", self.end_effector, f"a frame of the table: {names}" + (f" or a point {points}" if points else ""))
+        if self.end_effector in points and self.orientation:
+            raise ValidationError("end_effector.orientation", self.orientation, f"none for the point {self.end_effector!r} (position only)")
         if not self.coordinates or not any(c.axis in AXES for c in self.coordinates):
             raise ValidationError("end_effector.coordinates", self.coordinates, "at least one of x, y, z")
         params = set(self.lengths) | set(self.angles)
@@ -230,7 +264,7 @@ class Mechanism:
 
 
 # ---------------------------------------------------------------------------------------- TOML
-TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "loop", "end_effector", "assembly",
+TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "point", "loop", "end_effector", "assembly",
             "tolerances", "clearance", "urdf", "tip")
 
 
@@ -274,6 +308,12 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
             Expression.parse(v, f"frame {fr['name']!r}.{k}")
         frames.append(Frame(str(fr["name"]), str(fr["antecedent"]), fr.get("joint", "fixed"), bool(fr.get("actuated", False)),
                             description=fr.get("description", ""), **kw))
+    points = []
+    for i, pt in enumerate(spec.get("point", [])):
+        _check_keys(pt, ("name", "mean_of", "description"), f"point[{i}]")
+        if "name" not in pt or not isinstance(pt.get("mean_of"), list):
+            raise ValidationError(f"point[{i}]", pt, "name and mean_of (a list of frame names)")
+        points.append(Point(str(pt["name"]), tuple(map(str, pt["mean_of"])), str(pt.get("description", ""))))
     loops = []
     for i, lp in enumerate(spec.get("loop", [])):
         _check_keys(lp, ("frames", "components"), f"loop[{i}]")
@@ -309,7 +349,7 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
                      loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
                      sources=tuple(tol.get("sources", ())), clearance=clearance, description=spec.get("description", ""),
-                     path=str(path))
+                     path=str(path), points=tuple(points))
     return mech
 
 

@@ -73,6 +73,10 @@ class Kinematics:
         self.order = self.tree.order
         self.paths = {k: set(self.tree.path(k)) for k in self.tree.frames}
         self.paths["0"] = set()
+        # points: mean of frame origins, oriented like their first frame (description.Point)
+        self.points = {p.name: p.frames for p in mech.points}
+        for p, frs in self.points.items():
+            self.paths[p] = set().union(*(self.paths[f] for f in frs))
         self.expr = {}
         used = []
         for f in mech.frames:
@@ -211,12 +215,22 @@ class Kinematics:
                 for k, (w, v) in zip(DH_FIELDS, ((za, _cross(pa, za)), (zero, za), (x1, _cross(p1, x1)),
                                                  (zero, x1), (z2, _cross(q2, z2)), (zero, z2))):
                     tw[(fname, k)] = np.concatenate([w, v], axis=1)
+        for p, frs in self.points.items():
+            T = world[frs[0]].copy()
+            T[:, :3, 3] = sum(world[f][:, :3, 3] for f in frs) / len(frs)
+            world[p] = T
         return State(n, world, grads, tw)
 
     def frame_jacobian(self, st: State, frame: str, columns) -> np.ndarray:
         """Motion ``[dp_k; dphi]`` (n, 6, n_columns) of frame ``k`` per unit change of each column:
         a name (joint variable or parameter, through every entry that uses it) or a DH entry
-        ``(frame, field)``."""
+        ``(frame, field)``. For a point: the mean of its frames' motions, the rotation of its first."""
+        if frame in self.points:
+            frs = self.points[frame]
+            J = [self.frame_jacobian(st, f, columns) for f in frs]
+            out = J[0].copy()
+            out[:, :3] = sum(j[:, :3] for j in J) / len(J)
+            return out
         path = self.paths[frame]
         n = st.n
         S = np.zeros((n, 6, len(columns)))          # spatial twists [omega; v0]
