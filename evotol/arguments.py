@@ -29,6 +29,17 @@ def seed(text: str) -> int:
     return value
 
 
+def jobs(text: str) -> int:
+    """``--jobs``: a positive integer (studies at the same time)."""
+    try:
+        value = int(text, 10)
+    except (TypeError, ValueError):
+        value = None
+    if value is None or value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
 def parse_scheduler(address: str) -> tuple[str, str, int]:
     """Split ``tcp://host:port`` into (scheme, host, port); ValidationError on any other form."""
     expected = f"an address of the form tcp://host:port (schemes: {', '.join(SCHEDULER_SCHEMES)})"

@@ -46,6 +46,8 @@ def cmd_reproduce(args) -> int:
     from evotol.outputs import output_folder
     from evotol.progress import Heartbeat
 
+    import os
+
     names = list(studies.available()) if args.study == "all" else [studies.get(args.study).name]
     out = output_folder(args.out, "--out")          # before any computation (issue 15)
     if args.scheduler:
@@ -56,6 +58,9 @@ def cmd_reproduce(args) -> int:
     summaries, failed, seconds = {}, [], {}
     interrupted = None                     # (study, what happened) after Ctrl-C
     t_all = time.perf_counter()
+    jobs = args.jobs if args.jobs is not None else min(2, os.cpu_count() or 1)
+    if jobs > 1 and len(names) > 1:        # several studies at once, each its own process (issue 13)
+        return _reproduce_jobs(names, out, args, jobs, t_all)
     for name in names:
         study = studies.get(name)
         print(f"[evotol] reproducing {name}: {study.title}", flush=True)
@@ -103,14 +108,43 @@ def cmd_reproduce(args) -> int:
     return 1 if failed else 0
 
 
-def _print_time_table(seconds: dict, failed: list, total: float) -> None:
+def _reproduce_jobs(names, out: Path, args, jobs: int, t_all: float) -> int:
+    """``evotol reproduce all`` with ``jobs`` studies at once (:mod:`evotol.jobs`)."""
+    from evotol import studies
+    from evotol.jobs import reproduce_concurrently
+
+    titles = {n: studies.get(n).title for n in names}
+    res = reproduce_concurrently(names, out, jobs=jobs, seed=args.seed, quick=args.quick, scheduler=args.scheduler,
+                                 titles=titles)
+    index = _write_index(out, res.summaries)
+    print(f"[evotol] index: {index}")
+    _print_time_table({n: res.seconds[n] for n in names if n in res.seconds}, res.failed,
+                      time.perf_counter() - t_all, jobs=jobs)
+    if res.failed:
+        print(f"[evotol] failed: {', '.join(res.failed)}", file=sys.stderr)
+    if res.interrupted:
+        done = [n for n in res.summaries if n not in res.stopped]
+        written = [n for n in res.written]
+        print(f"evotol: interrupted (Ctrl-C) during {', '.join(res.stopped) or 'none'}: "
+              + (f"{', '.join(written)} written, but a method inside stopped early at Ctrl-C (best design so far); "
+                 if written else "")
+              + (f"{', '.join(n for n in res.stopped if n not in written)} stopped before their files were written "
+                 "(files of an earlier run, if any, are untouched); " if set(res.stopped) - set(written) else "")
+              + f"completed and written: {', '.join(done) or 'none'}; not run: {', '.join(res.not_run) or 'none'}",
+              file=sys.stderr)
+        return 130
+    return 1 if res.failed else 0
+
+
+def _print_time_table(seconds: dict, failed: list, total: float, jobs: int = 1) -> None:
     """Per-study wall-clock times (s) at the end of ``evotol reproduce all`` (issue 13), with the
     machine load: the 2-core machine is often shared, so absolute times are noisy."""
     import os
 
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     w = max(len(n) for n in seconds) if seconds else 5
-    print(f"[evotol] run times (load average {load:.1f}, {os.cpu_count()} cores):")
+    print(f"[evotol] run times (load average {load:.1f}, {os.cpu_count()} cores"
+          + (f"; {jobs} studies at a time, so their times overlap" if jobs > 1 else "") + "):")
     for name, sec in seconds.items():
         print(f"  {name:{w}s} {sec:8.1f} s{'  (failed)' if name in failed else ''}")
     print(f"  {'total':{w}s} {total:8.1f} s", flush=True)
@@ -178,6 +212,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quick", action="store_true", help="smaller run for a fast look")
     r.add_argument("--scheduler", type=arguments.scheduler, default=None,
                    help="Dask scheduler address (tcp://host:port) for the large grid/design studies; default: local cores")
+    r.add_argument("--jobs", type=arguments.jobs, default=None,
+                   help="studies run at the same time for 'all', each in its own process with its output in "
+                        "OUT/logs/NAME.log (default: 2 on a machine with 2 or more cores; 1 runs them one by one "
+                        "in this process). A study's grids use every core either way.")
     r.set_defaults(func=cmd_reproduce)
 
     u = sub.add_parser("run", help="run a user study described in a TOML file")

@@ -46,7 +46,7 @@ def test_reproduce_all_stops_at_ctrl_c_and_says_where(monkeypatch, tmp_path, cap
     fake = {"a-first": _study("a-first", _quiet), "b-second": _study("b-second", second),
             "c-third": _study("c-third", _quiet)}
     monkeypatch.setattr(studies, "available", lambda: fake)
-    assert main(["reproduce", "all", "--out", str(tmp_path)]) == 130
+    assert main(["reproduce", "all", "--out", str(tmp_path), "--jobs", "1"]) == 130
     err = capsys.readouterr().err
     assert "interrupted (Ctrl-C) during b-second" in err
     assert "completed and written: a-first" in err and "not run: c-third" in err
