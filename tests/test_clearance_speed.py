@@ -8,6 +8,7 @@
   and both keep the gap <= 0.1 %.
 """
 import numpy as np
+import pytest
 
 from robots.clearance import max_pose_error
 from robots.clearance import maxerror as me
@@ -50,13 +51,69 @@ def test_initial_patches_use_one_vertex_of_each_antipodal_pair():
     assert sorted(map(tuple, spanned.sum(1).round(12))) == [(-1, -1, 1), (-1, 1, 1), (1, -1, 1), (1, 1, 1)]
 
 
-def test_initial_circle_patches_are_four_45_degree_arcs_of_the_half_circle():
+def test_initial_circle_patches_are_three_60_degree_arcs_of_the_half_circle():
     verts, tri, sign = me._initial_patches(2)
-    arcs = verts[tri] * sign[..., None]                   # (4, 2, 2): ends of each arc
-    assert len(verts) == 4 and len(arcs) == 4             # 0, 45, 90, 135 deg (+ the antipode of 0 deg)
+    arcs = verts[tri] * sign[..., None]                   # (3, 2, 2): ends of each arc
+    assert len(verts) == 3 and len(arcs) == 3             # 0, 60, 120 deg (+ the antipode of 0 deg)
     cosines = np.einsum("ak,ak->a", arcs[:, 0], arcs[:, 1])
-    assert np.allclose(cosines, np.cos(np.pi / 4))
+    assert np.allclose(cosines, np.cos(np.pi / 3))
     assert np.allclose(arcs[-1, 1], [-1.0, 0.0]) and np.allclose(arcs[0, 0], [1.0, 0.0])
+
+
+def _block(mech, pose, target):
+    """Scaled problem data at ``pose`` of the block of ``mech`` with the most components of target
+    "p" or "r" (the 5-bar's out-of-plane block for "r": rotations about x and y)."""
+    pm = max(mech.pose_maps(np.atleast_2d(pose)), key=lambda b: (b.C_pos if target == "p" else b.C_rot).shape[1])
+    D = pm.row_bounds(np.broadcast_to(mech.default_bounds(), (1, mech.n_joints, 4)))
+    Bt = pm.B * D[..., None]
+    Ct = (pm.C_pos if target == "p" else pm.C_rot) * D[:, None, :]
+    return Ct, Bt, pm.n_disk, pm.groups
+
+
+@pytest.mark.parametrize("robot, target", [("fivebar", "r"), ("irsbot2", "p"), ("irsbot2", "r")])
+def test_interpolated_dual_bound_is_valid_and_never_above_the_vertex_bound(robot, target):
+    """For patches around directions of a real error set: the dual-interpolation bound (issue 13)
+    is above h at 40 directions inside the patch, each solved to 1e-10, and not above the
+    sublinearity bound of the vertex values."""
+    from robots.clearance.support import _gram_pinv, solve_support, true_dual
+
+    if robot == "fivebar":
+        from robots.fivebar import FiveBar
+
+        Ct, Bt, nd, groups = _block(FiveBar().clearance_mechanism(), [0.0, 0.07], target)
+    else:
+        from robots.irsbot2 import IRSBot2
+
+        Ct, Bt, nd, groups = _block(IRSBot2.thesis("VI.1").clearance_mechanism(), [0.0, -0.05], target)
+    k = Ct.shape[1]
+    rng = np.random.default_rng(5)
+    gi = _gram_pinv(Bt)
+
+    def solve(U, tol):
+        a = np.einsum("qr,pq->pr", Ct[0], U)
+        n = len(U)
+        res = solve_support(a, np.repeat(Bt, n, 0), nd, tol=tol * np.abs(a).sum(1), gram_inv=np.repeat(gi, n, 0),
+                            groups=groups)
+        return res, a
+
+    tighter = 0
+    for _ in range(12):
+        centre = me._normalise(rng.normal(size=k))
+        U = me._normalise(centre + rng.uniform(0.05, 0.5) * rng.normal(size=(k, k)))
+        if np.min(U @ U.T) <= 0.2:
+            continue
+        res, a = solve(U, 1e-3)                           # vertex duals of moderate precision
+        Y = a + np.einsum("prm,pm->pr", np.repeat(Bt, len(U), 0), res.mu)
+        H = true_dual(Y, nd)
+        vertex = me._patch_bound(U[None], H[None])[0]
+        interp = me._interpolated_bound(U[None], Y[None], nd, 6)[0]
+        assert interp <= vertex * (1 + 1e-12)
+        tighter += interp < vertex * (1 - 1e-6)
+        L = rng.dirichlet(np.ones(k), 40)
+        inside = me._normalise(L @ U)
+        exact, _ = solve(inside, 1e-10)
+        assert np.all(exact.lower <= interp * (1 + 1e-9))
+    assert tighter >= 1
 
 
 def _agree(mech, poses):

@@ -13,8 +13,11 @@ branch and bound on the circle (2 target components) or the half sphere (3 compo
 ``h(u) = h(-u)`` by symmetry): for a patch spanned by unit vectors ``u_1..u_q``,
 ``max_patch h <= max_i h(u_i) / d`` where ``d`` is the distance from the origin to the flat
 patch (positive homogeneity + subadditivity of ``h``); patches whose bound does not exceed the
-best attained norm by more than the tolerance are discarded, the others are split. The result
-carries
+best attained norm by more than the tolerance are discarded, the others are split. A second,
+often much tighter bound interpolates the vertices' **dual points** across the patch (weak
+duality holds for any dual point and the problem's data are linear in the direction:
+:func:`_interpolated_bound`), so patches on round parts of the error set prune without being
+split. The result carries
 
 * ``p_max``: a value **attained** by an explicit feasible set of joint error screws (returned);
 * ``p_upper``: a **certified** upper bound (dual certificates on the directions + patch bound);
@@ -113,9 +116,12 @@ class _Evaluator:
         return res.upper, res.mu
 
     def cheap(self, case, u, mu):
-        a = np.einsum("kqr,kq->kr", self.Ct[case], u)
         self.n_cheap += len(case)
-        return true_dual(a + (self.Bt[case] @ mu[..., None])[..., 0], self.nd)
+        return true_dual(self.dual_vectors(case, u, mu), self.nd)
+
+    def dual_vectors(self, case, u, mu):
+        """``y = D C^T u + D B mu`` (K, R): the cone-wise vectors whose norms sum to the dual bound."""
+        return np.einsum("kqr,kq->kr", self.Ct[case], u) + (self.Bt[case] @ mu[..., None])[..., 0]
 
     def polish(self, n_iter: int = 2, rtol: float | None = None, cases=None):
         """Local ascent from the best attained point: u <- x / ||x||, x <- argmax u^T x; monotone
@@ -190,6 +196,49 @@ def _patch_bound(U, H):
     return b1
 
 
+def _sub_points(q: int, n: int):
+    """Conic weights (S, q) of the sub-points of a patch split ``n`` times along each edge, and the
+    sub-patches (T, q) as indices into them: the arc cut into ``n`` arcs, or the triangle into
+    ``n^2`` triangles."""
+    if q == 2:
+        t = np.arange(n + 1) / n
+        return np.stack([1 - t, t], 1), np.stack([np.arange(n), np.arange(1, n + 1)], 1)
+    pts = [(i, j) for i in range(n + 1) for j in range(n + 1 - i)]
+    at = {p: c for c, p in enumerate(pts)}
+    W = np.array([(n - i - j, i, j) for i, j in pts], float) / n
+    tris = []
+    for i in range(n):
+        for j in range(n - i):
+            tris.append((at[(i, j)], at[(i + 1, j)], at[(i, j + 1)]))
+            if i + j < n - 1:
+                tris.append((at[(i + 1, j)], at[(i + 1, j + 1)], at[(i, j + 1)]))
+    return W, np.array(tris)
+
+
+def _interpolated_bound(U, Y, nd: int, n: int):
+    """Certified bound of ``max h(u)`` over the patches spanned by unit vectors U (P, q, k), from the
+    dual vectors ``Y`` (P, q, R) of their vertices (``y_i = a(U_i) + B mu_i``, whose cone norms sum
+    to the vertex bound ``f(mu_i, U_i)``).
+
+    For ``u = sum l_i U_i`` (``l >= 0``) the dual point ``mu = sum l_i mu_i`` is feasible, so by weak
+    duality and the linearity of ``a(u)``, ``h(u) <= f(mu, u) = sum_c ||sum_i l_i y_{c,i}||`` -- the
+    interpolated bound G(u). It is never above the vertex bound ``sum l_i f(mu_i, U_i)`` (triangle
+    inequality) and is exact where the optimal dual is linear across the patch (a round part of the
+    error set), so patches on curved parts prune without being split. G is sublinear on the patch's
+    cone, so its maximum over the patch is bounded by :func:`_patch_bound` on ``n`` sub-patches per
+    edge with G at their vertices."""
+    P, q, k = U.shape
+    W, sub = _sub_points(q, n)
+    V = np.einsum("sq,pqk->psk", W, U)                              # (P, S, k) sub-points in the cone
+    nv = np.linalg.norm(V, axis=-1)
+    G = true_dual(np.einsum("sq,pqr->psr", W, Y), nd) / nv          # (P, S) bound at the unit sub-points
+    V = V / nv[..., None]
+    T = len(sub)
+    SU = V[:, sub].reshape(P * T, q, k)
+    SH = G[:, sub].reshape(P * T, q)
+    return _patch_bound(SU, SH).reshape(P, T).max(axis=1)
+
+
 def _initial_patches(k: int):
     if k == 2:
         n0 = _N_CIRCLE0
@@ -214,17 +263,19 @@ def _initial_patches(k: int):
 
 
 _STOP_BELOW = 0.03   # B&B vertices certified 3 % below the best value need no more precision (1 % before issue 13)
-_N_CIRCLE0 = 4       # initial vertices on the half circle for 2-component targets (6 before issue 13;
+_N_CIRCLE0 = 3       # initial vertices on the half circle for 2-component targets (6 before issue 13;
                      # four 45 deg arcs need ~23 % fewer Newton iterations on the 5-bar)
 _LEVEL0 = 0          # initial subdivision of the half-sphere octants
 _POLISH_RTOL0 = 1e-6  # precision of the ascent from the initial vertices' best point
 _POLISH_RTOL = 1e-6   # precision of the final ascent (1e-8 before issue 13; the gap target is 1e-3)
 _DEDUP_ANTIPODES = "on"  # "off": solve both vertices of an antipodal pair (before issue 13)
 _PATCH_BOUND = "exact"  # "legacy": today's min(max H / d, |X|) (issue 13 comparison)
+_INTERPOLATE = 6        # sub-patches per edge of the dual-interpolation bound (0: off, the bound before it)
 
 
 #: the engine's settings before issue 13 (for the agreement test and the benchmark)
-LEGACY_OPTIONS = {"_STOP_BELOW": 0.01, "_N_CIRCLE0": 6, "_POLISH_RTOL": 1e-8, "_DEDUP_ANTIPODES": "off", "_PATCH_BOUND": "legacy"}
+LEGACY_OPTIONS = {"_STOP_BELOW": 0.01, "_N_CIRCLE0": 6, "_POLISH_RTOL": 1e-8, "_DEDUP_ANTIPODES": "off", "_PATCH_BOUND": "legacy",
+                  "_INTERPOLATE": 0}
 
 
 class legacy_engine:
@@ -263,13 +314,21 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
     PU = np.tile(verts[tri] * sign[..., None], (K, 1, 1))         # (P, q, k)
     PH = up[:, tri].reshape(K * T, -1)                             # (P, q) certified upper values
     PM = (mu[:, tri] * sign[None, :, :, None]).reshape(K * T, tri.shape[1], m)
+    interp = _INTERPOLATE and m
+    if interp:
+        PY = ev.dual_vectors(np.repeat(pc, tri.shape[1]), PU.reshape(-1, k), PM.reshape(-1, m)).reshape(PU.shape[:2] + (R,))
     pruned = np.zeros(K)
     q = PU.shape[1]
     for _ in range(max_rounds):
         bound = _patch_bound(PU, PH)
+        if interp:        # the finer (costlier) bound only where the vertex bound does not prune
+            loose = np.nonzero(bound > ev.best[pc] * (1 + tol_bb))[0]
+            bound[loose] = np.minimum(bound[loose], _interpolated_bound(PU[loose], PY[loose], nd, _INTERPOLATE))
         keep = bound > ev.best[pc] * (1 + tol_bb)
         np.maximum.at(pruned, pc[~keep], bound[~keep])
         pc, PU, PH, PM = pc[keep], PU[keep], PH[keep], PM[keep]
+        if interp:
+            PY = PY[keep]
         if not pc.size:
             break
         if q == 2:
@@ -293,6 +352,8 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
                               stop_below=sc * (1 - _STOP_BELOW))
             hm[need] = np.minimum(hm[need], he)
             um[need] = me
+        if interp:
+            ym = ev.dual_vectors(uc, uu, um)[back].reshape(len(pc), e, R)
         hm = hm[back].reshape(len(pc), e)
         mm = um[back].reshape(len(pc), e, m)
         if q == 2:
@@ -301,6 +362,8 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
             PU = np.concatenate([np.stack([a, ab], 1), np.stack([ab, b], 1)])
             PH = np.concatenate([np.stack([PH[:, 0], hm[:, 0]], 1), np.stack([hm[:, 0], PH[:, 1]], 1)])
             PM = np.concatenate([np.stack([PM[:, 0], mm[:, 0]], 1), np.stack([mm[:, 0], PM[:, 1]], 1)])
+            if interp:
+                PY = np.concatenate([np.stack([PY[:, 0], ym[:, 0]], 1), np.stack([ym[:, 0], PY[:, 1]], 1)])
             pc = np.tile(pc, 2)
         else:
             V = [PU[:, 0], PU[:, 1], PU[:, 2], mids[:, 0], mids[:, 1], mids[:, 2]]
@@ -310,10 +373,16 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
             PU = np.concatenate([np.stack([V[i] for i in c], 1) for c in kids])
             PH = np.concatenate([np.stack([Hh[i] for i in c], 1) for c in kids])
             PM = np.concatenate([np.stack([Mm[i] for i in c], 1) for c in kids])
+            if interp:
+                Yy = [PY[:, 0], PY[:, 1], PY[:, 2], ym[:, 0], ym[:, 1], ym[:, 2]]
+                PY = np.concatenate([np.stack([Yy[i] for i in c], 1) for c in kids])
             pc = np.tile(pc, 4)
     alive = np.zeros(K)
     if pc.size:
-        np.maximum.at(alive, pc, _patch_bound(PU, PH))
+        ab = _patch_bound(PU, PH)
+        if interp:
+            ab = np.minimum(ab, _interpolated_bound(PU, PY, nd, _INTERPOLATE))   # the few still alive
+        np.maximum.at(alive, pc, ab)
     changed = np.nonzero(ev.best > best_before)[0]
     ev.polish(n_iter=1, cases=np.arange(K))         # final tightening of the attained value
     if changed.size:

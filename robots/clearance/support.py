@@ -104,6 +104,21 @@ def _barrier_terms(Y: np.ndarray, nd: int, tau: np.ndarray):
     return Yd, Yi, td, ti, qd, qi
 
 
+def _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k):
+    """Gradient part ``B_g^T sigma`` and Hessian ``B_g^T W B_g - G^T G`` of one column group
+    (see :func:`solve_support`); the disk terms ``G_c = c_c y_c^T B_c`` are formed elementwise
+    (a (1 x 2) @ (2 x s) product per disk would be one BLAS call each)."""
+    gg = (sig[:, None, dr] @ Bgd)[:, 0, :] + (sig[:, None, ir] @ Bgi)[:, 0, :]
+    Hg = np.swapaxes(Bgd * wrow[:, dr, None], 1, 2) @ Bgd + np.swapaxes(Bgi * wrow[:, ir, None], 1, 2) @ Bgi
+    ndg = dcone.stop - dcone.start
+    if ndg:
+        B4 = Bgd.reshape(k, ndg, 2, -1)
+        Y = Yd[:, dcone]
+        Gd = (Y[:, :, 0, None] * B4[:, :, 0] + Y[:, :, 1, None] * B4[:, :, 1]) * cd[:, dcone, None]
+        Hg -= np.swapaxes(Gd, 1, 2) @ Gd
+    return gg, Hg
+
+
 def _merge_groups(groups):
     """Merge row groups whose columns are a subset of another group's (fewer, larger blocks)."""
     groups = [(np.asarray(d, int), np.asarray(i, int), np.asarray(c, int)) for d, i, c in groups]
@@ -206,7 +221,8 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         wB, wa, wmu, wtau, wgi, wY = (x[keep0] for x in (wB, wa, wmu, wtau, wgi, wY))
         gB = [(x[keep0], y[keep0]) for x, y in gB]
     it = 0
-    reg = np.eye(m) * 1e-14
+    diag = np.arange(m)
+    dense = len(grows) == 1 and np.array_equal(grows[0][2], np.arange(m))
     STATS["problems"] += K
     while idx.size and it < max_iter:
         it += 1
@@ -219,20 +235,18 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         wi = (tc / ti) * (1.0 - tc * Yi ** 2 / (ti * qi))
         wrow = np.concatenate([np.repeat(wd, 2, axis=1), wi], axis=1)
         cd = np.sqrt(tc ** 2 / (td ** 2 * qd)) if nd else None
-        g = np.zeros((k, m))
-        H = np.zeros((k, m, m))
-        for (dr, ir, cols, dcone), (Bgd, Bgi) in zip(grows, gB):
-            s_ = len(cols)
-            gg = (sig[:, None, dr] @ Bgd)[:, 0, :] + (sig[:, None, ir] @ Bgi)[:, 0, :]
-            Hg = np.swapaxes(Bgd * wrow[:, dr, None], 1, 2) @ Bgd + np.swapaxes(Bgi * wrow[:, ir, None], 1, 2) @ Bgi
-            ndg = dcone.stop - dcone.start
-            if ndg:
-                Gd = (Yd[:, dcone, None, :] @ Bgd.reshape(k, ndg, 2, s_))[:, :, 0, :] * cd[:, dcone, None]
-                Hg -= np.swapaxes(Gd, 1, 2) @ Gd
-            g[:, cols] += gg
-            H[:, cols[:, None], cols[None, :]] += Hg
+        if dense:                      # one group over every column: no scatter (the IRSBot-2 distal module)
+            (dr, ir, cols, dcone), (Bgd, Bgi) = grows[0], gB[0]
+            g, H = _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k)
+        else:
+            g = np.zeros((k, m))
+            H = np.zeros((k, m, m))
+            for (dr, ir, cols, dcone), (Bgd, Bgi) in zip(grows, gB):
+                gg, Hg = _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k)
+                g[:, cols] += gg
+                H[:, cols[:, None], cols[None, :]] += Hg
         g *= tc
-        H += (np.trace(H, axis1=1, axis2=2) / m + 1e-300)[:, None, None] * reg
+        H[:, diag, diag] += ((np.trace(H, axis1=1, axis2=2) / m + 1e-300) * 1e-14)[:, None]
         try:
             d = -np.linalg.solve(H, g[..., None])[..., 0]
         except np.linalg.LinAlgError:
