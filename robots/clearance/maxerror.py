@@ -270,7 +270,8 @@ _POLISH_RTOL0 = 1e-6  # precision of the ascent from the initial vertices' best 
 _POLISH_RTOL = 1e-6   # precision of the final ascent (1e-8 before issue 13; the gap target is 1e-3)
 _DEDUP_ANTIPODES = "on"  # "off": solve both vertices of an antipodal pair (before issue 13)
 _PATCH_BOUND = "exact"  # "legacy": today's min(max H / d, |X|) (issue 13 comparison)
-_INTERPOLATE = 6        # sub-patches per edge of the dual-interpolation bound (0: off, the bound before it)
+_INTERPOLATE = 6        # sub-patches per edge of the dual-interpolation bound on triangles (0: off, the bound before it)
+_INTERPOLATE_ARC = 24   # ... and sub-arcs per arc (2-component targets: cheap, and round sets need them)
 
 
 #: the engine's settings before issue 13 (for the agreement test and the benchmark)
@@ -315,6 +316,7 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
     PH = up[:, tri].reshape(K * T, -1)                             # (P, q) certified upper values
     PM = (mu[:, tri] * sign[None, :, :, None]).reshape(K * T, tri.shape[1], m)
     interp = _INTERPOLATE and m
+    n_sub = _INTERPOLATE_ARC if k == 2 else _INTERPOLATE
     if interp:
         PY = ev.dual_vectors(np.repeat(pc, tri.shape[1]), PU.reshape(-1, k), PM.reshape(-1, m)).reshape(PU.shape[:2] + (R,))
     pruned = np.zeros(K)
@@ -323,7 +325,7 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
         bound = _patch_bound(PU, PH)
         if interp:        # the finer (costlier) bound only where the vertex bound does not prune
             loose = np.nonzero(bound > ev.best[pc] * (1 + tol_bb))[0]
-            bound[loose] = np.minimum(bound[loose], _interpolated_bound(PU[loose], PY[loose], nd, _INTERPOLATE))
+            bound[loose] = np.minimum(bound[loose], _interpolated_bound(PU[loose], PY[loose], nd, n_sub))
         keep = bound > ev.best[pc] * (1 + tol_bb)
         np.maximum.at(pruned, pc[~keep], bound[~keep])
         pc, PU, PH, PM = pc[keep], PU[keep], PH[keep], PM[keep]
@@ -381,7 +383,7 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
     if pc.size:
         ab = _patch_bound(PU, PH)
         if interp:
-            ab = np.minimum(ab, _interpolated_bound(PU, PY, nd, _INTERPOLATE))   # the few still alive
+            ab = np.minimum(ab, _interpolated_bound(PU, PY, nd, n_sub))   # the few still alive
         np.maximum.at(alive, pc, ab)
     changed = np.nonzero(ev.best > best_before)[0]
     ev.polish(n_iter=1, cases=np.arange(K))         # final tightening of the attained value
