@@ -277,6 +277,8 @@ _INTERPOLATE_ARC = 24   # ... and sub-arcs per arc (2-component targets: cheap, 
 #: the engine's settings before issue 13 (for the agreement test and the benchmark)
 LEGACY_OPTIONS = {"_STOP_BELOW": 0.01, "_N_CIRCLE0": 6, "_POLISH_RTOL": 1e-8, "_DEDUP_ANTIPODES": "off", "_PATCH_BOUND": "legacy",
                   "_INTERPOLATE": 0}
+#: ... and of the convex solver (robots.clearance.support)
+LEGACY_SUPPORT_OPTIONS = {"_PRED": "legacy", "_GROWTH": 8.0}
 
 
 class legacy_engine:
@@ -285,13 +287,22 @@ class legacy_engine:
     ``with legacy_engine(): max_pose_error(...)``. Not thread safe (module settings)."""
 
     def __enter__(self):
+        from robots.clearance import support
+
         g = globals()
         self._saved = {k: g[k] for k in LEGACY_OPTIONS}
+        self._saved_support = {k: getattr(support, k) for k in LEGACY_SUPPORT_OPTIONS}
         g.update(LEGACY_OPTIONS)
+        for k, v in LEGACY_SUPPORT_OPTIONS.items():
+            setattr(support, k, v)
         return self
 
     def __exit__(self, *exc):
+        from robots.clearance import support
+
         globals().update(self._saved)
+        for k, v in self._saved_support.items():
+            setattr(support, k, v)
         return False
 
 
