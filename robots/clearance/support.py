@@ -282,6 +282,14 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
                 pending[acc] = False
         wmu = wmu + step[:, None] * d
         wY = wY + step[:, None] * BD
+        if stop_below is not None:
+            # every iterate is dual feasible: its value is a certified upper bound (weak duality),
+            # enough to drop a vertex certified below ``stop_below`` before the path is centred
+            up_it = true_dual(wY, nd)
+            better = up_it < upper[idx]
+            if better.any():
+                upper[idx[better]] = up_it[better]
+                best_mu[idx[better]] = wmu[better]
         centred = np.nonzero(lam2 < _CENTRED)[0]
         if _TRACE: print("it", it, "k", k, "lam2 med %.3g" % np.median(lam2), "tau med %.3g" % np.median(wtau))
         if centred.size:
