@@ -124,7 +124,7 @@ def _reproduce_jobs(names, out: Path, args, jobs: int, t_all: float) -> int:
         print(f"[evotol] failed: {', '.join(res.failed)}", file=sys.stderr)
     if res.interrupted:
         done = [n for n in res.summaries if n not in res.stopped]
-        written = [n for n in res.written]
+        written = res.written
         print(f"evotol: interrupted (Ctrl-C) during {', '.join(res.stopped) or 'none'}: "
               + (f"{', '.join(written)} written, but a method inside stopped early at Ctrl-C (best design so far); "
                  if written else "")

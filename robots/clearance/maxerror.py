@@ -239,6 +239,19 @@ def _interpolated_bound(U, Y, nd: int, n: int):
     return _patch_bound(SU, SH).reshape(P, T).max(axis=1)
 
 
+_KIDS = ((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5))   # a triangle's four children: vertices 0-2, edge midpoints 3-5
+
+
+def _children(parent, mid):
+    """A per-vertex array of the children of split patches: ``parent`` (P, q, ...) at the patches'
+    vertices, ``mid`` (P, e, ...) at their new midpoints (edges 01, 12, 20). An arc gives two arcs,
+    a triangle four triangles; children are stacked child-kind by child-kind (as ``np.tile(pc, .)``)."""
+    if parent.shape[1] == 2:
+        return np.concatenate([np.stack([parent[:, 0], mid[:, 0]], 1), np.stack([mid[:, 0], parent[:, 1]], 1)])
+    v = [parent[:, 0], parent[:, 1], parent[:, 2], mid[:, 0], mid[:, 1], mid[:, 2]]
+    return np.concatenate([np.stack([v[i] for i in c], 1) for c in _KIDS])
+
+
 def _initial_patches(k: int):
     if k == 2:
         n0 = _N_CIRCLE0
@@ -263,8 +276,8 @@ def _initial_patches(k: int):
 
 
 _STOP_BELOW = 0.06   # B&B vertices certified 6 % below the best value need no more precision (1 % before issue 13, 3 % until every iterate's dual value was checked)
-_N_CIRCLE0 = 3       # initial vertices on the half circle for 2-component targets (6 before issue 13;
-                     # four 45 deg arcs need ~23 % fewer Newton iterations on the 5-bar)
+_N_CIRCLE0 = 3       # initial vertices on the half circle for 2-component targets (6 before issue 13, 4 until
+                     # the dual-interpolation bound: three 60 deg arcs then need fewer Newton iterations)
 _LEVEL0 = 0          # initial subdivision of the half-sphere octants
 _POLISH_RTOL0 = 1e-6  # precision of the ascent from the initial vertices' best point
 _POLISH_RTOL = 1e-6   # precision of the final ascent (1e-8 before issue 13; the gap target is 1e-3)
@@ -369,27 +382,10 @@ def _maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, g
             ym = ev.dual_vectors(uc, uu, um)[back].reshape(len(pc), e, R)
         hm = hm[back].reshape(len(pc), e)
         mm = um[back].reshape(len(pc), e, m)
-        if q == 2:
-            a, b = PU[:, 0], PU[:, 1]
-            ab = mids[:, 0]
-            PU = np.concatenate([np.stack([a, ab], 1), np.stack([ab, b], 1)])
-            PH = np.concatenate([np.stack([PH[:, 0], hm[:, 0]], 1), np.stack([hm[:, 0], PH[:, 1]], 1)])
-            PM = np.concatenate([np.stack([PM[:, 0], mm[:, 0]], 1), np.stack([mm[:, 0], PM[:, 1]], 1)])
-            if interp:
-                PY = np.concatenate([np.stack([PY[:, 0], ym[:, 0]], 1), np.stack([ym[:, 0], PY[:, 1]], 1)])
-            pc = np.tile(pc, 2)
-        else:
-            V = [PU[:, 0], PU[:, 1], PU[:, 2], mids[:, 0], mids[:, 1], mids[:, 2]]
-            Hh = [PH[:, 0], PH[:, 1], PH[:, 2], hm[:, 0], hm[:, 1], hm[:, 2]]
-            Mm = [PM[:, 0], PM[:, 1], PM[:, 2], mm[:, 0], mm[:, 1], mm[:, 2]]
-            kids = ((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5))
-            PU = np.concatenate([np.stack([V[i] for i in c], 1) for c in kids])
-            PH = np.concatenate([np.stack([Hh[i] for i in c], 1) for c in kids])
-            PM = np.concatenate([np.stack([Mm[i] for i in c], 1) for c in kids])
-            if interp:
-                Yy = [PY[:, 0], PY[:, 1], PY[:, 2], ym[:, 0], ym[:, 1], ym[:, 2]]
-                PY = np.concatenate([np.stack([Yy[i] for i in c], 1) for c in kids])
-            pc = np.tile(pc, 4)
+        PU, PH, PM = _children(PU, mids), _children(PH, hm), _children(PM, mm)
+        if interp:
+            PY = _children(PY, ym)
+        pc = np.tile(pc, 2 if q == 2 else 4)
     alive = np.zeros(K)
     if pc.size:
         ab = _patch_bound(PU, PH)

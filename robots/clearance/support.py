@@ -27,7 +27,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-_STEPS = 0.5 ** np.arange(12)
 _CENTRED = 1e-2
 _GROWTH = 16.0   # tau grows by this factor at each centring (8 before the path predictor below)
 _PRED = "path"   # predictor scale: "path" = tau_old / tau_new (checked against no step); "legacy": best of 1, .75, .5, .25, 0
@@ -282,6 +281,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
                 pending[acc] = False
         wmu = wmu + step[:, None] * d
         wY = wY + step[:, None] * BD
+        up_it = None
         if stop_below is not None:
             # every iterate is dual feasible: its value is a certified upper bound (weak duality),
             # enough to drop a vertex certified below ``stop_below`` before the path is centred
@@ -295,7 +295,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         if centred.size:
             c_idx = idx[centred]
             Yc = wY[centred]
-            up = true_dual(Yc, nd)
+            up = true_dual(Yc, nd) if up_it is None else up_it[centred]     # (computed above already)
             better = up < upper[c_idx]
             upper[c_idx] = np.where(better, up, upper[c_idx])
             best_mu[c_idx[better]] = wmu[centred[better]]
