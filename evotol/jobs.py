@@ -25,6 +25,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from evotol.interrupt import CtrlC
 from evotol.progress import EXPECTED_SECONDS
 
 #: exit code of a study process stopped by Ctrl-C (``evotol reproduce``)
@@ -96,37 +97,40 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
           f"output: {logs}/NAME.log", file=stream, flush=True)
     last_report = time.perf_counter()
     try:
-        while queue or running:
-            while queue and len(running) < jobs:
-                name = queue.pop(0)
-                log = open(logs / f"{name}.log", "w", encoding="utf-8")
-                # own session: a terminal Ctrl-C reaches only this process, which forwards one
-                # SIGINT to each study (a second one would abort a GA's clean stop)
-                proc = subprocess.Popen(_command(name, out, seed=seed, quick=quick, scheduler=scheduler),
-                                        stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
-                running[name] = (proc, time.perf_counter(), log)
-                print(f"[evotol] started {name}" + (f": {titles[name]}" if name in titles else ""), file=stream, flush=True)
-            for name in list(running):
-                proc, t0, log = running[name]
-                code = proc.poll()
-                if code is None:
-                    continue
-                log.close()
-                del running[name]
-                res.seconds[name] = time.perf_counter() - t0
-                if code == 0:
-                    res.summaries[name] = json.loads((out / f"{name}.json").read_text(encoding="utf-8"))
-                    print(f"[evotol] {name} done in {res.seconds[name]:.1f} s -> {out / (name + '.html')}", file=stream, flush=True)
-                else:
-                    res.failed.append(name)
-                    print(f"[evotol] {name} failed (exit code {code}); last lines of {logs / (name + '.log')}:\n"
-                          f"{_tail(logs / (name + '.log'))}", file=sys.stderr, flush=True)
-            if running and time.perf_counter() - last_report >= report_every:
-                last_report = time.perf_counter()
-                now = time.perf_counter()
-                print("[evotol] running: " + ", ".join(f"{n} ({now - t0:.0f} s)" for n, (_, t0, _) in running.items()),
-                      file=stream, flush=True)
-            time.sleep(poll)
+        # Ctrl-C raises here even when this process was started with SIGINT ignored (as by `nohup`
+        # or `cmd &` in a script), as in the one-at-a-time path
+        with CtrlC():
+            while queue or running:
+                while queue and len(running) < jobs:
+                    name = queue.pop(0)
+                    log = open(logs / f"{name}.log", "w", encoding="utf-8")
+                    # own session: a terminal Ctrl-C reaches only this process, which forwards one
+                    # SIGINT to each study (a second one would abort a GA's clean stop)
+                    proc = subprocess.Popen(_command(name, out, seed=seed, quick=quick, scheduler=scheduler),
+                                            stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+                    running[name] = (proc, time.perf_counter(), log)
+                    print(f"[evotol] started {name}" + (f": {titles[name]}" if name in titles else ""), file=stream, flush=True)
+                for name in list(running):
+                    proc, t0, log = running[name]
+                    code = proc.poll()
+                    if code is None:
+                        continue
+                    log.close()
+                    del running[name]
+                    res.seconds[name] = time.perf_counter() - t0
+                    if code == 0:
+                        res.summaries[name] = json.loads((out / f"{name}.json").read_text(encoding="utf-8"))
+                        print(f"[evotol] {name} done in {res.seconds[name]:.1f} s -> {out / (name + '.html')}", file=stream, flush=True)
+                    else:
+                        res.failed.append(name)
+                        print(f"[evotol] {name} failed (exit code {code}); last lines of {logs / (name + '.log')}:\n"
+                              f"{_tail(logs / (name + '.log'))}", file=sys.stderr, flush=True)
+                if running and time.perf_counter() - last_report >= report_every:
+                    last_report = time.perf_counter()
+                    now = time.perf_counter()
+                    print("[evotol] running: " + ", ".join(f"{n} ({now - t0:.0f} s)" for n, (_, t0, _) in running.items()),
+                          file=stream, flush=True)
+                time.sleep(poll)
     except KeyboardInterrupt:
         for name, (proc, t0, log) in running.items():
             if proc.poll() is None:
