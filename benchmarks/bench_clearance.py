@@ -8,7 +8,9 @@ Prints, in one run:
   variables, target < 2 min), with the thesis's method on two points;
 * 32 768 clearance-bound sets of the 5-bar at one pose (the tolerance-synthesis workload);
 * issue 13: the engine against its settings before issue 13 (``legacy_engine()``) on the same
-  IRSBot-2 points in one process: time and Newton-iteration ratios, agreement of the brackets.
+  IRSBot-2 points in one process: time and Newton-iteration ratios, agreement of the brackets;
+* the compiled Newton iteration (``robots.clearance.newton_kernel``) against the NumPy one
+  (``support.numpy_iteration()``) on the same points in one process.
 
 Absolute times depend on the load of this shared 2-core machine (printed with ``uptime``'s load
 average); compare ratios measured in one run.
@@ -108,6 +110,28 @@ def main(argv=None):
               f"x{2 * tn / (tl + tl2):.2f} of the time; Newton iterations {nl} -> {nn} (x{nn / nl:.2f}); "
               f"convex solves {rl.n_solves} -> {rn.n_solves}; largest gap {rl.gap.max():.1e} -> {rn.gap.max():.1e}; "
               f"brackets overlap at every pose: {overlap}; max |p_now/p_before - 1| = {np.abs(rn.p_max / rl.p_max - 1).max():.1e}")
+
+    print(f"\n== compiled Newton iteration (numba) vs NumPy iteration, same points, one process ==")
+    from robots.clearance import newton_kernel
+    if not newton_kernel.AVAILABLE:
+        print("numba not available: skipped")
+    for m2, sub, label in cases if newton_kernel.AVAILABLE else ():
+        max_pose_error(m2, sub[:2])              # load the compiled kernel outside the timing
+        ts = {}
+        for name in ("numpy", "compiled", "numpy again", "compiled again"):
+            t = time.process_time()
+            if name.startswith("numpy"):
+                with support.numpy_iteration():
+                    r = max_pose_error(m2, sub)
+            else:
+                r = max_pose_error(m2, sub)
+            ts[name] = (time.process_time() - t, r)
+        tn = ts["numpy"][0] + ts["numpy again"][0]
+        tc = ts["compiled"][0] + ts["compiled again"][0]
+        ra, rb = ts["numpy"][1], ts["compiled"][1]
+        overlap = bool(np.all(ra.p_max <= rb.p_upper * (1 + 1e-12)) and np.all(rb.p_max <= ra.p_upper * (1 + 1e-12)))
+        print(f"{label}, {len(sub)} poses: NumPy {ts['numpy'][0]:.2f} / {ts['numpy again'][0]:.2f} s CPU, compiled "
+              f"{ts['compiled'][0]:.2f} / {ts['compiled again'][0]:.2f} s -> x{tc / tn:.2f} of the time; brackets overlap: {overlap}")
 
     print("\n== 5-bar tolerance-synthesis workload: 32 768 bound sets at (0, 70) mm ==")
     ev = ClearanceEvaluator(mech, [[0.0, 0.07]])

@@ -27,11 +27,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evotol.errors import ValidationError
+from robots.clearance import newton_kernel
+
 _CENTRED = 1e-2
 _GROWTH = 16.0   # tau grows by this factor at each centring (8 before the path predictor below)
 _PRED = "path"   # predictor scale: "path" = tau_old / tau_new (checked against no step); "legacy": best of 1, .75, .5, .25, 0
 _PRED_LEGACY = np.array([1.0, 0.75, 0.5, 0.25, 0.0])
 _TRACE = False
+_KERNEL = None   # default of solve_support's ``kernel``: None = compiled when numba is available, False = NumPy
 _LS = np.array([1.0, 0.5, 0.25, 0.12])
 #: work counters (Newton iterations summed over problems), read by benchmarks
 STATS = {"newton": 0, "problems": 0}
@@ -151,7 +155,8 @@ def _barrier_value(Y: np.ndarray, nd: int, tau: np.ndarray) -> np.ndarray:
 
 def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | float, mu0: np.ndarray | None = None,
                   gap0: np.ndarray | float | None = None, max_iter: int = 100, gram_inv: np.ndarray | None = None,
-                  growth: float | None = None, rtol: float = 0.0, groups=None, stop_below=None) -> SupportResult:
+                  growth: float | None = None, rtol: float = 0.0, groups=None, stop_below=None,
+                  kernel: bool | None = None) -> SupportResult:
     """Solve the batched support-function problems (see module docstring).
 
     a: (K, R) scaled linear terms; B: (K, R, m) scaled loop maps (rows: ``nd`` disks as pairs,
@@ -160,7 +165,11 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     gram_inv: optional precomputed ``pinv(B^T B)`` (K, m, m); groups: optional block sparsity
     of B (:attr:`robots.clearance.model.PoseMaps.groups`): the Newton systems are then
     assembled group by group; stop_below: (K,) stop as soon as the certified upper bound is below
-    this value (enough for a branch-and-bound vertex far from the maximum).
+    this value (enough for a branch-and-bound vertex far from the maximum); kernel: run each
+    Newton iteration compiled (:mod:`robots.clearance.newton_kernel`, default when numba is
+    available) or with batched NumPy (``False``; the reference, equal to round-off). A problem
+    whose Hessian is exactly singular takes no step in the compiled iteration (its decrement is
+    reported as 0, so the path moves on) where NumPy falls back to a pseudo-inverse.
 
     Method: the dual ``min_mu sum_c ||y_c||`` (``y = a + B mu``) is written as the SOCP
     ``min sum_c t_c, ||y_c|| <= t_c`` and solved by a primal log-barrier path-following method:
@@ -207,13 +216,21 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     perm = np.concatenate([np.stack([2 * dperm, 2 * dperm + 1], 1).ravel(), iperm]).astype(int)
     inv = np.empty_like(perm)
     inv[perm] = np.arange(R)
-    a, B, Y = a[:, perm], B[:, perm], Y[:, perm]
+    a, B, Y = np.take(a, perm, axis=1), np.take(B, perm, axis=1), np.take(Y, perm, axis=1)   # (C-contiguous copies)
     grows, d0, i0 = [], 0, 2 * nd
     for dcone, irows, cols in groups:
         dn, inn = len(dcone), len(irows)
         grows.append((slice(2 * d0, 2 * d0 + 2 * dn), slice(i0, i0 + inn), np.asarray(cols, int), slice(d0, d0 + dn)))
         d0, i0 = d0 + dn, i0 + inn
-    gB = [(B[:, dr][:, :, cols], B[:, ir][:, :, cols]) for dr, ir, cols, _ in grows]
+    kernel = _KERNEL if kernel is None else kernel
+    use_kernel = (kernel is None or bool(kernel)) and newton_kernel.AVAILABLE and newton_kernel._kernel() is not None
+    if kernel and not use_kernel:
+        raise ValidationError("kernel", kernel, "False or None: numba is not available (see robots.clearance.newton_kernel)")
+    if use_kernel:
+        kgroups = newton_kernel.group_arrays(grows, nd)
+        gB = None
+    else:   # the NumPy iteration works on each group's rows and columns (copies)
+        gB = [(B[:, dr][:, :, cols], B[:, ir][:, :, cols]) for dr, ir, cols, _ in grows]
     # working set (compacted when it shrinks)
     idx = np.arange(K)
     wB, wa, wmu, wtau, wgi, wY = B, a, mu.copy(), tau, gram_inv, Y
@@ -221,71 +238,26 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         keep0 = lower < upper
         idx = idx[keep0]
         wB, wa, wmu, wtau, wgi, wY = (x[keep0] for x in (wB, wa, wmu, wtau, wgi, wY))
-        gB = [(x[keep0], y[keep0]) for x, y in gB]
+        gB = gB and [(x[keep0], y[keep0]) for x, y in gB]
     it = 0
-    diag = np.arange(m)
     dense = len(grows) == 1 and np.array_equal(grows[0][2], np.arange(m))
     STATS["problems"] += K
     while idx.size and it < max_iter:
         it += 1
         k = len(idx)
         STATS["newton"] += k
-        Yd, Yi, td, ti, qd, qi = _barrier_terms(wY, nd, wtau)
-        tc = wtau[:, None]
-        sig = np.concatenate([(Yd / td[..., None]).reshape(k, 2 * nd), Yi / ti], axis=1)
-        wd = tc / td
-        wi = (tc / ti) * (1.0 - tc * Yi ** 2 / (ti * qi))
-        wrow = np.concatenate([np.repeat(wd, 2, axis=1), wi], axis=1)
-        cd = np.sqrt(tc ** 2 / (td ** 2 * qd)) if nd else None
-        if dense:                      # one group over every column: no scatter (the IRSBot-2 distal module)
-            (dr, ir, cols, dcone), (Bgd, Bgi) = grows[0], gB[0]
-            g, H = _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k)
+        # one damped Newton step with line search on every problem; with ``stop_below`` also the
+        # dual value of the new iterate -- every iterate is dual feasible, so its value is a
+        # certified upper bound (weak duality), enough to drop a vertex certified below
+        # ``stop_below`` before the path is centred
+        if use_kernel:
+            # the compiled iteration (robots.clearance.newton_kernel): same steps as the branch below
+            H, lam2, up_it, fail = newton_kernel.newton_iterate(wY, wmu, wB, wtau, nd, kgroups, stop_below is not None)
+            if stop_below is None:
+                up_it = None
         else:
-            g = np.zeros((k, m))
-            H = np.zeros((k, m, m))
-            for (dr, ir, cols, dcone), (Bgd, Bgi) in zip(grows, gB):
-                gg, Hg = _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k)
-                g[:, cols] += gg
-                H[:, cols[:, None], cols[None, :]] += Hg
-        g *= tc
-        H[:, diag, diag] += ((np.trace(H, axis1=1, axis2=2) / m + 1e-300) * 1e-14)[:, None]
-        try:
-            d = -np.linalg.solve(H, g[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            d = -(np.linalg.pinv(H, hermitian=True) @ g[..., None])[..., 0]
-        lam2 = np.maximum(-(g * d).sum(-1), 0.0)
-        lam = np.sqrt(lam2)
-        BD = np.zeros((k, R))
-        for (dr, ir, cols, _), (Bgd, Bgi) in zip(grows, gB):
-            dc = d[:, cols, None]
-            BD[:, dr] = (Bgd @ dc)[..., 0]
-            BD[:, ir] = (Bgi @ dc)[..., 0]
-        # backtracking line search on the reduced barrier F = sum_c q_c - log(1 + q_c),
-        # q_c = sqrt(1 + tau^2 |y_c|^2); never shorter than the damped step 1/(1+lambda), which
-        # self-concordance guarantees to decrease F
-        damped = np.where(lam > 0.25, 1.0 / (1.0 + lam), 1.0)
-        step = damped.copy()
-        bi = np.nonzero(lam > 0.25)[0]
-        if bi.size:
-            # F at the current point from the Newton pieces already computed (no second evaluation)
-            F0 = (qd[bi] - np.log1p(qd[bi])).sum(-1) + (qi[bi] - np.log1p(qi[bi])).sum(-1)
-            pending = np.ones(bi.size, bool)
-            for t in _LS:              # progressive backtracking: most problems accept t = 1
-                if t <= 0 or not pending.any():
-                    break
-                pi = bi[pending]
-                Ft = _barrier_value((wY[pi] + t * BD[pi])[:, None, :], nd, wtau[pi])[:, 0]
-                ok = Ft <= F0[pending] - 0.1 * t * lam2[pi]
-                acc = np.nonzero(pending)[0][ok]
-                step[bi[acc]] = np.maximum(t, damped[bi[acc]])
-                pending[acc] = False
-        wmu = wmu + step[:, None] * d
-        wY = wY + step[:, None] * BD
-        up_it = None
-        if stop_below is not None:
-            # every iterate is dual feasible: its value is a certified upper bound (weak duality),
-            # enough to drop a vertex certified below ``stop_below`` before the path is centred
-            up_it = true_dual(wY, nd)
+            H, lam2, wmu, wY, up_it = _numpy_iteration(wY, wmu, wtau, nd, R, m, grows, gB, dense, stop_below is not None)
+        if up_it is not None:
             better = up_it < upper[idx]
             if better.any():
                 upper[idx[better]] = up_it[better]
@@ -354,12 +326,89 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             mu[idx] = wmu
             if keep.sum() < 0.8 * len(idx):
                 wB, wa, wmu, wtau, wgi, wY = (x[keep] for x in (wB, wa, wmu, wtau, wgi, wY))
-                gB = [(x[keep], y[keep]) for x, y in gB]
+                gB = gB and [(x[keep], y[keep]) for x, y in gB]
                 idx = idx[keep]
             elif not keep.any():
                 idx = idx[keep]
     mu[idx] = wmu if len(wmu) == len(idx) else mu[idx]
     return SupportResult(upper, lower, sigma[:, inv], best_mu, it)
+
+
+def _numpy_iteration(wY, wmu, wtau, nd, R, m, grows, gB, dense, want_dual):
+    """One barrier-Newton iteration with batched NumPy operations (the reference for
+    :mod:`robots.clearance.newton_kernel`, used when numba is unavailable); returns
+    ``(H, lam2, mu, Y, dual)``."""
+    k = len(wY)
+    diag = np.arange(m)
+    Yd, Yi, td, ti, qd, qi = _barrier_terms(wY, nd, wtau)
+    tc = wtau[:, None]
+    sig = np.concatenate([(Yd / td[..., None]).reshape(k, 2 * nd), Yi / ti], axis=1)
+    wd = tc / td
+    wi = (tc / ti) * (1.0 - tc * Yi ** 2 / (ti * qi))
+    wrow = np.concatenate([np.repeat(wd, 2, axis=1), wi], axis=1)
+    cd = np.sqrt(tc ** 2 / (td ** 2 * qd)) if nd else None
+    if dense:                      # one group over every column: no scatter (the IRSBot-2 distal module)
+        (dr, ir, cols, dcone), (Bgd, Bgi) = grows[0], gB[0]
+        g, H = _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k)
+    else:
+        g = np.zeros((k, m))
+        H = np.zeros((k, m, m))
+        for (dr, ir, cols, dcone), (Bgd, Bgi) in zip(grows, gB):
+            gg, Hg = _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k)
+            g[:, cols] += gg
+            H[:, cols[:, None], cols[None, :]] += Hg
+    g *= tc
+    H[:, diag, diag] += ((np.trace(H, axis1=1, axis2=2) / m + 1e-300) * 1e-14)[:, None]
+    try:
+        d = -np.linalg.solve(H, g[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        d = -(np.linalg.pinv(H, hermitian=True) @ g[..., None])[..., 0]
+    lam2 = np.maximum(-(g * d).sum(-1), 0.0)
+    lam = np.sqrt(lam2)
+    BD = np.zeros((k, R))
+    for (dr, ir, cols, _), (Bgd, Bgi) in zip(grows, gB):
+        dc = d[:, cols, None]
+        BD[:, dr] = (Bgd @ dc)[..., 0]
+        BD[:, ir] = (Bgi @ dc)[..., 0]
+    # backtracking line search on the reduced barrier F = sum_c q_c - log(1 + q_c),
+    # q_c = sqrt(1 + tau^2 |y_c|^2); never shorter than the damped step 1/(1+lambda), which
+    # self-concordance guarantees to decrease F
+    damped = np.where(lam > 0.25, 1.0 / (1.0 + lam), 1.0)
+    step = damped.copy()
+    bi = np.nonzero(lam > 0.25)[0]
+    if bi.size:
+        # F at the current point from the Newton pieces already computed (no second evaluation)
+        F0 = (qd[bi] - np.log1p(qd[bi])).sum(-1) + (qi[bi] - np.log1p(qi[bi])).sum(-1)
+        pending = np.ones(bi.size, bool)
+        for t in _LS:              # progressive backtracking: most problems accept t = 1
+            if t <= 0 or not pending.any():
+                break
+            pi = bi[pending]
+            Ft = _barrier_value((wY[pi] + t * BD[pi])[:, None, :], nd, wtau[pi])[:, 0]
+            ok = Ft <= F0[pending] - 0.1 * t * lam2[pi]
+            acc = np.nonzero(pending)[0][ok]
+            step[bi[acc]] = np.maximum(t, damped[bi[acc]])
+            pending[acc] = False
+    wmu = wmu + step[:, None] * d
+    wY = wY + step[:, None] * BD
+    # every iterate is dual feasible: its value is a certified upper bound (weak duality)
+    up_it = true_dual(wY, nd) if want_dual else None
+    return H, lam2, wmu, wY, up_it
+
+
+class numpy_iteration:
+    """Context manager: every support solve inside the ``with`` block runs the NumPy iteration
+    (the reference for the compiled one; benchmarks compare the two in one process)."""
+
+    def __enter__(self):
+        global _KERNEL
+        self._old, _KERNEL = _KERNEL, False
+        return self
+
+    def __exit__(self, *exc):
+        global _KERNEL
+        _KERNEL = self._old
+        return False
 
 
 def _project_free(sigma: np.ndarray, Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, gram_inv: np.ndarray,

@@ -1,0 +1,320 @@
+"""One barrier-Newton iteration of the support-function solver, compiled per problem (numba).
+
+:func:`robots.clearance.support.solve_support` minimises, for every problem of a batch, the
+reduced log barrier ``F(mu) = sum_c q_c - log(1 + q_c)``, ``q_c = sqrt(1 + tau^2 ||y_c||^2)``,
+``y = a + B mu`` (its module docstring has the derivation). One iteration is
+
+1. the barrier pieces per cone (disk pair or interval row): ``t_c = (1 + q_c) / tau``,
+   ``sigma_c = y_c / t_c`` (gradient part), the row weights ``w`` and the disk rank-one terms;
+2. the gradient ``g = tau B^T sigma`` and the Hessian ``H = B^T W B - sum_disks G_c G_c^T``
+   (``G_c = c_c y_c^T B_c``), assembled group by group over the loop map's block sparsity;
+3. the Newton step ``d = -H^{-1} g`` (Cholesky; LU with partial pivoting if round-off makes
+   ``H`` indefinite), the decrement ``lambda^2 = -g^T d`` and ``B d``;
+4. the backtracking line search on ``F`` (steps 1, .5, .25, .12, never shorter than the damped
+   step ``1 / (1 + lambda)`` that self-concordance guarantees; only when ``lambda > 0.25``);
+5. the update of ``mu`` and ``y`` and, optionally, the certified dual value ``sum_c ||y_c||``.
+
+The NumPy version of the same iteration (``solve_support(..., kernel=False)``) does this with
+batched array operations; per problem and iteration it allocates some twenty temporaries of the
+batch's size, and the Hessian products go through one small BLAS call per problem. Compiled, the
+whole iteration of one problem stays in the first-level cache: on the IRSBot-2 problems (96 rows
+x 18 loop variables, 144 x 30) it is several times faster (``benchmarks/bench_clearance.py``).
+Both versions agree to round-off (``tests/test_clearance_engine.py``).
+
+numba is a dependency of evotol, imported on the first compiled iteration (a process that never
+solves a support problem does not pay for it). The first use on a fresh install compiles the
+kernel (about 6 s) into numba's on-disk cache (``__pycache__`` beside this file, or numba's
+user-wide cache directory when that is read-only); later processes load it in about 0.5 s. If
+numba cannot be imported or fails to compile (a platform without wheels, a NumPy it does not
+support yet), a ``RuntimeWarning`` says so once and the solver uses the NumPy iteration, with
+the same results up to round-off; the environment variable ``EVOTOL_NO_NUMBA=1`` asks for that
+explicitly.
+"""
+from __future__ import annotations
+
+import importlib.util
+import os
+import warnings
+
+import numpy as np
+
+#: False when numba is missing, failed to compile, or EVOTOL_NO_NUMBA is set (NumPy iteration)
+AVAILABLE = (os.environ.get("EVOTOL_NO_NUMBA", "").lower() not in ("1", "true", "yes")
+             and importlib.util.find_spec("numba") is not None)
+_COMPILED = None
+
+#: steps of the backtracking line search (support._LS)
+LINE_SEARCH = np.array([1.0, 0.5, 0.25, 0.12])
+
+
+def group_arrays(grows, nd: int):
+    """Flat description of the column groups for the kernel: per group the disk-cone range
+    ``[d0, d1)``, the interval-row range ``[i0, i1)`` (rows of the permuted problem) and its
+    columns ``cols[off[g]:off[g+1]]``."""
+    gd = np.array([(s.start, s.stop) for *_, s in grows], np.int64).reshape(-1, 2)
+    gi = np.array([(ir.start, ir.stop) for _, ir, _, _ in grows], np.int64).reshape(-1, 2)
+    cols = [np.asarray(c, np.int64) for _, _, c, _ in grows]
+    off = np.concatenate([[0], np.cumsum([len(c) for c in cols])]).astype(np.int64)
+    return gd, gi, np.concatenate(cols) if cols else np.zeros(0, np.int64), off
+
+
+def _newton_iterate_py(Y, mu, B, tau, nd, gd, gi, gcols, goff, ls, want_dual, H_out, lam2_out, dual_out, fail_out):
+    """Kernel body (compiled by numba when available; see the module docstring).
+
+    In place: ``Y`` (k, R), ``mu`` (k, m) updated by the accepted step; ``H_out`` (k, m, m) the
+    Hessian at the start point (for the path predictor); ``lam2_out`` (k,) the squared Newton
+    decrement; ``dual_out`` (k,) ``sum_c ||y_c||`` after the step (when ``want_dual``);
+    ``fail_out`` (k,) 1 where ``H`` is singular (step not taken: the caller uses a pseudo-inverse)."""
+    k, R = Y.shape
+    m = mu.shape[1]
+    ng = gd.shape[0]
+    smax = 0
+    sig = np.empty(R)
+    w = np.empty(R)
+    cd = np.empty(nd)
+    rmax = 0
+    dmax = 0
+    for q in range(ng):
+        smax = max(smax, goff[q + 1] - goff[q])
+        rmax = max(rmax, 2 * (gd[q, 1] - gd[q, 0]) + gi[q, 1] - gi[q, 0])
+        dmax = max(dmax, gd[q, 1] - gd[q, 0])
+    Bs = np.empty((max(rmax, 1), max(smax, 1)))      # a group's rows of B (its columns), then weighted
+    Ws = np.empty((max(rmax, 1), max(smax, 1)))
+    Gs = np.empty((max(dmax, 1), max(smax, 1)))      # the disks' rank-one rows G_c
+    Ss = np.empty(max(rmax, 1))
+    g = np.empty(m)
+    L = np.empty((m, m))
+    d = np.empty(m)
+    z = np.empty(m)
+    piv = np.empty(m, np.int64)
+    BD = np.empty(R)
+    for p in range(k):
+        t = tau[p]
+        F0 = 0.0
+        # 1. barrier pieces
+        for c in range(nd):
+            y0 = Y[p, 2 * c]
+            y1 = Y[p, 2 * c + 1]
+            r = np.sqrt(y0 * y0 + y1 * y1)
+            q = np.sqrt(1.0 + (t * r) ** 2)
+            td = (1.0 + q) / t
+            sig[2 * c] = y0 / td
+            sig[2 * c + 1] = y1 / td
+            w[2 * c] = t / td
+            w[2 * c + 1] = t / td
+            cd[c] = np.sqrt(t * t / (td * td * q))
+            F0 += q - np.log1p(q)
+        for j in range(2 * nd, R):
+            y = Y[p, j]
+            q = np.sqrt(1.0 + (t * y) ** 2)
+            ti = (1.0 + q) / t
+            sig[j] = y / ti
+            w[j] = (t / ti) * (1.0 - t * y * y / (ti * q))
+            F0 += q - np.log1p(q)
+        # 2. gradient and Hessian, group by group (lower triangle, then mirrored)
+        H = H_out[p]
+        for a in range(m):
+            g[a] = 0.0
+            for b in range(m):
+                H[a, b] = 0.0
+        for q in range(ng):
+            c0 = goff[q]
+            s = goff[q + 1] - c0
+            dn = gd[q, 1] - gd[q, 0]
+            nr = 2 * dn + gi[q, 1] - gi[q, 0]
+            Bg = np.empty((nr, s))
+            Bw = np.empty((nr, s))
+            Gm = np.empty((dn, s))
+            sg = np.empty(nr)
+            rr = 0
+            for c in range(gd[q, 0], gd[q, 1]):
+                for e in range(2):
+                    j = 2 * c + e
+                    for a in range(s):
+                        v = B[p, j, gcols[c0 + a]]
+                        Bg[rr, a] = v
+                        Bw[rr, a] = w[j] * v
+                    sg[rr] = sig[j]
+                    rr += 1
+                e0 = Y[p, 2 * c] * cd[c]
+                e1 = Y[p, 2 * c + 1] * cd[c]
+                for a in range(s):
+                    Gm[c - gd[q, 0], a] = e0 * Bg[rr - 2, a] + e1 * Bg[rr - 1, a]
+            for j in range(gi[q, 0], gi[q, 1]):
+                for a in range(s):
+                    v = B[p, j, gcols[c0 + a]]
+                    Bg[rr, a] = v
+                    Bw[rr, a] = w[j] * v
+                sg[rr] = sig[j]
+                rr += 1
+            Hg = np.dot(Bw.T, Bg)
+            if dn:
+                Hg -= np.dot(Gm.T, Gm)
+            gg = np.dot(sg, Bg)
+            for a in range(s):
+                ja = gcols[c0 + a]
+                g[ja] += gg[a]
+                for b in range(s):
+                    H[ja, gcols[c0 + b]] += Hg[a, b]
+        tr = 0.0
+        for a in range(m):
+            g[a] *= t
+            tr += H[a, a]
+        reg = (tr / m + 1e-300) * 1e-14
+        for a in range(m):
+            H[a, a] += reg
+        # 3. Newton step: Cholesky, else LU with partial pivoting
+        ok = True
+        for a in range(m):
+            for b in range(a + 1):
+                v = H[a, b]
+                for c in range(b):
+                    v -= L[a, c] * L[b, c]
+                if a == b:
+                    if v <= 0.0:
+                        ok = False
+                        break
+                    L[a, a] = np.sqrt(v)
+                else:
+                    L[a, b] = v / L[b, b]
+            if not ok:
+                break
+        if ok:
+            for a in range(m):
+                v = -g[a]
+                for c in range(a):
+                    v -= L[a, c] * z[c]
+                z[a] = v / L[a, a]
+            for a in range(m - 1, -1, -1):
+                v = z[a]
+                for c in range(a + 1, m):
+                    v -= L[c, a] * d[c]
+                d[a] = v / L[a, a]
+        else:
+            for a in range(m):
+                for b in range(m):
+                    L[a, b] = H[a, b]
+                z[a] = -g[a]
+            singular = False
+            for c in range(m):
+                best = c
+                for a in range(c + 1, m):
+                    if abs(L[a, c]) > abs(L[best, c]):
+                        best = a
+                piv[c] = best
+                if L[best, c] == 0.0:
+                    singular = True
+                    break
+                if best != c:
+                    for b in range(m):
+                        tmp = L[c, b]
+                        L[c, b] = L[best, b]
+                        L[best, b] = tmp
+                    tmp = z[c]
+                    z[c] = z[best]
+                    z[best] = tmp
+                for a in range(c + 1, m):
+                    f = L[a, c] / L[c, c]
+                    if f != 0.0:
+                        for b in range(c, m):
+                            L[a, b] -= f * L[c, b]
+                        z[a] -= f * z[c]
+            if singular:
+                fail_out[p] = 1
+                lam2_out[p] = 0.0
+                continue
+            for a in range(m - 1, -1, -1):
+                v = z[a]
+                for b in range(a + 1, m):
+                    v -= L[a, b] * d[b]
+                d[a] = v / L[a, a]
+        fail_out[p] = 0
+        lam2 = 0.0
+        for a in range(m):
+            lam2 -= g[a] * d[a]
+        lam2 = max(lam2, 0.0)
+        lam2_out[p] = lam2
+        lam = np.sqrt(lam2)
+        # B d on the groups' rows (the other rows do not enter the loop equations)
+        for j in range(R):
+            BD[j] = 0.0
+        for q in range(ng):
+            c0 = goff[q]
+            s = goff[q + 1] - c0
+            for j in range(2 * gd[q, 0], 2 * gd[q, 1]):
+                v = 0.0
+                for a in range(s):
+                    ja = gcols[c0 + a]
+                    v += B[p, j, ja] * d[ja]
+                BD[j] = v
+            for j in range(gi[q, 0], gi[q, 1]):
+                v = 0.0
+                for a in range(s):
+                    ja = gcols[c0 + a]
+                    v += B[p, j, ja] * d[ja]
+                BD[j] = v
+        # 4. line search
+        step = 1.0
+        if lam > 0.25:
+            damped = 1.0 / (1.0 + lam)
+            step = damped
+            for i in range(ls.shape[0]):
+                st = ls[i]
+                Ft = 0.0
+                for c in range(nd):
+                    y0 = Y[p, 2 * c] + st * BD[2 * c]
+                    y1 = Y[p, 2 * c + 1] + st * BD[2 * c + 1]
+                    q = np.sqrt(1.0 + t * t * (y0 * y0 + y1 * y1))
+                    Ft += q - np.log1p(q)
+                for j in range(2 * nd, R):
+                    y = Y[p, j] + st * BD[j]
+                    q = np.sqrt(1.0 + (t * y) ** 2)
+                    Ft += q - np.log1p(q)
+                if Ft <= F0 - 0.1 * st * lam2:
+                    step = max(st, damped)
+                    break
+        # 5. update (and the certified dual value of the new point)
+        for a in range(m):
+            mu[p, a] += step * d[a]
+        for j in range(R):
+            Y[p, j] += step * BD[j]
+        if want_dual:
+            f = 0.0
+            for c in range(nd):
+                f += np.sqrt(Y[p, 2 * c] ** 2 + Y[p, 2 * c + 1] ** 2)
+            for j in range(2 * nd, R):
+                f += abs(Y[p, j])
+            dual_out[p] = f
+
+
+def _kernel():
+    """The compiled kernel (numba imported and the cache loaded on first use), or None."""
+    global _COMPILED, AVAILABLE
+    if _COMPILED is None and AVAILABLE:
+        try:
+            import numba
+
+            _COMPILED = numba.njit(cache=True, nogil=True, error_model="numpy")(_newton_iterate_py)
+        except Exception as exc:        # pragma: no cover - depends on the platform
+            AVAILABLE = False
+            warnings.warn(f"robots.clearance.newton_kernel: numba unavailable ({exc!r}); the clearance engine "
+                          "uses its NumPy iteration (same results, slower)", RuntimeWarning, stacklevel=3)
+    return _COMPILED
+
+
+def newton_iterate(Y, mu, B, tau, nd, groups, want_dual: bool):
+    """Run one iteration on every problem (see :func:`_newton_iterate_py`); returns
+    ``(H, lam2, dual, fail)``. ``groups`` is :func:`group_arrays`'s output."""
+    for name, x in (("Y", Y), ("mu", mu)):     # updated in place
+        if not (x.flags.c_contiguous and x.flags.writeable and x.dtype == np.float64):
+            raise ValueError(f"newton_iterate: {name} must be a writeable C-contiguous float64 array")
+    B = np.ascontiguousarray(B, dtype=np.float64)
+    k, m = mu.shape
+    H = np.empty((k, m, m))
+    lam2 = np.empty(k)
+    dual = np.empty(k)
+    fail = np.zeros(k, np.int64)
+    gd, gi, gcols, goff = groups
+    _kernel()(Y, mu, B, np.ascontiguousarray(tau, float), int(nd), gd, gi, gcols, goff, LINE_SEARCH,
+                    bool(want_dual), H, lam2, dual, fail)
+    return H, lam2, dual, fail

@@ -1,0 +1,125 @@
+"""The compiled barrier-Newton iteration (robots.clearance.newton_kernel) against the NumPy one.
+
+The NumPy iteration is the reference: both must take the same step (Hessian, decrement, new
+iterate) on the block-sparse loop maps of the IRSBot-2 (one dense group; four overlapping
+groups), on tiny planar problems and on problems without disks or intervals, and the whole
+support solve must return the same certified brackets and the same Newton work."""
+import numpy as np
+import pytest
+
+from robots.clearance import max_pose_error, newton_kernel
+from robots.clearance import support
+from robots.clearance.support import _merge_groups, _numpy_iteration, solve_support
+
+pytestmark = pytest.mark.skipif(not newton_kernel.AVAILABLE, reason="numba not importable: NumPy iteration only")
+
+
+def _layout(nd, ni, m, groups):
+    """Permuted-row layout as solve_support builds it: (grows, gB builder) for given groups
+    ((disk cones, interval rows, columns), ...) with disks/intervals contiguous per group."""
+    groups = _merge_groups(groups)
+    grows, d0, i0 = [], 0, 2 * nd
+    for dc, ir, cols in groups:
+        grows.append((slice(2 * d0, 2 * d0 + 2 * len(dc)), slice(i0, i0 + len(ir)), np.asarray(cols, int),
+                      slice(d0, d0 + len(dc))))
+        d0, i0 = d0 + len(dc), i0 + len(ir)
+    return grows
+
+
+CASES = {
+    "irsbot2-distal (dense)": (32, 32, 18, [(range(32), range(64, 96), range(18))]),
+    "irsbot2-parallelograms (4 groups)": (48, 48, 30, [
+        (range(0, 8), range(96, 104), range(12, 24)), (range(8, 24), range(104, 120), [*range(0, 6), *range(12, 18)]),
+        (range(24, 32), range(120, 128), range(12, 30)), (range(32, 48), range(128, 144), range(6, 18))]),
+    "5-bar (tiny)": (4, 7, 3, [(range(4), range(8, 15), range(3))]),
+    "disks only": (6, 0, 4, [(range(6), [], range(4))]),
+    "intervals only": (0, 9, 5, [([], range(0, 9), range(5))]),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+@pytest.mark.parametrize("tau", [0.3, 30.0, 3e4])
+def test_one_iteration_equals_numpy(name, tau):
+    nd, ni, m, groups = CASES[name]
+    R = 2 * nd + ni
+    rng = np.random.default_rng(hash(name) % 2 ** 32)
+    k = 64
+    grows = _layout(nd, ni, m, groups)
+    mask = np.zeros((R, m), bool)
+    for dr, ir, cols, _ in grows:
+        mask[dr, cols[:, None]] = True
+        mask[ir, cols[:, None]] = True
+    B = rng.standard_normal((k, R, m)) * mask
+    Y = rng.standard_normal((k, R)) / tau
+    mu = rng.standard_normal((k, m))
+    taus = np.full(k, tau) * rng.uniform(0.5, 2.0, k)
+    gB = [(B[:, dr][:, :, cols], B[:, ir][:, :, cols]) for dr, ir, cols, _ in grows]
+    dense = len(grows) == 1 and np.array_equal(grows[0][2], np.arange(m))
+    H1, l1, mu1, Y1, f1 = _numpy_iteration(Y.copy(), mu.copy(), taus, nd, R, m, grows, gB, dense, True)
+    Y2, mu2 = Y.copy(), mu.copy()
+    H2, l2, f2, fail = newton_kernel.newton_iterate(Y2, mu2, B, taus, nd, newton_kernel.group_arrays(grows, nd), True)
+    assert not fail.any()
+    scale = np.abs(H1).max(axis=(1, 2))[:, None, None]
+    np.testing.assert_allclose(H2 / scale, H1 / scale, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(l2, l1, rtol=1e-9, atol=1e-12 * l1.max())
+    np.testing.assert_allclose(Y2, Y1, rtol=0, atol=1e-9 * np.abs(Y1).max())
+    np.testing.assert_allclose(mu2, mu1, rtol=0, atol=1e-9 * np.abs(mu1).max())
+    np.testing.assert_allclose(f2, f1, rtol=1e-12)
+
+
+def test_kernel_rejects_arrays_it_cannot_update_in_place():
+    Y = np.zeros((2, 6))[:, ::2]
+    with pytest.raises(ValueError, match="Y must be a writeable C-contiguous"):
+        newton_kernel.newton_iterate(Y, np.zeros((2, 2)), np.zeros((2, 3, 2)), np.ones(2), 0,
+                                     newton_kernel.group_arrays([(slice(0, 0), slice(0, 3), np.arange(2), slice(0, 0))], 0), False)
+
+
+@pytest.fixture(scope="module")
+def irsbot2_poses():
+    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+    W = MAP_WORKSPACE
+    rng = np.random.default_rng(3)
+    pts = np.column_stack([rng.uniform(W.low[0], 0.0, 6), rng.uniform(W.low[1], W.high[1], 6)])
+    return IRSBot2.thesis("VI.1"), pts
+
+
+@pytest.mark.parametrize("parallelograms", [False, True])
+def test_certified_maps_agree_with_the_numpy_iteration(irsbot2_poses, parallelograms):
+    """Whole engine, both iterations: brackets overlap, gaps <= 0.1 %, the same Newton work
+    to within a few iterations (round-off can move a stopping test by one iteration)."""
+    robot, pts = irsbot2_poses
+    mech = robot.clearance_mechanism(parallelograms=parallelograms)
+    out = {}
+    for kern in (False, True):
+        support.STATS.update(newton=0)
+        if kern:
+            out[kern] = (max_pose_error(mech, pts), support.STATS["newton"])
+        else:
+            with support.numpy_iteration():
+                out[kern] = (max_pose_error(mech, pts), support.STATS["newton"])
+    (a, na), (b, nb) = out[False], out[True]
+    for lo, up in (("p_max", "p_upper"), ("r_max", "r_upper")):
+        la, ua, lb, ub = (getattr(r, f) for r in (a, b) for f in (lo, up))
+        assert np.all(np.maximum(la, lb) <= np.minimum(ua, ub) * (1 + 1e-12))
+    assert a.gap.max() <= 1e-3 and b.gap.max() <= 1e-3
+    assert abs(na - nb) <= 0.02 * na
+
+
+def test_solve_support_kernel_flag(irsbot2_poses):
+    """kernel=True and kernel=False certify the same support values on one batch of directions."""
+    robot, pts = irsbot2_poses
+    mech = robot.clearance_mechanism()
+    pm = mech.pose_maps(pts[:2])[0]
+    D = pm.row_bounds(mech.default_bounds()[None].repeat(2, 0))
+    Bt = pm.B * D[..., None]
+    u = np.random.default_rng(0).standard_normal((2, 5, 3))
+    u /= np.linalg.norm(u, axis=-1, keepdims=True)
+    Ct = pm.C_pos * D[:, None, :]
+    a = np.einsum("kqr,kdq->kdr", Ct, u).reshape(10, -1)
+    B = np.repeat(Bt, 5, axis=0)
+    r0 = solve_support(a, B, pm.n_disk, tol=1e-9 * np.abs(a).sum(-1), groups=pm.groups, kernel=False)
+    r1 = solve_support(a, B, pm.n_disk, tol=1e-9 * np.abs(a).sum(-1), groups=pm.groups, kernel=True)
+    for r in (r0, r1):
+        assert np.all(r.lower <= r.upper * (1 + 1e-12))
+    np.testing.assert_allclose(r1.upper, r0.upper, rtol=1e-8)
+    np.testing.assert_allclose(r1.lower, r0.lower, rtol=1e-8)
