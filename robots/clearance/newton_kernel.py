@@ -126,27 +126,19 @@ def _newton_iterate_py(Y, mu, B, tau, nd, gd, gi, gcols, goff, ls, want_dual, H_
             Bw = np.empty((nr, s))
             Gm = np.empty((dn, s))
             sg = np.empty(nr)
-            rr = 0
-            for c in range(gd[q, 0], gd[q, 1]):
-                for e in range(2):
-                    j = 2 * c + e
-                    for a in range(s):
-                        v = B[p, j, gcols[c0 + a]]
-                        Bg[rr, a] = v
-                        Bw[rr, a] = w[j] * v
-                    sg[rr] = sig[j]
-                    rr += 1
-                e0 = Y[p, 2 * c] * cd[c]
-                e1 = Y[p, 2 * c + 1] * cd[c]
-                for a in range(s):
-                    Gm[c - gd[q, 0], a] = e0 * Bg[rr - 2, a] + e1 * Bg[rr - 1, a]
-            for j in range(gi[q, 0], gi[q, 1]):
+            # the group's rows: its disks' pairs, then its intervals
+            for rr in range(nr):
+                j = 2 * gd[q, 0] + rr if rr < 2 * dn else gi[q, 0] + rr - 2 * dn
                 for a in range(s):
                     v = B[p, j, gcols[c0 + a]]
                     Bg[rr, a] = v
                     Bw[rr, a] = w[j] * v
                 sg[rr] = sig[j]
-                rr += 1
+            for c in range(dn):
+                e0 = Y[p, 2 * (gd[q, 0] + c)] * cd[gd[q, 0] + c]
+                e1 = Y[p, 2 * (gd[q, 0] + c) + 1] * cd[gd[q, 0] + c]
+                for a in range(s):
+                    Gm[c, a] = e0 * Bg[2 * c, a] + e1 * Bg[2 * c + 1, a]
             Hg = np.dot(Bw.T, Bg)
             if dn:
                 Hg -= np.dot(Gm.T, Gm)
