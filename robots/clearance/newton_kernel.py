@@ -279,6 +279,151 @@ def _newton_iterate_py(Y, mu, B, tau, nd, gd, gi, gcols, goff, ls, want_dual, H_
             dual_out[p] = f
 
 
+def _project_centred_py(cidx, Y, a, B, gram_inv, tau, nd, s0_out, s_out, lo_out):
+    """Feasible point of each centred problem ``p = cidx[i]`` (support._project on the barrier
+    point): ``s0 = y_c / t_c`` cone-wise, the loop residual ``B^T s0`` removed with ``pinv(B^T B)``,
+    scaled back into the unit cones; ``lo = a^T s``. Writes s0_out, s_out (n, R), lo_out (n,)."""
+    R = Y.shape[1]
+    m = B.shape[2]
+    r = np.empty(m)
+    z = np.empty(m)
+    for i in range(cidx.shape[0]):
+        p = cidx[i]
+        t = tau[p]
+        for c in range(nd):
+            y0 = Y[p, 2 * c]
+            y1 = Y[p, 2 * c + 1]
+            td = (1.0 + np.sqrt(1.0 + t * t * (y0 * y0 + y1 * y1))) / t
+            s0_out[i, 2 * c] = y0 / td
+            s0_out[i, 2 * c + 1] = y1 / td
+        for j in range(2 * nd, R):
+            y = Y[p, j]
+            s0_out[i, j] = y / ((1.0 + np.sqrt(1.0 + (t * y) ** 2)) / t)
+        for b in range(m):
+            r[b] = 0.0
+        for j in range(R):
+            sj = s0_out[i, j]
+            if sj != 0.0:
+                for b in range(m):
+                    r[b] += sj * B[p, j, b]
+        for b in range(m):
+            v = 0.0
+            for e in range(m):
+                v += gram_inv[p, b, e] * r[e]
+            z[b] = v
+        worst = 1.0
+        for j in range(R):
+            v = s0_out[i, j]
+            for b in range(m):
+                v -= B[p, j, b] * z[b]
+            s_out[i, j] = v
+        for c in range(nd):
+            worst = max(worst, np.sqrt(s_out[i, 2 * c] ** 2 + s_out[i, 2 * c + 1] ** 2))
+        for j in range(2 * nd, R):
+            worst = max(worst, abs(s_out[i, j]))
+        lo = 0.0
+        for j in range(R):
+            s_out[i, j] /= worst
+            lo += a[p, j] * s_out[i, j]
+        lo_out[i] = lo
+
+
+def _predict_centred_py(cidx, Y, mu, B, H, told, tnew, cand, nd):
+    """Path predictor of each centred problem ``p = cidx[i]`` (see support.solve_support): the
+    tangent ``d mu / d tau = -H^{-1} B^T dY/dtau`` times ``tnew - told``, tried at the scales
+    ``cand[i]`` and taken where the barrier at ``tnew`` is lowest (first of equals). In place on Y,
+    mu; a problem whose Hessian Cholesky fails keeps its point."""
+    R = Y.shape[1]
+    m = B.shape[2]
+    nc = cand.shape[1]
+    dY = np.empty(R)
+    dg = np.empty(m)
+    L = np.empty((m, m))
+    z = np.empty(m)
+    dmu = np.empty(m)
+    dYp = np.empty(R)
+    for i in range(cidx.shape[0]):
+        p = cidx[i]
+        t = told[i]
+        for c in range(nd):
+            y0 = Y[p, 2 * c]
+            y1 = Y[p, 2 * c + 1]
+            rd = np.sqrt(y0 * y0 + y1 * y1)
+            q = np.sqrt(1.0 + (t * rd) ** 2)
+            cf = (2.0 * t * (1.0 + q) - t ** 3 * rd * rd / q) / (1.0 + q) ** 2
+            dY[2 * c] = y0 * cf
+            dY[2 * c + 1] = y1 * cf
+        for j in range(2 * nd, R):
+            y = Y[p, j]
+            q = np.sqrt(1.0 + (t * y) ** 2)
+            dY[j] = y * (2.0 * t * (1.0 + q) - t ** 3 * y * y / q) / (1.0 + q) ** 2
+        for b in range(m):
+            dg[b] = 0.0
+        for j in range(R):
+            v = dY[j]
+            if v != 0.0:
+                for b in range(m):
+                    dg[b] += v * B[p, j, b]
+        ok = True
+        for r_ in range(m):
+            for b in range(r_ + 1):
+                v = H[p, r_, b]
+                for c in range(b):
+                    v -= L[r_, c] * L[b, c]
+                if r_ == b:
+                    if v <= 0.0:
+                        ok = False
+                        break
+                    L[r_, r_] = np.sqrt(v)
+                else:
+                    L[r_, b] = v / L[b, b]
+            if not ok:
+                break
+        if not ok:
+            continue
+        for r_ in range(m):
+            v = dg[r_]
+            for c in range(r_):
+                v -= L[r_, c] * z[c]
+            z[r_] = v / L[r_, r_]
+        scale = -(tnew[i] - t)
+        for r_ in range(m - 1, -1, -1):
+            v = z[r_]
+            for c in range(r_ + 1, m):
+                v -= L[c, r_] * dmu[c]
+            dmu[r_] = v / L[r_, r_]
+        for r_ in range(m):
+            dmu[r_] *= scale
+        for j in range(R):
+            v = 0.0
+            for b in range(m):
+                v += B[p, j, b] * dmu[b]
+            dYp[j] = v
+        t2 = tnew[i] * tnew[i]
+        best = 0
+        Fbest = np.inf
+        for e in range(nc):
+            sc = cand[i, e]
+            F = 0.0
+            for c in range(nd):
+                y0 = Y[p, 2 * c] + sc * dYp[2 * c]
+                y1 = Y[p, 2 * c + 1] + sc * dYp[2 * c + 1]
+                q = np.sqrt(1.0 + t2 * (y0 * y0 + y1 * y1))
+                F += q - np.log1p(q)
+            for j in range(2 * nd, R):
+                y = Y[p, j] + sc * dYp[j]
+                q = np.sqrt(1.0 + t2 * y * y)
+                F += q - np.log1p(q)
+            if F < Fbest:
+                Fbest = F
+                best = e
+        sc = cand[i, best]
+        for b in range(m):
+            mu[p, b] += sc * dmu[b]
+        for j in range(R):
+            Y[p, j] += sc * dYp[j]
+
+
 def _kernel():
     """The compiled kernel (numba imported and the cache loaded on first use), or None."""
     global _COMPILED, AVAILABLE
@@ -286,7 +431,8 @@ def _kernel():
         try:
             import numba
 
-            _COMPILED = numba.njit(cache=True, nogil=True, error_model="numpy")(_newton_iterate_py)
+            jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+            _COMPILED = (jit(_newton_iterate_py), jit(_project_centred_py), jit(_predict_centred_py))
         except Exception as exc:        # pragma: no cover - depends on the platform
             AVAILABLE = False
             warnings.warn(f"robots.clearance.newton_kernel: numba unavailable ({exc!r}); the clearance engine "
@@ -307,6 +453,22 @@ def newton_iterate(Y, mu, B, tau, nd, groups, want_dual: bool):
     dual = np.empty(k)
     fail = np.zeros(k, np.int64)
     gd, gi, gcols, goff = groups
-    _kernel()(Y, mu, B, np.ascontiguousarray(tau, float), int(nd), gd, gi, gcols, goff, LINE_SEARCH,
+    _kernel()[0](Y, mu, B, np.ascontiguousarray(tau, float), int(nd), gd, gi, gcols, goff, LINE_SEARCH,
                     bool(want_dual), H, lam2, dual, fail)
     return H, lam2, dual, fail
+
+
+def project_centred(cidx, Y, a, B, gram_inv, tau, nd):
+    """Feasible points of the centred problems ``cidx`` (see :func:`_project_centred_py`);
+    returns ``(s0, s, lower)``."""
+    n, R = len(cidx), Y.shape[1]
+    s0, s, lo = np.empty((n, R)), np.empty((n, R)), np.empty(n)
+    _kernel()[1](np.asarray(cidx, np.int64), Y, a, B, gram_inv, tau, int(nd), s0, s, lo)
+    return s0, s, lo
+
+
+def predict_centred(cidx, Y, mu, B, H, told, tnew, cand, nd):
+    """The path predictor on the centred problems ``cidx``, in place on Y and mu (see
+    :func:`_predict_centred_py`)."""
+    _kernel()[2](np.asarray(cidx, np.int64), Y, mu, B, H, np.ascontiguousarray(told, float),
+                 np.ascontiguousarray(tnew, float), np.ascontiguousarray(cand, float), int(nd))

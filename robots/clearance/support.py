@@ -272,15 +272,19 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             upper[c_idx] = np.where(better, up, upper[c_idx])
             best_mu[c_idx[better]] = wmu[centred[better]]
             tcen = wtau[centred]
-            Ydc, Yic, tdc, tic, _, _ = _barrier_terms(Yc, nd, tcen)
-            s0 = np.concatenate([(Ydc / tdc[..., None]).reshape(len(c_idx), 2 * nd), Yic / tic], axis=1)
-            ac, Bc = wa[centred], wB[centred]
-            s_new, lo_new = _project(s0, ac, Bc, nd, wgi[centred])
+            if use_kernel:
+                s0, s_new, lo_new = newton_kernel.project_centred(centred, wY, wa, wB, wgi, wtau, nd)
+            else:
+                Ydc, Yic, tdc, tic, _, _ = _barrier_terms(Yc, nd, tcen)
+                s0 = np.concatenate([(Ydc / tdc[..., None]).reshape(len(c_idx), 2 * nd), Yic / tic], axis=1)
+                ac, Bc = wa[centred], wB[centred]
+                s_new, lo_new = _project(s0, ac, Bc, nd, wgi[centred])
             tgt = np.maximum(np.maximum(tol[c_idx], rtol * upper[c_idx]), floor[c_idx])
             # complementary-slackness repair once the barrier gap is no longer what limits us
             weak = (upper[c_idx] - lo_new > tgt) & (2.0 * n_cones / tcen < 0.2 * (upper[c_idx] - lo_new))
             if weak.any():
-                s2, lo2 = _project_free(s0[weak], Yc[weak], ac[weak], Bc[weak], nd, wgi[centred[weak]])
+                cw = centred[weak]
+                s2, lo2 = _project_free(s0[weak], Yc[weak], wa[cw], wB[cw], nd, wgi[cw])
                 take = lo2 > lo_new[weak]
                 sw, lw = s_new[weak], lo_new[weak]
                 sw[take], lw[take] = s2[take], lo2[take]
@@ -296,28 +300,14 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             # by tau_new / tau_old; scaled by tau_old / tau_new it is the extrapolation of that model
             # (the old choice among 1, .75, .5, .25, 0 took 0.25 at best: a damped Newton step
             # followed every increase of tau). The unscaled point is kept if the barrier is lower there.
-            tc2 = tcen[:, None]
-            rdc = np.sqrt((Ydc ** 2).sum(-1))
-            qdc, qic = np.sqrt(1 + (tc2 * rdc) ** 2), np.sqrt(1 + (tc2 * Yic) ** 2)
-            cfd = (2 * tc2 * (1 + qdc) - tc2 ** 3 * rdc ** 2 / qdc) / (1 + qdc) ** 2
-            cfi = (2 * tc2 * (1 + qic) - tc2 ** 3 * Yic ** 2 / qic) / (1 + qic) ** 2
-            dY = np.concatenate([(Ydc * cfd[..., None]).reshape(len(c_idx), 2 * nd), Yic * cfi], axis=1)
-            dg = (dY[:, None, :] @ Bc)[:, 0, :]
-            try:
-                dmu = -np.linalg.solve(H[centred], dg[..., None])[..., 0] * (tnew - tcen)[:, None]
-                dYp = (Bc @ dmu[..., None])[..., 0]
-                if _PRED == "legacy":
-                    cand = np.broadcast_to(_PRED_LEGACY, (len(tcen), len(_PRED_LEGACY)))
-                else:
-                    cand = np.stack([tcen / tnew, np.zeros_like(tcen)], 1)
-                trial = Yc[:, None, :] + cand[:, :, None] * dYp[:, None, :]
-                Fp = _barrier_value(trial, nd, tnew)
-                best = np.argmin(Fp, axis=1)
-                sc = cand[np.arange(len(best)), best]
-                wmu[centred] = wmu[centred] + sc[:, None] * dmu
-                wY[centred] = Yc + sc[:, None] * dYp
-            except np.linalg.LinAlgError:
-                pass
+            if _PRED == "legacy":
+                cand = np.broadcast_to(_PRED_LEGACY, (len(tcen), len(_PRED_LEGACY)))
+            else:
+                cand = np.stack([tcen / tnew, np.zeros_like(tcen)], 1)
+            if use_kernel:
+                newton_kernel.predict_centred(centred, wY, wmu, wB, H, tcen, tnew, cand, nd)
+            else:
+                _numpy_predictor(Yc, Ydc, Yic, Bc, H[centred], tcen, tnew, cand, nd, wmu, wY, centred)
         gap = upper[idx] - lower[idx]
         keep = gap > np.maximum(tol[idx], rtol * upper[idx])
         if stop_below is not None:
@@ -394,6 +384,29 @@ def _numpy_iteration(wY, wmu, wtau, nd, R, m, grows, gB, dense, want_dual):
     # every iterate is dual feasible: its value is a certified upper bound (weak duality)
     up_it = true_dual(wY, nd) if want_dual else None
     return H, lam2, wmu, wY, up_it
+
+
+def _numpy_predictor(Yc, Ydc, Yic, Bc, Hc, tcen, tnew, cand, nd, wmu, wY, centred):
+    """The path predictor with batched NumPy (reference of ``newton_kernel.predict_centred``):
+    in place on ``wmu``, ``wY`` at the rows ``centred``."""
+    tc2 = tcen[:, None]
+    rdc = np.sqrt((Ydc ** 2).sum(-1))
+    qdc, qic = np.sqrt(1 + (tc2 * rdc) ** 2), np.sqrt(1 + (tc2 * Yic) ** 2)
+    cfd = (2 * tc2 * (1 + qdc) - tc2 ** 3 * rdc ** 2 / qdc) / (1 + qdc) ** 2
+    cfi = (2 * tc2 * (1 + qic) - tc2 ** 3 * Yic ** 2 / qic) / (1 + qic) ** 2
+    dY = np.concatenate([(Ydc * cfd[..., None]).reshape(len(tcen), 2 * nd), Yic * cfi], axis=1)
+    dg = (dY[:, None, :] @ Bc)[:, 0, :]
+    try:
+        dmu = -np.linalg.solve(Hc, dg[..., None])[..., 0] * (tnew - tcen)[:, None]
+    except np.linalg.LinAlgError:
+        return
+    dYp = (Bc @ dmu[..., None])[..., 0]
+    trial = Yc[:, None, :] + cand[:, :, None] * dYp[:, None, :]
+    Fp = _barrier_value(trial, nd, tnew)
+    best = np.argmin(Fp, axis=1)
+    sc = cand[np.arange(len(best)), best]
+    wmu[centred] = wmu[centred] + sc[:, None] * dmu
+    wY[centred] = Yc + sc[:, None] * dYp
 
 
 class numpy_iteration:
