@@ -57,7 +57,11 @@ def test_one_iteration_equals_numpy(name, tau):
     dense = len(grows) == 1 and np.array_equal(grows[0][2], np.arange(m))
     H1, l1, mu1, Y1, f1 = _numpy_iteration(Y.copy(), mu.copy(), taus, nd, R, m, grows, gB, dense, True)
     Y2, mu2 = Y.copy(), mu.copy()
-    H2, l2, f2, fail = newton_kernel.newton_iterate(Y2, mu2, B, taus, nd, newton_kernel.group_arrays(grows, nd), True)
+    rows = np.arange(k)[::-1].copy()             # working problem i reads original problem rows[i]
+    blocks = newton_kernel.group_blocks(B, grows)
+    GB = np.empty_like(blocks)
+    GB[rows] = blocks
+    H2, l2, f2, fail = newton_kernel.newton_iterate(Y2, mu2, GB, rows, taus, nd, newton_kernel.group_arrays(grows, nd), True)
     assert not fail.any()
     scale = np.abs(H1).max(axis=(1, 2))[:, None, None]
     np.testing.assert_allclose(H2 / scale, H1 / scale, rtol=0, atol=1e-13)
@@ -70,7 +74,7 @@ def test_one_iteration_equals_numpy(name, tau):
 def test_kernel_rejects_arrays_it_cannot_update_in_place():
     Y = np.zeros((2, 6))[:, ::2]
     with pytest.raises(ValueError, match="Y must be a writeable C-contiguous"):
-        newton_kernel.newton_iterate(Y, np.zeros((2, 2)), np.zeros((2, 3, 2)), np.ones(2), 0,
+        newton_kernel.newton_iterate(Y, np.zeros((2, 2)), np.zeros((2, 6)), np.arange(2), np.ones(2), 0,
                                      newton_kernel.group_arrays([(slice(0, 0), slice(0, 3), np.arange(2), slice(0, 0))], 0), False)
 
 

@@ -14,6 +14,14 @@ reduced log barrier ``F(mu) = sum_c q_c - log(1 + q_c)``, ``q_c = sqrt(1 + tau^2
    step ``1 / (1 + lambda)`` that self-concordance guarantees; only when ``lambda > 0.25``);
 5. the update of ``mu`` and ``y`` and, optionally, the certified dual value ``sum_c ||y_c||``.
 
+At a centred point two more compiled steps run on the centred problems only: the feasible
+primal point (barrier point projected onto the loop equations and scaled into the cones: the
+certified lower bound, :func:`project_centred`) and the path predictor (:func:`predict_centred`).
+The kernels read ``B``, ``a`` and ``pinv(B^T B)`` of the original problems through the working
+set's index, so nothing of size ``K x R x m`` is copied when the working set shrinks; the Newton
+iteration reads each column group's block of ``B`` from one contiguous array
+(:func:`group_blocks`, built once per solve).
+
 The NumPy version of the same iteration (``solve_support(..., kernel=False)``) does this with
 batched array operations; per problem and iteration it allocates some twenty temporaries of the
 batch's size, and the Hessian products go through one small BLAS call per problem. Compiled, the
@@ -49,16 +57,26 @@ LINE_SEARCH = np.array([1.0, 0.5, 0.25, 0.12])
 
 def group_arrays(grows, nd: int):
     """Flat description of the column groups for the kernel: per group the disk-cone range
-    ``[d0, d1)``, the interval-row range ``[i0, i1)`` (rows of the permuted problem) and its
-    columns ``cols[off[g]:off[g+1]]``."""
+    ``[d0, d1)``, the interval-row range ``[i0, i1)`` (rows of the permuted problem), its
+    columns ``cols[off[g]:off[g+1]]`` and the offset ``boff[g]`` of its block in
+    :func:`group_blocks`."""
     gd = np.array([(s.start, s.stop) for *_, s in grows], np.int64).reshape(-1, 2)
     gi = np.array([(ir.start, ir.stop) for _, ir, _, _ in grows], np.int64).reshape(-1, 2)
     cols = [np.asarray(c, np.int64) for _, _, c, _ in grows]
     off = np.concatenate([[0], np.cumsum([len(c) for c in cols])]).astype(np.int64)
-    return gd, gi, np.concatenate(cols) if cols else np.zeros(0, np.int64), off
+    sizes = [(2 * (d1 - d0) + (i1 - i0)) * len(c) for (d0, d1), (i0, i1), c in zip(gd, gi, cols)]
+    boff = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    return gd, gi, np.concatenate(cols) if cols else np.zeros(0, np.int64), off, boff
 
 
-def _newton_iterate_py(Y, mu, B, tau, nd, gd, gi, gcols, goff, ls, want_dual, H_out, lam2_out, dual_out, fail_out):
+def group_blocks(B, grows):
+    """Each group's rows x columns of ``B`` (K, R, m), flattened side by side: (K, sum nr_g s_g),
+    the layout :func:`_newton_iterate_py` reads with :func:`group_arrays`' offsets."""
+    parts = [np.concatenate([B[:, dr], B[:, ir]], axis=1)[:, :, cols].reshape(len(B), -1) for dr, ir, cols, _ in grows]
+    return np.ascontiguousarray(np.concatenate(parts, axis=1) if parts else np.zeros((len(B), 0)))
+
+
+def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, want_dual, H_out, lam2_out, dual_out, fail_out):
     """Kernel body (compiled by numba when available; see the module docstring).
 
     In place: ``Y`` (k, R), ``mu`` (k, m) updated by the accepted step; ``H_out`` (k, m, m) the
@@ -88,6 +106,7 @@ def _newton_iterate_py(Y, mu, B, tau, nd, gd, gi, gcols, goff, ls, want_dual, H_
     z = np.empty(m)
     piv = np.empty(m, np.int64)
     BD = np.empty(R)
+    dl = np.empty(max(smax, 1))
     for p in range(k):
         t = tau[p]
         F0 = 0.0
@@ -122,17 +141,16 @@ def _newton_iterate_py(Y, mu, B, tau, nd, gd, gi, gcols, goff, ls, want_dual, H_
             s = goff[q + 1] - c0
             dn = gd[q, 1] - gd[q, 0]
             nr = 2 * dn + gi[q, 1] - gi[q, 0]
-            Bg = np.empty((nr, s))
+            Bg = GB[rows[p], boff[q]:boff[q] + nr * s].reshape((nr, s))   # the group's rows x columns
             Bw = np.empty((nr, s))
             Gm = np.empty((dn, s))
             sg = np.empty(nr)
             # the group's rows: its disks' pairs, then its intervals
             for rr in range(nr):
                 j = 2 * gd[q, 0] + rr if rr < 2 * dn else gi[q, 0] + rr - 2 * dn
+                wj = w[j]
                 for a in range(s):
-                    v = B[p, j, gcols[c0 + a]]
-                    Bg[rr, a] = v
-                    Bw[rr, a] = w[j] * v
+                    Bw[rr, a] = wj * Bg[rr, a]
                 sg[rr] = sig[j]
             for c in range(dn):
                 e0 = Y[p, 2 * (gd[q, 0] + c)] * cd[gd[q, 0] + c]
@@ -233,18 +251,15 @@ def _newton_iterate_py(Y, mu, B, tau, nd, gd, gi, gcols, goff, ls, want_dual, H_
         for q in range(ng):
             c0 = goff[q]
             s = goff[q + 1] - c0
-            for j in range(2 * gd[q, 0], 2 * gd[q, 1]):
-                v = 0.0
-                for a in range(s):
-                    ja = gcols[c0 + a]
-                    v += B[p, j, ja] * d[ja]
-                BD[j] = v
-            for j in range(gi[q, 0], gi[q, 1]):
-                v = 0.0
-                for a in range(s):
-                    ja = gcols[c0 + a]
-                    v += B[p, j, ja] * d[ja]
-                BD[j] = v
+            dn = gd[q, 1] - gd[q, 0]
+            nr = 2 * dn + gi[q, 1] - gi[q, 0]
+            Bg = GB[rows[p], boff[q]:boff[q] + nr * s].reshape((nr, s))
+            for a in range(s):
+                dl[a] = d[gcols[c0 + a]]
+            bd = np.dot(Bg, dl[:s])
+            for rr in range(nr):
+                j = 2 * gd[q, 0] + rr if rr < 2 * dn else gi[q, 0] + rr - 2 * dn
+                BD[j] = bd[rr]
         # 4. line search
         step = 1.0
         if lam > 0.25:
@@ -279,7 +294,7 @@ def _newton_iterate_py(Y, mu, B, tau, nd, gd, gi, gcols, goff, ls, want_dual, H_
             dual_out[p] = f
 
 
-def _project_centred_py(cidx, Y, a, B, gram_inv, tau, nd, s0_out, s_out, lo_out):
+def _project_centred_py(cidx, rows, Y, a, B, gram_inv, tau, nd, s0_out, s_out, lo_out):
     """Feasible point of each centred problem ``p = cidx[i]`` (support._project on the barrier
     point): ``s0 = y_c / t_c`` cone-wise, the loop residual ``B^T s0`` removed with ``pinv(B^T B)``,
     scaled back into the unit cones; ``lo = a^T s``. Writes s0_out, s_out (n, R), lo_out (n,)."""
@@ -289,6 +304,7 @@ def _project_centred_py(cidx, Y, a, B, gram_inv, tau, nd, s0_out, s_out, lo_out)
     z = np.empty(m)
     for i in range(cidx.shape[0]):
         p = cidx[i]
+        o = rows[p]
         t = tau[p]
         for c in range(nd):
             y0 = Y[p, 2 * c]
@@ -305,17 +321,17 @@ def _project_centred_py(cidx, Y, a, B, gram_inv, tau, nd, s0_out, s_out, lo_out)
             sj = s0_out[i, j]
             if sj != 0.0:
                 for b in range(m):
-                    r[b] += sj * B[p, j, b]
+                    r[b] += sj * B[o, j, b]
         for b in range(m):
             v = 0.0
             for e in range(m):
-                v += gram_inv[p, b, e] * r[e]
+                v += gram_inv[o, b, e] * r[e]
             z[b] = v
         worst = 1.0
         for j in range(R):
             v = s0_out[i, j]
             for b in range(m):
-                v -= B[p, j, b] * z[b]
+                v -= B[o, j, b] * z[b]
             s_out[i, j] = v
         for c in range(nd):
             worst = max(worst, np.sqrt(s_out[i, 2 * c] ** 2 + s_out[i, 2 * c + 1] ** 2))
@@ -324,11 +340,11 @@ def _project_centred_py(cidx, Y, a, B, gram_inv, tau, nd, s0_out, s_out, lo_out)
         lo = 0.0
         for j in range(R):
             s_out[i, j] /= worst
-            lo += a[p, j] * s_out[i, j]
+            lo += a[o, j] * s_out[i, j]
         lo_out[i] = lo
 
 
-def _predict_centred_py(cidx, Y, mu, B, H, told, tnew, cand, nd):
+def _predict_centred_py(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
     """Path predictor of each centred problem ``p = cidx[i]`` (see support.solve_support): the
     tangent ``d mu / d tau = -H^{-1} B^T dY/dtau`` times ``tnew - told``, tried at the scales
     ``cand[i]`` and taken where the barrier at ``tnew`` is lowest (first of equals). In place on Y,
@@ -344,6 +360,7 @@ def _predict_centred_py(cidx, Y, mu, B, H, told, tnew, cand, nd):
     dYp = np.empty(R)
     for i in range(cidx.shape[0]):
         p = cidx[i]
+        o = rows[p]
         t = told[i]
         for c in range(nd):
             y0 = Y[p, 2 * c]
@@ -363,7 +380,7 @@ def _predict_centred_py(cidx, Y, mu, B, H, told, tnew, cand, nd):
             v = dY[j]
             if v != 0.0:
                 for b in range(m):
-                    dg[b] += v * B[p, j, b]
+                    dg[b] += v * B[o, j, b]
         ok = True
         for r_ in range(m):
             for b in range(r_ + 1):
@@ -397,7 +414,7 @@ def _predict_centred_py(cidx, Y, mu, B, H, told, tnew, cand, nd):
         for j in range(R):
             v = 0.0
             for b in range(m):
-                v += B[p, j, b] * dmu[b]
+                v += B[o, j, b] * dmu[b]
             dYp[j] = v
         t2 = tnew[i] * tnew[i]
         best = 0
@@ -440,35 +457,36 @@ def _kernel():
     return _COMPILED
 
 
-def newton_iterate(Y, mu, B, tau, nd, groups, want_dual: bool):
-    """Run one iteration on every problem (see :func:`_newton_iterate_py`); returns
-    ``(H, lam2, dual, fail)``. ``groups`` is :func:`group_arrays`'s output."""
+def newton_iterate(Y, mu, GB, rows, tau, nd, groups, want_dual: bool):
+    """Run one iteration on every working problem ``i`` (original problem ``rows[i]``: its group
+    blocks are ``GB[rows[i]]``, :func:`group_blocks`); see :func:`_newton_iterate_py`. Returns
+    ``(H, lam2, dual, fail)``; ``groups`` is :func:`group_arrays`'s output."""
     for name, x in (("Y", Y), ("mu", mu)):     # updated in place
         if not (x.flags.c_contiguous and x.flags.writeable and x.dtype == np.float64):
             raise ValueError(f"newton_iterate: {name} must be a writeable C-contiguous float64 array")
-    B = np.ascontiguousarray(B, dtype=np.float64)
     k, m = mu.shape
     H = np.empty((k, m, m))
     lam2 = np.empty(k)
     dual = np.empty(k)
     fail = np.zeros(k, np.int64)
-    gd, gi, gcols, goff = groups
-    _kernel()[0](Y, mu, B, np.ascontiguousarray(tau, float), int(nd), gd, gi, gcols, goff, LINE_SEARCH,
-                    bool(want_dual), H, lam2, dual, fail)
+    gd, gi, gcols, goff, boff = groups
+    _kernel()[0](Y, mu, np.ascontiguousarray(GB, dtype=np.float64), np.asarray(rows, np.int64),
+                 np.ascontiguousarray(tau, float), int(nd), gd, gi, gcols, goff, boff, LINE_SEARCH,
+                 bool(want_dual), H, lam2, dual, fail)
     return H, lam2, dual, fail
 
 
-def project_centred(cidx, Y, a, B, gram_inv, tau, nd):
-    """Feasible points of the centred problems ``cidx`` (see :func:`_project_centred_py`);
-    returns ``(s0, s, lower)``."""
+def project_centred(cidx, rows, Y, a, B, gram_inv, tau, nd):
+    """Feasible points of the centred working problems ``cidx`` (original problems ``rows[cidx]``
+    of ``a``, ``B``, ``gram_inv``; see :func:`_project_centred_py`); returns ``(s0, s, lower)``."""
     n, R = len(cidx), Y.shape[1]
     s0, s, lo = np.empty((n, R)), np.empty((n, R)), np.empty(n)
-    _kernel()[1](np.asarray(cidx, np.int64), Y, a, B, gram_inv, tau, int(nd), s0, s, lo)
+    _kernel()[1](np.asarray(cidx, np.int64), np.asarray(rows, np.int64), Y, a, B, gram_inv, tau, int(nd), s0, s, lo)
     return s0, s, lo
 
 
-def predict_centred(cidx, Y, mu, B, H, told, tnew, cand, nd):
-    """The path predictor on the centred problems ``cidx``, in place on Y and mu (see
-    :func:`_predict_centred_py`)."""
-    _kernel()[2](np.asarray(cidx, np.int64), Y, mu, B, H, np.ascontiguousarray(told, float),
+def predict_centred(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
+    """The path predictor on the centred working problems ``cidx`` (``B`` of the original
+    problems ``rows[cidx]``), in place on Y and mu (see :func:`_predict_centred_py`)."""
+    _kernel()[2](np.asarray(cidx, np.int64), np.asarray(rows, np.int64), Y, mu, B, H, np.ascontiguousarray(told, float),
                  np.ascontiguousarray(tnew, float), np.ascontiguousarray(cand, float), int(nd))

@@ -227,17 +227,22 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     if kernel and not use_kernel:
         raise ValidationError("kernel", kernel, "False or None: numba is not available (see robots.clearance.newton_kernel)")
     if use_kernel:
+        # the kernels read B, a and pinv(B^T B) of the original problems through ``idx`` (no copies
+        # when the working set shrinks) and each group's block of B from one contiguous array
         kgroups = newton_kernel.group_arrays(grows, nd)
+        GB = newton_kernel.group_blocks(B, grows)
         gB = None
     else:   # the NumPy iteration works on each group's rows and columns (copies)
         gB = [(B[:, dr][:, :, cols], B[:, ir][:, :, cols]) for dr, ir, cols, _ in grows]
     # working set (compacted when it shrinks)
     idx = np.arange(K)
     wB, wa, wmu, wtau, wgi, wY = B, a, mu.copy(), tau, gram_inv, Y
+    if use_kernel:
+        wB = wa = wgi = None           # read through idx
     if np.any(lower >= upper):             # trivial problems leave at once
         keep0 = lower < upper
         idx = idx[keep0]
-        wB, wa, wmu, wtau, wgi, wY = (x[keep0] for x in (wB, wa, wmu, wtau, wgi, wY))
+        wB, wa, wmu, wtau, wgi, wY = (None if x is None else x[keep0] for x in (wB, wa, wmu, wtau, wgi, wY))
         gB = gB and [(x[keep0], y[keep0]) for x, y in gB]
     it = 0
     dense = len(grows) == 1 and np.array_equal(grows[0][2], np.arange(m))
@@ -252,7 +257,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         # ``stop_below`` before the path is centred
         if use_kernel:
             # the compiled iteration (robots.clearance.newton_kernel): same steps as the branch below
-            H, lam2, up_it, fail = newton_kernel.newton_iterate(wY, wmu, wB, wtau, nd, kgroups, stop_below is not None)
+            H, lam2, up_it, fail = newton_kernel.newton_iterate(wY, wmu, GB, idx, wtau, nd, kgroups, stop_below is not None)
             if stop_below is None:
                 up_it = None
         else:
@@ -273,7 +278,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             best_mu[c_idx[better]] = wmu[centred[better]]
             tcen = wtau[centred]
             if use_kernel:
-                s0, s_new, lo_new = newton_kernel.project_centred(centred, wY, wa, wB, wgi, wtau, nd)
+                s0, s_new, lo_new = newton_kernel.project_centred(centred, idx, wY, a, B, gram_inv, wtau, nd)
             else:
                 Ydc, Yic, tdc, tic, _, _ = _barrier_terms(Yc, nd, tcen)
                 s0 = np.concatenate([(Ydc / tdc[..., None]).reshape(len(c_idx), 2 * nd), Yic / tic], axis=1)
@@ -283,8 +288,8 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             # complementary-slackness repair once the barrier gap is no longer what limits us
             weak = (upper[c_idx] - lo_new > tgt) & (2.0 * n_cones / tcen < 0.2 * (upper[c_idx] - lo_new))
             if weak.any():
-                cw = centred[weak]
-                s2, lo2 = _project_free(s0[weak], Yc[weak], wa[cw], wB[cw], nd, wgi[cw])
+                cw = c_idx[weak]
+                s2, lo2 = _project_free(s0[weak], Yc[weak], a[cw], B[cw], nd, gram_inv[cw])
                 take = lo2 > lo_new[weak]
                 sw, lw = s_new[weak], lo_new[weak]
                 sw[take], lw[take] = s2[take], lo2[take]
@@ -305,7 +310,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             else:
                 cand = np.stack([tcen / tnew, np.zeros_like(tcen)], 1)
             if use_kernel:
-                newton_kernel.predict_centred(centred, wY, wmu, wB, H, tcen, tnew, cand, nd)
+                newton_kernel.predict_centred(centred, idx, wY, wmu, B, H, tcen, tnew, cand, nd)
             else:
                 _numpy_predictor(Yc, Ydc, Yic, Bc, H[centred], tcen, tnew, cand, nd, wmu, wY, centred)
         gap = upper[idx] - lower[idx]
@@ -315,7 +320,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         if not keep.all():
             mu[idx] = wmu
             if keep.sum() < 0.8 * len(idx):
-                wB, wa, wmu, wtau, wgi, wY = (x[keep] for x in (wB, wa, wmu, wtau, wgi, wY))
+                wB, wa, wmu, wtau, wgi, wY = (None if x is None else x[keep] for x in (wB, wa, wmu, wtau, wgi, wY))
                 gB = gB and [(x[keep], y[keep]) for x, y in gB]
                 idx = idx[keep]
             elif not keep.any():
