@@ -304,13 +304,17 @@ class Kinematics:
                                  np.zeros(3 if Rt is not None else 0, bool)])
         return np.concatenate(F, axis=1), np.concatenate(J, axis=1), is_len
 
-    def _newton(self, q: dict, names, system, n: int, max_iter: int, tol: float = 1e-12):
+    def _newton(self, q: dict, names, system, n: int, max_iter: int, tol: float = 1e-12, final_check: bool = True):
         """Gauss-Newton with min-norm steps on ``system(q) -> (F, J over all variables, is_length)``
-        for the unknowns ``names``; returns (q, scaled residual (n,))."""
+        for the unknowns ``names``; returns (q, scaled residual (n,)). ``final_check=False`` skips
+        the evaluation after the last step (the residual returned is then the one before it: a
+        continuation step that only tracks the branch)."""
         idx = [self.variables.index(x) for x in names]
         q = {k: np.array(np.broadcast_to(v, (n,)), float) for k, v in q.items()}
         res = np.full(n, np.inf)
         for it in range(max_iter + 1):
+            if it == max_iter and not final_check:
+                break
             F, J, is_len = system(q)
             w = np.where(is_len, 1.0 / self.length_scale, 1.0)
             Fs, Js = F * w, J[:, :, idx] * w[:, None]
@@ -363,9 +367,10 @@ class Kinematics:
         for s in np.linspace(1.0 / K, 1.0, K):
             target = x0 + s * (poses - x0)
             Rt = self._target_orientation(target)
-            # intermediate steps only track the branch (loose tolerance); the last one converges fully
+            # intermediate steps only track the branch: one Gauss-Newton correction each (the
+            # residual left is second order in the step); the last one converges fully
             q, res = self._newton(q, self.variables, lambda q: self._ig_system(q, target, Rt), n,
-                                  3 if s < 1 else 40, tol=1e-6 if s < 1 else 1e-12)
+                                  1 if s < 1 else 40, tol=1e-6 if s < 1 else 1e-12, final_check=s >= 1)
         bad = ~(res < 1e-9)
         if bad.any():
             raise KinematicsError(f"{self.mech.name}: the loops cannot close at pose {poses[bad][0].tolist()} "
