@@ -6,8 +6,9 @@ every ``every`` seconds -- elapsed time and the expected time of a full run -- f
 thread, only when the stream is not a terminal, and stops when the study ends.
 
 ``EXPECTED_SECONDS``: full-run times of the seed studies measured on the project's 2-core
-machine, each study alone (2026-11-23, after the clearance-engine changes of issue 13's third
-session; `evotol reproduce all` runs two at a time, longest first, so these also set its order); ``--quick`` runs are much shorter. They are a
+machine, each study alone (2026-11-23; the engine studies after the compiled Newton iteration of
+issue 13's fourth session, with the numba cache warm; `evotol reproduce all` runs two at a time,
+longest first, so these also set its order); ``--quick`` runs are much shorter. They are a
 guide, not a promise: the load of the machine changes them.
 """
 from __future__ import annotations
@@ -17,9 +18,9 @@ import threading
 import time
 
 EXPECTED_SECONDS = {
-    "brahmia2023-delta": 42, "chase1990-clutch": 5, "deng2012-5bar": 20, "deng2012-clearalloc": 14,
-    "deng2012-dimsynth": 68, "deng2012-irsbot2": 92, "deng2012-tolsynth": 28, "laramolina2019-5r": 33,
-    "mechanisms": 5, "process-stack": 4, "yao2013": 30,
+    "brahmia2023-delta": 42, "chase1990-clutch": 5, "deng2012-5bar": 21, "deng2012-clearalloc": 9,
+    "deng2012-dimsynth": 35, "deng2012-irsbot2": 56, "deng2012-tolsynth": 17, "laramolina2019-5r": 33,
+    "mechanisms": 8, "process-stack": 4, "yao2013": 30,
 }
 
 
