@@ -84,8 +84,11 @@ def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: 
     "missed" (upper bound < required at some pose) or "undecided". inside: (n_poses,) fractions of
     n samples. The verdict holds for all poses together at ``confidence``: each pose's interval
     is taken at level 1 − (1 − confidence)/n_poses (Bonferroni), since the smallest of many
-    estimates at the bound is biased low. The reported interval is the worst pose's at
-    ``confidence``.
+    estimates at the bound is biased low. The reported interval (``yield_lower``, ``yield_upper``)
+    is the worst pose's at ``confidence``; ``verdict_interval`` is the worst pose's at the
+    Bonferroni level ``verdict_level`` -- the interval the verdict reads (all poses share n, so the
+    worst pose has the smallest bounds: "met" iff its lower end >= required, "missed" iff its
+    upper end < required).
     The interval assumes independent samples (exact for method="mc"; Latin hypercube samples
     usually vary less, so the interval is then conservative)."""
     from scipy.stats import beta
@@ -103,6 +106,8 @@ def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: 
            "yield_estimate": float(k[worst] / n), "yield_lower": float(lo[worst]), "yield_upper": float(hi[worst]),
            "yield_required": required}
     lo, hi = interval((1 - confidence) / len(k))
+    out["verdict_level"] = float(1 - (1 - confidence) / len(k))
+    out["verdict_interval"] = [float(lo[worst]), float(hi[worst])]
     if required is not None:
         out["verdict"] = ("missed" if np.any(hi < required) else "met" if np.all(lo >= required) else "undecided")
     return out

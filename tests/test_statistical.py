@@ -158,6 +158,16 @@ def test_clopper_pearson_interval_matches_scipy_binomtest():
     assert out["verdict"] == "missed"            # upper bound of pose 1 < 0.99
     assert yield_check(np.array([1.0, 1.0]), 2000, 0.99)["verdict"] == "met"
     assert yield_check(np.array([0.99]), 2000, 0.99)["verdict"] == "undecided"
+    # the verdict reads the worst pose's interval at the Bonferroni level 1 - 0.05 / n_poses
+    ref3 = stats.binomtest(1960, 2000).proportion_ci(1 - 0.05 / 3, method="exact")
+    assert out["verdict_level"] == pytest.approx(1 - 0.05 / 3)
+    assert out["verdict_interval"] == pytest.approx([ref3.low, ref3.high])
+    # an interval at 95 % above the requirement can still be undecided for 50 poses together
+    near = yield_check(np.full(50, 0.9965), 20000, 0.9953)
+    assert near["yield_lower"] >= 0.9953 > near["verdict_interval"][0] and near["verdict"] == "undecided"
+    from evotol.studyfile import _yield_cell
+    cell = _yield_cell(near)
+    assert "at 95 %" in cell and "undecided against 0.9953: worst pose [" in cell and "at 99.9 % per pose" in cell
 
 
 def _planar5r_problem(model, n=2048):
