@@ -69,6 +69,37 @@ def group_arrays(grows, nd: int):
     return gd, gi, np.concatenate(cols) if cols else np.zeros(0, np.int64), off, boff
 
 
+def _chol_factor(H, L, m):
+    """Cholesky factor ``L`` (lower) of the leading m x m block of ``H``; False when a pivot is
+    not positive (round-off made H indefinite)."""
+    for a in range(m):
+        for b in range(a + 1):
+            v = H[a, b]
+            for c in range(b):
+                v -= L[a, c] * L[b, c]
+            if a == b:
+                if v <= 0.0:
+                    return False
+                L[a, a] = np.sqrt(v)
+            else:
+                L[a, b] = v / L[b, b]
+    return True
+
+
+def _chol_solve(L, rhs, out, m):
+    """``out = (L L^T)^{-1} rhs`` by forward and back substitution (``rhs`` is overwritten)."""
+    for a in range(m):
+        v = rhs[a]
+        for c in range(a):
+            v -= L[a, c] * rhs[c]
+        rhs[a] = v / L[a, a]
+    for a in range(m - 1, -1, -1):
+        v = rhs[a]
+        for c in range(a + 1, m):
+            v -= L[c, a] * out[c]
+        out[a] = v / L[a, a]
+
+
 def group_blocks(B, grows):
     """Each group's rows x columns of ``B`` (K, R, m), flattened side by side: (K, sum nr_g s_g),
     the layout :func:`_newton_iterate_py` reads with :func:`group_arrays`' offsets."""
@@ -174,32 +205,10 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
         for a in range(m):
             H[a, a] += reg
         # 3. Newton step: Cholesky, else LU with partial pivoting
-        ok = True
-        for a in range(m):
-            for b in range(a + 1):
-                v = H[a, b]
-                for c in range(b):
-                    v -= L[a, c] * L[b, c]
-                if a == b:
-                    if v <= 0.0:
-                        ok = False
-                        break
-                    L[a, a] = np.sqrt(v)
-                else:
-                    L[a, b] = v / L[b, b]
-            if not ok:
-                break
-        if ok:
+        if _chol_factor(H, L, m):
             for a in range(m):
-                v = -g[a]
-                for c in range(a):
-                    v -= L[a, c] * z[c]
-                z[a] = v / L[a, a]
-            for a in range(m - 1, -1, -1):
-                v = z[a]
-                for c in range(a + 1, m):
-                    v -= L[c, a] * d[c]
-                d[a] = v / L[a, a]
+                z[a] = -g[a]
+            _chol_solve(L, z, d, m)
         else:
             for a in range(m):
                 for b in range(m):
@@ -355,7 +364,6 @@ def _predict_centred_py(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
     dY = np.empty(R)
     dg = np.empty(m)
     L = np.empty((m, m))
-    z = np.empty(m)
     dmu = np.empty(m)
     dYp = np.empty(R)
     for i in range(cidx.shape[0]):
@@ -381,34 +389,10 @@ def _predict_centred_py(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
             if v != 0.0:
                 for b in range(m):
                     dg[b] += v * B[o, j, b]
-        ok = True
-        for r_ in range(m):
-            for b in range(r_ + 1):
-                v = H[p, r_, b]
-                for c in range(b):
-                    v -= L[r_, c] * L[b, c]
-                if r_ == b:
-                    if v <= 0.0:
-                        ok = False
-                        break
-                    L[r_, r_] = np.sqrt(v)
-                else:
-                    L[r_, b] = v / L[b, b]
-            if not ok:
-                break
-        if not ok:
+        if not _chol_factor(H[p], L, m):
             continue
-        for r_ in range(m):
-            v = dg[r_]
-            for c in range(r_):
-                v -= L[r_, c] * z[c]
-            z[r_] = v / L[r_, r_]
+        _chol_solve(L, dg, dmu, m)
         scale = -(tnew[i] - t)
-        for r_ in range(m - 1, -1, -1):
-            v = z[r_]
-            for c in range(r_ + 1, m):
-                v -= L[c, r_] * dmu[c]
-            dmu[r_] = v / L[r_, r_]
         for r_ in range(m):
             dmu[r_] *= scale
         for j in range(R):
@@ -449,6 +433,8 @@ def _kernel():
             import numba
 
             jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+            # the kernels call these by their global names: bind the compiled versions first
+            globals().update(_chol_factor=jit(_chol_factor), _chol_solve=jit(_chol_solve))
             _COMPILED = (jit(_newton_iterate_py), jit(_project_centred_py), jit(_predict_centred_py))
         except Exception as exc:        # pragma: no cover - depends on the platform
             AVAILABLE = False
