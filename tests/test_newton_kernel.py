@@ -127,3 +127,30 @@ def test_solve_support_kernel_flag(irsbot2_poses):
         assert np.all(r.lower <= r.upper * (1 + 1e-12))
     np.testing.assert_allclose(r1.upper, r0.upper, rtol=1e-8)
     np.testing.assert_allclose(r1.lower, r0.lower, rtol=1e-8)
+
+
+def test_without_numba_the_numpy_iteration_runs(monkeypatch):
+    """EVOTOL_NO_NUMBA=1 (or numba missing): no kernel, same certified result; asking for the
+    kernel then is an error naming the field."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from evotol.errors import ValidationError
+    from robots.fivebar import FiveBar
+
+    code = ("import json, numpy as np\n"
+            "from robots.clearance import newton_kernel, max_pose_error\n"
+            "from robots.fivebar import FiveBar\n"
+            "r = max_pose_error(FiveBar().clearance_mechanism(), [[0.0, 0.07], [0.01, 0.05]])\n"
+            "import sys; print(json.dumps([newton_kernel.AVAILABLE, 'numba' in sys.modules, r.p_max.tolist(), r.p_upper.tolist()]))\n")
+    env = {**os.environ, "EVOTOL_NO_NUMBA": "1"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    available, imported, p_max, p_upper = json.loads(out.stdout.strip().splitlines()[-1])
+    assert available is False and imported is False
+    ref = max_pose_error(FiveBar().clearance_mechanism(), [[0.0, 0.07], [0.01, 0.05]])
+    assert np.all(np.maximum(ref.p_max, p_max) <= np.minimum(ref.p_upper, p_upper) * (1 + 1e-12))
+    monkeypatch.setattr(newton_kernel, "AVAILABLE", False)
+    with pytest.raises(ValidationError, match="kernel"):
+        solve_support(np.ones((1, 4)), np.ones((1, 4, 1)), 1, tol=1e-6, kernel=True)
