@@ -425,6 +425,20 @@ def _predict_centred_py(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
             Y[p, j] += sc * dYp[j]
 
 
+def _say_if_compiling(dispatcher) -> None:
+    """One line on stderr when numba's on-disk cache has no copy of the kernels yet (a fresh
+    install): the first solve then pauses ~10 s to compile them, and should not look hung."""
+    import sys
+
+    try:
+        index = dispatcher._cache._cache_file._index_path      # numba internals; silent if they change
+    except AttributeError:
+        return
+    if not os.path.exists(index):
+        print("[evotol] compiling the clearance engine's Newton kernels with numba (once per install, "
+              "about 10 s; cached in " + os.path.dirname(index) + ")", file=sys.stderr, flush=True)
+
+
 def _kernel():
     """The compiled kernel (numba imported and the cache loaded on first use), or None."""
     global _COMPILED, AVAILABLE
@@ -436,6 +450,7 @@ def _kernel():
             # the kernels call these by their global names: bind the compiled versions first
             globals().update(_chol_factor=jit(_chol_factor), _chol_solve=jit(_chol_solve))
             _COMPILED = (jit(_newton_iterate_py), jit(_project_centred_py), jit(_predict_centred_py))
+            _say_if_compiling(_COMPILED[0])
         except Exception as exc:        # pragma: no cover - depends on the platform
             AVAILABLE = False
             warnings.warn(f"robots.clearance.newton_kernel: numba unavailable ({exc!r}); the clearance engine "
