@@ -169,3 +169,16 @@ def test_first_compile_is_announced(tmp_path, capsys):
     newton_kernel._say_if_compiling(fake(tmp_path / "there.nbi"))
     newton_kernel._say_if_compiling(object())          # numba internals changed: silent
     assert capsys.readouterr().err == ""
+
+
+def test_warm_up_compiles_every_signature_the_solver_uses():
+    """warm_up() (run before worker pools start) leaves nothing to compile for a real solve."""
+    from robots.fivebar import FiveBar
+    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+
+    assert newton_kernel.warm_up() is True
+    before = [len(f.signatures) for f in newton_kernel._COMPILED]
+    centre = (np.array(MAP_WORKSPACE.low) + np.array(MAP_WORKSPACE.high)) / 2
+    max_pose_error(IRSBot2.thesis("VI.1").clearance_mechanism(parallelograms=True), centre[None])
+    max_pose_error(FiveBar().clearance_mechanism(), [[0.0, 0.07]])
+    assert [len(f.signatures) for f in newton_kernel._COMPILED] == before
