@@ -176,7 +176,7 @@ def test_warm_up_compiles_every_signature_the_solver_uses():
     from robots.fivebar import FiveBar
     from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
 
-    assert newton_kernel.warm_up() is True
+    assert support.warm_up() is True
     before = [len(f.signatures) for f in newton_kernel._COMPILED]
     centre = (np.array(MAP_WORKSPACE.low) + np.array(MAP_WORKSPACE.high)) / 2
     max_pose_error(IRSBot2.thesis("VI.1").clearance_mechanism(parallelograms=True), centre[None])

@@ -20,8 +20,8 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol.executor import parallel_map
-from robots.clearance import newton_kernel
 from robots.clearance.maxerror import MaxPoseError, max_pose_error
+from robots.clearance.support import warm_up
 from robots.clearance.model import ClearanceMechanism
 
 
@@ -44,7 +44,7 @@ def grid_max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: fl
     starts = range(0, n, chunk_size)
     per_pose = b.ndim == 3
     items = [(mech, poses[s:s + chunk_size], b[s:s + chunk_size] if per_pose else b, tol) for s in starts]
-    newton_kernel.warm_up()     # compile the solver's kernels once here, not once per worker (fresh install)
+    warm_up()     # compile the solver's kernels once here, not once per worker (fresh install)
     parts = parallel_map(_solve_chunk, items, workers=workers, scheduler=scheduler)
     out = MaxPoseError.concat(parts)
     out.seconds = time.perf_counter() - t0

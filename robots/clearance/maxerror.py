@@ -35,8 +35,7 @@ from evotol.errors import ConvergenceError, ValidationError
 from evotol.executor import parallel_map
 from evotol.threads import one_blas_thread
 from robots.clearance.model import ClearanceMechanism, PoseMaps
-from robots.clearance import newton_kernel
-from robots.clearance.support import _gram_pinv, solve_support, true_dual
+from robots.clearance.support import _gram_pinv, solve_support, true_dual, warm_up
 
 
 # ---------------------------------------------------------------------------- geometry of directions
@@ -620,7 +619,7 @@ class ClearanceEvaluator:
             t0 = time.perf_counter()
             items = [(self.mech, self.maps, idx[s:s + chunk_size], b[s:s + chunk_size], self.tol)
                      for s in range(0, len(b), chunk_size)]
-            newton_kernel.warm_up()     # compile the solver's kernels once here, not once per worker
+            warm_up()     # compile the solver's kernels once here, not once per worker
             out = MaxPoseError.concat(parallel_map(_evaluate_chunk, items, workers=workers, scheduler=scheduler))
             out.seconds = time.perf_counter() - t0
             return out

@@ -492,17 +492,3 @@ def predict_centred(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
     _kernel()[2](np.asarray(cidx, np.int64), np.asarray(rows, np.int64), Y, mu, B, H, np.ascontiguousarray(told, float),
                  np.ascontiguousarray(tnew, float), np.ascontiguousarray(cand, float), int(nd))
 
-
-def warm_up() -> bool:
-    """Compile (or load from numba's cache) all the kernels in this process by solving one tiny
-    support problem. Called before a pool of worker processes starts, so that on a fresh install
-    the kernels are compiled once here instead of once per worker. Returns whether they are available."""
-    if not (AVAILABLE and _kernel() is not None):
-        return False
-    from robots.clearance.support import solve_support
-
-    rng = np.random.default_rng(0)
-    a = rng.standard_normal((2, 6))
-    B = rng.standard_normal((2, 6, 2))
-    solve_support(a, B, 2, tol=1e-9, kernel=True)
-    return AVAILABLE

@@ -414,6 +414,18 @@ def _numpy_predictor(Yc, Ydc, Yic, Bc, Hc, tcen, tnew, cand, nd, wmu, wY, centre
     wY[centred] = Yc + sc[:, None] * dYp
 
 
+def warm_up() -> bool:
+    """Compile (or load from numba's cache) all the kernels of :mod:`.newton_kernel` in this process
+    by solving one tiny support problem. Called before a pool of worker processes starts: the
+    forked workers inherit the kernels instead of each importing numba and loading them (or, on a
+    fresh install, compiling them). Returns whether the compiled kernels are available."""
+    if not (newton_kernel.AVAILABLE and newton_kernel._kernel() is not None):
+        return False
+    rng = np.random.default_rng(0)
+    solve_support(rng.standard_normal((2, 6)), rng.standard_normal((2, 6, 2)), 2, tol=1e-9, kernel=True)
+    return newton_kernel.AVAILABLE
+
+
 class numpy_iteration:
     """Context manager: every support solve inside the ``with`` block runs the NumPy iteration
     (the reference for the compiled one; benchmarks compare the two in one process)."""
