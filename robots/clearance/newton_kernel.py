@@ -113,29 +113,21 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
     In place: ``Y`` (k, R), ``mu`` (k, m) updated by the accepted step; ``H_out`` (k, m, m) the
     Hessian at the start point (for the path predictor); ``lam2_out`` (k,) the squared Newton
     decrement; ``dual_out`` (k,) ``sum_c ||y_c||`` after the step (when ``want_dual``);
-    ``fail_out`` (k,) 1 where ``H`` is singular (step not taken: the caller uses a pseudo-inverse)."""
+    ``fail_out`` (k,) 1 where ``H`` is exactly singular (no step; ``lam2`` is reported as 0, so
+    the caller treats the point as centred and the barrier path moves on)."""
     k, R = Y.shape
     m = mu.shape[1]
     ng = gd.shape[0]
     smax = 0
+    for q in range(ng):
+        smax = max(smax, goff[q + 1] - goff[q])
     sig = np.empty(R)
     w = np.empty(R)
     cd = np.empty(nd)
-    rmax = 0
-    dmax = 0
-    for q in range(ng):
-        smax = max(smax, goff[q + 1] - goff[q])
-        rmax = max(rmax, 2 * (gd[q, 1] - gd[q, 0]) + gi[q, 1] - gi[q, 0])
-        dmax = max(dmax, gd[q, 1] - gd[q, 0])
-    Bs = np.empty((max(rmax, 1), max(smax, 1)))      # a group's rows of B (its columns), then weighted
-    Ws = np.empty((max(rmax, 1), max(smax, 1)))
-    Gs = np.empty((max(dmax, 1), max(smax, 1)))      # the disks' rank-one rows G_c
-    Ss = np.empty(max(rmax, 1))
     g = np.empty(m)
     L = np.empty((m, m))
     d = np.empty(m)
     z = np.empty(m)
-    piv = np.empty(m, np.int64)
     BD = np.empty(R)
     dl = np.empty(max(smax, 1))
     for p in range(k):
@@ -161,7 +153,7 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
             sig[j] = y / ti
             w[j] = (t / ti) * (1.0 - t * y * y / (ti * q))
             F0 += q - np.log1p(q)
-        # 2. gradient and Hessian, group by group (lower triangle, then mirrored)
+        # 2. gradient and Hessian, group by group (two BLAS products per group, scattered into H)
         H = H_out[p]
         for a in range(m):
             g[a] = 0.0
@@ -220,7 +212,6 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
                 for a in range(c + 1, m):
                     if abs(L[a, c]) > abs(L[best, c]):
                         best = a
-                piv[c] = best
                 if L[best, c] == 0.0:
                     singular = True
                     break
