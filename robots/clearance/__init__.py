@@ -48,6 +48,8 @@ extra=(J, t))`` (clearances plus other interval sources, e.g. ``robots.fivebar.c
 Modules: :mod:`.kinematics` (modified DH / Khalil-Kleinfinger frames, adjoints),
 :mod:`.model` (clearance bounds, joints, chains, bodies, error mapping matrices, loop
 equations), :mod:`.support` (per-direction convex problem with a duality certificate),
+:mod:`.newton_kernel` (its Newton iteration and centring steps compiled with numba; the NumPy
+iteration in :mod:`.support` is the reference and the fallback),
 :mod:`.maxerror` (branch and bound over directions, :func:`max_pose_error`),
 :mod:`.multistart` (the thesis's QR + multistart local optimisation, the baseline),
 :mod:`.grid` (grid studies on local cores or a Dask cluster).
