@@ -219,8 +219,6 @@ def compute(config: dict) -> StudyResult:
     entries = doe.random_subset(f, config["n_designs"], seed=seed) if config["n_designs"] else doe.full_factorial(f)
     store = Path(config["out_dir"]) / f"{NAME}_store{'_quick' if quick else ''}" if config.get("out_dir") else None
     log = doe.EvaluationLog()
-    from robots.clearance.support import warm_up
-    warm_up()     # the engine's kernels compiled (fresh install) here, not in every worker
     df = doe.evaluate(entries, ev, store=store, workers=workers, scheduler=scheduler, progress=config["progress"],
                       log=log, chunk_size=4 if quick else None, description="IRSBot-2 designs")
     # always evaluate the thesis's two good designs (Tab. VII.2) -- they are grid designs

@@ -250,8 +250,6 @@ def compute(config: dict) -> StudyResult:
     entries = doe.random_subset(f, config["n_entries"], seed=seed) if config["n_entries"] else doe.full_factorial(f)
     store = Path(config["out_dir"]) / f"{NAME}_store{'_quick' if quick else ''}" if config.get("out_dir") else None
     log = doe.EvaluationLog()
-    from robots.clearance.support import warm_up
-    warm_up()     # the engine's kernels compiled (fresh install) here, not in every worker
     df = doe.evaluate(entries, ev, store=store,
                       workers=config["workers"], scheduler=scheduler, progress=config["progress"], log=log,
                       chunk_size=None if quick else 4096,   # ~2 ms/entry in chunks of 4096 vs ~5 ms in 256

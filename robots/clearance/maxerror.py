@@ -35,6 +35,7 @@ from evotol.errors import ConvergenceError, ValidationError
 from evotol.executor import parallel_map
 from evotol.threads import one_blas_thread
 from robots.clearance.model import ClearanceMechanism, PoseMaps
+from robots.clearance import support
 from robots.clearance.support import _gram_pinv, solve_support, true_dual, warm_up
 
 
@@ -300,8 +301,6 @@ class legacy_engine:
     ``with legacy_engine(): max_pose_error(...)``. Not thread safe (module settings)."""
 
     def __enter__(self):
-        from robots.clearance import support
-
         g = globals()
         self._saved = {k: g[k] for k in LEGACY_OPTIONS}
         self._saved_support = {k: getattr(support, k) for k in LEGACY_SUPPORT_OPTIONS}
@@ -311,8 +310,6 @@ class legacy_engine:
         return self
 
     def __exit__(self, *exc):
-        from robots.clearance import support
-
         globals().update(self._saved)
         for k, v in self._saved_support.items():
             setattr(support, k, v)

@@ -102,7 +102,13 @@ def _chol_solve(L, rhs, out, m):
 
 def group_blocks(B, grows):
     """Each group's rows x columns of ``B`` (K, R, m), flattened side by side: (K, sum nr_g s_g),
-    the layout :func:`_newton_iterate_py` reads with :func:`group_arrays`' offsets."""
+    the layout :func:`_newton_iterate_py` reads with :func:`group_arrays`' offsets. One group over
+    all rows and columns in order (the IRSBot-2 distal module) is ``B`` itself: a view, no copy."""
+    if len(grows) == 1:
+        dr, ir, cols, _ = grows[0]
+        if (dr.start == 0 and ir.start == dr.stop and ir.stop == B.shape[1]
+                and np.array_equal(cols, np.arange(B.shape[2])) and B.flags.c_contiguous):
+            return B.reshape(len(B), -1)
     parts = [np.concatenate([B[:, dr], B[:, ir]], axis=1)[:, :, cols].reshape(len(B), -1) for dr, ir, cols, _ in grows]
     return np.ascontiguousarray(np.concatenate(parts, axis=1) if parts else np.zeros((len(B), 0)))
 
