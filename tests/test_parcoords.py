@@ -15,7 +15,8 @@ import pytest
 
 from evotol import doe
 from evotol.filtering import DesignStudy, Preset
-from evotol.reporting.headless import HeadlessChromium, find_chromium
+from evotol.reporting.headless import HeadlessChromium
+from tests.browser import require_chromium
 from evotol.reporting.html import Report
 from evotol.reporting.parcoords import (KNEE, PARETO, Axis, add_parcoords, default_axes, drawn_lines, format_tick,
                                         log_ticks, parcoords_figure, parcoords_frame, preset_table_rows)
@@ -94,8 +95,7 @@ def test_report_is_self_contained_and_lists_python_counts(tmp_path):
 
 
 def test_preset_button_in_headless_chromium_shows_the_python_count(tmp_path):
-    # a browser test must run, not skip: CI (.ci/run) installs chromium and fails without it
-    assert find_chromium() is not None, "headless Chromium is required (apt-get install chromium)"
+    require_chromium()
     st = make_study(3)
     extra = pareto_like(st)
     rep = Report("toy parcoords", "")
@@ -161,8 +161,7 @@ N_TRACE_LINES = ("(function(v){ return v.bdata ? atob(v.bdata).length / 8 : v.le
 
 
 def test_page_draws_a_sample_but_counts_every_entry_and_can_draw_all(tmp_path):
-    # a browser test must run, not skip: CI (.ci/run) installs chromium and fails without it
-    assert find_chromium() is not None, "headless Chromium is required (apt-get install chromium)"
+    require_chromium()
     st = make_study(3)
     extra = pareto_like(st)
     rep = Report("toy parcoords, sampled", "")

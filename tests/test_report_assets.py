@@ -4,7 +4,8 @@ import re
 import plotly.graph_objects as go
 from plotly.offline import get_plotlyjs
 
-from evotol.reporting.headless import HeadlessChromium, find_chromium
+from evotol.reporting.headless import HeadlessChromium
+from tests.browser import require_chromium
 from evotol.reporting.html import Report, plotlyjs_name
 
 BUNDLE_HEAD = get_plotlyjs()[:200]     # the start of plotly.min.js, to find an inlined copy
@@ -39,7 +40,7 @@ def test_inline_plotly_is_one_self_contained_file(tmp_path):
 
 def test_report_draws_offline_in_headless_chromium(tmp_path):
     """The page loads plotly.js from the file beside it (file://, no network) and draws the figure."""
-    assert find_chromium() is not None, "headless Chromium is required (apt-get install chromium; .ci/run does)"
+    require_chromium()
     page_path = _report("offline").write(tmp_path / "report.html")
     with HeadlessChromium() as browser:
         page = browser.open(page_path)

@@ -6,14 +6,21 @@
 * :func:`allocate_nsga2` – cost vs. accuracy Pareto front (pymoo NSGA-II);
 * :func:`allocate_monotone` – best design + proven lower bound of a monotone, non-convex problem
   (joint clearances; polyblock outer approximation);
-* :mod:`evotol.allocators.baselines` – equal tolerance, proportional scaling, Lagrange closed forms.
+* :mod:`evotol.allocators.baselines` – equal tolerance, proportional scaling, Lagrange closed forms;
+* :mod:`evotol.allocators.process` – process selection (a process per source and its tolerance):
+  :func:`allocate_process_optimum` (branch and bound, certified), :func:`allocate_process_ga`,
+  :func:`allocate_process_baselines`, :func:`process_front`; they return a ``ProcessResult``.
 """
 from evotol.allocators.baselines import allocate_equal, allocate_lagrange, allocate_proportional
 from evotol.allocators.ga import allocate_ga
 from evotol.allocators.monotone import allocate_monotone
 from evotol.allocators.nsga import ParetoFront, allocate_nsga2
 from evotol.allocators.optimum import allocate_optimum
+from evotol.allocators.process import (Process, ProcessProblem, ProcessResult, allocate_process_baselines,
+                                       allocate_process_ga, allocate_process_optimum, process_front)
 from evotol.allocators.sensitivity import aggregated_sensitivity, allocate_sensitivity
 
 __all__ = ["allocate_sensitivity", "allocate_optimum", "allocate_ga", "allocate_nsga2", "allocate_monotone", "ParetoFront",
-           "allocate_equal", "allocate_proportional", "allocate_lagrange", "aggregated_sensitivity"]
+           "allocate_equal", "allocate_proportional", "allocate_lagrange", "aggregated_sensitivity",
+           "Process", "ProcessProblem", "ProcessResult", "allocate_process_optimum", "allocate_process_ga",
+           "allocate_process_baselines", "process_front"]

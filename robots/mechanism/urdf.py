@@ -33,20 +33,52 @@ def _pin():
     try:
         import pinocchio
     except ImportError:
-        raise ValidationError("urdf", "pinocchio", "the 'pin' package installed (pip install 'evotol[urdf]')") from None
+        raise ValidationError("urdf", "pinocchio", "the 'pin' package installed (a dependency of evotol: pip install evotol)") from None
     return pinocchio
 
 
+#: URDFs shipped with evotol (``robots/urdf/``, copies from example-robot-data 6.0.0 with their licences)
+SHIPPED_URDF_DIR = Path(__file__).resolve().parent.parent / "urdf"
+
+
 def resolve_urdf(name: str, base_dir=None) -> Path:
-    """A URDF path, or ``"<pip package>:<path under its robots folder>"``."""
+    """The file a description's ``urdf = ...`` names.
+
+    Parameters
+    ----------
+    name : str
+        A path (relative paths are tried against ``base_dir`` first), or
+        ``"<pip package>:<path under its robots folder>"`` such as
+        ``"example-robot-data:ur_description/urdf/ur5_robot.urdf"``. For the ``example-robot-data``
+        files evotol ships (``robots/urdf/``: the UR5 and the Panda, byte-identical to 6.0.0), the
+        shipped copy is used, so a result does not depend on which version of that package is
+        installed; any other file is taken from the installed package.
+    base_dir : path-like, optional
+        Folder of the description file.
+
+    Returns
+    -------
+    pathlib.Path
+        An existing file.
+
+    Raises
+    ------
+    ValidationError
+        ``urdf``: the package is not installed (and no shipped copy exists) or the file does not exist.
+    """
     if ":" in name and not Path(name).exists():
         import importlib.metadata as md
 
         pkg, _, rel = name.partition(":")
+        shipped = SHIPPED_URDF_DIR / rel if pkg == "example-robot-data" else None
+        if shipped is not None and shipped.is_file():
+            return shipped
         try:
             dist = md.distribution(pkg)
         except md.PackageNotFoundError:
-            raise ValidationError("urdf", name, f"an installed package {pkg!r} (pip install {pkg})") from None
+            have = (f"; evotol ships {', '.join(sorted(str(p.relative_to(SHIPPED_URDF_DIR)) for p in SHIPPED_URDF_DIR.rglob('*.urdf')))}"
+                    if shipped is not None else "")
+            raise ValidationError("urdf", name, f"an installed package {pkg!r} (pip install {pkg}){have}") from None
         p = Path(dist.locate_file(f"cmeel.prefix/share/{pkg}/robots/{rel}"))
     else:
         p = Path(name)
