@@ -115,7 +115,7 @@ def yield_fronts():
         pp = make("rss")
         opt = allocate_process_optimum(pp)
         c0 = time.process_time()
-        df = process_front(pp, objective="yield", seed=0)
+        df = process_front(pp, objective="yield", seed=0).table
         cpu = time.process_time() - c0
         at = df[df["yield"] >= y3 - 1e-12]
         best = float(at.cost.min()) if len(at) else float("nan")

@@ -1,9 +1,11 @@
-"""Pareto fronts: the one knee definition used by every NSGA-II front in evotol."""
+"""Pareto fronts: the one front type and the one knee definition used by every NSGA-II front in evotol."""
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
+import pandas as pd
 
 from evotol.errors import ValidationError
 
@@ -57,3 +59,63 @@ def non_dominated(F: np.ndarray) -> np.ndarray:
     from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
     return NonDominatedSorting().do(np.asarray(F, dtype=float), only_non_dominated_front=True)
+
+
+@dataclass
+class ParetoFront:
+    """Non-dominated designs sorted by cost: the one front type of evotol.
+
+    ``table`` has a ``cost`` column, the second objective's column (``objective``; default
+    ``normalised_error`` = max error / bound, <= 1 meets the requirement) and one column per design
+    variable (SI tolerances; for process selection also the chosen process per source).
+    :func:`evotol.allocators.allocate_nsga2` and
+    :func:`evotol.allocators.process.process_front` return it.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        One row per front member, sorted by cost.
+    seconds : float
+        Wall time of the run that produced the front (s).
+    history : pandas.DataFrame or None
+        Per generation statistics, when the run recorded them.
+    objective : str
+        Column of the second (minimised) objective.
+    limit : float
+        A member is feasible when ``table[objective] <= limit`` (1 for a normalised error; the
+        allowed miss probability for a yield front).
+    """
+
+    table: pd.DataFrame
+    seconds: float = 0.0
+    history: pd.DataFrame | None = field(default=None, repr=False)
+    objective: str = "normalised_error"
+    limit: float = 1.0
+
+    @property
+    def cost(self) -> np.ndarray:
+        """Cost of every member (cost units), ascending."""
+        return self.table["cost"].to_numpy()
+
+    @property
+    def error(self) -> np.ndarray:
+        """The second objective of every member (``table[objective]``)."""
+        return self.table[self.objective].to_numpy()
+
+    def cheapest_feasible(self) -> pd.Series:
+        """The cheapest member with ``objective <= limit`` (tolerance 1e-9 relative).
+
+        Raises
+        ------
+        ValidationError
+            When no member meets the limit.
+        """
+        ok = self.table[self.table[self.objective] <= self.limit * (1 + 1e-9)]
+        if ok.empty:
+            raise ValidationError("Pareto front", "no design", f"a design with {self.objective} <= {self.limit:g}")
+        return ok.loc[ok["cost"].idxmin()]
+
+    def knee(self) -> int:
+        """Row of the knee (:func:`ideal_point_knee`: nearest to the ideal point with cost and the
+        second objective each scaled to [0, 1] over the front)."""
+        return ideal_point_knee(np.stack([self.cost, self.error], axis=1))

@@ -1,15 +1,24 @@
-"""Allocation methods. All return an :class:`evotol.result.AllocationResult`.
+"""Allocation methods and what each returns.
+
+On a :class:`evotol.problem.ToleranceProblem` (an :class:`evotol.result.AllocationResult`, unless said):
 
 * :func:`allocate_sensitivity` – the equal-effect rule the literature compares against;
 * :func:`allocate_optimum` – exact optimum of the convex problem, with a certificate;
 * :func:`allocate_ga` – single-objective GA (pymoo) with the penalty fitness of Yao 2013 eq. 15;
-* :func:`allocate_nsga2` – cost vs. accuracy Pareto front (pymoo NSGA-II);
+* :func:`allocate_nsga2` – cost vs. accuracy Pareto front (pymoo NSGA-II): a :class:`ParetoFront`;
 * :func:`allocate_monotone` – best design + proven lower bound of a monotone, non-convex problem
   (joint clearances; polyblock outer approximation);
-* :mod:`evotol.allocators.baselines` – equal tolerance, proportional scaling, Lagrange closed forms;
-* :mod:`evotol.allocators.process` – process selection (a process per source and its tolerance):
-  :func:`allocate_process_optimum` (branch and bound, certified), :func:`allocate_process_ga`,
-  :func:`allocate_process_baselines`, :func:`process_front`; they return a ``ProcessResult``.
+* :mod:`evotol.allocators.baselines` – equal tolerance, proportional scaling, Lagrange closed forms.
+
+On a :class:`evotol.allocators.process.ProcessProblem` (process *and* tolerance per source; a
+:class:`evotol.allocators.process.ProcessResult`, unless said):
+
+* :func:`allocate_process_optimum` – exact (branch and bound or enumeration), certified;
+* :func:`allocate_process_ga` – GA over process choices and tolerances;
+* :func:`allocate_process_baselines` – a dict of the textbook rules on the cheapest feasible processes;
+* :func:`process_front` – NSGA-II cost vs. error or vs. yield: a :class:`ParetoFront`.
+
+Every allocator takes the problem first and its options by keyword.
 """
 from evotol.allocators.baselines import allocate_equal, allocate_lagrange, allocate_proportional
 from evotol.allocators.ga import allocate_ga

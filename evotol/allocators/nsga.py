@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import sys
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -18,43 +17,13 @@ from pymoo.algorithms.moo.nsga2 import NSGA2
 from pymoo.core.callback import Callback
 from pymoo.core.problem import Problem
 from pymoo.termination import get_termination
-from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
 from evotol.allocators.ga import initial_population
 from evotol.constraints import ConstraintRows, constraint_rows
 from evotol.errors import ValidationError
-from evotol.pareto import ideal_point_knee
+from evotol.pareto import ParetoFront, non_dominated
 from evotol.problem import ToleranceProblem
 from evotol.threads import single_threaded_blas
-
-
-@dataclass
-class ParetoFront:
-    """Non-dominated designs sorted by cost: ``table`` has columns cost, normalised_error, one
-    column per constrained component (SI), and one column per source tolerance (SI)."""
-
-    table: pd.DataFrame
-    seconds: float = 0.0
-    history: pd.DataFrame | None = field(default=None, repr=False)
-
-    @property
-    def cost(self) -> np.ndarray:
-        return self.table["cost"].to_numpy()
-
-    @property
-    def error(self) -> np.ndarray:
-        return self.table["normalised_error"].to_numpy()
-
-    def cheapest_feasible(self) -> pd.Series:
-        ok = self.table[self.table["normalised_error"] <= 1 + 1e-9]
-        if ok.empty:
-            raise ValidationError("Pareto front", "no design", "a design that meets the requirement")
-        return ok.loc[ok["cost"].idxmin()]
-
-    def knee(self) -> int:
-        """Row of the knee (:func:`evotol.pareto.ideal_point_knee`: nearest to the ideal point
-        with cost and normalised error each scaled to [0, 1] over the front)."""
-        return ideal_point_knee(np.stack([self.cost, self.error], axis=1))
 
 
 class _FrontProblem(Problem):
@@ -151,7 +120,7 @@ def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int
     ev = problem.evaluate(T, top_only=True)
     err = ev.violation + 1
     cost = problem.cost(T)
-    nd = NonDominatedSorting().do(np.stack([cost, err], 1), only_non_dominated_front=True)
+    nd = non_dominated(np.stack([cost, err], 1))
     order = nd[np.argsort(cost[nd])]
     table = pd.DataFrame({"cost": cost[order], "normalised_error": err[order]})
     for comp, _ in problem.components:

@@ -139,7 +139,7 @@ def run_case(pp: ProcessProblem, config: dict, enumerate_all: bool) -> dict:
             "optimum": {"processes": bb.processes, "tolerances_mm": _mm(bb.tolerances), "cost": bb.cost,
                         "normalised_error": bb.normalised_error, "feasible": bb.feasible, "certificate": bb.certificate}}
     if enumerate_all:
-        en = allocate_process_optimum(pp, "enumerate")
+        en = allocate_process_optimum(pp, method="enumerate")
         case["enumeration"] = {"cost": en.cost, "n_convex_solves": en.n_convex_solves, "processes": en.processes,
                                "seconds": en.seconds, "same_optimum": bool(abs(en.cost - bb.cost) <= 1e-9 * bb.cost)}
     ga = allocate_process_ga(pp, pop_size=config["pop_size"], n_gen=config["n_gen"], seed=config["seed"])
@@ -152,10 +152,10 @@ def run_case(pp: ProcessProblem, config: dict, enumerate_all: bool) -> dict:
                          for k, r in allocate_process_baselines(pp).items()}
     ga_kw = {k: config[k] for k in ("pop_size", "n_gen", "seed")}
     front = process_front(pp, **ga_kw)
-    case["front"] = {"cost": front.cost.tolist(), "normalised_error": front.normalised_error.tolist()}
+    case["front"] = {"cost": front.cost.tolist(), "normalised_error": front.error.tolist()}
     yfront = process_front(pp, objective="yield", **ga_kw)
     case["yield_front"] = {"distribution": "normal, t = 3 sigma", "cost": yfront.cost.tolist(),
-                           "yield": yfront["yield"].tolist(),
+                           "yield": yfront.table["yield"].tolist(),
                            "yield_at_optimum": float(pp.assembly_yield([[bb.tolerances[n] for n in pp.names]])[0])}
     case["mc_nonlinear_at_optimum"] = _mc_nonlinear(pp, bb.tolerances, config["n_mc"], config["seed"])
     case["seconds"] = time.perf_counter() - t0

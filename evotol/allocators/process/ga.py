@@ -1,0 +1,95 @@
+"""GA over process choices and tolerances: one real gene per source (process index + log-position
+in its range), a boundary repair, pymoo's GA (encoding: :mod:`evotol.allocators.process`)."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from pymoo.core.callback import Callback
+from pymoo.core.problem import Problem
+from pymoo.core.repair import Repair
+
+from evotol.allocators.process.problem import ProcessProblem, ProcessResult, _result
+from evotol.constraints import ConstraintRows
+from evotol.errors import ValidationError
+from evotol.threads import single_threaded_blas
+
+
+def _decode(pp: ProcessProblem, X: np.ndarray):
+    k = np.clip(np.floor(X).astype(int), 0, pp.n_processes - 1)
+    u = np.clip(X - k, 0.0, 1.0)
+    idx = np.arange(pp.n_sources)
+    lo, hi = pp.lo[idx, k], pp.hi[idx, k]
+    return k, lo * (hi / lo) ** u, lo, hi
+
+
+def _encode(k, T, lo, hi):
+    span = np.log(hi / lo)
+    u = np.where(span > 0, np.log(np.clip(T, lo, hi) / lo) / np.where(span > 0, span, 1.0), 0.0)
+    return k + np.clip(u, 0.0, 1 - 1e-12)
+
+
+def _repair(pp, rows, X, iters: int = 25):
+    k, T, lo, hi = _decode(pp, X)
+    for _ in range(iters):
+        ne = rows.normalised_error(T)
+        Tn = np.clip(T / ne[:, None], lo, hi)
+        if np.allclose(Tn, T, rtol=1e-13, atol=0):
+            break
+        T = Tn
+    return _encode(k, T, lo, hi)
+
+
+class _ProcessRepair(Repair):
+    """Scale every design's tolerances onto the constraint (see :func:`_repair`)."""
+
+    def __init__(self, pp: ProcessProblem, rows: ConstraintRows):
+        super().__init__()
+        self.pp, self.rows = pp, rows
+
+    def _do(self, problem, X, **kwargs):
+        return _repair(self.pp, self.rows, X)
+
+
+class _ProcessGAProblem(Problem):
+    """One gene per source (process index + position in its range): cost, one constraint max error/bound − 1."""
+
+    def __init__(self, pp: ProcessProblem):
+        super().__init__(n_var=pp.n_sources, n_obj=1, n_ieq_constr=1, xl=np.zeros(pp.n_sources),
+                         xu=pp.n_processes - 1e-9)
+        self.pp = pp
+
+    def _evaluate(self, X, out, *args, **kwargs):
+        k, T, _, _ = _decode(self.pp, X)
+        out["F"] = self.pp.cost(k, T)[:, None]
+        out["G"] = (self.pp.normalised_error(T) - 1)[:, None]
+
+
+class _History(Callback):
+    """Best feasible cost after every generation (NaN before the first feasible design)."""
+
+    def __init__(self):
+        super().__init__()
+        self.costs: list[float] = []
+
+    def notify(self, algorithm):
+        opt = algorithm.opt
+        self.costs.append(float(opt.get("F")[0, 0]) if opt.get("CV")[0, 0] <= 0 else float("nan"))
+
+
+@single_threaded_blas
+def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0,
+                        repair: bool = True) -> ProcessResult:
+    """pymoo GA over process choices and tolerances (encoding and repair: module docstring)."""
+    from pymoo.algorithms.soo.nonconvex.ga import GA
+    from pymoo.optimize import minimize
+
+    t0 = time.perf_counter()
+    rows = ConstraintRows(pp.base)
+    hist = _History()
+    alg = GA(pop_size=pop_size, repair=_ProcessRepair(pp, rows) if repair else None, eliminate_duplicates=True)
+    res = minimize(_ProcessGAProblem(pp), alg, ("n_gen", n_gen), seed=seed, verbose=False, callback=hist)
+    if res.X is None:
+        raise ValidationError("processes", pp.describe(), "a feasible design found by the GA (raise n_gen / pop_size)")
+    k, T, _, _ = _decode(pp, np.atleast_2d(res.X))
+    return _result(pp, "GA (pymoo, one gene per source)", k[0], T[0], t0, history=hist.costs)

@@ -1,0 +1,285 @@
+"""The process-selection problem: candidate processes per source, the problem that chooses among
+them, and the result of an allocation (conventions: :mod:`evotol.allocators.process`)."""
+from __future__ import annotations
+
+import copy
+import itertools
+import time
+from dataclasses import dataclass, field, replace
+from typing import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from cost_models.base import CostModel
+from cost_models.power import PowerCost
+from evotol.errors import ValidationError
+from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from robots.base import RobotErrorModel
+
+FEAS_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Process:
+    """One candidate manufacturing process of a source.
+
+    name: e.g. ``"turn"``, ``"grind"``.
+    cost: cost model of the tolerance (SI t), valid (positive, non-increasing) on the range.
+    lower, upper: tolerances this process holds (SI), 0 < lower <= upper.
+    fixed_cost: set-up cost added when the process is chosen (cost units, >= 0).
+    """
+
+    name: str
+    cost: CostModel
+    lower: float
+    upper: float
+    fixed_cost: float = 0.0
+
+    def total(self, t) -> np.ndarray:
+        return self.fixed_cost + self.cost.cost(t)
+
+
+def _dominated(a: Process, b: Process, n: int = 33) -> bool:
+    """True when b covers a's range and is cheaper everywhere on it (a can never be chosen)."""
+    if not (b.lower <= a.lower and b.upper >= a.upper):
+        return False
+    t = np.geomspace(a.lower, a.upper, n)
+    return bool(np.all(b.total(t) < a.total(t)))
+
+
+class ProcessProblem:
+    """Tolerance allocation with a process choice per source (see the module docstring).
+
+    robot: any :class:`robots.base.RobotErrorModel` (e.g. :class:`robots.assembly.AssemblyFunction`).
+    processes: source name -> non-empty list of :class:`Process`.
+    requirement, poses: as for :class:`ToleranceProblem`.
+    """
+
+    def __init__(self, robot: RobotErrorModel, processes: Mapping[str, Sequence[Process]], requirement: Requirement,
+                 poses, *, n_directions: int = 600, check_dominance: bool = True):
+        if not isinstance(robot, RobotErrorModel):
+            raise ValidationError("robot", robot, "a robots.base.RobotErrorModel")
+        if not isinstance(processes, Mapping):
+            raise ValidationError("processes", processes, "a mapping source name -> list of Process")
+        names = robot.source_names
+        missing = [n for n in names if n not in processes]
+        if missing:
+            raise ValidationError("processes", sorted(processes), f"a process list for every source of {robot.name}; missing {missing}")
+        extra = [n for n in processes if n not in names]
+        if extra:
+            raise ValidationError(f"processes[{extra[0]!r}]", extra[0], f"a source of {robot.name}: {list(names)}")
+        self.processes: dict[str, tuple[Process, ...]] = {}
+        for n in names:
+            plist = processes[n]
+            if isinstance(plist, Process) or not isinstance(plist, Sequence) or len(plist) == 0:
+                raise ValidationError(f"processes[{n!r}]", plist, "a non-empty list of Process (at least one way to make it)")
+            seen = set()
+            for p in plist:
+                if not isinstance(p, Process):
+                    raise ValidationError(f"processes[{n!r}] entry", p, "an evotol.allocators.process.Process")
+                field_ = f"processes[{n!r}][{p.name!r}]"
+                if p.name in seen:
+                    raise ValidationError(f"processes[{n!r}] name", p.name, "unique process names per source")
+                seen.add(p.name)
+                if not isinstance(p.fixed_cost, (int, float, np.floating)) or not np.isfinite(p.fixed_cost) or p.fixed_cost < 0:
+                    raise ValidationError(f"{field_}.fixed_cost", p.fixed_cost, "a finite cost >= 0")
+                try:
+                    Tolerance(p.cost, p.lower, p.upper).validate(n)
+                except ValidationError as exc:
+                    raise ValidationError(f"{field_}: {exc.field}", exc.value, exc.expected) from None
+            if check_dominance:
+                for a, b in itertools.permutations(plist, 2):
+                    if _dominated(a, b):
+                        t = np.sqrt(a.lower * a.upper)
+                        raise ValidationError(
+                            f"processes[{n!r}][{a.name!r}]", f"cost {float(a.total(t)):.4g} at t = {t:.3g}",
+                            f"a process that can be the cheapest somewhere: {b.name!r} covers its range "
+                            f"[{a.lower:.3g}, {a.upper:.3g}] and costs less everywhere on it (here {float(b.total(t)):.4g}); "
+                            "check the units of the cost curves, or pass check_dominance=False")
+            self.processes[n] = tuple(plist)
+        self.names = names
+        self.n_processes = np.array([len(self.processes[n]) for n in names])
+        lo = {n: min(p.lower for p in self.processes[n]) for n in names}
+        hi = {n: max(p.upper for p in self.processes[n]) for n in names}
+        # geometry-only base problem: costs are placeholders, replaced in every subproblem
+        placeholder = {n: Tolerance(PowerCost(1.0, 1.0, scale=hi[n]), lo[n], hi[n]) for n in names}
+        self.base = ToleranceProblem(robot, placeholder, requirement, poses, n_directions=n_directions)
+        self.robot, self.requirement = robot, requirement
+        P = int(self.n_processes.max())
+        self.lo = np.full((len(names), P), np.nan)
+        self.hi = np.full((len(names), P), np.nan)
+        for j, n in enumerate(names):
+            for k, p in enumerate(self.processes[n]):
+                self.lo[j, k], self.hi[j, k] = p.lower, p.upper
+
+    # --- basics -----------------------------------------------------------------------------------
+    @property
+    def n_sources(self) -> int:
+        return len(self.names)
+
+    @property
+    def n_combinations(self) -> int:
+        return int(np.prod(self.n_processes.astype(float)))
+
+    def choice_names(self, choice) -> dict[str, str]:
+        return {n: self.processes[n][int(k)].name for n, k in zip(self.names, choice)}
+
+    def choice_index(self, names: Mapping[str, str]) -> np.ndarray:
+        out = []
+        for n in self.names:
+            pn = [p.name for p in self.processes[n]]
+            if names.get(n) not in pn:
+                raise ValidationError(f"process choice[{n!r}]", names.get(n), f"one of {pn}")
+            out.append(pn.index(names[n]))
+        return np.array(out)
+
+    def subproblem(self, choice) -> ToleranceProblem:
+        """The convex allocation problem of one process choice (shares the cached geometry)."""
+        choice = np.asarray(choice, dtype=int)
+        sub = copy.copy(self.base)
+        sub.tolerances = {n: Tolerance(self.processes[n][k].cost, self.processes[n][k].lower, self.processes[n][k].upper)
+                          for n, k in zip(self.names, choice)}
+        sub.lower = self.lo[np.arange(self.n_sources), choice].copy()
+        sub.upper = self.hi[np.arange(self.n_sources), choice].copy()
+        sub._mc_cache = None
+        return sub
+
+    def fixed_cost(self, choice) -> float:
+        return float(sum(self.processes[n][int(k)].fixed_cost for n, k in zip(self.names, choice)))
+
+    def cost(self, choices, T) -> np.ndarray:
+        """Total cost of designs (choices (n, S) int, T (n, S) SI) -> (n,)."""
+        choices = np.atleast_2d(np.asarray(choices, dtype=int))
+        T = np.atleast_2d(np.asarray(T, dtype=float))
+        c = np.zeros(T.shape[0])
+        for j, n in enumerate(self.names):
+            for k, p in enumerate(self.processes[n]):
+                m = choices[:, j] == k
+                if m.any():
+                    c[m] += p.total(T[m, j])
+        return c
+
+    def in_ranges(self, choices, T, rtol: float = 1e-9) -> np.ndarray:
+        choices = np.atleast_2d(np.asarray(choices, dtype=int))
+        T = np.atleast_2d(T)
+        idx = np.arange(self.n_sources)
+        lo, hi = self.lo[idx, choices], self.hi[idx, choices]
+        return np.all((T >= lo * (1 - rtol)) & (T <= hi * (1 + rtol)), axis=1)
+
+    def normalised_error(self, T) -> np.ndarray:
+        """Exact max error / bound over poses and components (<= 1: feasible)."""
+        return self.base.evaluate(np.atleast_2d(T), top_only=True).violation + 1
+
+    def yield_model(self, distribution="normal"):
+        """First-order statistical model of the responses (:class:`evotol.statistical.FirstOrderYield`,
+        ``docs/statistical.md``) with every source distributed as ``distribution`` (a kind name or an
+        :class:`evotol.distributions.Distribution`; default normal with t = 3σ)."""
+        from evotol.distributions import Distribution
+
+        if not isinstance(distribution, (str, Distribution)):
+            raise ValidationError("distribution", distribution, "a distribution kind name or evotol.distributions.Distribution")
+        tol = {n: Tolerance(t.cost, t.lower, t.upper, distribution=distribution) for n, t in self.base.tolerances.items()}
+        req = replace(self.requirement, measure="yield", probability=None, ppm=None)
+        return ToleranceProblem(self.robot, tol, req, self.base.poses).first_order_yield()
+
+    def assembly_yield(self, T, model=None) -> np.ndarray:
+        """Yield of designs ``T`` (n, n_sources), SI: P(every response within its limit) of the
+        first-order model, as the Bonferroni bound 1 − Σ_k P(|Δy_k| > L_k) over the responses
+        (poses); exact for one response (the clutch). ``model``: :meth:`yield_model` (default normal).
+
+        The response mean m_k and variance s_k² (in units of L_k) are the model's moments
+        (:meth:`evotol.statistical.FirstOrderYield.moments`); an assembly response is a scalar (row z
+        of the error twist), so P(|Δy_k| > L_k) = Φ((−1 − m_k)/s_k) + Φ((m_k − 1)/s_k) exactly
+        (normal sources; moment-matched normal otherwise, ``model.exact``) -- the 3-D octant rule
+        of :func:`evotol.statistical.miss_probability` is built for full-rank covariances and is off
+        by up to ~1e-4 of the miss probability on this rank-one case.
+        """
+        from scipy.stats import norm
+
+        model = self.yield_model() if model is None else model
+        T = np.atleast_2d(np.asarray(T, dtype=float))
+        S, mean = model.moments("position", T)
+        s = np.sqrt(np.maximum(S[..., 2], 1e-300))
+        m = 0.0 if mean is None else mean[..., 2]
+        miss = (norm.cdf((-1.0 - m) / s) + norm.sf((1.0 - m) / s)).sum(axis=1)
+        return 1.0 - np.minimum(miss, 1.0)
+
+    def judge(self, processes: Mapping[str, str], tolerances: Mapping[str, float]) -> dict:
+        """Recompute a published design: its cost, its normalised error (max error / bound; > 1
+        means the requirement is violated) and whether each tolerance lies in its process's range."""
+        ch = self.choice_index(processes)
+        missing = [n for n in self.names if n not in tolerances]
+        if missing:
+            raise ValidationError("tolerances", sorted(tolerances), f"a tolerance for every source; missing {missing}")
+        t = np.array([float(tolerances[n]) for n in self.names])
+        if not np.all(np.isfinite(t)) or np.any(t <= 0):
+            raise ValidationError("tolerances", t.tolist(), "positive finite tolerances (SI)")
+        idx = np.arange(self.n_sources)
+        outside = [n for n, ok in zip(self.names, (t >= self.lo[idx, ch] * (1 - 1e-9)) & (t <= self.hi[idx, ch] * (1 + 1e-9))) if not ok]
+        ne = float(self.normalised_error(t)[0])
+        return {"cost": float(self.cost(ch, t)[0]), "normalised_error": ne, "holds_requirement": bool(ne <= 1 + 1e-9),
+                "outside_process_range": outside}
+
+    def describe(self) -> str:
+        lines = [f"ProcessProblem: {self.robot.name}, {self.n_sources} sources, {self.n_combinations} process combinations, "
+                 f"measure {self.requirement.measure}"]
+        for n in self.names:
+            lines.append(f"  {n}: " + "; ".join(f"{p.name} [{p.lower:.3g}, {p.upper:.3g}] {p.cost!r}"
+                                              + (f" + {p.fixed_cost:g}" if p.fixed_cost else "") for p in self.processes[n]))
+        return "\n".join(lines)
+
+    __repr__ = describe
+
+
+def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None, measure: str = "worst_case", *,
+                     processes: Mapping[str, Sequence[Process]] | None = None, **requirement):
+    """"Every response of an assembly within its limit" (see :mod:`robots.assembly`): a
+    :class:`ToleranceProblem` when ``tolerances`` are given, a :class:`ProcessProblem` when
+    ``processes`` are."""
+    req = Requirement(position=1.0, measure=measure, **requirement)
+    if (tolerances is None) == (processes is None):
+        raise ValidationError("assembly_problem", "tolerances/processes", "exactly one of tolerances= or processes=")
+    if processes is not None:
+        return ProcessProblem(assembly, processes, req, assembly.response_poses)
+    return ToleranceProblem(assembly, tolerances, req, assembly.response_poses)
+
+
+# --- results -----------------------------------------------------------------------------------------
+@dataclass
+class ProcessResult:
+    """A process choice and tolerances (SI), with its cost and how it was found."""
+
+    method: str
+    processes: dict[str, str]
+    tolerances: dict[str, float]
+    cost: float
+    feasible: bool
+    normalised_error: float
+    seconds: float = 0.0
+    n_nodes: int | None = None
+    n_convex_solves: int | None = None
+    n_combinations: int | None = None
+    certificate: dict | None = None
+    history: list | None = field(default=None, repr=False)
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in ("method", "processes", "tolerances", "cost", "feasible", "normalised_error",
+                                            "seconds", "n_nodes", "n_convex_solves", "n_combinations", "certificate")}
+        return {k: v for k, v in d.items() if v is not None}
+
+    def table(self, problem: ProcessProblem, unit: float = 1e-3, unit_name: str = "mm") -> pd.DataFrame:
+        ch = problem.choice_index(self.processes)
+        t = np.array([self.tolerances[n] for n in problem.names])
+        return pd.DataFrame({"source": problem.names, "process": [self.processes[n] for n in problem.names],
+                             f"tolerance ({unit_name})": t / unit,
+                             "cost": [float(problem.processes[n][k].total(t[j])) for j, (n, k) in enumerate(zip(problem.names, ch))]})
+
+
+def _result(pp: ProcessProblem, method: str, choice, t, t0: float, **kw) -> ProcessResult:
+    t = np.asarray(t, dtype=float)
+    ne = float(pp.normalised_error(t)[0])
+    ok = bool(ne <= 1 + 1e-7 and pp.in_ranges(choice, t)[0])
+    return ProcessResult(method, pp.choice_names(choice), dict(zip(pp.names, t.tolist())), float(pp.cost(choice, t)[0]),
+                         ok, ne, seconds=time.perf_counter() - t0, **kw)
+
