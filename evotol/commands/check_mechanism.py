@@ -1,6 +1,9 @@
 """``evotol check-mechanism FILE``: what a mechanism description gives, and whether it is right.
 
-Prints the joint variables (actuated and passive), the error sources it generated (name, group,
+Prints what it understood, in display units (lengths in mm, angles in deg): the design
+parameters, the assembly joints as declared and as solved by Newton, and the end-effector pose
+there -- so a unit slip (``Rb = 250`` meaning mm) is visible before it becomes an answer. Then the
+joint variables (actuated and passive), the error sources it generated (name, group,
 unit), the largest loop-closure residual of the Newton inverse geometry over Latin-hypercube poses
 of the workspace, and the agreement of the first-order sensitivities with central finite
 differences of the nonlinear closure (``robots.base.check_robot``). With a ``[clearance]`` table it
@@ -10,6 +13,7 @@ finite-difference agreement is worse than ``--rtol``.
 from __future__ import annotations
 
 import json
+import math
 
 from robots.mechanism.checks import check_mechanism
 
@@ -25,6 +29,35 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_check_mechanism)
 
 
+DISPLAY = {"m": ("mm", 1e3), "rad": ("deg", 180 / math.pi)}
+
+
+def _shown(value, unit: str) -> str:
+    """``0.2`` m -> ``200 mm``; ``0.698`` rad -> ``40 deg``."""
+    if value is None:
+        return "-"
+    u, k = DISPLAY.get(unit, (unit, 1.0))
+    v = value * k
+    return f"{0.0 if abs(v) < 1e-9 else v:.6g} {u}"        # round-off below 1e-9 mm / deg shows as 0
+
+
+def print_understood(out: dict) -> None:
+    """The parameters, the assembly (declared and solved joints) and the end-effector pose, in mm
+    and deg (:func:`robots.mechanism.checks.understood`)."""
+    params = [f"{p['name']} = {_shown(p['value'], p['unit'])}" for p in out.get("parameters", [])]
+    for i in range(0, len(params), 6):
+        print(("  parameters: " if i == 0 else "              ") + ", ".join(params[i:i + 6]))
+    asm = out["assembly"]
+    print("  assembly pose: " + ", ".join(f"{c['name']} = {_shown(c['value'], c['unit'])}" for c in asm["pose"]))
+    w = max([len(j["name"]) for j in asm["joints"]] + [5])
+    print(f"    {'joint':{w}s} {'declared':>14s} {'solved':>14s}")
+    for j in asm["joints"]:
+        print(f"    {j['name']:{w}s} {_shown(j['declared'], j['unit']):>14s} {_shown(j['solved'], j['unit']):>14s}")
+    ee = out["end_effector"]
+    print(f"  end-effector {ee['frame']} at the assembly: position ({', '.join(_shown(v, 'm')[:-3] for v in ee['position'])}) mm, "
+          f"yaw/pitch/roll ({', '.join(_shown(v, 'rad')[:-4] for v in ee['yaw_pitch_roll'])}) deg")
+
+
 def cmd_check_mechanism(args) -> int:
     srcs = [s.strip() for s in args.sources.split(",")] if args.sources else None
     out = check_mechanism(args.file, args.poses, srcs)
@@ -33,6 +66,7 @@ def cmd_check_mechanism(args) -> int:
         print(json.dumps(out, indent=2))
         return 0 if ok else 1
     print(f"{out['name']}  ({out['file']}{', planar' if out['planar'] else ''})")
+    print_understood(out)
     print(f"  actuated joint variables: {', '.join(out['actuated']) or '-'}")
     print(f"  passive joint variables:  {', '.join(out['passive']) or '-'}")
     print(f"  {out['n_sources']} error sources:")
