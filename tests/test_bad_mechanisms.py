@@ -53,6 +53,34 @@ MECHANISM_CASES = {
     "declared leg angle far from the closed one": ((("{ a1 = 2.95", "{ a1 = 1.95"),),
                                                    ["assembly.joints.a1 = 1.95 rad", "a1 = 2.94539", "more than 0.5 rad"]),
     "declared platform joint of the other side": ((("c1 = -0.68", "c1 = 0.68"),), ["assembly.joints.c1 = 0.68 rad", "loop residual"]),
+    # item 2: plausibility of the values as written
+    "base radius written in mm": (((' = "200*mm"', " = 250"),), ["lengths.Rb = 250", "below 10 m", "did you mean '250*mm'?"]),
+    "length expression beyond 10 m": (((' = "200*mm"', ' = "250*1000*mm"'),), ["lengths.Rb = '250*1000*mm'", "below 10 m", "max_length"]),
+    "DH length entry in mm": (((' = "rp"\ntheta = "-(90', ' = 50\ntheta = "-(90'),), ["frame 'P1'.d = 50", "did you mean '50*mm'?"]),
+    "negative platform radius": (((' = "50*mm"', ' = "-50*mm"'),), ["lengths.rp = '-50*mm'", "non-negative length", "negative_lengths"]),
+    "frame angle in degrees": ((('gamma = "210*deg"', "gamma = 210"),), ["frame 'A2'.gamma = 210", "did you mean '210*deg'?"]),
+    "twist angle in degrees": ((('alpha = "90*deg"', "alpha = 90"),), ["frame 'L1'.alpha = 90", "did you mean '90*deg'?"]),
+    "angle parameter in degrees": ((('offset = "40*deg"', "offset = 40"),), ["angles.offset = 40", "did you mean '40*deg'?"]),
+    "workspace angle bound in degrees": ((('high = "10*deg"', "high = 10"),), ["coordinate phi.high = 10", "did you mean '10*deg'?"]),
+    "workspace length bound in mm": ((('low = "-30*mm"', "low = -30"),), ["coordinate x.low = -30", "did you mean '-30*mm'?"]),
+    "assembly stroke in mm": ((("l1 = 0.165", "l1 = 165"),), ["assembly.joints.l1 = 165", "did you mean '165*mm'?"]),
+    "assembly joint angle in degrees": ((("{ a1 = 2.95", "{ a1 = 169"),), ["assembly.joints.a1 = 169", "did you mean '169*deg'?"]),
+    "assembly pose in mm": ((("pose = [0.0, 0.0, 0.0]", "pose = [0.0, 20, 0.0]"),), ["assembly.pose (y) = 20", "did you mean '20*mm'?"]),
+    "orientation angle in degrees": ((('orientation = [["z", "phi"]]', 'orientation = [["z", "phi"], ["z", 180]]'),),
+                                     ["end_effector.orientation[1] = 180", "did you mean '180*deg'?"]),
+    "angle coordinate without orientation": ((('orientation = [["z", "phi"]]', ""),),
+                                             ["coordinate 'phi' = 'phi'", "end_effector.orientation", "moves nothing"]),
+    "z coordinate in a planar mechanism": ((('{ name = "y", axis = "y"', '{ name = "y", axis = "z"'),),
+                                           ["coordinate 'y'.axis = 'z'", "planar mechanism"]),
+    "two coordinates on one axis": ((('{ name = "y", axis = "y"', '{ name = "y", axis = "x"'),),
+                                    ["coordinate 'y'.axis = 'x'", "'x' is already x"]),
+    "out-of-plane orientation in a planar mechanism": ((('orientation = [["z", "phi"]]', 'orientation = [["x", "phi"]]'),),
+                                                       ["end_effector.orientation = ['x', 'phi']", "about z only"]),
+    "[checks] key typo": ((("[lengths]", "[checks]\nmax_lenght = 20\n\n[lengths]"),), ["checks.max_lenght = 20", "'max_length'"]),
+    "[checks] negative_lengths names no length": ((("[lengths]", '[checks]\nnegative_lengths = ["Rc"]\n\n[lengths]'),),
+                                                  ["checks.negative_lengths = ['Rc']", "names of [lengths]", "'Rb'"]),
+    "[checks] max_length not positive": ((("[lengths]", "[checks]\nmax_length = 0\n\n[lengths]"),),
+                                         ["checks.max_length = 0", "a positive length"]),
 }
 
 
@@ -72,3 +100,28 @@ def test_the_unedited_tutorial_file_checks_clean(tmp_path, capsys):
     """The table's base file passes, so every failure above is the edit's."""
     code, out, err = _check(["check-mechanism", str(_edited(tmp_path, ())), "--poses", "3"], capsys)
     assert code == 0 and not err.strip(), err
+
+
+@pytest.mark.parametrize("edits, before, after", [
+    # a large machine: [checks] max_length lifts the 10 m bound (the assembly check still runs)
+    ([(' = "200*mm"', " = 250"), ("[lengths]", "[checks]\nmax_length = 300\n\n[lengths]")],
+     "lengths.Rb = 250", "assembly.joints.l1 = 0.165 m was declared, but Newton closed the loops at l1 = 249.962"),
+    # an intended negative length: listed in [checks] negative_lengths (the mirrored platform then
+    # does not close near the declared joints)
+    ([(' = "50*mm"', ' = "-50*mm"'), ("[lengths]", '[checks]\nnegative_lengths = ["rp"]\n\n[lengths]')],
+     "lengths.rp", "assembly.joints.l1 = 0.165 m was declared, but Newton closed the loops at l1 = 0.24046"),
+])
+def test_declared_intent_lifts_a_plausibility_check(edits, before, after, tmp_path, capsys):
+    """The override is read: the message moves from the plausibility check to the next check."""
+    code, _, err = _check(["check-mechanism", str(_edited(tmp_path, edits[:1])), "--poses", "3"], capsys)
+    assert code == 2 and before in err
+    code, _, err = _check(["check-mechanism", str(_edited(tmp_path, edits)), "--poses", "3"], capsys)
+    assert code == 2 and before not in err and after in err, err
+
+
+def test_angles_written_with_a_unit_are_taken_as_meant(tmp_path, capsys):
+    """'720*deg' and '4*pi' are beyond 2 pi but written with a unit: no plausibility error (the
+    frame is the same as with 0 deg, so the file still checks clean)."""
+    f = _edited(tmp_path, [('gamma = "210*deg"', 'gamma = "210*deg + 720*deg"'), ('gamma = "330*deg"', 'gamma = "330*deg + 4*pi"')])
+    code, out, err = _check(["check-mechanism", str(f), "--poses", "3"], capsys)
+    assert code == 0, err

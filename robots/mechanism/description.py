@@ -36,6 +36,7 @@ from evotol.errors import ValidationError
 from robots.clearance.kinematics import DH_FIELDS
 from robots.clearance.model import BOUND_NAMES, ClearanceBounds
 from robots.mechanism.expressions import CONSTANTS, FUNCTIONS, Expression
+from robots.mechanism.plausibility import check_workspace, check_written_values
 from robots.mechanism.urdf import resolve_urdf, urdf_frames
 
 JOINT_TYPES = ("revolute", "prismatic", "fixed")
@@ -226,6 +227,7 @@ class Mechanism:
             raise ValidationError("parameter name", sorted(set(self.lengths) & set(self.angles))[0], "in [lengths] or [angles], not both")
         if self.assembly_pose and len(self.assembly_pose) != len(self.coordinates):
             raise ValidationError("assembly.pose", self.assembly_pose, f"{len(self.coordinates)} numbers, one per coordinate")
+        check_workspace(self.coordinates, self.orientation, self.planar)       # issue 27: a coordinate moves something
 
     # ------------------------------------------------------------------ names
     @property
@@ -265,7 +267,7 @@ class Mechanism:
 
 # ---------------------------------------------------------------------------------------- TOML
 TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "point", "loop", "end_effector", "assembly",
-            "tolerances", "clearance", "urdf", "tip")
+            "tolerances", "clearance", "urdf", "tip", "checks")
 
 
 def _number(v, where: str) -> float:
@@ -345,12 +347,23 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     tol = spec.get("tolerances", {})
     _check_keys(tol, ("sources",), "tolerances")
     clearance = _clearance_from_dict(spec["clearance"]) if "clearance" in spec else None
+    check_written_values(spec, _joint_units(frames, set(lengths) | set(angles)))    # issue 27: units as written
     mech = Mechanism(name=str(name), frames=tuple(frames), end_effector=str(ee.get("frame", ee_default or "")), coordinates=tuple(coords),
                      loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
                      sources=tuple(tol.get("sources", ())), clearance=clearance, description=spec.get("description", ""),
                      path=str(path), points=tuple(points))
     return mech
+
+
+def _joint_units(frames, params) -> dict[str, str]:
+    """Joint variable -> "m" (in the r of a prismatic frame) or "rad" (in the theta of a revolute one)."""
+    out = {}
+    for f in frames:
+        if f.joint_field:
+            for x in Expression.parse(getattr(f, f.joint_field), f"frame {f.name!r}.{f.joint_field}").names - params:
+                out.setdefault(x, "m" if f.joint == "prismatic" else "rad")
+    return out
 
 
 def _bounds(b, where: str) -> ClearanceBounds:
