@@ -147,26 +147,27 @@ def _at_budget(problem: ToleranceProblem, name: str, budget, t0, family, log_p):
 
 
 @single_threaded_blas
-def allocate_equal(problem: ToleranceProblem, budget: float | None = None):
+def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None):
     """Equal tolerances; ``budget``: the smallest common tolerance whose cost fits the budget."""
     t0 = time.perf_counter()
     if budget is not None:
         return _at_budget(problem, "equal tolerance", budget, t0, *scaled_family(problem, np.ones(problem.n_sources)))
-    return make_result(problem, "equal tolerance", equal_design(problem), seconds=time.perf_counter() - t0)
+    return make_result(problem, "equal tolerance", equal_design(problem), seconds=time.perf_counter() - t0, repair=True)
 
 
 @single_threaded_blas
-def allocate_proportional(problem: ToleranceProblem, weights=None, budget: float | None = None):
+def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = None, weights=None):
     """t_j ∝ w_j (default: the upper bounds); ``budget``: scaled down until the cost fits the budget."""
     t0 = time.perf_counter()
     if budget is not None:
         w = problem.upper if weights is None else problem.as_array(weights)
         return _at_budget(problem, "proportional scaling", budget, t0, *scaled_family(problem, w))
-    return make_result(problem, "proportional scaling", proportional_design(problem, weights), seconds=time.perf_counter() - t0)
+    return make_result(problem, "proportional scaling", proportional_design(problem, weights), seconds=time.perf_counter() - t0,
+                       repair=True)
 
 
 @single_threaded_blas
-def allocate_lagrange(problem: ToleranceProblem, measure: str | None = None, budget: float | None = None):
+def allocate_lagrange(problem: ToleranceProblem, *, budget: float | None = None, measure: str | None = None):
     """Lagrange closed forms; ``budget``: the multiplier λ chosen so the cost is the budget (the
     same stationarity condition solves min stack-up s.t. cost <= budget)."""
     t0 = time.perf_counter()
@@ -177,5 +178,5 @@ def allocate_lagrange(problem: ToleranceProblem, measure: str | None = None, bud
         return _at_budget(problem, "Lagrange closed form", budget, t0,
                           lambda x: _t_of_lambda(problem, s, np.exp(-x), m), (-50.0, 50.0))
     t = lagrange_design(problem, measure)
-    return make_result(problem, "Lagrange closed form", t, seconds=time.perf_counter() - t0,
+    return make_result(problem, "Lagrange closed form", t, seconds=time.perf_counter() - t0, repair=True,
                        info={"stack_up": measure or problem.requirement.measure})

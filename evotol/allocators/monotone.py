@@ -155,13 +155,16 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
             "vertices": int(len(V)), "rounds": rounds, "converged": bool(gap <= rel_gap)}
 
 
-def allocate_monotone(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-2, max_evaluations: int = 4000,
-                      batch: int = 16):
+def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None, incumbent=None, rel_gap: float = 1e-2,
+                      max_evaluations: int = 4000, batch: int = 16):
     """Best design found with a proven lower bound on the optimal cost, for a problem whose measure
     is monotone but not convex (clearance sources). The certificate carries ``lower_bound``,
     ``gap`` (relative to the design's cost) and the polyblock's counts; ``result.verdict`` reads
     it (a gap above 1e-6 is reported as "not certified")."""
     t0 = time.perf_counter()
+    if budget is not None:
+        raise ValidationError("budget", budget, "None for allocate_monotone (it brackets the minimum cost at the "
+                              "requirement; allocate_ga(problem, budget=...) gives the best accuracy at a budget)")
     problem.check_feasible()
     res = polyblock(problem, incumbent=incumbent, rel_gap=rel_gap, max_evaluations=max_evaluations, batch=batch)
     if res["t"] is None:
@@ -170,4 +173,4 @@ def allocate_monotone(problem: ToleranceProblem, *, incumbent=None, rel_gap: flo
             "solver": "polyblock (monotonic optimisation, Tuy 2000)", "evaluations": res["evaluations"],
             "vertices": res["vertices"], "rounds": res["rounds"], "converged": res["converged"]}
     return make_result(problem, "optimum bracket (polyblock)", res["t"], certificate=cert,
-                       seconds=time.perf_counter() - t0)
+                       seconds=time.perf_counter() - t0, repair=True)

@@ -95,12 +95,17 @@ class _CheckFront(Callback):
 
 
 @single_threaded_blas
-def allocate_nsga2(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
-                   seeds=(), n_check: int = 5, progress: bool | None = None,
+def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, pop_size: int = 100, n_gen: int = 200,
+                   seed: int = 0, seeds=(), n_check: int = 5, progress: bool | None = None,
                    log_scale: bool | None = None) -> ParetoFront:
     """NSGA-II cost vs. normalised error (see module docstring). ``log_scale``: search log(t)
-    (default: when some tolerance range spans more than two decades)."""
+    (default: when some tolerance range spans more than two decades). ``budget`` is accepted for
+    the shape every allocator shares and must be None: the front spans every budget (read a point
+    with ``front.table``, or use ``allocate_ga(problem, budget=...)``)."""
     t0 = time.perf_counter()
+    if budget is not None:
+        raise ValidationError("budget", budget, "None for allocate_nsga2 (the front covers every budget; "
+                              "allocate_ga(problem, budget=...) gives the best accuracy at one)")
     for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1), ("seed", seed, 0)):
         if not isinstance(v, (int, np.integer)) or v < lo:
             raise ValidationError(name, v, f"an integer >= {lo}")

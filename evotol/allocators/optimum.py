@@ -171,7 +171,7 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
 
 
 @single_threaded_blas
-def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, tol: float = 1e-9,
+def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, tol: float = 1e-9,
                      max_rounds: int = 60, max_rows: int = 400, refine: bool | dict = False):
     """Certified optimum (min cost at the requirement, or best accuracy at ``budget``).
 
@@ -189,7 +189,7 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
         from evotol.refinement import refine_poses
 
         opts = {} if refine is True else dict(refine)
-        res, info = refine_poses(problem, lambda p: allocate_optimum(p, budget, tol=tol, max_rounds=max_rounds,
+        res, info = refine_poses(problem, lambda p: allocate_optimum(p, budget=budget, tol=tol, max_rounds=max_rounds,
                                                                      max_rows=max_rows), **opts)
         res.info["refinement"] = {k: v for k, v in info.items() if k != "pose_indices"}
         return res
@@ -235,7 +235,7 @@ def allocate_optimum(problem: ToleranceProblem, budget: float | None = None, *, 
         # certified-feasible variant: scale until the proven bound (grid / cos δ) holds too
         worst = max(float(np.max(getattr(ev_bound, f"{c}_bound")) / lim) for c, lim in problem.components)
         cert["proven_bound_over_requirement"] = worst
-    return make_result(problem, "optimum", t, certificate=cert, seconds=time.perf_counter() - t0,
+    return make_result(problem, "optimum", t, certificate=cert, seconds=time.perf_counter() - t0, repair=True,
                        info={"solver_message": str(getattr(res, "message", ""))})
 
 

@@ -96,8 +96,8 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
 
 
 @single_threaded_blas
-def allocate_sensitivity(problem: ToleranceProblem, measure: str | None = None, collective_groups=(),
-                         budget: float | None = None):
+def allocate_sensitivity(problem: ToleranceProblem, *, budget: float | None = None, measure: str | None = None,
+                         collective_groups=()):
     """Equal-effect allocation (see module docstring); ``measure`` defaults to the requirement's.
     ``collective_groups``: see :func:`aggregated_sensitivity`. ``budget``: best accuracy at this
     cost instead -- the equal-effect design t_j ∝ 1/s_j scaled until it costs the budget
@@ -115,4 +115,4 @@ def allocate_sensitivity(problem: ToleranceProblem, measure: str | None = None, 
     if collective_groups:
         rule += f", collective groups {list(collective_groups)}"
     return make_result(problem, "sensitivity" + (" (collective)" if collective_groups else ""), t,
-                       seconds=time.perf_counter() - t0, info={"rule": rule})
+                       seconds=time.perf_counter() - t0, info={"rule": rule}, repair=True)

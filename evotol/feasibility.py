@@ -1,0 +1,127 @@
+"""What evotol calls *feasible*: one rule for every allocator, and the repair that makes a final
+design meet it.
+
+**The rule.** A design is feasible when every free tolerance lies within its bounds and, for every
+constrained component (position, orientation),
+
+    proven upper bound of the largest error over the poses  ≤  requirement × (1 + FEASIBILITY_RTOL)
+
+with ``FEASIBILITY_RTOL = 1e-6`` (0.5 nm on a 0.5 mm requirement: far below anything a drawing
+carries, far above round-off). The proven bound is the measure's own: for the worst case, the
+certified bound of :mod:`evotol.support_bound` (tightened to 1e-8 relative at the poses that can
+hold the maximum, so a design allocated to hold the requirement with equality is not rejected for
+the looseness of a direction grid); for RSS and a quantile, the value itself (exact); for joint
+clearances, the certified engine's bound; for yield, the yield's lower bound against the required
+probability (``Evaluation.violation``).
+
+**The repair.** A GA or NSGA-II may end a hair outside (its penalty and its direction sample see the
+attained value, not the proven bound). :func:`repair_by_scaling` scales the free tolerances by one
+factor s < 1 until the rule holds (every measure is non-decreasing in each tolerance) and reports
+s; :func:`evotol.result.make_result` applies it to every allocator's final design
+(``result.info["feasibility_repair"]``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from evotol import measures
+from evotol.support_bound import certified_max
+
+#: relative tolerance of the feasibility rule (see module docstring)
+FEASIBILITY_RTOL = 1e-6
+#: relative tolerance to which the worst-case bound is tightened before the rule is read
+BOUND_RTOL = 1e-8
+
+
+def tighten_bounds(problem, ev, t: np.ndarray) -> None:
+    """Tighten ``ev.<component>_bound`` of one design ``t`` in place (worst-case measure only).
+
+    Only poses whose grid bound exceeds the requirement × (1 + FEASIBILITY_RTOL) are refined: the
+    others already meet the rule, whatever their exact maximum.
+    """
+    if problem.requirement.measure != "worst_case" or problem.clearances is not None:
+        return
+    shape = None if problem.shape.plain else problem.shape
+    for comp, lim in problem.components:
+        bound = getattr(ev, f"{comp}_bound")
+        value = getattr(ev, comp)
+        if bound is None or value is None:
+            continue
+        coeff = problem.coefficients(comp)
+        D, delta = coeff[1], coeff[2]
+        blocks = problem.blocks[comp]
+        for p in np.flatnonzero(bound[0] > lim * (1 + FEASIBILITY_RTOL)):
+            b, attained = certified_max([B[p:p + 1] for B in blocks], t, D, delta, float(value[0, p]), shape,
+                                        rtol=BOUND_RTOL)
+            bound[0, p] = min(float(bound[0, p]), b)
+            value[0, p] = max(float(value[0, p]), attained)
+
+
+def bound_ratio(problem, ev) -> float:
+    """Largest proven error / requirement over components and poses (1 = exactly at it)."""
+    if problem.requirement.measure == "yield":
+        return float(ev.violation[0] + 1)
+    ratio = -np.inf
+    for comp, lim in problem.components:
+        b = getattr(ev, f"{comp}_bound")
+        if b is None:
+            b = getattr(ev, comp)
+        ratio = max(ratio, float(np.max(b[0])) / lim)
+    return ratio
+
+
+def meets_requirement(problem, ev) -> bool:
+    """The rule (module docstring) for one evaluated design."""
+    return bound_ratio(problem, ev) <= 1 + FEASIBILITY_RTOL
+
+
+def evaluate_proven(problem, t: np.ndarray):
+    """Exact evaluation of one design with its worst-case bound tightened: ``Evaluation``."""
+    ev = problem.evaluate(np.asarray(t, dtype=float)[None])
+    tighten_bounds(problem, ev, np.asarray(t, dtype=float))
+    return ev
+
+
+def repair_by_scaling(problem, t: np.ndarray, ev=None, max_steps: int = 8):
+    """Scale the free tolerances of ``t`` until the rule holds.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+    t : ndarray
+        Full design (n_sources,), SI.
+    ev : Evaluation, optional
+        Its proven evaluation (:func:`evaluate_proven`), if already computed.
+
+    Returns
+    -------
+    (t, ev, info) : tuple
+        The repaired design and its proven evaluation, and ``info`` = ``{"scale": s, "ratio_before":
+        ..., "ratio_after": ...}`` or ``None`` when no repair was needed. When scaling down to the
+        lower bounds cannot meet the rule, ``t`` is returned unchanged with ``info["failed"] = True``
+        (the result is then reported infeasible).
+    """
+    t = np.asarray(t, dtype=float)
+    ev = evaluate_proven(problem, t) if ev is None else ev
+    ratio0 = bound_ratio(problem, ev)
+    if ratio0 <= 1 + FEASIBILITY_RTOL or not np.isfinite(ratio0):
+        return t, ev, None
+    f = problem.free
+    s_total, tt, ratio = 1.0, t.copy(), ratio0
+    for _ in range(max_steps):
+        # aim a little inside: the error is at most linear in the scale for centred intervals
+        s = (1 + 0.5 * FEASIBILITY_RTOL) / ratio if problem.requirement.measure != "yield" else 1 - 2e-3
+        s_total *= s
+        # through the problem's variables: shared members follow their variable, locked sources stay
+        tt = problem.full(np.maximum(t[f] * s_total, problem.lower[f])[None])[0]
+        ev = evaluate_proven(problem, tt)
+        ratio = bound_ratio(problem, ev)
+        if ratio <= 1 + FEASIBILITY_RTOL:
+            return tt, ev, {"scale": s_total, "ratio_before": ratio0, "ratio_after": ratio}
+        if np.all(tt[f] <= problem.lower[f]):
+            break
+    return t, evaluate_proven(problem, t), {"scale": 1.0, "ratio_before": ratio0, "ratio_after": ratio0, "failed": True}
+
+
+__all__ = ["FEASIBILITY_RTOL", "bound_ratio", "meets_requirement", "evaluate_proven", "repair_by_scaling",
+           "tighten_bounds", "measures"]
