@@ -46,6 +46,7 @@ from evotol.allocators.budget import check_budget, cheapest_design
 from evotol.constraints import ConstraintRows, ExactRows, constraint_rows
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
+from evotol.quality_loss import has_quality_loss
 from evotol.result import make_result
 from evotol.threads import single_threaded_blas
 
@@ -116,7 +117,12 @@ class _BoundaryRepair(Repair):
     def _do(self, problem, X, **kwargs):
         P = self.rows.problem
         T = P.full(X)
-        T = boundary_scale(self.rows, T)
+        if has_quality_loss(P):   # cost + loss is not monotone: pull in infeasible designs only
+            out = self.rows.normalised_error(T) > 1
+            if out.any():
+                T[out] = boundary_scale(self.rows, T[out])
+        else:
+            T = boundary_scale(self.rows, T)
         return T[:, P.free]
 
 

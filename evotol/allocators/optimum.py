@@ -9,7 +9,9 @@ then an exact evaluation adds the rows it misses, until none is missing.
 
 Certificate. Multipliers λ >= 0 of the (nearly) active rows are estimated by NNLS on the
 stationarity condition ∇c(t*) + Σ λ_r ∇g_r(t*) = 0 over the free tolerances strictly inside their
-bounds; the relative residual is the **KKT residual**. For any λ >= 0 the Lagrange dual
+bounds; the relative residual is the **KKT residual** (with no active row -- a cost with a
+quality-loss term can have its optimum inside the requirement -- it is |∇c|·|t| / c over those
+tolerances, the relative cost change of a unit relative change of t). For any λ >= 0 the Lagrange dual
     q(λ) = Σ_j min_{lo_j <= t <= hi_j} [c_j(t) + w_j t + v_j t²] − Σ λ + (locked terms),
     w = Aᵀλ, v = Bᵀμ,
 is a proven **lower bound** on the optimum (rows are true constraints, so dropping the others
@@ -123,7 +125,11 @@ def certificate(problem: ToleranceProblem, rows: ConstraintRows, t: np.ndarray, 
     mu[act_b] = coef[act_a.size:]
     cost = float(problem.cost(t))
     lb = dual_bound(problem, rows, lam, mu)
-    return {"lower_bound": lb, "gap": (cost - lb) / cost, "kkt_residual": float(res / max(np.linalg.norm(rhs), 1e-300)),
+    if M.shape[1]:
+        kkt = float(res / max(np.linalg.norm(rhs), 1e-300))
+    else:   # no active row (a cost with a loss term can have its optimum inside): |∇c|·|t| / c
+        kkt = float(res * np.linalg.norm(tf[interior]) / max(abs(cost), 1e-300))
+    return {"lower_bound": lb, "gap": (cost - lb) / cost, "kkt_residual": kkt,
             "active_rows": int(act_a.size + act_b.size), "working_rows": int(rows.n_rows)}
 
 

@@ -83,6 +83,14 @@ def study_units(name: str) -> dict:
         return {"keys": {**_GEOMETRY, **_SYNTHESIS, "h_mm_matching_thesis_r_max": "mm"}, "tables": endpoints}
     if name in ("chase1990-clutch", "process-stack"):
         return {"keys": _PROCESS}
+    if name == "choi2000-clutch":
+        return {"keys": {**_PROCESS, "quality_loss_A": COST + " (loss at the limit)", "quality_loss": COST,
+                         "K_per_rad2": COST + " per rad²", "processes": "index (1-based process id)",
+                         "sensitivities_rad_per_mm": "rad/mm", "measure_over_limit": RELATIVE,
+                         "loss_balance_ratio_A100": RELATIVE, "cage_nominal_mm": "mm", "lower_bound": COST,
+                         "process_choice_part": COST, "tolerance_part": COST, "rtol": RELATIVE,
+                         "max_relative_tolerance_difference": RELATIVE, "front_size": COUNT,
+                         "rss_over_T_A0": RELATIVE, "rss_over_T_A20": RELATIVE, "rss_over_T_A100": RELATIVE}}
     if name == "deng2012-clearalloc":
         return {"keys": {"best_feasible": COST, "ga_vs_doe": RELATIVE + ": (GA - DOE best) / DOE best"}}
     if name == "laramolina2019-5r":

@@ -33,6 +33,8 @@ def _repair(pp, rows, X, iters: int = 25):
     k, T, lo, hi = _decode(pp, X)
     for _ in range(iters):
         ne = rows.normalised_error(T)
+        if pp.loss_coefficients.any():   # cost + loss is not monotone: only pull infeasible designs in
+            ne = np.maximum(ne, 1.0)
         Tn = np.clip(T / ne[:, None], lo, hi)
         if np.allclose(Tn, T, rtol=1e-13, atol=0):
             break

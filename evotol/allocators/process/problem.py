@@ -112,6 +112,46 @@ class ProcessProblem:
         for j, n in enumerate(names):
             for k, p in enumerate(self.processes[n]):
                 self.lo[j, k], self.hi[j, k] = p.lower, p.upper
+        #: per-source coefficients q_j of the expected quality loss Σ q_j t_j² inside the process
+        #: costs (zero unless built by :meth:`with_quality_loss`)
+        self.loss_coefficients = np.zeros(len(names))
+        self.quality_loss_A = None
+
+    def with_quality_loss(self, A) -> "ProcessProblem":
+        """The same problem with every process's cost = machining cost + expected Taguchi loss.
+
+        Parameters
+        ----------
+        A : float or mapping
+            Loss at the limit (cost units) per response (:func:`evotol.quality_loss.loss_coefficients`;
+            K = A / L², σ = t / 3).
+
+        Returns
+        -------
+        ProcessProblem
+            Processes' costs wrapped in :class:`cost_models.quality_loss.QualityLossCost`;
+            ``loss_coefficients`` holds q_j. ``A = 0`` gives the same optimum as this problem.
+
+        Raises
+        ------
+        ValidationError
+            A negative or unknown coefficient; a problem that already carries a loss.
+        """
+        from cost_models.quality_loss import QualityLossCost
+        from evotol.quality_loss import loss_coefficients
+
+        if self.quality_loss_A is not None:
+            raise ValidationError("quality_loss", A, f"a problem without a loss term (this one has A = {self.quality_loss_A})")
+        q = loss_coefficients(self.base, A)
+        procs = {n: [replace(p, cost=QualityLossCost(p.cost, qj)) for p in self.processes[n]] for n, qj in zip(self.names, q)}
+        out = ProcessProblem(self.robot, procs, self.requirement, self.base.poses, n_directions=self.base.n_directions,
+                             check_dominance=False)
+        out.loss_coefficients, out.quality_loss_A = q, A
+        return out
+
+    def quality_loss(self, T) -> np.ndarray:
+        """Expected quality loss Σ_j q_j t_j² of designs T (n, n_sources) SI -> (n,) (0 without a loss term)."""
+        return np.atleast_2d(np.asarray(T, dtype=float)) ** 2 @ self.loss_coefficients
 
     # --- basics -----------------------------------------------------------------------------------
     @property
