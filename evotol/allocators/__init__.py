@@ -18,7 +18,11 @@ On a :class:`evotol.allocators.process.ProcessProblem` (process *and* tolerance 
 * :func:`allocate_process_baselines` – a dict of the textbook rules on the cheapest feasible processes;
 * :func:`process_front` – NSGA-II cost vs. error or vs. yield: a :class:`ParetoFront`.
 
-Every allocator takes the problem first and its options by keyword.
+Every allocator has one shape: ``allocate_x(problem, *, budget=None, seed=..., **options)`` -- the
+problem first, everything else by keyword (``seed`` where the method is random; ``budget`` selects
+*best accuracy at a budget*, and is refused with a one-line error by the methods that have no such
+mode: NSGA-II, whose front spans every budget, and the polyblock bracket). What *feasible* means in
+every result is one rule, :mod:`evotol.feasibility`.
 """
 from evotol.allocators.baselines import allocate_equal, allocate_lagrange, allocate_proportional
 from evotol.allocators.ga import allocate_ga
