@@ -25,7 +25,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from cost_models.base import CostModel
-from evotol import clearances as clearance_measure, distributions, measures, statistical
+from evotol import clearances as clearance_measure, distributions, measures, plausibility, statistical
 from evotol.errors import InfeasibleError, ValidationError
 from robots.base import RobotErrorModel
 
@@ -302,6 +302,7 @@ class ToleranceProblem:
         self._coeff_cache: dict[str, tuple] = {}
         self._mc_cache = None
         self._yield_cache = None
+        plausibility.warn(plausibility.problem_warnings(self))      # unit slips (issue 27): one line each
 
     def _check_pose_set(self, poses) -> np.ndarray:
         if poses is None or (hasattr(poses, "__len__") and len(poses) == 0):

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from evotol import feasibility
+from evotol import feasibility, plausibility
 from evotol.problem import Evaluation, ToleranceProblem
 
 
@@ -169,5 +169,10 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
         within = bool(cost <= budget * (1 + 1e-9))
         feasible = within and in_bounds
         info.update({"budget": float(budget), "within_budget": within, "meets_requirement": meets})
-    return AllocationResult(method, problem, dict(zip(problem.names, t.tolist())), cost,
-                            feasible, ev, history, certificate, seconds, info)
+    result = AllocationResult(method, problem, dict(zip(problem.names, t.tolist())), cost,
+                              feasible, ev, history, certificate, seconds, info)
+    lines = plausibility.result_warnings(problem, result)      # unit slips, an inactive requirement (issue 27)
+    if lines:
+        result.info["warnings"] = lines
+        plausibility.warn(lines)
+    return result

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import cost_models
-from evotol import clearances
+from evotol import clearances, plausibility
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_monotone, allocate_nsga2,
                                allocate_optimum, allocate_sensitivity)
 from evotol.allocators.budget import check_budget
@@ -274,7 +274,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     summary = {"name": name, "problem": problem.describe(), "seed": seed,
                "results": {m: r.to_dict() for m, r in results.items()}, "monte_carlo": checks,
                "seconds": time.perf_counter() - t0, "interrupted": bool(stopped),
-               "units": units_block(problem)}   # docs/units.md
+               "units": units_block(problem),   # docs/units.md
+               "warnings": plausibility.study_warnings(problem, results.values())}   # unit slips (issue 27)
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
     if front is not None:
@@ -285,6 +286,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
                  + (f"; not run: {', '.join(skipped)}" if skipped else "")
                  + ". The results below are what was computed until then; a GA or NSGA-II that was "
                    "stopped reports its best design so far.")
+    for line in summary["warnings"]:
+        rep.text(f"Warning: {line}", note=True)
     rep.heading("Allocations")
     rows = [[n] + [results[m].tolerances[n] for m in results] for n in problem.names]
     rows.append(["cost"] + [results[m].cost for m in results])

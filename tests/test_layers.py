@@ -41,6 +41,7 @@ LAYERS = {
     "cost_models": 1, "robots": 1,
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2, "evotol.feasibility": 2, "evotol.support_bound": 2,
     "evotol.distributions": 2, "evotol.statistical": 2, "evotol.clearances": 2, "evotol.quality_loss": 2,
+    "evotol.plausibility": 2,
     "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3, "evotol.refinement": 3,
     "evotol.montecarlo": 4, "evotol.nonlinear": 4,
     "evotol.reporting": 5,
