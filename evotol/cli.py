@@ -158,7 +158,7 @@ def cmd_run(args) -> int:
     study_file = input_file(args.study_file, "study file", "a study TOML file")
     out = output_folder(args.out if args.out is not None else study_file.parent, "--out")
     with reported():                    # unit slips, an inactive requirement: one line each (issue 27)
-        summary = run_study_file(study_file, out=out, seed=args.seed, keep_going=args.keep_going)
+        summary = run_study_file(study_file, out=out, seed=args.seed, keep_going=args.keep_going, force=args.force)
     _print_results(summary)
     print(f"[evotol] wrote {summary['html']} and {summary['json']}")
     if summary.get("interrupted"):
@@ -227,6 +227,8 @@ def build_parser() -> argparse.ArgumentParser:
     u.add_argument("--keep-going", action="store_true",
                    help="Ctrl-C stops only the running method (a GA keeps its best design so far); the "
                         "remaining methods still run and the exit code is 0 (default: stop, exit code 130)")
+    u.add_argument("--force", action="store_true",
+                   help="overwrite the files of another study with the same name in the output folder (default: refuse)")
     u.set_defaults(func=cmd_run)
 
     ls = sub.add_parser("list", help="list the reproducible studies")

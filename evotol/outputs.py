@@ -7,6 +7,7 @@ location is a one-line :class:`~evotol.errors.ValidationError` naming the option
 """
 from __future__ import annotations
 
+import json
 import os
 import tempfile
 from pathlib import Path
@@ -71,3 +72,43 @@ def input_file(path, field: str, expected: str = "an existing file") -> Path:
     if not os.access(p, os.R_OK):
         raise ValidationError(field, shown, f"{expected} that can be read (permission denied)")
     return p
+
+
+def check_not_overwriting(out: Path, name: str, study_file, force: bool = False) -> None:
+    """Refuse to overwrite another study's files in ``out`` (issue 27 item 4).
+
+    ``evotol run`` writes ``NAME.json`` and ``NAME.html``; its JSON records ``study_file``, the
+    resolved path of the study file that wrote them. The same study file may write again (an
+    edited and re-run study keeps its place); files recorded by another study file, or without
+    that record (a seed study's, an earlier evotol's), are refused unless ``force``.
+
+    Parameters
+    ----------
+    out : Path
+        The output folder.
+    name : str
+        The study's ``name`` (the files' stem).
+    study_file : str or Path
+        The study file about to write.
+    force : bool
+        Overwrite on purpose (``evotol run --force``).
+
+    Raises
+    ------
+    ValidationError
+        Naming ``--out``, the files there and the study file that wrote them.
+    """
+    existing = [p for p in (Path(out) / f"{name}.json", Path(out) / f"{name}.html") if p.exists()]
+    if force or not existing:
+        return
+    owner = None
+    try:
+        owner = json.loads((Path(out) / f"{name}.json").read_text(encoding="utf-8")).get("study_file")
+    except (OSError, ValueError, AttributeError):
+        pass
+    if owner is not None and owner == str(Path(study_file).resolve()):
+        return
+    who = f"by the study file {owner}" if owner else "by another study (no study file recorded)"
+    raise ValidationError("--out", str(out), f"a folder without another study's files: {' and '.join(p.name for p in existing)} "
+                                             f"there were written {who}; pass --force to overwrite them, or give this study "
+                                             f"another name (name = {name!r}) or another --out")

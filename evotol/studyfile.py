@@ -29,6 +29,7 @@ from evotol.errors import ValidationError
 from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
+from evotol.outputs import check_not_overwriting
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report
 from evotol.studies import StudyResult, write_outputs
@@ -206,7 +207,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
                             clearances=cl)
 
 
-def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
+def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: bool = False) -> dict:
     """Run the study; Ctrl-C stops the running method (GA/NSGA-II keep their best so far), skips the
     remaining ones unless ``keep_going``, and the partial results are still written, marked
     ``"interrupted": true`` in the JSON and in the report's header (issue 15)."""
@@ -221,6 +222,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
     seed = spec.get("seed", 0) if seed is None else seed
     name = spec.get("name", path.stem)
     out = Path(out) if out else path.parent
+    check_not_overwriting(out, name, path, force)     # another study's files (issue 27); before any work
     problem = load_problem(spec, base_dir=path.parent)
     methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None   # no sensitivity rule
                        else {"sensitivity": {}, "optimum": {}, "ga": {}})
@@ -271,7 +273,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False) -> dict:
                 ctrl_c.count = max(ctrl_c.count, before + 1)
             if ctrl_c.count > before:
                 stopped.append(f"verify {m}")
-    summary = {"name": name, "problem": problem.describe(), "seed": seed,
+    summary = {"name": name, "study_file": str(path.resolve()), "problem": problem.describe(), "seed": seed,
                "results": {m: r.to_dict() for m, r in results.items()}, "monte_carlo": checks,
                "seconds": time.perf_counter() - t0, "interrupted": bool(stopped),
                "units": units_block(problem),   # docs/units.md

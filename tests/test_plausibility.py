@@ -12,7 +12,6 @@ from __future__ import annotations
 import json
 import math
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,9 +21,8 @@ from evotol.allocators import allocate_sensitivity
 from evotol.cli import main
 from evotol.plausibility import PlausibilityWarning, problem_warnings, result_warnings
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from tests.fast_study import fast_study
 from tests.toy_robot import ToyRobot
-
-EXAMPLE = Path(__file__).resolve().parents[1] / "reports" / "studies" / "ucr3_example.toml"
 
 
 def _problem(position=1e-3, orientation=None, upper=1e-3, lower=1e-6, measure="rss"):
@@ -107,15 +105,7 @@ def test_assembly_requirement_is_a_ratio_and_not_flagged():
 
 # --- evotol run: the same lines on stderr, in the JSON and in the report ------------------------
 def _study(tmp_path, *edits):
-    text = EXAMPLE.read_text()
-    for old, new in (("grid = [5, 5, 3]", "grid = [2, 2, 2]"), ("n_samples = 500", "n_samples = 20"),
-                     ("optimum = {}\n", ""), ("ga = { pop_size = 60, n_gen = 60 }\n", ""),
-                     ("nsga2 = { pop_size = 60, n_gen = 60 }\n", "")) + edits:
-        assert old in text, old
-        text = text.replace(old, new)
-    f = tmp_path / "study.toml"
-    f.write_text(text)
-    return f
+    return fast_study(tmp_path, *edits)
 
 
 STUDY_WARNING_CASES = {   # study-file edit: strings of the one line (stderr, JSON, report)
