@@ -31,6 +31,8 @@ from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.outputs import check_not_overwriting
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.process_studyfile import front_figure, run_process_study
+from evotol.quality_loss import with_quality_loss
 from evotol.reporting import Report
 from evotol.studies import StudyResult, write_outputs
 from evotol.units import units_block
@@ -41,7 +43,7 @@ from robots.mechanism.model import model_from_table
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange, "monotone": allocate_monotone}
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
-            "methods", "verify", "distribution", "sigma_k", "clearances")
+            "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes")
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
@@ -163,6 +165,9 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     """Build the problem from a parsed study file (dict); ``base_dir``: where relative files
     (``[robot] mechanism = "my_robot.toml"``) are looked up."""
     check_study_keys(spec)
+    if "processes" in spec:
+        raise ValidationError("processes", sorted(spec["processes"]), "no [processes.*] here: a process-selection study "
+                              "is read by evotol.process_studyfile.load_process_problem (evotol run does so)")
     rs = dict(spec.get("robot", {}))
     if "mechanism" in rs or "urdf" in rs:       # a description (robots/mechanism, docs/mechanisms.md); its
         robot = model_from_table(rs, base_dir)  # [robot.assembly] table is the assembly configuration
@@ -203,8 +208,10 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     tol = {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec) for s in sourced.sources}
     req = Requirement(**spec.get("requirement", {}))
     shared = spec.get("shared")
-    return ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"),
-                            clearances=cl)
+    problem = ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"),
+                               clearances=cl)
+    # quality_loss = A (or {response = A}): machining cost + Taguchi loss (docs/process_selection.md)
+    return with_quality_loss(problem, spec["quality_loss"]) if "quality_loss" in spec else problem
 
 
 def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: bool = False) -> dict:
@@ -223,6 +230,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     name = spec.get("name", path.stem)
     out = Path(out) if out else path.parent
     check_not_overwriting(out, name, path, force)     # another study's files (issue 27); before any work
+    if "processes" in spec:     # process selection: [processes.<dimension>] (evotol/process_studyfile.py)
+        return run_process_study(spec, path, out, seed, load_problem)
     problem = load_problem(spec, base_dir=path.parent)
     methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None   # no sensitivity rule
                        else {"sensitivity": {}, "optimum": {}, "ga": {}})
@@ -312,10 +321,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
             fig.update_layout(title=f"{m} convergence", xaxis_title="generation", yaxis_title="fitness", yaxis_type="log")
             rep.figure(fig)
     if front is not None:
-        import plotly.graph_objects as go
-        fig = go.Figure(go.Scatter(x=front.error, y=front.cost, mode="markers", name="NSGA-II"))
-        fig.update_layout(title="Cost vs. normalised error", xaxis_title="max error / bound", yaxis_title="cost")
-        rep.figure(fig)
+        front_figure(rep, front)
     paths = write_outputs(name, out, StudyResult(summary), rep)
     summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary

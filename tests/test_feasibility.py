@@ -104,6 +104,14 @@ SMALL = {"ga": {"pop_size": 20, "n_gen": 8}}
 @pytest.mark.parametrize("path", [p for p in EXAMPLES if p.name != "ucr3_yield.toml"], ids=lambda p: p.stem)
 def test_every_allocator_meets_the_rule_on_every_shipped_example(path):
     spec = tomllib.loads(path.read_text())
+    if "processes" in spec:            # process selection: the same rule on the exact response stack
+        from evotol.process_studyfile import METHODS as PROCESS_METHODS, load_process_problem
+        pp = load_process_problem(spec, load_problem, base_dir=path.parent)
+        for m in ("optimum", "ga"):
+            res = PROCESS_METHODS[m](pp, **({"pop_size": 20, "n_gen": 8} if m == "ga" else {}))
+            t = np.array([res.tolerances[n] for n in pp.names])
+            assert res.feasible and float(pp.normalised_error(t)[0]) <= 1 + FEASIBILITY_RTOL, m
+        return
     problem = load_problem(spec, base_dir=path.parent)
     methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None
                        else {"sensitivity": {}, "optimum": {}, "ga": {}})

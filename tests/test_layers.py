@@ -45,7 +45,7 @@ LAYERS = {
     "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3, "evotol.refinement": 3,
     "evotol.montecarlo": 4, "evotol.nonlinear": 4,
     "evotol.reporting": 5,
-    "evotol.studies": 6, "evotol.studyfile": 6,
+    "evotol.studies": 6, "evotol.studyfile": 6, "evotol.process_studyfile": 6,
     "evotol.cli": 7, "evotol.commands": 7, "evotol.arguments": 7, "evotol.__main__": 7,
 }
 NAMES = ["foundation", "models", "problem", "allocators", "verification", "reporting", "studies", "cli"]

@@ -1,0 +1,200 @@
+"""Process selection from a study file: ``[processes.<dimension>]`` tables (docs/process_selection.md).
+
+A study file with a ``processes`` table is a process-selection study: every source (dimension)
+lists its candidate processes, each with a ``name``, a ``cost`` model (as in ``[cost.*]``: a table
+with ``model`` and its coefficients), a tolerance range ``lower``/``upper`` (SI) and an optional
+``fixed_cost`` (set-up cost, cost units). Two spellings, both TOML::
+
+    [[processes.X1]]                       # an array of tables, each with its name
+    name = "turn"
+    cost = { model = "power", a0 = 0.5, a1 = 1.0, scale = 1e-3 }
+    lower = 6e-5
+    upper = 1.5e-4
+    fixed_cost = 5.0
+
+    [processes.X2.grind]                   # or a table per process, named by its key
+    cost = { model = "power", a0 = 0.25, a1 = 1.0, scale = 1e-3 }
+    lower = 2e-5
+    upper = 1.5e-4
+
+The robot (an assembly function or any robot), the poses and the requirement are read as for an
+ordinary study (:func:`evotol.studyfile.load_problem`); ``quality_loss`` adds the Taguchi loss
+(``docs/process_selection.md``, "Quality loss"). ``[methods]`` takes ``optimum`` (branch and
+bound, :func:`allocate_process_optimum`; ``method = "enumerate"`` for all combinations), ``ga``,
+``baselines`` and ``nsga2`` (:func:`process_front`), with the keyword arguments of those functions;
+the outputs are the same JSON/HTML pair as every study.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+import cost_models
+from evotol.allocators.process import (Process, ProcessProblem, allocate_process_baselines, allocate_process_ga,
+                                       allocate_process_optimum, process_front)
+from evotol.errors import ValidationError
+from evotol.keywords import check_keywords, unknown_key_message
+from evotol.reporting import Report
+from evotol.studies import StudyResult, write_outputs
+from evotol.units import units_block
+
+PROCESS_KEYS = ("name", "cost", "lower", "upper", "fixed_cost")
+METHODS = {"optimum": allocate_process_optimum, "ga": allocate_process_ga, "baselines": allocate_process_baselines,
+           "nsga2": process_front}
+DEFAULT_METHODS = {"optimum": {}, "ga": {}, "baselines": {}}
+
+
+def _number(field: str, v, what: str) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ValidationError(field, v, what)
+    return float(v)
+
+
+def parse_process(field: str, name: str, table) -> Process:
+    """One process from its table (``field`` names it in errors: ``processes.X1.turn``)."""
+    if not isinstance(table, dict):
+        raise ValidationError(field, table, f"a table with keys among {list(PROCESS_KEYS)}")
+    for k in table:
+        if k not in PROCESS_KEYS:
+            raise ValidationError(f"{field}.{k}", table[k], unknown_key_message(k, PROCESS_KEYS))
+    for k in ("cost", "lower", "upper"):
+        if k not in table:
+            raise ValidationError(f"{field}.{k}", None, "a value (cost: a cost-model table; lower/upper: SI tolerances)")
+    if not isinstance(table["cost"], dict):
+        raise ValidationError(f"{field}.cost", table["cost"], "a cost-model table, e.g. { model = \"power\", a0 = 0.5, a1 = 1 }")
+    try:
+        cost = cost_models.from_dict(table["cost"])
+    except ValidationError as exc:
+        raise ValidationError(f"{field}.cost: {exc.field}", exc.value, exc.expected) from None
+    return Process(str(name), cost, _number(f"{field}.lower", table["lower"], "a positive tolerance (SI)"),
+                   _number(f"{field}.upper", table["upper"], "a positive tolerance (SI)"),
+                   _number(f"{field}.fixed_cost", table.get("fixed_cost", 0.0), "a cost >= 0"))
+
+
+def parse_processes(table, source_names) -> dict[str, list[Process]]:
+    """``[processes]``: source name -> list of :class:`Process` (both spellings of the module docstring)."""
+    if not isinstance(table, dict):
+        raise ValidationError("processes", table, "a table [processes.<dimension>] per source")
+    out = {}
+    for src, entry in table.items():
+        if src not in source_names:
+            raise ValidationError(f"processes.{src}", src, unknown_key_message(src, list(source_names)))
+        if isinstance(entry, list):
+            procs = []
+            for i, p in enumerate(entry):
+                if not isinstance(p, dict) or "name" not in p:
+                    raise ValidationError(f"processes.{src}[{i}].name", None, "a process name")
+                procs.append(parse_process(f"processes.{src}[{i}]", p["name"], p))
+        elif isinstance(entry, dict):
+            procs = [parse_process(f"processes.{src}.{n}", p.get("name", n) if isinstance(p, dict) else n, p)
+                     for n, p in entry.items()]
+        else:
+            raise ValidationError(f"processes.{src}", entry, "[[processes.NAME]] tables or [processes.NAME.PROCESS] tables")
+        out[src] = procs
+    return out
+
+
+def load_process_problem(spec: dict, load_problem, base_dir=None) -> ProcessProblem:
+    """The :class:`ProcessProblem` of a study file with a ``processes`` table.
+
+    The geometry (robot, poses, requirement) comes from ``load_problem`` (the study-file reader,
+    :func:`evotol.studyfile.load_problem`, passed in by its caller) with the processes' ranges as
+    bounds and a placeholder cost (never used: every process brings its own cost).
+
+    Raises
+    ------
+    ValidationError
+        A bad ``processes`` table (naming ``processes.SOURCE...``), ``cost``/``bounds`` given
+        beside ``processes``, or anything :func:`load_problem` refuses.
+    """
+    for k in ("cost", "bounds"):
+        if k in spec:
+            raise ValidationError(k, spec[k], "nothing in a process-selection study (costs and ranges come from [processes.*])")
+    rs = spec.get("robot", {})
+    names = list(rs.get("nominal", {})) if "assembly" in rs else None
+    procs_raw = spec["processes"]
+    if names is not None:
+        procs = parse_processes(procs_raw, names)
+    else:
+        procs = None
+    geo = {k: v for k, v in spec.items() if k not in ("processes", "quality_loss", "methods")}
+    geo["cost"] = {"default": {"model": "power", "a0": 1.0, "a1": 1.0, "scale": 1.0}}
+    if procs is not None:
+        geo["sources"] = {n: {"lower": min(p.lower for p in ps), "upper": max(p.upper for p in ps)}
+                          for n, ps in procs.items() if ps}
+    base = load_problem(geo, base_dir)
+    if procs is None:
+        procs = parse_processes(procs_raw, base.names)
+    pp = ProcessProblem(base.robot, procs, base.requirement, base.poses)
+    if "quality_loss" in spec:
+        pp = pp.with_quality_loss(spec["quality_loss"])
+    return pp
+
+
+def _result_dict(pp: ProcessProblem, r) -> dict:
+    d = r.to_dict()
+    t = np.array([r.tolerances[n] for n in pp.names])
+    d["quality_loss"] = float(pp.quality_loss(t)[0])
+    d["machining_cost"] = r.cost - d["quality_loss"]
+    return d
+
+
+def run_process_study(spec: dict, path: Path, out, seed: int, load_problem) -> dict:
+    """Run the methods of a process-selection study file and write ``NAME.json`` / ``NAME.html``
+    (``load_problem``: the study-file reader of the geometry, see :func:`load_process_problem`)."""
+    t0 = time.perf_counter()
+    name = spec.get("name", path.stem)
+    pp = load_process_problem(spec, load_problem, base_dir=path.parent)
+    methods = spec.get("methods", DEFAULT_METHODS)
+    for m, kw in methods.items():
+        if m not in METHODS:
+            raise ValidationError(f"methods.{m}", m, unknown_key_message(m, sorted(METHODS)))
+        check_keywords(METHODS[m], kw, f"methods.{m}", exclude=("pp",))
+    results, front = {}, None
+    for m, kw in methods.items():
+        print(f"[evotol] {m} ...", flush=True)
+        kw = dict(kw)
+        if m in ("ga", "nsga2"):
+            kw.setdefault("seed", seed)
+        if m == "baselines":
+            results.update({f"baseline {k}": r for k, r in allocate_process_baselines(pp, **kw).items()})
+        elif m == "nsga2":
+            front = process_front(pp, **kw)
+        else:
+            results[m] = METHODS[m](pp, **kw)
+    summary = {"name": name, "problem": pp.describe(), "seed": seed,
+               "results": {m: _result_dict(pp, r) for m, r in results.items()},
+               "seconds": time.perf_counter() - t0, "units": units_block(pp.base)}
+    if front is not None:
+        summary["pareto_front"] = front.table.to_dict(orient="list")
+    rep = Report(f"evotol process-selection study: {name}",
+                 f"{pp.robot.name}, {pp.n_sources} sources, {pp.n_combinations} process combinations, "
+                 f"measure {pp.requirement.measure}" + (f", quality loss A = {pp.quality_loss_A}" if pp.quality_loss_A else ""))
+    rep.heading("Allocations")
+    rows = [[f"{n} (process)"] + [r.processes[n] for r in results.values()] for n in pp.names]
+    rows += [[f"{n} (t, SI)"] + [r.tolerances[n] for r in results.values()] for n in pp.names]
+    for key in ("machining_cost", "quality_loss"):
+        rows.append([key.replace("_", " ")] + [summary["results"][m][key] for m in results])
+    rows.append(["total cost"] + [r.cost for r in results.values()])
+    rows.append(["max error / limit"] + [r.normalised_error for r in results.values()])
+    rows.append(["feasible"] + [r.feasible for r in results.values()])
+    rep.table(rows, ["", *results])
+    if "optimum" in results and results["optimum"].certificate:
+        c = results["optimum"].certificate
+        rep.text(f"Certificate: {c['proof']}; incumbent {c['incumbent']:.6g}, leaf duality gap {c['leaf_gap']:.2e}.", note=True)
+    if front is not None:
+        front_figure(rep, front)
+    paths = write_outputs(name, out, StudyResult(summary), rep)
+    summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
+    return summary
+
+
+def front_figure(rep: Report, front) -> None:
+    """Add the cost vs. normalised error scatter of a :class:`evotol.pareto.ParetoFront` to a study report."""
+    import plotly.graph_objects as go
+
+    fig = go.Figure(go.Scatter(x=front.error, y=front.cost, mode="markers", name="NSGA-II"))
+    fig.update_layout(title="Cost vs. normalised error", xaxis_title="max error / requirement", yaxis_title="cost")
+    rep.figure(fig)
