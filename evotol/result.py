@@ -126,7 +126,7 @@ class AllocationResult:
 
 
 def make_result(problem: ToleranceProblem, method: str, t, *, history=None, certificate=None,
-                seconds: float = 0.0, info=None, budget: float | None = None, repair: bool = False) -> AllocationResult:
+                seconds: float = 0.0, info=None, budget: float | None = None, repair: bool | float = False) -> AllocationResult:
     """Evaluate design ``t`` exactly and wrap it as an :class:`AllocationResult`.
 
     Parameters
@@ -139,10 +139,12 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
     budget : float, optional
         Budget mode: ``feasible`` then means within the bounds and the budget, and whether the
         requirement is met is ``info["meets_requirement"]`` (issue 15: "feasible" must mean what it says).
-    repair : bool
+    repair : bool or float
         An allocator's final design: when it misses the rule of :mod:`evotol.feasibility` (proven
-        bound ≤ requirement × (1 + 1e-6)) by a hair, scale its free tolerances until it holds;
-        the scale is reported in ``info["feasibility_repair"]``. Not in budget mode.
+        bound ≤ requirement × (1 + 1e-6)), scale its free tolerances until it holds; the scale is
+        reported in ``info["feasibility_repair"]``. ``True``: only a miss up to
+        ``feasibility.REPAIR_MAX`` (a rule's answer a hair outside); a float: up to that relative
+        miss (``inf`` for search methods). Not in budget mode.
 
     Returns
     -------
@@ -154,7 +156,8 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
     ev = feasibility.evaluate_proven(problem, t)
     info = dict(info or {})
     if repair and budget is None:
-        t, ev, fix = feasibility.repair_by_scaling(problem, t, ev)
+        t, ev, fix = feasibility.repair_by_scaling(problem, t, ev,
+                                                   max_miss=feasibility.REPAIR_MAX if repair is True else float(repair))
         if fix is not None:
             info["feasibility_repair"] = fix
     f = problem.free

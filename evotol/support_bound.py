@@ -63,7 +63,8 @@ def _children_arcs(C: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 
 def certified_max(blocks_p: list[np.ndarray], t: np.ndarray, D: np.ndarray, delta: float, attained: float,
-                  shape=None, rtol: float = 1e-9, max_rounds: int = 40, max_caps: int = 200_000) -> tuple[float, float]:
+                  shape=None, rtol: float = 1e-9, max_rounds: int = 40, max_caps: int = 200_000,
+                  return_direction: bool = False):
     """Proven upper bound and attained value of max_{|u|=1} h(u) at one pose.
 
     Parameters
@@ -82,15 +83,24 @@ def certified_max(blocks_p: list[np.ndarray], t: np.ndarray, D: np.ndarray, delt
     rtol : float
         Stop when the bound is within ``rtol`` (relative) of the best attained value.
 
+    return_direction : bool
+        Also return the direction (3,) where ``attained`` was reached (``None`` when the value
+        passed in was not beaten).
+
     Returns
     -------
-    (bound, attained) : tuple of float
+    (bound, attained[, direction]) : tuple
         ``attained ≤ max h ≤ bound`` (SI); ``bound`` is within ``rtol`` of ``attained`` unless
         ``max_rounds`` or ``max_caps`` stopped the search first.
     """
     t = np.asarray(t, dtype=float)
+    best_u = [None]
+
+    def out(bound, L):
+        return (bound, L, best_u[0]) if return_direction else (bound, L)
+
     if delta <= 0:                      # a single exact direction (z-only output)
-        return float(attained), float(attained)
+        return out(float(attained), float(attained))
     planar = bool(np.all(D[:, 2] == 0))
     symmetric = shape is None or shape.centred
     C = np.concatenate([D, -D]) if symmetric else D
@@ -98,14 +108,18 @@ def certified_max(blocks_p: list[np.ndarray], t: np.ndarray, D: np.ndarray, delt
     L = float(attained)
     for _ in range(max_rounds):
         h = _h(blocks_p, t, C, shape)
-        L = max(L, float(h.max(initial=-np.inf)))
+        k = int(np.argmax(h))
+        if h[k] > L:
+            L, best_u[0] = float(h[k]), C[k].copy()
         ub = h / np.cos(r)
         live = ub > L * (1 + rtol)
         if not live.any():
-            return max(L, float(ub.max(initial=L))) if False else L * (1 + 0.0) if ub.size == 0 else max(L, min(float(ub.max()), L * (1 + rtol))), L
+            return out(max(L, float(ub.max())), L)
         if live.sum() * SPLIT * SPLIT > max_caps:
-            return float(ub[live].max()), L
+            return out(float(ub[live].max()), L)
         C, r = (_children_arcs if planar else _children_caps)(C[live], r[live])
     h = _h(blocks_p, t, C, shape)
-    L = max(L, float(h.max()))
-    return float(max(L, (h / np.cos(r)).max())), L
+    k = int(np.argmax(h))
+    if h[k] > L:
+        L, best_u[0] = float(h[k]), C[k].copy()
+    return out(float(max(L, (h / np.cos(r)).max())), L)

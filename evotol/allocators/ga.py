@@ -299,7 +299,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
 
         best, refinement = hold_on_workspace(problem, best, **({} if refine is True else dict(refine)))
     name = "GA" if budget is None else "GA (best accuracy at budget)"
-    return make_result(problem, name, best, history=history, seconds=time.perf_counter() - t0, budget=budget, repair=True,
+    return make_result(problem, name, best, history=history, seconds=time.perf_counter() - t0, budget=budget, repair=np.inf,
                        info={"operators": operators, "repair": bool(repair), "pop_size": pop_size, "n_gen": n_gen,
                              "seed": seed, "penalty": penalty, "interrupted": interrupted,
                              "initial_best": float(history["best_fitness"].iloc[0]) if len(history) else np.nan,

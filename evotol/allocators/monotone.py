@@ -173,4 +173,4 @@ def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None,
             "solver": "polyblock (monotonic optimisation, Tuy 2000)", "evaluations": res["evaluations"],
             "vertices": res["vertices"], "rounds": res["rounds"], "converged": res["converged"]}
     return make_result(problem, "optimum bracket (polyblock)", res["t"], certificate=cert,
-                       seconds=time.perf_counter() - t0, repair=True)
+                       seconds=time.perf_counter() - t0, repair=np.inf)
