@@ -21,7 +21,6 @@ equations and scaled back into the set (:func:`evotol.clearances.sample_twists`)
 """
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
 
@@ -32,6 +31,7 @@ from evotol.distributions import METHODS
 from evotol.errors import ValidationError
 from evotol.nonlinear import verify_nonlinear
 from evotol.problem import ToleranceProblem
+from evotol.progress import progress_bar
 from evotol.statistical import pose_error_nan
 from evotol.threads import single_threaded_blas
 
@@ -154,9 +154,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     inside_nl = np.zeros(P) if exceed_nl else None
     lin_err, lin_scale = 0.0, 0.0
     rows = {"position": slice(0, 3), "orientation": slice(3, 6)}
-    from tqdm.auto import tqdm
-    bar = tqdm(total=P, desc="Monte Carlo", unit="pose", leave=False,
-               disable=(not sys.stderr.isatty()) if progress is None else not progress)
+    bar = progress_bar(P, "Monte Carlo", "pose", progress, size=f"{P} poses × {n_samples} samples"
+                       + (" (nonlinear model)" if exceed_nl else ""))
     for start in range(0, P, chunk_poses):
         idx = np.arange(start, min(start + chunk_poses, P))
         E = np.empty((idx.size, n_samples, robot.n_columns))

@@ -1,5 +1,10 @@
 """Progress a log file can show: periodic lines while a study runs, when no terminal is attached.
 
+:func:`progress_bar` is the one progress display of the long methods (GA, NSGA-II, Monte Carlo):
+a tqdm bar on a terminal; with ``progress=True`` and no terminal (``evotol run ... > log``), a
+line every ``every`` seconds with the count, the elapsed time and the time left -- the same tqdm
+object, so callers only ``update()`` (issue 27 item 5).
+
 Progress bars (tqdm) switch themselves off when stdout is not a terminal, so ``evotol reproduce
 yao2013 > log`` used to print nothing for 28 s (issue 15). :class:`Heartbeat` prints one line
 every ``every`` seconds -- elapsed time and the expected time of a full run -- from a daemon
@@ -16,6 +21,8 @@ from __future__ import annotations
 import sys
 import threading
 import time
+
+from tqdm.auto import tqdm
 
 EXPECTED_SECONDS = {
     "brahmia2023-delta": 42, "chase1990-clutch": 5, "deng2012-5bar": 21, "deng2012-clearalloc": 9,
@@ -62,3 +69,103 @@ class Heartbeat:
         if self._thread is not None:
             self._thread.join(timeout=1.0)
         return False
+
+
+#: one line of :func:`progress_bar` off a terminal
+LINE_FORMAT = "{desc}: {n_fmt}/{total_fmt} {unit} ({percentage:.0f} %), {elapsed} elapsed, about {remaining} left{postfix}"
+
+
+def _seconds(s: float) -> str:
+    return f"{s:.0f} s" if s < 100 else f"{s / 60:.1f} min"
+
+
+class _Estimate:
+    """After the first step, one line: the method's size and its time estimated from that step
+    (``GA: 60 generations × 60 designs × 75 poses; about 45 s (the first 1 gen took 0.75 s)``), when the
+    estimate is at least ``delay`` s (a short run says nothing)."""
+
+    size = ""
+
+    def update(self, n=1):
+        if self.n == 0 and n and not self.disable and self.total:      # the first step: state the estimate
+            elapsed = self._time() - self.start_t
+            total = elapsed / n * self.total
+            if total >= self.delay:
+                self.say(f"{self.desc}: {self.size + '; ' if self.size else ''}about {_seconds(total)} "
+                         f"(from the first {n} {self.unit}: {elapsed:.2g} s)")
+        return super().update(n)
+
+    def say(self, text: str) -> None:
+        self.write(text, file=self.fp)
+
+
+class _Bar(_Estimate, tqdm):
+    """A tqdm bar with the estimate line."""
+
+
+class _Lines(_Estimate, tqdm):
+    """A tqdm that prints a new line at each display (at most every ``mininterval`` s) instead of
+    redrawing one with carriage returns: readable in a log file."""
+
+    def say(self, text: str) -> None:
+        self.fp.write(f"[evotol] {text}\n")
+        self.fp.flush()
+
+    def display(self, msg=None, pos=None, force: bool = False):
+        if msg == "" or not self.n:       # clearing a bar, or nothing done yet: nothing to say in a log
+            return False
+        now = self._time()                # set_postfix() refreshes at every step: at most a line per interval
+        if not force and now - getattr(self, "_said", getattr(self, "start_t", now)) < self.mininterval:
+            return True
+        self._said = now
+        self.say(self.__str__() if msg is None else msg)
+        return True
+
+    def close(self):
+        elapsed = self._time() - getattr(self, "start_t", self._time())
+        if not self.disable and self.n and elapsed >= self.delay:     # how far it got, in how long
+            post = f", {self.postfix}" if self.postfix else ""
+            self.say(f"{self.desc}: {self.n}/{self.total} {self.unit} in {_seconds(elapsed)}{post}")
+        super().close()
+
+
+def progress_bar(total: int, desc: str, unit: str, progress: bool | None = None, size: str = "", stream=None,
+                 every: float = 10.0, delay: float = 2.0) -> tqdm:
+    """The progress display of a long method (see the module docstring).
+
+    Parameters
+    ----------
+    total : int
+        Steps of the method (generations, poses).
+    desc, unit : str
+        What runs (``"GA"``) and what a step is (``"gen"``).
+    progress : bool or None
+        None: a bar on a terminal, nothing otherwise; True: a bar on a terminal, a line every
+        ``every`` s otherwise; False: nothing.
+    size : str
+        The method's size, stated with the time estimate after the first step
+        (``"60 generations x 60 designs x 75 poses"``).
+    stream : file, optional
+        Where to write (default: stderr, whose ``isatty()`` decides).
+    every : float
+        Seconds between lines off a terminal (the first after ``every`` s).
+    delay : float
+        Seconds before a bar appears, and the shortest estimate that is stated.
+
+    Returns
+    -------
+    tqdm
+        Call ``update(n)``, ``set_postfix(...)``, ``close()`` (or use it as a context manager).
+    """
+    stream = sys.stderr if stream is None else stream
+    tty = getattr(stream, "isatty", lambda: False)()
+    if progress is False or (progress is None and not tty):
+        return tqdm(total=total, disable=True)
+    if tty:
+        bar = _Bar(total=total, desc=desc, unit=unit, leave=False, delay=delay, file=stream)
+    else:
+        bar = _Lines(total=total, desc=desc, unit=unit, file=stream, mininterval=every, delay=every, miniters=1,
+                     bar_format=LINE_FORMAT, leave=False)
+        bar.delay = delay                 # the estimate's threshold (the first line waits ``every`` s)
+    bar.size = size
+    return bar

@@ -255,11 +255,12 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
             before = ctrl_c.count
             try:
                 if m == "nsga2":
-                    front = allocate_nsga2(problem, seed=seed, **kw)
+                    front = allocate_nsga2(problem, seed=seed, **{"progress": True, **kw})   # a bar, or lines in a log
                     continue
                 kw = dict(kw)
                 if m == "ga":
                     kw.setdefault("seed", seed)
+                    kw.setdefault("progress", True)       # a bar on a terminal, lines in a log (issue 27)
                 if m == "monotone" and "ga" in results and results["ga"].feasible:   # the GA's design as incumbent
                     kw.setdefault("incumbent", results["ga"].t)
                 if m in REFINING_METHODS and refine_option(spec):
@@ -277,7 +278,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
                 continue
             before = ctrl_c.count
             try:
-                checks[m] = verify(problem, r.t, seed=seed, **vspec).to_dict()
+                checks[m] = verify(problem, r.t, seed=seed, progress=True, **vspec).to_dict()
             except KeyboardInterrupt:
                 ctrl_c.count = max(ctrl_c.count, before + 1)
             if ctrl_c.count > before:

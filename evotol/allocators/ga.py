@@ -23,7 +23,6 @@ Runs are reproducible from ``seed``; Ctrl-C stops the run and returns the best d
 from __future__ import annotations
 
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -46,6 +45,7 @@ from evotol.allocators.budget import check_budget, cheapest_design
 from evotol.constraints import ConstraintRows, ExactRows, constraint_rows
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
+from evotol.progress import progress_bar
 from evotol.quality_loss import has_quality_loss
 from evotol.result import make_result
 from evotol.threads import single_threaded_blas
@@ -266,9 +266,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     algo.setup(gp, termination=get_termination("n_gen", n_gen), seed=seed, verbose=False)
     hist = []
     interrupted = False
-    from tqdm.auto import tqdm
-    bar = tqdm(total=n_gen, desc="GA", unit="gen", disable=(not sys.stderr.isatty()) if progress is None else not progress,
-               leave=False)
+    bar = progress_bar(n_gen, "GA", "gen", progress, size=f"{n_gen} generations × {pop_size} designs × {problem.n_poses} poses")
     try:
         while algo.has_next():
             algo.next()

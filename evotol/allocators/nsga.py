@@ -8,7 +8,6 @@ re-evaluated exactly and filtered for non-dominance.
 """
 from __future__ import annotations
 
-import sys
 import time
 
 import numpy as np
@@ -23,6 +22,7 @@ from evotol.constraints import ConstraintRows, constraint_rows
 from evotol.errors import ValidationError
 from evotol.pareto import ParetoFront, non_dominated
 from evotol.problem import ToleranceProblem
+from evotol.progress import progress_bar
 from evotol.threads import single_threaded_blas
 
 
@@ -115,9 +115,8 @@ def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, po
         log_scale = bool(np.any(problem.upper[f] / problem.lower[f] > 100))
     fp = _FrontProblem(problem, rows, log_scale)
     X0 = initial_population(problem, pop_size, seed, seeds, log_scale=log_scale)
-    from tqdm.auto import tqdm
-    with tqdm(total=n_gen, desc="NSGA-II", unit="gen", leave=False,
-              disable=(not sys.stderr.isatty()) if progress is None else not progress) as bar:
+    with progress_bar(n_gen, "NSGA-II", "gen", progress,
+                      size=f"{n_gen} generations × {pop_size} designs × {problem.n_poses} poses") as bar:
         watch = _CheckFront(fp, rows, np.random.default_rng(seed), n_check, bar)
         algo = run_nsga2(fp, pop_size=pop_size, n_gen=n_gen, seed=seed, sampling=X0, callback=watch,
                          interruptible=True)
