@@ -26,6 +26,7 @@ from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, a
 from evotol.allocators.budget import check_budget
 from evotol.distributions import Distribution
 from evotol.errors import ValidationError
+from evotol.filekinds import check_kind
 from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
@@ -225,6 +226,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
         spec = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ValidationError("study file", str(path), f"valid TOML ({exc})") from None
+    check_kind(spec, "study", path)          # a mechanism description given as a study file (issue 27)
     t0 = time.perf_counter()
     seed = spec.get("seed", 0) if seed is None else seed
     name = spec.get("name", path.stem)

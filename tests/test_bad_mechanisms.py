@@ -125,3 +125,55 @@ def test_angles_written_with_a_unit_are_taken_as_meant(tmp_path, capsys):
     f = _edited(tmp_path, [('gamma = "210*deg"', 'gamma = "210*deg + 720*deg"'), ('gamma = "330*deg"', 'gamma = "330*deg + 4*pi"')])
     code, out, err = _check(["check-mechanism", str(f), "--poses", "3"], capsys)
     assert code == 0, err
+
+
+# --- issue 27 item 6: the wrong kind of file is named as such ---------------------------------
+STUDY = Path(__file__).resolve().parents[1] / "reports" / "studies" / "ucr3_example.toml"
+
+
+def _study_naming(d: Path, target: Path) -> str:
+    f = d / "s.toml"
+    f.write_text(STUDY.read_text().replace('model = "ucr3"', f'mechanism = "{target}"').replace('variant = "verified"', ""))
+    return str(f)
+
+
+WRONG_KIND_CASES = {   # argv builder (tmp_path -> argv), strings of the one-line message
+    "check-mechanism given a study file": (lambda d: ["check-mechanism", str(STUDY)],
+                                           [f"mechanism file = '{STUDY}'", "this is a study file", f"evotol run {STUDY}"]),
+    "run given a mechanism file": (lambda d: ["run", str(RPR), "--out", str(d)],
+                                   [f"study file = '{RPR}'", "this is a mechanism description", "evotol check-mechanism",
+                                    "[robot] mechanism ="]),
+    "describe given a study file": (lambda d: ["describe", str(STUDY)], ["mechanism file", "this is a study file"]),
+    "a study's [robot] mechanism is a study file": (lambda d: ["run", _study_naming(d, STUDY), "--out", str(d)],
+                                                    [f"mechanism file = '{STUDY}'", "this is a study file"]),
+    "describe --set for a description": (lambda d: ["describe", "ur5", "--set", "variant=paper"],
+                                         ["--set = ['variant=paper']", "nothing for a mechanism description"]),
+    "describe an unknown name lists the shipped descriptions": (lambda d: ["describe", "planar3rr"],
+                                                                ["robot.model = 'planar3rr'", "'planar3rpr'", "description file"]),
+}
+
+
+@pytest.mark.parametrize("case", list(WRONG_KIND_CASES))
+def test_wrong_kind_of_file(case, tmp_path, capsys):
+    build, names = WRONG_KIND_CASES[case]
+    code, out, err = _check(build(tmp_path), capsys)
+    assert code == 2, (out, err)
+    assert "Traceback" not in err
+    message = err.strip().splitlines()[-1]
+    for name in names:
+        assert name in message, (name, message)
+
+
+def test_describe_takes_shipped_mechanisms_and_description_files(tmp_path, capsys):
+    """The 3-RPR's five sources by name and from a copy of its file; the UR5 by name."""
+    f = tmp_path / "mine.toml"
+    f.write_text(RPR.read_text())
+    for target in ("planar3rpr", str(f)):
+        code, out, err = _check(["describe", target], capsys)
+        assert code == 0, err
+        rows = [line.split()[:3] for line in out.splitlines() if line.startswith("  ") and len(line.split()) > 3]
+        assert rows[1:6] == [["Rb", "length", "m"], ["rp", "length", "m"], ["l1", "actuator", "m"],
+                             ["l2", "actuator", "m"], ["l3", "actuator", "m"]], out
+    code, out, err = _check(["describe", "ur5", "--json"], capsys)
+    import json
+    assert code == 0 and json.loads(out)["robot"] == "UR5"

@@ -37,7 +37,7 @@ PACKAGES = ("evotol", "cost_models", "robots")
 LAYERS = {
     "evotol": 0, "evotol.errors": 0, "evotol.threads": 0, "evotol.executor": 0, "evotol.pareto": 0,
     "evotol.outputs": 0, "evotol.interrupt": 0, "evotol.keywords": 0,
-    "evotol.conformance": 0, "evotol.progress": 0, "evotol.units": 0,
+    "evotol.conformance": 0, "evotol.progress": 0, "evotol.units": 0, "evotol.filekinds": 0,
     "cost_models": 1, "robots": 1,
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2, "evotol.feasibility": 2, "evotol.support_bound": 2,
     "evotol.distributions": 2, "evotol.statistical": 2, "evotol.clearances": 2, "evotol.quality_loss": 2,

@@ -1,5 +1,9 @@
 """``evotol describe ROBOT``: a robot's error sources (group, unit, shape) and its workspace.
 
+ROBOT may also be a mechanism description: a shipped one by name (``evotol describe ur5``,
+``planar3rpr``) or a description file (``evotol describe my_robot.toml``); a study file there is
+named as the wrong kind of file (issue 27).
+
 What a study file needs to name: the source names for ``[sources.NAME]``, the groups for
 ``[cost.GROUP]``, the units the tolerances are given in (SI: m or rad), and the workspace
 coordinates and ranges for ``[poses]``. ROBOT is a built-in name, an entry point of the
@@ -15,7 +19,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "describe", help="list a robot's error sources (groups, units, shapes) and its workspace",
         description=__doc__.split("\n\n", 1)[1])
-    p.add_argument("robot", help="robot name (e.g. ucr3, delta, planar5r, fivebar) or module:Class")
+    p.add_argument("robot", help="robot name (e.g. ucr3, delta, planar5r, fivebar), module:Class, a shipped mechanism "
+                                 "description (ur5, planar3rpr, ...) or a description file (TOML)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="constructor argument of the robot (repeatable); VALUE is read as TOML (number, string...)")
     p.add_argument("--json", action="store_true", help="print the description as JSON")
@@ -55,16 +60,46 @@ def describe(robot) -> dict:
     }
 
 
-def cmd_describe(args) -> int:
+def robot_for(name: str, settings: list[str]):
+    """The robot ``evotol describe NAME`` means: a description file, a registered robot (with
+    ``--set`` arguments), else a shipped mechanism description.
+
+    Raises
+    ------
+    ValidationError
+        An unknown name (listing robots and shipped descriptions), ``--set`` for a description,
+        or a study file (the wrong kind of file).
+    """
+    from pathlib import Path
+
     from evotol.errors import ValidationError
     from robots import registry
+    from robots.mechanism.model import SHIPPED, MechanismModel, resolve_description
 
-    cls = registry.get(args.robot)
-    kwargs = _parse_set(args.set)
+    path = Path(name)
+    description = path.is_file() or (":" not in name and (SHIPPED / f"{name}.toml").is_file())
     try:
-        robot = cls(**kwargs)
+        cls = None if path.is_file() else registry.get(name)
+    except ValidationError as exc:
+        if not description:
+            shipped = sorted(f.stem for f in SHIPPED.glob("*.toml"))
+            raise ValidationError(exc.field, name, f"{exc.expected}, a shipped mechanism description {shipped} or a "
+                                                   "description file (TOML)") from None
+        cls = None
+    if cls is None:
+        if settings:
+            raise ValidationError("--set", settings, f"nothing for a mechanism description ({name} has no constructor "
+                                                     "arguments: edit the file)")
+        return MechanismModel(resolve_description(name))
+    kwargs = _parse_set(settings)
+    try:
+        return cls(**kwargs)
     except TypeError as exc:
         raise ValidationError("--set", kwargs, f"constructor arguments accepted by {cls.__name__} ({exc})") from None
+
+
+def cmd_describe(args) -> int:
+    robot = robot_for(args.robot, args.set)
     d = describe(robot)
     if args.json:
         print(json.dumps(d, indent=2))

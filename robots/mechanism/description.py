@@ -33,6 +33,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
+from evotol.filekinds import check_kind
 from robots.clearance.kinematics import DH_FIELDS
 from robots.clearance.model import BOUND_NAMES, ClearanceBounds
 from robots.mechanism.expressions import CONSTANTS, FUNCTIONS, Expression
@@ -281,6 +282,8 @@ def _number(v, where: str) -> float:
 
 def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     """Build a :class:`Mechanism` from a parsed TOML document (dict); errors name the field."""
+    if path:
+        check_kind(spec, "mechanism", path)     # a study file given as a description (issue 27)
     _check_keys(spec, TOP_KEYS, "mechanism")
     name = spec.get("name") or (Path(path).stem if path else "mechanism")
     lengths = {k: _number(v, f"lengths.{k}") for k, v in dict(spec.get("lengths", {})).items()}
