@@ -11,6 +11,7 @@ import pytest
 from evotol.errors import ValidationError
 from robots.base import check_robot
 from robots.mechanism import MechanismModel, mechanism_from_dict
+from robots.mechanism.placement import PLACEMENT_FIELDS
 from robots.mechanism.urdf import pinocchio_tip_pose, resolve_urdf
 
 HERE = Path(__file__).resolve().parents[1] / "robots" / "mechanisms"
@@ -31,12 +32,15 @@ def test_forward_kinematics_equals_pinocchio_1e_12(ur5):
     assert np.abs(T - P).max() < 1e-12
 
 
-def test_ur5_sources_are_link_lengths_link_angles_and_encoders(ur5):
+def test_ur5_default_sources_are_placement_twists_and_joint_offsets(ur5):
+    """Per joint: the six placement errors of its origin less the one its joint offset duplicates
+    (the rotation about its own axis: y for the lift/elbow/wrist-1/wrist-3 joints, z for pan and
+    wrist 2), plus the joint offset."""
     names = ur5.source_names
-    assert len(names) == 42
-    assert {"shoulder_lift_joint_y", "elbow_joint_z", "wrist_1_joint_pitch", "elbow_joint"} <= set(names)
-    groups = {s.group for s in ur5.sources}
-    assert groups == {"length", "angle", "actuator"}
+    assert len(names) == 36
+    assert {"shoulder_lift_joint.tilt_x", "shoulder_lift_joint.tilt_z", "shoulder_pan_joint.tilt_y", "elbow_joint"} <= set(names)
+    assert not {"shoulder_lift_joint.tilt_y", "shoulder_pan_joint.tilt_z"} & set(names)
+    assert {s.group for s in ur5.sources} == {"length", "angle", "actuator"}
 
 
 def test_ur5_inverse_geometry_reaches_the_task_box_and_matches_fd(ur5):
@@ -100,3 +104,82 @@ n_samples = 10
     opt = data["results"]["optimum"]
     assert set(opt["tolerances"]) == {"elbow_joint_z", "wrist_1_joint_z", "shoulder_lift_joint", "elbow_joint"}
     assert opt["feasible"]
+
+
+# ---------------------------------------------------------------------------- placement twists (issue 23 item 1)
+JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
+
+
+def pinocchio_placement_regressor(path, tip, Q):
+    """Pinocchio's joint placement regressor of the tip frame (LOCAL_WORLD_ALIGNED), (n, 6, 6 n_joints),
+    then the tip frame's own placement twist (6 columns: [R 0; 0 R] in the same reference)."""
+    import pinocchio as pin
+
+    model = pin.buildModelFromUrdf(str(path))
+    data = model.createData()
+    fid = model.getFrameId(tip)
+    out = []
+    for q in Q:
+        pin.framesForwardKinematics(model, data, q)
+        R = data.oMf[fid].rotation
+        tool = np.zeros((6, 6))
+        tool[:3, :3] = tool[3:, 3:] = R
+        out.append(np.hstack([pin.computeFrameKinematicRegressor(model, data, fid, pin.LOCAL_WORLD_ALIGNED), tool]))
+    return np.array(out)
+
+
+def stacked_rank(S):
+    from robots.mechanism.identifiability import stacked_rank as rank
+
+    return rank(S)
+
+
+@pytest.fixture(scope="module")
+def ur5_all_twists():
+    return MechanismModel(HERE / "ur5.toml", sources=[f"{j}.{k}" for j in JOINTS + ["tool0"] for k in PLACEMENT_FIELDS])
+
+
+def test_placement_columns_equal_pinocchio_regressor_and_fd(ur5_all_twists):
+    """Every placement column (6 joints + tool0) equals Pinocchio's computeFrameKinematicRegressor
+    column (M_i exp(delta), delta = [v; omega] local) to 1e-12, and central FD of the nonlinear
+    model (the perturbed placement M exp(delta)) to 1e-6."""
+    m = ur5_all_twists
+    Q = np.random.default_rng(3).uniform(-np.pi, np.pi, (40, 6))
+    S = m.sensitivity_at_joints(Q)
+    R = pinocchio_placement_regressor(resolve_urdf(UR5), "tool0", Q)
+    assert np.abs(S - R).max() < 1e-12
+    rep = check_robot(m, m.workspace.latin_hypercube(5, seed=4))
+    assert rep["n_columns"] == 42 and rep["fd_relative_mismatch"] < 1e-6
+
+
+def test_ur5_sources_span_pinocchio_placement_space_26_and_30(ur5, ur5_all_twists):
+    """Stacked over 200 random configurations: the default sources (5 twists + offset per joint)
+    span rank 26, the same space as Pinocchio's 36 joint placement columns (rank of both together
+    also 26); with tool0's six twists, 30. The old roll/pitch/yaw parameters span only 24 (roll and
+    yaw of the pitch = pi/2 origins are exact negatives)."""
+    Q = np.random.default_rng(0).uniform(-np.pi, np.pi, (200, 6))
+    R = pinocchio_placement_regressor(resolve_urdf(UR5), "tool0", Q)
+    S = ur5.sensitivity_at_joints(Q)
+    assert stacked_rank(R[:, :, :36]) == stacked_rank(S) == stacked_rank(np.concatenate([S, R[:, :, :36]], 2)) == 26
+    T = ur5_all_twists.sensitivity_at_joints(Q)
+    assert stacked_rank(R) == stacked_rank(T) == stacked_rank(np.concatenate([S, T, R], 2)) == 30
+    old = MechanismModel(HERE / "ur5.toml", sources=[f"{j}_{k}" for j in JOINTS for k in ("x", "y", "z", "roll", "pitch", "yaw")] + JOINTS)
+    So = old.sensitivity_at_joints(Q)
+    assert stacked_rank(So) == 24
+    i, k = old.source_names.index("shoulder_lift_joint_roll"), old.source_names.index("shoulder_lift_joint_yaw")
+    assert np.allclose(So[..., i], -So[..., k], atol=1e-10)
+
+
+def test_placement_errors_of_a_dh_row_equal_its_entries():
+    """Closed form in a TOML description (3-UCR, a closed loop): for a joint row with d = 0 the
+    placement (the frame before Rot(z, theta) Trans(z, r)) tilts about x as the row's alpha, shifts
+    along x and z as its d and r; a fixed row's placement is the frame itself, whose tilt about z is
+    its theta -- at every pose."""
+    pairs = [("R1.tilt_x", "R1.alpha"), ("U1b.shift_x", "U1b.d"), ("C1.shift_z", "C1.r"), ("P1.tilt_z", "P1.theta")]
+    m = MechanismModel(HERE / "ucr3.toml", sources=[x for p in pairs for x in p] + ["P1.shift_y", "C1r.tilt_y"])
+    S = m.sensitivity(m.workspace.latin_hypercube(8, seed=1))
+    for c in range(0, 8, 2):
+        assert np.abs(S[..., c + 1]).max() > 0.1
+        assert np.abs(S[..., c] - S[..., c + 1]).max() < 1e-12 * np.abs(S[..., c + 1]).max()
+    rep = check_robot(m, m.workspace.latin_hypercube(4, seed=2))
+    assert rep["fd_relative_mismatch"] < 1e-6

@@ -37,6 +37,7 @@ from evotol.filekinds import check_kind
 from robots.clearance.kinematics import DH_FIELDS
 from robots.clearance.model import BOUND_NAMES, ClearanceBounds
 from robots.mechanism.expressions import CONSTANTS, FUNCTIONS, Expression
+from robots.mechanism.placement import PLACEMENT_FIELDS
 from robots.mechanism.plausibility import check_workspace, check_written_values
 from robots.mechanism.urdf import resolve_urdf, urdf_frames
 
@@ -240,8 +241,9 @@ class Mechanism:
         return {f.name: f for f in self.frames}
 
     def entry_names(self) -> list[str]:
-        """Every DH entry as ``"<frame>.<entry>"`` (e.g. ``"A.theta"``, ``"C.d"``)."""
-        return [f"{f.name}.{k}" for f in self.frames for k in DH_FIELDS]
+        """Every DH entry as ``"<frame>.<entry>"`` (e.g. ``"A.theta"``, ``"C.d"``), then every
+        placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`robots.mechanism.placement`)."""
+        return [f"{f.name}.{k}" for f in self.frames for k in DH_FIELDS + PLACEMENT_FIELDS]
 
     def candidate_sources(self, actuated: Sequence[str] = ()) -> list[str]:
         """Names a tolerance may be put on: design parameters, actuated joint variables (actuator
@@ -260,8 +262,9 @@ class Mechanism:
                 raise ValidationError("tolerances.sources", p, "a name or pattern string")
             hit = [c for c in cands if fnmatch.fnmatchcase(c, p)]
             if not hit:
-                raise ValidationError("tolerances.sources", p, f"a parameter ({sorted(self.parameters)}), an actuated joint variable {list(actuated)} or a DH entry "
-                                                                f"'<frame>.<gamma|b|alpha|d|theta|r>' of frames {[f.name for f in self.frames]}")
+                raise ValidationError("tolerances.sources", p, f"a parameter ({sorted(self.parameters)}), an actuated joint variable {list(actuated)}, a DH entry "
+                                                                f"'<frame>.<gamma|b|alpha|d|theta|r>' or a placement error '<frame>.<shift|tilt>_<x|y|z>' "
+                                                                f"of frames {[f.name for f in self.frames]}")
             out += [h for h in hit if h not in out]
         return out
 
@@ -290,7 +293,7 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     angles = {k: _number(v, f"angles.{k}") for k, v in dict(spec.get("angles", {})).items()}
     frames = []
     raw_frames = spec.get("frame", [])
-    ee_default = None
+    ee_default, sources_default = None, ()
     if "urdf" in spec:                          # a serial arm from URDF (robots/mechanism/urdf.py)
         if raw_frames:
             raise ValidationError("frame", raw_frames, "no [[frame]] rows next to urdf (the URDF gives them)")
@@ -299,7 +302,7 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
         rows, ul, ua, info = urdf_frames(resolve_urdf(str(spec["urdf"]), Path(path).parent if path else None), str(spec["tip"]))
         raw_frames = rows
         lengths, angles = {**ul, **lengths}, {**ua, **angles}
-        ee_default = info["tip"]
+        ee_default, sources_default = info["tip"], tuple(info["default_sources"])
     if not isinstance(raw_frames, list) or not raw_frames:
         raise ValidationError("frame", raw_frames, "a list of [[frame]] tables (the modified-DH rows)")
     fkeys = ("name", "antecedent", "joint", "actuated", "description") + DH_FIELDS
@@ -354,7 +357,7 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     mech = Mechanism(name=str(name), frames=tuple(frames), end_effector=str(ee.get("frame", ee_default or "")), coordinates=tuple(coords),
                      loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
-                     sources=tuple(tol.get("sources", ())), clearance=clearance, description=spec.get("description", ""),
+                     sources=tuple(tol.get("sources", sources_default)), clearance=clearance, description=spec.get("description", ""),
                      path=str(path), points=tuple(points))
     return mech
 

@@ -25,9 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, kk_transform, rot_x, rot_z, rotation_vector, trans
+from robots.clearance.kinematics import (DH_FIELDS, DHFrame, DHTree, inv_transform, kk_transform, rot_x, rot_z, rotation_vector,
+                                         trans)
 from robots.mechanism.description import AXES, ANGLE_FIELDS, Mechanism
 from robots.mechanism.expressions import Expression
+from robots.mechanism.placement import PLACEMENT_FIELDS, placement_error, placement_twists
 
 IN_PLANE = (0, 1, 5)            # x, y, rotation about z
 #: How far Newton may move a declared ``[assembly]`` joint while closing the loops
@@ -49,6 +51,14 @@ def _rot_y(a):
 
 
 _AXIS_ROT["y"] = _rot_y
+
+
+def _rot_z_inv(th):
+    """Rot(z, -theta) (n, 3, 3): undoes a joint row's rotation to reach its placement axes."""
+    c, s = np.cos(th), np.sin(th)
+    R = np.zeros((len(c), 3, 3))
+    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
+    return R
 
 
 def _cross(a, b):
@@ -228,10 +238,12 @@ class Kinematics:
         return env
 
     def state(self, q: dict, n: int, *, wrt=(), params: dict | None = None, offsets: dict | None = None,
-              twists: bool = True) -> State:
+              twists: bool = True, placement=()) -> State:
         """Evaluate the tree at ``n`` configurations. q: joint variables (n,) arrays; params:
         overrides of design parameters (scalars or (n,) arrays); offsets: additive errors of DH
-        entries ``{(frame, field): (n,) array}``; wrt: names whose derivatives are wanted."""
+        entries ``{(frame, field): (n,) array}`` and placement errors ``{(frame, "tilt_x"): ...}``
+        (:mod:`robots.mechanism.placement`); wrt: names whose derivatives are wanted; placement:
+        frames whose placement twists are wanted (``twists[(frame, "shift_x")]`` ...)."""
         env = self.env(q, n, params)
         world = {"0": np.broadcast_to(np.eye(4), (n, 4, 4))}
         grads, tw = {}, {}
@@ -266,18 +278,40 @@ class Kinematics:
             p2 = np.stack([d_ * cg, d_ * sg, b_], axis=1)  # origin after Trans(x, d)
             L[:, :3, 3] = p2 + r_[:, None] * R1[:, :, 2]
             L[:, 3, 3] = 1.0
-            world[fname] = Ta @ L
+            E = None
+            if offsets:
+                perr = {k: offsets[(fname, k)] for k in PLACEMENT_FIELDS if (fname, k) in offsets}
+                E = placement_error(perr, n) if perr else None
+            fixed = f.sigma == 2
+            if E is None:
+                world[fname] = Ta @ L
+            elif fixed:                                 # placement = the frame itself
+                world[fname] = Ta @ L @ E
+            else:                                       # placement = before Rot(z, theta) Trans(z, r)
+                P = np.zeros((n, 4, 4))
+                P[:, :3, :3], P[:, :3, 3], P[:, 3, 3] = R1, p2, 1.0
+                world[fname] = Ta @ P @ E @ inv_transform(P) @ L
             if twists:
                 Ra, pa = Ta[:, :3, :3], Ta[:, :3, 3]
                 za = Ra[:, :, 2]
                 x1 = Ra[:, :, 0] * cg[:, None] + Ra[:, :, 1] * sg[:, None]
                 p1 = pa + za * b_[:, None]
-                z2 = world[fname][:, :3, 2]
-                q2 = pa + np.einsum("nij,nj->ni", Ra, p2)
+                Tj = world[fname] if (E is None or not fixed) else world[fname] @ inv_transform(E)
+                z2 = Tj[:, :3, 2]
+                q2 = Tj[:, :3, 3] - r_[:, None] * z2      # origin after Trans(x, d), E included
                 zero = np.zeros((n, 3))
                 for k, (w, v) in zip(DH_FIELDS, ((za, _cross(pa, za)), (zero, za), (x1, _cross(p1, x1)),
                                                  (zero, x1), (z2, _cross(q2, z2)), (zero, z2))):
                     tw[(fname, k)] = np.concatenate([w, v], axis=1)
+                if fname in placement:
+                    if fixed:
+                        Tp = world[fname]
+                    else:
+                        Tp = np.array(Tj)
+                        Tp[:, :3, :3] = Tj[:, :3, :3] @ _rot_z_inv(th)
+                        Tp[:, :3, 3] = q2
+                    for k, t in placement_twists(Tp).items():
+                        tw[(fname, k)] = t
         for p, frs in self.points.items():
             T = world[frs[0]].copy()
             T[:, :3, 3] = sum(world[f][:, :3, 3] for f in frs) / len(frs)

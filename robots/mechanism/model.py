@@ -27,6 +27,7 @@ from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, rotation_vec
 from robots.clearance.model import Chain, ClearanceMechanism, Joint
 from robots.mechanism.description import LENGTH_FIELDS, UNIT_SCALE, Mechanism, load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import IN_PLANE, Kinematics
+from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
 
 OUT_OF_PLANE_FIELDS = ("b", "alpha", "r")
 
@@ -73,6 +74,15 @@ class MechanismModel(RobotErrorModel):
                                                                      "in a planar mechanism")
                 self.columns.append(nm)
                 specs.append(SourceSpec(nm, 1, unit, "length" if unit == "m" else "angle", f"design parameter {nm}"))
+            elif nm.split(".")[1] in PLACEMENT_FIELDS:
+                fr, k = nm.split(".")
+                if mech.planar:
+                    raise ValidationError(f"{mech.name} source", nm, "a parameter or DH entry (placement errors are 3-D; "
+                                                                     "in a planar mechanism use the in-plane entries gamma, d, theta)")
+                unit = "m" if k in SHIFT_FIELDS else "rad"
+                self.columns.append((fr, k))
+                specs.append(SourceSpec(nm, 1, unit, "length" if unit == "m" else "angle",
+                                        f"placement error of frame {fr}: {'translation along' if unit == 'm' else 'rotation about'} its {k[-1]} axis"))
             else:
                 fr, k = nm.split(".")
                 if mech.planar and k in OUT_OF_PLANE_FIELDS:
@@ -84,6 +94,7 @@ class MechanismModel(RobotErrorModel):
                 self.columns.append((fr, k))
                 specs.append(SourceSpec(nm, 1, unit, group, f"{'actuator offset of' if group == 'actuator' else k + ' of'} frame {fr}"))
         self.sources = tuple(specs)
+        self._placement_frames = frozenset(c[0] for c in self.columns if isinstance(c, tuple) and c[1] in PLACEMENT_FIELDS)
 
     # ------------------------------------------------------------------ helpers
     def joint_values(self, poses) -> dict:
@@ -96,13 +107,28 @@ class MechanismModel(RobotErrorModel):
     def _maps(self, poses):
         q = self.kin.inverse_geometry(poses)
         n = len(poses)
-        st = self.kin.state(q, n, wrt=set(self.kin.passive) | set(self._param_names()))
+        st = self.kin.state(q, n, wrt=set(self.kin.passive) | set(self._param_names()), placement=self._placement_frames)
         return q, st
 
     def sensitivity(self, poses) -> np.ndarray:
         """First-order map (n, 6, n_sources): ``[dp (m); dphi (rad)]`` of the end-effector frame."""
         poses = self.check_poses(poses)
         q, st = self._maps(poses)
+        return self._sensitivity(st, poses)
+
+    def sensitivity_at_joints(self, q) -> np.ndarray:
+        """First-order map (n, 6, n_sources) at given joint values: a dict ``{variable: (n,)}`` or an
+        array (n, n_variables) in the order of ``kin.variables`` (rad, m); no inverse geometry."""
+        if not isinstance(q, dict):
+            Q = np.atleast_2d(np.asarray(q, float))
+            if Q.shape[1] != len(self.kin.variables):
+                raise ValidationError("joint values", Q.shape, f"(n, {len(self.kin.variables)}) columns {self.kin.variables}")
+            q = {v: Q[:, i] for i, v in enumerate(self.kin.variables)}
+        n = len(np.atleast_1d(next(iter(q.values()))))
+        st = self.kin.state(q, n, wrt=set(self.kin.passive) | set(self._param_names()), placement=self._placement_frames)
+        return self._sensitivity(st, np.zeros((n, len(self.workspace.names))))
+
+    def _sensitivity(self, st, poses) -> np.ndarray:
         kin = self.kin
         Je = kin.frame_jacobian(st, self.mechanism.end_effector, self.columns)
         if not (self.mechanism.loops and kin.passive):

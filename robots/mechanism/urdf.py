@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from evotol.errors import ValidationError
+from robots.mechanism.placement import PLACEMENT_FIELDS
 
 AXIS_NAMES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
 
@@ -94,30 +95,69 @@ def _ident(name: str) -> str:
     return s if s and not s[0].isdigit() else f"j_{s}"
 
 
-def _origin_rows(prefix: str, antecedent: str, M, lengths: dict, angles: dict, pin) -> tuple[list[dict], str]:
-    """Rows Tz(z) Tx(x) Ty(y) Rz(yaw) Ry(pitch) Rx(roll) for a placement M (pinocchio SE3)."""
+def _origin_rows(prefix: str, antecedent: str, M, lengths: dict, angles: dict, pin) -> list[dict]:
+    """Rows Tz(z) Tx(x) Ty(y) Rz(yaw) Ry(pitch) Rx(roll) for a placement M (pinocchio SE3); the
+    last row, a fixed frame named ``prefix``, is the placement itself (its errors:
+    :mod:`robots.mechanism.placement`)."""
     x, y, z = (float(v) for v in M.translation)
     roll, pitch, yaw = (float(v) for v in pin.rpy.matrixToRpy(M.rotation))
     for k, v in zip("xyz", (x, y, z)):
         lengths[f"{prefix}_{k}"] = v
     for k, v in zip(("roll", "pitch", "yaw"), (roll, pitch, yaw)):
         angles[f"{prefix}_{k}"] = v
-    rows = [
+    return [
         {"name": f"{prefix}__t", "antecedent": antecedent, "b": f"{prefix}_z", "d": f"{prefix}_x", "theta": "pi/2"},
         {"name": f"{prefix}__ty", "antecedent": f"{prefix}__t", "d": f"{prefix}_y", "theta": "-pi/2"},
         {"name": f"{prefix}__rzy", "antecedent": f"{prefix}__ty", "gamma": f"{prefix}_yaw + pi/2", "alpha": f"{prefix}_pitch",
          "theta": "-pi/2"},
-        {"name": f"{prefix}__rx", "antecedent": f"{prefix}__rzy", "alpha": f"{prefix}_roll"},
+        {"name": prefix, "antecedent": f"{prefix}__rzy", "alpha": f"{prefix}_roll"},
     ]
-    return rows, f"{prefix}__rx"
+
+
+def joint_axis(model, j: int) -> tuple[str, np.ndarray]:
+    """('revolute' | 'prismatic', unit axis in the joint frame) of Pinocchio joint ``j``; continuous
+    joints are revolute (one angle, Pinocchio's (cos, sin) pair)."""
+    short = model.joints[j].shortname()
+    m = re.fullmatch(r"JointModel(R|P)(?:UB)?([XYZ])", short)
+    if m:
+        kind, ax = m.groups()
+        return ("revolute" if kind == "R" else "prismatic"), np.array(AXIS_NAMES[ax])
+    m = re.fullmatch(r"JointModel(Revolute|Prismatic)(?:Unbounded)?Unaligned(?:Tpl)?", short)
+    if m:
+        a = np.asarray(model.joints[j].extract().axis, float)
+        return m.group(1).lower(), a / np.linalg.norm(a)
+    raise ValidationError(f"urdf joint {model.names[j]!r}", short,
+                          "a revolute, continuous or prismatic joint (floating and planar joints are not a serial chain's)")
+
+
+def axis_angles(a: np.ndarray) -> tuple[float, float]:
+    """(gamma, alpha) with Rot(z, gamma) Rot(x, alpha) e_z = a (a unit vector)."""
+    alpha = float(np.arccos(np.clip(a[2], -1.0, 1.0)))
+    gamma = float(np.arctan2(a[0], -a[1])) if np.hypot(a[0], a[1]) > 1e-15 else 0.0
+    return gamma, alpha
+
+
+def _along_axis(kind: str, a: np.ndarray) -> str | None:
+    """The placement error a joint offset duplicates, when the axis is a coordinate axis (else None)."""
+    k = int(np.argmax(np.abs(a)))
+    if abs(abs(a[k]) - 1.0) > 1e-12:
+        return None
+    return ("tilt_" if kind == "revolute" else "shift_") + "xyz"[k]
 
 
 def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
     """(frame rows, lengths, angles, info) of the chain root -> ``tip`` of a URDF.
 
+    Per joint ``J``: origin rows ending in the fixed frame ``J`` (the joint's origin, URDF
+    ``<origin>``), the joint row ``J__q`` turning about (sliding along) the URDF axis with the
+    variable ``J``, and for an axis other than +z a row ``J__back`` that restores the origin's axes.
+
     info: ``model`` (pinocchio Model), ``tip_frame_id``, ``joints`` (names in chain order),
-    ``variables`` (joint variable names in the description) and ``tip`` (the description frame
-    that equals the URDF tip frame)."""
+    ``variables`` (joint variable names in the description), ``tip`` (the description frame that
+    equals the URDF tip frame) and ``default_sources``: per joint the six placement errors of its
+    origin and its joint offset, less the one placement error the offset duplicates (the rotation
+    about a revolute joint's own axis, the translation along a prismatic joint's), when the axis
+    is a coordinate axis of the origin -- the span of Pinocchio's joint placement regressor."""
     pin = _pin()
     try:
         model = pin.buildModelFromUrdf(str(path))
@@ -131,39 +171,30 @@ def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
         chain.append(j)
         j = model.parents[j]
     chain.reverse()
-    rows, lengths, angles, names, variables = [], {}, {}, [], []
+    rows, lengths, angles, names, variables, sources = [], {}, {}, [], [], []
     ant = "0"
     for j in chain:
         jname = _ident(model.names[j])
-        short = model.joints[j].shortname()
-        m = re.fullmatch(r"JointModel(R|P)(?:UB)?([XYZ])", short)
-        if m is None:
-            raise ValidationError(f"urdf joint {model.names[j]!r}", short, "a revolute, continuous or prismatic joint about x, y or z")
-        kind, ax = m.groups()
-        if model.nqs[j] != 1:
-            raise ValidationError(f"urdf joint {model.names[j]!r}", short, "a joint with one configuration variable "
-                                                                          "(continuous joints are read as revolute)")
-        r, ant = _origin_rows(jname, ant, model.jointPlacements[j], lengths, angles, pin)
-        rows += r
-        pre = {"X": {"gamma": "pi/2", "alpha": "pi/2"}, "Y": {"alpha": "-pi/2"}, "Z": {}}[ax]
-        post = {"X": {"alpha": "-pi/2", "theta": "-pi/2"}, "Y": {"alpha": "pi/2"}, "Z": None}[ax]
-        if pre:
-            rows.append({"name": f"{jname}__axis", "antecedent": ant, **pre})
-            ant = f"{jname}__axis"
-        joint_row = {"name": jname, "antecedent": ant, "joint": "revolute" if kind == "R" else "prismatic", "actuated": True,
-                     ("theta" if kind == "R" else "r"): jname}
+        kind, a = joint_axis(model, j)
+        rows += _origin_rows(jname, ant, model.jointPlacements[j], lengths, angles, pin)
+        gamma, alpha = axis_angles(a)
+        joint_row = {"name": f"{jname}__q", "antecedent": jname, "joint": kind, "actuated": True,
+                     ("theta" if kind == "revolute" else "r"): jname}
+        if gamma or alpha:
+            joint_row.update(gamma=gamma, alpha=alpha)
         rows.append(joint_row)
-        ant = jname
-        if post:
-            rows.append({"name": f"{jname}__back", "antecedent": ant, **post})
+        ant = f"{jname}__q"
+        if gamma or alpha:
+            rows.append({"name": f"{jname}__back", "antecedent": ant, "alpha": -alpha, "theta": -gamma})
             ant = f"{jname}__back"
+        dup = _along_axis(kind, a)
+        sources += [f"{jname}.{k}" for k in PLACEMENT_FIELDS if k != dup] + [jname]
         names.append(model.names[j])
         variables.append(jname)
     tname = _ident(tip)
-    r, ant = _origin_rows(tname, ant, model.frames[fid].placement, lengths, angles, pin)
-    rows += r
-    rows.append({"name": tname, "antecedent": ant})
-    return rows, lengths, angles, {"model": model, "tip_frame_id": fid, "joints": names, "variables": variables, "tip": tname}
+    rows += _origin_rows(tname, ant, model.frames[fid].placement, lengths, angles, pin)
+    return rows, lengths, angles, {"model": model, "tip_frame_id": fid, "joints": names, "variables": variables, "tip": tname,
+                                   "default_sources": sources}
 
 
 def pinocchio_tip_pose(path, tip: str, q: np.ndarray) -> np.ndarray:
