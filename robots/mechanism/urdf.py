@@ -8,10 +8,11 @@ of ours (``tests/test_mechanism_urdf.py``: 1e-12).
 Every joint ``J`` of the chain from the root to the ``tip`` frame becomes rows of the modified-DH
 table: its origin (the placement of the joint in its parent joint's frame, fixed joints folded in)
 as a translation ``Tz(J_z) Tx(J_x) Ty(J_y)`` and a rotation ``Rz(J_yaw) Ry(J_pitch) Rx(J_roll)``
-(URDF's ``xyz``/``rpy``), then the joint about (along) its axis with the variable ``J``. The twelve
-numbers ``J_x ... J_yaw`` are **design parameters** in ``[lengths]``/``[angles]`` -- the link-length
-and link-angle errors -- and the joint variables are actuated (their sources are the joint
-offsets / encoder errors). The tip's own placement gets parameters ``<tip>_x ...`` too.
+(URDF's ``xyz``/``rpy``, design parameters in ``[lengths]``/``[angles]``) ending in a fixed frame
+``J`` (the joint frame before its motion), then the joint about (along) its axis, any direction,
+with the variable ``J``. The error sources by default are each origin's placement errors
+``J.shift_x ... J.tilt_z`` (:mod:`robots.mechanism.placement`, Pinocchio's placement-regressor
+convention) and the joint offsets ``J``; ``docs/mechanisms.md`` states the conventions.
 
 In a description file: ``urdf = "arm.urdf"`` (relative to the file) or
 ``urdf = "example-robot-data:ur_description/urdf/ur5_robot.urdf"`` (a file shipped in a pip
