@@ -53,6 +53,8 @@ MECHANISM_CASES = {
     "declared leg angle far from the closed one": ((("{ a1 = 2.95", "{ a1 = 1.95"),),
                                                    ["assembly.joints.a1 = 1.95 rad", "a1 = 2.94539", "more than 0.5 rad"]),
     "declared platform joint of the other side": ((("c1 = -0.68", "c1 = 0.68"),), ["assembly.joints.c1 = 0.68 rad", "loop residual"]),
+    "slider laid along the wrong side of the leg": ((('alpha = "90*deg"', 'alpha = "-90*deg"'),),
+                                                    ["the loops do not close at the assembly pose [0.0, 0.0, 0.0]", "[assembly]"]),
     # item 2: plausibility of the values as written
     "base radius written in mm": (((' = "200*mm"', " = 250"),), ["lengths.Rb = 250", "below 10 m", "did you mean '250*mm'?"]),
     "length expression beyond 10 m": (((' = "200*mm"', ' = "250*1000*mm"'),), ["lengths.Rb = '250*1000*mm'", "below 10 m", "max_length"]),
