@@ -39,3 +39,9 @@ class InfeasibleError(EvotolError):
         self.requirement, self.smallest_error, self.pose = requirement, smallest_error, pose
         super().__init__(f"infeasible: {requirement} cannot be met; with every free tolerance at its lower bound the "
                          f"error is {smallest_error:.6g} at pose {pose}" + (f" ({detail})" if detail else ""))
+
+
+class CheckFailed(EvotolError, AssertionError):
+    """A conformance check failed (a robot, cost model or measure breaks its contract): names the
+    plugin, the check and what was measured. Raised, not asserted, so it holds under ``python -O``;
+    an ``AssertionError`` too, so pytest reports it as a failed assertion."""

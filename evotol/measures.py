@@ -39,8 +39,6 @@ from functools import lru_cache
 
 import numpy as np
 
-MEASURES = ("worst_case", "rss", "mc_quantile", "yield")   # yield: evotol.statistical
-
 
 @lru_cache(maxsize=16)
 def hemisphere(n: int = 600) -> tuple[np.ndarray, float]:

@@ -7,7 +7,8 @@ import numpy as np
 import pandas as pd
 
 from evotol import feasibility, plausibility
-from evotol.problem import Evaluation, ToleranceProblem
+from evotol.accuracy.base import Evaluation
+from evotol.problem import ToleranceProblem
 
 
 #: info entries that are a solver's raw diagnostics, not results: ``to_dict`` nests them under

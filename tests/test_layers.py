@@ -8,8 +8,9 @@ hides a cycle. From the bottom:
    ``evotol.progress``, ``evotol.units`` (no physics, no problem; anyone
    may use them);
 1. models: ``cost_models``, ``robots``;
-2. problem and measures: ``evotol.problem``, ``measures``, ``constraints``, ``result``,
-   ``distributions``, ``statistical`` (the first-order yield measure);
+2. problem and measures: ``evotol.problem``, ``tolerance``, ``requirement``, ``variables``,
+   ``accuracy`` (the measure plugins and their registry), ``measures``, ``constraints``,
+   ``result``, ``distributions``, ``statistical`` (the first-order yield model);
 3. allocators and design-space search: ``evotol.allocators``, ``evotol.doe``, ``evotol.filtering``,
    ``evotol.refinement`` (workspace refinement the allocators call);
 4. verification: ``evotol.montecarlo``, ``evotol.nonlinear``;
@@ -42,6 +43,7 @@ LAYERS = {
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2, "evotol.feasibility": 2, "evotol.support_bound": 2,
     "evotol.distributions": 2, "evotol.statistical": 2, "evotol.clearances": 2, "evotol.quality_loss": 2,
     "evotol.plausibility": 2,
+    "evotol.tolerance": 2, "evotol.requirement": 2, "evotol.variables": 2, "evotol.accuracy": 2,
     "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3, "evotol.refinement": 3,
     "evotol.montecarlo": 4, "evotol.nonlinear": 4,
     "evotol.reporting": 5,

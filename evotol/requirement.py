@@ -1,0 +1,71 @@
+"""The accuracy requirement: bounds on the end-effector's position and orientation errors and the
+measure (a name in :mod:`evotol.accuracy.registry`) that judges them."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evotol import statistical
+from evotol.accuracy import registry as measure_registry
+from evotol.errors import ValidationError
+
+
+@dataclass(frozen=True)
+class Requirement:
+    """Accuracy the end-effector must hold at every pose.
+
+    position: bound on |δp| (m), or None; orientation: bound on |δθ| (rad), or None.
+    measure: the name of a registered measure (:mod:`evotol.accuracy.registry`); built in:
+        ``"worst_case"`` (exact for the linear model, see :mod:`evotol.measures`),
+        ``"rss"`` (root sum square of the sources' worst-case effects), or ``"mc_quantile"``
+        (the ``quantile`` of |δp| over ``mc_samples`` Latin-hypercube samples, linear model), or
+        ``"yield"``: at every pose P(|δp| ≤ position and |δθ| ≤ orientation) ≥ ``probability``
+        for the first-order model (:mod:`evotol.statistical`; Bonferroni bound for both).
+    probability: required yield of the ``yield`` measure in (0, 1) (default 0.9973 = 3σ), or
+    ppm: the same given as allowed defects per million (probability = 1 − ppm·1e-6).
+    model: ``"linear"`` (first-order model, exact probability) or ``"nonlinear"`` (``yield`` only:
+        the robot's ``pose_error`` on ``mc_samples`` common Latin-hypercube samples from ``seed``,
+        :class:`evotol.statistical.SampledYield`).
+    """
+
+    position: float | None = None
+    orientation: float | None = None
+    measure: str = "worst_case"
+    quantile: float = 0.95
+    mc_samples: int = 2000
+    seed: int = 0
+    probability: float | None = None
+    ppm: float | None = None
+    model: str = "linear"
+
+    @property
+    def required_yield(self) -> float:
+        """The yield the ``yield`` measure requires (from ``probability`` or ``ppm``)."""
+        if self.ppm is not None:
+            return 1.0 - float(self.ppm) * 1e-6
+        return 0.9973 if self.probability is None else float(self.probability)
+
+    def validate(self) -> None:
+        if self.position is None and self.orientation is None:
+            raise ValidationError("requirement", self, "a position and/or orientation bound")
+        for f in ("position", "orientation"):
+            v = getattr(self, f)
+            if v is not None and not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
+                raise ValidationError(f"requirement.{f}", v, "a positive bound (m for position, rad for orientation) or None")
+        measure_registry.get(self.measure, field="requirement.measure")
+        if not 0 < self.quantile < 1:
+            raise ValidationError("requirement.quantile", self.quantile, "a probability in (0, 1)")
+        if self.model not in ("linear", "nonlinear"):
+            raise ValidationError("requirement.model", self.model, "'linear' or 'nonlinear'")
+        if self.model == "nonlinear" and self.measure != "yield":
+            raise ValidationError("requirement.model", self.model, "'linear' unless measure = 'yield'")
+        if self.probability is not None and self.ppm is not None:
+            raise ValidationError("requirement.ppm", self.ppm, "None when requirement.probability is given (one of the two)")
+        if self.probability is not None:
+            statistical.required_probability(self.probability)
+        if self.ppm is not None and not (isinstance(self.ppm, (int, float, np.floating)) and 0 < self.ppm < 1e6):
+            raise ValidationError("requirement.ppm", self.ppm, "defects per million in (0, 1e6)")
+        if int(self.mc_samples) < 10:
+            raise ValidationError("requirement.mc_samples", self.mc_samples, "at least 10 samples")
+
