@@ -82,8 +82,11 @@ class ParetoFront:
     objective : str
         Column of the second (minimised) objective.
     limit : float
-        A member is feasible when ``table[objective] <= limit`` (1 for a normalised error; the
-        allowed miss probability for a yield front).
+        A member is feasible when ``table[objective] <= limit × (1 + rtol)`` (1 for a normalised
+        error; the allowed miss probability for a yield front).
+    rtol : float
+        Relative tolerance of that test (``allocate_nsga2``: the rule of :mod:`evotol.feasibility`,
+        1e-6, on the proven bound; its ``proven_ratio`` column holds it for the members checked).
     """
 
     table: pd.DataFrame
@@ -91,6 +94,7 @@ class ParetoFront:
     history: pd.DataFrame | None = field(default=None, repr=False)
     objective: str = "normalised_error"
     limit: float = 1.0
+    rtol: float = 1e-9
 
     @property
     def cost(self) -> np.ndarray:
@@ -103,14 +107,14 @@ class ParetoFront:
         return self.table[self.objective].to_numpy()
 
     def cheapest_feasible(self) -> pd.Series:
-        """The cheapest member with ``objective <= limit`` (tolerance 1e-9 relative).
+        """The cheapest member with ``objective <= limit × (1 + rtol)``.
 
         Raises
         ------
         ValidationError
             When no member meets the limit.
         """
-        ok = self.table[self.table[self.objective] <= self.limit * (1 + 1e-9)]
+        ok = self.table[self.table[self.objective] <= self.limit * (1 + self.rtol)]
         if ok.empty:
             raise ValidationError("Pareto front", "no design", f"a design with {self.objective} <= {self.limit:g}")
         return ok.loc[ok["cost"].idxmin()]

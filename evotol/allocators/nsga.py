@@ -19,6 +19,7 @@ from pymoo.termination import get_termination
 
 from evotol.allocators.ga import initial_population
 from evotol.constraints import ConstraintRows, constraint_rows
+from evotol import feasibility
 from evotol.errors import ValidationError
 from evotol.pareto import ParetoFront, non_dominated
 from evotol.problem import ToleranceProblem
@@ -125,10 +126,29 @@ def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, po
     err = ev.violation + 1
     cost = problem.cost(T)
     nd = non_dominated(np.stack([cost, err], 1))
-    order = nd[np.argsort(cost[nd])]
-    table = pd.DataFrame({"cost": cost[order], "normalised_error": err[order]})
+    T, err = T[nd].copy(), err[nd].copy()
+    comp_err = {comp: np.max(getattr(ev, comp)[nd], axis=1) for comp, _ in problem.components}
+    # members that meet the requirement by their attained error are held to the one rule of
+    # evotol.feasibility (proven bound <= requirement x (1 + 1e-6)); one a hair outside is scaled in
+    proven = np.full(len(nd), np.nan)
+    repaired = np.zeros(len(nd), dtype=bool)
+    for i in np.flatnonzero(err <= 1 + feasibility.FEASIBILITY_RTOL):
+        t_i, ev_i, fix = feasibility.repair_by_scaling(problem, T[i], max_miss=np.inf)
+        proven[i] = feasibility.bound_ratio(problem, ev_i)
+        if fix is not None and not fix.get("failed"):
+            T[i], repaired[i] = t_i, True
+            err[i] = max(float(ev_i.violation[0] + 1), 0.0)
+            for comp, _ in problem.components:
+                comp_err[comp][i] = float(np.max(getattr(ev_i, comp)[0]))
+    cost = problem.cost(T)
+    order = np.argsort(cost, kind="stable")
+    table = pd.DataFrame({"cost": cost[order], "normalised_error": err[order], "proven_ratio": proven[order],
+                          "repaired": repaired[order]})
     for comp, _ in problem.components:
-        table[f"{comp}_error"] = np.max(getattr(ev, comp)[order], axis=1)
+        table[f"{comp}_error"] = comp_err[comp][order]
     for j, n in enumerate(problem.names):
         table[n] = T[order, j]
-    return ParetoFront(table.reset_index(drop=True), time.perf_counter() - t0, pd.DataFrame(watch.history))
+    feasible_rows = (table["normalised_error"] <= 1 + feasibility.FEASIBILITY_RTOL) & ~(table["proven_ratio"] > 1 + feasibility.FEASIBILITY_RTOL)
+    table.loc[~feasible_rows & (table["normalised_error"] <= 1), "normalised_error"] = table["proven_ratio"]
+    return ParetoFront(table.reset_index(drop=True), time.perf_counter() - t0, pd.DataFrame(watch.history),
+                       rtol=feasibility.FEASIBILITY_RTOL)
