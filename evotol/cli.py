@@ -171,23 +171,25 @@ def cmd_run(args) -> int:
 
 
 def _print_results(summary: dict) -> None:
-    """One line per method of ``evotol run``: cost, largest errors (mm, deg), feasibility and the
-    Monte Carlo exceed rate, so the terminal answers "what did I get" without opening the JSON."""
-    results, mc = summary.get("results") or {}, summary.get("monte_carlo") or {}
-    if not results:
+    """One line per method of ``evotol run`` (and, for NSGA-II, its cheapest feasible point and
+    knee): cost, largest errors in the study's display units, status and the Monte Carlo exceed
+    rate, so the terminal answers "what did I get" without opening the JSON."""
+    from evotol.reporting.user_study import terminal_rows
+
+    rows, header = terminal_rows(summary)
+    if not rows:
         return
-    print("[evotol] results (cost in the cost models' unit; errors: attained worst value over the poses)")
-    print(f"  {'method':12s} {'cost':>12s} {'position mm':>12s} {'orient. deg':>12s}  {'feasible':8s} {'MC exceed':>9s}")
-    for name, r in results.items():
-        if not isinstance(r, dict) or "cost" not in r:
-            continue
-        p, o = r.get("max_position_error"), r.get("max_orientation_error")
-        rate = (mc.get(name) or {}).get("max_exceed_rate")
-        print(f"  {name:12s} {r['cost']:12.6g} {'-' if p is None else format(p * 1e3, '.5g'):>12s} "
-              f"{'-' if o is None else format(math.degrees(o), '.5g'):>12s}  {str(r.get('feasible')):8s} "
-              f"{'' if rate is None else format(rate, '.2%'):>9s}")
+    print("[evotol] results (cost in the cost models' unit; errors: largest over the allocation poses)")
+    widths = [max(len(str(x)) for x in col) for col in zip(header, *rows)]
+    for line in [header, *rows]:
+        print("  " + "  ".join(f"{x:<{w}s}" if i in (0, len(line) - 1) else f"{x:>{w}s}"
+                               for i, (x, w) in enumerate(zip(line, widths))).rstrip())
+    for name, r in summary["results"].items():
         if r.get("verdict"):
-            print(f"  {'':12s} {r['verdict']}")
+            print(f"  {name}: {r['verdict']}")
+    over = summary.get("nsga2", {}).get("cheapest_feasible_over_optimum")
+    if over is not None:
+        print(f"  nsga2: the front's cheapest feasible point is {100 * over:.3g} % above the certified optimum")
 
 
 def cmd_list(args) -> int:

@@ -36,6 +36,9 @@ from evotol.statistical import pose_error_nan
 from evotol.threads import single_threaded_blas
 
 RADIAL = distributions.RADIAL
+#: linearisation error (max |nonlinear − linear| / max |linear|) up to which the first-order model
+#: is read as adequate, and up to which as approximate (:attr:`MonteCarloResult.linearisation_verdict`)
+LINEAR_OK, LINEAR_ROUGH = 0.01, 0.10
 
 
 @dataclass
@@ -66,10 +69,33 @@ class MonteCarloResult:
         rates = self.nonlinear_exceed_rate if nonlinear and self.nonlinear_exceed_rate else self.exceed_rate
         return float(max(np.max(v) for v in rates.values()))
 
+    @property
+    def linearisation_verdict(self) -> str | None:
+        """The linearisation check read as a sentence (None when the robot has no nonlinear model).
+
+        ``linearisation_error`` is max |nonlinear − linear| / max |linear| error over the sampled
+        designs and poses (dimensionless); below :data:`LINEAR_OK` the first-order results (worst
+        case, RSS, yield, the allocators' certificates) hold for the robot itself, below
+        :data:`LINEAR_ROUGH` they are approximate, above it they are unreliable.
+        """
+        e = self.linearisation_error
+        if e is None:
+            return None
+        pct = f"{100 * e:.3g} % of the largest first-order error"
+        if e <= LINEAR_OK:
+            return f"first-order model adequate: the nonlinear model differs by at most {pct} (<= {100 * LINEAR_OK:g} %)"
+        if e <= LINEAR_ROUGH:
+            return (f"first-order model approximate: the nonlinear model differs by up to {pct} "
+                    f"(> {100 * LINEAR_OK:g} %); read the nonlinear exceed rate")
+        return (f"first-order model unreliable: the nonlinear model differs by up to {pct} "
+                f"(> {100 * LINEAR_ROUGH:g} %); judge the design by the nonlinear Monte Carlo")
+
     def to_dict(self) -> dict:
         d = {"method": self.method, "n_samples": self.n_samples, "seed": self.seed, "seconds": self.seconds,
              "max_exceed_rate": self.max_exceed_rate(), "linearisation_error": self.linearisation_error,
              "max_error_over_worst_case": self.max_error_over_worst_case}
+        if self.linearisation_verdict is not None:
+            d["linearisation_verdict"] = self.linearisation_verdict
         if self.nonlinear_exceed_rate:
             d["max_exceed_rate_nonlinear"] = self.max_exceed_rate(True)
         if self.yield_check:

@@ -8,6 +8,7 @@ import pandas as pd
 
 from evotol import feasibility, plausibility
 from evotol.accuracy.base import Evaluation
+from evotol.display import DisplayUnits, error_unit, pose_text, problem_units
 from evotol.problem import ToleranceProblem
 
 
@@ -49,11 +50,27 @@ class AllocationResult:
     def worst_pose(self, component: str = "position") -> int:
         return int(np.argmax(getattr(self.errors, component)[0]))
 
-    def contributions(self, component: str = "position", pose: int | str = "worst") -> pd.DataFrame:
+    def contributions(self, component: str = "position", pose: int | str = "worst",
+                      units: DisplayUnits | None = None) -> pd.DataFrame:
         """Each source's share (%) of the error at one pose (default: the worst pose).
 
         Worst case: share of h(u*) = Σ_j t_j‖B_jᵀu*‖ at the worst direction u*; RSS: share of the
         sum of squares. The standard contributor report of tolerance-analysis tools.
+
+        Parameters
+        ----------
+        component : str
+            ``"position"`` or ``"orientation"``.
+        pose : int or "worst"
+            Pose index, or the pose of the largest ``component`` error.
+        units : DisplayUnits, optional
+            Units of the ``±`` column (default: from the mechanism's ``display``).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns source, group, tolerance (SI), unit (SI), ``±`` (the tolerance as text in
+            display units, e.g. ``"±12.00 µm"``), cost (cost-model unit), percent; sorted by share.
         """
         c = getattr(self.errors, f"{component}_contrib")
         if c is None:
@@ -61,9 +78,11 @@ class AllocationResult:
         p = self.worst_pose(component) if pose == "worst" else int(pose)
         share = 100 * c[0, p]
         p_ = self.problem
+        u = units or problem_units(p_)
+        shown = [u.format(t, unit, sign="±") for t, unit in zip(self.t, p_.units())]
         return pd.DataFrame({"source": p_.names, "group": p_.groups(), "tolerance": self.t,
-                             "unit": p_.units(), "cost": p_.source_costs(self.t), "percent": share}).sort_values(
-            "percent", ascending=False, ignore_index=True)
+                             "unit": p_.units(), "±": shown, "cost": p_.source_costs(self.t),
+                             "percent": share}).sort_values("percent", ascending=False, ignore_index=True)
 
     def contributions_per_pose(self, component: str = "position") -> pd.DataFrame:
         """(n_poses × n_sources) table of % contributions."""
@@ -89,7 +108,10 @@ class AllocationResult:
         d.update(info)
         if self.verdict is not None:
             d["verdict"] = self.verdict
+        d["status"] = self.status()
         if diagnostics:
+            if self.solver_note:
+                diagnostics["solver_message_meaning"] = self.solver_note
             d["diagnostics"] = diagnostics
         return d
 
@@ -114,17 +136,66 @@ class AllocationResult:
         return (f"not certified: relative gap {gap:.2e} to the proven lower bound {float(c['lower_bound']):.6g}"
                 + (f", KKT residual {kkt:.1e}" if "kkt_residual" in c else ""))
 
-    def summary(self) -> str:
-        lines = [f"{self.method}: cost {self.cost:.5g}, feasible {self.feasible}"]
+    def status(self, units: DisplayUnits | None = None) -> str:
+        """Whether the design meets the requirement, in words; in budget mode first whether it is
+        within the budget (``feasible`` then means within the budget and the bounds, issue 25)."""
+        u = units or problem_units(self.problem)
+        if "meets_requirement" in self.info:
+            meets = bool(self.info["meets_requirement"])
+        elif "bound_ratio" in self.info:        # the rule of evotol.feasibility
+            meets = bool(self.info["bound_ratio"] <= 1 + feasibility.FEASIBILITY_RTOL)
+        else:
+            meets = bool(self.errors.violation[0] <= feasibility.FEASIBILITY_RTOL)
+        misses = [f"{comp} {u.format(self.max_error(comp), error_unit(self.problem, comp))}, "
+                  f"{100 * (self.max_error(comp) / lim - 1):.2g} % above {u.format(lim, error_unit(self.problem, comp))}"
+                  for comp, lim in self.problem.components
+                  if self.max_error(comp) > lim * (1 + feasibility.FEASIBILITY_RTOL)]
+        req = "meets the requirement" if meets else "misses the requirement" + (f" ({', '.join(misses)})" if misses else "")
+        if "budget" in self.info:
+            return (f"{'within' if self.info.get('within_budget') else 'over'} budget {self.info['budget']:.5g}; {req}")
+        return req if self.feasible or not meets else f"{req}; outside the tolerance bounds"
+
+    def summary(self, units: DisplayUnits | None = None) -> str:
+        """Cost, status, the largest errors (display units) with the worst pose in workspace
+        coordinates, the yield for a yield design, and the certificate read as a sentence.
+
+        Parameters
+        ----------
+        units : DisplayUnits, optional
+            Display units (default: from the mechanism's ``display``, :func:`evotol.display.default_units`).
+        """
+        u = units or problem_units(self.problem)
+        lines = [f"{self.method}: cost {self.cost:.5g}; {self.status(u)}"]
         for comp, lim in self.problem.components:
-            lines.append(f"  max {comp} error {self.max_error(comp):.4g} (bound {lim:.4g})")
+            eu = error_unit(self.problem, comp)
+            p = self.worst_pose(comp)
+            lines.append(f"  max {comp} error {u.format(self.max_error(comp), eu)} (requirement {u.format(lim, eu)}) "
+                         f"at pose {p}: {pose_text(self.problem.robot.workspace, self.problem.poses[p])}")
+        if self.errors.probability is not None:
+            y = self.errors.probability[0]
+            lines.append(f"  yield (first-order, lower bound) at the worst pose {float(np.min(y)):.6g} "
+                         f"(required {self.problem.requirement.required_yield:g}) at pose {int(np.argmin(y))}")
         if self.verdict is not None:
             lines.append(f"  {self.verdict}")
         if self.certificate:
             lines.append("  certificate: " + ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
                                                     for k, v in self.certificate.items()))
+        note = self.solver_note
+        if note:
+            lines.append(f"  note: {note}")
+        lines += [f"  warning: {w}" for w in self.info.get("warnings", [])]
         return "\n".join(lines)
 
+    @property
+    def solver_note(self) -> str | None:
+        """The solver's exit message read against the certificate (None without a message)."""
+        msg = self.info.get("solver_message")
+        if not msg:
+            return None
+        if self.verdict and self.verdict.startswith("certified optimal"):
+            return (f"the solver's exit message \"{msg}\" says only that its line search could make no "
+                    "further progress at its working precision; the proven lower bound certifies the cost")
+        return f"the solver's exit message: \"{msg}\""
 
 def make_result(problem: ToleranceProblem, method: str, t, *, history=None, certificate=None,
                 seconds: float = 0.0, info=None, budget: float | None = None, repair: bool | float = False) -> AllocationResult:

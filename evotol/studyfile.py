@@ -24,6 +24,7 @@ from evotol import clearances, plausibility
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_monotone, allocate_nsga2,
                                allocate_optimum, allocate_sensitivity)
 from evotol.allocators.budget import check_budget
+from evotol.display import DisplayUnits, parse_units, problem_units
 from evotol.distributions import Distribution
 from evotol.errors import ValidationError
 from evotol.filekinds import check_kind
@@ -32,11 +33,11 @@ from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.outputs import check_not_overwriting
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
-from evotol.process_studyfile import front_figure, run_process_study
+from evotol.process_studyfile import run_process_study
 from evotol.quality_loss import with_quality_loss
-from evotol.reporting import Report
+from evotol.reporting.user_study import render_user_study
 from evotol.studies import StudyResult, write_outputs
-from evotol.units import units_block
+from evotol.study_outputs import study_summary
 from robots import registry
 from robots.assembly import assembly_from_spec
 from robots.mechanism.model import model_from_table
@@ -44,7 +45,8 @@ from robots.mechanism.model import model_from_table
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange, "monotone": allocate_monotone}
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
-            "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes")
+            "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report")
+REPORT_KEYS = ("units",)
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
@@ -54,20 +56,6 @@ REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement))
 #: methods that take the whole-workspace refinement option
 REFINING_METHODS = ("optimum", "ga")
 
-
-
-def _yield_cell(y: dict) -> str:
-    """Report cell of a yield check: worst-pose estimate with its interval at the stated
-    confidence, then the verdict with the interval it is read from (Bonferroni level over the
-    poses), so an interval above the requirement next to "undecided" is explained."""
-    pct = lambda c: f"{100 * c:.4g} %"
-    cell = (f"{y['yield_estimate']:.5f} [{y['yield_lower']:.5f}, {y['yield_upper']:.5f}] at {pct(y['confidence'])} "
-            f"({y['model']} model)")
-    if "verdict" in y:
-        lo, hi = y["verdict_interval"]
-        cell += (f"; {y['verdict']} against {y['yield_required']:g}: worst pose [{lo:.5f}, {hi:.5f}] at "
-                 f"{pct(y['verdict_level'])} per pose")
-    return cell
 
 
 def _check_keys(table, valid, where: str) -> None:
@@ -90,6 +78,7 @@ def check_study_keys(spec: dict) -> None:
     elif ref is not None and not isinstance(ref, bool):
         raise ValidationError("poses.refine", ref, "true, false or a table of refinement options")
     _check_keys(spec.get("requirement", {}), REQUIREMENT_KEYS, "requirement")
+    _check_keys(spec.get("report", {}), REPORT_KEYS, "report")
     bounds = spec.get("bounds", {})   # sub-tables [bounds.GROUP] are checked once the robot is known
     _check_keys({k: v for k, v in bounds.items() if not isinstance(v, dict)} if isinstance(bounds, dict) else bounds,
                 BOUND_KEYS, "bounds")
@@ -98,6 +87,11 @@ def check_study_keys(spec: dict) -> None:
     seed = spec.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValidationError("seed", seed, "a non-negative integer")
+
+
+def report_units(spec: dict, problem: ToleranceProblem) -> DisplayUnits:
+    """The study's display units: ``[report] units``, else the mechanism's ``display`` (evotol.display)."""
+    return parse_units(spec.get("report", {}).get("units"), problem_units(problem))
 
 
 def refine_option(spec: dict):
@@ -235,6 +229,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     if "processes" in spec:     # process selection: [processes.<dimension>] (evotol/process_studyfile.py)
         return run_process_study(spec, path, out, seed, load_problem)
     problem = load_problem(spec, base_dir=path.parent)
+    units = report_units(spec, problem)
     methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None   # no sensitivity rule
                        else {"sensitivity": {}, "optimum": {}, "ga": {}})
     vspec = spec.get("verify", {"n_samples": 1000})
@@ -285,46 +280,14 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
                 ctrl_c.count = max(ctrl_c.count, before + 1)
             if ctrl_c.count > before:
                 stopped.append(f"verify {m}")
-    summary = {"name": name, "study_file": str(path.resolve()), "problem": problem.describe(), "seed": seed,
-               "results": {m: r.to_dict() for m, r in results.items()}, "monte_carlo": checks,
-               "seconds": time.perf_counter() - t0, "interrupted": bool(stopped),
-               "units": units_block(problem),   # docs/units.md
-               "warnings": plausibility.study_warnings(problem, results.values())}   # unit slips (issue 27)
+    summary = study_summary(name, problem, results, front, checks, seed=seed, units=units,
+                            seconds=time.perf_counter() - t0)
+    summary["study_file"] = str(path.resolve())
+    summary["warnings"] = plausibility.study_warnings(problem, results.values())   # unit slips (issue 27)
+    summary["interrupted"] = bool(stopped)
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
-    if front is not None:
-        summary["pareto_front"] = front.table.to_dict(orient="list")
-    rep = Report(f"evotol study: {name}", f"{problem.robot.name}, {problem.n_poses} poses, measure {problem.requirement.measure}")
-    if stopped:
-        rep.text(f"Interrupted (Ctrl-C): stopped {', '.join(stopped)}"
-                 + (f"; not run: {', '.join(skipped)}" if skipped else "")
-                 + ". The results below are what was computed until then; a GA or NSGA-II that was "
-                   "stopped reports its best design so far.")
-    for line in summary["warnings"]:
-        rep.text(f"Warning: {line}", note=True)
-    rep.heading("Allocations")
-    rows = [[n] + [results[m].tolerances[n] for m in results] for n in problem.names]
-    rows.append(["cost"] + [results[m].cost for m in results])
-    rows.append(["feasible"] + [results[m].feasible for m in results])
-    rows.append(["MC max exceed rate"] + [checks[m]["max_exceed_rate"] if m in checks else "not run" for m in results])
-    if problem.requirement.measure == "yield":
-        rows.append(["MC yield at the worst pose [interval at the stated confidence]; verdict for all poses together "
-                     "[worst pose's interval at the Bonferroni level the verdict uses]"] +
-                    [_yield_cell(checks[m]["yield"]) if m in checks else "not run" for m in results])
-    rep.table(rows, ["source (SI)"] + list(results))
-    for m, r in results.items():
-        rep.heading(f"Contributors at the worst pose: {m}")
-        c = r.contributions()
-        rep.table(c.values.tolist(), list(c.columns))
-        if r.history is not None and len(r.history):
-            import plotly.graph_objects as go
-            fig = go.Figure()
-            fig.add_scatter(x=r.history["generation"], y=r.history["best_fitness"], name="best")
-            fig.add_scatter(x=r.history["generation"], y=r.history["mean_fitness"], name="mean")
-            fig.update_layout(title=f"{m} convergence", xaxis_title="generation", yaxis_title="fitness", yaxis_type="log")
-            rep.figure(fig)
-    if front is not None:
-        front_figure(rep, front)
+    rep = render_user_study(summary)
     paths = write_outputs(name, out, StudyResult(summary), rep)
     summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary

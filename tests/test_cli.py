@@ -19,11 +19,22 @@ def test_run_example_study_file(tmp_path, capsys):
     assert d["results"]["optimum"]["feasible"]
     assert d["results"]["ga"]["cost"] <= d["results"]["optimum"]["cost"] * 1.01
     assert d["results"]["optimum"]["tolerances"]["R1"] == pytest.approx(2e-5)   # locked
-    # the terminal answers "what did I get": one line per method with its cost and largest error (mm)
-    lines = {ln.split()[0]: ln.split() for ln in capsys.readouterr().out.splitlines() if ln.startswith("  ")}
+    # the terminal answers "what did I get": one line per method with its cost and largest error in
+    # the study's display units (the UCR3 shows no length in mm: µm, issue 25), and NSGA-II's
+    # cheapest feasible point and knee
+    out = capsys.readouterr().out
+    assert "position (µm)" in out and d["display_units"] == {"length": "µm", "angle": "deg"}
+    lines = {ln.split()[0]: ln.split() for ln in out.splitlines() if ln.startswith("  ")}
     for name, r in d["results"].items():
         assert float(lines[name][1]) == pytest.approx(r["cost"], rel=1e-5)
-        assert float(lines[name][2]) == pytest.approx(r["max_position_error"] * 1e3, rel=1e-4)
+        assert float(lines[name][2]) == pytest.approx(r["max_position_error"] * 1e6, rel=1e-3)
+    knee = next(ln.split() for ln in out.splitlines() if ln.startswith("  nsga2 knee"))
+    front = d["pareto_front"]
+    i = d["nsga2"]["knee"]["row"]
+    assert float(knee[2]) == pytest.approx(front["cost"][i], rel=1e-5)
+    assert float(knee[3]) == pytest.approx(front["position_error"][i] * 1e6, rel=1e-3)
+    if "cheapest_feasible" in d["nsga2"]:
+        assert any(ln.startswith("  nsga2 cheapest feasible") for ln in out.splitlines())
     # the report loads the plotly.js written once beside it (issue 11 item 7), no inlined 4.8 MB copy
     from evotol.reporting.html import plotlyjs_name
     page = (tmp_path / "ucr3_example.html").read_text()

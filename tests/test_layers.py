@@ -5,7 +5,7 @@ hides a cycle. From the bottom:
 
 0. foundation: ``evotol.errors``, ``evotol.threads``, ``evotol.executor``, ``evotol.pareto``,
    ``evotol.outputs``, ``evotol.interrupt``, ``evotol.keywords``, ``evotol.conformance``,
-   ``evotol.progress``, ``evotol.units`` (no physics, no problem; anyone
+   ``evotol.progress``, ``evotol.units``, ``evotol.display`` (no physics, no problem; anyone
    may use them);
 1. models: ``cost_models``, ``robots``;
 2. problem and measures: ``evotol.problem``, ``tolerance``, ``requirement``, ``variables``,
@@ -38,16 +38,16 @@ PACKAGES = ("evotol", "cost_models", "robots")
 LAYERS = {
     "evotol": 0, "evotol.errors": 0, "evotol.threads": 0, "evotol.executor": 0, "evotol.pareto": 0,
     "evotol.outputs": 0, "evotol.interrupt": 0, "evotol.keywords": 0,
-    "evotol.conformance": 0, "evotol.progress": 0, "evotol.units": 0, "evotol.filekinds": 0,
+    "evotol.conformance": 0, "evotol.progress": 0, "evotol.units": 0, "evotol.filekinds": 0, "evotol.display": 0,
     "cost_models": 1, "robots": 1,
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2, "evotol.feasibility": 2, "evotol.support_bound": 2,
     "evotol.distributions": 2, "evotol.statistical": 2, "evotol.clearances": 2, "evotol.quality_loss": 2,
     "evotol.plausibility": 2,
     "evotol.tolerance": 2, "evotol.requirement": 2, "evotol.variables": 2, "evotol.accuracy": 2,
     "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3, "evotol.refinement": 3,
-    "evotol.montecarlo": 4, "evotol.nonlinear": 4,
+    "evotol.montecarlo": 4, "evotol.nonlinear": 4, "evotol.workspace_map": 4, "evotol.explorer_data": 4,
     "evotol.reporting": 5,
-    "evotol.studies": 6, "evotol.studyfile": 6, "evotol.process_studyfile": 6,
+    "evotol.studies": 6, "evotol.studyfile": 6, "evotol.process_studyfile": 6, "evotol.study_outputs": 6,
     "evotol.cli": 7, "evotol.commands": 7, "evotol.arguments": 7, "evotol.__main__": 7,
 }
 NAMES = ["foundation", "models", "problem", "allocators", "verification", "reporting", "studies", "cli"]

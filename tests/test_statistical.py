@@ -165,7 +165,7 @@ def test_clopper_pearson_interval_matches_scipy_binomtest():
     # an interval at 95 % above the requirement can still be undecided for 50 poses together
     near = yield_check(np.full(50, 0.9965), 20000, 0.9953)
     assert near["yield_lower"] >= 0.9953 > near["verdict_interval"][0] and near["verdict"] == "undecided"
-    from evotol.studyfile import _yield_cell
+    from evotol.reporting.user_study import yield_cell as _yield_cell
     cell = _yield_cell(near)
     assert "at 95 %" in cell and "undecided against 0.9953: worst pose [" in cell and "at 99.9 % per pose" in cell
 

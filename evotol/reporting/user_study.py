@@ -1,0 +1,315 @@
+"""The report of a user study (``evotol run``), drawn from its JSON summary alone.
+
+Per method: a top table (cost, the error at the worst pose in display units, the worst pose in
+workspace coordinates, the verdict and the certificate, the Monte Carlo exceed rate, the yield
+when the measure is yield), the tolerances in display units, an error map over slices of the
+continuous workspace, the contributions at the worst pose, the linearisation check with a verdict;
+the NSGA-II front with the certified optimum, the GA and the sensitivity design marked; the
+what-if explorer (:mod:`evotol.reporting.explorer`). Lengths are shown in µm or mm and angles in
+arcsec, mrad or deg (the study's ``display_units``, :mod:`evotol.display`); the JSON stays SI.
+"""
+from __future__ import annotations
+
+import html
+
+import numpy as np
+import plotly.graph_objects as go
+from plotly.subplots import make_subplots
+
+from evotol.display import DisplayUnits, number
+from evotol.reporting.explorer import explorer_section
+from evotol.reporting.html import Report
+
+#: marker of each method on the NSGA-II plot (symbol, colour)
+MARKS = {"optimum": ("star", "#d62728"), "ga": ("diamond", "#2ca02c"), "sensitivity": ("square", "#ff7f0e"),
+         "lagrange": ("triangle-up", "#9467bd"), "equal": ("cross", "#8c564b"), "monotone": ("star-diamond", "#e377c2")}
+
+
+def _units(summary: dict) -> DisplayUnits:
+    return DisplayUnits(**summary["display_units"])
+
+
+def _error_text(summary: dict, comp: str, value) -> str:
+    return _units(summary).format(value, summary["error_units"][comp])
+
+
+def pose_cells(summary: dict, pose) -> str:
+    """A pose (SI) in the workspace's display units: ``x = 12.00 mm, y = -3.000 mm``."""
+    ws = summary["workspace"]
+    return ", ".join(f"{n} = {number(v * k)}" + (f" {u}" if u not in ("1", "") else "")
+                     for n, v, k, u in zip(ws["names"], pose, ws["display_scale"], ws["display_units"]))
+
+
+def yield_cell(y: dict) -> str:
+    """Report cell of a yield check: worst-pose estimate with its interval at the stated
+    confidence, then the verdict with the interval it is read from (Bonferroni level over the
+    poses), so an interval above the requirement next to "undecided" is explained."""
+    pct = lambda c: f"{100 * c:.4g} %"
+    cell = (f"{y['yield_estimate']:.5f} [{y['yield_lower']:.5f}, {y['yield_upper']:.5f}] at {pct(y['confidence'])} "
+            f"({y['model']} model)")
+    if "verdict" in y:
+        lo, hi = y["verdict_interval"]
+        cell += (f"; {y['verdict']} against {y['yield_required']:g}: worst pose [{lo:.5f}, {hi:.5f}] at "
+                 f"{pct(y['verdict_level'])} per pose")
+    return cell
+
+
+def _certificate_cell(r: dict) -> str:
+    c = r.get("certificate")
+    if not c:
+        return "none (no lower bound for this method)"
+    if "gap" in c and "lower_bound" in c:
+        return f"lower bound {float(c['lower_bound']):.6g}, gap {float(c['gap']):.1e}"
+    return ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in c.items())
+
+
+def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
+    """Rows of the top table: one per method and, for NSGA-II, its cheapest feasible point and knee."""
+    comps = list(summary["requirement"])
+    yield_measure = summary["measure"] == "yield"
+    header = ["method", "cost"] + [f"max {c} error (requirement {_error_text(summary, c, summary['requirement'][c])})"
+                                   for c in comps]
+    header += ["worst pose (workspace coordinates)", "status", "verdict / certificate", "MC exceed rate"]
+    if yield_measure:
+        header.insert(2 + len(comps), "yield at the worst pose (first-order; required)")
+    rows = []
+    for m, r in summary["results"].items():
+        comp0 = comps[0]
+        row = [m, r["cost"]] + [_error_text(summary, c, r.get(f"max_{c}_error")) for c in comps]
+        if yield_measure:
+            mc = summary["monte_carlo"].get(m) or {}
+            row.append((f"{r['yield_at_worst_pose']:.6f} (required {r['required_yield']:g})" if "yield_at_worst_pose" in r
+                        else "–") + (f"; Monte Carlo: {yield_cell(mc['yield'])}" if "yield" in mc else ""))
+        mc = summary["monte_carlo"].get(m)
+        row += [f"#{r['worst_pose'][comp0]}: {pose_cells(summary, r['worst_pose_coordinates'][comp0])}",
+                r.get("status", ""), r.get("verdict") or _certificate_cell(r),
+                f"{mc['max_exceed_rate']:.2%}" if mc else "not run"]
+        rows.append(row)
+    for key, label in (("cheapest_feasible", "NSGA-II cheapest feasible"), ("knee", "NSGA-II knee")):
+        p = summary.get("nsga2", {}).get(key)
+        if p is None:
+            continue
+        row = [label, p["cost"]] + [_error_text(summary, c, p.get(f"max_{c}_error")) for c in comps]
+        if yield_measure:
+            row.append("–")
+        over = summary["nsga2"].get("cheapest_feasible_over_optimum") if key == "cheapest_feasible" else None
+        row += [f"front row {p['row']}", "meets the requirement" if p["normalised_error"] <= 1 + 1e-9
+                else f"misses the requirement (normalised error {p['normalised_error']:.4g})",
+                "no certificate" + (f"; {100 * over:.3g} % above the certified optimum" if over is not None else ""), "not run"]
+        rows.append(row)
+    return rows, header
+
+
+def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
+    """The terminal table of ``evotol run``: every method run, NSGA-II as its cheapest feasible
+    point and its knee; errors in the study's display units."""
+    comps = list(summary.get("requirement", {}))
+    u = _units(summary)
+    header = ["method", "cost"] + [f"{c} ({u.unit_for(summary['error_units'][c])})" for c in comps] + ["MC exceed", "status"]
+    rows = []
+    for m, r in (summary.get("results") or {}).items():
+        mc = (summary.get("monte_carlo") or {}).get(m)
+        rows.append([m, f"{r['cost']:.6g}"] + [number(u.convert(r[f"max_{c}_error"], summary["error_units"][c]))
+                                               for c in comps]
+                    + [f"{mc['max_exceed_rate']:.2%}" if mc else "", r.get("status", "")])
+    for key, label in (("cheapest_feasible", "nsga2 cheapest feasible"), ("knee", "nsga2 knee")):
+        p = summary.get("nsga2", {}).get(key)
+        if p is not None:
+            rows.append([label, f"{p['cost']:.6g}"] + [number(u.convert(p[f"max_{c}_error"], summary["error_units"][c]))
+                                                       for c in comps]
+                        + ["", "meets the requirement" if p["normalised_error"] <= 1 + 1e-9
+                           else f"misses the requirement ({p['normalised_error']:.4g} × requirement)"])
+    if "pareto_front" in summary and "cheapest_feasible" not in summary.get("nsga2", {}):
+        rows.append(["nsga2", "", *[""] * len(comps), "", "no front member meets the requirement"])
+    return rows, header
+
+
+def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
+    """Source × method table of the tolerances in display units (± values)."""
+    u = _units(summary)
+    methods = list(summary["results"])
+    extra = {k: summary["nsga2"][k]["tolerances"] for k in ("cheapest_feasible", "knee") if k in summary.get("nsga2", {})}
+    rows = []
+    for s in summary["sources"]:
+        unit = u.unit_for(s["unit"])
+        vals = [number(u.convert(summary["results"][m]["tolerances"][s["name"]], s["unit"])) for m in methods]
+        vals += [number(u.convert(t[s["name"]], s["unit"])) for t in extra.values()]
+        rows.append([s["name"], s["group"], f"± {unit}"] + vals)
+    header = ["source", "group", "unit"] + methods + [f"NSGA-II {k.replace('_', ' ')}" for k in extra]
+    return rows, header
+
+
+def _error_map_figure(summary: dict, method: str, comp: str):
+    """Heatmaps of ``comp`` error over the workspace slices (display units), allocation poses
+    projected as dots, the worst allocation pose as a star."""
+    slices = summary["figures"]["error_maps"][method]
+    ws = summary["workspace"]
+    scale = dict(zip(ws["names"], ws["display_scale"]))
+    dunit = dict(zip(ws["names"], ws["display_units"]))
+    u = _units(summary)
+    eu = summary["error_units"][comp]
+    k = u.factor(eu)
+    titles = [", ".join(f"{n} = {number(v * scale[n])} {dunit[n]}" for n, v in s["fixed"].items()) or "whole workspace"
+              for s in slices]
+    fig = make_subplots(rows=1, cols=len(slices), subplot_titles=titles, horizontal_spacing=0.08)
+    zmax = np.nanmax([np.nanmax(np.asarray(s["values"][comp], dtype=float)) for s in slices]) * k
+    lim = summary["requirement"][comp] * k
+    poses = np.asarray(summary["poses"], dtype=float)
+    r = summary["results"][method]
+    wp = np.asarray(r["worst_pose_coordinates"][comp])
+    for i, s in enumerate(slices, start=1):
+        xn, yn = s["x_name"], s["y_name"]
+        x = np.asarray(s["x"]) * scale[xn]
+        z = np.asarray(s["values"][comp], dtype=float) * k
+        if yn is None:
+            fig.add_scatter(x=x, y=z, mode="lines", name=f"{comp} error", row=1, col=i, showlegend=i == 1)
+            continue
+        y = np.asarray(s["y"]) * scale[yn]
+        fig.add_heatmap(x=x, y=y, z=z, zmin=0, zmax=max(zmax, lim), colorscale="Viridis", row=1, col=i,
+                        colorbar={"title": u.unit_for(eu)}, showscale=i == len(slices),
+                        hovertemplate=f"{xn} %{{x:.4g}}<br>{yn} %{{y:.4g}}<br>error %{{z:.4g}} {u.unit_for(eu)}<extra></extra>")
+        fig.add_contour(x=x, y=y, z=z, contours={"start": lim, "end": lim, "coloring": "none", "showlabels": True},
+                        line={"color": "white", "width": 2, "dash": "dash"}, showscale=False, hoverinfo="skip",
+                        row=1, col=i, name="requirement")
+        ix, iy = ws["names"].index(xn), ws["names"].index(yn)
+        fig.add_scatter(x=poses[:, ix] * scale[xn], y=poses[:, iy] * scale[yn], mode="markers", row=1, col=i,
+                        marker={"color": "white", "size": 5, "line": {"color": "black", "width": 1}},
+                        name="allocation poses", showlegend=i == 1)
+        fig.add_scatter(x=[wp[ix] * scale[xn]], y=[wp[iy] * scale[yn]], mode="markers", row=1, col=i,
+                        marker={"symbol": "star", "color": "red", "size": 14, "line": {"color": "black", "width": 1}},
+                        name="worst allocation pose", showlegend=i == 1)
+        fig.update_xaxes(title_text=f"{xn} ({dunit[xn]})", row=1, col=i)
+        fig.update_yaxes(title_text=f"{yn} ({dunit[yn]})", row=1, col=i)
+    fig.update_layout(title=f"{method}: {comp} error over the workspace ({u.unit_for(eu)}; dashed: the requirement)",
+                      height=420, legend={"orientation": "h", "y": -0.25})
+    return fig
+
+
+def map_caption(summary: dict, method: str, comp: str) -> str:
+    """The largest error on the map against the largest over the allocation poses."""
+    slices = summary["figures"]["error_maps"][method]
+    best = (-np.inf, None, None)
+    for s in slices:
+        z = np.asarray(s["values"][comp], dtype=float)
+        if np.all(np.isnan(z)):
+            continue
+        idx = np.unravel_index(np.nanargmax(z), z.shape)
+        if z[idx] > best[0]:
+            best = (float(z[idx]), s, idx)
+    v, s, idx = best
+    r = summary["results"][method]
+    unreachable = sum(sl["unreachable"] for sl in slices)
+    if s is None:
+        return "No pose of the map is reachable."
+    names = summary["workspace"]["names"]
+    pose = [s["fixed"].get(n) for n in names]
+    pose[names.index(s["x_name"])] = s["x"][idx[-1]]
+    if s["y_name"] is not None:
+        pose[names.index(s["y_name"])] = s["y"][idx[0]]
+    text = (f"Largest {comp} error on the map {_error_text(summary, comp, v)} at {pose_cells(summary, pose)}; "
+            f"over the allocation poses {_error_text(summary, comp, r[f'max_{comp}_error'])}.")
+    if v > r[f"max_{comp}_error"] * (1 + 1e-6):
+        text += (" The map finds a larger error between the allocation poses: refine the pose set "
+                 "([poses] refine = true) to hold the requirement over the whole workspace.")
+    if unreachable:
+        text += f" {unreachable} map poses are out of reach and left blank."
+    return text
+
+
+def _front_figure(summary: dict):
+    pf = summary["pareto_front"]
+    fig = go.Figure(go.Scatter(x=pf["normalised_error"], y=pf["cost"], mode="markers", name="NSGA-II front",
+                               marker={"color": "#1f77b4", "size": 6}))
+    for key, (label, sym) in {"cheapest_feasible": ("NSGA-II cheapest feasible", "circle-open"),
+                              "knee": ("NSGA-II knee", "hexagon-open")}.items():
+        p = summary.get("nsga2", {}).get(key)
+        if p is not None:
+            fig.add_scatter(x=[p["normalised_error"]], y=[p["cost"]], mode="markers", name=label,
+                            marker={"symbol": sym, "size": 16, "color": "#1f77b4", "line": {"width": 2}})
+    for m, r in summary["results"].items():
+        sym, col = MARKS.get(m, ("x", "#7f7f7f"))
+        label = "certified optimum" if m == "optimum" and (r.get("verdict") or "").startswith("certified optimal") else m
+        fig.add_scatter(x=[r["normalised_error"]], y=[r["cost"]], mode="markers", name=label,
+                        marker={"symbol": sym, "color": col, "size": 15, "line": {"color": "black", "width": 1}})
+    fig.add_vline(x=1.0, line_dash="dash", line_color="grey", annotation_text="requirement")
+    fig.update_layout(title="Cost vs. normalised error (max error / requirement): NSGA-II front and the methods",
+                      xaxis_title="max error / requirement", yaxis_title="cost", height=480)
+    return fig
+
+
+def _convergence_figure(method: str, history: dict):
+    fig = go.Figure()
+    fig.add_scatter(x=history["generation"], y=history["best_fitness"], name="best")
+    fig.add_scatter(x=history["generation"], y=history["mean_fitness"], name="mean")
+    fig.update_layout(title=f"{method} convergence", xaxis_title="generation", yaxis_title="fitness", yaxis_type="log",
+                      height=360)
+    return fig
+
+
+def _linearisation_rows(summary: dict) -> list[list]:
+    rows = []
+    for m, mc in summary["monte_carlo"].items():
+        e = mc.get("linearisation_error")
+        rows.append([m, mc["n_samples"], f"{mc['max_exceed_rate']:.2%}",
+                     f"{mc['max_exceed_rate_nonlinear']:.2%}" if "max_exceed_rate_nonlinear" in mc else "–",
+                     "–" if e is None else f"{100 * e:.3g} %",
+                     mc.get("linearisation_verdict") or "no nonlinear model: first-order only"])
+    return rows
+
+
+def render_user_study(summary: dict) -> Report:
+    """The HTML report of ``evotol run`` from its JSON summary (see the module docstring)."""
+    u = _units(summary)
+    req = ", ".join(f"{c} ≤ {_error_text(summary, c, v)}" for c, v in summary["requirement"].items())
+    rep = Report(f"evotol study: {summary['name']}",
+                 f"{summary['robot']}, {summary['n_poses']} poses, measure {summary['measure']}, requirement {req}; "
+                 f"lengths in {u.length}, angles in {u.angle} (the JSON holds SI values)")
+    if summary.get("interrupted"):
+        what = summary.get("interruption", {})
+        rep.text(f"Interrupted (Ctrl-C): stopped {', '.join(what.get('stopped', []))}"
+                 + (f"; not run: {', '.join(what['skipped'])}" if what.get("skipped") else "")
+                 + ". The results below are what was computed until then; a GA or NSGA-II that was "
+                   "stopped reports its best design so far.", note=True)
+    for line in summary.get("warnings", []):
+        rep.text(f"Warning: {line}", note=True)
+    rep.heading("Results")
+    rows, header = top_table_rows(summary)
+    rep.table(rows, header, table_id="top")
+    rep.heading("Allocated tolerances")
+    rows, header = tolerance_rows(summary)
+    rep.table(rows, header, table_id="tolerances")
+    if summary.get("exports"):
+        rep.text("The tolerance table as a drawing carries it: " + ", ".join(
+            f'<a href="{html.escape(p)}">{html.escape(p)}</a>' for p in summary["exports"].values()) + ".", raw=True)
+    if "pareto_front" in summary:
+        rep.heading("NSGA-II front")
+        over = summary.get("nsga2", {}).get("cheapest_feasible_over_optimum")
+        if over is not None:
+            rep.text(f"The front's cheapest feasible point costs {100 * over:.3g} % more than the certified optimum: "
+                     "NSGA-II approximates the front, the optimum is proven.", note=True)
+        rep.figure(_front_figure(summary), div_id="front")
+    for m, r in summary["results"].items():
+        rep.heading(f"{m}")
+        for comp in summary["requirement"]:
+            if m in summary["figures"].get("error_maps", {}):
+                rep.figure(_error_map_figure(summary, m, comp), div_id=f"map-{m}-{comp}")
+                rep.text(map_caption(summary, m, comp))
+            c = r["contributions"].get(comp)
+            if c:
+                unit_of = {s["name"]: s["unit"] for s in summary["sources"]}
+                group_of = {s["name"]: s["group"] for s in summary["sources"]}
+                rows = [[s, group_of[s], u.format(r["tolerances"][s], unit_of[s], sign="±"), pc]
+                        for s, pc in zip(c["source"], c["percent"])]
+                rep.text(f"Contributions to the {comp} error at the worst pose "
+                         f"(#{r['worst_pose'][comp]}: {pose_cells(summary, r['worst_pose_coordinates'][comp])}):")
+                rep.table(rows, ["source", "group", "tolerance", "share (%)"])
+        if r.get("history"):
+            rep.figure(_convergence_figure(m, r["history"]), div_id=f"conv-{m}")
+        if r.get("diagnostics", {}).get("solver_message_meaning"):
+            rep.text("Note: " + r["diagnostics"]["solver_message_meaning"] + ".")
+    if summary["monte_carlo"]:
+        rep.heading("Monte Carlo and the linearisation check")
+        rep.table(_linearisation_rows(summary), ["method", "samples", "exceed rate (first-order)",
+                                                 "exceed rate (nonlinear)", "linearisation error", "verdict"])
+    explorer_section(rep, summary)
+    return rep

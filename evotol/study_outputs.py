@@ -1,0 +1,150 @@
+"""What ``evotol run`` writes about a user study: the JSON summary its report is drawn from.
+
+:func:`study_summary` turns a problem, its allocations, the NSGA-II front and the Monte Carlo
+checks into plain data (SI, with the ``units`` block of docs/units.md): per method the worst pose
+and its coordinates, the errors at every pose, the contributions at the worst pose, the normalised
+error (where the method sits next to the front); the error maps over workspace slices
+(:mod:`evotol.workspace_map`); the NSGA-II front's cheapest feasible point and knee, and how far
+the cheapest is above the certified optimum; the explorer's data (:mod:`evotol.explorer_data`).
+:func:`evotol.reporting.user_study.render_user_study` draws the page from it alone.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from evotol.display import DisplayUnits, error_unit
+from evotol.explorer_data import explorer_data
+from evotol.problem import ToleranceProblem
+from evotol.units import COUNT, RELATIVE, make_units_block
+from evotol.workspace_map import DEFAULT_N, error_map_slices
+
+_PER_SOURCE = "m or rad (the source's unit, see units.tolerances)"
+_COORD = "workspace coordinate, SI (see workspace.units)"
+#: units of the keys this module adds to a user study's JSON (docs/units.md)
+KEYS = {
+    "low": _COORD, "high": _COORD, "display_scale": "display unit per SI unit (see workspace.display_units)",
+    "poses": _COORD, "x": _COORD, "y": _COORD, "fixed": _COORD, "worst_pose_coordinates": _COORD,
+    "unreachable": COUNT, "dim": COUNT, "row": "index", "members": "index", "owner": "index",
+    "rho": RELATIVE + ": half-width per unit t", "kappa": RELATIVE + ": centre shift per unit t",
+    "width": RELATIVE + ": width the cost model sees per unit t", "cost_weight": RELATIVE,
+    "offset": _PER_SOURCE, "locked": _PER_SOURCE, "lower": _PER_SOURCE, "upper": _PER_SOURCE, "starts": _PER_SOURCE,
+    "params": "cost-model coefficients (t in units of scale)", "scale": _PER_SOURCE + ": the cost model's unit of t",
+    "limit": "m or rad (the component's unit)", "directions": "1: unit direction vector", "covering_angle": "rad",
+    "blocks": "m or rad per unit source error (first-order sensitivity B_j)",
+    "sensitivity": "m or rad per unit source error (spectral norm of B_j)",
+    "guaranteed": RELATIVE + ": 1 - cos(covering angle), the page's largest possible shortfall",
+    "measured": RELATIVE + ": largest 1 - sampled / certified worst case (largest error of a design)",
+    "measured_any_pose": RELATIVE + ": largest 1 - sampled / certified worst case (any pose)",
+    "worst_pose_agrees": "1: fraction of designs whose sampled worst pose is the certified one",
+    "yield_at_worst_pose": "1: first-order yield (lower bound) at the worst pose",
+    "required_yield": "1: required probability",
+    "best_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
+    "mean_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
+}
+
+
+def study_units_block(problem: ToleranceProblem) -> dict:
+    """The ``units`` block of a user study's JSON."""
+    return make_units_block(keys=KEYS, tolerances=dict(zip(problem.names, problem.units())))
+
+
+def result_details(problem: ToleranceProblem, r) -> dict:
+    """Per-method additions to ``AllocationResult.to_dict``: normalised error, worst pose (index
+    and SI coordinates) and errors at every pose per component, contributions at the worst pose,
+    the yield at the worst pose for a yield design."""
+    d = {"normalised_error": float(r.errors.violation[0] + 1), "worst_pose": {}, "worst_pose_coordinates": {},
+         "errors_per_pose": {}, "contributions": {}}
+    for comp, _ in problem.components:
+        p = r.worst_pose(comp)
+        d["worst_pose"][comp] = p
+        d["worst_pose_coordinates"][comp] = problem.poses[p].tolist()
+        d["errors_per_pose"][comp] = getattr(r.errors, comp)[0].tolist()
+        if getattr(r.errors, f"{comp}_contrib") is not None:
+            c = r.contributions(comp)
+            d["contributions"][comp] = {"source": c["source"].tolist(), "percent": c["percent"].tolist()}
+    if r.history is not None and len(r.history) and {"best_fitness", "mean_fitness"} <= set(r.history):
+        d["history"] = {k: r.history[k].tolist() for k in ("generation", "best_fitness", "mean_fitness")}
+    if r.errors.probability is not None:
+        d["yield_at_worst_pose"] = float(np.min(r.errors.probability[0]))
+        d["required_yield"] = problem.requirement.required_yield
+    return d
+
+
+def front_summary(problem: ToleranceProblem, front, results: dict) -> dict:
+    """The NSGA-II front's cheapest feasible point and knee (row, cost, normalised error, largest
+    errors, tolerances), and the cheapest's cost over the certified optimum's when there is one."""
+    table = front.table
+    out = {}
+    rows = {"knee": int(front.knee())}
+    feasible = table.index[table["normalised_error"] <= 1 + 1e-9]
+    if len(feasible):
+        rows["cheapest_feasible"] = int(table.loc[feasible, "cost"].idxmin())
+    for key, i in rows.items():
+        row = table.iloc[i]
+        out[key] = {"row": i, "cost": float(row["cost"]), "normalised_error": float(row["normalised_error"]),
+                    **{f"max_{c}_error": float(row[f"{c}_error"]) for c, _ in problem.components},
+                    "tolerances": {n: float(row[n]) for n in problem.names}}
+    opt = results.get("optimum")
+    if "cheapest_feasible" in out and opt is not None and opt.verdict and opt.verdict.startswith("certified optimal"):
+        out["cheapest_feasible_over_optimum"] = out["cheapest_feasible"]["cost"] / opt.cost - 1
+    return out
+
+
+def study_summary(name: str, problem: ToleranceProblem, results: dict, front, checks: dict, *, seed: int,
+                  units: DisplayUnits, seconds: float, maps: bool = True) -> dict:
+    """The JSON-ready summary of a user study (see the module docstring).
+
+    Parameters
+    ----------
+    name : str
+    problem : ToleranceProblem
+    results : dict
+        Method -> :class:`evotol.result.AllocationResult`.
+    front : evotol.pareto.ParetoFront or None
+        The NSGA-II front, if NSGA-II ran.
+    checks : dict
+        Method -> ``MonteCarloResult.to_dict()``.
+    seed : int
+    units : DisplayUnits
+        The study's display units (stored; values stay SI).
+    seconds : float
+    maps : bool
+        Compute the error maps over workspace slices.
+
+    Returns
+    -------
+    dict
+    """
+    ws = problem.robot.workspace
+    summary = {"name": name, "problem": problem.describe(), "seed": seed, "measure": problem.requirement.measure,
+               "requirement": {c: lim for c, lim in problem.components},
+               "error_units": {c: error_unit(problem, c) for c, _ in problem.components},
+               "display_units": units.to_dict(),
+               "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
+                             "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high)},
+               "robot": problem.robot.name, "n_poses": problem.n_poses, "poses": problem.poses.tolist(),
+               "sources": [{"name": n, "group": s.group, "unit": s.unit, "dim": s.dim}
+                           for n, s in zip(problem.names, problem.robot.sources)],
+               "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
+               "monte_carlo": checks, "seconds": seconds, "figures": {}}
+    if front is not None:
+        summary["pareto_front"] = front.table.to_dict(orient="list")
+        summary["nsga2"] = front_summary(problem, front, results)
+    continuous = tuple(ws.units) != ("1",) and any(h > lo for lo, h in zip(ws.low, ws.high))
+    if maps and results and not continuous:
+        summary["figures"]["error_maps_note"] = ("no error map: the workspace is a list of responses "
+                                                 "(an assembly), not a continuous range")
+    if maps and results and continuous:
+        names = list(results)
+        T = np.array([results[m].t for m in names])
+        first = results[names[0]]
+        anchor = problem.poses[first.worst_pose(problem.components[0][0])]
+        n = 11 if problem.clearances is not None else DEFAULT_N    # the certified engine is slower per pose
+        slices = error_map_slices(problem, T, anchor, n)
+        summary["figures"]["error_maps"] = {
+            m: [{**{k: v for k, v in s.items() if k != "values"},
+                 "values": {c: s["values"][c][i] for c in s["values"]}} for s in slices]
+            for i, m in enumerate(names)}
+    summary["explorer"] = explorer_data(problem, {m: r.t for m, r in results.items()}, seed)
+    summary["units"] = study_units_block(problem)
+    return summary
