@@ -86,8 +86,9 @@ def number(v: float, digits: int = 4) -> str:
     if v == 0 or not math.isfinite(v):
         return f"{v:g}"
     if 1e-4 <= abs(v) < 1e6:
-        decimals = max(0, digits - 1 - int(math.floor(math.log10(abs(v)))))
-        return f"{v:.{decimals}f}"
+        r = float(f"{v:.{digits - 1}e}")        # rounded first: 0.0999999 -> 0.1000, not 0.10000
+        decimals = max(0, digits - 1 - int(math.floor(math.log10(abs(r)))))
+        return f"{r:.{decimals}f}"
     return f"{v:.{digits - 1}e}"
 
 

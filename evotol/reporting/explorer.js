@@ -133,7 +133,10 @@
     digits = digits || 4;
     if (v === 0 || !isFinite(v)) return String(v);
     var a = Math.abs(v);
-    if (a >= 1e-4 && a < 1e6) return v.toFixed(Math.max(0, digits - 1 - Math.floor(Math.log10(a))));
+    if (a >= 1e-4 && a < 1e6) {
+      var r = +v.toExponential(digits - 1);   /* rounded first: 0.0999999 -> 0.1000 */
+      return r.toFixed(Math.max(0, digits - 1 - Math.floor(Math.log10(Math.abs(r)))));
+    }
     return v.toExponential(digits - 1);
   }
   function factor(unit) { return cfg.factors[unit] !== undefined ? cfg.factors[unit] : 1; }

@@ -1,0 +1,119 @@
+"""Issue 25 item 2: the report of a user study (evotol run) -- top table with the worst pose where it
+is, error maps over the continuous workspace, the NSGA-II front with the methods marked, the yield
+column and the linearisation verdict -- drawn from its JSON alone."""
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evotol.display import number
+from evotol.reporting.user_study import render_user_study, top_table_rows
+from evotol.studyfile import load_problem, run_study_file
+
+STUDIES = Path(__file__).resolve().parents[1] / "reports" / "studies"
+
+
+def _run(tmp_path_factory, name: str, replace: list[tuple[str, str]], methods: str, verify: str = "n_samples = 40"):
+    d = tmp_path_factory.mktemp(name)
+    text = (STUDIES / f"{name}.toml").read_text()
+    for a, b in replace:
+        text = text.replace(a, b)
+    text = text[:text.index("[methods]")] + f"[methods]\n{methods}\n[verify]\n{verify}\n"
+    (d / f"{name}.toml").write_text(text)
+    summary = run_study_file(d / f"{name}.toml", out=d)
+    return d, summary, tomllib.loads(text)
+
+
+@pytest.fixture(scope="module")
+def planar(tmp_path_factory):
+    return _run(tmp_path_factory, "planar3rrr", [("grid = [5, 5, 3]", "grid = [3, 3, 2]")],
+                "sensitivity = {}\noptimum = {}\nga = { pop_size = 20, n_gen = 15 }\nnsga2 = { pop_size = 40, n_gen = 40 }\n")
+
+
+def test_page_is_drawn_from_the_json_alone(planar):
+    d, summary, _ = planar
+    data = json.loads((d / "planar3rrr.json").read_text())
+    assert render_user_study(data).render() == (d / "planar3rrr.html").read_text()
+
+
+def test_top_table_has_cost_error_worst_pose_in_workspace_coordinates_and_the_certificate(planar):
+    d, _, spec = planar
+    data = json.loads((d / "planar3rrr.json").read_text())
+    rows, header = top_table_rows(data)
+    assert header[2] == "max position error (requirement 0.1000 mm)"
+    by_method = {r[0]: r for r in rows}
+    problem = load_problem(spec, base_dir=STUDIES)
+    for m, r in data["results"].items():
+        p = r["worst_pose"]["position"]
+        x, y, phi = problem.poses[p]
+        row = by_method[m]
+        assert row[2] == f"{number(r['max_position_error'] * 1e3)} mm"
+        assert row[3] == f"#{p}: x = {number(x * 1e3)} mm, y = {number(y * 1e3)} mm, phi = {number(math.degrees(phi))} deg"
+    assert by_method["optimum"][5].startswith("certified optimal")
+    assert by_method["ga"][5].startswith("none")                   # no certificate: said, not left blank
+    assert "NSGA-II knee" in by_method
+    page = (d / "planar3rrr.html").read_text()
+    assert "4.4665e-05" not in page and "e-05" not in page.split('id="explorer-data"')[0].split("<h2>NSGA-II")[0]
+
+
+def test_error_map_values_are_the_problem_errors_at_those_workspace_poses(planar):
+    d, _, spec = planar
+    data = json.loads((d / "planar3rrr.json").read_text())
+    problem = load_problem(spec, base_dir=STUDIES)
+    names = data["workspace"]["names"]
+    rng = np.random.default_rng(0)
+    for m in ("optimum", "ga"):
+        t = problem.as_array(data["results"][m]["tolerances"])
+        slices = data["figures"]["error_maps"][m]
+        assert len(slices) >= 2 and all(s["x_name"] == "x" and s["y_name"] == "y" for s in slices)
+        for s in slices:
+            z = np.asarray(s["values"]["position"])
+            assert z.shape == (len(s["y"]), len(s["x"])) == (21, 21)
+            for i, j in rng.integers(0, 21, size=(3, 2)):
+                pose = [s["x"][j], s["y"][i], s["fixed"]["phi"]]
+                direct = problem.at_poses([pose]).evaluate(t[None]).position[0, 0]
+                assert z[i, j] == pytest.approx(direct, rel=1e-9)
+        # every allocation pose on a slice: the map's value there is the allocation's own error
+        errs = data["results"][m]["errors_per_pose"]["position"]
+        hits = 0
+        for k, pose in enumerate(data["poses"]):
+            for s in slices:
+                if np.isclose(pose[2], s["fixed"]["phi"]) and pose[0] in s["x"] and pose[1] in s["y"]:
+                    z = np.asarray(s["values"]["position"])
+                    assert z[s["y"].index(pose[1]), s["x"].index(pose[0])] == pytest.approx(errs[k], rel=1e-6)
+                    hits += 1
+        assert hits >= 4
+    assert set(names) == {"x", "y", "phi"}
+
+
+def test_front_marks_and_the_cheapest_feasible_point_against_the_optimum(planar):
+    d, _, _ = planar
+    data = json.loads((d / "planar3rrr.json").read_text())
+    front = data["pareto_front"]
+    nsga = data["nsga2"]
+    cost, err = np.asarray(front["cost"]), np.asarray(front["normalised_error"])
+    ok = err <= 1 + 1e-9
+    if ok.any():
+        i = int(np.flatnonzero(ok)[np.argmin(cost[ok])])
+        assert nsga["cheapest_feasible"]["row"] == i
+        assert nsga["cheapest_feasible_over_optimum"] == pytest.approx(cost[i] / data["results"]["optimum"]["cost"] - 1)
+        assert nsga["cheapest_feasible_over_optimum"] >= -1e-6          # the certified optimum is a lower bound
+    # the methods sit on the plot where their own cost and normalised error are
+    for m, r in data["results"].items():
+        assert r["normalised_error"] == pytest.approx(max(r["max_position_error"] / 1e-4, 0), rel=1e-9)
+    page = (d / "planar3rrr.html").read_text()
+    assert "certified optimum" in page and "NSGA-II knee" in page
+
+
+def test_yield_study_has_a_yield_column(tmp_path_factory):
+    d, summary, _ = _run(tmp_path_factory, "ucr3_yield", [("grid = [5, 5, 3]", "grid = [2, 2, 2]")],
+                         "equal = {}\n", "n_samples = 200\nmethod = \"mc\"")
+    rows, header = top_table_rows(summary)
+    col = header.index("yield at the worst pose (first-order; required)")
+    r = summary["results"]["equal"]
+    assert rows[0][col].startswith(f"{r['yield_at_worst_pose']:.6f} (required 0.9973); Monte Carlo:")
