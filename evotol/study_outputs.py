@@ -27,7 +27,8 @@ KEYS = {
     "unreachable": COUNT, "dim": COUNT, "row": "index", "members": "index", "owner": "index",
     "rho": RELATIVE + ": half-width per unit t", "kappa": RELATIVE + ": centre shift per unit t",
     "width": RELATIVE + ": width the cost model sees per unit t", "cost_weight": RELATIVE,
-    "offset": _PER_SOURCE, "locked": _PER_SOURCE, "lower": _PER_SOURCE, "upper": _PER_SOURCE, "starts": _PER_SOURCE,
+    "offset": _PER_SOURCE, "nominal": _PER_SOURCE, "minus": RELATIVE + ": lower deviation per unit t",
+    "plus": RELATIVE + ": upper deviation per unit t", "locked": _PER_SOURCE, "lower": _PER_SOURCE, "upper": _PER_SOURCE, "starts": _PER_SOURCE,
     "params": "cost-model coefficients (t in units of scale)", "scale": _PER_SOURCE + ": the cost model's unit of t",
     "limit": "m or rad (the component's unit)", "directions": "1: unit direction vector", "covering_angle": "rad",
     "blocks": "m or rad per unit source error (first-order sensitivity B_j)",
@@ -48,12 +49,42 @@ def study_units_block(problem: ToleranceProblem) -> dict:
     return make_units_block(keys=KEYS, tolerances=dict(zip(problem.names, problem.units())))
 
 
+def source_nominals(robot) -> dict[str, float]:
+    """Nominal values (SI) of the sources where the model knows them: an assembly's dimensions, a
+    mechanism description's named lengths and angles; none for joint errors and encoder offsets."""
+    inner = getattr(robot, "robot", robot)        # clearances.WithClearances wraps the robot
+    if hasattr(inner, "dimension_names") and hasattr(inner, "x0"):
+        return {n: float(v) for n, v in zip(inner.dimension_names, np.ravel(inner.x0))}
+    mech = getattr(inner, "mechanism", None)
+    if mech is not None:
+        return {n: float(v) for table in (getattr(mech, "lengths", {}), getattr(mech, "angles", {}))
+                for n, v in table.items() if np.isscalar(v)}
+    return {}
+
+
+def source_table(problem: ToleranceProblem) -> list[dict]:
+    """Per source: name, group, SI unit, dimension, nominal (SI, where known), the interval
+    [offset − minus·t, offset + plus·t], and whether it is fixed (no cost) or locked."""
+    nominal = source_nominals(problem.robot)
+    out = []
+    for j, (n, s) in enumerate(zip(problem.names, problem.robot.sources)):
+        tol = problem.tolerances[n]
+        row = {"name": n, "group": s.group, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset),
+               "minus": float(tol.minus), "plus": float(tol.plus), "fixed": bool(tol.is_fixed),
+               "locked": None if tol.locked is None else float(tol.locked)}
+        if n in nominal:
+            row["nominal"] = nominal[n]
+        out.append(row)
+    return out
+
+
 def result_details(problem: ToleranceProblem, r) -> dict:
     """Per-method additions to ``AllocationResult.to_dict``: normalised error, worst pose (index
     and SI coordinates) and errors at every pose per component, contributions at the worst pose,
     the yield at the worst pose for a yield design."""
     d = {"normalised_error": float(r.errors.violation[0] + 1), "worst_pose": {}, "worst_pose_coordinates": {},
-         "errors_per_pose": {}, "contributions": {}}
+         "errors_per_pose": {}, "contributions": {},
+         "source_costs": dict(zip(problem.names, problem.source_costs(r.t).tolist()))}
     for comp, _ in problem.components:
         p = r.worst_pose(comp)
         d["worst_pose"][comp] = p
@@ -123,8 +154,7 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
                "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
                              "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high)},
                "robot": problem.robot.name, "n_poses": problem.n_poses, "poses": problem.poses.tolist(),
-               "sources": [{"name": n, "group": s.group, "unit": s.unit, "dim": s.dim}
-                           for n, s in zip(problem.names, problem.robot.sources)],
+               "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
                "monte_carlo": checks, "seconds": seconds, "figures": {}}
     if front is not None:

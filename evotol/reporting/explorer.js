@@ -114,8 +114,16 @@
       var r = Math.sqrt(tot), val = ev.rss[p];
       for (var j3 = 0; j3 < NS; j3++) out[j3] = tot > 0 ? sq[j3] / tot * (val > 0 ? r / val : 1) : 0;
     } else {
-      var base = (p * pc.ND + ev.dir[p]) * NS, h = ev.wc[p];
-      for (var j2 = 0; j2 < NS; j2++) out[j2] = h > 0 ? t[j2] * pc.c[base + j2] / h : 0;
+      /* evotol.measures.worst_case: (rho t |B_j^T u| + (offset + kappa t) b_j.u) / h at the worst direction */
+      var base = (p * pc.ND + ev.dir[p]) * NS, h = ev.wc[p], u = pc.comp.directions[ev.dir[p]], B = pc.comp.blocks[p];
+      for (var j2 = 0; j2 < NS; j2++) {
+        var s = E.sources[j2], v = t[j2] * pc.c[base + j2];
+        if (s.dim === 1 && s.offset !== 0) {
+          var k = pc.comp.owner.indexOf(j2);
+          v += s.offset * (B[0][k] * u[0] + B[1][k] * u[1] + B[2][k] * u[2]);
+        }
+        out[j2] = h > 0 ? v / h : 0;
+      }
     }
     return out;
   }
@@ -159,6 +167,7 @@
     COMPS.forEach(function (pc) {
       var ev = errors(pc, t), key = measure === "rss" ? ev.rss : ev.wc, p = argmax(key);
       res.components[pc.name] = {wc: Array.from(ev.wc), rss: Array.from(ev.rss), worst_pose: p,
+        direction: pc.comp.directions[ev.dir[p]],
         worst_pose_wc: argmax(ev.wc), worst_pose_rss: argmax(ev.rss),
         contributions: Array.from(contributions(pc, t, ev, measure === "rss" ? "rss" : "wc", p))};
     });
