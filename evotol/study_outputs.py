@@ -15,7 +15,7 @@ import numpy as np
 from evotol.display import DisplayUnits, error_unit
 from evotol.explorer_data import explorer_data
 from evotol.problem import ToleranceProblem
-from evotol.units import COUNT, RELATIVE, make_units_block
+from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.workspace_map import DEFAULT_N, error_map_slices
 
 _PER_SOURCE = "m or rad (the source's unit, see units.tolerances)"
@@ -38,7 +38,7 @@ KEYS = {
     "measured_any_pose": RELATIVE + ": largest 1 - sampled / certified worst case (any pose)",
     "worst_pose_agrees": "1: fraction of designs whose sampled worst pose is the certified one",
     "yield_at_worst_pose": "1: first-order yield (lower bound) at the worst pose",
-    "required_yield": "1: required probability",
+    "required_yield": "1: required probability", "source_costs": COST,
     "best_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
     "mean_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
 }

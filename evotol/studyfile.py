@@ -35,6 +35,8 @@ from evotol.outputs import check_not_overwriting
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.process_studyfile import run_process_study
 from evotol.quality_loss import with_quality_loss
+from evotol.reporting.export import FORMATS as EXPORT_FORMATS
+from evotol.reporting.export import write_tolerance_table
 from evotol.reporting.user_study import render_user_study
 from evotol.studies import StudyResult, write_outputs
 from evotol.study_outputs import study_summary
@@ -287,7 +289,11 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["interrupted"] = bool(stopped)
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
+    if results:     # the drawing table, linked from the page (evotol/reporting/export.py)
+        summary["exports"] = {k: f"{name}_tolerances.{k}" for k in EXPORT_FORMATS}
     rep = render_user_study(summary)
     paths = write_outputs(name, out, StudyResult(summary), rep)
+    for f in summary.get("exports", {}).values():
+        write_tolerance_table(summary, out / f)
     summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary

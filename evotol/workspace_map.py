@@ -3,7 +3,7 @@
 An allocation is computed (and certified) on a finite set of poses; the map shows what it does
 between them. Each slice varies two workspace coordinates over their whole range on an
 ``n × n`` grid and holds the others at the worst allocation pose's values (for a 3-D workspace
-also at the third coordinate's low and high ends). Every grid pose is evaluated exactly under the
+the third coordinate at its low end, middle and high end, and at the worst pose's value). Every grid pose is evaluated exactly under the
 problem's own measure (:meth:`evotol.problem.ToleranceProblem.evaluate`), so the largest value on
 a map may exceed the largest value over the allocation poses: that is a pose the allocation set
 missed (``evotol run``'s ``[poses] refine`` adds such poses).
@@ -53,8 +53,11 @@ def slice_specs(workspace, anchor, n: int = DEFAULT_N) -> list[dict]:
     anchors = [anchor]
     if workspace.dim == 3 and others and others[0] in varied:
         k = others[0]
-        anchors = [np.where(np.arange(3) == k, v, anchor) for v in (lo[k], anchor[k], hi[k])]
-        anchors = [a for i, a in enumerate(anchors) if not any(np.isclose(a[k], b[k]) for b in anchors[:i])]
+        values = [lo[k], anchor[k], hi[k]]
+        if np.isclose(anchor[k], lo[k]) or np.isclose(anchor[k], hi[k]):
+            values.insert(1, 0.5 * (lo[k] + hi[k]))          # an end anchor: the middle slice too
+        values = sorted(v for i, v in enumerate(values) if not any(np.isclose(v, w) for w in values[:i]))
+        anchors = [np.where(np.arange(3) == k, v, anchor) for v in values]
     specs = []
     for a in anchors:
         axis_values = [np.linspace(lo[i], hi[i], n) for i in axes]

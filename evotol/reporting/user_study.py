@@ -170,7 +170,7 @@ def _error_map_figure(summary: dict, method: str, comp: str):
                         hovertemplate=f"{xn} %{{x:.4g}}<br>{yn} %{{y:.4g}}<br>error %{{z:.4g}} {u.unit_for(eu)}<extra></extra>")
         fig.add_contour(x=x, y=y, z=z, contours={"start": lim, "end": lim, "coloring": "none", "showlabels": True},
                         line={"color": "white", "width": 2, "dash": "dash"}, showscale=False, hoverinfo="skip",
-                        row=1, col=i, name="requirement")
+                        row=1, col=i, name="requirement", showlegend=False)
         ix, iy = ws["names"].index(xn), ws["names"].index(yn)
         fig.add_scatter(x=poses[:, ix] * scale[xn], y=poses[:, iy] * scale[yn], mode="markers", row=1, col=i,
                         marker={"color": "white", "size": 5, "line": {"color": "black", "width": 1}},

@@ -1,0 +1,42 @@
+"""``evotol export STUDY.json``: the allocated tolerance table as a drawing carries it (CSV or Excel).
+
+Reads the JSON that ``evotol run`` wrote and writes, per source, the name, group, nominal (where
+known), the tolerance ± in the study's display units and the limit deviations, the process, the
+source's share of the cost and its contribution at the worst pose (evotol/reporting/export.py).
+An ``.xlsx`` file holds an ``about`` sheet and one sheet per method; a ``.csv`` file one method
+(default: the certified optimum, else the cheapest method that meets the requirement).
+"""
+from __future__ import annotations
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("export", help="write a user study's tolerance table as CSV or Excel (drawing units)",
+                              description=__doc__.split("\n\n", 1)[1])
+    p.add_argument("study_json", help="the NAME.json that 'evotol run' wrote")
+    p.add_argument("--method", default=None, help="the allocation to export (default: optimum, else the cheapest "
+                                                  "feasible method; an .xlsx file otherwise holds every method)")
+    p.add_argument("--out", default=None, help="output file ending in .csv or .xlsx (default: NAME_tolerances.xlsx "
+                                               "beside the JSON)")
+    p.set_defaults(func=cmd_export)
+
+
+def cmd_export(args) -> int:
+    import json
+    from pathlib import Path
+
+    from evotol.errors import ValidationError
+    from evotol.outputs import input_file
+    from evotol.reporting.export import write_tolerance_table
+
+    path = input_file(args.study_json, "study JSON", "the NAME.json written by 'evotol run'")
+    try:
+        summary = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValidationError("study JSON", str(path), f"a JSON file ({exc})") from None
+    if not isinstance(summary, dict) or "display_units" not in summary or "sources" not in summary:
+        raise ValidationError("study JSON", str(path), "the JSON of a user study written by 'evotol run' "
+                                                       "(with display_units and sources)")
+    out = Path(args.out) if args.out else Path(path).with_name(f"{summary['name']}_tolerances.xlsx")
+    written = write_tolerance_table(summary, out, args.method)
+    print(f"[evotol] wrote {written}")
+    return 0

@@ -1,0 +1,130 @@
+"""The allocated tolerance table as a drawing carries it: CSV and an Excel workbook.
+
+Per source: name, group, nominal (where the model knows it), the tolerance ± in display units
+(and the limit deviations for an asymmetric interval [offset − minus·t, offset + plus·t]),
+the process (where the study selected one), the source's share of the cost and its contribution
+to the error at the worst pose. Read from a user study's JSON summary
+(:mod:`evotol.study_outputs`) alone, so ``evotol export NAME.json`` writes the same table as
+``evotol run``. The workbook is written by pandas through openpyxl: one sheet per method and an
+``about`` sheet (study, units, requirement, status of each method).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from evotol.display import DisplayUnits
+from evotol.errors import ValidationError
+
+FORMATS = ("csv", "xlsx")
+
+
+def chosen_method(summary: dict) -> str:
+    """The allocation a drawing would carry: the certified optimum when it meets the requirement,
+    else the cheapest method that meets it, else the first method run."""
+    results = summary.get("results") or {}
+    if not results:
+        raise ValidationError("results", None, "a study summary with at least one allocation")
+    opt = results.get("optimum")
+    if opt is not None and opt.get("feasible"):
+        return "optimum"
+    ok = [m for m, r in results.items() if r.get("feasible") and "budget" not in r]
+    return min(ok, key=lambda m: results[m]["cost"]) if ok else next(iter(results))
+
+
+def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
+    """The drawing table of one method's allocation (default :func:`chosen_method`).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (``evotol run``).
+    method : str, optional
+        A method of ``summary["results"]``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns: source, group, unit (display), nominal, ± tolerance, lower deviation, upper
+        deviation (display units; the deviations from the nominal that the interval allows),
+        process, cost share (%), contribution (%) to the first constrained component's error at
+        the worst pose.
+
+    Raises
+    ------
+    ValidationError
+        An unknown method.
+    """
+    method = method or chosen_method(summary)
+    results = summary.get("results") or {}
+    if method not in results:
+        raise ValidationError("method", method, f"one of {sorted(results)}")
+    r = results[method]
+    u = DisplayUnits(**summary["display_units"])
+    comp = next(iter(summary["requirement"]))
+    share = dict(zip(r["contributions"].get(comp, {}).get("source", []), r["contributions"].get(comp, {}).get("percent", [])))
+    costs = r.get("source_costs", {})
+    total = sum(costs.values())
+    processes = r.get("processes", {})
+    rows = []
+    for s in summary["sources"]:
+        n, k = s["name"], u.factor(s["unit"])
+        t = r["tolerances"][n]
+        rows.append({"source": n, "group": s["group"], "unit": u.unit_for(s["unit"]),
+                     "nominal": s["nominal"] * k if "nominal" in s else None,
+                     "± tolerance": t * k * (s["minus"] + s["plus"]) / 2,
+                     "lower deviation": (s["offset"] - s["minus"] * t) * k,
+                     "upper deviation": (s["offset"] + s["plus"] * t) * k,
+                     "process": processes.get(n, "fixed (bought in)" if s.get("fixed") else ""),
+                     "cost share (%)": 100 * costs.get(n, 0.0) / total if total else 0.0,
+                     f"contribution to the {comp} error at the worst pose (%)": share.get(n)})
+    return pd.DataFrame(rows)
+
+
+def about_table(summary: dict) -> pd.DataFrame:
+    """The ``about`` sheet: study, units, requirement and each method's cost and status."""
+    u = DisplayUnits(**summary["display_units"])
+    rows = [("study", summary["name"]), ("robot", summary["robot"]), ("measure", summary["measure"]),
+            ("length unit", u.length), ("angle unit", u.angle)]
+    rows += [(f"requirement: {c}", u.format(v, summary["error_units"][c])) for c, v in summary["requirement"].items()]
+    rows += [(f"method {m}", f"cost {r['cost']:.6g}; {r.get('status', '')}") for m, r in summary["results"].items()]
+    rows.append(("values", "± tolerance is the half-width (minus + plus)/2·t; deviations are from the nominal"))
+    return pd.DataFrame(rows, columns=["item", "value"])
+
+
+def write_tolerance_table(summary: dict, path, method: str | None = None) -> Path:
+    """Write the drawing table: ``.csv`` (one method, default :func:`chosen_method`) or ``.xlsx``
+    (the ``about`` sheet, then one sheet per method, the chosen one first; ``method`` given: that one).
+
+    Parameters
+    ----------
+    summary : dict
+    path : str or Path
+        Ends in ``.csv`` or ``.xlsx``.
+    method : str, optional
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    ValidationError
+        Another file ending, or an unknown method.
+    """
+    path = Path(path)
+    kind = path.suffix.lower().lstrip(".")
+    if kind not in FORMATS:
+        raise ValidationError("export file", str(path), f"a file name ending in one of {['.' + f for f in FORMATS]}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if kind == "csv":
+        tolerance_table(summary, method).to_csv(path, index=False)
+        return path
+    first = method or chosen_method(summary)
+    methods = [first] if method else [first] + [m for m in summary["results"] if m != first]
+    with pd.ExcelWriter(path, engine="openpyxl") as xl:
+        about_table(summary).to_excel(xl, sheet_name="about", index=False)
+        for m in methods:
+            tolerance_table(summary, m).to_excel(xl, sheet_name=m[:31], index=False)
+    return path
