@@ -37,17 +37,35 @@ __all__ = ["ToleranceProblem", "Tolerance", "Requirement", "Evaluation", "COST_W
 class ToleranceProblem:
     """Tolerance allocation over a robot's workspace (see module docstring).
 
-    robot: a :class:`robots.base.RobotErrorModel`.
-    tolerances: source name -> :class:`Tolerance`, one entry per robot source.
-    requirement: :class:`Requirement`.
-    poses: (n_poses, workspace.dim) array of workspace poses (SI units), at least one.
-    n_directions: hemisphere directions for the worst-case measure (more: tighter bound).
-    shared: group name -> member source names; each group is one tolerance variable.
-    shared_cost: ``"part"`` (default: cost counted for every member) or ``"variable"`` (once).
-    clearances: :class:`evotol.clearances.ClearanceSources` -- joint-clearance classes allocated
-        with the robot's (interval) sources; their names follow the robot's source names, and the
-        ``worst_case`` measure is then the certified engine's (:func:`evotol.clearances.worst_case`).
-        With tolerances for none of the robot's own sources, the problem allocates clearances only.
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        The error model (sources, sensitivities at poses).
+    tolerances : Mapping[str, Tolerance]
+        Source name -> :class:`Tolerance`, one entry per robot source.
+    requirement : Requirement
+        The accuracy to hold at every pose.
+    poses : array_like, shape (n_poses, workspace.dim)
+        Workspace poses (SI units: m, rad), at least one.
+    n_directions : int
+        Hemisphere directions for the worst-case measure (more: tighter bound).
+    shared : Mapping[str, Sequence[str]] or None
+        Group name -> member source names; each group is one tolerance variable.
+    shared_cost : {"part", "variable"}
+        ``"part"`` (default: cost counted for every member) or ``"variable"`` (once).
+    clearances : evotol.clearances.ClearanceSources or None
+        Joint-clearance classes allocated with the robot's (interval) sources; their names follow
+        the robot's source names, and the ``worst_case`` measure is then the certified engine's
+        (:func:`evotol.clearances.worst_case`). With tolerances for none of the robot's own
+        sources, the problem allocates clearances only.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Before any computation: a robot, requirement, tolerance, pose array, ``shared`` group or
+        ``clearances`` that is not what is expected (the message names the field and the value).
+    evotol.errors.KinematicsError
+        A pose out of reach or at a singularity of the robot.
     """
 
     def __init__(self, robot: RobotErrorModel, tolerances: Mapping[str, Tolerance], requirement: Requirement,
@@ -315,7 +333,7 @@ class ToleranceProblem:
         return np.array([self.tolerances[n].interval(t[j]) for j, n in enumerate(self.names)])
 
     def source_errors(self, Z: list[np.ndarray], t: np.ndarray) -> list[np.ndarray]:
-        """Map unit samples Z_j (n, dim_j; |z| <= 1, centred) to errors inside the intervals of
+        """Map unit samples Z_j (n, dim_j; ``|z| <= 1``, centred) to errors inside the intervals of
         design t (SI): e_j = offset_j + κ_j t_j + ρ_j t_j z_j (centred sources: t_j z_j)."""
         sh = self.shape
         out = []

@@ -15,18 +15,39 @@ from evotol.errors import ValidationError
 class Requirement:
     """Accuracy the end-effector must hold at every pose.
 
-    position: bound on |δp| (m), or None; orientation: bound on |δθ| (rad), or None.
-    measure: the name of a registered measure (:mod:`evotol.accuracy.registry`); built in:
-        ``"worst_case"`` (exact for the linear model, see :mod:`evotol.measures`),
-        ``"rss"`` (root sum square of the sources' worst-case effects), or ``"mc_quantile"``
-        (the ``quantile`` of |δp| over ``mc_samples`` Latin-hypercube samples, linear model), or
-        ``"yield"``: at every pose P(|δp| ≤ position and |δθ| ≤ orientation) ≥ ``probability``
-        for the first-order model (:mod:`evotol.statistical`; Bonferroni bound for both).
-    probability: required yield of the ``yield`` measure in (0, 1) (default 0.9973 = 3σ), or
-    ppm: the same given as allowed defects per million (probability = 1 − ppm·1e-6).
-    model: ``"linear"`` (first-order model, exact probability) or ``"nonlinear"`` (``yield`` only:
-        the robot's ``pose_error`` on ``mc_samples`` common Latin-hypercube samples from ``seed``,
-        :class:`evotol.statistical.SampledYield`).
+    Parameters
+    ----------
+    position : float or None
+        Bound on the position error ``|δp|`` (m), or None.
+    orientation : float or None
+        Bound on the orientation error ``|δθ|`` (rad), or None. At least one of the two is given.
+    measure : str
+        The name of a registered measure (:mod:`evotol.accuracy.registry`); built in:
+        ``"worst_case"`` (exact for the linear model, see :mod:`evotol.measures`), ``"rss"`` (root
+        sum square of the sources' worst-case effects), ``"mc_quantile"`` (the ``quantile`` of
+        ``|δp|`` over ``mc_samples`` Latin-hypercube samples, linear model), or ``"yield"``: at
+        every pose P(``|δp|`` ≤ position and ``|δθ|`` ≤ orientation) ≥ ``probability`` for the
+        first-order model (:mod:`evotol.statistical`; Bonferroni bound for both).
+    quantile : float
+        Quantile of the ``mc_quantile`` measure, in (0, 1) (1, dimensionless).
+    mc_samples : int
+        Latin-hypercube samples of the ``mc_quantile`` measure and of the nonlinear ``yield``
+        (at least 10).
+    seed : int
+        Seed of those samples.
+    probability : float or None
+        Required yield of the ``yield`` measure in (0, 1) (default 0.9973 = 3σ), or
+    ppm : float or None
+        the same given as allowed defects per million (probability = 1 − ppm·1e-6).
+    model : {"linear", "nonlinear"}
+        ``"linear"`` (first-order model, exact probability) or ``"nonlinear"`` (``yield`` only:
+        the robot's ``pose_error`` on ``mc_samples`` common Latin-hypercube samples from
+        ``seed``, :class:`evotol.statistical.SampledYield`).
+
+    Notes
+    -----
+    A plain value: nothing is checked at construction. :meth:`validate` (called by
+    :class:`evotol.problem.ToleranceProblem`) raises :class:`evotol.errors.ValidationError`.
     """
 
     position: float | None = None
@@ -47,6 +68,15 @@ class Requirement:
         return 0.9973 if self.probability is None else float(self.probability)
 
     def validate(self) -> None:
+        """Check the requirement.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            No bound, a non-positive bound, an unknown ``measure`` or ``model``, a ``quantile``,
+            ``probability`` or ``ppm`` out of range, both ``probability`` and ``ppm``, fewer
+            than 10 ``mc_samples``.
+        """
         if self.position is None and self.orientation is None:
             raise ValidationError("requirement", self, "a position and/or orientation bound")
         for f in ("position", "orientation"):

@@ -17,24 +17,39 @@ COST_WIDTHS = ("half", "full")
 class Tolerance:
     """Settings of one error source's tolerance (all keyword fields; SI units: m or rad).
 
-    cost: cost model of this tolerance, or None for a fixed source (:meth:`fixed`).
-    lower, upper: allowed range of the tolerance t, 0 < lower <= upper.
-    locked: if given, the tolerance is fixed at this value and not optimised (its cost counts).
-    distribution: how the source is distributed inside its tolerance (Monte Carlo and the
-        ``yield`` measure): a kind name (``"uniform"``, ``"normal"`` with t = 3σ,
-        ``"truncated_normal"``, ``"contact"``) or an :class:`evotol.distributions.Distribution`
-        (``sigma_k``, ``mean_shift``); conventions in :mod:`evotol.distributions`. For an
-        asymmetric interval the distribution is placed on the interval: centre
-        offset + (plus − minus)/2·t, half-width (minus + plus)/2·t.
-    offset, minus, plus (interval sources only): the error lies in
-        ``[offset − minus·t, offset + plus·t]``; ``offset`` is a fixed mean shift (SI),
-        ``minus``/``plus`` fixed ratios (>= 0, not both 0). Default: the centred interval ±t.
-    cost_width: which width the cost model is evaluated on: ``"half"`` (default: the half-width
+    Parameters
+    ----------
+    cost : cost_models.CostModel or None
+        Cost model of this tolerance, or None for a fixed source (:meth:`fixed`).
+    lower, upper : float
+        Allowed range of the tolerance t (m or rad, the source's unit), 0 < lower <= upper.
+    locked : float or None
+        If given, the tolerance is fixed at this value (m or rad) and not optimised (its cost
+        counts).
+    distribution : str or evotol.distributions.Distribution
+        How the source is distributed inside its tolerance (Monte Carlo and the ``yield``
+        measure): a kind name (``"uniform"``, ``"normal"`` with t = 3σ, ``"truncated_normal"``,
+        ``"contact"``) or a :class:`evotol.distributions.Distribution` (``sigma_k``,
+        ``mean_shift``); conventions in :mod:`evotol.distributions`. For an asymmetric interval
+        the distribution is placed on the interval: centre offset + (plus − minus)/2·t,
+        half-width (minus + plus)/2·t.
+    offset, minus, plus : float
+        Interval sources only: the error lies in ``[offset − minus·t, offset + plus·t]``;
+        ``offset`` is a fixed mean shift (m or rad), ``minus``/``plus`` fixed ratios (>= 0, not
+        both 0). Default: the centred interval ±t.
+    cost_width : {"half", "full"}
+        Which width the cost model is evaluated on: ``"half"`` (default: the half-width
         (minus + plus)/2·t, which is t for ±t -- the convention of the cost–tolerance literature
         for a symmetric ±t) or ``"full"`` (the whole width (minus + plus)·t, as a drawing states
         a tolerance zone).
-    contains_nominal: if True, every allowed interval must contain 0 (the nominal value), which
-        is checked at the smallest allowed tolerance.
+    contains_nominal : bool
+        If True, every allowed interval must contain 0 (the nominal value), which is checked at
+        the smallest allowed tolerance.
+
+    Notes
+    -----
+    A plain value: nothing is checked at construction. :meth:`validate` (called by
+    :class:`evotol.problem.ToleranceProblem` for every entry) raises :class:`evotol.errors.ValidationError`.
     """
 
     cost: CostModel | None
@@ -91,6 +106,22 @@ class Tolerance:
         return self.cost.dcost(t) if w == 1 else w * self.cost.dcost(w * np.asarray(t, dtype=float))
 
     def validate(self, name: str, dim: int = 1) -> None:
+        """Check the settings for source ``name`` of dimension ``dim``.
+
+        Parameters
+        ----------
+        name : str
+            Source name, used in the error message (``tolerances['name'].field``).
+        dim : int
+            Dimension of the source's error vector (1 interval, 2 disk, 3 ball).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A field out of range (non-positive or inverted bounds, ``locked`` outside them,
+            unknown distribution or ``cost_width``, an asymmetric interval on a 2-D/3-D source,
+            an interval without 0 when ``contains_nominal``, a cost model undefined on the range).
+        """
         f0 = f"tolerances[{name!r}]"
         if self.cost is not None and not isinstance(self.cost, CostModel):
             raise ValidationError(f"{f0}.cost", self.cost, "a cost_models.CostModel (or None with Tolerance.fixed)")

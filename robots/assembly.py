@@ -42,17 +42,42 @@ ROW = 2  # error-twist row that carries the normalised response errors (position
 class AssemblyFunction(RobotErrorModel):
     """Error model of an assembly given as a function of its dimensions.
 
-    function: ``f(**dims) -> y`` called with one numpy array per dimension name (same shapes,
-        possibly complex), returning one array (one response) or a tuple/list of arrays (several
+    Parameters
+    ----------
+    function : callable
+        ``f(**dims) -> y`` called with one numpy array per dimension name (same shapes, possibly
+        complex), returning one array (one response) or a tuple/list of arrays (several
         responses), each of the shape of the inputs. Write it with numpy ufuncs so it is
         vectorised (and complex-safe: ``np.arccos``, ``np.sqrt``... are; ``abs`` and ``np.real``
         are not).
-    nominal: dimension name -> nominal value (SI).
-    limits: response name -> allowed deviation ``L_k`` from the nominal response (its unit), in
-        the order the function returns the responses.
-    units: optional dimension name -> ``"m"`` or ``"rad"`` (default ``"m"``).
-    groups: optional dimension name -> group (part name, for reports).
-    step: complex step ``h`` relative to ``max(|x_j|, 1e-3)``.
+    nominal : Mapping[str, float]
+        Dimension name -> nominal value (SI: m or rad).
+    limits : Mapping[str, float]
+        Response name -> allowed deviation ``L_k`` from the nominal response (the response's
+        unit), in the order the function returns the responses.
+    name : str
+        Name of the assembly (reports, messages).
+    units : Mapping[str, str] or None
+        Dimension name -> ``"m"`` or ``"rad"`` (default ``"m"``).
+    groups : Mapping[str, str] or None
+        Dimension name -> group (part name, for reports).
+    step : float
+        Complex step ``h`` relative to ``max(|x_j|, 1e-3)`` (1, dimensionless).
+    fd_rtol : float
+        Largest relative difference between the complex-step and the central-difference
+        gradients at the nominal for the complex step to be used (1, dimensionless).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A function that is not callable, an empty or non-finite ``nominal``, an empty or
+        non-positive ``limits``, a ``units``/``groups`` key that is not a dimension, or
+        derivatives at the nominal that are not finite.
+
+    Warns
+    -----
+    RuntimeWarning
+        When the function is not complex-safe and central differences are used.
     """
 
     def __init__(self, function: Callable, nominal: Mapping[str, float], limits: Mapping[str, float], *,

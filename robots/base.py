@@ -37,12 +37,24 @@ SHAPES = {1: "interval", 2: "disk", 3: "ball"}
 class SourceSpec:
     """One error source of a robot.
 
-    name: unique identifier, e.g. ``"l1"`` or ``"U1a"``.
-    dim: 1 (interval), 2 (disk) or 3 (ball) -- the error is a vector of this size, norm <= t.
-    unit: ``"m"`` or ``"rad"``: the unit of the error vector's components.
-    group: family the source belongs to (``"length"``, ``"U joint"``...), used by cost models,
+    Parameters
+    ----------
+    name : str
+        Unique identifier, e.g. ``"l1"`` or ``"U1a"``.
+    dim : {1, 2, 3}
+        1 (interval), 2 (disk) or 3 (ball) -- the error is a vector of this size, norm <= t.
+    unit : {"m", "rad"}
+        The unit of the error vector's components.
+    group : str
+        Family the source belongs to (``"length"``, ``"U joint"``...), used by cost models,
         reports and the sensitivity rule.
-    description: one line for reports.
+    description : str
+        One line for reports.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A ``dim`` other than 1, 2, 3 or a ``unit`` other than ``"m"``, ``"rad"``.
     """
 
     name: str

@@ -211,17 +211,62 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
                 seeds=None, seed_with_baselines: bool = True, budget: float | None = None,
                 n_elite: int = 2, n_check: int = 1, progress: bool | None = None,
                 checkpoint: str | Path | None = None, checkpoint_every: int = 20, refine: bool | dict = False):
-    """GA allocation (see module docstring). Returns an AllocationResult with the history.
+    """GA allocation: least cost under the requirement (Yao et al. 2013 eq. 15; module docstring).
 
-    budget: if given, minimise the (normalised) error subject to cost <= budget instead.
-    seeds: designs (mapping or array) placed in the initial population; by default the
-        sensitivity, Lagrange and equal-tolerance baselines (``seed_with_baselines``).
-    progress: tqdm bar over generations (default: only on an interactive terminal).
-    checkpoint: JSON file updated every ``checkpoint_every`` generations with the best design.
-    refine: final check over the whole workspace (``True`` or options of
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    pop_size, n_gen : int
+        Population size (>= 4) and number of generations (>= 1).
+    seed : int
+        Seed of the run (>= 0); the run is reproducible from it.
+    operators : {"pymoo", "paper"}
+        pymoo's tournament/SBX/polynomial mutation, or the paper's roulette/elitism/Wright
+        crossover/uniform mutation.
+    repair : bool or None
+        Scale every design onto the boundary of the requirement (default: with ``"pymoo"``
+        operators, no budget and a worst-case or RSS measure); ``False`` is the paper's GA.
+    penalty : float or None
+        Constant k of eq. 15 added to an infeasible design's fitness, in the cost models' unit
+        (default: 10× the cost of the tightest design; 10 in budget mode, on the normalised error).
+    seeds : sequence of mapping or array, or None
+        Designs (SI) placed in the initial population; by default the sensitivity, Lagrange and
+        equal-tolerance baselines (``seed_with_baselines``).
+    seed_with_baselines : bool
+        Whether the default seeds are used.
+    budget : float or None
+        If given (cost models' unit), minimise the (normalised) error subject to cost <= budget
+        instead.
+    n_elite : int
+        Parents passed unchanged per generation (``"paper"`` operators).
+    n_check : int
+        Best designs checked exactly per generation (missed worst-case rows are added).
+    progress : bool or None
+        tqdm bar over generations (default: only on an interactive terminal).
+    checkpoint : str or Path or None
+        JSON file updated every ``checkpoint_every`` generations with the best design.
+    checkpoint_every : int
+        Generations between checkpoints.
+    refine : bool or dict
+        Final check over the whole workspace (``True`` or options of
         :func:`evotol.refinement.hold_on_workspace`): the best design is scaled until it holds at
         the worst poses found between and beyond the problem's poses; reported in
         ``result.info["refinement"]``.
+
+    Returns
+    -------
+    evotol.result.AllocationResult
+        The best design (tolerances in SI), its cost (cost models' unit), its errors (m, rad),
+        the per-generation history and the feasibility repair applied (:mod:`evotol.feasibility`).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown ``operators``, a ``pop_size``/``n_gen``/``seed`` out of range, a budget below
+        the cost of the cheapest design, or ``repair=True`` with the ``mc_quantile`` measure.
+    evotol.errors.InfeasibleError
+        Without a budget: even every free tolerance at its lower bound misses the requirement.
     """
     t0 = time.perf_counter()
     if operators not in ("pymoo", "paper"):

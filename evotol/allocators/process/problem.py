@@ -225,12 +225,12 @@ class ProcessProblem:
 
     def assembly_yield(self, T, model=None) -> np.ndarray:
         """Yield of designs ``T`` (n, n_sources), SI: P(every response within its limit) of the
-        first-order model, as the Bonferroni bound 1 − Σ_k P(|Δy_k| > L_k) over the responses
+        first-order model, as the Bonferroni bound 1 − Σ_k P(``|Δy_k|`` > L_k) over the responses
         (poses); exact for one response (the clutch). ``model``: :meth:`yield_model` (default normal).
 
         The response mean m_k and variance s_k² (in units of L_k) are the model's moments
         (:meth:`evotol.statistical.FirstOrderYield.moments`); an assembly response is a scalar (row z
-        of the error twist), so P(|Δy_k| > L_k) = Φ((−1 − m_k)/s_k) + Φ((m_k − 1)/s_k) exactly
+        of the error twist), so P(``|Δy_k|`` > L_k) = Φ((−1 − m_k)/s_k) + Φ((m_k − 1)/s_k) exactly
         (normal sources; moment-matched normal otherwise, ``model.exact``) -- the 3-D octant rule
         of :func:`evotol.statistical.miss_probability` is built for full-rank covariances and is off
         by up to ~1e-4 of the miss probability on this rank-one case.

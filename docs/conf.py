@@ -1,0 +1,146 @@
+"""Sphinx configuration: the docs/ pages (MyST Markdown) and the API reference, one site.
+
+Build: ``python -m sphinx -W --keep-going -b html docs docs/_build/html`` (the ``docs`` extra of
+pyproject.toml). Why Sphinx + numpydoc: ``docs/index.md``.
+
+The API pages (``docs/api/*.rst``) use one directive, ``.. evotol-api:: MODULE``: it lists the
+public names of MODULE (its ``__all__``; without one, the functions and classes it defines plus
+the front-door names ``evotol`` loads from it) in a summary table and documents each object once,
+at its defining module (``obj.__module__``), on the first page (in ``API_PAGES`` order) that lists
+it; later pages link to it. So a module split (a class moving to a new module) changes no page,
+and a front-door name that no page documents fails the build (a warning, ``-W``).
+"""
+from __future__ import annotations
+
+import importlib
+import inspect
+import os
+import sys
+
+from docutils import nodes
+from docutils.statemachine import StringList
+from sphinx.util import logging
+from sphinx.util.docutils import SphinxDirective
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, ROOT)           # the checkout being documented, before any installed evotol
+
+project = "evotol"
+author = "evotol contributors"
+copyright = "evotol contributors"
+release = version = importlib.import_module("evotol").__version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "myst_parser",
+]
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+root_doc = "index"
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**/__pycache__"]
+myst_enable_extensions = ["dollarmath", "amsmath"]
+myst_heading_anchors = 3
+suppress_warnings = [
+    # the docs/ pages point at source files of the repository (`../evotol/problem.py`), which are
+    # not pages of the site; the links stay as they are written
+    "myst.xref_missing",
+    # illustrative snippets with "..." in ```toml / ```json fences (docs/mechanisms.md, docs/units.md)
+    "misc.highlighting_failure",
+]
+
+autodoc_default_options = {"member-order": "bysource"}
+autodoc_typehints = "none"          # numpydoc's Parameters section carries the types
+autosummary_generate = False        # the evotol-api directive documents, autosummary only tabulates
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_xref_param_type = False
+
+html_theme = "furo"
+html_title = f"evotol {release}"
+
+logger = logging.getLogger("evotol.docs")
+
+#: the API pages, in the order they claim the objects they document (docs/api/<module>.rst)
+API_PAGES = [
+    "evotol.problem", "evotol.allocators", "evotol.result", "evotol.montecarlo", "evotol.feasibility",
+    "evotol.errors", "robots", "robots.base", "robots.checks", "robots.mechanism", "robots.assembly",
+    "cost_models",
+]
+
+
+def _front_door() -> dict[str, str]:
+    return dict(importlib.import_module("evotol")._WHERE)
+
+
+def public_names(modname: str) -> list[str]:
+    """Public names of a module: ``__all__``, else what it defines plus the front-door names it serves."""
+    module = importlib.import_module(modname)
+    names = getattr(module, "__all__", None)
+    if names is None:
+        names = [n for n, obj in vars(module).items()
+                 if not n.startswith("_") and (inspect.isfunction(obj) or inspect.isclass(obj))
+                 and getattr(obj, "__module__", None) == modname]
+        names += [n for n, where in _front_door().items() if where == modname and n not in names]
+    # a module listed in __all__ (``evotol.feasibility.measures``) is not an API object
+    return [n for n in names if not inspect.ismodule(getattr(module, n))]
+
+
+def home(modname: str, name: str) -> tuple[str, str]:
+    """(``module.qualname`` where the object is defined, autodoc directive) of a public name."""
+    obj = getattr(importlib.import_module(modname), name)
+    if inspect.isclass(obj):
+        kind = "autoexception" if issubclass(obj, BaseException) else "autoclass"
+    elif inspect.isfunction(obj) or inspect.isbuiltin(obj):
+        kind = "autofunction"
+    else:                            # a constant: documented where it is listed
+        return f"{modname}.{name}", "autodata"
+    return f"{obj.__module__}.{obj.__qualname__}", kind
+
+
+def claims() -> dict[str, str]:
+    """Defining path -> the API page (module name) that documents it: the first page listing it."""
+    owner: dict[str, str] = {}
+    for page in API_PAGES:
+        for name in public_names(page):
+            owner.setdefault(home(page, name)[0], page)
+    return owner
+
+
+class EvotolAPI(SphinxDirective):
+    """``.. evotol-api:: MODULE`` (``:table-only:`` for the front door): summary table + autodoc."""
+
+    required_arguments = 1
+    option_spec = {"table-only": lambda arg: True}
+
+    def run(self):
+        modname = self.arguments[0]
+        owner = claims()
+        lines = [f".. automodule:: {modname}", "   :no-index:" if "table-only" in self.options else "", "",
+                 # the table names objects by their full defining path: no current module for it
+                 ".. currentmodule:: None", "", ".. autosummary::", ""]
+        entries = []
+        for name in public_names(modname):
+            path, kind = home(modname, name)
+            if "table-only" in self.options and path not in owner:
+                logger.warning(f"front-door name evotol.{name} ({path}) is documented on no API page; "
+                               f"add its module to API_PAGES in docs/conf.py", location=self.get_location())
+            lines.append(f"   ~{path}")
+            if owner.get(path) == modname and "table-only" not in self.options:
+                entries.append((path, kind))
+        lines.append("")
+        for path, kind in entries:
+            lines += [f".. {kind}:: {path}"]
+            if kind in ("autoclass", "autoexception"):
+                lines += ["   :members:"]
+            lines.append("")
+        node = nodes.container()
+        self.state.nested_parse(StringList(lines, source=f"<evotol-api {modname}>"), self.content_offset, node)
+        return node.children
+
+
+def setup(app):
+    app.add_directive("evotol-api", EvotolAPI)
+    return {"parallel_read_safe": True}
