@@ -150,8 +150,45 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     interval at the worst pose (``confidence``) and, for a ``yield`` requirement, the verdict
     (:func:`yield_check`; ``requirement_missed`` flags a requirement the robot misses).
 
-    ``model="nonlinear"``: the worst-vertex check and interval Monte Carlo through the robot's
-    ``pose_error`` instead (:func:`evotol.nonlinear.verify_nonlinear`, returns its NonlinearCheck)."""
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem whose poses, requirement and distributions are sampled.
+    tolerances : mapping or array_like
+        The design: source name -> tolerance, or one value per source (SI: m or rad).
+    n_samples : int
+        Samples per pose (>= 1).
+    method : {"lhs", "mc"}
+        Latin hypercube or plain Monte Carlo sampling.
+    seed : int
+        Seed; each pose gets its own stream (``SeedSequence(seed).spawn``).
+    nonlinear : bool
+        Also sample the robot's nonlinear ``pose_error`` where it has one.
+    radial : str
+        Radial law of disk/ball sources, one of ``evotol.distributions.RADIAL``.
+    chunk_poses : int
+        Poses sampled per chunk (memory).
+    progress : bool or None
+        tqdm bar over the chunks (default: only on an interactive terminal).
+    confidence : float
+        Confidence of the Clopper-Pearson intervals of the yield, in (0, 1).
+    model : {"linear", "nonlinear"}
+        ``"nonlinear"``: the worst-vertex check and interval Monte Carlo through the robot's
+        ``pose_error`` instead (:func:`evotol.nonlinear.verify_nonlinear`).
+
+    Returns
+    -------
+    MonteCarloResult or evotol.nonlinear.NonlinearCheck
+        Per pose: exceedance rates, largest sampled errors and their 95 % quantile (m, rad), the
+        yield (1) and its interval; the ratio of the sampled maximum to the worst case (1). With
+        ``model="nonlinear"``: the :class:`evotol.nonlinear.NonlinearCheck`.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown ``model``, ``method`` or ``radial``, ``n_samples`` < 1, ``"nonlinear"`` with
+        clearance sources, or a design that does not match the problem's sources.
+    """
     if model == "nonlinear" and problem.clearances is not None:
         raise ValidationError("model", model, "'linear' with clearance sources (the clearance model is first order)")
     if model == "nonlinear":

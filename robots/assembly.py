@@ -273,9 +273,24 @@ class _LinearResponses:
 class LinearStack(AssemblyFunction):
     """A linear tolerance stack ``y_k = Σ_j a_kj x_j``: sensitivities given, nothing to derive.
 
-    sensitivities: dimension name -> a_j (one response) or response name -> {dimension -> a_kj}.
-    limits: response name -> allowed deviation (one entry per response).
-    nominal: optional dimension -> nominal value (SI); only Monte Carlo reports use it.
+    Parameters
+    ----------
+    sensitivities : Mapping
+        Dimension name -> a_j (one response) or response name -> {dimension -> a_kj} (response
+        unit per dimension unit, e.g. m/m).
+    limits : Mapping[str, float]
+        Response name -> allowed deviation (the response's unit), one entry per response.
+    nominal : Mapping[str, float] or None
+        Dimension -> nominal value (SI: m or rad); only Monte Carlo reports use it.
+    name : str
+        Name of the stack (reports, messages).
+    **kw
+        Further options of :class:`AssemblyFunction` (``units``, ``groups``).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Empty or non-finite sensitivities, or a response that has no limit.
     """
 
     def __init__(self, sensitivities: Mapping, limits: Mapping[str, float], *, nominal: Mapping[str, float] | None = None,

@@ -148,7 +148,27 @@ def _at_budget(problem: ToleranceProblem, name: str, budget, t0, family, log_p):
 
 @single_threaded_blas
 def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None):
-    """Equal tolerances; ``budget``: the smallest common tolerance whose cost fits the budget."""
+    """Equal tolerances: one common t for every free source, scaled onto the requirement.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    budget : float or None
+        If given (cost models' unit), the smallest common tolerance whose cost fits the budget.
+
+    Returns
+    -------
+    evotol.result.AllocationResult
+        The design (tolerances in SI: m or rad), its cost (cost models' unit), its errors at every
+        pose (m, rad) and the feasibility repair applied (:mod:`evotol.feasibility`).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A ``budget`` that is not a finite positive cost, or below the cost of the cheapest
+        design (every free tolerance at its upper bound).
+    """
     t0 = time.perf_counter()
     if budget is not None:
         return _at_budget(problem, "equal tolerance", budget, t0, *scaled_family(problem, np.ones(problem.n_sources)))
@@ -157,7 +177,31 @@ def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None):
 
 @single_threaded_blas
 def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = None, weights=None):
-    """t_j ∝ w_j (default: the upper bounds); ``budget``: scaled down until the cost fits the budget."""
+    """Proportional scaling: t_j ∝ w_j, scaled onto the requirement.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    budget : float or None
+        If given (cost models' unit), the design scaled down until its cost fits the budget.
+    weights : array_like or None
+        Positive weights w_j of the free sources (default: their upper bounds).
+
+    Returns
+    -------
+    evotol.result.AllocationResult
+        The design (tolerances in SI: m or rad), its cost (cost models' unit), its errors at every
+        pose (m, rad) and the feasibility repair applied (:mod:`evotol.feasibility`).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A ``budget`` that is not a finite positive cost, or below the cost of the cheapest
+        design (every free tolerance at its upper bound).
+    evotol.errors.ValidationError
+        Weights that are not positive.
+    """
     t0 = time.perf_counter()
     if budget is not None:
         w = problem.upper if weights is None else problem.as_array(weights)
@@ -168,8 +212,32 @@ def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = N
 
 @single_threaded_blas
 def allocate_lagrange(problem: ToleranceProblem, *, budget: float | None = None, measure: str | None = None):
-    """Lagrange closed forms; ``budget``: the multiplier λ chosen so the cost is the budget (the
-    same stationarity condition solves min stack-up s.t. cost <= budget)."""
+    """Lagrange closed forms: the stationarity condition of min cost s.t. stack-up = requirement.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    budget : float or None
+        If given (cost models' unit), the multiplier λ chosen so the cost is the budget (the same
+        stationarity condition solves min stack-up s.t. cost <= budget).
+    measure : {"worst_case", "rss"} or None
+        Stack-up of the closed form (default: the requirement's measure).
+
+    Returns
+    -------
+    evotol.result.AllocationResult
+        The design (tolerances in SI: m or rad), its cost (cost models' unit), its errors at every
+        pose (m, rad) and the feasibility repair applied (:mod:`evotol.feasibility`).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A ``budget`` that is not a finite positive cost, or below the cost of the cheapest
+        design (every free tolerance at its upper bound).
+    evotol.errors.ValidationError
+        A requirement the lower tolerance limits cannot hold.
+    """
     t0 = time.perf_counter()
     if budget is not None:
         m = measure or problem.requirement.measure

@@ -158,9 +158,39 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
 def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None, incumbent=None, rel_gap: float = 1e-2,
                       max_evaluations: int = 4000, batch: int = 16):
     """Best design found with a proven lower bound on the optimal cost, for a problem whose measure
-    is monotone but not convex (clearance sources). The certificate carries ``lower_bound``,
-    ``gap`` (relative to the design's cost) and the polyblock's counts; ``result.verdict`` reads
-    it (a gap above 1e-6 is reported as "not certified")."""
+    is monotone but not convex (clearance sources): polyblock outer approximation (Tuy 2000).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    budget : None
+        Accepted for the shape every allocator shares and must be None (the bracket is of the
+        minimum cost at the requirement).
+    incumbent : mapping or array or None
+        A feasible design (SI) to start from.
+    rel_gap : float
+        Relative gap (1, dimensionless) between the design's cost and the lower bound at which
+        the search stops.
+    max_evaluations : int
+        Largest number of designs evaluated.
+    batch : int
+        Designs evaluated per round.
+
+    Returns
+    -------
+    evotol.result.AllocationResult
+        The best design (SI) and its cost (cost models' unit); the certificate carries
+        ``lower_bound``, ``gap`` (relative to the design's cost) and the polyblock's counts;
+        ``result.verdict`` reads it (a gap above 1e-6 is reported as "not certified").
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A ``budget`` that is not None, or ``max_evaluations`` too few to find a feasible design.
+    evotol.errors.InfeasibleError
+        Even every free tolerance at its lower bound misses the requirement.
+    """
     t0 = time.perf_counter()
     if budget is not None:
         raise ValidationError("budget", budget, "None for allocate_monotone (it brackets the minimum cost at the "

@@ -99,10 +99,40 @@ class _CheckFront(Callback):
 def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, pop_size: int = 100, n_gen: int = 200,
                    seed: int = 0, seeds=(), n_check: int = 5, progress: bool | None = None,
                    log_scale: bool | None = None) -> ParetoFront:
-    """NSGA-II cost vs. normalised error (see module docstring). ``log_scale``: search log(t)
-    (default: when some tolerance range spans more than two decades). ``budget`` is accepted for
-    the shape every allocator shares and must be None: the front spans every budget (read a point
-    with ``front.table``, or use ``allocate_ga(problem, budget=...)``)."""
+    """NSGA-II cost vs. normalised error (see module docstring).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    budget : None
+        Accepted for the shape every allocator shares and must be None: the front spans every
+        budget (read a point with ``front.table``, or use ``allocate_ga(problem, budget=...)``).
+    pop_size, n_gen : int
+        Population size (>= 4) and number of generations (>= 1).
+    seed : int
+        Seed of the run (>= 0); the run is reproducible from it.
+    seeds : sequence of mapping or array
+        Designs (SI) placed in the initial population.
+    n_check : int
+        Front members checked exactly per generation (missed worst-case rows are added).
+    progress : bool or None
+        tqdm bar over generations (default: only on an interactive terminal).
+    log_scale : bool or None
+        Search log(t) (default: when some tolerance range spans more than two decades).
+
+    Returns
+    -------
+    ParetoFront
+        ``table``: the non-dominated designs by increasing cost, with ``cost`` (cost models'
+        unit), ``normalised_error`` (error / requirement, 1), ``<component>_error`` (m, rad) and
+        one column per source (SI); ``seconds`` and the per-generation ``history``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A ``budget`` that is not None, or a ``pop_size``/``n_gen``/``seed`` out of range.
+    """
     t0 = time.perf_counter()
     if budget is not None:
         raise ValidationError("budget", budget, "None for allocate_nsga2 (the front covers every budget; "

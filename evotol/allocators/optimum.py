@@ -182,15 +182,50 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
                      max_rounds: int = 60, max_rows: int = 400, refine: bool | dict = False):
     """Certified optimum (min cost at the requirement, or best accuracy at ``budget``).
 
-    refine: the whole workspace (:mod:`evotol.refinement`): ``True`` or a dict of
-    :func:`evotol.refinement.refine_poses` options (``grid``, ``candidates``, ``local``, ``add``,
-    ``max_rounds``): after each solve, the workspace is searched for the pose of largest
-    normalised error, which is added before solving again, until the requirement holds there.
-    ``result.info["refinement"]`` reports the worst pose, its error and the number of rounds.
+    SLSQP on the convex problem with cutting planes (the worst-case rows of
+    :mod:`evotol.constraints`), certified by its KKT residual and duality gap.
 
-    With clearance sources (``problem.clearances``) the worst case is not convex: the result is
-    :func:`evotol.allocators.monotone.allocate_monotone`'s best design with a proven lower bound
-    (a bracket, reported "not certified" unless it closes).
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    budget : float or None
+        If given (cost models' unit), best accuracy at this cost instead of least cost at the
+        requirement.
+    tol : float
+        Largest normalised violation accepted before the design is scaled onto the boundary
+        (1, dimensionless).
+    max_rounds : int
+        Cutting-plane rounds before :class:`evotol.errors.ConvergenceError`.
+    max_rows : int
+        Largest working set of constraint rows.
+    refine : bool or dict
+        The whole workspace (:mod:`evotol.refinement`): ``True`` or a dict of
+        :func:`evotol.refinement.refine_poses` options (``grid``, ``candidates``, ``local``,
+        ``add``, ``max_rounds``): after each solve, the workspace is searched for the pose of
+        largest normalised error, which is added before solving again, until the requirement
+        holds there. ``result.info["refinement"]`` reports the worst pose, its error and the
+        number of rounds.
+
+    Returns
+    -------
+    evotol.result.AllocationResult
+        The optimal design (tolerances in SI: m or rad), its cost (cost models' unit), its
+        errors (m, rad) and ``certificate`` (lower bound, relative gap, KKT residual, rows). With clearance
+        sources (``problem.clearances``) the worst case is not convex: the result is
+        :func:`evotol.allocators.monotone.allocate_monotone`'s best design with a proven lower
+        bound (a bracket, reported "not certified" unless it closes).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A measure other than ``worst_case``/``rss`` (or ``rss`` with asymmetric intervals), a
+        cost model that is not convex on its range, a bad ``budget``, or ``budget``/``refine``
+        with clearance sources.
+    evotol.errors.InfeasibleError
+        Even every free tolerance at its lower bound misses the requirement.
+    evotol.errors.ConvergenceError
+        The cutting planes did not converge in ``max_rounds``.
     """
     if refine:
         from evotol.refinement import refine_poses

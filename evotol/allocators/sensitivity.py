@@ -98,10 +98,35 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
 @single_threaded_blas
 def allocate_sensitivity(problem: ToleranceProblem, *, budget: float | None = None, measure: str | None = None,
                          collective_groups=()):
-    """Equal-effect allocation (see module docstring); ``measure`` defaults to the requirement's.
-    ``collective_groups``: see :func:`aggregated_sensitivity`. ``budget``: best accuracy at this
-    cost instead -- the equal-effect design t_j ∝ 1/s_j scaled until it costs the budget
-    (:mod:`evotol.allocators.budget`)."""
+    """Equal-effect allocation (see module docstring).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    budget : float or None
+        If given (cost models' unit), best accuracy at this cost instead: the equal-effect design
+        t_j ∝ 1/s_j scaled until it costs the budget (:mod:`evotol.allocators.budget`).
+    measure : {"worst_case", "rss"} or None
+        Stack-up the equal effects are summed in (default: the requirement's measure).
+    collective_groups : sequence of str
+        Source groups treated as one collective source (see :func:`aggregated_sensitivity`).
+
+    Returns
+    -------
+    evotol.result.AllocationResult
+        The design (tolerances in SI: m or rad), its cost (cost models' unit), its errors at every
+        pose (m, rad) and the feasibility repair applied (:mod:`evotol.feasibility`).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A ``budget`` that is not a finite positive cost, or below the cost of the cheapest
+        design (every free tolerance at its upper bound).
+    evotol.errors.ValidationError
+        A ``collective_groups`` entry that is not a group of interval sources, clearance classes
+        in the problem, or locked tolerances that already exceed the requirement.
+    """
     t0 = time.perf_counter()
     if budget is not None:
         budget = check_budget(problem, budget)

@@ -35,9 +35,20 @@ OUT_OF_PLANE_FIELDS = ("b", "alpha", "r")
 class MechanismModel(RobotErrorModel):
     """Geometric error model of a described mechanism (see the module docstring).
 
-    mechanism: a :class:`Mechanism` or the path of its TOML file; sources: names/patterns
-    (default: the description's ``[tolerances] sources``, else every design parameter and every
-    actuator offset); workspace: override of the description's box.
+    Parameters
+    ----------
+    mechanism : Mechanism or str or Path
+        A :class:`Mechanism` or the path of its TOML file (``docs/mechanisms.md``).
+    sources : sequence of str or None
+        Source names/patterns (default: the description's ``[tolerances] sources``, else every
+        design parameter and every actuator offset).
+    workspace : robots.base.Workspace or None
+        Override of the description's box (SI: m, rad).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A description that does not load or check (names the entry), or no toleranced source.
     """
 
     def __init__(self, mechanism: Mechanism | str | Path, sources=None, workspace: Workspace | None = None):

@@ -40,7 +40,24 @@ def cheapest_feasible_processes(pp: ProcessProblem, rows: ConstraintRows | None 
 
 @single_threaded_blas
 def allocate_process_baselines(pp: ProcessProblem) -> dict[str, ProcessResult]:
-    """Sensitivity rule and Lagrange closed form on the cheapest feasible processes."""
+    """Sensitivity rule and Lagrange closed form on the cheapest feasible processes.
+
+    Parameters
+    ----------
+    pp : ProcessProblem
+        Process and tolerance per source (tolerances in SI: m or rad).
+
+    Returns
+    -------
+    dict[str, ProcessResult]
+        ``"sensitivity"`` and ``"lagrange"``: each rule's tolerances (SI) on the cheapest process
+        of every source that can hold the requirement, with their cost (cost models' unit).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        No process combination fine enough to hold the requirement.
+    """
     out = {}
     t0 = time.perf_counter()
     choice = cheapest_feasible_processes(pp)

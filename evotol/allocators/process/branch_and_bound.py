@@ -85,8 +85,28 @@ def allocate_process_optimum(pp: ProcessProblem, *, method: str = "branch_and_bo
                              incumbent: ProcessResult | None = None) -> ProcessResult:
     """Exact minimum-cost process choice and tolerances (see the module docstring).
 
-    method: ``"branch_and_bound"`` or ``"enumerate"`` (every combination's convex optimum).
-    rtol: a node is pruned when its bound >= incumbent × (1 − rtol).
+    Parameters
+    ----------
+    pp : ProcessProblem
+        Process and tolerance per source (tolerances in SI: m or rad).
+    method : {"branch_and_bound", "enumerate"}
+        Branch and bound on dual lower bounds, or every combination's convex optimum.
+    rtol : float
+        A node is pruned when its bound >= incumbent × (1 − rtol) (1, dimensionless).
+    incumbent : ProcessResult or None
+        A known feasible design whose cost starts the pruning.
+
+    Returns
+    -------
+    ProcessResult
+        The process of every source, its tolerance (SI), the cost (machining plus fixed costs,
+        cost models' unit), the normalised error (error / requirement, 1) and how it was found,
+        with the node and solve counts and the certificate of the optimum.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown ``method``, or no process choice that can hold the requirement.
     """
     if method not in ("branch_and_bound", "enumerate"):
         raise ValidationError("method", method, "'branch_and_bound' or 'enumerate'")

@@ -82,7 +82,31 @@ class _History(Callback):
 @single_threaded_blas
 def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0,
                         repair: bool = True) -> ProcessResult:
-    """pymoo GA over process choices and tolerances (encoding and repair: module docstring)."""
+    """pymoo GA over process choices and tolerances (encoding and repair: module docstring).
+
+    Parameters
+    ----------
+    pp : ProcessProblem
+        Process and tolerance per source (tolerances in SI: m or rad).
+    pop_size, n_gen : int
+        Population size and number of generations.
+    seed : int
+        Seed of the run; the run is reproducible from it.
+    repair : bool
+        Scale the tolerances of every design onto the requirement's boundary.
+
+    Returns
+    -------
+    ProcessResult
+        The process of every source, its tolerance (SI), the cost (machining plus fixed costs,
+        cost models' unit), the normalised error (error / requirement, 1) and how it was found,
+        with the best cost per generation (``history``).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        The GA found no feasible design (raise ``n_gen`` / ``pop_size``).
+    """
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.optimize import minimize
 

@@ -24,10 +24,21 @@ FEAS_TOL = 1e-9
 class Process:
     """One candidate manufacturing process of a source.
 
-    name: e.g. ``"turn"``, ``"grind"``.
-    cost: cost model of the tolerance (SI t), valid (positive, non-increasing) on the range.
-    lower, upper: tolerances this process holds (SI), 0 < lower <= upper.
-    fixed_cost: set-up cost added when the process is chosen (cost units, >= 0).
+    Parameters
+    ----------
+    name : str
+        E.g. ``"turn"``, ``"grind"``.
+    cost : cost_models.CostModel
+        Cost model of the tolerance (SI t), valid (positive, non-increasing) on the range.
+    lower, upper : float
+        Tolerances this process holds (SI: m or rad), 0 < lower <= upper.
+    fixed_cost : float
+        Set-up cost added when the process is chosen (cost units, >= 0).
+
+    Notes
+    -----
+    A plain value: :class:`ProcessProblem` checks it and raises
+    :class:`evotol.errors.ValidationError` naming the source and the process.
     """
 
     name: str
@@ -51,9 +62,28 @@ def _dominated(a: Process, b: Process, n: int = 33) -> bool:
 class ProcessProblem:
     """Tolerance allocation with a process choice per source (see the module docstring).
 
-    robot: any :class:`robots.base.RobotErrorModel` (e.g. :class:`robots.assembly.AssemblyFunction`).
-    processes: source name -> non-empty list of :class:`Process`.
-    requirement, poses: as for :class:`ToleranceProblem`.
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        Any error model (e.g. :class:`robots.assembly.AssemblyFunction`).
+    processes : Mapping[str, Sequence[Process]]
+        Source name -> non-empty list of :class:`Process`.
+    requirement : evotol.problem.Requirement
+        As for :class:`evotol.problem.ToleranceProblem`.
+    poses : array_like, shape (n_poses, workspace.dim)
+        As for :class:`evotol.problem.ToleranceProblem` (SI).
+    n_directions : int
+        Hemisphere directions for the worst-case measure.
+    check_dominance : bool
+        Refuse a process that another one of the same source covers and undercuts everywhere
+        (usually a unit slip in a cost curve).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A robot or requirement of the wrong type, a source without processes or a process for
+        no source, a process that is not a :class:`Process`, duplicate process names, a negative
+        or non-finite ``fixed_cost``, a cost model invalid on its range, or a dominated process.
     """
 
     def __init__(self, robot: RobotErrorModel, processes: Mapping[str, Sequence[Process]], requirement: Requirement,
