@@ -190,6 +190,8 @@ class Mechanism:
     description: str = ""
     path: str = ""
     points: tuple[Point, ...] = ()
+    limits: Mapping[str, tuple[float, float]] = field(default_factory=dict)   # joint variable -> (lower, upper), SI
+    urdf: tuple[str, ...] = ()        # (resolved URDF path, tip frame) of a description read from a URDF
 
     def __post_init__(self):
         names = [f.name for f in self.frames]
@@ -271,7 +273,7 @@ class Mechanism:
 
 # ---------------------------------------------------------------------------------------- TOML
 TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "point", "loop", "end_effector", "assembly",
-            "tolerances", "clearance", "urdf", "tip", "checks")
+            "tolerances", "clearance", "urdf", "tip", "checks", "limits")
 
 
 def _number(v, where: str) -> float:
@@ -293,16 +295,17 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     angles = {k: _number(v, f"angles.{k}") for k, v in dict(spec.get("angles", {})).items()}
     frames = []
     raw_frames = spec.get("frame", [])
-    ee_default, sources_default = None, ()
+    ee_default, sources_default, limits, urdf = None, (), {}, ()
     if "urdf" in spec:                          # a serial arm from URDF (robots/mechanism/urdf.py)
         if raw_frames:
             raise ValidationError("frame", raw_frames, "no [[frame]] rows next to urdf (the URDF gives them)")
         if "tip" not in spec:
             raise ValidationError("tip", None, "the URDF link or frame that is the end-effector, e.g. 'tool0'")
-        rows, ul, ua, info = urdf_frames(resolve_urdf(str(spec["urdf"]), Path(path).parent if path else None), str(spec["tip"]))
+        urdf = (str(resolve_urdf(str(spec["urdf"]), Path(path).parent if path else None)), str(spec["tip"]))
+        rows, ul, ua, info = urdf_frames(*urdf)
         raw_frames = rows
         lengths, angles = {**ul, **lengths}, {**ua, **angles}
-        ee_default, sources_default = info["tip"], tuple(info["default_sources"])
+        ee_default, sources_default, limits = info["tip"], tuple(info["default_sources"]), dict(info["limits"])
     if not isinstance(raw_frames, list) or not raw_frames:
         raise ValidationError("frame", raw_frames, "a list of [[frame]] tables (the modified-DH rows)")
     fkeys = ("name", "antecedent", "joint", "actuated", "description") + DH_FIELDS
@@ -358,8 +361,21 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
                      loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
                      sources=tuple(tol.get("sources", sources_default)), clearance=clearance, description=spec.get("description", ""),
-                     path=str(path), points=tuple(points))
+                     path=str(path), points=tuple(points), limits={**limits, **_limits(spec.get("limits", {}))}, urdf=urdf)
     return mech
+
+
+def _limits(table) -> dict:
+    """``[limits] q1 = [-pi, pi]``: joint variable -> (lower, upper) in SI (rad, m); issue 23."""
+    out = {}
+    for k, v in dict(table).items():
+        if not (isinstance(v, list) and len(v) == 2):
+            raise ValidationError(f"limits.{k}", v, "[lower, upper] of the joint variable (rad or m, e.g. ['-170*deg', '170*deg'])")
+        lo, hi = (_number(x, f"limits.{k}") for x in v)
+        if not lo <= hi:
+            raise ValidationError(f"limits.{k}", v, "lower <= upper")
+        out[str(k)] = (lo, hi)
+    return out
 
 
 def _joint_units(frames, params) -> dict[str, str]:

@@ -25,11 +25,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.clearance.kinematics import (DH_FIELDS, DHFrame, DHTree, inv_transform, kk_transform, rot_x, rot_z, rotation_vector,
-                                         trans)
+from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, inv_transform, rotation_vector
 from robots.mechanism.description import AXES, ANGLE_FIELDS, Mechanism
 from robots.mechanism.expressions import Expression
+from robots.mechanism.limits import check_joint_limits, check_limit_names
 from robots.mechanism.placement import PLACEMENT_FIELDS, placement_error, placement_twists
+from robots.mechanism.rotations import AXIS_ROT, cross_rows, rot_z_inverse
 
 IN_PLANE = (0, 1, 5)            # x, y, rotation about z
 #: How far Newton may move a declared ``[assembly]`` joint while closing the loops
@@ -38,38 +39,6 @@ IN_PLANE = (0, 1, 5)            # x, y, rotation about z
 #: Farther is another working mode, or a description that does not mean what was written.
 ASSEMBLY_MAX_ANGLE = 0.5
 ASSEMBLY_MAX_LENGTH_FRACTION = 0.2
-_AXIS_ROT = {"x": rot_x, "y": None, "z": rot_z}
-
-
-def _rot_y(a):
-    a = np.asarray(a, float)
-    c, s = np.cos(a), np.sin(a)
-    T = np.zeros(a.shape + (4, 4))
-    T[..., 0, 0], T[..., 0, 2], T[..., 2, 0], T[..., 2, 2] = c, s, -s, c
-    T[..., 1, 1] = T[..., 3, 3] = 1
-    return T
-
-
-_AXIS_ROT["y"] = _rot_y
-
-
-def _rot_z_inv(th):
-    """Rot(z, -theta) (n, 3, 3): undoes a joint row's rotation to reach its placement axes."""
-    c, s = np.cos(th), np.sin(th)
-    R = np.zeros((len(c), 3, 3))
-    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
-    return R
-
-
-def _cross(a, b):
-    """Row-wise cross product of (n, 3) arrays (np.cross is slow for small rows)."""
-    out = np.empty_like(a)
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
-
-
 @dataclass
 class State:
     """Kinematic state at ``n`` configurations: world transforms, entry derivatives, entry twists."""
@@ -135,6 +104,7 @@ class Kinematics:
         self.length_scale = float(max(lengths)) if lengths else 1.0
         self.coord_axes = [(i, AXES.index(c.axis)) for i, c in enumerate(mech.coordinates) if c.axis in AXES]
         self._check_loops_actuated()
+        check_limit_names(mech.limits, self.variables)
         self.joint_unit = {}                        # joint variable -> "m" (prismatic) or "rad" (revolute)
         for f in mech.frames:
             for x in (self.expr[(f.name, f.joint_field)].names if f.joint_field else ()):
@@ -300,15 +270,15 @@ class Kinematics:
                 z2 = Tj[:, :3, 2]
                 q2 = Tj[:, :3, 3] - r_[:, None] * z2      # origin after Trans(x, d), E included
                 zero = np.zeros((n, 3))
-                for k, (w, v) in zip(DH_FIELDS, ((za, _cross(pa, za)), (zero, za), (x1, _cross(p1, x1)),
-                                                 (zero, x1), (z2, _cross(q2, z2)), (zero, z2))):
+                for k, (w, v) in zip(DH_FIELDS, ((za, cross_rows(pa, za)), (zero, za), (x1, cross_rows(p1, x1)),
+                                                 (zero, x1), (z2, cross_rows(q2, z2)), (zero, z2))):
                     tw[(fname, k)] = np.concatenate([w, v], axis=1)
                 if fname in placement:
                     if fixed:
                         Tp = world[fname]
                     else:
                         Tp = np.array(Tj)
-                        Tp[:, :3, :3] = Tj[:, :3, :3] @ _rot_z_inv(th)
+                        Tp[:, :3, :3] = Tj[:, :3, :3] @ rot_z_inverse(th)
                         Tp[:, :3, 3] = q2
                     for k, t in placement_twists(Tp).items():
                         tw[(fname, k)] = t
@@ -380,7 +350,7 @@ class Kinematics:
         env = {**self.mech.parameters, **{c.name: poses[:, i] for i, c in enumerate(self.mech.coordinates)}}
         R = np.broadcast_to(np.eye(4), (len(poses), 4, 4))
         for ax, e in self.orientation:
-            R = R @ _AXIS_ROT[ax](np.broadcast_to(np.real(e(env)), (len(poses),)))
+            R = R @ AXIS_ROT[ax](np.broadcast_to(np.real(e(env)), (len(poses),)))
         return R[:, :3, :3]
 
     def _ig_system(self, q: dict, poses: np.ndarray, Rt):
@@ -401,14 +371,21 @@ class Kinematics:
                                  np.zeros(3 if Rt is not None else 0, bool)])
         return np.concatenate(F, axis=1), np.concatenate(J, axis=1), is_len
 
-    def _newton(self, q: dict, names, system, n: int, max_iter: int, tol: float = 1e-12, final_check: bool = True):
+    def _newton(self, q: dict, names, system, n: int, max_iter: int, tol: float = 1e-12, final_check: bool = True,
+                posture: dict | None = None):
         """Gauss-Newton with min-norm steps on ``system(q) -> (F, J over all variables, is_length)``
         for the unknowns ``names``; returns (q, scaled residual (n,)). ``final_check=False`` skips
         the evaluation after the last step (the residual returned is then the one before it: a
-        continuation step that only tracks the branch)."""
+        continuation step that only tracks the branch).
+
+        ``posture`` (joint values): where there are more unknowns than equations (a redundant arm),
+        each step is ``q <- q_ref + J^+ (J (q - q_ref) - F)``, Newton's step for the configuration
+        nearest to ``q_ref`` (Euclidean norm of the joint values, rad and m) that solves ``F = 0``:
+        at convergence ``q - q_ref`` has no component in the self-motion (null space of J)."""
         idx = [self.variables.index(x) for x in names]
         q = {k: np.array(np.broadcast_to(v, (n,)), float) for k, v in q.items()}
         res = np.full(n, np.inf)
+        moved = 0.0                         # largest self-motion of the last redundant step (rad or m)
         for it in range(max_iter + 1):
             if it == max_iter and not final_check:
                 break
@@ -416,8 +393,20 @@ class Kinematics:
             w = np.where(is_len, 1.0 / self.length_scale, 1.0)
             Fs, Js = F * w, J[:, :, idx] * w[:, None]
             res = np.abs(Fs).max(axis=1) if Fs.shape[1] else np.zeros(n)
-            if np.all(res < tol) or it == max_iter:
+            if (np.all(res < tol) and moved <= 1e-11) or it == max_iter:
                 break
+            if posture is not None and Js.shape[1] < len(idx):
+                # redundant: min-norm correction of the residual plus the null-space pull to q_ref
+                d = np.stack([q[x] - posture[x] for x in names], axis=1)
+                y = np.einsum("nki,ni->nk", Js, d) - Fs
+                JJt = np.einsum("nki,nli->nkl", Js, Js)
+                lam = 1e-13 * np.maximum(np.einsum("nii->n", JJt), 1e-300)
+                JJt[:, np.arange(Js.shape[1]), np.arange(Js.shape[1])] += lam[:, None]
+                new = np.einsum("nki,nk->ni", Js, np.linalg.solve(JJt, y[..., None])[..., 0])
+                moved = float(np.abs(new - d).max()) if n else 0.0
+                for c, x in enumerate(names):
+                    q[x] = posture[x] + new[:, c]
+                continue
             # Gauss-Newton step from the damped normal equations (batched small solves; the
             # damping only matters where some unknowns do not enter, e.g. an idle passive joint)
             JtJ = np.einsum("nki,nkj->nij", Js, Js)
@@ -444,6 +433,7 @@ class Kinematics:
                                       f"declared assembly joints (scaled residual {res[0]:.2g}); check the frames, the loops "
                                       "and [assembly]", poses=pose)
             self._check_assembly_reached(pose, q0, q, Rt)
+            check_joint_limits(m.name, m.limits, q, pose, [c.name for c in m.coordinates], "assembly pose")
             self._assembly = (pose[0], {k: float(v[0]) for k, v in q.items()})
         return self._assembly
 
@@ -468,12 +458,13 @@ class Kinematics:
             # intermediate steps only track the branch: one Gauss-Newton correction each (the
             # residual left is second order in the step); the last one converges fully
             q, res = self._newton(q, self.variables, lambda q: self._ig_system(q, target, Rt), n,
-                                  1 if s < 1 else 40, tol=1e-6 if s < 1 else 1e-12, final_check=s >= 1)
+                                  1 if s < 1 else 40, tol=1e-6 if s < 1 else 1e-12, final_check=s >= 1, posture=q0)
         bad = ~(res < 1e-9)
         if bad.any():
             raise KinematicsError(f"{self.mech.name}: the loops cannot close at pose {poses[bad][0].tolist()} "
                                   f"({', '.join(c.name for c in self.mech.coordinates)}, SI): out of reach or singular "
                                   f"(scaled residual {res[bad][0]:.2g})", poses=poses[bad])
+        check_joint_limits(self.mech.name, self.mech.limits, q, poses, [c.name for c in self.mech.coordinates])
         if len(self._cache) > 8:
             self._cache.clear()
         self._cache[key] = q

@@ -130,14 +130,22 @@ class MechanismModel(RobotErrorModel):
     def sensitivity_at_joints(self, q) -> np.ndarray:
         """First-order map (n, 6, n_sources) at given joint values: a dict ``{variable: (n,)}`` or an
         array (n, n_variables) in the order of ``kin.variables`` (rad, m); no inverse geometry."""
-        if not isinstance(q, dict):
-            Q = np.atleast_2d(np.asarray(q, float))
-            if Q.shape[1] != len(self.kin.variables):
-                raise ValidationError("joint values", Q.shape, f"(n, {len(self.kin.variables)}) columns {self.kin.variables}")
-            q = {v: Q[:, i] for i, v in enumerate(self.kin.variables)}
-        n = len(np.atleast_1d(next(iter(q.values()))))
+        q, n = self._joint_dict(q)
         st = self.kin.state(q, n, wrt=set(self.kin.passive) | set(self._param_names()), placement=self._placement_frames)
         return self._sensitivity(st, np.zeros((n, len(self.workspace.names))))
+
+    def _joint_dict(self, q) -> tuple[dict, int]:
+        """Joint values as ``{variable: (n,)}`` from a dict or an array (n, n_variables); and n."""
+        if not isinstance(q, dict):
+            Q = np.atleast_2d(np.asarray(q, float))
+            if Q.ndim != 2 or Q.shape[1] != len(self.kin.variables):
+                raise ValidationError("joint values", Q.shape, f"(n, {len(self.kin.variables)}) columns {self.kin.variables}")
+            q = {v: Q[:, i] for i, v in enumerate(self.kin.variables)}
+        missing = [v for v in self.kin.variables if v not in q]
+        if missing:
+            raise ValidationError("joint values", missing[0], f"a value for every joint variable {self.kin.variables}")
+        n = len(np.atleast_1d(q[self.kin.variables[0]])) if self.kin.variables else 1
+        return {v: np.broadcast_to(np.asarray(q[v], float), (n,)) for v in self.kin.variables}, n
 
     def _sensitivity(self, st, poses) -> np.ndarray:
         kin = self.kin
@@ -203,8 +211,19 @@ class MechanismModel(RobotErrorModel):
         n = len(poses)
         if errors.ndim != 3 or errors.shape[0] != n or errors.shape[2] != self.n_columns:
             raise ValidationError("errors shape", errors.shape, f"({n}, n_samples, {self.n_columns})")
+        return self._pose_error(self.kin.inverse_geometry(poses), n, errors, poses)
+
+    def pose_error_at_joints(self, q, errors) -> np.ndarray:
+        """:meth:`pose_error` at given joint values (a dict or (n, n_variables), rad and m) instead
+        of poses: errors (n, m, n_sources) -> (n, m, 6); no inverse geometry."""
+        q, n = self._joint_dict(q)
+        errors = np.asarray(errors, float)
+        if errors.ndim != 3 or errors.shape[0] != n or errors.shape[2] != self.n_columns:
+            raise ValidationError("errors shape", errors.shape, f"({n}, n_samples, {self.n_columns})")
+        return self._pose_error(q, n, errors, np.zeros((n, len(self.workspace.names))))
+
+    def _pose_error(self, q, n, errors, poses) -> np.ndarray:
         m = errors.shape[1]
-        q = self.kin.inverse_geometry(poses)
         T0 = self.kin.state(q, n, twists=False).world[self.mechanism.end_effector]
         qq = {k: np.repeat(v, m) for k, v in q.items()}
         flat = errors.reshape(n * m, -1)

@@ -146,19 +146,67 @@ def _along_axis(kind: str, a: np.ndarray) -> str | None:
     return ("tilt_" if kind == "revolute" else "shift_") + "xyz"[k]
 
 
+def urdf_joints(path) -> dict:
+    """The URDF's joints as written: ``{name: {"type", "mimic": (leader, multiplier, offset) | None,
+    "limit": (lower, upper) | None}}`` (``<limit>`` of revolute and prismatic joints; continuous
+    joints have none; SI as in URDF)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(str(path)).getroot()
+    except ET.ParseError as exc:
+        raise ValidationError("urdf", str(path), f"well-formed XML ({exc})") from None
+    out = {}
+    for j in root.iter("joint"):
+        name, typ = j.get("name"), j.get("type")
+        if name is None or typ is None:
+            continue
+        mim = j.find("mimic")
+        mimic = None if mim is None else (mim.get("joint"), float(mim.get("multiplier", 1.0)), float(mim.get("offset", 0.0)))
+        lim = j.find("limit")
+        limit = None
+        if typ in ("revolute", "prismatic") and lim is not None and lim.get("lower") is not None and lim.get("upper") is not None:
+            limit = (float(lim.get("lower")), float(lim.get("upper")))
+        out[name] = {"type": typ, "mimic": mimic, "limit": limit}
+    return out
+
+
+def frame_id(model, name: str) -> int:
+    """Pinocchio's id of frame ``name``: the link (BODY) when a link and a joint share the name."""
+    pin = _pin()
+    for kind in (pin.FrameType.BODY, pin.FrameType.OP_FRAME, pin.FrameType.FIXED_JOINT, pin.FrameType.JOINT):
+        if model.existFrame(name, kind):
+            return model.getFrameId(name, kind)
+    return model.getFrameId(name)
+
+
+def chain_joints(model, frame_id: int) -> list[int]:
+    """Pinocchio joint ids from the root to the joint that carries frame ``frame_id``."""
+    chain, j = [], model.frames[frame_id].parentJoint
+    while j > 0:
+        chain.append(j)
+        j = model.parents[j]
+    return chain[::-1]
+
+
 def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
     """(frame rows, lengths, angles, info) of the chain root -> ``tip`` of a URDF.
 
     Per joint ``J``: origin rows ending in the fixed frame ``J`` (the joint's origin, URDF
-    ``<origin>``), the joint row ``J__q`` turning about (sliding along) the URDF axis with the
-    variable ``J``, and for an axis other than +z a row ``J__back`` that restores the origin's axes.
+    ``<origin>``), the joint row ``J__q`` turning about (sliding along) the URDF axis, any
+    direction, with the variable ``J``, and for an axis other than +z a row ``J__back`` that
+    restores the origin's axes. A mimic joint ``J`` of ``L`` has no variable of its own: its row
+    holds ``J_multiplier * L + J_offset`` (both design parameters, so their errors are sources).
 
     info: ``model`` (pinocchio Model), ``tip_frame_id``, ``joints`` (names in chain order),
-    ``variables`` (joint variable names in the description), ``tip`` (the description frame that
-    equals the URDF tip frame) and ``default_sources``: per joint the six placement errors of its
-    origin and its joint offset, less the one placement error the offset duplicates (the rotation
-    about a revolute joint's own axis, the translation along a prismatic joint's), when the axis
-    is a coordinate axis of the origin -- the span of Pinocchio's joint placement regressor."""
+    ``variables`` (joint variable names), ``mimic`` (``{joint: (leader variable, multiplier,
+    offset)}``), ``limits`` (``{variable: (lower, upper)}`` from ``<limit>``, a mimic joint's range
+    carried over to its leader), ``tip`` (the description frame that equals the URDF tip frame) and
+    ``default_sources``: per joint the six placement errors of its origin and its joint offset (a
+    mimic joint: its offset and multiplier), less the one placement error the offset duplicates
+    (the rotation about a revolute joint's own axis, the translation along a prismatic joint's),
+    when the axis is a coordinate axis of the origin -- the span of Pinocchio's joint placement
+    regressor."""
     pin = _pin()
     try:
         model = pin.buildModelFromUrdf(str(path))
@@ -166,21 +214,39 @@ def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
         raise ValidationError("urdf", str(path), f"a URDF Pinocchio can read ({exc})") from None
     if not model.existFrame(tip):
         raise ValidationError("tip", tip, f"a link or frame of {Path(path).name}: {[f.name for f in model.frames][:40]}")
-    fid = model.getFrameId(tip)
-    chain, j = [], model.frames[fid].parentJoint
-    while j > 0:
-        chain.append(j)
-        j = model.parents[j]
-    chain.reverse()
-    rows, lengths, angles, names, variables, sources = [], {}, {}, [], [], []
+    written = urdf_joints(path)
+    fid = frame_id(model, tip)
+    chain = chain_joints(model, fid)
+    if not chain:
+        raise ValidationError("tip", tip, f"a frame that a joint of {Path(path).name} moves (this one is fixed to the root)")
+    rows, lengths, angles, names, variables, sources, mimic, limits = [], {}, {}, [], [], [], {}, {}
     ant = "0"
     for j in chain:
         jname = _ident(model.names[j])
         kind, a = joint_axis(model, j)
         rows += _origin_rows(jname, ant, model.jointPlacements[j], lengths, angles, pin)
         gamma, alpha = axis_angles(a)
+        w = written.get(model.names[j], {})
+        dup = _along_axis(kind, a)
+        if w.get("mimic"):
+            leader, mult, off = w["mimic"]
+            var = _ident(leader)
+            angles[f"{jname}_multiplier"] = mult
+            (lengths if kind == "prismatic" else angles)[f"{jname}_offset"] = off
+            value = f"{jname}_multiplier * {var} + {jname}_offset"
+            mimic[jname] = (var, mult, off)
+            own = [f"{jname}_offset", f"{jname}_multiplier"]
+            if w.get("limit") and mult != 0:
+                lo, hi = sorted(((w["limit"][0] - off) / mult, (w["limit"][1] - off) / mult))
+                plo, phi = limits.get(var, (-np.inf, np.inf))
+                limits[var] = (max(lo, plo), min(hi, phi))
+        else:
+            var, value, own = jname, jname, [jname]
+            if w.get("limit"):
+                plo, phi = limits.get(var, (-np.inf, np.inf))
+                limits[var] = (max(w["limit"][0], plo), min(w["limit"][1], phi))
         joint_row = {"name": f"{jname}__q", "antecedent": jname, "joint": kind, "actuated": True,
-                     ("theta" if kind == "revolute" else "r"): jname}
+                     ("theta" if kind == "revolute" else "r"): value}
         if gamma or alpha:
             joint_row.update(gamma=gamma, alpha=alpha)
         rows.append(joint_row)
@@ -188,22 +254,51 @@ def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
         if gamma or alpha:
             rows.append({"name": f"{jname}__back", "antecedent": ant, "alpha": -alpha, "theta": -gamma})
             ant = f"{jname}__back"
-        dup = _along_axis(kind, a)
-        sources += [f"{jname}.{k}" for k in PLACEMENT_FIELDS if k != dup] + [jname]
+        sources += [f"{jname}.{k}" for k in PLACEMENT_FIELDS if k != dup] + own
         names.append(model.names[j])
-        variables.append(jname)
+        if var not in variables:
+            variables.append(var)
     tname = _ident(tip)
+    if any(r["name"] == tname for r in rows):
+        tname = f"{tname}__tip"
     rows += _origin_rows(tname, ant, model.frames[fid].placement, lengths, angles, pin)
     return rows, lengths, angles, {"model": model, "tip_frame_id": fid, "joints": names, "variables": variables, "tip": tname,
-                                   "default_sources": sources}
+                                   "default_sources": sources, "mimic": mimic, "limits": limits}
 
 
-def pinocchio_tip_pose(path, tip: str, q: np.ndarray) -> np.ndarray:
-    """Pinocchio's own forward kinematics of the tip frame, (n, 4, 4), for joint values (n, nq)."""
+def pinocchio_configuration(model, chain_values: dict, mimic: dict | None = None) -> np.ndarray:
+    """Pinocchio's ``q`` (n, model.nq) for joint values ``{joint name: (n,)}`` (rad, m; other joints
+    at 0): a continuous joint's angle becomes its (cos, sin) pair, a mimic joint ``{name: (leader,
+    multiplier, offset)}`` follows its leader."""
+    n = len(np.atleast_1d(next(iter(chain_values.values()))))
+    vals = {k: np.broadcast_to(np.asarray(v, float), (n,)) for k, v in chain_values.items()}
+    for jn, (leader, m, o) in (mimic or {}).items():
+        if leader in vals:
+            vals[jn] = m * vals[leader] + o
+    Q = np.zeros((n, model.nq))
+    for j in range(1, model.njoints):
+        i, nq = model.idx_qs[j], model.nqs[j]
+        v = vals.get(_ident(model.names[j]))
+        if nq == 2:
+            a = np.zeros(n) if v is None else v
+            Q[:, i], Q[:, i + 1] = np.cos(a), np.sin(a)
+        elif nq == 1 and v is not None:
+            Q[:, i] = v
+    return Q
+
+
+def pinocchio_tip_pose(path, tip: str, q) -> np.ndarray:
+    """Pinocchio's own forward kinematics of the tip frame, (n, 4, 4): ``q`` is an array (n, nq)
+    of Pinocchio configurations, or a dict of the description's joint values (see
+    :func:`pinocchio_configuration`; mimic joints follow their leaders)."""
     pin = _pin()
     model = pin.buildModelFromUrdf(str(path))
     data = model.createData()
-    fid = model.getFrameId(tip)
+    fid = frame_id(model, tip)
+    if isinstance(q, dict):
+        written = urdf_joints(path)
+        mim = {_ident(n): (_ident(w["mimic"][0]), w["mimic"][1], w["mimic"][2]) for n, w in written.items() if w["mimic"]}
+        q = pinocchio_configuration(model, q, mim)
     out = []
     for qi in np.atleast_2d(q):
         pin.framesForwardKinematics(model, data, np.asarray(qi, float))

@@ -1,0 +1,38 @@
+"""Small rotation helpers of the mechanism kinematics, vectorised over poses."""
+from __future__ import annotations
+
+import numpy as np
+
+from robots.clearance.kinematics import rot_x, rot_z
+
+AXIS_ROT = {"x": rot_x, "y": None, "z": rot_z}
+
+
+def rot_y(a):
+    """Rot(y, a) (..., 4, 4)."""
+    a = np.asarray(a, float)
+    c, s = np.cos(a), np.sin(a)
+    T = np.zeros(a.shape + (4, 4))
+    T[..., 0, 0], T[..., 0, 2], T[..., 2, 0], T[..., 2, 2] = c, s, -s, c
+    T[..., 1, 1] = T[..., 3, 3] = 1
+    return T
+
+
+AXIS_ROT["y"] = rot_y
+
+
+def rot_z_inverse(th):
+    """Rot(z, -theta) (n, 3, 3): undoes a joint row's rotation to reach its placement axes."""
+    c, s = np.cos(th), np.sin(th)
+    R = np.zeros((len(c), 3, 3))
+    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
+    return R
+
+
+def cross_rows(a, b):
+    """Row-wise cross product of (n, 3) arrays (np.cross is slow for small rows)."""
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out

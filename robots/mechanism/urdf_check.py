@@ -1,0 +1,118 @@
+"""A URDF chain checked against Pinocchio and finite differences, at joint values (no task box needed).
+
+For the chain root -> ``tip`` of a URDF, at random configurations inside the joint limits:
+
+* forward kinematics of the tip against Pinocchio's ``framesForwardKinematics``;
+* every sensitivity column against central finite differences of the nonlinear model
+  (:meth:`MechanismModel.pose_error_at_joints`, the placements perturbed as ``M exp(delta)``);
+* the rank of the sources stacked over the configurations against the rank of Pinocchio's joint
+  placement regressor (``computeFrameKinematicRegressor``, ``LOCAL_WORLD_ALIGNED``) of the same
+  chain, and the rank of both together (equal ranks = the same span).
+
+``tests/test_urdf_walk.py`` runs it over every URDF of ``example-robot-data``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from robots.mechanism.identifiability import stacked_rank
+from robots.mechanism.placement import PLACEMENT_FIELDS
+from robots.mechanism.urdf import _pin, chain_joints, pinocchio_configuration, urdf_frames
+
+
+def pinocchio_placement_regressor(model, frame_id: int, Q: np.ndarray, with_tip: bool = False) -> np.ndarray:
+    """Pinocchio's joint placement regressor of a frame, (n, 6, 6 (njoints - 1)) [+ 6 tip columns].
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+    frame_id : int
+    Q : ndarray (n, model.nq)
+        Pinocchio configurations.
+    with_tip : bool
+        Append the frame's own placement twist (``[R 0; 0 R]`` in ``LOCAL_WORLD_ALIGNED``).
+
+    Returns
+    -------
+    ndarray
+        ``[v; omega]`` of the frame per unit twist of each joint placement (local, ``M exp(delta)``).
+    """
+    pin = _pin()
+    data = model.createData()
+    out = []
+    for q in np.atleast_2d(Q):
+        pin.framesForwardKinematics(model, data, q)
+        R = pin.computeFrameKinematicRegressor(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)
+        if with_tip:
+            tip = np.zeros((6, 6))
+            tip[:3, :3] = tip[3:, 3:] = data.oMf[frame_id].rotation
+            R = np.hstack([R, tip])
+        out.append(R)
+    return np.array(out)
+
+
+def random_joints(model, variables, limits, n: int, seed: int = 0) -> dict:
+    """Uniform joint values inside the limits (a joint without limits: [-pi, pi] or [-0.1, 0.1] m)."""
+    rng = np.random.default_rng(seed)
+    out = {}
+    for v in variables:
+        lo, hi = limits.get(v, (-np.pi, np.pi))
+        lo, hi = max(lo, -np.pi), min(hi, np.pi)
+        out[v] = rng.uniform(lo, hi, n) if hi > lo else np.full(n, lo)
+    return out
+
+
+def check_urdf_chain(robot, n: int = 8, seed: int = 0, step: float = 1e-6) -> dict:
+    """Pinocchio and finite-difference agreement of a URDF description at random joint values.
+
+    Parameters
+    ----------
+    robot : MechanismModel
+        Built from a description with ``urdf`` and ``tip``.
+    n : int
+        Number of random configurations (inside the joint limits).
+    step : float
+        Central-difference step (m or rad).
+
+    Returns
+    -------
+    dict
+        ``fk_vs_pinocchio`` (largest |T - T_pin|), ``fd_rel_error`` (largest |FD - S| / largest |S|),
+        ``n_sources``, ``rank`` (the sources), ``pinocchio_rank`` (the chain's placement regressor),
+        ``combined_rank`` (both together) and the same three with the tip's placement
+        (``rank_with_tip`` ...), ``n_joints``.
+    """
+    pin = _pin()
+    path, tip = robot.mechanism.urdf
+    info = urdf_frames(path, tip)[3]
+    model, fid = info["model"], info["tip_frame_id"]
+    kin = robot.kin
+    q = random_joints(model, kin.variables, robot.mechanism.limits, n, seed)
+    T = kin.state(q, n, twists=False).world[robot.mechanism.end_effector]
+    Qp = pinocchio_configuration(model, {v: q[v] for v in kin.variables}, info["mimic"])
+    data = model.createData()
+    Tp = []
+    for qi in Qp:
+        pin.framesForwardKinematics(model, data, qi)
+        Tp.append(data.oMf[fid].homogeneous)
+    fk = float(np.abs(T - np.array(Tp)).max())
+    S = robot.sensitivity_at_joints(q)
+    k = robot.n_columns
+    E = np.zeros((n, 2 * k, k))
+    E[:, np.arange(k), np.arange(k)] = step
+    E[:, k + np.arange(k), np.arange(k)] = -step
+    D = robot.pose_error_at_joints(q, E)
+    fd = np.swapaxes((D[:, :k] - D[:, k:]) / (2 * step), 1, 2)
+    fd_rel = float(np.abs(fd - S).max() / max(np.abs(S).max(), 1e-300))
+    # span against Pinocchio: the chain's joints only (their columns), our placement twists + offsets
+    chain_cols = [6 * (j - 1) + c for j in chain_joints(model, fid) for c in range(6)]
+    R = pinocchio_placement_regressor(model, fid, Qp, with_tip=True)
+    Rj, Rt = R[:, :, chain_cols], R[:, :, list(chain_cols) + list(range(R.shape[2] - 6, R.shape[2]))]
+    own = [i for i, s in enumerate(robot.source_names) if not s.endswith("_multiplier")]
+    Sj = S[:, :, own]
+    tip_model = type(robot)(robot.mechanism, sources=list(robot.mechanism.sources) + [f"{info['tip']}.{f}" for f in PLACEMENT_FIELDS])
+    St = tip_model.sensitivity_at_joints(q)[:, :, [i for i, s in enumerate(tip_model.source_names) if not s.endswith("_multiplier")]]
+    return {"fk_vs_pinocchio": fk, "fd_rel_error": fd_rel, "n_sources": k, "n_joints": len(info["joints"]),
+            "rank": stacked_rank(Sj), "pinocchio_rank": stacked_rank(Rj), "combined_rank": stacked_rank(np.concatenate([Sj, Rj], 2)),
+            "rank_with_tip": stacked_rank(St), "pinocchio_rank_with_tip": stacked_rank(Rt),
+            "combined_rank_with_tip": stacked_rank(np.concatenate([St, Rt], 2))}
