@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import time
 import tomllib
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +33,7 @@ from evotol.interrupt import CtrlC
 from evotol.keywords import check_keywords, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.outputs import check_not_overwriting
+from evotol.progress import Heartbeat
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.process_studyfile import run_process_study
 from evotol.quality_loss import with_quality_loss
@@ -264,7 +266,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
                     kw.setdefault("incumbent", results["ga"].t)
                 if m in REFINING_METHODS and refine_option(spec):
                     kw.setdefault("refine", refine_option(spec))
-                results[m] = METHODS[m](problem, **kw)
+                with Heartbeat(m) if m != "ga" else nullcontext():   # off a terminal, a line every 10 s (a GA: its own)
+                    results[m] = METHODS[m](problem, **kw)
             except KeyboardInterrupt:
                 ctrl_c.count = max(ctrl_c.count, before + 1)
             finally:

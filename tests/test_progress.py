@@ -93,3 +93,24 @@ def test_run_shows_the_size_and_progress_of_every_long_method_in_a_log(tmp_path,
                  "[evotol] NSGA-II: 2 generations × 8 designs × 8 poses; about ", "[evotol] NSGA-II: 2/2 gen in ",
                  "[evotol] Monte Carlo: 8 poses × 20 samples"):
         assert line in err, (line, err)
+
+
+def test_run_prints_lines_for_a_method_without_a_bar(tmp_path, capsys, monkeypatch):
+    """The exact optimum has no bar: off a terminal, `evotol run` prints the Heartbeat's line
+    every interval while it runs (here 0.01 s, with a solve made to last 0.1 s)."""
+    import functools
+
+    import evotol.studyfile as sf
+    from evotol.progress import Heartbeat
+    from tests.fast_study import fast_study
+
+    monkeypatch.setattr(sf, "Heartbeat", functools.partial(Heartbeat, every=0.01))
+    slow = sf.METHODS["sensitivity"]
+
+    def sensitivity(problem, **kw):
+        time.sleep(0.1)
+        return slow(problem, **kw)
+
+    monkeypatch.setitem(sf.METHODS, "sensitivity", sensitivity)
+    assert main(["run", str(fast_study(tmp_path)), "--out", str(tmp_path)]) == 0
+    assert "[evotol] sensitivity: running for " in capsys.readouterr().out
