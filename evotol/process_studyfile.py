@@ -164,7 +164,7 @@ def run_process_study(spec: dict, path: Path, out, seed: int, load_problem) -> d
             front = process_front(pp, **kw)
         else:
             results[m] = METHODS[m](pp, **kw)
-    summary = {"name": name, "problem": pp.describe(), "seed": seed,
+    summary = {"name": name, "study_file": str(Path(path).resolve()), "problem": pp.describe(), "seed": seed,
                "results": {m: _result_dict(pp, r) for m, r in results.items()},
                "seconds": time.perf_counter() - t0, "units": units_block(pp.base)}
     if front is not None:

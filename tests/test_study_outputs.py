@@ -57,3 +57,24 @@ def test_files_without_a_recorded_study_file_are_not_overwritten(tmp_path, capsy
     (tmp_path / "ucr3_example.html").write_text("<html></html>")                       # only a report
     code, err = _run(["run", str(fast_study(tmp_path / "s")), "--out", str(tmp_path)], capsys)
     assert code == 2 and "ucr3_example.html there were written" in err
+
+
+def test_a_process_study_records_its_file_too(tmp_path, capsys):
+    """Process-selection study files (evotol/process_studyfile.py) run again into their folder;
+    a copy under another path with the same name is refused."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "reports" / "studies" / "clutch_processes.toml").read_text()
+    start = text.index("[methods]")
+    end = text.index("\n[", start + 1) if "\n[" in text[start + 1:] else len(text)
+    text = text[:start] + "[methods]\noptimum = {}\n" + text[end:]
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    a, b = tmp_path / "a" / "p.toml", tmp_path / "b" / "p.toml"
+    a.write_text(text)
+    b.write_text(text)
+    for f, code in ((a, 0), (a, 0), (b, 2)):
+        got, err = _run(["run", str(f), "--out", str(tmp_path)], capsys)
+        assert got == code, err
+    assert "clutch_processes.json and clutch_processes.html there were written by the study file" in err
+    assert json.loads((tmp_path / "clutch_processes.json").read_text())["study_file"] == str(a.resolve())
