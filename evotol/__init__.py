@@ -38,6 +38,11 @@ _WHERE = {
     "allocate_process_ga": "evotol.allocators",
     "allocate_process_baselines": "evotol.allocators",
     "process_front": "evotol.allocators",
+    "assembly_problem": "evotol.allocators.process",
+    # sources beyond intervals
+    "Distribution": "evotol.distributions",
+    "ClearanceClass": "evotol.clearances",
+    "ClearanceSources": "evotol.clearances",
     # results and verification
     "AllocationResult": "evotol.result",
     "ParetoFront": "evotol.allocators",
