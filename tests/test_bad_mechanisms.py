@@ -78,6 +78,17 @@ MECHANISM_CASES = {
                                     ["coordinate 'y'.axis = 'x'", "'x' is already x"]),
     "out-of-plane orientation in a planar mechanism": ((('orientation = [["z", "phi"]]', 'orientation = [["x", "phi"]]'),),
                                                        ["end_effector.orientation = ['x', 'phi']", "about z only"]),
+    "stroke limits in mm written as metres": ((("[lengths]", '[limits]\nl1 = [140, 170]\n\n[lengths]'),),
+                                              ["limits.l1 = 140", "did you mean '140*mm'?"]),
+    "joint limits in degrees written as radians": ((("[lengths]", "[limits]\na1 = [-170, 170]\n\n[lengths]"),),
+                                                   ["limits.a1 = -170", "did you mean '-170*deg'?"]),
+    # joint and stroke limits (declared with issue 23's [limits]): the task box must stay within them
+    "task box beyond the real strokes": ((("[lengths]", '[limits]\nl1 = ["140*mm", "170*mm"]\n\n[lengths]'),),
+                                         ["the pose [", "(x, y, phi, SI) needs joint l1 = 0.183093", "outside its limits [0.14, 0.17]"]),
+    "assembly outside the stroke limits": ((("[lengths]", '[limits]\nl1 = ["170*mm", "200*mm"]\n\n[lengths]'),),
+                                           ["the assembly pose [0.0, 0.0, 0.0]", "needs joint l1 = 0.164861", "[0.17, 0.2]"]),
+    "limits for a joint that does not exist": ((("[lengths]", '[limits]\nl9 = ["140*mm", "170*mm"]\n\n[lengths]'),),
+                                               ["limits.l9", "a joint variable", "'l1'"]),
     "[checks] key typo": ((("[lengths]", "[checks]\nmax_lenght = 20\n\n[lengths]"),), ["checks.max_lenght = 20", "'max_length'"]),
     "[checks] negative_lengths names no length": ((("[lengths]", '[checks]\nnegative_lengths = ["Rc"]\n\n[lengths]'),),
                                                   ["checks.negative_lengths = ['Rc']", "names of [lengths]", "'Rb'"]),
@@ -89,7 +100,7 @@ MECHANISM_CASES = {
 @pytest.mark.parametrize("case", list(MECHANISM_CASES))
 def test_mechanism_file_mistake(case, tmp_path, capsys):
     edits, names = MECHANISM_CASES[case]
-    code, out, err = _check(["check-mechanism", str(_edited(tmp_path, edits)), "--poses", "3"], capsys)
+    code, out, err = _check(["check-mechanism", str(_edited(tmp_path, edits)), "--poses", "20"], capsys)
     assert code == 2, (out, err)
     assert "Traceback" not in err
     message = err.strip().splitlines()[-1]

@@ -7,7 +7,7 @@ and the fix:
   machine): ``Rb = 250`` meant 250 mm -- "did you mean '250*mm'?";
 * an **angle beyond 2π written as a plain number** (``gamma = 90`` is 90 rad): "did you mean
   '90*deg'?" -- an angle written with a unit or with ``pi`` (``"720*deg"``, ``"4*pi"``) is taken
-  as meant;
+  as meant (also in ``[assembly] joints`` and ``[limits]``, by the joint's kind);
 * a **negative design length** in ``[lengths]`` (a mirrored mechanism), unless listed in ``[checks]
   negative_lengths``: signs belong in the frame entries (``d = "-rp"``);
 * a **workspace coordinate that moves nothing**: an ``angle`` coordinate named in no
@@ -15,8 +15,8 @@ and the fix:
   out-of-plane orientation in a planar mechanism.
 
 The written values (``spec``, the parsed TOML) are checked, not only the SI numbers, so the
-message can quote what was typed. Joint and stroke limits are :mod:`robots.mechanism.urdf`'s
-(issue 23).
+message can quote what was typed. Whether the workspace stays within the joint and stroke limits
+is the inverse geometry's check (issue 23).
 """
 from __future__ import annotations
 
@@ -125,12 +125,15 @@ def check_written_values(spec: Mapping, variables: Mapping[str, str]) -> None:
             _check_angle(where, raw)
         else:
             _check_length(where, raw, _constant(raw, where), max_length)
-    for x, raw in dict(asm.get("joints", {})).items():
+    joint_values = [(f"assembly.joints.{x}", x, raw) for x, raw in dict(asm.get("joints", {})).items()]
+    limits = spec.get("limits", {}) if isinstance(spec.get("limits"), Mapping) else {}
+    joint_values += [(f"limits.{x}", x, raw) for x, pair in limits.items() if isinstance(pair, list) for raw in pair]
+    for where, x, raw in joint_values:
         unit = variables.get(x)
         if unit == "m":
-            _check_length(f"assembly.joints.{x}", raw, _constant(raw, f"assembly.joints.{x}"), max_length)
+            _check_length(where, raw, _constant(raw, where), max_length)
         elif unit == "rad":
-            _check_angle(f"assembly.joints.{x}", raw)
+            _check_angle(where, raw)
 
 
 def check_workspace(coordinates, orientation, planar: bool) -> None:
