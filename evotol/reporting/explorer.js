@@ -7,6 +7,7 @@
   "use strict";
   var cfg = JSON.parse(document.getElementById("explorer-data").textContent);
   var E = cfg.explorer, NS = E.sources.length, NV = E.variables.length;
+  var MAX_ROWS = 15;      /* contributions shown one by one; the rest summed in one row */
 
   /* ---- cost models: x = t / scale, the textbook formula f(x) (cost_models/) ---- */
   function polyval(x, p) {            /* numpy.polynomial.polynomial.polyval: Horner from the top */
@@ -195,25 +196,31 @@
       order.sort(function (a, b) { return r.contributions[b] - r.contributions[a]; });
       h += "<p>Contributions to the " + (measure === "rss" ? "RSS" : "worst-case") + " " + pc.name + " error at the worst pose #" +
         r.worst_pose + ":</p><table class=\"ev ex-contrib\"><tr><th>source</th><th>tolerance</th><th>share (%)</th></tr>";
-      order.forEach(function (j) {
+      var rest = 0;
+      order.forEach(function (j, i) {
         var s = E.sources[j];
+        if (i >= MAX_ROWS) { rest += r.contributions[j]; return; }
         h += "<tr><td>" + s.name + "</td><td>±" + show(state.t[j], s.unit) + "</td><td>" + number(100 * r.contributions[j]) + "</td></tr>";
       });
+      if (order.length > MAX_ROWS)
+        h += "<tr><td>" + (order.length - MAX_ROWS) + " more sources</td><td></td><td>" + number(100 * rest) + "</td></tr>";
       h += "</table>";
     });
     el.innerHTML = h;
     root.querySelector("#ex-cost-head").textContent = number(state.cost, 6);
-    if (window.Plotly) {
-      var traces = [];
+    if (window.Plotly) {      /* every component on one axis: error / requirement (1 = at the requirement) */
+      var traces = [], n = 0;
       COMPS.forEach(function (pc) {
-        var r = state.components[pc.name], k = factor(cfg.error_units[pc.name]), idx = r.wc.map(function (_, i) { return i; });
-        traces.push({x: idx, y: r.wc.map(function (v) { return v * k; }), type: "bar", name: "worst case (" + pc.name + ")"});
-        traces.push({x: idx, y: r.rss.map(function (v) { return v * k; }), type: "bar", name: "RSS (" + pc.name + ")"});
-        traces.push({x: [0, idx.length - 1], y: [pc.limit * k, pc.limit * k], mode: "lines", name: "requirement",
-          line: {dash: "dash", color: "#b00020"}});
+        var r = state.components[pc.name], idx = r.wc.map(function (_, i) { return i; });
+        n = idx.length;
+        traces.push({x: idx, y: r.wc.map(function (v) { return v / pc.limit; }), type: "bar", name: "worst case (" + pc.name + ")"});
+        traces.push({x: idx, y: r.rss.map(function (v) { return v / pc.limit; }), type: "bar", name: "RSS (" + pc.name + ")"});
       });
-      Plotly.react("ex-plot", traces, {title: "errors at every allocation pose (" + label(cfg.error_units[COMPS[0].name]) + ")",
-        xaxis: {title: "pose"}, barmode: "group", height: 340, margin: {t: 40}}, {displaylogo: false, responsive: true});
+      traces.push({x: [-0.5, n - 0.5], y: [1, 1], mode: "lines", name: "requirement", line: {dash: "dash", color: "#b00020"}});
+      Plotly.react("ex-plot", traces, {title: {text: "error / requirement at every allocation pose (first-order)"},
+        xaxis: {title: {text: "allocation pose #"}}, yaxis: {title: {text: "error / requirement"}}, barmode: "group",
+        height: 360, margin: {t: 50}},
+        {displaylogo: false, responsive: true});
     }
   }
 

@@ -31,6 +31,9 @@ def tightness_text(tightness: dict) -> str:
     """The sentence saying how far the page's sampled worst case can be and was below the certified one."""
     parts = []
     for comp, t in tightness.items():
+        if t["guaranteed"] == 0:
+            parts.append(f"{comp}: exact (the error has one direction, {t['n_directions']} sampled)")
+            continue
         parts.append(f"{comp}: {t['n_directions']} directions, covering angle {t['covering_angle']:.3g} rad, so the page "
                      f"is never more than {100 * t['guaranteed']:.3g} % below the certified worst case; measured on "
                      f"{t['n_designs']} tolerance vectors (the methods' allocations and random vectors within the bounds) "

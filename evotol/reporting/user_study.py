@@ -153,6 +153,7 @@ def _error_map_figure(summary: dict, method: str, comp: str):
               for s in slices]
     fig = make_subplots(rows=1, cols=len(slices), subplot_titles=titles, horizontal_spacing=0.08)
     zmax = np.nanmax([np.nanmax(np.asarray(s["values"][comp], dtype=float)) for s in slices]) * k
+    zmin = np.nanmin([np.nanmin(np.asarray(s["values"][comp], dtype=float)) for s in slices]) * k
     lim = summary["requirement"][comp] * k
     poses = np.asarray(summary["poses"], dtype=float)
     r = summary["results"][method]
@@ -165,19 +166,26 @@ def _error_map_figure(summary: dict, method: str, comp: str):
             fig.add_scatter(x=x, y=z, mode="lines", name=f"{comp} error", row=1, col=i, showlegend=i == 1)
             continue
         y = np.asarray(s["y"]) * scale[yn]
-        fig.add_heatmap(x=x, y=y, z=z, zmin=0, zmax=max(zmax, lim), colorscale="Viridis", row=1, col=i,
+        fig.add_heatmap(x=x, y=y, z=z, zmin=zmin, zmax=max(zmax, lim), colorscale="Viridis", row=1, col=i,
                         colorbar={"title": u.unit_for(eu)}, showscale=i == len(slices),
                         hovertemplate=f"{xn} %{{x:.4g}}<br>{yn} %{{y:.4g}}<br>error %{{z:.4g}} {u.unit_for(eu)}<extra></extra>")
         fig.add_contour(x=x, y=y, z=z, contours={"start": lim, "end": lim, "coloring": "none", "showlabels": True},
                         line={"color": "white", "width": 2, "dash": "dash"}, showscale=False, hoverinfo="skip",
                         row=1, col=i, name="requirement", showlegend=False)
         ix, iy = ws["names"].index(xn), ws["names"].index(yn)
-        fig.add_scatter(x=poses[:, ix] * scale[xn], y=poses[:, iy] * scale[yn], mode="markers", row=1, col=i,
-                        marker={"color": "white", "size": 5, "line": {"color": "black", "width": 1}},
-                        name="allocation poses", showlegend=i == 1)
-        fig.add_scatter(x=[wp[ix] * scale[xn]], y=[wp[iy] * scale[yn]], mode="markers", row=1, col=i,
-                        marker={"symbol": "star", "color": "red", "size": 14, "line": {"color": "black", "width": 1}},
-                        name="worst allocation pose", showlegend=i == 1)
+        fixed = [(ws["names"].index(n), v) for n, v in s["fixed"].items()]
+        on = np.all([np.isclose(poses[:, k], v, rtol=1e-9, atol=1e-12) for k, v in fixed], axis=0) if fixed \
+            else np.ones(len(poses), dtype=bool)
+        # allocation poses on this slice as dots; none there (a Latin hypercube, a 6-D box): their projection
+        pick, label, colour = (on, "allocation poses on this slice", "white") if on.any() else \
+            (np.ones(len(poses), dtype=bool), "allocation poses (projected)", "#bbbbbb")
+        fig.add_scatter(x=poses[pick, ix] * scale[xn], y=poses[pick, iy] * scale[yn], mode="markers", row=1, col=i,
+                        marker={"color": colour, "size": 5, "line": {"color": "black", "width": 1}},
+                        name=label, showlegend=bool(i == 1 or not on.any()))
+        if all(np.isclose(wp[k], v, rtol=1e-9, atol=1e-12) for k, v in fixed):
+            fig.add_scatter(x=[wp[ix] * scale[xn]], y=[wp[iy] * scale[yn]], mode="markers", row=1, col=i,
+                            marker={"symbol": "star", "color": "red", "size": 14, "line": {"color": "black", "width": 1}},
+                            name="worst allocation pose")
         fig.update_xaxes(title_text=f"{xn} ({dunit[xn]})", row=1, col=i)
         fig.update_yaxes(title_text=f"{yn} ({dunit[yn]})", row=1, col=i)
     fig.update_layout(title=f"{method}: {comp} error over the workspace ({u.unit_for(eu)}; dashed: the requirement)",
@@ -209,8 +217,8 @@ def map_caption(summary: dict, method: str, comp: str) -> str:
     text = (f"Largest {comp} error on the map {_error_text(summary, comp, v)} at {pose_cells(summary, pose)}; "
             f"over the allocation poses {_error_text(summary, comp, r[f'max_{comp}_error'])}.")
     if v > r[f"max_{comp}_error"] * (1 + 1e-6):
-        text += (" The map finds a larger error between the allocation poses: refine the pose set "
-                 "([poses] refine = true) to hold the requirement over the whole workspace.")
+        text += (" The map finds a larger error between the allocation poses: the allocation holds the requirement "
+                 "only at its poses; add poses there (or [poses] refine = true) to hold it over the whole workspace.")
     if unreachable:
         text += f" {unreachable} map poses are out of reach and left blank."
     return text
