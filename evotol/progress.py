@@ -40,15 +40,28 @@ def expected(name: str) -> str:
 
 
 class Heartbeat:
-    """``with Heartbeat("yao2013"): study.run(...)`` -- a line every ``every`` s on a non-terminal."""
+    """``with Heartbeat("yao2013"): study.run(...)`` -- a line every ``every`` s on a non-terminal.
 
-    def __init__(self, name: str, every: float = 10.0, stream=None, force: bool = False):
+    ``bar=True``: on a terminal, a tqdm line with the elapsed time instead (shown after 2 s,
+    redrawn every second, on ``bar_stream``, default stderr) -- for a method of unknown length,
+    such as the exact optimum's cutting planes in ``evotol run`` (issue 27 item 5)."""
+
+    def __init__(self, name: str, every: float = 10.0, stream=None, force: bool = False, bar: bool = False,
+                 bar_stream=None):
         self.name, self.every = name, float(every)
         self.stream = stream if stream is not None else sys.stdout
         isatty = getattr(self.stream, "isatty", lambda: False)
         self.active = force or not isatty()
+        self.bar_stream = sys.stderr if bar_stream is None else bar_stream
+        self.bar = bar and not self.active and getattr(self.bar_stream, "isatty", lambda: False)()
         self._stop = threading.Event()
         self._thread = None
+
+    def _spin(self) -> None:
+        with tqdm(total=None, desc=self.name, bar_format="{desc}: running for {elapsed}", leave=False, delay=2.0,
+                  file=self.bar_stream) as bar:
+            while not self._stop.wait(1.0):
+                bar.refresh()
 
     def _beat(self) -> None:
         t0 = time.perf_counter()
@@ -59,8 +72,9 @@ class Heartbeat:
                   file=self.stream, flush=True)
 
     def __enter__(self) -> "Heartbeat":
-        if self.active:
-            self._thread = threading.Thread(target=self._beat, name=f"heartbeat-{self.name}", daemon=True)
+        if self.active or self.bar:
+            self._thread = threading.Thread(target=self._beat if self.active else self._spin, name=f"heartbeat-{self.name}",
+                                            daemon=True)
             self._thread.start()
         return self
 

@@ -268,7 +268,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
                     kw.setdefault("incumbent", results["ga"].t)
                 if m in REFINING_METHODS and refine_option(spec):
                     kw.setdefault("refine", refine_option(spec))
-                with Heartbeat(m) if m != "ga" else nullcontext():   # off a terminal, a line every 10 s (a GA: its own)
+                with Heartbeat(m, bar=True) if m != "ga" else nullcontext():   # a line every 10 s or a bar (a GA: its own)
                     results[m] = METHODS[m](problem, **kw)
             except KeyboardInterrupt:
                 ctrl_c.count = max(ctrl_c.count, before + 1)

@@ -114,3 +114,17 @@ def test_run_prints_lines_for_a_method_without_a_bar(tmp_path, capsys, monkeypat
     monkeypatch.setitem(sf.METHODS, "sensitivity", sensitivity)
     assert main(["run", str(fast_study(tmp_path)), "--out", str(tmp_path)]) == 0
     assert "[evotol] sensitivity: running for " in capsys.readouterr().out
+
+
+def test_heartbeat_bar_on_a_terminal_shows_the_elapsed_time():
+    """A method of unknown length (the exact optimum) gets a tqdm line on a terminal: after its
+    2 s delay it reads 'optimum: running for 00:02'; off a terminal the lines of the log instead."""
+    out, err = _Terminal(), _Terminal()
+    with Heartbeat("optimum", stream=out, bar=True, bar_stream=err):
+        time.sleep(3.2)
+    assert "optimum: running for 00:0" in err.getvalue() and "\r" in err.getvalue()
+    assert out.getvalue() == ""
+    log, err2 = io.StringIO(), _Terminal()
+    with Heartbeat("optimum", every=0.02, stream=log, bar=True, bar_stream=err2):
+        time.sleep(0.1)
+    assert "[evotol] optimum: running for" in log.getvalue() and err2.getvalue() == ""
