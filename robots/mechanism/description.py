@@ -356,7 +356,7 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     tol = spec.get("tolerances", {})
     _check_keys(tol, ("sources",), "tolerances")
     clearance = _clearance_from_dict(spec["clearance"]) if "clearance" in spec else None
-    check_written_values(spec, _joint_units(frames, set(lengths) | set(angles)))    # issue 27: units as written
+    check_written_values(spec, joint_units(frames, set(lengths) | set(angles)))    # issue 27: units as written
     mech = Mechanism(name=str(name), frames=tuple(frames), end_effector=str(ee.get("frame", ee_default or "")), coordinates=tuple(coords),
                      loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
@@ -378,7 +378,7 @@ def _limits(table) -> dict:
     return out
 
 
-def _joint_units(frames, params) -> dict[str, str]:
+def joint_units(frames, params) -> dict[str, str]:
     """Joint variable -> "m" (in the r of a prismatic frame) or "rad" (in the theta of a revolute one)."""
     out = {}
     for f in frames:

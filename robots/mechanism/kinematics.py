@@ -26,19 +26,14 @@ import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
 from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, inv_transform, rotation_vector
-from robots.mechanism.description import AXES, ANGLE_FIELDS, Mechanism
+from robots.mechanism import working_mode
+from robots.mechanism.description import AXES, ANGLE_FIELDS, Mechanism, joint_units
 from robots.mechanism.expressions import Expression
 from robots.mechanism.limits import check_joint_limits, check_limit_names
 from robots.mechanism.placement import PLACEMENT_FIELDS, placement_error, placement_twists
 from robots.mechanism.rotations import AXIS_ROT, cross_rows, rot_z_inverse
 
 IN_PLANE = (0, 1, 5)            # x, y, rotation about z
-#: How far Newton may move a declared ``[assembly]`` joint while closing the loops
-#: (docs/mechanisms.md, "Checks before computing"): a revolute joint by 0.5 rad (29 deg), a
-#: prismatic one by 20 % of the description's length scale (its largest length parameter).
-#: Farther is another working mode, or a description that does not mean what was written.
-ASSEMBLY_MAX_ANGLE = 0.5
-ASSEMBLY_MAX_LENGTH_FRACTION = 0.2
 @dataclass
 class State:
     """Kinematic state at ``n`` configurations: world transforms, entry derivatives, entry twists."""
@@ -105,12 +100,8 @@ class Kinematics:
         self.coord_axes = [(i, AXES.index(c.axis)) for i, c in enumerate(mech.coordinates) if c.axis in AXES]
         self._check_loops_actuated()
         check_limit_names(mech.limits, self.variables)
-        self.joint_unit = {}                        # joint variable -> "m" (prismatic) or "rad" (revolute)
-        for f in mech.frames:
-            for x in (self.expr[(f.name, f.joint_field)].names if f.joint_field else ()):
-                if x in self.variables:
-                    self.joint_unit.setdefault(x, "m" if f.joint == "prismatic" else "rad")
-        self._check_assembly_declared()
+        self.joint_unit = {x: u for x, u in joint_units(mech.frames, set(params)).items() if x in self.variables}
+        working_mode.check_declared(self)           # a closed-loop mechanism declares its assembly (issue 27)
         self._assembly = None
         self._cache = {}
 
@@ -146,57 +137,6 @@ class Kinematics:
             if not frames & (act | coupled):
                 lp = loops[r]
                 raise ValidationError(f"loop {lp.a}-{lp.b}", sorted(frames), "a loop (or group of loops sharing links) with an actuated joint")
-
-    def _check_assembly_declared(self) -> None:
-        """A closed-loop mechanism declares its working mode: every joint variable in ``[assembly]
-        joints`` (Newton from all-zero joints picks an arbitrary assembly, issue 27)."""
-        if not self.mech.loops:
-            return
-        declared = self.mech.assembly_joints
-        if not declared:
-            raise ValidationError("assembly", None, f"an [assembly] table for the closed-loop mechanism {self.mech.name!r}: "
-                                                    f"pose and approximate joints {{{', '.join(self.variables)}}} of the "
-                                                    "intended working mode (Newton from all-zero joints picks any)")
-        missing = [x for x in self.variables if x not in declared]
-        if missing:
-            raise ValidationError("assembly.joints", sorted(declared), f"a value for every joint variable of the closed "
-                                                                       f"loops; missing: {', '.join(missing)}")
-
-    def _check_assembly_reached(self, pose: np.ndarray, q0: dict, q: dict, Rt) -> None:
-        """Newton closed the loops near the declared joints (:data:`ASSEMBLY_MAX_ANGLE`,
-        :data:`ASSEMBLY_MAX_LENGTH_FRACTION`); else a KinematicsError naming the joint, its declared
-        and reached values and the loop residual at the declared joints. A serial chain (no loop)
-        is not checked here: its joints are the seed of the inverse geometry (redundancy and joint
-        limits: the URDF work, issue 23)."""
-        if not self.mech.loops:
-            return
-        declared = self.mech.assembly_joints
-        worst, worst_ratio = None, 1.0
-        for x in self.variables:
-            if x not in declared:
-                continue
-            unit = self.joint_unit.get(x, "rad")
-            d = float(q[x][0] - declared[x])
-            if unit == "rad":
-                d = float(np.arctan2(np.sin(d), np.cos(d)))     # a full turn is the same posture
-                limit = ASSEMBLY_MAX_ANGLE
-            else:
-                limit = ASSEMBLY_MAX_LENGTH_FRACTION * self.length_scale
-            if abs(d) / limit > worst_ratio:
-                worst, worst_ratio = (x, unit, limit), abs(d) / limit
-        if worst is None:
-            return
-        x, unit, limit = worst
-        F, _, _ = self._ig_system(q0, pose, Rt)
-        rows = self.loop_row_is_length()
-        loop = F[0, :len(rows)]
-        res_m = float(np.abs(loop[rows]).max()) if rows.any() else 0.0
-        res_rad = float(np.abs(loop[~rows]).max()) if (~rows).any() else 0.0
-        raise KinematicsError(f"{self.mech.name}: assembly.joints.{x} = {declared[x]:.6g} {unit} was declared, but Newton "
-                              f"closed the loops at {x} = {q[x][0]:.6g} {unit} (more than {limit:.3g} {unit} away); the loop "
-                              f"residual at the declared joints is {res_m:.3g} m, {res_rad:.3g} rad. Check the units of the "
-                              "lengths and angles (250 is 250 m: write '250*mm'; 90 is 90 rad: write '90*deg'), the frames "
-                              "and loops, or declare the joints of the intended assembly", poses=pose)
 
     # ------------------------------------------------------------------ forward kinematics
     def env(self, q: dict, n: int, params: dict | None = None) -> dict:
@@ -432,7 +372,7 @@ class Kinematics:
                 raise KinematicsError(f"{m.name}: the loops do not close at the assembly pose {pose[0].tolist()} from the "
                                       f"declared assembly joints (scaled residual {res[0]:.2g}); check the frames, the loops "
                                       "and [assembly]", poses=pose)
-            self._check_assembly_reached(pose, q0, q, Rt)
+            working_mode.check_reached(self, pose, q0, q)
             check_joint_limits(m.name, m.limits, q, pose, [c.name for c in m.coordinates], "assembly pose")
             self._assembly = (pose[0], {k: float(v[0]) for k, v in q.items()})
         return self._assembly
