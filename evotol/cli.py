@@ -176,8 +176,6 @@ def _print_results(summary: dict) -> None:
     rate, so the terminal answers "what did I get" without opening the JSON."""
     from evotol.reporting.user_study import terminal_rows
 
-    if "display_units" not in summary:     # a process-selection study's summary (evotol/process_studyfile.py) has
-        return                             # no display units: its report and JSON carry the results
     rows, header = terminal_rows(summary)
     if not rows:
         return

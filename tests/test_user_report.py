@@ -117,3 +117,42 @@ def test_yield_study_has_a_yield_column(tmp_path_factory):
     col = header.index("yield at the worst pose (first-order; required)")
     r = summary["results"]["equal"]
     assert rows[0][col].startswith(f"{r['yield_at_worst_pose']:.6f} (required 0.9973); Monte Carlo:")
+
+
+def test_map_finds_a_larger_error_between_too_few_allocation_poses(tmp_path_factory):
+    """An allocation on the centre pose alone holds the requirement there only: the map over the
+    whole workspace finds the larger error at the box's edge and the caption says so."""
+    d, summary, spec = _run(tmp_path_factory, "planar3rrr", [("grid = [5, 5, 3]", "list = [[0.0, 0.0, 0.0]]")],
+                            "optimum = {}\n")
+    from evotol.reporting.user_study import map_caption
+    r = summary["results"]["optimum"]
+    z = np.concatenate([np.asarray(s["values"]["position"]).ravel() for s in summary["figures"]["error_maps"]["optimum"]])
+    assert r["max_position_error"] == pytest.approx(1e-4, rel=1e-6) and z.max() > 1.05e-4
+    # the largest map value is the problem's error at that pose, evaluated directly
+    problem = load_problem(spec, base_dir=STUDIES)
+    s = max(summary["figures"]["error_maps"]["optimum"], key=lambda s: np.max(s["values"]["position"]))
+    i, j = np.unravel_index(np.argmax(s["values"]["position"]), (21, 21))
+    direct = problem.at_poses([[s["x"][j], s["y"][i], s["fixed"]["phi"]]]).evaluate(problem.as_array(r["tolerances"])[None])
+    assert z.max() == pytest.approx(direct.position[0, 0], rel=1e-9)
+    text = map_caption(summary, "optimum", "position")
+    assert f"Largest position error on the map {number(z.max() * 1e3)} mm" in text and "larger error between" in text
+
+
+def test_terminal_lists_every_method_and_the_front_of_a_process_study(tmp_path, capsys):
+    """Issue 25 item 5 for a process-selection study (no lengths to convert): every method, then
+    NSGA-II's cheapest feasible point and its knee."""
+    from evotol.cli import main
+    text = (STUDIES / "clutch_processes.toml").read_text()
+    (tmp_path / "c.toml").write_text(text)
+    assert main(["run", str(tmp_path / "c.toml"), "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    data = json.loads((tmp_path / "clutch_processes.json").read_text())
+    lines = [ln.split() for ln in out.splitlines() if ln.startswith("  ")]
+    for m, r in data["results"].items():
+        row = next(ln for ln in lines if " ".join(ln).startswith(m + " "))
+        assert float(row[len(m.split())]) == pytest.approx(r["cost"], rel=1e-5)
+    cost, err = np.asarray(data["pareto_front"]["cost"]), np.asarray(data["pareto_front"]["normalised_error"])
+    cheapest = min(cost[err <= 1 + 1e-9])
+    row = next(ln for ln in lines if ln[:3] == ["nsga2", "cheapest", "feasible"])
+    assert float(row[3]) == pytest.approx(cheapest, rel=1e-5)
+    assert any(ln[:2] == ["nsga2", "knee"] for ln in lines)

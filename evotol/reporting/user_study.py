@@ -17,6 +17,7 @@ import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
 from evotol.display import DisplayUnits, number
+from evotol.pareto import ideal_point_knee
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
 
@@ -103,6 +104,20 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
 def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     """The terminal table of ``evotol run``: every method run, NSGA-II as its cheapest feasible
     point and its knee; errors in the study's display units."""
+    if "display_units" not in summary:    # a process-selection study (evotol/process_studyfile.py): no lengths
+        header = ["method", "cost", "max error / requirement", "status"]
+        rows = [[m, f"{r['cost']:.6g}", number(r["normalised_error"]) if "normalised_error" in r else "",
+                 "meets the requirement" if r.get("feasible") else "misses the requirement"]
+                for m, r in (summary.get("results") or {}).items() if isinstance(r, dict) and "cost" in r]
+        pf = summary.get("pareto_front") or {}
+        if "cost" in pf and "normalised_error" in pf and len(pf["cost"]):
+            cost, err = np.asarray(pf["cost"], dtype=float), np.asarray(pf["normalised_error"], dtype=float)
+            ok = np.flatnonzero(err <= 1 + 1e-9)
+            picks = ([("nsga2 cheapest feasible", int(ok[np.argmin(cost[ok])]))] if ok.size else []) + \
+                [("nsga2 knee", ideal_point_knee(np.stack([cost, err], axis=1)))]
+            rows += [[label, f"{cost[i]:.6g}", number(err[i]),
+                      "meets the requirement" if err[i] <= 1 + 1e-9 else "misses the requirement"] for label, i in picks]
+        return rows, header
     comps = list(summary.get("requirement", {}))
     u = _units(summary)
     header = ["method", "cost"] + [f"{c} ({u.unit_for(summary['error_units'][c])})" for c in comps] + ["MC exceed", "status"]
@@ -234,14 +249,17 @@ def _front_figure(summary: dict):
         if p is not None:
             fig.add_scatter(x=[p["normalised_error"]], y=[p["cost"]], mode="markers", name=label,
                             marker={"symbol": sym, "size": 16, "color": "#1f77b4", "line": {"width": 2}})
-    for m, r in summary["results"].items():
+    # the certified optimum drawn last, on top of a GA that lands next to it
+    for m, r in sorted(summary["results"].items(), key=lambda kv: kv[0] == "optimum"):
         sym, col = MARKS.get(m, ("x", "#7f7f7f"))
         label = "certified optimum" if m == "optimum" and (r.get("verdict") or "").startswith("certified optimal") else m
         fig.add_scatter(x=[r["normalised_error"]], y=[r["cost"]], mode="markers", name=label,
-                        marker={"symbol": sym, "color": col, "size": 15, "line": {"color": "black", "width": 1}})
+                        marker={"symbol": sym, "color": col, "size": 18 if m == "optimum" else 14,
+                                "line": {"color": "black", "width": 1}})
     fig.add_vline(x=1.0, line_dash="dash", line_color="grey", annotation_text="requirement")
-    fig.update_layout(title="Cost vs. normalised error (max error / requirement): NSGA-II front and the methods",
-                      xaxis_title="max error / requirement", yaxis_title="cost", height=480)
+    fig.update_layout(title="Cost vs. normalised error (max error / requirement): NSGA-II front and the methods "
+                            "(log scales)", xaxis_title="max error / requirement", yaxis_title="cost", height=480,
+                      xaxis_type="log", yaxis_type="log")
     return fig
 
 
