@@ -87,6 +87,12 @@ class ParetoFront:
     rtol : float
         Relative tolerance of that test (``allocate_nsga2``: the rule of :mod:`evotol.feasibility`,
         1e-6, on the proven bound; its ``proven_ratio`` column holds it for the members checked).
+    objectives : tuple of (column, sense, log), optional
+        Every objective of the front: sense +1 minimised, -1 maximised; ``log`` where the knee is
+        read on a log scale. Default: ``cost`` and ``objective``, both minimised. The first one is
+        what :meth:`cheapest_feasible` optimises (a design study's front, e.g. workspace area vs.
+        p_max vs. r_max from :func:`evotol.doe.nsga2`, has no cost: its "cheapest" is the best in
+        its first objective).
     """
 
     table: pd.DataFrame
@@ -95,11 +101,19 @@ class ParetoFront:
     objective: str = "normalised_error"
     limit: float = 1.0
     rtol: float = 1e-9
+    objectives: tuple[tuple[str, int, bool], ...] | None = None
+
+    def __post_init__(self):
+        if self.objectives is None:     # a cost-vs-accuracy front: two minimised objectives
+            self.objectives = (("cost", 1, False), (self.objective, 1, False))
+        missing = [c for c, _, _ in self.objectives if c not in self.table.columns]
+        if missing:
+            raise ValidationError("ParetoFront.table", list(self.table.columns)[:8], f"the objective columns {missing}")
 
     @property
     def cost(self) -> np.ndarray:
-        """Cost of every member (cost units), ascending."""
-        return self.table["cost"].to_numpy()
+        """The first objective of every member (for a cost-vs-accuracy front: the cost, ascending)."""
+        return self.table[self.objectives[0][0]].to_numpy()
 
     @property
     def error(self) -> np.ndarray:
@@ -117,9 +131,18 @@ class ParetoFront:
         ok = self.table[self.table[self.objective] <= self.limit * (1 + self.rtol)]
         if ok.empty:
             raise ValidationError("Pareto front", "no design", f"a design with {self.objective} <= {self.limit:g}")
-        return ok.loc[ok["cost"].idxmin()]
+        first, sense, _ = self.objectives[0]
+        return ok.loc[ok[first].idxmin() if sense > 0 else ok[first].idxmax()]
+
+    def _minimised(self) -> np.ndarray:
+        return np.column_stack([sense * self.table[c].to_numpy(dtype=float) for c, sense, _ in self.objectives])
 
     def knee(self) -> int:
-        """Row of the knee (:func:`ideal_point_knee`: nearest to the ideal point with cost and the
-        second objective each scaled to [0, 1] over the front)."""
-        return ideal_point_knee(np.stack([self.cost, self.error], axis=1))
+        """Row of the knee (:func:`ideal_point_knee`: nearest to the ideal point with every
+        objective scaled to [0, 1] over the front, log10 first where an objective says so)."""
+        return ideal_point_knee(self._minimised(), [lg and sense > 0 for _, sense, lg in self.objectives])
+
+    def knees(self) -> pd.DataFrame:
+        """Every knee point (:func:`knee_points`: the ideal-point knee and pymoo's high trade-off
+        points), as rows of the table."""
+        return self.table.iloc[knee_points(self._minimised(), [lg and sense > 0 for _, sense, lg in self.objectives])]

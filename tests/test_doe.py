@@ -194,8 +194,9 @@ class CostAndError:
 def test_nsga2_reaches_the_closed_form_front_and_marks_a_knee():
     """For Σ t = P fixed, Σ 1/t is least at equal t: cost >= n²/P (µm), equality on the front."""
     f = [Factor(f"t{j}_mm", low=1e-4, high=1e-1, log=True) for j in range(3)]
-    front = doe.nsga2(f, CostAndError(), [Objective("cost", 1, log=True), Objective("p_max_mm", 1, log=True)],
-                      pop_size=40, n_gen=40, seed=1)
+    pf = doe.nsga2(f, CostAndError(), [Objective("cost", 1, log=True), Objective("p_max_mm", 1, log=True)],
+                   pop_size=40, n_gen=40, seed=1)
+    front = pf.table
     bound = 9.0 / (front["p_max_mm"] * 1e3)
     ratio = front["cost"] / bound
     assert (ratio >= 1 - 1e-12).all()
@@ -205,6 +206,10 @@ def test_nsga2_reaches_the_closed_form_front_and_marks_a_knee():
     k = front.loc[front["knee"], "p_max_mm"]
     lo, hi = np.log10(front["p_max_mm"].min()), np.log10(front["p_max_mm"].max())
     assert ((np.log10(k) > lo) & (np.log10(k) < hi)).any()
+    # the one front type: its knees are the table's knee rows, its cheapest member the least cost
+    assert list(pf.knees().index) == list(front.index[front["knee"]])
+    assert pf.knee() in set(front.index[front["knee"]])
+    assert pf.cheapest_feasible()["cost"] == front["cost"].min()
 
 
 def test_knee_of_a_convex_front():
@@ -221,4 +226,4 @@ def test_nsga2_on_local_processes_equals_in_process():
     objs = [Objective("cost", 1, log=True), Objective("p_max_mm", 1, log=True)]
     a = doe.nsga2(f, CostAndError(), objs, pop_size=12, n_gen=3, seed=2)
     b = doe.nsga2(f, CostAndError(), objs, pop_size=12, n_gen=3, seed=2, workers=2)
-    pd.testing.assert_frame_equal(a, b)
+    pd.testing.assert_frame_equal(a.table, b.table)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -13,7 +14,7 @@ from evotol.doe.evaluation import Evaluator, _evaluate_chunk, evaluate
 from evotol.doe.factors import FEASIBLE, SOURCE, Factor, _check_factors, from_unit
 from evotol.allocators.nsga import run_nsga2
 from evotol.errors import EvotolError, ValidationError
-from evotol.pareto import knee_points, non_dominated
+from evotol.pareto import ParetoFront, knee_points, non_dominated
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,7 @@ class DesignProblem(Problem):
 def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[Objective], *,
           pop_size: int = 64, n_gen: int = 40, seed: int = 0, constraint: str | None = None,
           initial: pd.DataFrame | None = None, progress: bool = False, workers: int = 1,
-          scheduler: str | None = None) -> pd.DataFrame:
+          scheduler: str | None = None) -> ParetoFront:
     """NSGA-II (pymoo) on the factors' continuous ranges; returns the final Pareto entries.
 
     Decision variables are the factors in [0, 1] mapped by :meth:`Factor.to_unit` (log-uniform
@@ -80,9 +81,11 @@ def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[
     evaluator output that must be <= 0 for a feasible entry (besides ``feasible``). ``initial``
     seeds the population with known entries (e.g. the best grid entries).
 
-    Returns a DataFrame of the non-dominated feasible entries with ``source = "NSGA-II"`` and a
-    boolean ``knee`` column (:func:`knee_points`), sorted by the first objective.
+    Returns the :class:`evotol.pareto.ParetoFront` of the non-dominated feasible entries: its
+    ``table`` has ``source = "NSGA-II"`` and a boolean ``knee`` column (:func:`knee_points`), sorted
+    by the first objective; ``objectives`` are the study's (column, sense, log).
     """
+    t0 = time.perf_counter()
     factors = _check_factors(factors)
     objectives = tuple(objectives)
     if not objectives:
@@ -117,5 +120,6 @@ def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[
     pareto.attrs["evotol"] = {"factors": [f.to_dict() for f in factors], "design": "NSGA-II",
                               "pop_size": pop_size, "n_gen": n_gen, "seed": seed,
                               "n_evaluations": int(len(allx))}
-    return pareto
+    return ParetoFront(pareto, time.perf_counter() - t0, objective=objectives[-1].column, limit=np.inf,
+                       objectives=tuple((o.column, int(o.sense), bool(o.log)) for o in objectives))
 

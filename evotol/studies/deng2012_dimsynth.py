@@ -271,12 +271,13 @@ def compute(config: dict) -> StudyResult:
 
     # NSGA-II on continuous dimensions: area vs p_max vs r_max
     t1 = time.perf_counter()
-    pareto = doe.nsga2(factors(continuous=True), ev,
+    front = doe.nsga2(factors(continuous=True), ev,
                        [Objective("area_mm2", -1), Objective("p_max_mm", 1, log=True), Objective("r_max_deg", 1, log=True)],
                        pop_size=config["pop_size"], n_gen=config["n_gen"], seed=seed,
                        initial=grid_front if len(grid_front) else None,
                        workers=1 if quick else (workers or os.cpu_count() or 1), scheduler=scheduler)
     t_nsga = time.perf_counter() - t1
+    pareto = front.table
     knees = pareto[pareto["knee"]]
 
     rng = study.objective_ranges(among=ok)

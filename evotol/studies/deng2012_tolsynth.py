@@ -272,8 +272,9 @@ def compute(config: dict) -> StudyResult:
     cont = [Factor(x.name, low=x.low, high=x.high, log=True, si_scale=MM, label=x.label, group=x.group) for x in f]
     objs = [Objective("cost", 1, log=True), Objective("p_max_mm", 1, log=True), Objective("r_max_deg", 1, log=True)]
     t1 = time.perf_counter()
-    pareto = doe.nsga2(cont, ev, objs, pop_size=config["pop_size"], n_gen=config["n_gen"], seed=seed)
+    front = doe.nsga2(cont, ev, objs, pop_size=config["pop_size"], n_gen=config["n_gen"], seed=seed)
     t_nsga = time.perf_counter() - t1
+    pareto = front.table
     knees = pareto[pareto["knee"]]
 
     gap = float(np.max(np.maximum(df["p_upper_mm"] / df["p_max_mm"], df["r_upper_deg"] / df["r_max_deg"]) - 1))
