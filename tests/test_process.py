@@ -10,7 +10,7 @@ from cost_models import PowerCost, ReciprocalCost
 from evotol.allocators.process import (Process, ProcessProblem, allocate_process_baselines, allocate_process_ga,
                                        allocate_process_optimum, assembly_problem, cheapest_feasible_processes,
                                        process_front)
-from evotol.errors import ValidationError
+from evotol.errors import InfeasibleError, ValidationError
 from evotol.problem import Requirement
 from evotol.studies._process_benchmarks import MM, clutch_problem, process, stack_problem
 from robots.assembly import LinearStack
@@ -130,11 +130,15 @@ def test_dominated_process_accepted_when_check_is_off():
     assert r.processes["x2"] == "fine"
 
 
-def test_no_process_fine_enough_is_a_validation_error():
+def test_no_process_fine_enough_is_an_infeasible_error():
+    """Every source at its finest process's lower limit misses the gap: InfeasibleError from every
+    allocator, naming the smallest achievable error ((0.05 + 0.02) mm / 1 µm = 70 × the limit)."""
     stack = LinearStack({"x1": 1.0, "x2": -1.0}, {"gap": 1e-6})
-    pp = assembly_problem(stack, processes={"x1": [process("mill")], "x2": [process("mill")]})
-    with pytest.raises(ValidationError, match="hold the requirement"):
-        allocate_process_optimum(pp)
+    pp = assembly_problem(stack, processes={"x1": [process("mill")], "x2": [process("mill"), process("turn")]})
+    for fn in (allocate_process_optimum, allocate_process_baselines, cheapest_feasible_processes):
+        with pytest.raises(InfeasibleError, match="no process choice can hold") as exc:
+            fn(pp)
+        assert exc.value.smallest_error == pytest.approx(70.0, rel=1e-6)
 
 
 def test_judge_recomputes_a_design_cost_and_constraint(clutch_wc):
@@ -217,3 +221,73 @@ def test_ga_and_front_problems_pickle(clutch_wc):
         back = pickle.loads(pickle.dumps(prob))
         X = np.full((1, pp.n_sources), 0.5)
         assert np.allclose(back.evaluate(X), prob.evaluate(X))
+
+
+def shaft_washer_bracket(play_mm=0.12, offset_mm=0.08, measure="worst_case"):
+    """Five dimensions (bracket, shaft shoulder, two washers, circlip), two responses sharing them
+    (axial play and an offset), 4·3·2·2·1 = 48 process combinations."""
+    st = LinearStack({"play": {"bracket": 1.0, "shaft": -1.0, "washer1": -1.0, "washer2": -1.0, "circlip": -1.0},
+                      "offset": {"bracket": 0.5, "shaft": -1.0, "washer1": -1.0, "circlip": -0.5}},
+                     {"play": play_mm * MM, "offset": offset_mm * MM}, name="shaft/washer/bracket")
+    procs = {"bracket": [process(p, 1.6) for p in ("mill", "turn", "grind", "hone")],
+             "shaft": [process(p, 1.0) for p in ("turn", "grind", "hone")],
+             "washer1": [process(p, 0.4) for p in ("turn", "grind")],
+             "washer2": [process(p, 0.4) for p in ("turn", "grind")],
+             "circlip": [process("grind", 0.3)]}
+    return assembly_problem(st, processes=procs, measure=measure)
+
+
+def _check_baselines_against_enumeration(pp):
+    enum = allocate_process_optimum(pp, method="enumerate")
+    base = allocate_process_baselines(pp)
+    assert set(base) == {"sensitivity", "lagrange"}
+    for key, r in base.items():
+        t = np.array([r.tolerances[n] for n in pp.names])
+        ne = float(pp.normalised_error(t[None])[0])
+        assert r.normalised_error == pytest.approx(ne, rel=1e-12)
+        assert r.feasible == bool(ne <= 1 + 1e-7 and pp.in_ranges(pp.choice_index(r.processes), t)[0])
+        if r.feasible:
+            assert r.cost >= enum.cost * (1 - 1e-9), key
+    assert base["lagrange"].feasible             # sized on a conservative stack, or scaled onto the limit
+    return enum, base
+
+
+def test_baselines_on_the_feasible_shaft_washer_bracket_problem():
+    """Worst case, 48 combinations: the Lagrange baseline used to raise 'expected a bound the lower
+    tolerance limits can hold' (its one-stack model, aggregated over the two responses, cannot hold
+    the limit on the cheapest processes the exact limit allows). Now both baselines return designs,
+    the Lagrange one feasible, none below the optimum that enumeration finds (17.42336 here)."""
+    pp = shaft_washer_bracket()
+    assert pp.n_combinations == 48
+    enum, base = _check_baselines_against_enumeration(pp)
+    assert allocate_process_optimum(pp).cost == pytest.approx(enum.cost, rel=1e-9)
+    assert enum.cost == pytest.approx(17.42336, abs=5e-6)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_baselines_on_random_feasible_process_problems(seed):
+    """Random stacks (5 dimensions, 1-3 responses, 1-4 processes each, worst case or RSS, random
+    limits): when enumeration finds a feasible choice the baselines return designs (Lagrange
+    feasible, none below the optimum); when it finds none every allocator raises InfeasibleError."""
+    rng = np.random.default_rng(seed)
+    names = [f"d{j}" for j in range(5)]
+    cat = ("mill", "turn", "grind", "hone")
+    n_feasible = n_infeasible = 0
+    for _ in range(4):
+        K = int(rng.integers(1, 4))
+        A = rng.choice([-1.0, 1.0], size=(K, 5)) * rng.uniform(0.5, 2.0, size=(K, 5))
+        st = LinearStack({f"r{k}": {n: float(A[k, j]) for j, n in enumerate(names)} for k in range(K)},
+                         {f"r{k}": float(rng.uniform(0.02, 0.4)) * MM for k in range(K)})
+        procs = {n: [process(p, float(rng.uniform(0.3, 2.0))) for p in
+                     sorted(rng.choice(cat, size=int(rng.integers(1, 4)), replace=False), key=cat.index)] for n in names}
+        pp = assembly_problem(st, processes=procs, measure=str(rng.choice(["worst_case", "rss"])))
+        tight = pp.lo[np.arange(5)[None], np.array(list(itertools.product(*[range(k) for k in pp.n_processes])))]
+        if np.any(pp.normalised_error(tight) <= 1):
+            _check_baselines_against_enumeration(pp)
+            n_feasible += 1
+        else:
+            for fn in (allocate_process_optimum, allocate_process_baselines):
+                with pytest.raises(InfeasibleError):
+                    fn(pp)
+            n_infeasible += 1
+    assert n_feasible >= 1

@@ -10,7 +10,7 @@ import numpy as np
 from scipy.optimize import nnls
 
 from evotol.allocators.optimum import allocate_optimum
-from evotol.allocators.process.baselines import cheapest_feasible_processes
+from evotol.allocators.process.baselines import check_some_choice_holds, cheapest_feasible_processes
 from evotol.allocators.process.problem import FEAS_TOL, ProcessProblem, ProcessResult, _result
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
@@ -111,6 +111,7 @@ def allocate_process_optimum(pp: ProcessProblem, *, method: str = "branch_and_bo
     if method not in ("branch_and_bound", "enumerate"):
         raise ValidationError("method", method, "'branch_and_bound' or 'enumerate'")
     t0 = time.perf_counter()
+    check_some_choice_holds(pp)
     rows = ConstraintRows(pp.base)
     S = pp.n_sources
     state = {"cost": np.inf, "choice": None, "t": None, "cert": None, "solves": 0, "nodes": 0}
@@ -165,10 +166,7 @@ def allocate_process_optimum(pp: ProcessProblem, *, method: str = "branch_and_bo
     else:
         # a first incumbent: the cheapest feasible processes (gives the first multipliers)
         if state["choice"] is None:
-            try:
-                ch = cheapest_feasible_processes(pp, rows)
-            except ValidationError:
-                ch = None
+            ch = cheapest_feasible_processes(pp)      # InfeasibleError when no process choice can hold
             if ch is not None:
                 leaf = solve_leaf(ch)
                 if leaf is not None:
@@ -195,8 +193,8 @@ def allocate_process_optimum(pp: ProcessProblem, *, method: str = "branch_and_bo
                 visit(c)
 
         visit([])
-    if state["choice"] is None:
-        raise ValidationError("processes", pp.describe(), "at least one process choice that can hold the requirement")
+    if state["choice"] is None:      # every leaf's convex solve failed although a choice can hold the limit
+        raise ValidationError("processes", pp.describe(), "at least one process choice whose convex optimum the solver finds")
     cert = {"leaf_gap": state["cert"].get("gap"), "leaf_kkt_residual": state["cert"].get("kkt_residual"),
             "incumbent": state["cost"], "rtol": rtol,
             "smallest_pruned_bound": float(min(pruned_bounds)) if pruned_bounds else None,
