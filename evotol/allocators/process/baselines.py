@@ -102,8 +102,10 @@ def _onto_limit(pp: ProcessProblem, choice, t: np.ndarray) -> np.ndarray:
         if np.allclose(tn, t, rtol=1e-13, atol=0):
             break
         t = tn
-    while pp.normalised_error(t[None])[0] > 1 + 1e-12:      # clipping can leave it a hair outside
-        t = np.maximum(t * (1 - 1e-10), lo)
+    for _ in range(1000):                                   # clipping can leave it a hair outside
+        if pp.normalised_error(t[None])[0] <= 1 + 1e-12:
+            break
+        t = np.maximum(t * (1 - 1e-9), lo)
     return t
 
 
@@ -120,8 +122,8 @@ def allocate_process_baselines(pp: ProcessProblem) -> dict[str, ProcessResult]:
     -------
     dict[str, ProcessResult]
         ``{"sensitivity": ProcessResult, "lagrange": ProcessResult}``: each rule's tolerances (SI) and
-        cost (cost models' unit) (a rule whose design misses
-        the limit, e.g. by clipping at a range, is reported ``feasible=False``).
+        cost (cost models' unit); a rule whose design misses the limit (e.g. by clipping at a range) is
+        reported ``feasible=False``.
 
     Raises
     ------
