@@ -73,7 +73,7 @@ class MonteCarloResult:
     def linearisation_verdict(self) -> str | None:
         """The linearisation check read as a sentence (None when the robot has no nonlinear model).
 
-        ``linearisation_error`` is max |nonlinear − linear| / max |linear| error over the sampled
+        ``linearisation_error`` is ``max |nonlinear − linear| / max |linear|`` error over the sampled
         designs and poses (dimensionless); below :data:`LINEAR_OK` the first-order results (worst
         case, RSS, yield, the allocators' certificates) hold for the robot itself, below
         :data:`LINEAR_ROUGH` they are approximate, above it they are unreliable.

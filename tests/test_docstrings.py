@@ -6,6 +6,9 @@ from __future__ import annotations
 
 import inspect
 import re
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -53,3 +56,17 @@ def test_section_pattern_finds_a_section_and_misses_prose():
 
     assert _sections(with_section) == {"Parameters"}
     assert _sections(prose) == set()
+
+
+def test_site_builds_with_warnings_as_errors(tmp_path):
+    """The docs/ pages and the API reference build with ``sphinx -W`` (as ``.ci/run`` does), so a
+    docstring that is not valid reStructuredText (``|x|`` is a substitution) fails here, before it
+    reaches main. Skipped without the ``docs`` extra; the dummy builder parses every page and
+    docstring but writes no HTML."""
+    pytest.importorskip("sphinx")
+    pytest.importorskip("numpydoc")
+    pytest.importorskip("myst_parser")
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    run = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "dummy", str(docs),
+                          str(tmp_path / "site")], capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-4000:]
