@@ -65,7 +65,7 @@ logger = logging.getLogger("evotol.docs")
 
 #: the API pages, in the order they claim the objects they document (docs/api/<module>.rst)
 API_PAGES = [
-    "evotol.problem", "evotol.allocators", "evotol.result", "evotol.montecarlo", "evotol.feasibility",
+    "evotol.problem", "evotol.accuracy", "evotol.allocators", "evotol.result", "evotol.montecarlo", "evotol.feasibility",
     "evotol.errors", "robots", "robots.base", "robots.checks", "robots.mechanism", "robots.assembly",
     "cost_models",
 ]
