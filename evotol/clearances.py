@@ -7,7 +7,7 @@ each as ``factor * t``: the thesis's radial clearance of joint A, ``Δb_xy = t``
 one class may cover several joints (one fit for all passive joints). Bounds no class covers keep
 the mechanism's own values (e.g. the passive joints' idle rotation Δβ_z = 0.2 rad).
 
-Measure. At pose p, the geometric sources (intervals |δ_j| <= t_j through the first-order map J_g)
+Measure. At pose p, the geometric sources (intervals ``|δ_j| <= t_j`` through the first-order map J_g)
 and the clearance screws s (each joint's s_k in its set C_k(c), consistent with the loops,
 ``B^T s = 0``) move the end-effector by ``J_g δ + C s``. The reachable set is the Minkowski sum
 ``P_g(t) + P_c(c)``, and the worst case ``W(t, c) = max |J_g δ + C s|`` is computed by the
@@ -23,6 +23,7 @@ Structure (proved in ``docs/clearance_allocation.md``, checked numerically in th
     mixture of two feasible screw sets is feasible for the mixed bounds) -- with loops, W is
     **not convex** in (t, c): along random segments of the 5-bar's thesis problem it exceeds
     its chord by up to 150-400 %, and two parallel chains give W = min(c_1, c_2) exactly.
+
 So the certified optimum's cutting planes do not apply; :mod:`evotol.allocators.monotone` uses
 the monotonicity instead (polyblock outer approximation: a proven lower bound on the cost).
 """
@@ -49,11 +50,27 @@ _TO_ENGINE = [3, 4, 5, 0, 1, 2]
 class ClearanceClass:
     """One allocated clearance tolerance (see the module docstring).
 
-    name: the tolerance's name (a source name of the problem); joints: names of the clearance
-    mechanism's joints it sets; bounds: component (``beta_xy``, ``beta_z``, ``b_xy``, ``b_z``) ->
-    factor, the bound is ``factor * t`` (rad or m); unit: ``"m"`` or ``"rad"`` of t (default: m if
-    a ``b_*`` component has factor 1, else rad); group: the cost-model group (default
-    ``"clearance"``).
+    Parameters
+    ----------
+    name : str
+        The tolerance's name (a source name of the problem).
+    joints : str or sequence of str
+        Names of the clearance mechanism's joints it sets.
+    bounds : Mapping[str, float]
+        Component (``beta_xy``, ``beta_z``, ``b_xy``, ``b_z``) -> factor; the bound is
+        ``factor * t`` (rad for ``beta_*``, m for ``b_*``).
+    unit : {"m", "rad"} or None
+        Unit of t (default: m if a ``b_*`` component has factor 1, else rad).
+    group : str
+        The cost-model group (default ``"clearance"``).
+    description : str
+        One line for reports (default: the bounds and joints).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        No joint, empty bounds, an unknown component, a factor that is not positive, or a
+        ``unit`` other than ``"m"``, ``"rad"``.
     """
 
     name: str
@@ -108,10 +125,25 @@ def thesis_classes(joints: Sequence[str], h: float, axial: bool = True) -> list[
 class ClearanceSources:
     """Clearance classes of a clearance mechanism (:class:`robots.clearance.ClearanceMechanism`).
 
-    mechanism: the engine's mechanism (e.g. ``MechanismModel(...).clearance_mechanism()``, whose
-    pose coordinates are the robot's); classes: the allocated clearances; base_bounds: the bounds
-    (n_joints, 4) of everything no class sets (default: the joints' own bounds); tol: relative
-    certificate gap of the engine.
+    Parameters
+    ----------
+    mechanism : robots.clearance.ClearanceMechanism
+        The engine's mechanism (e.g. ``MechanismModel(...).clearance_mechanism()``, whose pose
+        coordinates are the robot's).
+    classes : sequence of ClearanceClass
+        The allocated clearances.
+    base_bounds : ndarray, shape (n_joints, 4), or None
+        The bounds (``beta_xy``, ``beta_z`` in rad; ``b_xy``, ``b_z`` in m) of everything no
+        class sets (default: the joints' own bounds).
+    tol : float
+        Relative certificate gap of the engine (1, dimensionless).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Not a clearance mechanism, no class, a class that is not a :class:`ClearanceClass`, a
+        joint without clearance, a bound set by two classes, duplicate class names, or
+        ``base_bounds`` of the wrong shape or negative.
     """
 
     mechanism: object

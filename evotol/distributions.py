@@ -4,7 +4,8 @@ A source j with tolerance t_j has an error vector e_j = t_j · z_j, where z_j is
 source's :class:`Distribution` *per unit tolerance*. The conventions follow what CETOL 6σ and 3DCS
 users expect (``docs/statistical.md``):
 
-Interval sources (dim 1, a length or angle error, |e| ≤ t):
+Interval sources (dim 1, a length or angle error, ``|e| ≤ t``)::
+
   * ``uniform``:           z ~ U(-1, 1)                                   var = 1/3
   * ``normal``:            z ~ N(0, 1/k²): the tolerance is k standard deviations (t = k·σ,
                            k = ``sigma_k``, default 3), *not* truncated    var = 1/k²
@@ -12,14 +13,16 @@ Interval sources (dim 1, a length or angle error, |e| ≤ t):
   * ``mean_shift`` m (a fraction of t, process mean shift as in the "1.5σ shift" of six-sigma
     practice): every distribution above is moved by m·t, e.g. uniform on [(m−1)t, (m+1)t].
 
-Disk / ball sources (dim 2 / 3, the radial clearance of a revolute / spherical joint, |e| ≤ t):
-the direction is uniform on the circle / sphere and the distribution names the *radius*:
+Disk / ball sources (dim 2 / 3, the radial clearance of a revolute / spherical joint, ``|e| ≤ t``):
+the direction is uniform on the circle / sphere and the distribution names the *radius*::
+
   * ``uniform``: r ~ U(0, t) (Yao 2013 eq. 12, ``radial="uniform"``) or uniform over the
     disk/ball area/volume (``radial="area"``: r = t·U^(1/dim));
   * ``contact``: r = t exactly (the journal always touches its bearing, Lara-Molina 2019 Sec. 2.5);
   * ``normal``: every component ~ N(0, (t/k)²) (circular / spherical normal; the radius is
     Rayleigh / Maxwell distributed and may exceed t);
   * ``truncated_normal``: r = |N(0, (t/k)²)| truncated at t (the radius, not the components).
+
 A mean shift has no natural direction on a disk or ball and is refused there.
 
 Every distribution is isotropic, so its covariance per unit tolerance is ``variance · I_dim``
@@ -46,8 +49,18 @@ METHODS = ("lhs", "mc")
 class Distribution:
     """How one source's error is distributed inside its tolerance t (see module docstring).
 
-    kind: one of :data:`KINDS`. sigma_k: k in t = k·σ for the normal kinds (> 0, default 3).
-    mean_shift: process mean shift as a fraction of t (interval sources only; |m| < 1).
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    sigma_k : float
+        k in t = k·σ for the normal kinds (> 0, default 3; 1, dimensionless).
+    mean_shift : float
+        Process mean shift as a fraction of t (interval sources only; ``|m| < 1``).
+
+    Notes
+    -----
+    A plain value: :meth:`validate` raises :class:`evotol.errors.ValidationError`.
     """
 
     kind: str = "uniform"
@@ -55,7 +68,21 @@ class Distribution:
     mean_shift: float = 0.0
 
     def validate(self, field: str = "distribution", dim: int | None = None) -> None:
-        """Check the settings; ``dim`` (1, 2, 3) also checks that they suit the source's shape."""
+        """Check the settings; ``dim`` (1, 2, 3) also checks that they suit the source's shape.
+
+        Parameters
+        ----------
+        field : str
+            Name of the field in the error message.
+        dim : {1, 2, 3} or None
+            Dimension of the source's error vector, or None to check the settings alone.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            An unknown ``kind``, ``sigma_k`` <= 0, ``|mean_shift|`` >= 1, a mean shift on a disk
+            or ball source, or ``"contact"`` on an interval source.
+        """
         if self.kind not in KINDS:
             raise ValidationError(f"{field}.kind", self.kind, f"one of {KINDS}")
         k = self.sigma_k

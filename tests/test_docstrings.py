@@ -21,7 +21,7 @@ NOT_CALLED = {"EvotolError", "ValidationError", "KinematicsError", "ConvergenceE
               "RobotErrorModel", "Evaluation", "AllocationResult", "MonteCarloResult", "ParetoFront",
               "ProcessResult"}
 #: plain values checked later: their ``validate`` (or the problem that holds them) raises
-PLAIN_VALUES = {"Tolerance", "Requirement", "Process"}
+PLAIN_VALUES = {"Tolerance", "Requirement", "Process", "Distribution"}
 
 
 def _sections(obj) -> set[str]:

@@ -304,9 +304,34 @@ class ProcessProblem:
 
 def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None, measure: str = "worst_case", *,
                      processes: Mapping[str, Sequence[Process]] | None = None, **requirement):
-    """"Every response of an assembly within its limit" (see :mod:`robots.assembly`): a
-    :class:`ToleranceProblem` when ``tolerances`` are given, a :class:`ProcessProblem` when
-    ``processes`` are."""
+    """"Every response of an assembly within its limit" (see :mod:`robots.assembly`).
+
+    Parameters
+    ----------
+    assembly : robots.assembly.AssemblyFunction
+        The assembly (its responses are the "poses"; each response's limit is its bound).
+    tolerances : Mapping[str, evotol.problem.Tolerance] or None
+        Dimension name -> tolerance (SI), for a tolerance problem; or
+    measure : str
+        Accuracy measure of the requirement (a registered measure name).
+    processes : Mapping[str, Sequence[Process]] or None
+        Dimension name -> candidate processes, for a process-selection problem.
+    **requirement
+        Further :class:`evotol.problem.Requirement` fields (``probability``, ``ppm``...).
+
+    Returns
+    -------
+    evotol.problem.ToleranceProblem or ProcessProblem
+        A :class:`evotol.problem.ToleranceProblem` when ``tolerances`` are given, a
+        :class:`ProcessProblem` when ``processes`` are; the requirement is normalised (the
+        response over its limit, 1).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Neither or both of ``tolerances`` and ``processes``, or what the problem's constructor
+        refuses.
+    """
     req = Requirement(position=1.0, measure=measure, **requirement)
     if (tolerances is None) == (processes is None):
         raise ValidationError("assembly_problem", "tolerances/processes", "exactly one of tolerances= or processes=")
