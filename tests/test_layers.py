@@ -44,6 +44,7 @@ LAYERS = {
     "evotol.distributions": 2, "evotol.statistical": 2, "evotol.clearances": 2, "evotol.quality_loss": 2,
     "evotol.plausibility": 2,
     "evotol.tolerance": 2, "evotol.requirement": 2, "evotol.variables": 2, "evotol.accuracy": 2,
+    "evotol.interval": 0, "evotol.nonlinear_worst_case": 2,
     "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3, "evotol.refinement": 3,
     "evotol.montecarlo": 4, "evotol.nonlinear": 4, "evotol.workspace_map": 4, "evotol.explorer_data": 4,
     "evotol.reporting": 5,

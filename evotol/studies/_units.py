@@ -40,7 +40,8 @@ _SYNTHESIS = {"presets_shown_in_report": COUNT, "report_lines": COUNT, "p_max_at
 _YIELD = "1: probability every response is within its limit (first-order model)"
 _PROCESS = {"incumbent": COST, "smallest_pruned_bound": COST, "history": COST + " (best fitness per generation)",
             "leaf_kkt_residual": RELATIVE, "max_abs_normalised": RELATIVE + ": |response error| / limit",
-            "yield": _YIELD, "yield_at_optimum": _YIELD}
+            "yield": _YIELD, "yield_at_optimum": _YIELD, "worst_point_offsets": "m", "side": "1: sign (+1 above, -1 below)",
+            "iteration": COUNT, "iterations": COUNT, "cost_difference": COST}
 
 
 _NORMALISED = "1: length / D, D = (r1_bar + r2_bar + r3_bar) / 3 (Lara-Molina 2019 eqs. 1-2)"
@@ -90,7 +91,8 @@ def study_units(name: str) -> dict:
                          "loss_balance_ratio_A100": RELATIVE, "cage_nominal_mm": "mm", "lower_bound": COST,
                          "process_choice_part": COST, "tolerance_part": COST, "rtol": RELATIVE,
                          "max_relative_tolerance_difference": RELATIVE, "front_size": COUNT,
-                         "rss_over_T_A0": RELATIVE, "rss_over_T_A20": RELATIVE, "rss_over_T_A100": RELATIVE}}
+                         "rss_over_T_A0": RELATIVE, "rss_over_T_A20": RELATIVE, "rss_over_T_A100": RELATIVE,
+                         "linear_optimum_nonlinear_worst_case_over_limit": RELATIVE}}
     if name == "deng2012-clearalloc":
         return {"keys": {"best_feasible": COST, "ga_vs_doe": RELATIVE + ": (GA - DOE best) / DOE best"}}
     if name == "laramolina2019-5r":

@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 
+from evotol.allocators.nonlinear_limit import allocate_nonlinear_limit
 from evotol.allocators.optimum import allocate_optimum
 from evotol.allocators.process import (ProcessProblem, ProcessResult, allocate_process_ga, allocate_process_optimum,
                                        process_front)
@@ -139,6 +140,15 @@ def run_case(data: dict, cage: float, A: float, pub: dict | None, config: dict) 
                           "mc_nonlinear_at_optimum": _mc_nonlinear(wc, wbb.tolerances, config["n_mc"], config["seed"])}
     if pub is not None:
         case["worst_case"]["published"] = design(wc, pub["processes"], pub["t_mm"])
+    nl = allocate_nonlinear_limit(wc, allocate_process_optimum)
+    held = of_result(wc, nl.result)
+    held["nonlinear_worst_case_over_limit"] = nl.worst_case["max_over_limit"]
+    case["worst_case"]["nonlinear"] = {
+        "linear_optimum_nonlinear_worst_case_over_limit": nl.linear_worst_case["max_over_limit"],
+        "method": nl.linear_worst_case["responses"][0]["method"], "holding_the_nonlinear_limit": held,
+        "cost_difference": nl.cost_difference, "cost_difference_over_linear": nl.cost_difference / nl.linear.cost,
+        "iterations": nl.iterations, "converged": nl.converged,
+        "mc_nonlinear": _mc_nonlinear(wc, nl.result.tolerances, config["n_mc"], config["seed"])}
     return case
 
 
