@@ -7,10 +7,10 @@ Prints, in one run:
 * the IRSBot-2 41 x 41 maps, distal module (78 variables) and distal + parallelograms (114
   variables, target < 2 min), with the thesis's method on two points;
 * 32 768 clearance-bound sets of the 5-bar at one pose (the tolerance-synthesis workload);
-* issue 13: the engine against its settings before issue 13 (``legacy_engine()``) on the same
+* issue 13: the engine against its settings before issue 13 (``options=LEGACY``, :mod:`robots.clearance.options`) on the same
   IRSBot-2 points in one process: time and Newton-iteration ratios, agreement of the brackets;
 * the compiled Newton iteration (``robots.clearance.newton_kernel``) against the NumPy one
-  (``support.numpy_iteration()``) on the same points in one process.
+  (``options=NUMPY``) on the same points in one process.
 
 Absolute times depend on the load of this shared 2-core machine (printed with ``uptime``'s load
 average); compare ratios measured in one run.
@@ -86,8 +86,7 @@ def main(argv=None):
               f"{np.round(ms2.p_max / o2.p_max, 4).tolist()}, r: {np.round(ms2.r_max / o2.r_max, 4).tolist()}")
 
     print(f"\n== issue 13: engine vs its settings before issue 13, same points, one process ==")
-    from robots.clearance import support
-    from robots.clearance.maxerror import legacy_engine
+    from robots.clearance.options import LEGACY, NUMPY
     sub = grid[:: 40 if args.quick else 8]
     cases = [(robot.clearance_mechanism(parallelograms=False), sub, "IRSBot-2 distal module"),
              (robot.clearance_mechanism(parallelograms=True), sub, "IRSBot-2 distal + parallelograms"),
@@ -95,14 +94,9 @@ def main(argv=None):
     for m2, sub, label in cases:
         out = {}
         for name in ("legacy", "new", "legacy again"):
-            n0 = support.STATS["newton"]
             t = time.perf_counter()
-            if name.startswith("legacy"):
-                with legacy_engine():
-                    r = max_pose_error(m2, sub)
-            else:
-                r = max_pose_error(m2, sub)
-            out[name] = (time.perf_counter() - t, support.STATS["newton"] - n0, r)
+            r = max_pose_error(m2, sub, **({"options": LEGACY} if name.startswith("legacy") else {}))
+            out[name] = (time.perf_counter() - t, r.n_newton, r)
         (tl, nl, rl), (tn, nn, rn), (tl2, _, _) = out["legacy"], out["new"], out["legacy again"]
         overlap = bool(np.all(rn.p_max <= rl.p_upper * (1 + 1e-12)) and np.all(rl.p_max <= rn.p_upper * (1 + 1e-12))
                        and np.all(rn.r_max <= rl.r_upper * (1 + 1e-12)) and np.all(rl.r_max <= rn.r_upper * (1 + 1e-12)))
@@ -120,11 +114,7 @@ def main(argv=None):
         ts = {}
         for name in ("numpy", "compiled", "numpy again", "compiled again"):
             t = time.process_time()
-            if name.startswith("numpy"):
-                with support.numpy_iteration():
-                    r = max_pose_error(m2, sub)
-            else:
-                r = max_pose_error(m2, sub)
+            r = max_pose_error(m2, sub, **({"options": NUMPY} if name.startswith("numpy") else {}))
             ts[name] = (time.process_time() - t, r)
         tn = ts["numpy"][0] + ts["numpy again"][0]
         tc = ts["compiled"][0] + ts["compiled again"][0]
@@ -152,13 +142,9 @@ def main(argv=None):
     few = b[:: 64 if args.quick else 16]            # issue 13: same bound sets, legacy settings vs now
     work = {}
     for name in ("legacy", "new"):
-        n0, t = support.STATS["newton"], time.perf_counter()
-        if name == "legacy":
-            with legacy_engine():
-                r = ev.evaluate(few)
-        else:
-            r = ev.evaluate(few)
-        work[name] = (time.perf_counter() - t, support.STATS["newton"] - n0, r)
+        t = time.perf_counter()
+        r = (ClearanceEvaluator(mech, [[0.0, 0.07]], options=LEGACY) if name == "legacy" else ev).evaluate(few)
+        work[name] = (time.perf_counter() - t, r.n_newton, r)
     (tl, nl, rl), (tn, nn, rn) = work["legacy"], work["new"]
     print(f"issue 13, {len(few)} of these sets: before {tl:.1f} s, now {tn:.1f} s; Newton iterations {nl} -> {nn} "
           f"(x{nn / nl:.2f}); largest gap {rl.gap.max():.1e} -> {rn.gap.max():.1e}; "

@@ -2,7 +2,8 @@
 ``sklearn/utils/estimator_checks.py`` style).
 
 :func:`cost_model_checks` yields ``(name, check)`` pairs, each check a callable of no argument
-that raises ``AssertionError`` saying what failed; a test turns each into its own pytest id::
+that raises :class:`evotol.errors.CheckFailed` saying what failed (not an ``assert``: the
+checks hold under ``python -O``); a test turns each into its own pytest id::
 
     @pytest.mark.parametrize("check", list(cost_model_checks(MyCost(...))), ids=lambda c: c[0])
     def test_my_cost(check):
@@ -24,7 +25,7 @@ import numpy as np
 from cost_models.base import CostModel
 from cost_models.compound import SumCost
 from cost_models.registry import ALIASES, available, from_dict
-from evotol.conformance import run_checks
+from evotol.conformance import require, run_checks
 
 
 def _grid(t_min: float, t_max: float, n: int = 50) -> np.ndarray:
@@ -33,7 +34,7 @@ def _grid(t_min: float, t_max: float, n: int = 50) -> np.ndarray:
 
 def check_named(model: CostModel, t_min: float, t_max: float) -> dict:
     """The model has a name (study files and reports refer to it by name)."""
-    assert getattr(model, "name", ""), f"{type(model).__name__}: cost model has no name"
+    require(getattr(model, "name", ""), f"{type(model).__name__}: cost model has no name")
     return {}
 
 
@@ -41,12 +42,14 @@ def check_vectorised(model: CostModel, t_min: float, t_max: float) -> dict:
     """``cost`` and ``dcost`` keep the shape of ``t`` and agree with element-wise calls."""
     t = _grid(t_min, t_max)
     c = model.cost(t)
-    assert c.shape == t.shape, f"{model.name}: cost(t) shape {c.shape} != {t.shape}"
+    require(c.shape == t.shape, f"{model.name}: cost(t) shape {c.shape} != {t.shape}")
     c2 = model.cost(t.reshape(5, 10))
-    assert c2.shape == (5, 10) and np.allclose(c2.ravel(), c), f"{model.name}: cost is not vectorised over arrays"
+    require(c2.shape == (5, 10) and np.allclose(c2.ravel(), c),
+            f"{model.name}: cost is not vectorised over arrays")
     single = np.array([float(model.cost(x)) for x in t[::7]])
-    assert np.allclose(single, c[::7], rtol=1e-12, atol=0), f"{model.name}: cost(t)[i] != cost(t[i])"
-    assert model.dcost(t).shape == t.shape, f"{model.name}: dcost(t) shape {model.dcost(t).shape} != {t.shape}"
+    require(np.allclose(single, c[::7], rtol=1e-12, atol=0), f"{model.name}: cost(t)[i] != cost(t[i])")
+    require(model.dcost(t).shape == t.shape,
+            f"{model.name}: dcost(t) shape {model.dcost(t).shape} != {t.shape}")
     return {}
 
 
@@ -56,11 +59,12 @@ def check_positive_and_monotone(model: CostModel, t_min: float, t_max: float) ->
     model.validate_range(t_min, t_max)        # raises ValidationError naming where it fails
     t = np.geomspace(t_min, t_max, 200)
     c = model.cost(t)
-    assert np.all(np.isfinite(c)) and np.all(c >= 0), f"{model.name}: cost negative or not finite on the range"
+    require(np.all(np.isfinite(c)) and np.all(c >= 0),
+            f"{model.name}: cost negative or not finite on the range")
     rise = np.diff(c)
     worst = float(rise.max())
-    assert worst <= 1e-9 * max(1.0, float(np.abs(c).max())), \
-        f"{model.name}: cost increases by {worst:.3g} between t = {t[rise.argmax()]:.6g} and {t[rise.argmax() + 1]:.6g}"
+    require(worst <= 1e-9 * max(1.0, float(np.abs(c).max())),
+            f"{model.name}: cost increases by {worst:.3g} between t = {t[rise.argmax()]:.6g} and {t[rise.argmax() + 1]:.6g}")
     return {}
 
 
@@ -71,7 +75,7 @@ def check_derivative_matches_fd(model: CostModel, t_min: float, t_max: float, rt
     fd = (model.cost(t + h) - model.cost(t - h)) / (2 * h)
     d = model.dcost(t)
     err = float(np.max(np.abs(fd - d)) / max(np.max(np.abs(d)), 1e-300))
-    assert err <= rtol, f"{model.name}: dcost differs from finite differences by {err:.3g} (relative)"
+    require(err <= rtol, f"{model.name}: dcost differs from finite differences by {err:.3g} (relative)")
     return {"dcost_fd_relative_error": err}
 
 
@@ -85,9 +89,10 @@ def check_convexity_flag(model: CostModel, t_min: float, t_max: float) -> dict:
     # slopes of consecutive chords must not decrease (convexity on a non-uniform grid)
     s = np.diff(c) / np.diff(t)
     drop = float(-(np.diff(s)).min()) if len(s) > 1 else 0.0
-    assert drop <= 1e-7 * max(float(np.abs(s).max()), 1e-300), \
-        f"{model.name}: declares convex = True but its chord slopes decrease by {drop:.3g} on [{t_min:.3g}, {t_max:.3g}]"
-    assert model.is_convex(t_min, t_max), f"{model.name}: declares convex = True but is_convex() is False on the range"
+    require(drop <= 1e-7 * max(float(np.abs(s).max()), 1e-300),
+            f"{model.name}: declares convex = True but its chord slopes decrease by {drop:.3g} on [{t_min:.3g}, {t_max:.3g}]")
+    require(model.is_convex(t_min, t_max),
+            f"{model.name}: declares convex = True but is_convex() is False on the range")
     return {"convex": True}
 
 
@@ -95,10 +100,10 @@ def check_dict_round_trip(model: CostModel, t_min: float, t_max: float) -> dict:
     """``cost_models.from_dict(model.to_dict())`` rebuilds the same model (same class, same costs)."""
     d = model.to_dict()
     back = from_dict(dict(d))
-    assert type(back) is type(model), f"{model.name}: from_dict(to_dict()) gives {type(back).__name__}"
+    require(type(back) is type(model), f"{model.name}: from_dict(to_dict()) gives {type(back).__name__}")
     t = _grid(t_min, t_max)
-    assert np.array_equal(back.cost(t), model.cost(t)), f"{model.name}: from_dict(to_dict()) costs differ"
-    assert back.to_dict() == d, f"{model.name}: to_dict changes on a round trip: {d} -> {back.to_dict()}"
+    require(np.array_equal(back.cost(t), model.cost(t)), f"{model.name}: from_dict(to_dict()) costs differ")
+    require(back.to_dict() == d, f"{model.name}: to_dict changes on a round trip: {d} -> {back.to_dict()}")
     return {}
 
 
@@ -106,7 +111,8 @@ def check_pickle_round_trip(model: CostModel, t_min: float, t_max: float) -> dic
     """The model pickles (cost models travel to worker processes and Dask) and costs the same after."""
     back = pickle.loads(pickle.dumps(model))
     t = _grid(t_min, t_max)
-    assert np.array_equal(back.cost(t), model.cost(t)), f"{model.name}: costs differ after a pickle round trip"
+    require(np.array_equal(back.cost(t), model.cost(t)),
+            f"{model.name}: costs differ after a pickle round trip")
     return {}
 
 
@@ -140,5 +146,5 @@ def check_cost_model(model: CostModel, t_min: float | None = None, t_max: float 
                      rtol: float = 1e-5) -> dict:
     """Run every check of :func:`cost_model_checks`; returns the merged measurements.
 
-    Raises one ``AssertionError`` listing every failed check (not only the first)."""
+    Raises one :class:`evotol.errors.CheckFailed` listing every failed check (not only the first)."""
     return run_checks(str(getattr(model, 'name', model)), cost_model_checks(model, t_min, t_max, rtol))

@@ -20,11 +20,42 @@ def nearest(name: str, valid: Iterable[str]) -> str | None:
     return close[0] if close else None
 
 
+def did_you_mean(name: str, valid: Iterable[str]) -> str:
+    """``" (did you mean 'x'?)"`` when a valid name is close to ``name``, else ``""``."""
+    guess = nearest(name, valid)
+    return f" (did you mean {guess!r}?)" if guess else ""
+
+
 def unknown_key_message(key: str, valid: Iterable[str]) -> str:
     """'a key among [...]' with '(did you mean ...?)' when one is close."""
     valid = sorted(valid)
-    guess = nearest(key, valid)
-    return f"a key among {valid}" + (f" (did you mean {guess!r}?)" if guess else "")
+    return f"a key among {valid}" + did_you_mean(key, valid)
+
+
+def check_table_keys(table, valid: Iterable[str], where: str) -> None:
+    """The one check that a table's keys are known.
+
+    Parameters
+    ----------
+    table : mapping
+        A table of a study file or description (TOML).
+    valid : iterable of str
+        The keys it may have.
+    where : str
+        Its place, named in the error (``""`` at the top level).
+
+    Raises
+    ------
+    ValidationError
+        ``table`` is not a table, or ``where.KEY = 'KEY': expected a key among [...] (did you mean
+        'x'?)`` for its first unknown key.
+    """
+    valid = list(valid)
+    if not isinstance(table, Mapping):
+        raise ValidationError(where, table, f"a table with keys among {sorted(valid)}")
+    for k in table:
+        if k not in valid:
+            raise ValidationError(f"{where}.{k}" if where else k, k, unknown_key_message(k, valid))
 
 
 def keywords_of(func: Callable, exclude: Iterable[str] = ()) -> list[str] | None:

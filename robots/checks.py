@@ -2,7 +2,8 @@
 ``sklearn/utils/estimator_checks.py`` style; contract in :mod:`robots.base`).
 
 :func:`robot_checks` yields ``(name, check)`` pairs, each check a callable of no argument that
-raises ``AssertionError`` saying what failed and returns measured numbers; a plugin author turns
+raises :class:`evotol.errors.CheckFailed` saying what failed (not an ``assert``: the
+checks hold under ``python -O``) and returns measured numbers; a plugin author turns
 each into its own pytest id::
 
     @pytest.mark.parametrize("check", list(robot_checks(MyRobot())), ids=lambda c: c[0])
@@ -19,8 +20,8 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from evotol.conformance import run_checks
-from evotol.errors import KinematicsError
+from evotol.conformance import require, run_checks
+from evotol.errors import CheckFailed, KinematicsError
 from robots.units import UNITS
 
 #: any object following :class:`robots.base.RobotErrorModel`'s contract (robots.base imports this
@@ -40,10 +41,11 @@ class _Settings:
 def check_sources_declared(s: _Settings) -> dict:
     """At least one error source, unique names, dimensions 1-3."""
     r = s.robot
-    assert r.sources, f"{r.name}: no error sources declared"
+    require(r.sources, f"{r.name}: no error sources declared")
     names = [x.name for x in r.sources]
-    assert len(set(names)) == len(names), f"{r.name}: duplicate source names {names}"
-    assert all(x.dim in (1, 2, 3) for x in r.sources), f"{r.name}: source dimensions {[x.dim for x in r.sources]}"
+    require(len(set(names)) == len(names), f"{r.name}: duplicate source names {names}")
+    require(all(x.dim in (1, 2, 3) for x in r.sources),
+            f"{r.name}: source dimensions {[x.dim for x in r.sources]}")
     return {"n_columns": r.n_columns}
 
 
@@ -52,13 +54,13 @@ def check_units_declared(s: _Settings) -> dict:
     or "1" when dimensionless), and the display scales (to mm, deg...) are positive numbers."""
     r, ws = s.robot, s.robot.workspace
     bad = [x.name for x in r.sources if x.unit not in UNITS]
-    assert not bad, f"{r.name}: sources {bad} have no SI unit (one of {UNITS})"
+    require(not bad, f"{r.name}: sources {bad} have no SI unit (one of {UNITS})")
     # a workspace coordinate may also be a dimensionless SI quantity ("1": an index, a ratio)
     allowed = UNITS + ("1",)
-    assert len(ws.units) == ws.dim and all(u in allowed for u in ws.units), \
-        f"{r.name}: workspace units {ws.units}, expected one of {allowed} per coordinate {ws.names}"
-    assert len(ws.display_scale) == ws.dim and all(np.isfinite(ws.display_scale)) and min(ws.display_scale) > 0, \
-        f"{r.name}: workspace display_scale {ws.display_scale}"
+    require(len(ws.units) == ws.dim and all(u in allowed for u in ws.units),
+            f"{r.name}: workspace units {ws.units}, expected one of {allowed} per coordinate {ws.names}")
+    require(len(ws.display_scale) == ws.dim and all(np.isfinite(ws.display_scale)) and min(ws.display_scale) > 0,
+            f"{r.name}: workspace display_scale {ws.display_scale}")
     return {}
 
 
@@ -67,8 +69,8 @@ def check_sensitivity_shape(s: _Settings) -> dict:
     r = s.robot
     J = np.asarray(r.sensitivity(s.poses))
     expected = (len(s.poses), 6, r.n_columns)
-    assert J.shape == expected, f"{r.name}: sensitivity shape {J.shape}, expected {expected}"
-    assert np.all(np.isfinite(J)), f"{r.name}: sensitivity has non-finite entries"
+    require(J.shape == expected, f"{r.name}: sensitivity shape {J.shape}, expected {expected}")
+    require(np.all(np.isfinite(J)), f"{r.name}: sensitivity has non-finite entries")
     return {"n_poses": len(s.poses)}
 
 
@@ -81,7 +83,8 @@ def check_pose_subset_invariance(s: _Settings) -> dict:
     Jsub = np.asarray(r.sensitivity(P[idx]))
     scale = max(float(np.abs(J).max()), 1e-300)
     gap = float(np.abs(Jsub - J[idx]).max())
-    assert gap <= 1e-10 * scale, f"{r.name}: sensitivity of poses {idx.tolist()} differs from the full call by {gap:.3g}"
+    require(gap <= 1e-10 * scale,
+            f"{r.name}: sensitivity of poses {idx.tolist()} differs from the full call by {gap:.3g}")
     if r.has_nonlinear_model:
         # errors of 1e-6 (m, rad): a pose error leaking between poses would be of that order;
         # iterative solvers may differ by round-off of the pose itself (~1e-15), < 1e-6 of it
@@ -89,8 +92,8 @@ def check_pose_subset_invariance(s: _Settings) -> dict:
         full = np.asarray(r.pose_error(P, E))
         sub = np.asarray(r.pose_error(P[idx], E[idx]))
         gap_e = float(np.abs(sub - full[idx]).max())
-        assert gap_e <= 1e-6 * max(float(np.abs(full).max()), 1e-300), \
-            f"{r.name}: pose_error of poses {idx.tolist()} differs from the full call by {gap_e:.3g}"
+        require(gap_e <= 1e-6 * max(float(np.abs(full).max()), 1e-300),
+                f"{r.name}: pose_error of poses {idx.tolist()} differs from the full call by {gap_e:.3g}")
     return {}
 
 
@@ -98,8 +101,8 @@ def check_pickle_round_trip(s: _Settings) -> dict:
     """The robot pickles (it travels to worker processes and Dask) and gives the same sensitivity."""
     r = s.robot
     back = pickle.loads(pickle.dumps(r))
-    assert np.array_equal(np.asarray(back.sensitivity(s.poses)), np.asarray(r.sensitivity(s.poses))), \
-        f"{r.name}: sensitivity differs after a pickle round trip"
+    require(np.array_equal(np.asarray(back.sensitivity(s.poses)), np.asarray(r.sensitivity(s.poses))),
+            f"{r.name}: sensitivity differs after a pickle round trip")
     return {}
 
 
@@ -117,8 +120,8 @@ def check_out_of_reach_raises(s: _Settings) -> dict:
             out = np.asarray(call(far[None, :]))
         except KinematicsError:
             continue
-        raise AssertionError(f"{r.name}: {name} at the unreachable pose {far.tolist()} returned "
-                             f"{'NaN' if np.isnan(out).any() else 'numbers'} instead of raising KinematicsError")
+        raise CheckFailed(f"{r.name}: {name} at the unreachable pose {far.tolist()} returned "
+                          f"{'NaN' if np.isnan(out).any() else 'numbers'} instead of raising KinematicsError")
     return {}
 
 
@@ -131,16 +134,18 @@ def check_pose_error_consistency(s: _Settings) -> dict:
         return {"nonlinear_model": False}
     n = r.n_columns
     zero = np.asarray(r.pose_error(P, np.zeros((len(P), 1, n))))
-    assert zero.shape == (len(P), 1, 6), f"{r.name}: pose_error shape {zero.shape}, expected {(len(P), 1, 6)}"
-    assert np.max(np.abs(zero)) <= s.atol, f"{r.name}: zero source errors give pose error {np.max(np.abs(zero)):.3g}"
+    require(zero.shape == (len(P), 1, 6),
+            f"{r.name}: pose_error shape {zero.shape}, expected {(len(P), 1, 6)}")
+    require(np.max(np.abs(zero)) <= s.atol,
+            f"{r.name}: zero source errors give pose error {np.max(np.abs(zero)):.3g}")
     J = np.asarray(r.sensitivity(P))
     E = np.concatenate([np.eye(n) * s.step, -np.eye(n) * s.step], axis=0)  # (2n, n)
     out = np.asarray(r.pose_error(P, np.ascontiguousarray(np.broadcast_to(E, (len(P), 2 * n, n)))))
     fd = (out[:, :n, :] - out[:, n:, :]).transpose(0, 2, 1) / (2 * s.step)
     scale = float(np.max(np.abs(J)))
     mismatch = float(np.max(np.abs(fd - J)))
-    assert mismatch <= s.rtol * scale + s.atol, \
-        f"{r.name}: sensitivity differs from finite differences by {mismatch:.3g} (scale {scale:.3g})"
+    require(mismatch <= s.rtol * scale + s.atol,
+            f"{r.name}: sensitivity differs from finite differences by {mismatch:.3g} (scale {scale:.3g})")
     return {"fd_mismatch": mismatch, "fd_relative_mismatch": mismatch / scale}
 
 
@@ -162,5 +167,5 @@ def check_robot(robot: Robot, poses=None, *, step: float = 1e-7, rtol: float = 1
     """Run every check of :func:`robot_checks` (like sklearn's ``check_estimator``); returns the
     merged measurements (e.g. ``fd_relative_mismatch``).
 
-    Raises one ``AssertionError`` listing every failed check (not only the first)."""
+    Raises one :class:`evotol.errors.CheckFailed` listing every failed check (not only the first)."""
     return run_checks(str(robot.name), robot_checks(robot, poses, step=step, rtol=rtol, atol=atol))

@@ -13,7 +13,7 @@ import pytest
 
 from evotol.accuracy import Evaluation, available, get, names
 from evotol.accuracy.base import ComponentErrors, evaluation_of, violation
-from evotol.accuracy.checks import CHECKS, check_measure, measure_checks, small_problem
+from evotol.accuracy_checks import CHECKS, check_measure, measure_checks, small_problem
 from evotol.accuracy.worst_case import WorstCaseMeasure
 from evotol.errors import CheckFailed, ValidationError
 from evotol.problem import Requirement
@@ -121,7 +121,7 @@ TRIANGLE = Triangle()
 SCRIPT = '''
 import numpy as np
 from evotol.accuracy import names
-from evotol.accuracy.checks import check_measure, small_problem
+from evotol.accuracy_checks import check_measure, small_problem
 from evotol.accuracy.registry import get
 
 P = small_problem().with_requirement(measure="triangle")

@@ -3,7 +3,7 @@
 * ``_patch_bound`` is the exact sublinearity bound ``max_{l >= 0} sum l_i H_i / |sum l_i U_i|``
   over a patch: checked against a dense brute-force maximisation over the simplex, and never
   above the bound used before (``min(max H / d, |X|)``).
-* Maps computed by the new settings and by ``legacy_engine()`` (today's algorithm before issue 13)
+* Maps computed by the new settings and by ``options=LEGACY`` (the algorithm before issue 13)
   on the same small grids: every certified bracket ``[max, upper]`` of one overlaps the other's,
   and both keep the gap <= 0.1 %.
 """
@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from robots.clearance import max_pose_error
-from robots.clearance import maxerror as me
+from robots.clearance import patches as me
+from robots.clearance.options import DEFAULT, LEGACY
 
 
 def _brute(U, H, n=400):
@@ -30,14 +31,13 @@ def test_patch_bound_is_the_exact_sublinearity_bound_and_never_above_the_old_one
     rng = np.random.default_rng(3)
     for k in (2, 3):
         for _ in range(60):
-            centre = me._normalise(rng.normal(size=k))
-            U = me._normalise(centre + rng.uniform(0.05, 0.6) * rng.normal(size=(k, k)))
+            centre = me.normalise(rng.normal(size=k))
+            U = me.normalise(centre + rng.uniform(0.05, 0.6) * rng.normal(size=(k, k)))
             if np.min(U @ U.T) <= 0:                     # the branch and bound's patches span < 90 deg
                 continue
             H = rng.uniform(0.5, 1.5, size=k)
-            new = me._patch_bound(U[None], H[None])[0]
-            with me.legacy_engine():
-                old = me._patch_bound(U[None], H[None])[0]
+            new = me.patch_bound(U[None], H[None])[0]
+            old = me.patch_bound(U[None], H[None], legacy=True)[0]
             ref = _brute(U, H)
             assert new >= ref * (1 - 1e-9)               # a valid bound: not below the true sup
             assert new <= ref * (1 + 2e-3) + 1e-12       # and tight (dense sampling)
@@ -45,14 +45,14 @@ def test_patch_bound_is_the_exact_sublinearity_bound_and_never_above_the_old_one
 
 
 def test_initial_patches_use_one_vertex_of_each_antipodal_pair():
-    verts, tri, sign = me._initial_patches(3)
+    verts, tri, sign = me.initial_patches(3)
     assert len(verts) == 3                                # e_x, e_y, e_z (were 5 with -e_x, -e_y)
     spanned = verts[tri] * sign[..., None]                # the four octants of the upper half sphere
     assert sorted(map(tuple, spanned.sum(1).round(12))) == [(-1, -1, 1), (-1, 1, 1), (1, -1, 1), (1, 1, 1)]
 
 
 def test_initial_circle_patches_are_three_60_degree_arcs_of_the_half_circle():
-    verts, tri, sign = me._initial_patches(2)
+    verts, tri, sign = me.initial_patches(2)
     arcs = verts[tri] * sign[..., None]                   # (3, 2, 2): ends of each arc
     assert len(verts) == 3 and len(arcs) == 3             # 0, 60, 120 deg (+ the antipode of 0 deg)
     cosines = np.einsum("ak,ak->a", arcs[:, 0], arcs[:, 1])
@@ -98,19 +98,19 @@ def test_interpolated_dual_bound_is_valid_and_never_above_the_vertex_bound(robot
 
     tighter = 0
     for _ in range(12):
-        centre = me._normalise(rng.normal(size=k))
-        U = me._normalise(centre + rng.uniform(0.05, 0.5) * rng.normal(size=(k, k)))
+        centre = me.normalise(rng.normal(size=k))
+        U = me.normalise(centre + rng.uniform(0.05, 0.5) * rng.normal(size=(k, k)))
         if np.min(U @ U.T) <= 0.2:
             continue
         res, a = solve(U, 1e-3)                           # vertex duals of moderate precision
         Y = a + np.einsum("prm,pm->pr", np.repeat(Bt, len(U), 0), res.mu)
         H = true_dual(Y, nd)
-        vertex = me._patch_bound(U[None], H[None])[0]
-        interp = me._interpolated_bound(U[None], Y[None], nd, 6)[0]
+        vertex = me.patch_bound(U[None], H[None])[0]
+        interp = me.interpolated_bound(U[None], Y[None], nd, 6)[0]
         assert interp <= vertex * (1 + 1e-12)
         tighter += interp < vertex * (1 - 1e-6)
         L = rng.dirichlet(np.ones(k), 40)
-        inside = me._normalise(L @ U)
+        inside = me.normalise(L @ U)
         exact, _ = solve(inside, 1e-10)
         assert np.all(exact.lower <= interp * (1 + 1e-9))
     assert tighter >= 1
@@ -118,8 +118,7 @@ def test_interpolated_dual_bound_is_valid_and_never_above_the_vertex_bound(robot
 
 def _agree(mech, poses):
     new = max_pose_error(mech, poses)
-    with me.legacy_engine():
-        old = max_pose_error(mech, poses)
+    old = max_pose_error(mech, poses, options=LEGACY)
     for r in (new, old):
         assert r.gap.max() <= 1e-3
     for a, b in ((new, old), (old, new)):
@@ -148,23 +147,17 @@ def test_path_predictor_keeps_the_certificate_with_fewer_newton_iterations():
     """The predictor scaled by tau_old / tau_new (mu(tau) ~ mu* + c / tau near the optimum) and the
     growth 16 of the barrier parameter: same brackets as the solver before it, fewer Newton steps
     (counted, not timed)."""
-    from robots.clearance import support
+    from dataclasses import replace
+
     from robots.fivebar import FiveBar
 
     fb = FiveBar()
     mech, poses = fb.clearance_mechanism(), fb.workspace.grid(4)
     counts, res = {}, {}
-    for name, opts in (("new", {}), ("old", me.LEGACY_SUPPORT_OPTIONS)):
-        saved = {k: getattr(support, k) for k in opts}
-        try:
-            for k, v in opts.items():
-                setattr(support, k, v)
-            n0 = support.STATS["newton"]
-            res[name] = max_pose_error(mech, poses)
-            counts[name] = support.STATS["newton"] - n0
-        finally:
-            for k, v in saved.items():
-                setattr(support, k, v)
+    old_solver = replace(DEFAULT, predictor=LEGACY.predictor, growth=LEGACY.growth)
+    for name, opts in (("new", DEFAULT), ("old", old_solver)):
+        res[name] = max_pose_error(mech, poses, options=opts)
+        counts[name] = res[name].n_newton
     assert counts["new"] < 0.8 * counts["old"]
     a, b = res["new"], res["old"]
     assert a.gap.max() <= 1e-3 and b.gap.max() <= 1e-3

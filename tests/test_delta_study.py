@@ -6,6 +6,7 @@ import pytest
 
 from evotol import studies
 from evotol.studies import brahmia2023_delta as study
+from robots import delta_synthesis as ds
 from robots.delta import DeltaRobot, cylinder_poses
 
 
@@ -26,7 +27,7 @@ def test_study_is_registered_and_writes_html_and_json(quick):
         assert key in data
     assert len(data["tolerance_intervals"]) == 47
     assert all(lo <= 0 <= hi for lo, hi in data["tolerance_intervals"].values())
-    assert set(data["verification_error_mm"]) == set(study.VERIFICATION_CASES)
+    assert set(data["verification_error_mm"]) == set(ds.VERIFICATION_CASES)
 
 
 def test_report_is_drawn_from_the_json_alone(quick):

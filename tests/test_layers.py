@@ -43,7 +43,7 @@ LAYERS = {
     "evotol.problem": 2, "evotol.measures": 2, "evotol.constraints": 2, "evotol.result": 2, "evotol.feasibility": 2, "evotol.support_bound": 2,
     "evotol.distributions": 2, "evotol.statistical": 2, "evotol.clearances": 2, "evotol.quality_loss": 2,
     "evotol.plausibility": 2,
-    "evotol.tolerance": 2, "evotol.requirement": 2, "evotol.variables": 2, "evotol.accuracy": 2,
+    "evotol.tolerance": 2, "evotol.requirement": 2, "evotol.variables": 2, "evotol.accuracy": 2, "evotol.accuracy_checks": 2,
     "evotol.interval": 0, "evotol.nonlinear_worst_case": 2,
     "evotol.allocators": 3, "evotol.doe": 3, "evotol.filtering": 3, "evotol.refinement": 3,
     "evotol.montecarlo": 4, "evotol.nonlinear": 4, "evotol.workspace_map": 4, "evotol.explorer_data": 4,

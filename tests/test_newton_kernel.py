@@ -9,6 +9,7 @@ import pytest
 
 from robots.clearance import max_pose_error, newton_kernel
 from robots.clearance import support
+from robots.clearance.options import DEFAULT, NUMPY
 from robots.clearance.support import _merge_groups, _numpy_iteration, solve_support
 
 pytestmark = pytest.mark.skipif(not newton_kernel.AVAILABLE, reason="numba not importable: NumPy iteration only")
@@ -94,13 +95,9 @@ def test_certified_maps_agree_with_the_numpy_iteration(irsbot2_poses, parallelog
     robot, pts = irsbot2_poses
     mech = robot.clearance_mechanism(parallelograms=parallelograms)
     out = {}
-    for kern in (False, True):
-        support.STATS.update(newton=0)
-        if kern:
-            out[kern] = (max_pose_error(mech, pts), support.STATS["newton"])
-        else:
-            with support.numpy_iteration():
-                out[kern] = (max_pose_error(mech, pts), support.STATS["newton"])
+    for kern, opts in ((False, NUMPY), (True, DEFAULT)):
+        res = max_pose_error(mech, pts, options=opts)
+        out[kern] = (res, res.n_newton)
     (a, na), (b, nb) = out[False], out[True]
     for lo, up in (("p_max", "p_upper"), ("r_max", "r_upper")):
         la, ua, lb, ub = (getattr(r, f) for r in (a, b) for f in (lo, up))
@@ -177,8 +174,8 @@ def test_warm_up_compiles_every_signature_the_solver_uses():
     from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
 
     assert support.warm_up() is True
-    before = [len(f.signatures) for f in newton_kernel._COMPILED]
+    before = [len(f.signatures) for f in newton_kernel._kernel()]
     centre = (np.array(MAP_WORKSPACE.low) + np.array(MAP_WORKSPACE.high)) / 2
     max_pose_error(IRSBot2.thesis("VI.1").clearance_mechanism(parallelograms=True), centre[None])
     max_pose_error(FiveBar().clearance_mechanism(), [[0.0, 0.07]])
-    assert [len(f.signatures) for f in newton_kernel._COMPILED] == before
+    assert [len(f.signatures) for f in newton_kernel._kernel()] == before

@@ -1,6 +1,6 @@
 """Accuracy measures as plugins: one protocol (:class:`Measure`: ``evaluate(problem, T, top_only)
 -> Evaluation``), one registry (built-ins plus the entry-point group ``evotol.measures``) and a
-conformance suite (:mod:`evotol.accuracy.checks`).
+conformance suite (:mod:`evotol.accuracy_checks`).
 
 Built in: ``worst_case`` (:mod:`.worst_case`), ``rss`` (:mod:`.rss`), ``mc_quantile``
 (:mod:`.mc_quantile`) and ``yield`` (:mod:`.statistical_yield`). The numerics they share live in

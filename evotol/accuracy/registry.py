@@ -8,7 +8,7 @@ model. A package adds a measure without touching evotol by declaring, in its ``p
 
 The entry point names a :class:`evotol.accuracy.base.Measure` instance (or a class, instantiated
 without arguments) whose ``name`` equals the entry point's name. ``Requirement(measure="my_measure")``
-then selects it; :func:`evotol.accuracy.checks.check_measure` proves it follows the contract.
+then selects it; :func:`evotol.accuracy_checks.check_measure` proves it follows the contract.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from importlib.metadata import entry_points
 
 from evotol.accuracy.base import Measure
 from evotol.errors import ValidationError
-from evotol.keywords import nearest
+from evotol.keywords import did_you_mean
 
 GROUP = "evotol.measures"
 
@@ -79,8 +79,7 @@ def get(name: str, field: str = "measure") -> Measure:
         eps = _entry_points() if isinstance(name, str) else {}
         if name not in eps:
             valid = names()
-            guess = nearest(str(name), valid)
-            raise ValidationError(field, name, f"one of {valid}" + (f" (did you mean {guess!r}?)" if guess else ""))
+            raise ValidationError(field, name, f"one of {valid}" + did_you_mean(str(name), valid))
         measure = _instance(eps[name].load(), name, eps[name].value)
     _loaded[name] = measure
     return measure

@@ -83,7 +83,7 @@ def compute(config: dict) -> StudyResult:
 
     from robots.clearance import max_pose_error, multistart_max_pose_error
     from robots.clearance.grid import grid_max_pose_error
-    from robots.clearance.maxerror import sample_max_errors
+    from robots.clearance.sampling import sample_max_errors
 
     t_start = time.perf_counter()
     n, quick, seed, b_mm, workers = config["n_grid"], config["quick"], config["seed"], config["b_mm"], config["workers"]

@@ -46,21 +46,26 @@ clearances would report -- it falls short of the worst case), ``max_pose_error(.
 extra=(J, t))`` (clearances plus other interval sources, e.g. ``robots.fivebar.combined_max_pose_error``).
 
 Modules: :mod:`.kinematics` (modified DH / Khalil-Kleinfinger frames, adjoints),
-:mod:`.model` (clearance bounds, joints, chains, bodies, error mapping matrices, loop
-equations), :mod:`.support` (per-direction convex problem with a duality certificate),
+:mod:`.model` (the mechanism: bodies, error mapping matrices, loop equations; its plain values
+in :mod:`.parts`, its per-pose maps in :mod:`.pose_maps`), :mod:`.support` (per-direction convex problem with a duality certificate),
 :mod:`.newton_kernel` (its Newton iteration and centring steps compiled with numba; the NumPy
 iteration in :mod:`.support` is the reference and the fallback),
-:mod:`.maxerror` (branch and bound over directions, :func:`max_pose_error`),
+:mod:`.maxerror` (:func:`max_pose_error`, :class:`ClearanceEvaluator`), :mod:`.branch_bound` (the
+branch and bound over directions) and :mod:`.patches` (its patches and bounds), :mod:`.options`
+(the engine's settings, one frozen :class:`EngineOptions` passed down; ``LEGACY``: before issue
+13), :mod:`.result` (:class:`MaxPoseError`), :mod:`.sampling` (random clearance states),
 :mod:`.multistart` (the thesis's QR + multistart local optimisation, the baseline),
 :mod:`.grid` (grid studies on local cores or a Dask cluster).
 """
 from robots.clearance.kinematics import DHFrame, DHTree, adjoint, kk_transform
-from robots.clearance.maxerror import (ClearanceEvaluator, MaxPoseError, evaluate_cases, max_pose_error,
-                                       sample_max_errors)
+from robots.clearance.maxerror import ClearanceEvaluator, MaxPoseError, evaluate_cases, max_pose_error
+from robots.clearance.options import EngineOptions
+from robots.clearance.sampling import sample_max_errors
 from robots.clearance.model import (BOUND_NAMES, Chain, ClearanceBounds, ClearanceMechanism, Joint, PoseMaps,
                                     twist_between)
 from robots.clearance.multistart import MultistartResult, multistart_max_pose_error
 
 __all__ = ["BOUND_NAMES", "Chain", "ClearanceBounds", "ClearanceEvaluator", "ClearanceMechanism", "DHFrame", "DHTree",
+           "EngineOptions",
            "Joint", "MaxPoseError", "MultistartResult", "PoseMaps", "adjoint", "evaluate_cases", "kk_transform",
            "max_pose_error", "multistart_max_pose_error", "sample_max_errors", "twist_between"]

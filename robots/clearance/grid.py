@@ -21,20 +21,22 @@ import numpy as np
 from evotol.errors import ValidationError
 from evotol.executor import parallel_map
 from robots.clearance.maxerror import MaxPoseError, max_pose_error
-from robots.clearance.support import warm_up
 from robots.clearance.model import ClearanceMechanism
+from robots.clearance.options import DEFAULT, EngineOptions
+from robots.clearance.support import warm_up
 
 
 def _solve_chunk(args):
-    mech, poses, bounds, tol = args
-    return max_pose_error(mech, poses, bounds, tol=tol)
+    mech, poses, bounds, tol, options = args
+    return max_pose_error(mech, poses, bounds, tol=tol, options=options)
 
 
 def grid_max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float = 1e-3, chunk_size: int = 256,
-                        workers: int | None = None, scheduler=None) -> MaxPoseError:
+                        workers: int | None = None, scheduler=None, options: EngineOptions = DEFAULT) -> MaxPoseError:
     """:func:`max_pose_error` over many poses, chunked and run in parallel (see module doc).
 
-    bounds: None, (n_joints, 4) or (n, n_joints, 4). ``seconds`` of the result is the wall time."""
+    bounds: None, (n_joints, 4) or (n, n_joints, 4); options: the engine's settings, sent to every
+    worker with its chunk. ``seconds`` of the result is the wall time."""
     t0 = time.perf_counter()
     poses = np.atleast_2d(np.asarray(poses, float))
     n = len(poses)
@@ -43,7 +45,7 @@ def grid_max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: fl
     b = mech.default_bounds() if bounds is None else np.asarray(bounds, float)
     starts = range(0, n, chunk_size)
     per_pose = b.ndim == 3
-    items = [(mech, poses[s:s + chunk_size], b[s:s + chunk_size] if per_pose else b, tol) for s in starts]
+    items = [(mech, poses[s:s + chunk_size], b[s:s + chunk_size] if per_pose else b, tol, options) for s in starts]
     warm_up()     # compile the solver's kernels once here, not once per worker (fresh install)
     parts = parallel_map(_solve_chunk, items, workers=workers, scheduler=scheduler)
     out = MaxPoseError.concat(parts)

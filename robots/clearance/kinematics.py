@@ -72,6 +72,16 @@ def rot_x(a):
     return T
 
 
+def rot_y(a):
+    a = np.asarray(a, float)
+    c, s = np.cos(a), np.sin(a)
+    T = np.zeros(a.shape + (4, 4))
+    T[..., 0, 0], T[..., 0, 2], T[..., 2, 0], T[..., 2, 2] = c, s, -s, c
+    T[..., 1, 1] = 1
+    T[..., 3, 3] = 1
+    return T
+
+
 def rot_z(a):
     a = np.asarray(a, float)
     c, s = np.cos(a), np.sin(a)

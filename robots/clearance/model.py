@@ -32,166 +32,25 @@ Planar mechanisms (all joint axes parallel to the base ``z`` axis) split exactly
 in-plane block (``dr_z, dt_x, dt_y`` -> ``dtheta_z, dp_x, dp_y``) and an out-of-plane block
 (``dr_x, dr_y, dt_z`` -> ``dtheta_x, dtheta_y, dp_z``); the clearance set is a product over the two
 blocks, so each maximum is computed per block and combined exactly (``p_max^2 = p_in^2 + p_out^2``).
+
+The plain values (bounds, joints, chains, blocks) live in :mod:`robots.clearance.parts`, the
+per-pose maps in :mod:`robots.clearance.pose_maps`; both are importable from here too.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
 from robots.clearance.kinematics import DHTree, exp_screw, inv_transform, rotation_vector, skew
+from robots.clearance.parts import (BOUND_NAMES, BOUND_UNITS, CONE_COMPONENTS, FULL, PLANAR, POS, ROT, Block, Chain,
+                                    ClearanceBounds, Joint)
+from robots.clearance.pose_maps import PoseMaps
 
-#: bound kinds, in the column order of a bounds array ``(..., n_joints, 4)``
-BOUND_NAMES = ("beta_xy", "beta_z", "b_xy", "b_z")
-BOUND_UNITS = ("rad", "rad", "m", "m")
-#: screw components each bound constrains (eqs. III.3-III.6): disk, interval, disk, interval
-CONE_COMPONENTS = ((0, 1), (2,), (3, 4), (5,))
-ROT, POS = (0, 1, 2), (3, 4, 5)
-
-
-@dataclass(frozen=True)
-class ClearanceBounds:
-    """Clearance bounds of one joint (Deng 2012 Fig. III.1, eqs. III.3-III.6), SI units.
-
-    beta_xy: tilt of the joint axis, rad (disk); beta_z: rotation about the axis, rad (interval;
-    ~0 for an actuated joint, large for a passive one: idle motion); b_xy: radial play, m (disk);
-    b_z: axial play, m (interval).
-    """
-
-    beta_xy: float
-    beta_z: float
-    b_xy: float
-    b_z: float
-
-    def __post_init__(self):
-        for k in BOUND_NAMES:
-            v = getattr(self, k)
-            if not isinstance(v, (int, float, np.floating)) or not np.isfinite(v) or v < 0:
-                raise ValidationError(f"ClearanceBounds.{k}", v, "a finite number >= 0 (SI units)")
-
-    @classmethod
-    def thesis(cls, active: bool, *, b_xy: float = 1e-4, b_z: float = 1e-4, beta_xy: float | None = 0.01,
-               h: float | None = None, beta_z_passive: float = 0.2, beta_z_active: float = 0.0) -> "ClearanceBounds":
-        """The thesis's convention (Sec. III.1.1, IV.3): ``beta_z`` = ``beta_z_active`` (locked,
-        default 0) for an actuated joint, ``beta_z_passive`` (idle motion, default 0.2 rad) for a
-        passive one; ``beta_xy = b_xy / h`` (eq. III.2) when a joint length ``h`` (m) is given."""
-        if h is not None:
-            if not h > 0:
-                raise ValidationError("ClearanceBounds.thesis h", h, "a joint length > 0 (m)")
-            beta_xy = b_xy / h
-        if beta_xy is None:
-            raise ValidationError("ClearanceBounds.thesis beta_xy", beta_xy, "a number, or give h")
-        return cls(float(beta_xy), float(beta_z_active if active else beta_z_passive), float(b_xy), float(b_z))
-
-    def as_array(self) -> np.ndarray:
-        return np.array([self.beta_xy, self.beta_z, self.b_xy, self.b_z])
-
-    def scaled(self, factor: float) -> "ClearanceBounds":
-        return ClearanceBounds(*(factor * self.as_array()))
-
-
-@dataclass(frozen=True)
-class Joint:
-    """A joint with clearance: ``frame`` is the DH frame whose ``z`` axis is the joint axis (the
-    error screw is expressed in it); ``active``: actuated (locked for the analysis)."""
-
-    name: str
-    frame: str
-    active: bool
-    bounds: ClearanceBounds
-
-
-@dataclass(frozen=True)
-class Chain:
-    """A serial chain of joints from body ``start`` to body ``end`` (names of bodies; ``"base"`` is
-    fixed). ``joints``: names of the chain's joints, base side first. ``path_end``: DH frame at
-    the end of the chain's kinematic path (defaults to the end body's frame); the end body is
-    reached from it by a constant offset (a cut joint of a closed loop, e.g. frame 5 = frame 6 of
-    the 5-bar, Tab. IV.1)."""
-
-    name: str
-    start: str
-    end: str
-    joints: tuple[str, ...]
-    path_end: str | None = None
-
-
-@dataclass(frozen=True)
-class Block:
-    """A set of screw/twist components that decouples from the rest (planar in/out of plane)."""
-
-    name: str
-    components: tuple[int, ...]  # twist and screw components (same index sets for the blocks used)
-
-
-FULL = (Block("spatial", (0, 1, 2, 3, 4, 5)),)
-PLANAR = (Block("in-plane", (2, 3, 4)), Block("out-of-plane", (0, 1, 5)))
-
-
-@dataclass
-class PoseMaps:
-    """Per-pose linear maps of one decoupled block, computed once and reused for any bounds.
-
-    cols: (n_rows,) index into the stacked screw vector (6 * n_joints) of each row, in cone order;
-    cone_joint, cone_kind: joint index and bound kind (0..3) of each cone; disks come first
-    (``n_disk`` cones of 2 rows), then intervals (1 row each).
-    C_pos, C_rot: (n_poses, k, n_rows) -- target twist components (base frame) of a consistent
-    screw vector; B: (n_poses, n_rows, m) -- consistency ``B^T s = 0``.
-    """
-
-    block: Block
-    cols: np.ndarray
-    cone_joint: np.ndarray
-    cone_kind: np.ndarray
-    n_disk: int
-    pos_comps: tuple[int, ...]
-    rot_comps: tuple[int, ...]
-    C_pos: np.ndarray
-    C_rot: np.ndarray
-    B: np.ndarray
-    #: sparsity of B: tuples (disk cone indices, interval row indices, loop columns) -- the rows of
-    #: a group are zero outside its columns (each loop touches few chains)
-    groups: tuple = ()
-
-    @property
-    def n_rows(self) -> int:
-        return len(self.cols)
-
-    @property
-    def n_loops(self) -> int:
-        return self.B.shape[-1]
-
-    def row_bounds(self, bounds: np.ndarray) -> np.ndarray:
-        """Bound of every row, (..., n_rows), from a bounds array (..., n_joints, 4)."""
-        per_cone = bounds[..., self.cone_joint, self.cone_kind]
-        nd = self.n_disk
-        return np.concatenate([np.repeat(per_cone[..., :nd], 2, axis=-1), per_cone[..., nd:]], axis=-1)
-
-    def take(self, idx) -> "PoseMaps":
-        return replace(self, C_pos=self.C_pos[idx], C_rot=self.C_rot[idx], B=self.B[idx])
-
-    def sample_screws(self, i: int, bounds: np.ndarray, n: int, rng, mode: str = "uniform") -> np.ndarray:
-        """``n`` random consistent clearance states at pose ``i``: the rows of the screw vector,
-        (n, n_rows), m and rad. Each joint's screw is drawn in its clearance set (``"uniform"``:
-        uniformly inside the disks and intervals; ``"boundary"``: on their boundaries), the part
-        violating the loop equations is removed (orthogonal projection onto ``B^T s = 0``, rows
-        scaled by their bounds) and the sample is scaled back into the set. ``bounds``: (n_joints, 4)."""
-        D = self.row_bounds(bounds[None])[0]
-        nd = self.n_disk
-        ni = self.n_rows - 2 * nd
-        ang = rng.uniform(0, 2 * np.pi, (n, nd))
-        rad = np.ones((n, nd)) if mode == "boundary" else np.sqrt(rng.uniform(0, 1, (n, nd)))
-        disk = np.stack([rad * np.cos(ang), rad * np.sin(ang)], -1).reshape(n, 2 * nd)
-        inter = rng.choice([-1.0, 1.0], (n, ni)) if mode == "boundary" else rng.uniform(-1, 1, (n, ni))
-        sig = np.concatenate([disk, inter], 1)
-        Bt = self.B[i] * D[:, None]
-        if Bt.shape[1]:
-            sig = sig - (sig @ Bt) @ np.linalg.pinv(Bt)      # orthogonal projection onto B^T s = 0
-        nrm_d = np.sqrt((sig[:, :2 * nd].reshape(n, nd, 2) ** 2).sum(-1)).max(-1, initial=0.0)
-        nrm_i = np.abs(sig[:, 2 * nd:]).max(-1, initial=0.0)
-        return sig / np.maximum(np.maximum(nrm_d, nrm_i), 1.0)[:, None] * D
+__all__ = ["BOUND_NAMES", "BOUND_UNITS", "CONE_COMPONENTS", "FULL", "PLANAR", "Block", "Chain", "ClearanceBounds",
+           "ClearanceMechanism", "Joint", "PoseMaps", "twist_between"]
 
 
 class ClearanceMechanism:

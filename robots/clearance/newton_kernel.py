@@ -22,34 +22,31 @@ set's index, so nothing of size ``K x R x m`` is copied when the working set shr
 iteration reads each column group's block of ``B`` from one contiguous array
 (:func:`group_blocks`, built once per solve).
 
-The NumPy version of the same iteration (``solve_support(..., kernel=False)``) does this with
-batched array operations; per problem and iteration it allocates some twenty temporaries of the
-batch's size, and the Hessian products go through one small BLAS call per problem. Compiled, the
-whole iteration of one problem stays in the first-level cache: on the IRSBot-2 problems (96 rows
-x 18 loop variables, 144 x 30) it is several times faster (``benchmarks/bench_clearance.py``).
-Both versions agree to round-off (``tests/test_clearance_engine.py``).
+The NumPy version (``solve_support(..., kernel=False)``, ``EngineOptions(kernel=False)``) does this
+with batched array operations (some twenty temporaries of the batch's size per iteration);
+compiled, one problem's iteration stays in the first-level cache, several times faster on the
+IRSBot-2 problems (``benchmarks/bench_clearance.py``). Both agree to round-off.
 
-numba is a dependency of evotol, imported on the first compiled iteration (a process that never
-solves a support problem does not pay for it). The first use on a fresh install compiles the
-kernel (about 6 s) into numba's on-disk cache (``__pycache__`` beside this file, or numba's
-user-wide cache directory when that is read-only); later processes load it in about 0.5 s. If
-numba cannot be imported or fails to compile (a platform without wheels, a NumPy it does not
-support yet), a ``RuntimeWarning`` says so once and the solver uses the NumPy iteration, with
-the same results up to round-off; the environment variable ``EVOTOL_NO_NUMBA=1`` asks for that
-explicitly.
+numba is a dependency of evotol, imported on the first compiled iteration. The first use on a
+fresh install compiles the kernel (about 6 s) into numba's on-disk cache (``__pycache__`` beside
+this file, or numba's user-wide cache directory); later processes load it in about 0.5 s. If numba
+cannot be imported or fails to compile, a ``RuntimeWarning`` says so once and the solver uses the
+NumPy iteration (same results up to round-off); ``EVOTOL_NO_NUMBA=1`` asks for that explicitly.
 """
 from __future__ import annotations
 
+import functools
 import importlib.util
 import os
+import types
 import warnings
 
 import numpy as np
 
-#: False when numba is missing, failed to compile, or EVOTOL_NO_NUMBA is set (NumPy iteration)
+#: False when numba is missing or EVOTOL_NO_NUMBA is set (NumPy iteration); :func:`_kernel` is None
+#: also when numba fails to compile
 AVAILABLE = (os.environ.get("EVOTOL_NO_NUMBA", "").lower() not in ("1", "true", "yes")
              and importlib.util.find_spec("numba") is not None)
-_COMPILED = None
 
 #: steps of the backtracking line search (support._LS)
 LINE_SEARCH = np.array([1.0, 0.5, 0.25, 0.12])
@@ -436,23 +433,33 @@ def _say_if_compiling(dispatcher) -> None:
               "about 10 s; cached in " + os.path.dirname(index) + ")", file=sys.stderr, flush=True)
 
 
-def _kernel():
-    """The compiled kernel (numba imported and the cache loaded on first use), or None."""
-    global _COMPILED, AVAILABLE
-    if _COMPILED is None and AVAILABLE:
-        try:
-            import numba
+def _bound(fn, **names):
+    """``fn`` calling ``names`` (the compiled helpers) through a copy of its globals: numba resolves
+    a kernel's calls there, and this module's own names stay the Python functions."""
+    out = types.FunctionType(fn.__code__, dict(fn.__globals__, **names), fn.__name__, fn.__defaults__, fn.__closure__)
+    out.__qualname__, out.__module__ = fn.__qualname__, fn.__module__
+    return out
 
-            jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-            # the kernels call these by their global names: bind the compiled versions first
-            globals().update(_chol_factor=jit(_chol_factor), _chol_solve=jit(_chol_solve))
-            _COMPILED = (jit(_newton_iterate_py), jit(_project_centred_py), jit(_predict_centred_py))
-            _say_if_compiling(_COMPILED[0])
-        except Exception as exc:        # pragma: no cover - depends on the platform
-            AVAILABLE = False
-            warnings.warn(f"robots.clearance.newton_kernel: numba unavailable ({exc!r}); the clearance engine "
-                          "uses its NumPy iteration (same results, slower)", RuntimeWarning, stacklevel=3)
-    return _COMPILED
+
+def _kernel():
+    """The compiled kernels (loaded once per process), or None: switched off or numba unusable."""
+    return _compiled() if AVAILABLE else None
+
+
+@functools.lru_cache(maxsize=1)
+def _compiled():
+    try:
+        import numba
+
+        jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+        helpers = {"_chol_factor": jit(_chol_factor), "_chol_solve": jit(_chol_solve)}
+        compiled = tuple(jit(_bound(f, **helpers)) for f in (_newton_iterate_py, _project_centred_py, _predict_centred_py))
+        _say_if_compiling(compiled[0])
+        return compiled
+    except Exception as exc:        # pragma: no cover - depends on the platform
+        warnings.warn(f"robots.clearance.newton_kernel: numba unavailable ({exc!r}); the clearance engine "
+                      "uses its NumPy iteration (same results, slower)", RuntimeWarning, stacklevel=3)
+        return None
 
 
 def newton_iterate(Y, mu, GB, rows, tau, nd, groups, want_dual: bool):

@@ -29,16 +29,12 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from robots.clearance import newton_kernel
+from robots.clearance.options import DEFAULT, EngineOptions
 
-_CENTRED = 1e-2
-_GROWTH = 16.0   # tau grows by this factor at each centring (8 before the path predictor below)
-_PRED = "path"   # predictor scale: "path" = tau_old / tau_new (checked against no step); "legacy": best of 1, .75, .5, .25, 0
+#: predictor scales tried by ``EngineOptions(predictor="legacy")``
 _PRED_LEGACY = np.array([1.0, 0.75, 0.5, 0.25, 0.0])
-_TRACE = False
-_KERNEL = None   # default of solve_support's ``kernel``: None = compiled when numba is available, False = NumPy
+#: steps of the backtracking line search
 _LS = np.array([1.0, 0.5, 0.25, 0.12])
-#: work counters (Newton iterations summed over problems), read by benchmarks
-STATS = {"newton": 0, "problems": 0}
 
 
 @dataclass
@@ -48,6 +44,7 @@ class SupportResult:
     sigma: np.ndarray   # (K, R) feasible scaled screws (||sigma_c|| <= 1, loop residual ~ 1e-13)
     mu: np.ndarray      # (K, m) dual variables (warm starts)
     iterations: int
+    newton: int = 0     # Newton iterations summed over the problems (the work done)
 
 
 def _cone_norms(Y: np.ndarray, nd: int) -> tuple[np.ndarray, np.ndarray]:
@@ -79,15 +76,11 @@ def recover_primal(Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, eps: np
         sd = np.where(rd[..., None] > 0, Yd / rd[..., None], 0.0)
         si = np.where(ri > 0, Y[:, 2 * nd:] / ri, 0.0)
     sigma = np.concatenate([sd.reshape(K, 2 * nd), si], axis=1)
-    if B.shape[-1]:
-        r = np.einsum("kr,krm->km", sigma, B)
-        if gram_inv is None:
-            gram_inv = _gram_pinv(B)
-        sigma = sigma - np.einsum("krm,km->kr", B, np.einsum("kmn,kn->km", gram_inv, r))
-    nd_, ni_ = _cone_norms(sigma, nd)
-    worst = np.maximum(nd_.max(-1, initial=0.0), ni_.max(-1, initial=0.0))
-    sigma = sigma / np.maximum(worst, 1.0)[:, None]
-    return sigma, np.einsum("kr,kr->k", a, sigma)
+    if not B.shape[-1]:           # no loop equation: nothing to project out
+        gram_inv = np.zeros((K, 0, 0))
+    elif gram_inv is None:
+        gram_inv = _gram_pinv(B)
+    return _project(sigma, a, B, nd, gram_inv)
 
 
 def _gram_pinv(B: np.ndarray) -> np.ndarray:
@@ -156,7 +149,7 @@ def _barrier_value(Y: np.ndarray, nd: int, tau: np.ndarray) -> np.ndarray:
 def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | float, mu0: np.ndarray | None = None,
                   gap0: np.ndarray | float | None = None, max_iter: int = 100, gram_inv: np.ndarray | None = None,
                   growth: float | None = None, rtol: float = 0.0, groups=None, stop_below=None,
-                  kernel: bool | None = None) -> SupportResult:
+                  kernel: bool | None = None, options: EngineOptions = DEFAULT) -> SupportResult:
     """Solve the batched support-function problems (see module docstring).
 
     a: (K, R) scaled linear terms; B: (K, R, m) scaled loop maps (rows: ``nd`` disks as pairs,
@@ -169,7 +162,9 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     Newton iteration compiled (:mod:`robots.clearance.newton_kernel`, default when numba is
     available) or with batched NumPy (``False``; the reference, equal to round-off). A problem
     whose Hessian is exactly singular takes no step in the compiled iteration (its decrement is
-    reported as 0, so the path moves on) where NumPy falls back to a pseudo-inverse.
+    reported as 0, so the path moves on) where NumPy falls back to a pseudo-inverse. options: the
+    engine's settings (:class:`robots.clearance.options.EngineOptions`: centring threshold,
+    ``growth``, predictor, ``kernel``); the arguments ``growth`` and ``kernel`` override them.
 
     Method: the dual ``min_mu sum_c ||y_c||`` (``y = a + B mu``) is written as the SOCP
     ``min sum_c t_c, ||y_c|| <= t_c`` and solved by a primal log-barrier path-following method:
@@ -183,7 +178,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     a = np.asarray(a, float)
     K, R = a.shape
     m = B.shape[-1]
-    growth = _GROWTH if growth is None else float(growth)
+    growth = options.growth if growth is None else float(growth)
     tol = np.broadcast_to(np.asarray(tol, float), (K,)).copy()
     if stop_below is not None:
         stop_below = np.broadcast_to(np.asarray(stop_below, float), (K,))
@@ -222,8 +217,8 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         dn, inn = len(dcone), len(irows)
         grows.append((slice(2 * d0, 2 * d0 + 2 * dn), slice(i0, i0 + inn), np.asarray(cols, int), slice(d0, d0 + dn)))
         d0, i0 = d0 + dn, i0 + inn
-    kernel = _KERNEL if kernel is None else kernel
-    use_kernel = (kernel is None or bool(kernel)) and newton_kernel.AVAILABLE and newton_kernel._kernel() is not None
+    kernel = options.kernel if kernel is None else kernel
+    use_kernel = (kernel is None or bool(kernel)) and newton_kernel._kernel() is not None
     if kernel and not use_kernel:
         raise ValidationError("kernel", kernel, "False or None: numba is not available (see robots.clearance.newton_kernel)")
     if use_kernel:
@@ -246,11 +241,11 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         gB = gB and [(x[keep0], y[keep0]) for x, y in gB]
     it = 0
     dense = len(grows) == 1 and np.array_equal(grows[0][2], np.arange(m))
-    STATS["problems"] += K
+    n_newton = 0
     while idx.size and it < max_iter:
         it += 1
         k = len(idx)
-        STATS["newton"] += k
+        n_newton += k
         # one damped Newton step with line search on every problem; with ``stop_below`` also the
         # dual value of the new iterate -- every iterate is dual feasible, so its value is a
         # certified upper bound (weak duality), enough to drop a vertex certified below
@@ -267,8 +262,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             if better.any():
                 upper[idx[better]] = up_it[better]
                 best_mu[idx[better]] = wmu[better]
-        centred = np.nonzero(lam2 < _CENTRED)[0]
-        if _TRACE: print("it", it, "k", k, "lam2 med %.3g" % np.median(lam2), "tau med %.3g" % np.median(wtau))
+        centred = np.nonzero(lam2 < options.centred)[0]
         if centred.size:
             c_idx = idx[centred]
             Yc = wY[centred]
@@ -305,7 +299,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             # by tau_new / tau_old; scaled by tau_old / tau_new it is the extrapolation of that model
             # (the old choice among 1, .75, .5, .25, 0 took 0.25 at best: a damped Newton step
             # followed every increase of tau). The unscaled point is kept if the barrier is lower there.
-            if _PRED == "legacy":
+            if options.predictor == "legacy":
                 cand = np.broadcast_to(_PRED_LEGACY, (len(tcen), len(_PRED_LEGACY)))
             else:
                 cand = np.stack([tcen / tnew, np.zeros_like(tcen)], 1)
@@ -326,7 +320,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
             elif not keep.any():
                 idx = idx[keep]
     mu[idx] = wmu if len(wmu) == len(idx) else mu[idx]
-    return SupportResult(upper, lower, sigma[:, inv], best_mu, it)
+    return SupportResult(upper, lower, sigma[:, inv], best_mu, it, n_newton)
 
 
 def _numpy_iteration(wY, wmu, wtau, nd, R, m, grows, gB, dense, want_dual):
@@ -419,26 +413,11 @@ def warm_up() -> bool:
     by solving one tiny support problem. Called before a pool of worker processes starts: the
     forked workers inherit the kernels instead of each importing numba and loading them (or, on a
     fresh install, compiling them). Returns whether the compiled kernels are available."""
-    if not (newton_kernel.AVAILABLE and newton_kernel._kernel() is not None):
+    if newton_kernel._kernel() is None:
         return False
     rng = np.random.default_rng(0)
     solve_support(rng.standard_normal((2, 6)), rng.standard_normal((2, 6, 2)), 2, tol=1e-9, kernel=True)
-    return newton_kernel.AVAILABLE
-
-
-class numpy_iteration:
-    """Context manager: every support solve inside the ``with`` block runs the NumPy iteration
-    (the reference for the compiled one; benchmarks compare the two in one process)."""
-
-    def __enter__(self):
-        global _KERNEL
-        self._old, _KERNEL = _KERNEL, False
-        return self
-
-    def __exit__(self, *exc):
-        global _KERNEL
-        _KERNEL = self._old
-        return False
+    return True
 
 
 def _project_free(sigma: np.ndarray, Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, gram_inv: np.ndarray,

@@ -1,5 +1,7 @@
 """Conformance checks for accuracy measures (contract in :mod:`evotol.accuracy.base`), one small
-named check each, like :mod:`robots.checks` and :mod:`cost_models.checks`.
+named check each, like :mod:`robots.checks` and :mod:`cost_models.checks`. They build a
+:class:`~evotol.problem.ToleranceProblem`, so they sit beside the problem, not in the measures' package
+(which the problem imports).
 
 :func:`measure_checks` yields ``(name, check)`` pairs; :func:`check_measure` runs them all and
 raises :class:`evotol.errors.CheckFailed` listing every failure. By default they run on

@@ -1,0 +1,75 @@
+"""Per-pose linear maps of one decoupled block of a clearance mechanism: the target rows ``C`` and
+the loop-equation map ``B`` (Deng 2012 eqs. III.22-III.24, V.1-V.4; ``B^T s = 0`` for consistent
+screws ``s``), computed once by :meth:`robots.clearance.model.ClearanceMechanism.pose_maps` and
+reused for any clearance bounds."""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from robots.clearance.parts import Block
+
+
+@dataclass
+class PoseMaps:
+    """Per-pose linear maps of one decoupled block, computed once and reused for any bounds.
+
+    cols: (n_rows,) index into the stacked screw vector (6 * n_joints) of each row, in cone order;
+    cone_joint, cone_kind: joint index and bound kind (0..3) of each cone; disks come first
+    (``n_disk`` cones of 2 rows), then intervals (1 row each).
+    C_pos, C_rot: (n_poses, k, n_rows) -- target twist components (base frame) of a consistent
+    screw vector; B: (n_poses, n_rows, m) -- consistency ``B^T s = 0``.
+    """
+
+    block: Block
+    cols: np.ndarray
+    cone_joint: np.ndarray
+    cone_kind: np.ndarray
+    n_disk: int
+    pos_comps: tuple[int, ...]
+    rot_comps: tuple[int, ...]
+    C_pos: np.ndarray
+    C_rot: np.ndarray
+    B: np.ndarray
+    #: sparsity of B: tuples (disk cone indices, interval row indices, loop columns) -- the rows of
+    #: a group are zero outside its columns (each loop touches few chains)
+    groups: tuple = ()
+
+    @property
+    def n_rows(self) -> int:
+        return len(self.cols)
+
+    @property
+    def n_loops(self) -> int:
+        return self.B.shape[-1]
+
+    def row_bounds(self, bounds: np.ndarray) -> np.ndarray:
+        """Bound of every row, (..., n_rows), from a bounds array (..., n_joints, 4)."""
+        per_cone = bounds[..., self.cone_joint, self.cone_kind]
+        nd = self.n_disk
+        return np.concatenate([np.repeat(per_cone[..., :nd], 2, axis=-1), per_cone[..., nd:]], axis=-1)
+
+    def take(self, idx) -> "PoseMaps":
+        return replace(self, C_pos=self.C_pos[idx], C_rot=self.C_rot[idx], B=self.B[idx])
+
+    def sample_screws(self, i: int, bounds: np.ndarray, n: int, rng, mode: str = "uniform") -> np.ndarray:
+        """``n`` random consistent clearance states at pose ``i``: the rows of the screw vector,
+        (n, n_rows), m and rad. Each joint's screw is drawn in its clearance set (``"uniform"``:
+        uniformly inside the disks and intervals; ``"boundary"``: on their boundaries), the part
+        violating the loop equations is removed (orthogonal projection onto ``B^T s = 0``, rows
+        scaled by their bounds) and the sample is scaled back into the set. ``bounds``: (n_joints, 4)."""
+        D = self.row_bounds(bounds[None])[0]
+        nd = self.n_disk
+        ni = self.n_rows - 2 * nd
+        ang = rng.uniform(0, 2 * np.pi, (n, nd))
+        rad = np.ones((n, nd)) if mode == "boundary" else np.sqrt(rng.uniform(0, 1, (n, nd)))
+        disk = np.stack([rad * np.cos(ang), rad * np.sin(ang)], -1).reshape(n, 2 * nd)
+        inter = rng.choice([-1.0, 1.0], (n, ni)) if mode == "boundary" else rng.uniform(-1, 1, (n, ni))
+        sig = np.concatenate([disk, inter], 1)
+        Bt = self.B[i] * D[:, None]
+        if Bt.shape[1]:
+            sig = sig - (sig @ Bt) @ np.linalg.pinv(Bt)      # orthogonal projection onto B^T s = 0
+        nrm_d = np.sqrt((sig[:, :2 * nd].reshape(n, nd, 2) ** 2).sum(-1)).max(-1, initial=0.0)
+        nrm_i = np.abs(sig[:, 2 * nd:]).max(-1, initial=0.0)
+        return sig / np.maximum(np.maximum(nrm_d, nrm_i), 1.0)[:, None] * D

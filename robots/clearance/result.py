@@ -1,0 +1,70 @@
+"""The result of the certified clearance engine: maximum pose errors with their certificates,
+maximising screws and twists (Deng 2012 eqs. III.26-III.27; :func:`robots.clearance.max_pose_error`)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+
+@dataclass
+class MaxPoseError:
+    """Global maximum pose errors of a set of cases (poses and/or clearance-bound sets).
+
+    p_max (m), r_max (rad): values attained by the explicit screws ``p_screws``/``r_screws``
+    (``(n, n_joints, 6)``, each joint's ``[dr; dt]`` in its own frame, rad and m);
+    p_upper, r_upper: certified upper bounds; p_twist, r_twist: end-effector error twists
+    ``[dtheta; dp]`` (base axes) produced by those screws; gap: largest relative gap per case;
+    n_solves: support problems solved; n_newton: Newton iterations summed over the problems
+    (the solver's work, counted per call: no global counter).
+    """
+
+    p_max: np.ndarray
+    p_upper: np.ndarray
+    r_max: np.ndarray
+    r_upper: np.ndarray
+    p_screws: np.ndarray
+    r_screws: np.ndarray
+    p_twist: np.ndarray
+    r_twist: np.ndarray
+    joint_names: tuple[str, ...]
+    n_solves: int = 0
+    seconds: float = 0.0
+    n_newton: int = 0
+    p_extra: np.ndarray | None = None   # (n, q) values of the extra sources at the p maximiser
+    r_extra: np.ndarray | None = None
+
+    @classmethod
+    def concat(cls, parts) -> "MaxPoseError":
+        """The cases of several results in order (chunks of a grid); ``n_solves``, ``n_newton``,
+        ``seconds`` summed."""
+        cat = {f: np.concatenate([getattr(p, f) for p in parts]) for f in
+               ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")}
+        return cls(**cat, joint_names=parts[0].joint_names, n_solves=sum(p.n_solves for p in parts),
+                   seconds=sum(p.seconds for p in parts), n_newton=sum(p.n_newton for p in parts))
+
+    def take(self, idx) -> "MaxPoseError":
+        """The cases ``idx`` (index array), in that order."""
+        per_case = {f: getattr(self, f)[idx] for f in
+                    ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")}
+        extra = {f: None if getattr(self, f) is None else getattr(self, f)[idx] for f in ("p_extra", "r_extra")}
+        return replace(self, **per_case, **extra)
+
+    @property
+    def p_gap(self) -> np.ndarray:
+        return (self.p_upper - self.p_max) / np.maximum(self.p_upper, 1e-300)
+
+    @property
+    def r_gap(self) -> np.ndarray:
+        return (self.r_upper - self.r_max) / np.maximum(self.r_upper, 1e-300)
+
+    @property
+    def gap(self) -> np.ndarray:
+        return np.maximum(self.p_gap, self.r_gap)
+
+    def dominant_joints(self, i: int = 0, which: str = "p") -> list[tuple[str, float]]:
+        """Joints ranked by the share of their clearance used at the maximiser of case ``i``."""
+        S = (self.p_screws if which == "p" else self.r_screws)[i]
+        mag = np.linalg.norm(S, axis=1)
+        order = np.argsort(mag)[::-1]
+        return [(self.joint_names[j], float(mag[j])) for j in order]

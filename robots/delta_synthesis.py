@@ -1,0 +1,164 @@
+"""Brahmia et al. 2023's geometric-tolerance synthesis of a Delta robot (Sec. 2.3, 3.1, 4.1), the
+method part: problem (12)-(13) per posture and imposed displacement, solved with scipy's
+``trust-constr`` (interior point, as the paper's fmincon "interior-point"; :func:`solve_displacement`),
+the tolerance-interval rule of Fig. 4 (:func:`fig4_intervals`) and the verification of Sec. 4.1
+(:func:`verification_errors`). The kinematics are :class:`robots.delta.DeltaRobot`'s; the paper's
+tables and the study around them are :mod:`evotol.studies.brahmia2023_delta`.
+
+Two objectives F are available: ``"closed"`` (the platform position from the loop-closure
+forward kinematics with errors must move by ΔP) and ``"open"`` (the paper's eq. 10 read
+literally: every serial sub-chain, joints held at Q_k, must end at P + ΔP).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import Bounds, minimize
+
+from evotol.errors import ValidationError
+from robots.delta import LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot
+
+BOUND_LINEAR_MM = 0.015           # eq. (13)
+BOUND_ANGULAR_DEG = 0.015         # eq. (13)
+IS_LINEAR = np.isin(PARAMETER_NAMES, LINEAR)
+
+
+def paper_bounds() -> np.ndarray:
+    """Bounds of eq. (13) in SI, (47,): 0.015 mm (m) for linear, 0.015 deg (rad) for angular."""
+    return np.where(IS_LINEAR, BOUND_LINEAR_MM * 1e-3, np.radians(BOUND_ANGULAR_DEG))
+
+
+def postures_m(names=None) -> np.ndarray:
+    names = list(POSTURES_MM) if names is None else list(names)
+    return np.array([POSTURES_MM[n] for n in names]) / 1e3
+
+
+# --- step 2: problem (12)-(13) ----------------------------------------------------------------------
+def _objective_parts(robot: DeltaRobot, pose, displacement, bounds, objective: str):
+    """Scaled residual vector and its Jacobian w.r.t. z = e / bounds, as a cached function of z."""
+    req = np.linalg.norm(displacement) or 1.0
+    target = pose + displacement
+    cache: dict = {}
+
+    def parts(z):
+        key = z.tobytes()
+        if key not in cache:
+            e = z * bounds
+            if objective == "closed":
+                x, J = robot.position_and_jacobian(pose, e)
+                res, jac = (x[0] - target) / req, J[0] * bounds / req
+            elif objective == "open":
+                h = 1e-30
+                E = e[None, None, :] + np.eye(e.size)[None] * (1j * h)
+                pts = robot.open_chain_points(pose[None], E)[0]           # (47, 3 legs, 2 branches, 3)
+                res = ((pts[0].real - target) / req).ravel()
+                jac = (pts.imag / h * bounds[:, None, None, None] / req).reshape(e.size, -1).T
+            else:
+                raise ValidationError("objective", objective, "'closed' or 'open'")
+            cache.clear()
+            cache[key] = (res, jac)
+        return cache[key]
+    return parts
+
+
+def solve_displacement(robot: DeltaRobot, pose, displacement, bounds=None, *, objective: str = "closed",
+                       min_magnitude=None, maxiter: int = 150) -> dict:
+    """Problem (12)-(13) for one posture and one imposed displacement ΔP (m).
+
+    Minimises F = |P_e - P - ΔP|^2 (eq. 10; ``objective="open"`` sums it over the 6 serial
+    sub-chains at Q_k) over the 47 errors with ``scipy.optimize.minimize(method="trust-constr")``
+    -- an interior-point method for the bound constraints, like the paper's fmincon -- with exact
+    gradient and Gauss-Newton Hessian, in variables scaled by the bounds.
+
+    ``bounds`` (SI, default eq. 13) bound |Δ|. ``min_magnitude`` (SI) adds the lower limit of
+    eq. (12), ``ΔL_min <= |ΔL|``: that set is two intervals per parameter, so the sign of each
+    parameter is fixed first to the descent direction of F at zero error (``+`` when the
+    parameter has no influence) and the problem is solved on ``sign * [min, max]``. Without it
+    the start is zero error. Returns errors (SI), F (in units of |ΔP|^2), the achieved
+    displacement of the platform (closed-loop forward kinematics, m), iterations, status.
+    """
+    if objective not in ("closed", "open"):
+        raise ValidationError("objective", objective, "'closed' or 'open'")
+    bounds = paper_bounds() if bounds is None else np.asarray(bounds, float)
+    pose = np.asarray(pose, float)
+    displacement = np.asarray(displacement, float)
+    parts = _objective_parts(robot, pose, displacement, bounds, objective)
+
+    def fun(z):
+        res, jac = parts(z)
+        return float(res @ res), 2 * jac.T @ res
+
+    def hess(z):
+        _, jac = parts(z)
+        return 2 * jac.T @ jac
+
+    n = bounds.size
+    if min_magnitude is None:
+        lower, upper, z0 = -np.ones(n), np.ones(n), np.zeros(n)
+    else:
+        frac = np.broadcast_to(np.asarray(min_magnitude, float), (n,)) / bounds
+        if np.any(frac < 0) or np.any(frac >= 1):
+            raise ValidationError("min_magnitude", min_magnitude, "0 <= min < bound for every parameter")
+        g = fun(np.zeros(n))[1]
+        sign = np.where(g > 1e-12 * np.max(np.abs(g)), -1.0, 1.0)
+        lower, upper = np.where(sign > 0, frac, -1.0), np.where(sign > 0, 1.0, -frac)
+        z0 = (lower + upper) / 2
+    sol = minimize(fun, z0, jac=True, hess=hess, method="trust-constr", bounds=Bounds(lower, upper),
+                   options=dict(gtol=1e-10, xtol=1e-10, maxiter=int(maxiter)))
+    e = np.clip(sol.x, lower, upper) * bounds
+    achieved = robot.forward_kinematics(pose[None], e[None, None])[0, 0] - pose
+    return {"errors": e, "F": float(sol.fun), "achieved": achieved, "nit": int(sol.nit), "status": int(sol.status),
+            "residual_mm": float(np.linalg.norm(achieved - displacement) * 1e3)}
+
+
+# --- step 3: Fig. 4 rule and the verification of Sec. 4.1 -------------------------------------------------
+def fig4_intervals(values, bounds=None, zero_tol: float = 1e-6):
+    """Tolerance interval of each parameter by the rule of Fig. 4.
+
+    values: (n_runs, 47) parameter values of the solutions of problem (12). Per parameter, the
+    lower limit is the largest negative value (max of y_neg), the upper limit the smallest
+    positive value (min of y_pos). Values with |v| <= zero_tol * bound are "not used" by a
+    solution and ignored. The paper does not say what to do when a side is empty: we mirror the
+    other side, and use the bound of eq. (13) if the parameter is never used (it then has no
+    influence at the postures). Returns (lower, upper) arrays in the units of ``values``.
+    """
+    values = np.atleast_2d(np.asarray(values, float))
+    bounds = paper_bounds() if bounds is None else np.asarray(bounds, float)
+    used = np.abs(values) > zero_tol * bounds
+    neg = np.where(used & (values < 0), values, -np.inf).max(axis=0)
+    pos = np.where(used & (values > 0), values, np.inf).min(axis=0)
+    lo = np.where(np.isfinite(neg), neg, np.where(np.isfinite(pos), -pos, -bounds))
+    hi = np.where(np.isfinite(pos), pos, np.where(np.isfinite(neg), -neg, bounds))
+    return lo, hi
+
+
+VERIFICATION_CASES = {
+    "case 1: all upper": ("hi", "hi"),
+    "case 2: all lower": ("lo", "lo"),
+    "case 3: linear upper, angular lower": ("hi", "lo"),
+    "case 4: linear lower, angular upper": ("lo", "hi"),
+}
+
+
+def verification_error_vectors(lo, hi) -> dict[str, np.ndarray]:
+    """The four error vectors of Sec. 4.1 (SI, (47,)), from interval limits lo, hi (SI)."""
+    lim = {"lo": np.asarray(lo, float), "hi": np.asarray(hi, float)}
+    return {case: np.where(IS_LINEAR, lim[lin], lim[ang]) for case, (lin, ang) in VERIFICATION_CASES.items()}
+
+
+def verification_errors(robot: DeltaRobot, lo, hi, postures=None) -> dict[str, dict[str, np.ndarray]]:
+    """Position error (mm) at the 15 postures for the 4 cases of Sec. 4.1 (Fig. 7).
+
+    ``closed``: |P_e - P| with the loop-closure forward kinematics with errors (ours);
+    ``open``: the largest |P_ei - P| over the 6 serial sub-chains at Q_k (the paper's eq. 6 read
+    literally); ``linear``: |S e| with the first-order map.
+    """
+    P = postures_m(postures)
+    cases = verification_error_vectors(lo, hi)
+    E = np.stack(list(cases.values()))                      # (4, 47)
+    Eb = np.broadcast_to(E, (len(P),) + E.shape)
+    closed = np.linalg.norm(robot.forward_kinematics(P, Eb) - P[:, None], axis=-1) * 1e3   # (15, 4)
+    pts = robot.open_chain_points(P, Eb)                                              # (15, 4, 3, 2, 3)
+    open_ = np.linalg.norm(pts - P[:, None, None, None], axis=-1).max(axis=(-1, -2)) * 1e3
+    S = robot.sensitivity(P)[:, :3]
+    lin = np.linalg.norm(np.einsum("nij,cj->nci", S, E), axis=-1) * 1e3
+    return {case: {"closed": closed[:, k], "open": open_[:, k], "linear": lin[:, k]} for k, case in enumerate(cases)}

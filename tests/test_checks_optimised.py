@@ -1,0 +1,70 @@
+"""Conformance checks hold under ``python -O`` (issue 26 item 4): they raise the named error
+:class:`evotol.errors.CheckFailed` instead of asserting, so stripping asserts strips nothing. Each
+case runs in a subprocess started with ``-O`` and must fail on a broken plugin: a robot whose
+sensitivities are all NaN, a cost model that rises with t, a measure whose errors fall as t grows."""
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+PRELUDE = '''
+import numpy as np
+from evotol.errors import CheckFailed
+assert False, "asserts are not stripped: this is not python -O"
+'''
+
+CASES = {
+    "robot with NaN sensitivities": '''
+from robots.base import RobotErrorModel, SourceSpec, Workspace
+from robots.checks import check_robot
+
+class NaNRobot(RobotErrorModel):
+    name = "nan"
+    sources = (SourceSpec("a", 1, "m", "length"),)
+    workspace = Workspace(("x",), (0.0,), (1.0,), ("m",))
+
+    def sensitivity(self, poses):
+        return np.full((len(self.check_poses(poses)), 6, 1), np.nan)
+
+check_robot(NaNRobot())
+''',
+    "cost model rising with t": '''
+from cost_models import CallableCost
+from cost_models.checks import check_cost_model
+
+check_cost_model(CallableCost(lambda t: 1.0 + 1e4 * t, lambda t: 1e4 + 0 * t, name="rising"), 1e-6, 1e-4)
+''',
+    "measure falling with t": '''
+from evotol.accuracy_checks import check_measure
+from evotol.accuracy.worst_case import WorstCaseMeasure
+
+class Falling(WorstCaseMeasure):
+    name = "falling"
+
+    def evaluate(self, problem, T, top_only=False):
+        ev = super().evaluate(problem, T, top_only)
+        ev.position = 1e-12 / ev.position
+        return ev
+
+check_measure(Falling())
+''',
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_check_fails_under_python_O(case):
+    code = PRELUDE + "try:\n" + textwrap.indent(CASES[case].strip(), "    ") + f'''
+except CheckFailed as exc:
+    print("CheckFailed:", str(exc).splitlines()[0])
+else:
+    print("passed")
+'''
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    out = subprocess.run([sys.executable, "-O", "-c", code], env=env, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("CheckFailed:"), out.stdout
