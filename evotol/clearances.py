@@ -35,7 +35,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
-from evotol.keywords import unknown_key_message
+from evotol.keywords import check_table_keys
 from robots.base import RobotErrorModel, SourceSpec
 
 #: clearance bound components, in the engine's column order (Deng 2012 eqs. III.3-III.6)
@@ -236,11 +236,7 @@ def from_table(table: dict, robot) -> ClearanceSources:
     and/or explicit ``[[clearances.class]]`` tables (``name``, ``joints``, ``bounds = {b_xy = 1.0,
     beta_xy = 100.0}``, optional ``unit``, ``group``). ``robot.clearance_mechanism()`` gives the
     joints and the fixed bounds (the description's ``[clearance]``)."""
-    if not isinstance(table, dict):
-        raise ValidationError("clearances", table, f"a table with keys among {TABLE_KEYS}")
-    for k in table:
-        if k not in TABLE_KEYS:
-            raise ValidationError(f"clearances.{k}", k, unknown_key_message(k, TABLE_KEYS))
+    check_table_keys(table, TABLE_KEYS, "clearances")
     if not hasattr(robot, "clearance_mechanism"):
         raise ValidationError("clearances", robot.name, "a robot with joint clearances (clearance_mechanism())")
     mech = robot.clearance_mechanism()
@@ -251,11 +247,7 @@ def from_table(table: dict, robot) -> ClearanceSources:
     elif "joints" in table or "axial" in table:
         raise ValidationError("clearances.h", None, "the joint length h (m) of eq. III.2 for the thesis's classes")
     for i, c in enumerate(table.get("class", [])):
-        if not isinstance(c, dict):
-            raise ValidationError(f"clearances.class[{i}]", c, "a table")
-        for k in c:
-            if k not in CLASS_KEYS:
-                raise ValidationError(f"clearances.class[{i}].{k}", k, unknown_key_message(k, CLASS_KEYS))
+        check_table_keys(c, CLASS_KEYS, f"clearances.class[{i}]")
         if "name" not in c or "joints" not in c or "bounds" not in c:
             raise ValidationError(f"clearances.class[{i}]", sorted(c), "name, joints and bounds")
         classes.append(ClearanceClass(**{**c, "joints": tuple(np.atleast_1d(c["joints"]).tolist())}))

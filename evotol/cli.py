@@ -53,8 +53,10 @@ def cmd_reproduce(args) -> int:
     if args.scheduler:
         import os
 
+        from evotol.executor.backends import SCHEDULER_ENV
+
         check_scheduler_answers(args.scheduler)
-        os.environ["EVOTOL_DASK_SCHEDULER"] = args.scheduler  # read by the grid/design studies
+        os.environ[SCHEDULER_ENV] = args.scheduler  # read by the grid/design studies (evotol.executor.scheduler_of)
     summaries, failed, seconds = {}, [], {}
     interrupted = None                     # (study, what happened) after Ctrl-C
     t_all = time.perf_counter()

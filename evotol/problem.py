@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import difflib
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -26,6 +25,7 @@ from evotol.accuracy import registry as measure_registry
 from evotol.accuracy.base import Evaluation
 from evotol.accuracy.statistical_yield import first_order_yield
 from evotol.errors import InfeasibleError, ValidationError
+from evotol.keywords import did_you_mean
 from evotol.requirement import Requirement
 from evotol.tolerance import COST_WIDTHS, Tolerance
 from evotol.variables import SHARED_COSTS, tolerance_variables
@@ -89,9 +89,8 @@ class ToleranceProblem:
         missing = [n for n in names if n not in tolerances]
         extra = [n for n in tolerances if n not in names]
         if extra:
-            near = difflib.get_close_matches(str(extra[0]), names, n=1)
             raise ValidationError(f"tolerances[{extra[0]!r}]", extra[0], f"a source of {robot.name}: {list(names)}"
-                                  + (f" (did you mean {near[0]!r}?)" if near else ""))
+                                  + did_you_mean(str(extra[0]), names))
         if missing:
             raise ValidationError("tolerances", sorted(tolerances), f"an entry for every source of {robot.name}; missing {missing}")
         for n, src in zip(names, robot.sources):
@@ -254,8 +253,7 @@ class ToleranceProblem:
         allowed = ("offset", "minus", "plus", "cost_width", "contains_nominal")
         for k in fields:
             if k not in allowed:
-                near = difflib.get_close_matches(k, allowed, n=1)
-                raise ValidationError(f"with_tolerances.{k}", k, f"one of {allowed}" + (f" (did you mean {near[0]!r}?)" if near else ""))
+                raise ValidationError(f"with_tolerances.{k}", k, f"one of {allowed}" + did_you_mean(k, allowed))
         n = self.n_sources
         tols = {}
         for j, nm in enumerate(self.names):

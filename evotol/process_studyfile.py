@@ -37,7 +37,7 @@ from evotol.allocators.nonlinear_limit import allocate_nonlinear_limit
 from evotol.allocators.process import (Process, ProcessProblem, allocate_process_baselines, allocate_process_ga,
                                        allocate_process_optimum, process_front)
 from evotol.errors import ValidationError
-from evotol.keywords import check_keywords, unknown_key_message
+from evotol.keywords import check_keywords, check_table_keys, unknown_key_message
 from evotol.reporting import Report
 from evotol.studies import StudyResult, write_outputs
 from evotol.units import COST, COUNT, RELATIVE, units_block
@@ -62,11 +62,7 @@ def _number(field: str, v, what: str) -> float:
 
 def parse_process(field: str, name: str, table) -> Process:
     """One process from its table (``field`` names it in errors: ``processes.X1.turn``)."""
-    if not isinstance(table, dict):
-        raise ValidationError(field, table, f"a table with keys among {list(PROCESS_KEYS)}")
-    for k in table:
-        if k not in PROCESS_KEYS:
-            raise ValidationError(f"{field}.{k}", table[k], unknown_key_message(k, PROCESS_KEYS))
+    check_table_keys(table, PROCESS_KEYS, field)
     for k in ("cost", "lower", "upper"):
         if k not in table:
             raise ValidationError(f"{field}.{k}", None, "a value (cost: a cost-model table; lower/upper: SI tolerances)")

@@ -32,7 +32,7 @@ from evotol.distributions import Distribution
 from evotol.errors import ValidationError
 from evotol.filekinds import check_kind
 from evotol.interrupt import CtrlC
-from evotol.keywords import check_keywords, unknown_key_message
+from evotol.keywords import check_keywords, check_table_keys, unknown_key_message
 from evotol.montecarlo import verify
 from evotol.outputs import check_not_overwriting
 from evotol.progress import Heartbeat
@@ -64,32 +64,23 @@ REFINING_METHODS = ("optimum", "ga")
 
 
 
-def _check_keys(table, valid, where: str) -> None:
-    """Unknown key -> ValidationError naming it (``where.key``) and the nearest valid key."""
-    if not isinstance(table, dict):
-        raise ValidationError(where, table, f"a table with keys among {sorted(valid)}")
-    for k in table:
-        if k not in valid:
-            raise ValidationError(f"{where}.{k}" if where else k, k, unknown_key_message(k, valid))
 
 
 def check_study_keys(spec: dict) -> None:
     """Check every table of a study file whose keys evotol defines (typos like ``lowr`` or
     ``[requirment]`` are errors, not silently ignored)."""
-    _check_keys(spec, TOP_KEYS, "")
-    _check_keys(spec.get("poses", {}), POSE_KEYS, "poses")
+    check_table_keys(spec, TOP_KEYS, "")
+    check_table_keys(spec.get("poses", {}), POSE_KEYS, "poses")
     ref = spec.get("poses", {}).get("refine")
     if isinstance(ref, dict):
-        _check_keys(ref, REFINE_KEYS, "poses.refine")
+        check_table_keys(ref, REFINE_KEYS, "poses.refine")
     elif ref is not None and not isinstance(ref, bool):
         raise ValidationError("poses.refine", ref, "true, false or a table of refinement options")
-    _check_keys(spec.get("requirement", {}), REQUIREMENT_KEYS, "requirement")
-    _check_keys(spec.get("report", {}), REPORT_KEYS, "report")
     bounds = spec.get("bounds", {})   # sub-tables [bounds.GROUP] are checked once the robot is known
-    _check_keys({k: v for k, v in bounds.items() if not isinstance(v, dict)} if isinstance(bounds, dict) else bounds,
+    check_table_keys({k: v for k, v in bounds.items() if not isinstance(v, dict)} if isinstance(bounds, dict) else bounds,
                 BOUND_KEYS, "bounds")
     for n, o in spec.get("sources", {}).items():
-        _check_keys(o, SOURCE_KEYS, f"sources.{n}")
+        check_table_keys(o, SOURCE_KEYS, f"sources.{n}")
     seed = spec.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValidationError("seed", seed, "a non-negative integer")

@@ -14,7 +14,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
-from evotol.keywords import nearest
+from evotol.keywords import did_you_mean
 
 SHARED_COSTS = ("part", "variable")
 
@@ -88,9 +88,7 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
             raise ValidationError(f"shared.{g}", members, "a non-empty list of source names")
         for m in members:
             if m not in index:
-                near = nearest(str(m), names)
-                raise ValidationError(f"shared.{g}", m, f"a source of {robot.name}: {names}"
-                                      + (f" (did you mean {near!r}?)" if near else ""))
+                raise ValidationError(f"shared.{g}", m, f"a source of {robot.name}: {names}" + did_you_mean(str(m), names))
             if m in seen:
                 raise ValidationError(f"shared.{g}", m, f"a source named in one shared group only, once "
                                       f"(already in {seen[m]!r})")

@@ -233,6 +233,25 @@ class UCR3(RobotErrorModel):
         return np.concatenate([p - p0[:, None], dtheta], axis=-1)
 
 
+#: The 21 columns of :meth:`UCR3.sensitivity` as columns of the shipped description
+#: ``robots/mechanisms/ucr3.toml``: (description source, sign). Lengths l_i = the actuated prismatic
+#: variables; the U-joint disks U_ia (radial, vertical) = the base frame's d and b; U_ib (t_i,
+#: w_i x t_i) = U_ia.r and U_ib.d; the platform-joint disks R_i (radial, normal in the platform) =
+#: minus the platform row's d and r (they move the platform relative to a_i, i.e. a_i by the
+#: opposite amount).
+DESCRIPTION_COLUMNS = (tuple((f"l{i}", 1) for i in (1, 2, 3))
+                       + tuple((f"U{i}a.{k}", 1) for i in (1, 2, 3) for k in ("d", "b"))
+                       + tuple((c, 1) for i in (1, 2, 3) for c in (f"U{i}a.r", f"U{i}b.d"))
+                       + tuple((f"P{i}.{k}", -1) for i in (1, 2, 3) for k in ("d", "r")))
+
+
+def columns_from_description(S: np.ndarray, source_names) -> np.ndarray:
+    """The description's sensitivity ``S`` (n, 6, n_columns; columns named ``source_names``) in the
+    column order and signs of :meth:`UCR3.sensitivity` (n, 6, 21) (:data:`DESCRIPTION_COLUMNS`)."""
+    names = list(source_names)
+    return np.stack([sign * S[:, :, names.index(c)] for c, sign in DESCRIPTION_COLUMNS], -1)
+
+
 def yao2013_poses(n_alpha: int = 11, n_beta: int = 11, n_z: int = 6, robot: UCR3 | None = None) -> np.ndarray:
     """Grid over the paper's workspace α, β ∈ [-5°, 5°], Z_c ∈ [0.255, 0.305] m."""
     return (robot or UCR3()).workspace.grid([n_alpha, n_beta, n_z])

@@ -273,22 +273,16 @@ n_samples = 20
 # ---------------------------------------------------------------------------------- 3-UCR
 def test_ucr3_description_equals_hand_written_all_21_columns_at_50_poses():
     """Yao 2013 3-UCR ('verified' J_x of eq. 10): the description gives every column of the
-    hand-written map. Lengths l_i = the actuated prismatic variables; the U-joint disks U_ia
-    (radial, vertical) = the base frame's d and b; U_ib (t_i, w_i x t_i) = U_ia.r and U_ib.d; the
-    platform-joint disks R_i (radial, normal in the platform) = minus the platform row's d and r
-    (they move the platform relative to a_i, i.e. a_i by the opposite amount)."""
-    from robots.ucr3 import UCR3
+    hand-written map, column for column as :data:`robots.ucr3.DESCRIPTION_COLUMNS` pairs them (all
+    21 used once)."""
+    from robots.ucr3 import DESCRIPTION_COLUMNS, UCR3, columns_from_description
 
     m = MechanismModel(HERE / "ucr3.toml")
     r = UCR3()
     poses = r.workspace.latin_hypercube(50, seed=1)
     S, H = m.sensitivity(poses), r.sensitivity(poses)
-    names = list(m.source_names)
-    cols = [("l1", 1), ("l2", 1), ("l3", 1)]
-    cols += [(f"U{i}a.{k}", 1) for i in (1, 2, 3) for k in ("d", "b")]
-    cols += [(c, 1) for i in (1, 2, 3) for c in (f"U{i}a.r", f"U{i}b.d")]
-    cols += [(f"P{i}.{k}", -1) for i in (1, 2, 3) for k in ("d", "r")]
-    D = np.stack([s * S[:, :, names.index(c)] for c, s in cols], -1)
+    assert len({c for c, _ in DESCRIPTION_COLUMNS}) == 21 == H.shape[2]
+    D = columns_from_description(S, m.source_names)
     assert np.abs(D - H).max() <= 1e-9 * np.abs(H).max()
     assert check_robot(m)["fd_relative_mismatch"] < 1e-6
 

@@ -11,7 +11,7 @@
 This package sits below the robots and the problem layer (it imports nothing of evotol but
 :mod:`evotol.errors`), so ``robots/clearance`` and ``evotol.doe`` share it.
 """
-from evotol.executor.backends import parallel_map, run_chunks, worker_count
+from evotol.executor.backends import parallel_map, run_chunks, scheduler_of, worker_count
 from evotol.executor.store import ChunkStore
 
-__all__ = ["run_chunks", "parallel_map", "worker_count", "ChunkStore"]
+__all__ = ["run_chunks", "parallel_map", "scheduler_of", "worker_count", "ChunkStore"]

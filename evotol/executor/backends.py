@@ -14,6 +14,26 @@ from evotol.errors import ValidationError
 #: ``on_done(index, result)``: called in this process for every finished item
 OnDone = Callable[[int, Any], None]
 
+#: the Dask scheduler address ``evotol reproduce --scheduler ADDRESS`` hands to the studies
+SCHEDULER_ENV = "EVOTOL_DASK_SCHEDULER"
+
+
+def scheduler_of(configured=None):
+    """The Dask scheduler a run uses.
+
+    Parameters
+    ----------
+    configured : str, distributed.Client or None
+        The study config's ``scheduler``.
+
+    Returns
+    -------
+    str, Client or None
+        ``configured`` if given, else the address in the environment variable ``EVOTOL_DASK_SCHEDULER``
+        (set by ``evotol reproduce --scheduler``), else None: local processes.
+    """
+    return configured or os.environ.get(SCHEDULER_ENV) or None
+
 
 def worker_count(workers: int | None) -> int:
     """Number of local processes: ``workers``, or all cores when None; a ValidationError below 1."""

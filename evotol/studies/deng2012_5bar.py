@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 
+from evotol.executor import scheduler_of
 from evotol.reporting.html import Report
 from evotol.studies import Study, StudyResult
 
@@ -79,8 +80,6 @@ QUICK = {"n_grid": 9, "n_mc": 2000, "n_starts": 2, "baseline_poses_m": ((0.0, 0.
 
 def compute(config: dict) -> StudyResult:
     """Four certified maps, the singular locus, symmetry, Monte Carlo shortfall and the multistart baseline."""
-    import os
-
     from robots.clearance import max_pose_error, multistart_max_pose_error
     from robots.clearance.grid import grid_max_pose_error
     from robots.clearance.sampling import sample_max_errors
@@ -88,7 +87,7 @@ def compute(config: dict) -> StudyResult:
     t_start = time.perf_counter()
     n, quick, seed, b_mm, workers = config["n_grid"], config["quick"], config["seed"], config["b_mm"], config["workers"]
     # `evotol reproduce --scheduler ADDRESS` passes the Dask address in the config (or the environment)
-    scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None
+    scheduler = scheduler_of(config["scheduler"])
     fb, variants = _variants(b_mm)
     x, y, poses = _grid(n)
     results, secs = {}, {}

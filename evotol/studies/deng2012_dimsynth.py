@@ -32,7 +32,9 @@ import pandas as pd
 
 from evotol import doe
 from evotol.doe import Factor, Objective
+from evotol.executor import scheduler_of
 from evotol.filtering import DesignStudy, Preset
+from evotol.pareto import non_dominated
 from evotol.studies import Study, StudyResult
 from evotol.studies._design_report import parcoords_counts, parcoords_section
 from robots.irsbot2 import IRSBot2, singularity_free_rectangle
@@ -209,11 +211,9 @@ def compute(config: dict) -> StudyResult:
     """Evaluate the 243 designs of Tab. VII.1 (``n_designs``: a random subset), find the grid's
     Pareto designs and knees, run NSGA-II on continuous dimensions. ``pose_errors`` replaces the
     certified engine (tests plug in closed forms); ``out_dir`` holds the resumable chunk store."""
-    from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
-
     t0 = time.perf_counter()
     quick, seed, workers = config["quick"], config["seed"], config["workers"]
-    scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None   # `evotol reproduce` on a cluster
+    scheduler = scheduler_of(config["scheduler"])   # `evotol reproduce` on a cluster
     ev = IRSBot2DesignEvaluator(n_grid=config["n_grid"], pose_errors=config["pose_errors"])
     f = factors()
     entries = doe.random_subset(f, config["n_designs"], seed=seed) if config["n_designs"] else doe.full_factorial(f)
@@ -232,7 +232,7 @@ def compute(config: dict) -> StudyResult:
     # Pareto designs of the grid (max area, min p_max, min r_max) -- threshold-free "good designs"
     ok = df[df["feasible"]].reset_index(drop=True)
     F = np.column_stack([-ok["area_mm2"], ok["p_max_mm"], ok["r_max_deg"]])
-    grid_front = ok.iloc[NonDominatedSorting().do(F, only_non_dominated_front=True)]
+    grid_front = ok.iloc[non_dominated(F)]
     in_front = [bool(((grid_front[[x.name for x in f]].to_numpy() == np.array(d)).all(1)).any()) for d in TAB_VII_2]
     Fg = np.column_stack([-grid_front["area_mm2"], grid_front["p_max_mm"], grid_front["r_max_deg"]])
     grid_knees = grid_front.iloc[doe.knee_points(Fg, log=[False, True, True])] if len(grid_front) else grid_front

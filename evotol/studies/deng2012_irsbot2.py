@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 
+from evotol.executor import scheduler_of
 from evotol.reporting.html import Report
 from evotol.studies import Study, StudyResult
 
@@ -59,8 +60,6 @@ QUICK = {"n_grid": 7, "rectangle_step": 2e-3, "n_starts": 1}
 
 def compute(config: dict) -> StudyResult:
     """The two error maps, the five points of the largest rectangle and the multistart baseline."""
-    import os
-
     from robots.clearance import ClearanceBounds, max_pose_error, multistart_max_pose_error
     from robots.clearance.symmetry import grid_max_pose_error_mirrored
     from robots.irsbot2 import MAP_WORKSPACE, IRSBot2, centred_singularity_free_rectangle, mirror_joint_map
@@ -68,7 +67,7 @@ def compute(config: dict) -> StudyResult:
     t_start = time.perf_counter()
     n, quick, seed, margin, workers = config["n_grid"], config["quick"], config["seed"], config["margin"], config["workers"]
     # `evotol reproduce --scheduler ADDRESS` passes the Dask address in the config (or the environment)
-    scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None
+    scheduler = scheduler_of(config["scheduler"])
     W = MAP_WORKSPACE
     x = np.linspace(W.low[0], W.high[0], n)
     z = np.linspace(W.low[1], W.high[1], n)

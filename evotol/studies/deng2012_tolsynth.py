@@ -24,7 +24,6 @@ report.
 from __future__ import annotations
 
 import math
-import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,6 +34,7 @@ import pandas as pd
 from evotol import doe
 from evotol.doe import Factor, Objective
 from evotol.errors import EvotolError
+from evotol.executor import scheduler_of
 from evotol.filtering import DesignStudy, Preset
 from evotol.studies import Study, StudyResult
 from evotol.studies._design_report import PRESET_HEADER, parcoords_counts, parcoords_section
@@ -244,7 +244,7 @@ def compute(config: dict) -> StudyResult:
     holds the resumable chunk store."""
     t0 = time.perf_counter()
     quick, seed = config["quick"], config["seed"]
-    scheduler = config["scheduler"] or os.environ.get("EVOTOL_DASK_SCHEDULER") or None   # `evotol reproduce` on a cluster
+    scheduler = scheduler_of(config["scheduler"])   # `evotol reproduce` on a cluster
     f = factors()
     ev = FiveBarToleranceEvaluator()
     entries = doe.random_subset(f, config["n_entries"], seed=seed) if config["n_entries"] else doe.full_factorial(f)

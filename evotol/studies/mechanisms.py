@@ -77,17 +77,12 @@ def _irsbot2(model, cfg) -> dict:
 
 
 def _ucr3(model, cfg) -> dict:
-    from robots.ucr3 import UCR3
+    from robots.ucr3 import UCR3, columns_from_description
 
     r = UCR3()
     poses = r.workspace.latin_hypercube(50, seed=cfg["seed"])
     S, H = model.sensitivity(poses), r.sensitivity(poses)
-    names = list(model.source_names)
-    cols = [("l1", 1), ("l2", 1), ("l3", 1)]
-    cols += [(f"U{i}a.{k}", 1) for i in (1, 2, 3) for k in ("d", "b")]
-    cols += [(c, 1) for i in (1, 2, 3) for c in (f"U{i}a.r", f"U{i}b.d")]
-    cols += [(f"P{i}.{k}", -1) for i in (1, 2, 3) for k in ("d", "r")]
-    D = np.stack([sg * S[:, :, names.index(c)] for c, sg in cols], -1)
+    D = columns_from_description(S, model.source_names)
     rel = _rel(D, H)
     return {"builtin_rel_diff": rel,
             "builtin": {"sensitivity_rel_diff_50_poses_21_columns": rel,

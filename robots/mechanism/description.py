@@ -34,8 +34,9 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol.filekinds import check_kind
+from evotol.keywords import check_table_keys
 from robots.clearance.kinematics import DH_FIELDS
-from robots.clearance.model import BOUND_NAMES, ClearanceBounds
+from robots.clearance.parts import BOUND_NAMES, Chain, ClearanceBounds
 from robots.mechanism.expressions import CONSTANTS, FUNCTIONS, Expression
 from robots.mechanism.placement import PLACEMENT_FIELDS
 from robots.mechanism.plausibility import check_workspace, check_written_values
@@ -47,14 +48,6 @@ ANGLE_FIELDS = ("gamma", "alpha", "theta")
 AXES = ("x", "y", "z")
 LOOP_COMPONENTS = ("all", "position")
 UNIT_SCALE = {"m": 1.0, "mm": 1e-3, "rad": 1.0, "deg": np.pi / 180}
-
-
-def _check_keys(table: Mapping, allowed: Sequence[str], where: str) -> None:
-    if not isinstance(table, Mapping):
-        raise ValidationError(where, table, f"a table with keys among {list(allowed)}")
-    for k in table:
-        if k not in allowed:
-            raise ValidationError(f"{where}.{k}", table[k], f"a known key: one of {list(allowed)}")
 
 
 @dataclass(frozen=True)
@@ -147,16 +140,9 @@ class Coordinate:
         return "rad" if self.axis == "angle" else "m"
 
 
-@dataclass(frozen=True)
-class ClearanceChain:
-    """A serial chain of joints with clearance between two bodies (Deng 2012 Ch. III, V); see
-    :class:`robots.clearance.model.Chain`."""
-
-    name: str
-    start: str
-    end: str
-    joints: tuple[str, ...]
-    path_end: str | None = None
+#: a serial chain of joints with clearance between two bodies (Deng 2012 Ch. III, V): the engine's
+#: own :class:`robots.clearance.parts.Chain`, built directly from the description
+ClearanceChain = Chain
 
 
 @dataclass(frozen=True)
@@ -289,7 +275,7 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     """Build a :class:`Mechanism` from a parsed TOML document (dict); errors name the field."""
     if path:
         check_kind(spec, "mechanism", path)     # a study file given as a description (issue 27)
-    _check_keys(spec, TOP_KEYS, "mechanism")
+    check_table_keys(spec, TOP_KEYS, "mechanism")
     name = spec.get("name") or (Path(path).stem if path else "mechanism")
     lengths = {k: _number(v, f"lengths.{k}") for k, v in dict(spec.get("lengths", {})).items()}
     angles = {k: _number(v, f"angles.{k}") for k, v in dict(spec.get("angles", {})).items()}
@@ -310,7 +296,7 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
         raise ValidationError("frame", raw_frames, "a list of [[frame]] tables (the modified-DH rows)")
     fkeys = ("name", "antecedent", "joint", "actuated", "description") + DH_FIELDS
     for i, fr in enumerate(raw_frames):
-        _check_keys(fr, fkeys, f"frame[{i}]")
+        check_table_keys(fr, fkeys, f"frame[{i}]")
         for k in ("name", "antecedent"):
             if k not in fr:
                 raise ValidationError(f"frame[{i}].{k}", None, "a frame name (antecedent '0' is the base)")
@@ -321,13 +307,13 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
                             description=fr.get("description", ""), **kw))
     points = []
     for i, pt in enumerate(spec.get("point", [])):
-        _check_keys(pt, ("name", "mean_of", "description"), f"point[{i}]")
+        check_table_keys(pt, ("name", "mean_of", "description"), f"point[{i}]")
         if "name" not in pt or not isinstance(pt.get("mean_of"), list):
             raise ValidationError(f"point[{i}]", pt, "name and mean_of (a list of frame names)")
         points.append(Point(str(pt["name"]), tuple(map(str, pt["mean_of"])), str(pt.get("description", ""))))
     loops = []
     for i, lp in enumerate(spec.get("loop", [])):
-        _check_keys(lp, ("frames", "components"), f"loop[{i}]")
+        check_table_keys(lp, ("frames", "components"), f"loop[{i}]")
         fr = lp.get("frames")
         if not isinstance(fr, list) or len(fr) != 2:
             raise ValidationError(f"loop[{i}].frames", fr, "two frame names that coincide (the cut joint)")
@@ -335,10 +321,10 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     ee = spec.get("end_effector")
     if ee is None:
         raise ValidationError("end_effector", None, "a table with frame and coordinates")
-    _check_keys(ee, ("frame", "coordinates", "orientation"), "end_effector")
+    check_table_keys(ee, ("frame", "coordinates", "orientation"), "end_effector")
     coords = []
     for i, c in enumerate(ee.get("coordinates", [])):
-        _check_keys(c, ("name", "axis", "low", "high", "display"), f"end_effector.coordinates[{i}]")
+        check_table_keys(c, ("name", "axis", "low", "high", "display"), f"end_effector.coordinates[{i}]")
         if "name" not in c or "low" not in c or "high" not in c:
             raise ValidationError(f"end_effector.coordinates[{i}]", c, "name, axis, low and high")
         coords.append(Coordinate(str(c["name"]), c.get("axis", c["name"]), _number(c["low"], f"coordinate {c['name']}.low"),
@@ -350,11 +336,11 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
         Expression.parse(o[1], f"end_effector.orientation[{i}]")
         orient.append((o[0], str(o[1])))
     asm = spec.get("assembly", {})
-    _check_keys(asm, ("pose", "joints"), "assembly")
+    check_table_keys(asm, ("pose", "joints"), "assembly")
     pose = tuple(_number(v, "assembly.pose") for v in asm.get("pose", ()))
     joints = {k: _number(v, f"assembly.joints.{k}") for k, v in dict(asm.get("joints", {})).items()}
     tol = spec.get("tolerances", {})
-    _check_keys(tol, ("sources",), "tolerances")
+    check_table_keys(tol, ("sources",), "tolerances")
     clearance = _clearance_from_dict(spec["clearance"]) if "clearance" in spec else None
     check_written_values(spec, joint_units(frames, set(lengths) | set(angles)))    # issue 27: units as written
     mech = Mechanism(name=str(name), frames=tuple(frames), end_effector=str(ee.get("frame", ee_default or "")), coordinates=tuple(coords),
@@ -389,7 +375,7 @@ def joint_units(frames, params) -> dict[str, str]:
 
 
 def _bounds(b, where: str) -> ClearanceBounds:
-    _check_keys(b, BOUND_NAMES, where)
+    check_table_keys(b, BOUND_NAMES, where)
     missing = [k for k in BOUND_NAMES if k not in b]
     if missing:
         raise ValidationError(f"{where}.{missing[0]}", None, f"all of {BOUND_NAMES} (rad, rad, m, m)")
@@ -397,10 +383,10 @@ def _bounds(b, where: str) -> ClearanceBounds:
 
 
 def _clearance_from_dict(c: Mapping) -> ClearanceSpec:
-    _check_keys(c, ("bodies", "chain", "end_effector", "bounds"), "clearance")
+    check_table_keys(c, ("bodies", "chain", "end_effector", "bounds"), "clearance")
     chains = []
     for i, ch in enumerate(c.get("chain", [])):
-        _check_keys(ch, ("name", "start", "end", "joints", "path_end"), f"clearance.chain[{i}]")
+        check_table_keys(ch, ("name", "start", "end", "joints", "path_end"), f"clearance.chain[{i}]")
         for k in ("name", "start", "end", "joints"):
             if k not in ch:
                 raise ValidationError(f"clearance.chain[{i}].{k}", None, "name, start and end bodies, joints (frame names)")

@@ -24,7 +24,7 @@ import numpy as np
 from evotol.errors import KinematicsError, ValidationError
 from robots.base import RobotErrorModel, SourceSpec, Workspace
 from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, rotation_vector
-from robots.clearance.model import Chain, ClearanceMechanism, Joint
+from robots.clearance.model import ClearanceMechanism, Joint
 from robots.mechanism.description import LENGTH_FIELDS, UNIT_SCALE, Mechanism, load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import IN_PLANE, Kinematics
 from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
@@ -294,7 +294,7 @@ class MechanismModel(RobotErrorModel):
             if b is None:
                 raise ValidationError(f"clearance.bounds.{j}", None, "bounds for the joint (or 'actuated'/'passive'/'default')")
             joints.append(Joint(j, j, f.actuated, b))
-        chains = [Chain(c.name, c.start, c.end, c.joints, c.path_end) for c in spec.chains]
+        chains = list(spec.chains)
         return ClearanceMechanism(name=self.name, tree=tree, joints=joints, bodies=dict(spec.bodies), chains=chains,
                                   end_effector=spec.end_effector, joint_values=joint_values, planar=self.mechanism.planar,
                                   pose_names=self.workspace.names)

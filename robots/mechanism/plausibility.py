@@ -24,6 +24,7 @@ import math
 from typing import Mapping
 
 from evotol.errors import ValidationError
+from evotol.keywords import check_table_keys
 from robots.mechanism.expressions import Expression
 
 #: largest plausible length of a description (m), unless ``[checks] max_length`` says otherwise
@@ -57,11 +58,7 @@ def _check_angle(where: str, raw) -> None:
 def check_options(spec: Mapping) -> tuple[float, frozenset]:
     """``[checks]``: ``max_length`` (m) and ``negative_lengths`` (names of ``[lengths]``)."""
     opts = spec.get("checks", {})
-    if not isinstance(opts, Mapping):
-        raise ValidationError("checks", opts, f"a table with keys among {list(CHECK_KEYS)}")
-    for k in opts:
-        if k not in CHECK_KEYS:
-            raise ValidationError(f"checks.{k}", opts[k], f"a known key: one of {list(CHECK_KEYS)}")
+    check_table_keys(opts, CHECK_KEYS, "checks")
     max_length = _constant(opts.get("max_length", MAX_LENGTH), "checks.max_length")
     if max_length is None or not max_length > 0:
         raise ValidationError("checks.max_length", opts.get("max_length"), "a positive length in metres")

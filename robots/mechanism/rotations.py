@@ -3,22 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.clearance.kinematics import rot_x, rot_z
+from robots.clearance.kinematics import rot_x, rot_y, rot_z
 
-AXIS_ROT = {"x": rot_x, "y": None, "z": rot_z}
-
-
-def rot_y(a):
-    """Rot(y, a) (..., 4, 4)."""
-    a = np.asarray(a, float)
-    c, s = np.cos(a), np.sin(a)
-    T = np.zeros(a.shape + (4, 4))
-    T[..., 0, 0], T[..., 0, 2], T[..., 2, 0], T[..., 2, 2] = c, s, -s, c
-    T[..., 1, 1] = T[..., 3, 3] = 1
-    return T
-
-
-AXIS_ROT["y"] = rot_y
+#: the elementary rotation (..., 4, 4) about each axis (the one definition: robots.clearance.kinematics)
+AXIS_ROT = {"x": rot_x, "y": rot_y, "z": rot_z}
 
 
 def rot_z_inverse(th):
