@@ -1,6 +1,6 @@
 """Issue 13: the faster branch and bound keeps the certificate and agrees with the engine before it.
 
-* ``_patch_bound`` is the exact sublinearity bound ``max_{l >= 0} sum l_i H_i / |sum l_i U_i|``
+* ``patches.patch_bound`` is the exact sublinearity bound ``max_{l >= 0} sum l_i H_i / |sum l_i U_i|``
   over a patch: checked against a dense brute-force maximisation over the simplex, and never
   above the bound used before (``min(max H / d, |X|)``).
 * Maps computed by the new settings and by ``options=LEGACY`` (the algorithm before issue 13)
