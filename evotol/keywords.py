@@ -47,7 +47,7 @@ def check_table_keys(table, valid: Iterable[str], where: str) -> None:
     Raises
     ------
     ValidationError
-        ``table`` is not a table, or ``where.KEY = 'KEY': expected a key among [...] (did you mean
+        ``table`` is not a table, or ``where.KEY = VALUE: expected a key among [...] (did you mean
         'x'?)`` for its first unknown key.
     """
     valid = list(valid)
@@ -55,7 +55,7 @@ def check_table_keys(table, valid: Iterable[str], where: str) -> None:
         raise ValidationError(where, table, f"a table with keys among {sorted(valid)}")
     for k in table:
         if k not in valid:
-            raise ValidationError(f"{where}.{k}" if where else k, k, unknown_key_message(k, valid))
+            raise ValidationError(f"{where}.{k}" if where else k, table[k], unknown_key_message(k, valid))
 
 
 def keywords_of(func: Callable, exclude: Iterable[str] = ()) -> list[str] | None:

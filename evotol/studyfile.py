@@ -63,9 +63,6 @@ REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement))
 REFINING_METHODS = ("optimum", "ga")
 
 
-
-
-
 def check_study_keys(spec: dict) -> None:
     """Check every table of a study file whose keys evotol defines (typos like ``lowr`` or
     ``[requirment]`` are errors, not silently ignored)."""
@@ -76,9 +73,11 @@ def check_study_keys(spec: dict) -> None:
         check_table_keys(ref, REFINE_KEYS, "poses.refine")
     elif ref is not None and not isinstance(ref, bool):
         raise ValidationError("poses.refine", ref, "true, false or a table of refinement options")
+    check_table_keys(spec.get("requirement", {}), REQUIREMENT_KEYS, "requirement")
+    check_table_keys(spec.get("report", {}), REPORT_KEYS, "report")
     bounds = spec.get("bounds", {})   # sub-tables [bounds.GROUP] are checked once the robot is known
     check_table_keys({k: v for k, v in bounds.items() if not isinstance(v, dict)} if isinstance(bounds, dict) else bounds,
-                BOUND_KEYS, "bounds")
+                     BOUND_KEYS, "bounds")
     for n, o in spec.get("sources", {}).items():
         check_table_keys(o, SOURCE_KEYS, f"sources.{n}")
     seed = spec.get("seed", 0)

@@ -73,6 +73,9 @@ def test_sum_of_registered_models_round_trips():
     m = cm.SumCost(cm.ExponentialCost(1.0, 0.5, scale=1e-5), cm.ReciprocalCost(0.0, 0.5, scale=1e-5))
     rep = cm.check_cost_model(m, *T_RANGE)
     assert "check_dict_round_trip" in dict(cost_model_checks(m, *T_RANGE)) and rep["convex"] is True
+    t = np.geomspace(*T_RANGE, 7)        # the sum is the sum of its terms (closed forms, x = t / 1e-5)
+    x = t / 1e-5
+    np.testing.assert_allclose(m.cost(t), 1.0 * np.exp(-0.5 * x) + 0.5 / x, rtol=1e-12)
 
 
 # --- the checks can fail -------------------------------------------------------------------------

@@ -217,6 +217,9 @@ def test_knee_of_a_convex_front():
     x = np.geomspace(0.1, 10, 41)
     F = np.column_stack([x, 1 / x])
     knees = doe.knee_points(F, log=[True, True])
+    from evotol.pareto import ideal_point_knee
+
+    assert ideal_point_knee(F, log=[True, True]) == 20 and x[20] == pytest.approx(1.0)
     assert 20 in knees
 
 
