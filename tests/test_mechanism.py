@@ -224,6 +224,11 @@ def test_reproduce_mechanisms_fields_quick(tmp_path):
         assert e["fd_rel_error"] < 1e-6
     for name in ("5-bar", "IRSBot-2", "3-UCR", "Delta"):
         assert m[name]["builtin_rel_diff"] < 1e-9, name
+    for arm, ranks in {"UR5": (36, 26, 30), "Panda": (42, 30, 34)}.items():    # issue 23 item 7
+        e, c = m[arm], m[arm]["configurations"]
+        assert e["n_sources"] == ranks[0] and e["rank"] == e["pinocchio_rank"]
+        assert (c["rank"], c["rank_with_tip"]) == ranks[1:] == (c["pinocchio_rank"], c["pinocchio_rank_with_tip"])
+        assert c["fd_rel_error"] < 1e-6 and c["fk_vs_pinocchio"] < 1e-12
     fb = m["5-bar"]
     assert fb["p_max_mm"] <= fb["p_upper_mm"] <= fb["p_max_mm"] * (1 + 1e-3)
     assert fb["r_max_rad"] <= fb["r_upper_rad"] <= fb["r_max_rad"] * (1 + 1e-3)

@@ -74,7 +74,7 @@ def test_redundant_panda_posture_is_the_one_nearest_the_assembly_posture(panda):
     from scipy.optimize import minimize
 
     from robots.mechanism.urdf import frame_id, resolve_urdf
-    from robots.mechanism.urdf_check import pinocchio_placement_regressor
+    from robots.mechanism.urdf import pinocchio_placement_regressor
 
     poses = panda.workspace.latin_hypercube(5, seed=3)
     q = panda.joint_values(poses)

@@ -26,6 +26,7 @@ def register(subparsers) -> None:
     p.add_argument("--sources", default=None, help="comma-separated names/patterns overriding [tolerances] sources")
     p.add_argument("--rtol", type=float, default=1e-5, help="largest relative FD mismatch accepted (default 1e-5)")
     p.add_argument("--json", action="store_true", help="print the check as JSON")
+    p.add_argument("--tip", default=None, help="with a URDF file: the end-effector link or frame (e.g. tool0)")
     p.set_defaults(func=cmd_check_mechanism)
 
 
@@ -60,6 +61,8 @@ def print_understood(out: dict) -> None:
 
 def cmd_check_mechanism(args) -> int:
     srcs = [s.strip() for s in args.sources.split(",")] if args.sources else None
+    if str(args.file).lower().endswith(".urdf"):
+        return cmd_check_urdf(args, srcs)
     out = check_mechanism(args.file, args.poses, srcs)
     ok = out["fd_rel_error"] is None or out["fd_rel_error"] <= args.rtol
     if args.json:
@@ -75,9 +78,64 @@ def cmd_check_mechanism(args) -> int:
     print(f"  loop-closure residual over {out['n_poses']} poses: {out['closure_residual']:.3g} (m or rad)")
     print(f"  sensitivity vs central finite differences of the closure: {out['fd_rel_error']:.3g} relative "
           f"({'OK' if ok else 'FAILED, > %g' % args.rtol})")
+    print_limits_and_rank(out)
     if "clearance_at_assembly" in out:
         c = out["clearance_at_assembly"]
         print(f"  clearance worst case at the assembly pose {c['pose']}: p_max {c['p_max_m'] * 1e3:.6g} mm "
               f"(bound {c['p_upper_m'] * 1e3:.6g}), r_max {c['r_max_rad']:.6g} rad (bound {c['r_upper_rad']:.6g})")
+    print(f"  {out['seconds']:.2f} s")
+    return 0 if ok else 1
+
+
+# ------------------------------------------------------------------ issue 23: URDF files, limits, rank
+def print_limits_and_rank(out: dict) -> None:
+    """Workspace box, joint limits and the rank of the sources over the workspace, in mm and deg,
+    naming blind and duplicated sources (:mod:`robots.mechanism.inspection`)."""
+    if "workspace" in out:
+        print("  workspace box: " + ", ".join(f"{c['name']} {_shown(c['low'], c['unit'])} .. {_shown(c['high'], c['unit'])}"
+                                              for c in out["workspace"]))
+    if "limits" in out:
+        lim = [f"{j['name']} {_shown(j['lower'], j['unit'])} .. {_shown(j['upper'], j['unit'])}" if j["lower"] is not None
+               else f"{j['name']} unlimited" for j in out["limits"]]
+        for i in range(0, len(lim), 3):
+            print(("  joint limits: " if i == 0 else "                ") + "; ".join(lim[i:i + 3]))
+    r = out.get("identifiability")
+    if not r:
+        return
+    pin_txt = (f"; Pinocchio's placement regressor {r['pinocchio_rank']}, both together {r['combined_rank']}"
+               f" ({'same span' if r['pinocchio_rank'] == r['combined_rank'] == r['rank'] else 'DIFFERENT span'})"
+               if "pinocchio_rank" in r else "")
+    print(f"  rank of the {r['n_sources']} sources over {r['over']}: {r['rank']}{pin_txt}")
+    if r["blind"]:
+        print(f"    blind (move nothing): {', '.join(r['blind'])}")
+    if r.get("missing"):
+        print(f"    missing (no source moves the tip this way): {', '.join(n for n, _ in r['missing'])}")
+    for a, b, sg in r["duplicated"]:
+        print(f"    duplicated: {a} = {'' if sg > 0 else '-'}{b}")
+    for combo in r["dependent"]:
+        print("    dependent: " + " ".join(f"{c:+.3g} {n}" for n, c in combo) + " = 0")
+
+
+def cmd_check_urdf(args, srcs) -> int:
+    """``evotol check-mechanism arm.urdf --tip tool0``: the URDF's chain, sources, rank, FD agreement."""
+    from evotol.errors import ValidationError
+    from robots.mechanism.urdf_check import check_urdf_file
+
+    if not args.tip:
+        raise ValidationError("--tip", None, "the URDF link or frame that is the end-effector, e.g. --tip tool0")
+    out = check_urdf_file(args.file, args.tip, args.poses, srcs)
+    ok = out["fd_rel_error"] <= args.rtol
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return 0 if ok else 1
+    print(f"{out['name']}  ({out['file']}, tip {out['tip']})")
+    print_understood(out)
+    print(f"  {out['n_sources']} error sources (nominal value):")
+    for s in out["sources"]:
+        print(f"    {s['name']:28s} {s['group']:9s} {_shown(s['nominal'], s['unit']):>12s}  {s['description']}")
+    print_limits_and_rank(out)
+    print(f"  forward kinematics vs Pinocchio: {out['fk_vs_pinocchio']:.3g} m")
+    print(f"  sensitivity vs central finite differences: {out['fd_rel_error']:.3g} relative "
+          f"({'OK' if ok else 'FAILED, > %g' % args.rtol})")
     print(f"  {out['seconds']:.2f} s")
     return 0 if ok else 1

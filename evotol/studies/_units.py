@@ -98,7 +98,11 @@ def study_units(name: str) -> dict:
     if name == "laramolina2019-5r":
         return {"keys": _5R_KEYS, "tables": _5R_TABLES}
     if name == "mechanisms":
-        return {"keys": {"closure_residual": "m", "poses": COUNT, "joint_angle_abs_diff_rad_50_poses": "rad"}}
+        return {"keys": {"closure_residual": "m", "poses": COUNT, "joint_angle_abs_diff_rad_50_poses": "rad",
+                         "rank": COUNT, "pinocchio_rank": COUNT, "combined_rank": COUNT, "rank_with_tip": COUNT,
+                         "pinocchio_rank_with_tip": COUNT, "combined_rank_with_tip": COUNT, "n_configurations": COUNT,
+                         "n_joints": COUNT, "fk_vs_pinocchio": "m",
+                         "duplicated": "1: [source, source, sign +1 or -1] (equal columns up to sign)"}}
     if name == "yao2013":
         tol = _robot_units("robots.ucr3", "UCR3")
         return {"keys": {"worst_case_error": "m", "rss_error": "m", "tolerance": "m or rad (see tolerances)",

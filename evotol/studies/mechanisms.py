@@ -12,6 +12,13 @@ position rows for all 47 parameters and its nonlinear closure vs ``robots.delta`
 ``r_max_rad`` at pose (0, 70) mm with the thesis's clearances (all b 0.1 mm, beta_xy 0.01 rad,
 passive beta_z 0.2 rad, actuated 0), each with its certified upper bound, and the time of the
 certified clearance map from the description relative to the hand-written model.
+
+Every mechanism also reports ``rank``: the rank of its sources' sensitivities stacked over the
+workspace poses (columns at unit norm, :mod:`robots.mechanism.identifiability`), with its blind and
+duplicated sources. The URDF arms (UR5, Panda) add ``pinocchio_rank`` (Pinocchio's placement
+regressor of the chain over the same poses) and, in ``configurations``, the same ranks over random
+configurations inside the joint limits, with and without the tip's placement, and the forward
+kinematics and FD agreement there (issue 23 item 7).
 """
 from __future__ import annotations
 
@@ -123,6 +130,17 @@ def _delta(model, cfg) -> dict:
                         "compared_with": "robots.delta (Brahmia 2023, eq. 12's 47 parameters; legs closed at the rods' midpoint)"}}
 
 
+def _urdf_ranks(path, cfg) -> dict:
+    """Ranks of the default sources and of Pinocchio's placement regressor over random configurations
+    inside the joint limits (the task box holds the tool orientation fixed, which lowers both), with
+    and without the tip's placement; FK and FD agreement there (robots.mechanism.urdf_check)."""
+    from robots.mechanism.model import MechanismModel
+    from robots.mechanism.urdf_check import check_urdf_chain
+
+    r = check_urdf_chain(MechanismModel(path), n=cfg["n_configurations"], seed=cfg["seed"])
+    return {"n_configurations": cfg["n_configurations"], **r}
+
+
 BUILTIN = {"5-bar": _fivebar, "IRSBot-2": _irsbot2, "3-UCR": _ucr3, "Delta": _delta}
 
 
@@ -134,8 +152,13 @@ def compute(cfg: dict) -> StudyResult:
     for path in sorted(SHIPPED.glob("*.toml")):
         t0 = time.perf_counter()
         chk = check_mechanism(path, cfg["n_poses"])
+        ident = chk["identifiability"]
         entry = {"file": path.name, "n_sources": chk["n_sources"], "sources": [s["name"] for s in chk["sources"]],
-                 "fd_rel_error": chk["fd_rel_error"], "closure_residual": chk["closure_residual"], "builtin_rel_diff": None}
+                 "fd_rel_error": chk["fd_rel_error"], "closure_residual": chk["closure_residual"], "builtin_rel_diff": None,
+                 "rank": ident["rank"], "pinocchio_rank": ident.get("pinocchio_rank"), "duplicated": ident["duplicated"],
+                 "blind": ident["blind"]}
+        if chk.get("urdf"):                     # a URDF arm: also over random configurations (issue 23 item 7)
+            entry["configurations"] = _urdf_ranks(path, cfg)
         if chk["name"] in BUILTIN:
             entry.update(BUILTIN[chk["name"]](MechanismModel(path), cfg))
         entry["seconds"] = time.perf_counter() - t0
@@ -147,9 +170,18 @@ def render(result: StudyResult) -> Report:
     m = result.summary["mechanisms"]
     rep = Report("Mechanisms from description files",
                  "every robots/mechanisms/*.toml: sources generated, FD agreement, equality with the hand-written model")
-    rows = [[name, e["file"], e["n_sources"], e["fd_rel_error"], e["closure_residual"],
-             "-" if e["builtin_rel_diff"] is None else e["builtin_rel_diff"], e["seconds"]] for name, e in m.items()]
-    rep.table(rows, ["mechanism", "file", "sources", "FD rel. error", "closure residual", "vs hand-written (rel.)", "s"])
+    rows = [[name, e["file"], e["n_sources"], e.get("rank", "-"), "-" if e.get("pinocchio_rank") is None else e["pinocchio_rank"],
+             e["fd_rel_error"], e["closure_residual"], "-" if e["builtin_rel_diff"] is None else e["builtin_rel_diff"], e["seconds"]]
+            for name, e in m.items()]
+    rep.table(rows, ["mechanism", "file", "sources", "rank (workspace)", "Pinocchio rank", "FD rel. error", "closure residual",
+                     "vs hand-written (rel.)", "s"])
+    arms = {name: e["configurations"] for name, e in m.items() if "configurations" in e}
+    if arms:
+        rep.heading("URDF arms over random configurations inside the joint limits")
+        rep.table([[name, c["n_configurations"], c["n_sources"], c["rank"], c["pinocchio_rank"], c["combined_rank"],
+                    c["rank_with_tip"], c["pinocchio_rank_with_tip"], c["fk_vs_pinocchio"], c["fd_rel_error"]] for name, c in arms.items()],
+                  ["arm", "configurations", "sources", "rank", "Pinocchio rank", "both", "rank + tip", "Pinocchio + tip",
+                   "FK vs Pinocchio (m)", "FD rel. error"], digits=3)
     if "5-bar" in m:
         e = m["5-bar"]
         rep.heading("5-bar at (0, 70) mm, the thesis's clearances (certified)")
@@ -166,5 +198,5 @@ def render(result: StudyResult) -> Report:
 
 
 STUDY = Study(name="mechanisms", title="Mechanisms from description files: FD agreement and equality with the hand-written models",
-              compute=compute, render=render, config={"seed": 0, "n_poses": 20, "map_grid": 11},
-              quick={"n_poses": 8, "map_grid": 5}, seed_paper="Deng 2012 Ch. II, IV, VI (5-bar, IRSBot-2)")
+              compute=compute, render=render, config={"seed": 0, "n_poses": 20, "map_grid": 11, "n_configurations": 200},
+              quick={"n_poses": 8, "map_grid": 5, "n_configurations": 40}, seed_paper="Deng 2012 Ch. II, IV, VI (5-bar, IRSBot-2)")

@@ -8,7 +8,12 @@
 Modules: :mod:`.expressions` (safe entry expressions, complex-step derivatives),
 :mod:`.description` (dataclasses and the TOML loader), :mod:`.kinematics` (forward kinematics,
 exact first-order maps, continued Newton inverse geometry), :mod:`.model` (the error model and the
-clearance mechanism). ``docs/mechanisms.md`` documents the file format.
+clearance mechanism). Serial arms from URDF (issue 23): :mod:`.urdf` (reading a URDF with
+Pinocchio), :mod:`.placement` (placement errors as local twists), :mod:`.limits` (joint limits),
+:mod:`.serial` and :mod:`.serial_kernels` (the compiled path of a serial chain),
+:mod:`.identifiability` (rank, blind and duplicated directions), :mod:`.urdf_check` (agreement
+with Pinocchio and finite differences), :mod:`.inspection` (what ``evotol check-mechanism`` shows).
+``docs/mechanisms.md`` documents the file format.
 """
 from robots.mechanism.description import (ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Mechanism, Point,
                                           load_mechanism, mechanism_from_dict)

@@ -68,6 +68,7 @@ def check_mechanism(file, n_poses: int = 20, sources=None) -> dict:
         The loops do not close at the assembly, or close far from the declared joints.
     """
     from robots.base import check_robot
+    from robots.mechanism.inspection import model_report
     from robots.mechanism.model import MechanismModel, resolve_description
 
     t0 = time.perf_counter()
@@ -81,6 +82,7 @@ def check_mechanism(file, n_poses: int = 20, sources=None) -> dict:
            "sources": [{"name": s.name, "group": s.group, "unit": s.unit, "description": s.description} for s in model.sources],
            "n_sources": len(model.sources), "n_poses": len(poses), "closure_residual": residual,
            "fd_rel_error": rep.get("fd_relative_mismatch"), "max_sensitivity": float(np.abs(model.sensitivity(poses)).max())}
+    out.update(model_report(model, poses))     # issue 23: nominal values, box and limits, rank (robots/mechanism/inspection.py)
     if model.mechanism.clearance is not None:
         from robots.clearance import max_pose_error
 

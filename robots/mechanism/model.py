@@ -28,6 +28,7 @@ from robots.clearance.model import ClearanceMechanism, Joint
 from robots.mechanism.description import LENGTH_FIELDS, UNIT_SCALE, Mechanism, load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import IN_PLANE, Kinematics
 from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
+from robots.mechanism.serial import SERIAL_COMPILED, SerialChain, serial_inverse_geometry
 
 OUT_OF_PLANE_FIELDS = ("b", "alpha", "r")
 
@@ -106,17 +107,24 @@ class MechanismModel(RobotErrorModel):
                 specs.append(SourceSpec(nm, 1, unit, group, f"{'actuator offset of' if group == 'actuator' else k + ' of'} frame {fr}"))
         self.sources = tuple(specs)
         self._placement_frames = frozenset(c[0] for c in self.columns if isinstance(c, tuple) and c[1] in PLACEMENT_FIELDS)
+        self._serial = SerialChain.build(self.kin, self.columns) if SERIAL_COMPILED else None   # robots/mechanism/serial.py
 
     # ------------------------------------------------------------------ helpers
     def joint_values(self, poses) -> dict:
         """All joint variables at poses (SI), from the continued Newton inverse geometry."""
-        return self.kin.inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
+        return self._inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
+
+    def _inverse_geometry(self, poses) -> dict:
+        """:meth:`Kinematics.inverse_geometry`, compiled for a serial chain (same steps, per pose)."""
+        if self._serial is None:
+            return self.kin.inverse_geometry(poses)
+        return serial_inverse_geometry(self.kin, self._serial, poses)
 
     def _param_names(self):
         return [c for c in self.columns if isinstance(c, str)]  # parameters and actuated variables
 
     def _maps(self, poses):
-        q = self.kin.inverse_geometry(poses)
+        q = self._inverse_geometry(poses)
         n = len(poses)
         st = self.kin.state(q, n, wrt=set(self.kin.passive) | set(self._param_names()), placement=self._placement_frames)
         return q, st
@@ -124,6 +132,8 @@ class MechanismModel(RobotErrorModel):
     def sensitivity(self, poses) -> np.ndarray:
         """First-order map (n, 6, n_sources): ``[dp (m); dphi (rad)]`` of the end-effector frame."""
         poses = self.check_poses(poses)
+        if self._serial is not None:
+            return self._serial.sensitivity(self._serial.joints_array(self._inverse_geometry(poses)))
         q, st = self._maps(poses)
         return self._sensitivity(st, poses)
 
@@ -131,6 +141,8 @@ class MechanismModel(RobotErrorModel):
         """First-order map (n, 6, n_sources) at given joint values: a dict ``{variable: (n,)}`` or an
         array (n, n_variables) in the order of ``kin.variables`` (rad, m); no inverse geometry."""
         q, n = self._joint_dict(q)
+        if self._serial is not None:
+            return self._serial.sensitivity(self._serial.joints_array(q))
         st = self.kin.state(q, n, wrt=set(self.kin.passive) | set(self._param_names()), placement=self._placement_frames)
         return self._sensitivity(st, np.zeros((n, len(self.workspace.names))))
 
@@ -211,7 +223,7 @@ class MechanismModel(RobotErrorModel):
         n = len(poses)
         if errors.ndim != 3 or errors.shape[0] != n or errors.shape[2] != self.n_columns:
             raise ValidationError("errors shape", errors.shape, f"({n}, n_samples, {self.n_columns})")
-        return self._pose_error(self.kin.inverse_geometry(poses), n, errors, poses)
+        return self._pose_error(self._inverse_geometry(poses), n, errors, poses)
 
     def pose_error_at_joints(self, q, errors) -> np.ndarray:
         """:meth:`pose_error` at given joint values (a dict or (n, n_variables), rad and m) instead
@@ -223,6 +235,8 @@ class MechanismModel(RobotErrorModel):
         return self._pose_error(q, n, errors, np.zeros((n, len(self.workspace.names))))
 
     def _pose_error(self, q, n, errors, poses) -> np.ndarray:
+        if self._serial is not None:
+            return self._serial.pose_error(self._serial.joints_array(q), errors)
         m = errors.shape[1]
         T0 = self.kin.state(q, n, twists=False).world[self.mechanism.end_effector]
         qq = {k: np.repeat(v, m) for k, v in q.items()}
@@ -246,7 +260,7 @@ class MechanismModel(RobotErrorModel):
     def closure_residual(self, poses=None) -> float:
         """Largest loop-closure and pose residual (m or rad) of the inverse geometry at poses."""
         poses = self.workspace.latin_hypercube(20, seed=0) if poses is None else self.check_poses(poses)
-        q = self.kin.inverse_geometry(poses)
+        q = self._inverse_geometry(poses)
         Rt = self.kin._target_orientation(poses)
         F, _, _ = self.kin._ig_system(q, poses, Rt)
         return float(np.abs(F).max()) if F.size else 0.0

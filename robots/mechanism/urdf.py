@@ -304,3 +304,34 @@ def pinocchio_tip_pose(path, tip: str, q) -> np.ndarray:
         pin.framesForwardKinematics(model, data, np.asarray(qi, float))
         out.append(data.oMf[fid].homogeneous.copy())
     return np.array(out)
+
+
+def pinocchio_placement_regressor(model, frame_id: int, Q: np.ndarray, with_tip: bool = False) -> np.ndarray:
+    """Pinocchio's joint placement regressor of a frame, (n, 6, 6 (njoints - 1)) [+ 6 tip columns].
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+    frame_id : int
+    Q : ndarray (n, model.nq)
+        Pinocchio configurations.
+    with_tip : bool
+        Append the frame's own placement twist (``[R 0; 0 R]`` in ``LOCAL_WORLD_ALIGNED``).
+
+    Returns
+    -------
+    ndarray
+        ``[v; omega]`` of the frame per unit twist of each joint placement (local, ``M exp(delta)``).
+    """
+    pin = _pin()
+    data = model.createData()
+    out = []
+    for q in np.atleast_2d(Q):
+        pin.framesForwardKinematics(model, data, q)
+        R = pin.computeFrameKinematicRegressor(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)
+        if with_tip:
+            tip = np.zeros((6, 6))
+            tip[:3, :3] = tip[3:, 3:] = data.oMf[frame_id].rotation
+            R = np.hstack([R, tip])
+        out.append(R)
+    return np.array(out)

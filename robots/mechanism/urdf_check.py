@@ -13,42 +13,14 @@ For the chain root -> ``tip`` of a URDF, at random configurations inside the joi
 """
 from __future__ import annotations
 
+import time
+from pathlib import Path
+
 import numpy as np
 
 from robots.mechanism.identifiability import stacked_rank
 from robots.mechanism.placement import PLACEMENT_FIELDS
-from robots.mechanism.urdf import _pin, chain_joints, pinocchio_configuration, urdf_frames
-
-
-def pinocchio_placement_regressor(model, frame_id: int, Q: np.ndarray, with_tip: bool = False) -> np.ndarray:
-    """Pinocchio's joint placement regressor of a frame, (n, 6, 6 (njoints - 1)) [+ 6 tip columns].
-
-    Parameters
-    ----------
-    model : pinocchio.Model
-    frame_id : int
-    Q : ndarray (n, model.nq)
-        Pinocchio configurations.
-    with_tip : bool
-        Append the frame's own placement twist (``[R 0; 0 R]`` in ``LOCAL_WORLD_ALIGNED``).
-
-    Returns
-    -------
-    ndarray
-        ``[v; omega]`` of the frame per unit twist of each joint placement (local, ``M exp(delta)``).
-    """
-    pin = _pin()
-    data = model.createData()
-    out = []
-    for q in np.atleast_2d(Q):
-        pin.framesForwardKinematics(model, data, q)
-        R = pin.computeFrameKinematicRegressor(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)
-        if with_tip:
-            tip = np.zeros((6, 6))
-            tip[:3, :3] = tip[3:, 3:] = data.oMf[frame_id].rotation
-            R = np.hstack([R, tip])
-        out.append(R)
-    return np.array(out)
+from robots.mechanism.urdf import _pin, chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
 
 
 def random_joints(model, variables, limits, n: int, seed: int = 0) -> dict:
@@ -116,3 +88,61 @@ def check_urdf_chain(robot, n: int = 8, seed: int = 0, step: float = 1e-6) -> di
             "rank": stacked_rank(Sj), "pinocchio_rank": stacked_rank(Rj), "combined_rank": stacked_rank(np.concatenate([Sj, Rj], 2)),
             "rank_with_tip": stacked_rank(St), "pinocchio_rank_with_tip": stacked_rank(Rt),
             "combined_rank_with_tip": stacked_rank(np.concatenate([St, Rt], 2))}
+
+
+def check_urdf_file(path, tip: str, n_poses: int = 20, sources=None) -> dict:
+    """``evotol check-mechanism arm.urdf --tip tool0`` as a JSON-ready dict (SI).
+
+    Parameters
+    ----------
+    path : str or Path
+        The URDF file.
+    tip : str
+        The end-effector link or frame.
+    n_poses : int
+        Random configurations inside the joint limits (at least 20 for the rank).
+    sources : list of str, optional
+        Names or patterns; default: the URDF arm's default sources.
+
+    Returns
+    -------
+    dict
+        ``name, file, tip, sources`` (with nominal values), ``parameters``, ``assembly`` (zero
+        configuration clipped into the limits, and the tip pose there), ``workspace`` (box of
+        the tip positions over the configurations), ``limits``, ``identifiability`` (rank, blind,
+        duplicated, Pinocchio's rank), ``fk_vs_pinocchio``, ``fd_rel_error``, ``seconds``.
+
+    Raises
+    ------
+    ValidationError
+        Not a URDF Pinocchio reads, an unknown tip, a floating or planar joint on the chain.
+    """
+    from robots.mechanism.checks import end_effector_pose
+    from robots.mechanism.description import mechanism_from_dict
+    from robots.mechanism.inspection import limits_and_box, rank_report, sources_with_nominal
+    from robots.mechanism.model import MechanismModel
+
+    t0 = time.perf_counter()
+    box = {"coordinates": [{"name": a, "axis": a, "low": -1.0, "high": 1.0} for a in "xyz"]}
+    mech = mechanism_from_dict({"name": Path(path).stem, "urdf": str(Path(path).resolve()), "tip": tip, "end_effector": box})
+    model = MechanismModel(mech, sources=sources)
+    kin = model.kin
+    n = max(int(n_poses), 20)
+    q = random_joints(None, kin.variables, mech.limits, n, seed=0)
+    q0 = {v: float(np.clip(0.0, *mech.limits.get(v, (-np.inf, np.inf)))) for v in kin.variables}
+    T = kin.state(q, n, twists=False).world[mech.end_effector][:, :3, 3]
+    chk = check_urdf_chain(model, n=min(n, 8))
+    ee = end_effector_pose(model, q0)
+    return {"name": mech.name, "file": str(path), "tip": tip, "sources": sources_with_nominal(model), "n_sources": model.n_columns,
+            "parameters": [{"name": k, "value": float(v), "unit": "m" if k in mech.lengths else "rad"}
+                           for k, v in mech.parameters.items()],
+            "assembly": {"joints": [{"name": v, "unit": kin.joint_unit.get(v, "rad"), "declared": None, "solved": q0[v]}
+                                    for v in kin.variables],
+                         "pose": [{"name": a, "value": float(x), "unit": "m"} for a, x in zip("xyz", ee["position"])]},
+            "end_effector": ee,
+            "workspace": [{"name": a, "unit": "m", "low": float(T[:, i].min()), "high": float(T[:, i].max())}
+                          for i, a in enumerate("xyz")],
+            "limits": limits_and_box(model)["limits"],
+            "identifiability": rank_report(model, q, f"{n} random configurations inside the joint limits"),
+            "fk_vs_pinocchio": chk["fk_vs_pinocchio"], "fd_rel_error": chk["fd_rel_error"],
+            "seconds": time.perf_counter() - t0}

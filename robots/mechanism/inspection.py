@@ -1,0 +1,60 @@
+"""What ``evotol check-mechanism`` shows about the error model of a described arm (issue 23 item 6):
+the sources with their nominal values, the workspace box and the joint limits, and the rank of
+the sources' sensitivities stacked over the workspace with the blind and duplicated directions
+(:mod:`robots.mechanism.identifiability`); for a URDF, the same against Pinocchio's placement
+regressor. :func:`robots.mechanism.urdf_check.check_urdf_file` checks a bare URDF (``evotol check-mechanism
+arm.urdf --tip tool0``) with these parts.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from robots.mechanism.identifiability import analyse
+from robots.mechanism.placement import PLACEMENT_FIELDS
+
+
+def sources_with_nominal(model) -> list[dict]:
+    """Each source: name, group, unit, description and nominal value (a design parameter's value;
+    0 for a placement error, a DH-entry offset or a joint offset, which are errors about the nominal)."""
+    params = model.mechanism.parameters
+    return [{"name": s.name, "group": s.group, "unit": s.unit, "description": s.description,
+             "nominal": float(params.get(s.name, 0.0))} for s in model.sources]
+
+
+def limits_and_box(model) -> dict:
+    """The workspace box (coordinates, SI) and the joint limits (rad or m; none: unlimited)."""
+    ws = model.workspace
+    lim = model.mechanism.limits
+    return {"workspace": [{"name": n, "unit": u, "low": float(lo), "high": float(hi)}
+                          for n, u, lo, hi in zip(ws.names, ws.units, ws.low, ws.high)],
+            "limits": [{"name": v, "unit": model.kin.joint_unit.get(v, "rad"), "lower": lim[v][0] if v in lim else None,
+                        "upper": lim[v][1] if v in lim else None} for v in model.kin.variables]}
+
+
+def rank_report(model, q: dict, where: str) -> dict:
+    """Rank, blind and duplicated sources over the configurations ``q``; for a URDF arm also the
+    rank of Pinocchio's placement regressor of the chain there and of both together."""
+    S = model.sensitivity_at_joints(q)
+    out = {"over": where, "n_configurations": int(len(next(iter(q.values())))), **analyse(S, model.source_names)}
+    if model.mechanism.urdf:
+        from robots.mechanism.urdf import chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
+
+        info = urdf_frames(*model.mechanism.urdf)[3]
+        mdl, fid = info["model"], info["tip_frame_id"]
+        cols = [6 * (j - 1) + c for j in chain_joints(mdl, fid) for c in range(6)]
+        R = pinocchio_placement_regressor(mdl, fid, pinocchio_configuration(mdl, q, info["mimic"]))[:, :, cols]
+        own = [i for i, s in enumerate(model.source_names) if not s.endswith("_multiplier")]
+        names = [f"{mdl.names[j]}.{f}" for j in chain_joints(mdl, fid) for f in PLACEMENT_FIELDS]
+        ref = analyse(S[:, :, own], [model.source_names[i] for i in own], R, names)
+        out["pinocchio_rank"], out["combined_rank"] = ref["reference_rank"], ref["combined_rank"]
+        out["missing"] = ref["missing"]       # placement directions of the chain that no source reproduces
+        out["pinocchio_reference"] = "computeFrameKinematicRegressor (LOCAL_WORLD_ALIGNED) of the chain's joints"
+    return out
+
+
+def model_report(model, poses) -> dict:
+    """The sources with nominal values, box and limits, and the rank over the workspace ``poses``
+    (joint values from the inverse geometry), for :func:`robots.mechanism.checks.check_mechanism`."""
+    q = model.joint_values(poses)
+    return {"sources": sources_with_nominal(model), **limits_and_box(model), "urdf": list(model.mechanism.urdf),
+            "identifiability": rank_report(model, q, f"{len(poses)} Latin-hypercube poses of the workspace")}

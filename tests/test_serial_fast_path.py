@@ -1,0 +1,59 @@
+"""The compiled serial-chain path (robots/mechanism/serial.py) equals the general description path
+(robots/mechanism/kinematics.py) it replaces for serial arms (issue 23 item 5): sensitivities at
+joint values, nonlinear pose errors (Monte Carlo) and the continued inverse geometry, on the UR5,
+the redundant Panda (posture nearest the assembly), a mimic chain and a TOML serial arm with
+constant offsets after its joints and parameters in its joint entries."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from robots.mechanism import MechanismModel, mechanism_from_dict
+
+HERE = Path(__file__).resolve().parents[1] / "robots" / "mechanisms"
+
+ARM = {
+    "name": "RRP arm", "lengths": {"L1": 0.3, "L2": 0.25, "h": 0.1}, "angles": {"off": 0.2, "k": 1.0},
+    "frame": [
+        {"name": "A", "antecedent": "0", "joint": "revolute", "actuated": True, "theta": "q1", "r": "h"},
+        {"name": "B", "antecedent": "A", "joint": "revolute", "actuated": True, "alpha": "pi/2", "d": "L1", "theta": "k*q2 + off"},
+        {"name": "C", "antecedent": "B", "joint": "prismatic", "actuated": True, "alpha": "-pi/2", "d": "L2", "theta": 0.3, "r": "q3"},
+        {"name": "E", "antecedent": "C", "d": 0.05, "theta": 0.4},
+    ],
+    "end_effector": {"frame": "E", "coordinates": [{"name": "x", "axis": "x", "low": 0.395, "high": 0.405},
+                                                   {"name": "y", "axis": "y", "low": 0.23, "high": 0.24},
+                                                   {"name": "z", "axis": "z", "low": 0.363, "high": 0.373}]},
+    "assembly": {"pose": [0.39952007, 0.23509598, 0.36831087], "joints": {"q1": 0.5, "q2": 0.5, "q3": 0.1}},
+    "tolerances": {"sources": ["A.tilt_?", "B.shift_?", "C.tilt_x", "E.shift_?", "E.tilt_?", "q?", "off", "k", "B.theta"]},
+}
+
+
+def pair(src, sources=None):
+    fast = MechanismModel(src, sources=sources)
+    slow = MechanismModel(src, sources=sources)
+    slow._serial = None
+    return fast, slow
+
+
+@pytest.mark.parametrize("which", ["ur5", "panda", "arm"])
+def test_fast_path_equals_general_path(which):
+    src = mechanism_from_dict(ARM) if which == "arm" else HERE / f"{which}.toml"
+    fast, slow = pair(src)
+    assert fast._serial is not None
+    poses = fast.workspace.latin_hypercube(12, seed=5)
+    qf, qs = fast.joint_values(poses), slow.kin.inverse_geometry(poses)
+    fast.kin._cache.clear()
+    assert max(np.abs(qf[v] - qs[v]).max() for v in qs) < 1e-9
+    S, Ss = fast.sensitivity_at_joints(qs), slow.sensitivity_at_joints(qs)
+    assert np.abs(S - Ss).max() < 1e-12 * max(np.abs(Ss).max(), 1.0)
+    assert np.abs(fast.sensitivity(poses) - Ss).max() < 1e-8                  # through the inverse geometry
+    E = np.random.default_rng(1).uniform(-1e-3, 1e-3, (len(poses), 7, fast.n_columns))
+    D, Ds = fast.pose_error_at_joints(qs, E), slow.pose_error_at_joints(qs, E)
+    assert np.abs(D - Ds).max() < 1e-13
+
+
+def test_unsupported_sources_use_the_general_path():
+    """A parameter of a constant entry (the origin's x of a URDF joint) is not a fast-path source."""
+    m = MechanismModel(HERE / "ur5.toml", sources=["elbow_joint_x", "elbow_joint"])
+    assert m._serial is None
+    assert MechanismModel(HERE / "fivebar.toml")._serial is None          # loops
