@@ -112,9 +112,13 @@ def front_summary(problem: ToleranceProblem, front, results: dict) -> dict:
         rows["cheapest_feasible"] = int(table.loc[feasible, "cost"].idxmin())
     for key, i in rows.items():
         row = table.iloc[i]
+        t = np.array([float(row[n]) for n in problem.names])
+        ev = problem.evaluate(t[None])          # where its largest error is (the front keeps only the value)
+        worst = {c: int(np.argmax(getattr(ev, c)[0])) for c, _ in problem.components}
         out[key] = {"row": i, "cost": float(row["cost"]), "normalised_error": float(row["normalised_error"]),
                     **{f"max_{c}_error": float(row[f"{c}_error"]) for c, _ in problem.components},
-                    "tolerances": {n: float(row[n]) for n in problem.names}}
+                    "worst_pose": worst, "worst_pose_coordinates": {c: problem.poses[p].tolist() for c, p in worst.items()},
+                    "tolerances": dict(zip(problem.names, t.tolist()))}
     opt = results.get("optimum")
     if "cheapest_feasible" in out and opt is not None and opt.verdict and opt.verdict.startswith("certified optimal"):
         out["cheapest_feasible_over_optimum"] = out["cheapest_feasible"]["cost"] / opt.cost - 1

@@ -108,6 +108,14 @@ def test_front_marks_and_the_cheapest_feasible_point_against_the_optimum(planar)
         assert r["normalised_error"] == pytest.approx(max(r["max_position_error"] / 1e-4, 0), rel=1e-9)
     page = (d / "planar3rrr.html").read_text()
     assert "certified optimum" in page and "NSGA-II knee" in page
+    # the front's points say where their largest error is, like the methods
+    _, _, spec = planar
+    problem = load_problem(spec, base_dir=STUDIES)
+    for p in nsga.values():
+        if isinstance(p, dict):
+            ev = problem.evaluate(problem.as_array(p["tolerances"])[None])
+            assert p["worst_pose"]["position"] == int(np.argmax(ev.position[0]))
+            assert p["worst_pose_coordinates"]["position"] == problem.poses[p["worst_pose"]["position"]].tolist()
 
 
 def test_yield_study_has_a_yield_column(tmp_path_factory):

@@ -94,7 +94,9 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
         if yield_measure:
             row.append("–")
         over = summary["nsga2"].get("cheapest_feasible_over_optimum") if key == "cheapest_feasible" else None
-        row += [f"front row {p['row']}", "meets the requirement" if p["normalised_error"] <= 1 + 1e-9
+        where = (f"#{p['worst_pose'][comps[0]]}: {pose_cells(summary, p['worst_pose_coordinates'][comps[0]])}"
+                 if "worst_pose" in p else "")
+        row += [f"{where} (front row {p['row']})".strip(), "meets the requirement" if p["normalised_error"] <= 1 + 1e-9
                 else f"misses the requirement (normalised error {p['normalised_error']:.4g})",
                 "no certificate" + (f"; {100 * over:.3g} % above the certified optimum" if over is not None else ""), "not run"]
         rows.append(row)
