@@ -21,7 +21,8 @@ The robot (an assembly function or any robot), the poses and the requirement are
 ordinary study (:func:`evotol.studyfile.load_problem`); ``quality_loss`` adds the Taguchi loss
 (``docs/process_selection.md``, "Quality loss"). ``[methods]`` takes ``optimum`` (branch and
 bound, :func:`allocate_process_optimum`; ``method = "enumerate"`` for all combinations), ``ga``,
-``baselines`` and ``nsga2`` (:func:`process_front`), with the keyword arguments of those functions;
+``baselines``, ``nsga2`` (:func:`process_front`) and ``nonlinear_limit`` (worst case: the optimum
+re-linearised until the nonlinear worst case holds), with the keyword arguments of those functions;
 the outputs are the same JSON/HTML pair as every study.
 """
 from __future__ import annotations
@@ -32,17 +33,24 @@ from pathlib import Path
 import numpy as np
 
 import cost_models
+from evotol.allocators.nonlinear_limit import allocate_nonlinear_limit
 from evotol.allocators.process import (Process, ProcessProblem, allocate_process_baselines, allocate_process_ga,
                                        allocate_process_optimum, process_front)
 from evotol.errors import ValidationError
 from evotol.keywords import check_keywords, check_table_keys, unknown_key_message
 from evotol.reporting import Report
 from evotol.studies import StudyResult, write_outputs
-from evotol.units import units_block
+from evotol.units import COST, COUNT, RELATIVE, units_block
 
 PROCESS_KEYS = ("name", "cost", "lower", "upper", "fixed_cost")
+def allocate_process_nonlinear_limit(pp: ProcessProblem, *, max_iter: int = 12, rtol: float = 1e-9):
+    """The exact optimum re-linearised until the assembly's nonlinear worst case holds
+    (:func:`evotol.allocators.nonlinear_limit.allocate_nonlinear_limit`; worst-case measure)."""
+    return allocate_nonlinear_limit(pp, allocate_process_optimum, max_iter=max_iter, rtol=rtol)
+
+
 METHODS = {"optimum": allocate_process_optimum, "ga": allocate_process_ga, "baselines": allocate_process_baselines,
-           "nsga2": process_front}
+           "nsga2": process_front, "nonlinear_limit": allocate_process_nonlinear_limit}
 DEFAULT_METHODS = {"optimum": {}, "ga": {}, "baselines": {}}
 
 
@@ -148,7 +156,7 @@ def run_process_study(spec: dict, path: Path, out, seed: int, load_problem) -> d
         if m not in METHODS:
             raise ValidationError(f"methods.{m}", m, unknown_key_message(m, sorted(METHODS)))
         check_keywords(METHODS[m], kw, f"methods.{m}", exclude=("pp",))
-    results, front = {}, None
+    results, front, nonlinear = {}, None, None
     for m, kw in methods.items():
         print(f"[evotol] {m} ...", flush=True)
         kw = dict(kw)
@@ -158,13 +166,26 @@ def run_process_study(spec: dict, path: Path, out, seed: int, load_problem) -> d
             results.update({f"baseline {k}": r for k, r in allocate_process_baselines(pp, **kw).items()})
         elif m == "nsga2":
             front = process_front(pp, **kw)
+        elif m == "nonlinear_limit":
+            nl = allocate_process_nonlinear_limit(pp, **kw)
+            results["nonlinear limit"] = nl.result
+            nonlinear = {"linear_optimum_nonlinear_worst_case_over_limit": nl.linear_worst_case["max_over_limit"],
+                         "nonlinear_worst_case_over_limit": nl.worst_case["max_over_limit"],
+                         "method": nl.worst_case["responses"][0]["method"], "cost_difference": nl.cost_difference,
+                         "n_iterations": nl.iterations, "converged": nl.converged}
         else:
             results[m] = METHODS[m](pp, **kw)
     summary = {"name": name, "study_file": str(Path(path).resolve()), "problem": pp.describe(), "seed": seed,
                "results": {m: _result_dict(pp, r) for m, r in results.items()},
                "seconds": time.perf_counter() - t0, "units": units_block(pp.base)}
+    summary["units"]["keys"].update(quality_loss=COST + " (expected Taguchi loss)", n_nodes=COUNT, n_convex_solves=COUNT,
+                                    n_combinations=COUNT, incumbent=COST, smallest_pruned_bound=COST,
+                                    leaf_gap=RELATIVE, leaf_kkt_residual=RELATIVE, rtol=RELATIVE)
+    summary["units"]["keys"].update({f"{n}_t": u for n, u in zip(pp.names, pp.base.units())})   # front columns
     if front is not None:
         summary["pareto_front"] = front.table.to_dict(orient="list")
+    if nonlinear is not None:
+        summary["nonlinear_limit"] = nonlinear
     rep = Report(f"evotol process-selection study: {name}",
                  f"{pp.robot.name}, {pp.n_sources} sources, {pp.n_combinations} process combinations, "
                  f"measure {pp.requirement.measure}" + (f", quality loss A = {pp.quality_loss_A}" if pp.quality_loss_A else ""))
@@ -180,6 +201,11 @@ def run_process_study(spec: dict, path: Path, out, seed: int, load_problem) -> d
     if "optimum" in results and results["optimum"].certificate:
         c = results["optimum"].certificate
         rep.text(f"Certificate: {c['proof']}; incumbent {c['incumbent']:.6g}, leaf duality gap {c['leaf_gap']:.2e}.", note=True)
+    if nonlinear is not None:
+        rep.text(f"Nonlinear worst case over the tolerance box ({nonlinear['method']}): the first-order optimum reaches "
+                 f"{nonlinear['linear_optimum_nonlinear_worst_case_over_limit']:.4f} × the limit; 'nonlinear limit' holds "
+                 f"it ({nonlinear['nonlinear_worst_case_over_limit']:.6f}) for {nonlinear['cost_difference']:+.4g} "
+                 f"after {nonlinear['n_iterations']} re-linearisations.", note=True)
     if front is not None:
         front_figure(rep, front)
     paths = write_outputs(name, out, StudyResult(summary), rep)

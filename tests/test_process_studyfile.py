@@ -41,6 +41,8 @@ def test_shipped_clutch_file_gives_the_python_api_optimum(tmp_path):
         if r["feasible"]:
             assert r["cost"] >= opt["cost"] * (1 - 1e-9), m
     assert len(data["pareto_front"]["cost"]) > 0
+    from evotol.units import numbers_without_unit
+    assert numbers_without_unit(data, data["units"]) == []     # docs/units.md
 
 
 def test_shipped_file_runs_through_evotol_run(tmp_path):
@@ -95,3 +97,19 @@ def test_quality_loss_in_an_ordinary_study_file():
     r = allocate_optimum(lossy)
     assert r.cost == pytest.approx(allocate_optimum(with_quality_loss(plain, 50.0)).cost, rel=1e-9)
     assert r.cost > allocate_optimum(plain).cost
+
+
+def test_nonlinear_limit_method_in_a_process_study_file(tmp_path):
+    """methods.nonlinear_limit on the clutch file switched to the worst-case limit: the JSON shows the
+    first-order optimum's proven nonlinear worst case above the limit and the held design on it."""
+    spec = _spec()
+    spec["requirement"]["measure"] = "worst_case"
+    spec["methods"] = {"optimum": {}, "nonlinear_limit": {}}
+    summary = run_process_study(spec, CLUTCH, tmp_path, 0, load_problem)
+    nl = summary["nonlinear_limit"]
+    assert nl["linear_optimum_nonlinear_worst_case_over_limit"] > 1.2
+    assert 1 - 1e-6 <= nl["nonlinear_worst_case_over_limit"] <= 1 + 1e-9
+    held, opt = summary["results"]["nonlinear limit"], summary["results"]["optimum"]
+    assert held["cost"] - opt["cost"] == pytest.approx(nl["cost_difference"], rel=1e-12) and nl["cost_difference"] > 0
+    from evotol.units import numbers_without_unit
+    assert numbers_without_unit(summary, summary["units"]) == []

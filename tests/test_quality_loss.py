@@ -103,3 +103,15 @@ def test_quality_loss_cost_derivatives_and_bad_input():
         loss_coefficients(tp, {"nope": 1.0})
     with pytest.raises(ValidationError, match="quality_loss"):
         loss_coefficients(tp, float("nan"))
+
+
+def test_budget_mode_refuses_a_quality_loss_problem():
+    """Best accuracy at a budget assumes cost falls with t (cheapest design = upper bounds); with a loss
+    term it does not, so every allocator's budget mode refuses it by name."""
+    from evotol.allocators import allocate_lagrange
+
+    _, tp = _stack_problem()
+    lp = with_quality_loss(tp, 5.0)
+    for fn in (allocate_optimum, allocate_lagrange):
+        with pytest.raises(ValidationError, match="budget"):
+            fn(lp, budget=100.0)

@@ -24,6 +24,7 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
+from evotol.quality_loss import has_quality_loss
 
 
 def cheapest_design(problem: ToleranceProblem) -> np.ndarray:
@@ -42,6 +43,9 @@ def check_budget(problem: ToleranceProblem, budget, field: str = "budget") -> fl
     if isinstance(budget, bool) or not isinstance(budget, numbers.Real) or not np.isfinite(float(budget)) \
             or float(budget) <= 0:
         raise ValidationError(field, budget, "a finite positive cost, in the cost models' unit")
+    if has_quality_loss(problem):
+        raise ValidationError(field, budget, "no budget on a problem with a quality-loss term (its cost is not "
+                                             "monotone in t): minimise machining cost + loss at the requirement instead")
     budget = float(budget)
     floor = float(problem.cost(cheapest_design(problem)))
     if budget < floor * (1 - 1e-12):
