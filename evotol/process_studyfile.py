@@ -155,7 +155,7 @@ def run_process_study(spec: dict, path: Path, out, seed: int, load_problem) -> d
     for m, kw in methods.items():
         if m not in METHODS:
             raise ValidationError(f"methods.{m}", m, unknown_key_message(m, sorted(METHODS)))
-        check_keywords(METHODS[m], kw, f"methods.{m}", exclude=("pp",))
+        check_keywords(METHODS[m], kw, f"methods.{m}", exclude=("problem", "pp", "budget"))
     results, front, nonlinear = {}, None, None
     for m, kw in methods.items():
         print(f"[evotol] {m} ...", flush=True)

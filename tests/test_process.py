@@ -291,3 +291,22 @@ def test_baselines_on_random_feasible_process_problems(seed):
                     fn(pp)
             n_infeasible += 1
     assert n_feasible >= 1
+
+
+def test_process_allocators_have_the_one_shape_and_refuse_a_budget(clutch_wc):
+    """(problem, *, budget=None, ...) keyword-only; a budget is a one-line ValidationError; a
+    ToleranceProblem instead of a ProcessProblem is named."""
+    import inspect
+
+    from evotol.allocators.process import process_front
+
+    pp, _ = clutch_wc
+    for fn in (allocate_process_optimum, allocate_process_ga, allocate_process_baselines, process_front):
+        params = list(inspect.signature(fn).parameters.values())
+        assert params[0].name == "problem"
+        assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in params[1:])
+        assert inspect.signature(fn).parameters["budget"].default is None
+        with pytest.raises(ValidationError, match="budget"):
+            fn(pp, budget=10.0)
+        with pytest.raises(ValidationError, match="ProcessProblem"):
+            fn(pp.base)

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from evotol.allocators.baselines import allocate_lagrange
-from evotol.allocators.process.problem import FEAS_TOL, ProcessProblem, ProcessResult, _result
+from evotol.allocators.process.problem import FEAS_TOL, check_no_budget, ProcessProblem, ProcessResult, _result
 from evotol.allocators.sensitivity import aggregated_sensitivity, allocate_sensitivity
 from evotol.errors import InfeasibleError, ValidationError
 from evotol.threads import single_threaded_blas
@@ -110,13 +110,16 @@ def _onto_limit(pp: ProcessProblem, choice, t: np.ndarray) -> np.ndarray:
 
 
 @single_threaded_blas
-def allocate_process_baselines(pp: ProcessProblem) -> dict[str, ProcessResult]:
+def allocate_process_baselines(problem: ProcessProblem, *, budget: None = None) -> dict[str, ProcessResult]:
     """Sensitivity rule and Lagrange closed form on the cheapest processes that can hold the limit.
 
     Parameters
     ----------
-    pp : ProcessProblem
+    problem : ProcessProblem
         Process and tolerance per source (tolerances in SI: m or rad).
+    budget : None
+        Must be None: process selection minimises cost at the requirement (the one allocator
+        shape; a budget is refused in one line).
 
     Returns
     -------
@@ -130,6 +133,7 @@ def allocate_process_baselines(pp: ProcessProblem) -> dict[str, ProcessResult]:
     InfeasibleError
         No process choice can hold the requirement.
     """
+    pp = check_no_budget(problem, budget, "allocate_process_baselines")
     out = {}
     t0 = time.perf_counter()
     try:

@@ -11,7 +11,7 @@ from scipy.optimize import nnls
 
 from evotol.allocators.optimum import allocate_optimum
 from evotol.allocators.process.baselines import check_some_choice_holds, cheapest_feasible_processes
-from evotol.allocators.process.problem import FEAS_TOL, ProcessProblem, ProcessResult, _result
+from evotol.allocators.process.problem import FEAS_TOL, check_no_budget, ProcessProblem, ProcessResult, _result
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
@@ -81,14 +81,17 @@ class _DualTables:
 
 
 @single_threaded_blas
-def allocate_process_optimum(pp: ProcessProblem, *, method: str = "branch_and_bound", rtol: float = 1e-7,
-                             incumbent: ProcessResult | None = None) -> ProcessResult:
+def allocate_process_optimum(problem: ProcessProblem, *, budget: None = None, method: str = "branch_and_bound",
+                             rtol: float = 1e-7, incumbent: ProcessResult | None = None) -> ProcessResult:
     """Exact minimum-cost process choice and tolerances (see the module docstring).
 
     Parameters
     ----------
-    pp : ProcessProblem
+    problem : ProcessProblem
         Process and tolerance per source (tolerances in SI: m or rad).
+    budget : None
+        Must be None: process selection minimises cost at the requirement (the one allocator
+        shape; a budget is refused in one line).
     method : {"branch_and_bound", "enumerate"}
         Branch and bound on dual lower bounds, or every combination's convex optimum.
     rtol : float
@@ -106,8 +109,11 @@ def allocate_process_optimum(pp: ProcessProblem, *, method: str = "branch_and_bo
     Raises
     ------
     evotol.errors.ValidationError
-        An unknown ``method``, or no process choice that can hold the requirement.
+        An unknown ``method``, or a ``budget``.
+    evotol.errors.InfeasibleError
+        No process choice can hold the requirement (every source at its finest process's lower limit misses it).
     """
+    pp = check_no_budget(problem, budget, "allocate_process_optimum")
     if method not in ("branch_and_bound", "enumerate"):
         raise ValidationError("method", method, "'branch_and_bound' or 'enumerate'")
     t0 = time.perf_counter()

@@ -7,7 +7,7 @@ import pandas as pd
 from pymoo.core.problem import Problem
 
 from evotol.allocators.process.ga import _decode
-from evotol.allocators.process.problem import ProcessProblem
+from evotol.allocators.process.problem import check_no_budget, ProcessProblem
 from evotol.errors import ValidationError
 from evotol.pareto import ParetoFront
 from evotol.threads import single_threaded_blas
@@ -40,14 +40,18 @@ THREE_SIGMA_MISS = 0.0026997960632601866
 
 
 @single_threaded_blas
-def process_front(pp: ProcessProblem, *, seed: int = 0, objective: str = "error", pop_size: int = 60, n_gen: int = 100,
-                  distribution="normal", max_miss: float = THREE_SIGMA_MISS) -> ParetoFront:
+def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0, objective: str = "error",
+                  pop_size: int = 60, n_gen: int = 100, distribution="normal",
+                  max_miss: float = THREE_SIGMA_MISS) -> ParetoFront:
     """NSGA-II front (:func:`evotol.allocators.nsga.run_nsga2`) of cost vs. a second objective.
 
     Parameters
     ----------
-    pp : ProcessProblem
+    problem : ProcessProblem
         The process-selection problem.
+    budget : None
+        Must be None: process selection minimises cost at the requirement (the one allocator
+        shape; a budget is refused in one line).
     seed : int
         Seed of pymoo's random generator.
     objective : {"error", "yield"}
@@ -77,6 +81,8 @@ def process_front(pp: ProcessProblem, *, seed: int = 0, objective: str = "error"
     import time
 
     from evotol.allocators.nsga import run_nsga2
+
+    pp = check_no_budget(problem, budget, "process_front")
 
     if objective not in FRONT_OBJECTIVES:
         raise ValidationError("objective", objective, f"one of {FRONT_OBJECTIVES}")

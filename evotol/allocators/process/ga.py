@@ -9,7 +9,7 @@ from pymoo.core.callback import Callback
 from pymoo.core.problem import Problem
 from pymoo.core.repair import Repair
 
-from evotol.allocators.process.problem import ProcessProblem, ProcessResult, _result
+from evotol.allocators.process.problem import check_no_budget, ProcessProblem, ProcessResult, _result
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol.threads import single_threaded_blas
@@ -80,14 +80,17 @@ class _History(Callback):
 
 
 @single_threaded_blas
-def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 100, seed: int = 0,
-                        repair: bool = True) -> ProcessResult:
+def allocate_process_ga(problem: ProcessProblem, *, budget: None = None, seed: int = 0, pop_size: int = 60,
+                        n_gen: int = 100, repair: bool = True) -> ProcessResult:
     """pymoo GA over process choices and tolerances (encoding and repair: module docstring).
 
     Parameters
     ----------
-    pp : ProcessProblem
+    problem : ProcessProblem
         Process and tolerance per source (tolerances in SI: m or rad).
+    budget : None
+        Must be None: process selection minimises cost at the requirement (the one allocator
+        shape; a budget is refused in one line).
     pop_size, n_gen : int
         Population size and number of generations.
     seed : int
@@ -109,6 +112,8 @@ def allocate_process_ga(pp: ProcessProblem, *, pop_size: int = 60, n_gen: int = 
     """
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.optimize import minimize
+
+    pp = check_no_budget(problem, budget, "allocate_process_ga")
 
     t0 = time.perf_counter()
     rows = ConstraintRows(pp.base)

@@ -378,3 +378,14 @@ def _result(pp: ProcessProblem, method: str, choice, t, t0: float, **kw) -> Proc
     return ProcessResult(method, pp.choice_names(choice), dict(zip(pp.names, t.tolist())), float(pp.cost(choice, t)[0]),
                          ok, ne, seconds=time.perf_counter() - t0, **kw)
 
+
+
+def check_no_budget(problem: ProcessProblem, budget, name: str) -> ProcessProblem:
+    """The one allocator shape: process allocators take ``budget=None`` and refuse a budget in one line
+    (process selection minimises cost at the requirement). Returns the problem, checked to be a
+    :class:`ProcessProblem`."""
+    if budget is not None:
+        raise ValidationError("budget", budget, f"None for {name} (process selection minimises cost at the requirement)")
+    if not isinstance(problem, ProcessProblem):
+        raise ValidationError("problem", type(problem).__name__, f"a ProcessProblem for {name} (evotol.allocators.process)")
+    return problem
