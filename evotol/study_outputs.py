@@ -179,6 +179,10 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
             m: [{**{k: v for k, v in s.items() if k != "values"},
                  "values": {c: s["values"][c][i] for c in s["values"]}} for s in slices]
             for i, m in enumerate(names)}
-    summary["explorer"] = explorer_data(problem, {m: r.t for m, r in results.items()}, seed)
+    starts = {m: r.t for m, r in results.items()}
+    for key, p in summary.get("nsga2", {}).items():     # the front's cheapest feasible point and knee too
+        if isinstance(p, dict) and "tolerances" in p:
+            starts[f"nsga2 {key.replace('_', ' ')}"] = problem.as_array(p["tolerances"])
+    summary["explorer"] = explorer_data(problem, starts, seed)
     summary["units"] = study_units_block(problem)
     return summary

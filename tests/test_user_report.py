@@ -108,7 +108,8 @@ def test_front_marks_and_the_cheapest_feasible_point_against_the_optimum(planar)
         assert r["normalised_error"] == pytest.approx(max(r["max_position_error"] / 1e-4, 0), rel=1e-9)
     page = (d / "planar3rrr.html").read_text()
     assert "certified optimum" in page and "NSGA-II knee" in page
-    # the front's points say where their largest error is, like the methods
+    # the explorer starts from them too, and they say where their largest error is, like the methods
+    assert {"nsga2 knee", "optimum", "ga"} <= set(data["explorer"]["starts"])
     _, _, spec = planar
     problem = load_problem(spec, base_dir=STUDIES)
     for p in nsga.values():
@@ -123,6 +124,7 @@ def test_yield_study_has_a_yield_column(tmp_path_factory):
                          "equal = {}\n", "n_samples = 200\nmethod = \"mc\"")
     rows, header = top_table_rows(summary)
     col = header.index("yield at the worst pose (first-order; required)")
+    assert header[2].startswith("max position error, yield-equivalent")   # not read as a worst case
     r = summary["results"]["equal"]
     assert rows[0][col].startswith(f"{r['yield_at_worst_pose']:.6f} (required 0.9973); Monte Carlo:")
 

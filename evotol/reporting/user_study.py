@@ -68,7 +68,8 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
     """Rows of the top table: one per method and, for NSGA-II, its cheapest feasible point and knee."""
     comps = list(summary["requirement"])
     yield_measure = summary["measure"] == "yield"
-    header = ["method", "cost"] + [f"max {c} error (requirement {_error_text(summary, c, summary['requirement'][c])})"
+    kind = ", yield-equivalent" if yield_measure else ""   # the error whose bound the yield requirement is
+    header = ["method", "cost"] + [f"max {c} error{kind} (requirement {_error_text(summary, c, summary['requirement'][c])})"
                                    for c in comps]
     header += ["worst pose (workspace coordinates)", "status", "verdict / certificate", "MC exceed rate"]
     if yield_measure:
