@@ -281,6 +281,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
                             seconds=time.perf_counter() - t0)
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = plausibility.study_warnings(problem, results.values())   # unit slips (issue 27)
+    summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)
     summary["interrupted"] = bool(stopped)
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}

@@ -120,3 +120,35 @@ def test_panda_sources_match_fd_and_span_pinocchio(panda):
     r = check_urdf_chain(panda, n=40)
     assert r["rank"] == r["pinocchio_rank"] == r["combined_rank"]
     assert r["rank_with_tip"] == r["pinocchio_rank_with_tip"] == r["combined_rank_with_tip"]
+
+
+def test_the_report_states_the_redundancy_resolution(panda, tmp_path):
+    """check-mechanism, the mechanisms study and an `evotol run` report say which posture was used."""
+    import json
+
+    from evotol.studyfile import run_study_file
+
+    r = panda.redundancy
+    assert (r["joint_variables"], r["task_equations"], r["resolution"]) == (7, 6, "nearest to the assembly posture")
+    assert MechanismModel(HERE / "ur5.toml").redundancy is None
+    (tmp_path / "s.toml").write_text('''name = "panda_small"
+[robot]
+mechanism = "panda"
+[poses]
+grid = [2, 2, 2]
+[requirement]
+position = 5e-4
+[cost.default]
+model = "exponential"
+a0 = 1.9
+a1 = 0.5
+scale = 1e-5
+[methods]
+optimum = {}
+[verify]
+n_samples = 10
+''')
+    summary = run_study_file(tmp_path / "s.toml", out=tmp_path)
+    data = json.loads(Path(summary["json"]).read_text())
+    assert data["notes"] == [r["text"]] and "nearest to the assembly posture" in r["text"]
+    assert "nearest to the assembly posture" in Path(summary["html"]).read_text()

@@ -99,6 +99,8 @@ def print_limits_and_rank(out: dict) -> None:
                else f"{j['name']} unlimited" for j in out["limits"]]
         for i in range(0, len(lim), 3):
             print(("  joint limits: " if i == 0 else "                ") + "; ".join(lim[i:i + 3]))
+    if out.get("redundancy"):
+        print(f"  redundancy: {out['redundancy']['text']}")
     r = out.get("identifiability")
     if not r:
         return

@@ -301,6 +301,8 @@ def render_user_study(summary: dict) -> Report:
                    "stopped reports its best design so far.", note=True)
     for line in summary.get("warnings", []):
         rep.text(f"Warning: {line}", note=True)
+    for line in summary.get("notes", []):
+        rep.text(line, note=True)
     rep.heading("Results")
     rows, header = top_table_rows(summary)
     rep.table(rows, header, table_id="top")

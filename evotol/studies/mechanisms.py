@@ -156,7 +156,7 @@ def compute(cfg: dict) -> StudyResult:
         entry = {"file": path.name, "n_sources": chk["n_sources"], "sources": [s["name"] for s in chk["sources"]],
                  "fd_rel_error": chk["fd_rel_error"], "closure_residual": chk["closure_residual"], "builtin_rel_diff": None,
                  "rank": ident["rank"], "pinocchio_rank": ident.get("pinocchio_rank"), "duplicated": ident["duplicated"],
-                 "blind": ident["blind"]}
+                 "blind": ident["blind"], "redundancy": None if chk.get("redundancy") is None else chk["redundancy"]["text"]}
         if chk.get("urdf"):                     # a URDF arm: also over random configurations (issue 23 item 7)
             entry["configurations"] = _urdf_ranks(path, cfg)
         if chk["name"] in BUILTIN:
@@ -175,6 +175,9 @@ def render(result: StudyResult) -> Report:
             for name, e in m.items()]
     rep.table(rows, ["mechanism", "file", "sources", "rank (workspace)", "Pinocchio rank", "FD rel. error", "closure residual",
                      "vs hand-written (rel.)", "s"])
+    for name, e in m.items():
+        if e.get("redundancy"):
+            rep.text(e["redundancy"])
     arms = {name: e["configurations"] for name, e in m.items() if "configurations" in e}
     if arms:
         rep.heading("URDF arms over random configurations inside the joint limits")

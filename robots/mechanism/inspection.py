@@ -57,4 +57,5 @@ def model_report(model, poses) -> dict:
     (joint values from the inverse geometry), for :func:`robots.mechanism.checks.check_mechanism`."""
     q = model.joint_values(poses)
     return {"sources": sources_with_nominal(model), **limits_and_box(model), "urdf": list(model.mechanism.urdf),
+            "redundancy": model.redundancy,
             "identifiability": rank_report(model, q, f"{len(poses)} Latin-hypercube poses of the workspace")}

@@ -114,6 +114,30 @@ class MechanismModel(RobotErrorModel):
         """All joint variables at poses (SI), from the continued Newton inverse geometry."""
         return self._inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
 
+    @property
+    def redundancy(self) -> dict | None:
+        """For a redundant mechanism (more joint variables than loop and task equations, e.g. the
+        7-joint Panda on a 6-D task): the counts and how the inverse geometry resolves the
+        self-motion (:meth:`Kinematics._newton`, ``docs/mechanisms.md`` "Redundant arms"); else None."""
+        kin = self.kin
+        n_eq = sum(len(kin.loop_rows(lp)) for lp in self.mechanism.loops) + len(kin.coord_axes) + (3 if kin.orientation else 0)
+        n_var = len(kin.variables)
+        if n_var <= n_eq:
+            return None
+        _, q0 = kin.assembly()
+        return {"joint_variables": n_var, "task_equations": n_eq, "self_motions": n_var - n_eq,
+                "resolution": "nearest to the assembly posture",
+                "posture": {k: float(v) for k, v in q0.items()},
+                "text": f"{self.name} is redundant: {n_var} joint variables for {n_eq} task equations ({n_var - n_eq} "
+                        "self-motion). At every pose the inverse geometry takes the configuration nearest to the "
+                        "assembly posture (Euclidean norm of the joint values, rad and m), continued from the assembly; "
+                        "the tolerances hold for that posture (docs/mechanisms.md, Redundant arms)."}
+
+    def notes(self) -> list[str]:
+        """Statements a report should carry about how this model was evaluated (the redundancy resolution)."""
+        r = self.redundancy
+        return [r["text"]] if r else []
+
     def _inverse_geometry(self, poses) -> dict:
         """:meth:`Kinematics.inverse_geometry`, compiled for a serial chain (same steps, per pose)."""
         if self._serial is None:

@@ -73,7 +73,7 @@ def _joint(T, kind, v, out):
             out[i, 3] = T[i, 3] + v * T[i, 2]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _chain(P, ident, kind, var, a, c, mark, q, dq, E, has_E, marks, T, tmp):
     """Forward kinematics of one configuration; joint values ``a q[var] + c + dq``; ``E[mark]``
     applied after ``P`` where ``has_E[mark]``; frames after ``P`` stored in ``marks``; tip in T
@@ -94,7 +94,7 @@ def _chain(P, ident, kind, var, a, c, mark, q, dq, E, has_E, marks, T, tmp):
             for i in range(4):
                 for j in range(4):
                     tmp[i, j] = T[i, j]
-        if m >= 0:
+        if m >= 0 and marks.shape[0] > 0:            # an empty marks array: the tip only (Monte Carlo)
             for i in range(3):
                 for j in range(4):
                     marks[m, i, j] = tmp[i, j]
@@ -106,7 +106,7 @@ def _chain(P, ident, kind, var, a, c, mark, q, dq, E, has_E, marks, T, tmp):
             _joint(tmp, kind[s], a[s] * q[var[s]] + c[s] + dq[s], T)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _column(marks, m, field, p, coef, S, col):
     """Add coef * (motion [dp; dphi] of the point p) of a unit placement error ``field`` at mark m."""
     k = field % 3
@@ -196,6 +196,7 @@ def pose_error(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mar
     tmp = np.empty((4, 4))
     qe = np.empty(Q.shape[1])
     dq = np.zeros(ns)
+    nomarks = np.empty((0, 3, 4))
     for i in range(n):
         _chain(P, ident, kind, var, a, c, mark, Q[i], dq0, E, none, marks, T0, tmp)
         for k in range(m):
@@ -212,7 +213,7 @@ def pose_error(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mar
             dq[:] = 0.0
             for t in range(j_col.shape[0]):
                 dq[j_stage[t]] += e[j_col[t]] * j_coef[t] * (qe[j_var[t]] if j_var[t] >= 0 else 1.0)
-            _chain(P, ident, kind, var, a, c, mark, qe, dq, E, has_E, marks, T, tmp)
+            _chain(P, ident, kind, var, a, c, mark, qe, dq, E, has_E, nomarks, T, tmp)
             for r in range(3):
                 out[i, k, r] = T[r, 3] - T0[r, 3]
                 for s in range(3):
@@ -261,6 +262,54 @@ def _task(P, ident, kind, var, a, c, mark, n_marks, q, target, Rt, has_rot, axes
 
 
 @njit(cache=True)
+def _gram(J, m, nv, rows, A):
+    """A = J J^T (rows) or J^T J, damped by 1e-13 of its trace (as Kinematics._newton)."""
+    k = m if rows else nv
+    tr = 0.0
+    for i in range(k):
+        for j in range(k):
+            s = 0.0
+            if rows:
+                for v in range(nv):
+                    s += J[i, v] * J[j, v]
+            else:
+                for r in range(m):
+                    s += J[r, i] * J[r, j]
+            A[i, j] = s
+        tr += A[i, i]
+    lam = 1e-13 * max(tr, 1e-300)
+    for i in range(k):
+        A[i, i] += lam
+
+
+@njit(cache=True)
+def _solve(A, b, k):
+    """Solve A x = b in place (b <- x) for the leading k x k block: Gaussian elimination with
+    partial pivoting (A is overwritten)."""
+    for c in range(k):
+        p = c
+        for r in range(c + 1, k):
+            if abs(A[r, c]) > abs(A[p, c]):
+                p = r
+        if p != c:
+            for j in range(k):
+                A[c, j], A[p, j] = A[p, j], A[c, j]
+            b[c], b[p] = b[p], b[c]
+        piv = A[c, c]
+        for r in range(c + 1, k):
+            f = A[r, c] / piv
+            if f != 0.0:
+                for j in range(c, k):
+                    A[r, j] -= f * A[c, j]
+                b[r] -= f * b[c]
+    for c in range(k - 1, -1, -1):
+        s = b[c]
+        for j in range(c + 1, k):
+            s -= A[c, j] * b[j]
+        b[c] = s / A[c, c]
+
+
+@njit(cache=True)
 def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts, has_rot, axes, jstage, jvar, jcoef, scale,
                      n_final, tol):
     """Joint values (n, n_vars) continued from q0 through the targets (K, n, n_axes) (rotations
@@ -273,6 +322,9 @@ def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts,
     res = np.empty(n)
     F = np.empty(m)
     J = np.empty((m, nv))
+    A = np.empty((max(m, nv), max(m, nv)))
+    y = np.empty(max(m, nv))
+    d = np.empty(nv)
     for i in range(n):
         q = q0.copy()
         r = np.inf
@@ -287,22 +339,33 @@ def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts,
                 r = np.max(np.abs(F))
                 if (r < tol and moved <= 1e-11) or it == iters:
                     break
-                if m < nv:
-                    d = q - q0
-                    y = J @ d - F
-                    A = J @ J.T
-                    lam = 1e-13 * max(np.trace(A), 1e-300)
-                    for j in range(m):
-                        A[j, j] += lam
-                    new = J.T @ np.linalg.solve(A, y)
-                    moved = np.max(np.abs(new - d))
-                    q = q0 + new
-                else:
-                    A = J.T @ J
-                    lam = 1e-13 * max(np.trace(A), 1e-300)
+                if m < nv:                  # redundant: q <- q0 + J^T (J J^T)^-1 (J (q - q0) - F)
                     for j in range(nv):
-                        A[j, j] += lam
-                    q = q - np.linalg.solve(A, J.T @ F)
+                        d[j] = q[j] - q0[j]
+                    _gram(J, m, nv, True, A)
+                    for j in range(m):
+                        s_ = -F[j]
+                        for v in range(nv):
+                            s_ += J[j, v] * d[v]
+                        y[j] = s_
+                    _solve(A, y, m)
+                    moved = 0.0
+                    for v in range(nv):
+                        s_ = 0.0
+                        for j in range(m):
+                            s_ += J[j, v] * y[j]
+                        moved = max(moved, abs(s_ - d[v]))
+                        q[v] = q0[v] + s_
+                else:                         # q <- q - (J^T J)^-1 J^T F
+                    _gram(J, m, nv, False, A)
+                    for v in range(nv):
+                        s_ = 0.0
+                        for j in range(m):
+                            s_ += J[j, v] * F[j]
+                        y[v] = s_
+                    _solve(A, y, nv)
+                    for v in range(nv):
+                        q[v] -= y[v]
         Q[i] = q
         res[i] = r
     return Q, res
