@@ -138,6 +138,9 @@ def test_published_a100_is_the_optimum_and_a0_is_not(result):
 
 
 def test_worst_case_variant_and_json_layout(result):
+    from evotol.units import numbers_without_unit
+
+    assert numbers_without_unit(result, result["units"]) == []        # docs/units.md
     data = choi.load()
     S = grad_fd(101.6)
     for case in result["cases"]:
@@ -147,6 +150,10 @@ def test_worst_case_variant_and_json_layout(result):
             for k in ("processes", "tolerances_mm", "machining_cost", "quality_loss", "total_cost", "rss_rad"):
                 assert k in case[part]
         assert "certificate" in case["optimum"]
+        pc = case["published"]["certificate"]
+        assert pc["proven_lower_bound"] <= case["optimum"]["total_cost"]
+        if case["published"]["holds_limit"]:
+            assert pc["gap_to_proven_lower_bound"] >= -1e-12
         w = case["worst_case"]["optimum"]
         assert w["worst_case_rad"] == pytest.approx(np.sum(np.abs(S) * np.array(w["tolerances_mm"])), rel=1e-6)
         assert w["worst_case_rad"] <= T_LIM * (1 + 1e-9)

@@ -92,7 +92,7 @@ def study_units(name: str) -> dict:
                          "process_choice_part": COST, "tolerance_part": COST, "rtol": RELATIVE,
                          "max_relative_tolerance_difference": RELATIVE, "front_size": COUNT,
                          "rss_over_T_A0": RELATIVE, "rss_over_T_A20": RELATIVE, "rss_over_T_A100": RELATIVE,
-                         "linear_optimum_nonlinear_worst_case_over_limit": RELATIVE}}
+                         "linear_optimum_nonlinear_worst_case_over_limit": RELATIVE, "proven_lower_bound": COST}}
     if name == "deng2012-clearalloc":
         return {"keys": {"best_feasible": COST, "ga_vs_doe": RELATIVE + ": (GA - DOE best) / DOE best"}}
     if name == "laramolina2019-5r":
