@@ -163,7 +163,9 @@ def test_mimic_joint_is_coupled_with_multiplier_and_offset_errors(tmp_path):
 
     p = tmp_path / "m.urdf"
     p.write_text(MIMIC)
-    robot = MechanismModel(mechanism_from_dict({"urdf": str(p), "tip": "tool", "end_effector": BOX}))
+    mech = mechanism_from_dict({"urdf": str(p), "tip": "tool", "end_effector": BOX})
+    assert "follow_offset" in mech.sources and "follow_multiplier" not in mech.sources     # on request
+    robot = MechanismModel(mech, sources=list(mech.sources) + ["follow_multiplier"])
     assert robot.kin.variables == ["lead", "slide"]
     assert robot.mechanism.limits["lead"] == pytest.approx((-1.6, 1.0))
     assert {"follow_offset", "follow_multiplier", "follow.tilt_x", "slide"} <= set(robot.source_names)

@@ -104,8 +104,10 @@ def print_limits_and_rank(out: dict) -> None:
     r = out.get("identifiability")
     if not r:
         return
+    own = r.get("rank_without_multipliers", r["rank"])
     pin_txt = (f"; Pinocchio's placement regressor {r['pinocchio_rank']}, both together {r['combined_rank']}"
-               f" ({'same span' if r['pinocchio_rank'] == r['combined_rank'] == r['rank'] else 'DIFFERENT span'})"
+               f" ({'same span' if r['pinocchio_rank'] == r['combined_rank'] == own else 'DIFFERENT span'}"
+               f"{'; the mimic multipliers add %d' % (r['rank'] - own) if r['rank'] > own else ''})"
                if "pinocchio_rank" in r else "")
     print(f"  rank of the {r['n_sources']} sources over {r['over']}: {r['rank']}{pin_txt}")
     if r["blind"]:
@@ -134,7 +136,8 @@ def cmd_check_urdf(args, srcs) -> int:
     print_understood(out)
     print(f"  {out['n_sources']} error sources (nominal value):")
     for s in out["sources"]:
-        print(f"    {s['name']:28s} {s['group']:9s} {_shown(s['nominal'], s['unit']):>12s}  {s['description']}")
+        nominal = f"{s['nominal']:.6g}" if s["unit"] == "1" else _shown(s["nominal"], s["unit"])
+        print(f"    {s['name']:28s} {s['group']:9s} {nominal:>12s}  {s['description']}")
     print_limits_and_rank(out)
     print(f"  forward kinematics vs Pinocchio: {out['fk_vs_pinocchio']:.3g} m")
     print(f"  sensitivity vs central finite differences: {out['fd_rel_error']:.3g} relative "

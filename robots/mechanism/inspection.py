@@ -17,8 +17,19 @@ def sources_with_nominal(model) -> list[dict]:
     """Each source: name, group, unit, description and nominal value (a design parameter's value;
     0 for a placement error, a DH-entry offset or a joint offset, which are errors about the nominal)."""
     params = model.mechanism.parameters
-    return [{"name": s.name, "group": s.group, "unit": s.unit, "description": s.description,
+    mimic = {f"{j}_multiplier" for j in _mimic_joints(model)}
+    return [{"name": s.name, "group": s.group, "unit": "1" if s.name in mimic else s.unit, "description": s.description
+             + (" (a ratio: joint per unit of its leader; the model files it with the angles)" if s.name in mimic else ""),
              "nominal": float(params.get(s.name, 0.0))} for s in model.sources]
+
+
+def _mimic_joints(model) -> list[str]:
+    """Mimic joints of a URDF description (their ``J_multiplier`` parameters are ratios)."""
+    if not model.mechanism.urdf:
+        return []
+    from robots.mechanism.urdf import urdf_joints, _ident
+
+    return [_ident(n) for n, w in urdf_joints(model.mechanism.urdf[0]).items() if w["mimic"]]
 
 
 def limits_and_box(model) -> dict:
@@ -47,6 +58,7 @@ def rank_report(model, q: dict, where: str) -> dict:
         names = [f"{mdl.names[j]}.{f}" for j in chain_joints(mdl, fid) for f in PLACEMENT_FIELDS]
         ref = analyse(S[:, :, own], [model.source_names[i] for i in own], R, names)
         out["pinocchio_rank"], out["combined_rank"] = ref["reference_rank"], ref["combined_rank"]
+        out["rank_without_multipliers"] = ref["rank"]      # the columns Pinocchio's placement regressor can hold
         out["missing"] = ref["missing"]       # placement directions of the chain that no source reproduces
         out["pinocchio_reference"] = "computeFrameKinematicRegressor (LOCAL_WORLD_ALIGNED) of the chain's joints"
     return out

@@ -203,7 +203,7 @@ def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
     offset)}``), ``limits`` (``{variable: (lower, upper)}`` from ``<limit>``, a mimic joint's range
     carried over to its leader), ``tip`` (the description frame that equals the URDF tip frame) and
     ``default_sources``: per joint the six placement errors of its origin and its joint offset (a
-    mimic joint: its offset and multiplier), less the one placement error the offset duplicates
+    mimic joint: its offset; its multiplier ``J_multiplier`` is a source on request), less the one placement error the offset duplicates
     (the rotation about a revolute joint's own axis, the translation along a prismatic joint's),
     when the axis is a coordinate axis of the origin -- the span of Pinocchio's joint placement
     regressor."""
@@ -235,7 +235,7 @@ def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
             (lengths if kind == "prismatic" else angles)[f"{jname}_offset"] = off
             value = f"{jname}_multiplier * {var} + {jname}_offset"
             mimic[jname] = (var, mult, off)
-            own = [f"{jname}_offset", f"{jname}_multiplier"]
+            own = [f"{jname}_offset"]           # the multiplier's error: a source on request (dimensionless)
             if w.get("limit") and mult != 0:
                 lo, hi = sorted(((w["limit"][0] - off) / mult, (w["limit"][1] - off) / mult))
                 plo, phi = limits.get(var, (-np.inf, np.inf))
