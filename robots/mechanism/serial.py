@@ -26,6 +26,29 @@ from robots.clearance.newton_kernel import AVAILABLE as SERIAL_COMPILED   # numb
 from robots.mechanism.placement import PLACEMENT_FIELDS
 
 
+_ANNOUNCED = []
+
+
+def _kernels():
+    """The compiled kernels; one line on stderr the first time a process finds no compiled copy in
+    numba's on-disk cache (a fresh install compiles them once, about 10 s), so it does not look hung."""
+    import os
+    import sys
+
+    from robots.mechanism import serial_kernels
+
+    if not _ANNOUNCED:
+        _ANNOUNCED.append(True)
+        try:
+            index = serial_kernels.inverse_geometry._cache._cache_file._index_path   # numba internals; silent if they change
+        except AttributeError:
+            return serial_kernels
+        if not os.path.exists(index):
+            print("[evotol] compiling the serial-arm kernels with numba (once per install, about 10 s; cached in "
+                  + os.path.dirname(index) + ")", file=sys.stderr, flush=True)
+    return serial_kernels
+
+
 def _kk(g, b, al, d) -> np.ndarray:
     """Rot(z,g) Trans(z,b) Rot(x,al) Trans(x,d) (4x4)."""
     cg, sg, ca, sa = np.cos(g), np.sin(g), np.cos(al), np.sin(al)
@@ -188,7 +211,7 @@ class SerialChain:
 
     def sensitivity(self, Q: np.ndarray) -> np.ndarray:
         """(n, 6, n_cols) at joint values Q (n, n_vars)."""
-        from robots.mechanism import serial_kernels as K
+        K = _kernels()
 
         vs = [(c, s) for c, v in zip(self.v_col, self.v_var) for s in np.flatnonzero((self.var == v) & (self.kind > 0))]
         j_col = np.concatenate([self.j_col, np.array([c for c, _ in vs], np.int64)])
@@ -204,7 +227,7 @@ class SerialChain:
 
     def pose_error(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
         """(n, m, 6) nonlinear tip error for errors (n, m, n_cols) at joint values Q (n, n_vars)."""
-        from robots.mechanism import serial_kernels as K
+        K = _kernels()
 
         p = self.p_terms
         return K.pose_error(*self._args(), np.ascontiguousarray(Q, float), np.asarray(errors, float),   # broadcast views as they are
@@ -213,7 +236,7 @@ class SerialChain:
 
     def inverse_geometry(self, q0: np.ndarray, targets: np.ndarray, Rts: np.ndarray | None, axes, scale: float):
         """(Q (n, n_vars), scaled residual (n,)) continued from q0 through targets (K, n, n_axes)."""
-        from robots.mechanism import serial_kernels as K
+        K = _kernels()
 
         js = np.array([s for s in range(len(self.kind)) if self.kind[s] > 0], np.int64)
         has_rot = Rts is not None

@@ -23,7 +23,7 @@ from robots.mechanism.placement import PLACEMENT_FIELDS
 from robots.mechanism.urdf import _pin, chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
 
 
-def random_joints(model, variables, limits, n: int, seed: int = 0) -> dict:
+def random_joints(variables, limits, n: int, seed: int = 0) -> dict:
     """Uniform joint values inside the limits (a joint without limits: [-pi, pi] or [-0.1, 0.1] m)."""
     rng = np.random.default_rng(seed)
     out = {}
@@ -59,7 +59,7 @@ def check_urdf_chain(robot, n: int = 8, seed: int = 0, step: float = 1e-6) -> di
     info = urdf_frames(path, tip)[3]
     model, fid = info["model"], info["tip_frame_id"]
     kin = robot.kin
-    q = random_joints(model, kin.variables, robot.mechanism.limits, n, seed)
+    q = random_joints(kin.variables, robot.mechanism.limits, n, seed)
     T = kin.state(q, n, twists=False).world[robot.mechanism.end_effector]
     Qp = pinocchio_configuration(model, {v: q[v] for v in kin.variables}, info["mimic"])
     data = model.createData()
@@ -128,7 +128,7 @@ def check_urdf_file(path, tip: str, n_poses: int = 20, sources=None) -> dict:
     model = MechanismModel(mech, sources=sources)
     kin = model.kin
     n = max(int(n_poses), 20)
-    q = random_joints(None, kin.variables, mech.limits, n, seed=0)
+    q = random_joints(kin.variables, mech.limits, n, seed=0)
     q0 = {v: float(np.clip(0.0, *mech.limits.get(v, (-np.inf, np.inf)))) for v in kin.variables}
     T = kin.state(q, n, twists=False).world[mech.end_effector][:, :3, 3]
     chk = check_urdf_chain(model, n=min(n, 8))
