@@ -44,6 +44,14 @@ def test_import_evotol_is_lazy():
     assert out.stdout.strip() == "[]"
 
 
+def test_cli_help_is_lazy():
+    """``evotol --help`` builds every sub-command's parser without the numerical stack."""
+    code = ("import sys\nfrom evotol.cli import build_parser\nbuild_parser().format_help()\n"
+            "print(sorted(m for m in ('numpy', 'scipy', 'pymoo', 'pinocchio', 'pandas', 'numba') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.strip() == "[]"
+
+
 def _named_classes():
     found = set()
     for folder in ("evotol", "robots", "cost_models"):

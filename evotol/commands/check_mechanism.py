@@ -15,8 +15,6 @@ from __future__ import annotations
 import json
 import math
 
-from robots.mechanism.checks import check_mechanism
-
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("check-mechanism", help="check a mechanism description: sources, loop closure, FD agreement",
@@ -63,6 +61,10 @@ def cmd_check_mechanism(args) -> int:
     srcs = [s.strip() for s in args.sources.split(",")] if args.sources else None
     if str(args.file).lower().endswith(".urdf"):
         return cmd_check_urdf(args, srcs)
+    # loaded here, not at import: every sub-command module is imported to build `evotol --help`,
+    # which must not pay for NumPy, the clearance engine and Pinocchio (tests/test_front_door.py)
+    from robots.mechanism.checks import check_mechanism
+
     out = check_mechanism(args.file, args.poses, srcs)
     ok = out["fd_rel_error"] is None or out["fd_rel_error"] <= args.rtol
     if args.json:
