@@ -69,9 +69,9 @@ def __getattr__(name: str):
         module = _WHERE[name]
     except KeyError:
         raise AttributeError(f"module 'evotol' has no attribute {name!r}") from None
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value          # the next access is a plain attribute
-    return value
+    # no caching in the module's globals: import_module returns the already-imported module, so a
+    # repeated access costs one dict lookup more, and no module state is rewritten
+    return getattr(importlib.import_module(module), name)
 
 
 def __dir__():
