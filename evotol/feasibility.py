@@ -159,5 +159,5 @@ def repair_by_scaling(problem, t: np.ndarray, ev=None, max_steps: int = 40, max_
     return t, evaluate_proven(problem, t), {"scale": 1.0, "ratio_before": ratio0, "ratio_after": ratio0, "failed": True}
 
 
-__all__ = ["FEASIBILITY_RTOL", "proven_cuts", "bound_ratio", "meets_requirement", "evaluate_proven", "repair_by_scaling",
-           "tighten_bounds", "measures"]
+__all__ = ["FEASIBILITY_RTOL", "REPAIR_MAX", "proven_cuts", "bound_ratio", "meets_requirement", "evaluate_proven",
+           "repair_by_scaling", "tighten_bounds"]
