@@ -66,8 +66,26 @@ API_PAGES = [
     "evotol.problem", "evotol.accuracy", "evotol.allocators", "evotol.result", "evotol.montecarlo", "evotol.feasibility",
     "evotol.distributions", "evotol.clearances", "evotol.errors", "robots", "robots.base", "robots.checks",
     "robots.mechanism", "robots.assembly", "cost_models",
-    "evotol",       # last: the front door documents the front-door names no page above lists
 ]
+
+
+def public_modules() -> list[str]:
+    """Every public module of the three packages (no ``_`` in its dotted name), in import order."""
+    import pkgutil
+    found = []
+    for pkg in ("evotol", "robots", "cost_models"):
+        found.append(pkg)
+        for info in pkgutil.walk_packages(importlib.import_module(pkg).__path__, pkg + "."):
+            if not any(part.startswith("_") for part in info.name.split(".")):
+                found.append(info.name)
+    return found
+
+
+# then every other public module that has its page (docs/api/<module>.rst; tests/test_docstrings.py
+# checks that every public module has one), and last the front door, which documents the names no
+# page above lists
+API_PAGES += [m for m in public_modules() if m not in API_PAGES and m != "evotol"
+              and os.path.isfile(os.path.join(os.path.dirname(__file__), "api", f"{m}.rst"))] + ["evotol"]
 
 
 def _front_door() -> dict[str, str]:

@@ -12,7 +12,7 @@ Quick use
 >>> res.dominant_joints(0)                          # which joints use their clearance
 
 Many clearance-bound sets at fixed poses (tolerance synthesis, issue 3)
----------------------------------------------------------------------
+-----------------------------------------------------------------------
 :class:`ClearanceEvaluator` computes the per-pose linear maps **once** (kinematics, error mapping
 matrices, loop-equation null spaces) and then evaluates any number of bound sets; identical
 sub-problems (same pose and same bounds on a decoupled block -- for a planar robot the in-plane

@@ -37,7 +37,7 @@ class EngineOptions:
     dedup_antipodes : bool
         Solve one vertex of each antipodal pair (h(-u) = h(u)); False: both (before issue 13).
     patch_bound : str
-        ``"exact"``: the exact sublinearity bound of a patch; ``"legacy"``: min(max H / d, |X|).
+        ``"exact"``: the exact sublinearity bound of a patch; ``"legacy"``: ``min(max H / d, |X|)``.
     interpolate, interpolate_arc : int
         Sub-patches per edge of the dual-interpolation bound on triangles, and sub-arcs per arc
         (0: no interpolation bound, as before issue 13).
