@@ -78,6 +78,17 @@ def test_baselines_are_feasible_processes_and_cost_at_least_the_optimum(clutch_w
             assert r.cost >= opt.cost * (1 - 1e-9)
     lag = allocate_process_baselines(pp)["lagrange"]
     assert lag.feasible
+    # the numbers of the Lagrange closed form (Chase 1990 eq. for the worst-case stack): on its
+    # processes, inside their ranges, the design sits on the limit (sum s_j t_j = 1) with equal
+    # marginal cost per unit of stack, dC_j/dt_j / s_j (central differences of the cost models)
+    s = np.abs(pp.robot.gradient[0]) / pp.robot.limits[0]
+    procs = [next(p for p in pp.processes[n] if p.name == lag.processes[n]) for n in pp.names]
+    t = np.array([lag.tolerances[n] for n in pp.names])
+    assert all(p.lower < tj < p.upper for p, tj in zip(procs, t))
+    assert s @ t == pytest.approx(1.0, rel=1e-9)
+    marginal = [(p.total(tj * (1 + 1e-6)) - p.total(tj * (1 - 1e-6))) / (2e-6 * tj) / sj for p, tj, sj in zip(procs, t, s)]
+    np.testing.assert_allclose(marginal, marginal[0], rtol=1e-6)
+    assert lag.cost == pytest.approx(sum(p.total(tj) for p, tj in zip(procs, t)), rel=1e-12)
 
 
 def test_nsga_front_feasible_points_cost_at_least_the_optimum(clutch_wc):

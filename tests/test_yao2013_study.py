@@ -46,8 +46,14 @@ def test_paper_comparison_under_the_paper_model(study):
 
 
 def test_html_is_offline_and_indexed(study):
-    out, _ = study
+    out, d = study
     html = (out / "yao2013.html").read_text()
+    # the page carries the computed costs of both variants, as the JSON has them (to 6 digits for the
+    # optimum and the GA, 4 for the sensitivity rule), not a rounded or stale copy
+    for variant in ("paper", "verified"):
+        v = d["variants"][variant]
+        for key, digits in (("optimum_cost", 6), ("ga_cost", 6), ("sensitivity_cost", 4)):
+            assert f"{v[key]:.{digits}g}" in html, (variant, key, v[key])
     assert "<script src=\"http" not in html and "Plotly" in html   # plotly.js beside it, no CDN
     assert "Convergence" in html and "exceed rate" in html
     assert "yao2013.html" in (out / "index.html").read_text()
