@@ -44,13 +44,39 @@ class LinearArm(RobotErrorModel):
         self._A, self._B = rng.normal(size=(6, 4)), rng.normal(size=(6, 4))
 
     def sensitivity(self, poses):
+        """J(x) = A + x·B at each pose.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 1)
+            Poses x in [0, 1] (m).
+
+        Returns
+        -------
+        ndarray, shape (n, 6, 4)
+            Sensitivity of the end-effector twist to the four length sources (rows 0–2
+            position in m/m, rows 3–5 orientation in rad/m).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A malformed pose array.
+        evotol.errors.KinematicsError
+            A pose outside [0, 1].
+        """
         x = self.check_poses(poses)[:, 0]
         return self._A[None] + x[:, None, None] * self._B[None]
 
 
 def small_problem() -> ToleranceProblem:
     """Four interval sources of tolerance 20–100 µm (normal, t = 3σ), three poses, position
-    bound 0.2 mm (first-order yield between 0.5 and 1 at the designs of the checks)."""
+    bound 0.2 mm (first-order yield between 0.5 and 1 at the designs of the checks).
+
+    Returns
+    -------
+    ToleranceProblem
+        :class:`LinearArm` with reciprocal costs, poses x = 0, 0.5, 1 m, ``Requirement(position=2e-4)``.
+    """
     tol = {f"l{j}": Tolerance(ReciprocalCost(1.0, 1.0, scale=1e-5), 2e-5, 1e-4, distribution="normal")
            for j in range(4)}
     return ToleranceProblem(LinearArm(), tol, Requirement(position=2e-4), [[0.0], [0.5], [1.0]])
@@ -74,7 +100,25 @@ class _Settings:
 
 def check_returns_evaluation(s: _Settings) -> dict:
     """An :class:`Evaluation` with (n_designs, n_poses) errors of every constrained component, a
-    finite (n_designs,) violation equal to max(error / bound) − 1 for the errors it reports."""
+    finite (n_designs,) violation equal to max(error / bound) − 1 for the errors it reports.
+
+    Parameters
+    ----------
+    s : _Settings
+        The measure, the problem (default :func:`small_problem`) and four designs ``T``
+        (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
+
+    Returns
+    -------
+    dict
+        ``n_fields``: the number of array fields the evaluation fills.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        Not an Evaluation, a missing or non-finite error array of the wrong shape, or a
+        wrong violation.
+    """
     ev = s.measure.evaluate(s.problem, s.T)
     n, P = s.T.shape[0], s.problem.n_poses
     require(isinstance(ev, Evaluation), f"{s.measure.name}: evaluate returned {type(ev).__name__}, not an Evaluation")
@@ -93,7 +137,24 @@ def check_returns_evaluation(s: _Settings) -> dict:
 def check_monotone_in_t(s: _Settings) -> dict:
     """Larger tolerances never give smaller errors: t → 1.5 t, and one source at a time × 1.5,
     at every pose and component (relative decrease at most the measure's ``monotone_rtol``), and
-    the violation never decreases beyond the same."""
+    the violation never decreases beyond the same.
+
+    Parameters
+    ----------
+    s : _Settings
+        The measure, the problem (default :func:`small_problem`) and four designs ``T``
+        (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
+
+    Returns
+    -------
+    dict
+        ``largest_relative_decrease``: the largest relative decrease of an error seen.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        An error or the violation decreases by more than ``monotone_rtol``.
+    """
     base = s.measure.evaluate(s.problem, s.T)
     grown = [1.5 * s.T] + [s.T * np.where(np.arange(s.problem.n_sources) == j, 1.5, 1.0)
                            for j in range(s.problem.n_sources)]
@@ -115,7 +176,25 @@ def check_monotone_in_t(s: _Settings) -> dict:
 
 def check_equals_brute_force(s: _Settings) -> dict:
     """Equal to the measure's own brute-force computation (:meth:`Measure.brute_force`) on the
-    small problem, within its declared ``brute_force_rtol`` / ``brute_force_atol``."""
+    small problem, within its declared ``brute_force_rtol`` / ``brute_force_atol``.
+
+    Parameters
+    ----------
+    s : _Settings
+        The measure, the problem (default :func:`small_problem`) and four designs ``T``
+        (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
+
+    Returns
+    -------
+    dict
+        ``largest_brute_force_difference``: the largest absolute difference (units of the field).
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        No ``brute_force``, an empty result, or a field that differs beyond ``brute_force_rtol`` /
+        ``brute_force_atol``.
+    """
     m = s.measure
     worst = 0.0
     for t in s.T[:2]:
@@ -135,7 +214,24 @@ def check_equals_brute_force(s: _Settings) -> dict:
 
 
 def check_vectorised(s: _Settings) -> dict:
-    """Evaluating four designs at once equals evaluating them one by one (every array field)."""
+    """Evaluating four designs at once equals evaluating them one by one (every array field).
+
+    Parameters
+    ----------
+    s : _Settings
+        The measure, the problem (default :func:`small_problem`) and four designs ``T``
+        (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
+
+    Returns
+    -------
+    dict
+        Empty: nothing measured.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        A field present only one way, or a design's values that differ.
+    """
     ev = _fields(s.measure.evaluate(s.problem, s.T))
     for i in range(s.T.shape[0]):
         one = _fields(s.measure.evaluate(s.problem, s.T[i:i + 1]))
@@ -160,10 +256,12 @@ def measure_checks(measure: Measure, problem: ToleranceProblem | None = None) ->
     problem : ToleranceProblem, optional
         A small problem (default :func:`small_problem`); the measure's ``brute_force`` must handle it.
 
-    Returns
-    -------
-    iterator of (str, callable)
-        Each check takes no argument, raises :class:`evotol.errors.CheckFailed` and returns measured numbers.
+    Yields
+    ------
+    name : str
+        The check's function name (e.g. ``"check_monotone_in_t"``).
+    check : callable
+        Takes no argument, raises :class:`evotol.errors.CheckFailed` and returns measured numbers.
     """
     settings = _Settings(measure, problem)
     for check in CHECKS:
@@ -173,6 +271,13 @@ def measure_checks(measure: Measure, problem: ToleranceProblem | None = None) ->
 def check_measure(measure: Measure, problem: ToleranceProblem | None = None) -> dict:
     """Run every check of :func:`measure_checks`.
 
+    Parameters
+    ----------
+    measure : Measure
+        The measure object (registered or not).
+    problem : ToleranceProblem, optional
+        A small problem (default :func:`small_problem`).
+
     Returns
     -------
     dict
@@ -180,7 +285,7 @@ def check_measure(measure: Measure, problem: ToleranceProblem | None = None) -> 
 
     Raises
     ------
-    CheckFailed
+    evotol.errors.CheckFailed
         Listing every failed check.
     """
     return run_checks(f"measure {getattr(measure, 'name', measure)!r}", measure_checks(measure, problem))

@@ -43,6 +43,17 @@ def tighten_bounds(problem, ev, t: np.ndarray) -> None:
 
     Only poses whose grid bound exceeds the requirement × (1 + FEASIBILITY_RTOL) are refined: the
     others already meet the rule, whatever their exact maximum.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem; nothing is done unless its measure is ``worst_case`` without clearances.
+    ev : Evaluation
+        The evaluation of the one design ``t`` (first row used); its ``*_bound`` (m, rad) are
+        lowered to the certified bound of :func:`evotol.support_bound.certified_max` and its
+        attained values raised to what that search attains.
+    t : ndarray, shape (n_sources,)
+        The design (SI: m or rad).
     """
     if problem.requirement.measure != "worst_case" or problem.clearances is not None:
         return
@@ -66,7 +77,22 @@ def proven_cuts(problem, rows, t: np.ndarray) -> int:
     """Add to a cutting-plane working set (:class:`evotol.constraints.ConstraintRows`) the rows of
     the directions where the certified search of :mod:`evotol.support_bound` finds design ``t``
     above the requirement (directions the ascent from the grid missed). Returns the rows added;
-    0 means ``t`` meets the rule as far as the worst case goes."""
+    0 means ``t`` meets the rule as far as the worst case goes.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem; nothing is added unless its measure is ``worst_case`` without clearances.
+    rows : evotol.constraints.ConstraintRows
+        The working set, extended in place with rows ``row·t / requirement`` (+ constant).
+    t : array_like, shape (n_sources,)
+        The design (SI: m or rad).
+
+    Returns
+    -------
+    int
+        Number of rows added.
+    """
     if problem.requirement.measure != "worst_case" or problem.clearances is not None:
         return 0
     ev = problem.evaluate(np.asarray(t, dtype=float)[None])
@@ -86,7 +112,20 @@ def proven_cuts(problem, rows, t: np.ndarray) -> int:
 
 
 def bound_ratio(problem, ev) -> float:
-    """Largest proven error / requirement over components and poses (1 = exactly at it)."""
+    """Largest proven error / requirement over components and poses (1 = exactly at it).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        Supplies the constrained components, their bounds and the measure.
+    ev : Evaluation
+        Evaluation of one design (first row used); ``*_bound`` where present, else the values.
+
+    Returns
+    -------
+    float
+        The ratio (dimensionless); for the ``yield`` measure ``violation + 1``.
+    """
     if problem.requirement.measure == "yield":
         return float(ev.violation[0] + 1)
     ratio = -np.inf
@@ -99,12 +138,38 @@ def bound_ratio(problem, ev) -> float:
 
 
 def meets_requirement(problem, ev) -> bool:
-    """The rule (module docstring) for one evaluated design."""
+    """The rule (module docstring) for one evaluated design.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem.
+    ev : Evaluation
+        Evaluation of one design (ideally :func:`evaluate_proven`'s).
+
+    Returns
+    -------
+    bool
+        ``bound_ratio(problem, ev) <= 1 + FEASIBILITY_RTOL``.
+    """
     return bound_ratio(problem, ev) <= 1 + FEASIBILITY_RTOL
 
 
 def evaluate_proven(problem, t: np.ndarray):
-    """Exact evaluation of one design with its worst-case bound tightened: ``Evaluation``."""
+    """Exact evaluation of one design with its worst-case bound tightened: ``Evaluation``.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem (its requirement's measure is used).
+    t : array_like, shape (n_sources,)
+        The design (SI: m or rad).
+
+    Returns
+    -------
+    Evaluation
+        One row (n_designs = 1), bounds tightened by :func:`tighten_bounds`.
+    """
     ev = problem.evaluate(np.asarray(t, dtype=float)[None])
     tighten_bounds(problem, ev, np.asarray(t, dtype=float))
     return ev
@@ -116,10 +181,13 @@ def repair_by_scaling(problem, t: np.ndarray, ev=None, max_steps: int = 40, max_
     Parameters
     ----------
     problem : ToleranceProblem
+        The problem (bounds, free variables, requirement).
     t : ndarray
         Full design (n_sources,), SI.
     ev : Evaluation, optional
         Its proven evaluation (:func:`evaluate_proven`), if already computed.
+    max_steps : int
+        Largest number of scaling steps (each evaluates the scaled design).
     max_miss : float
         Largest relative miss repaired (default ``REPAIR_MAX``, for rules whose answer is their own;
         a search method -- GA, NSGA-II, cutting planes -- passes ``inf``: its final design is only

@@ -31,7 +31,15 @@ def _up(x):
 
 
 class Interval:
-    """Arrays ``lo <= hi``; see the module docstring."""
+    """Arrays ``lo <= hi``; see the module docstring.
+
+    Parameters
+    ----------
+    lo : array_like
+        Lower ends (units of the quantity enclosed, e.g. m or rad).
+    hi : array_like, optional
+        Upper ends, broadcastable with ``lo``; None: the degenerate interval ``[lo, lo]``.
+    """
 
     __array_priority__ = 1000
 
@@ -41,10 +49,23 @@ class Interval:
 
     @staticmethod
     def of(x) -> "Interval":
+        """``x`` as an interval: itself if it is one, else the degenerate ``[x, x]``.
+
+        Parameters
+        ----------
+        x : Interval or array_like
+            An interval or plain numbers.
+
+        Returns
+        -------
+        Interval
+            ``x`` unchanged, or ``Interval(x, x)``.
+        """
         return x if isinstance(x, Interval) else Interval(x, x)
 
     @property
     def shape(self):
+        """Broadcast shape of ``lo`` and ``hi`` (tuple of int)."""
         return np.broadcast_shapes(self.lo.shape, self.hi.shape)
 
     def _out(lo, hi) -> "Interval":
@@ -78,6 +99,13 @@ class Interval:
     __rmul__ = __mul__
 
     def reciprocal(self):
+        """Enclosure of 1/x, rounded outwards.
+
+        Returns
+        -------
+        Interval
+            ``[1/hi, 1/lo]``; the whole real line where the interval holds 0.
+        """
         zero = (self.lo <= 0) & (self.hi >= 0)
         with np.errstate(divide="ignore"):
             lo, hi = 1.0 / self.hi, 1.0 / self.lo
@@ -90,6 +118,13 @@ class Interval:
         return Interval.of(o) * self.reciprocal()
 
     def square(self):
+        """Enclosure of x², rounded outwards (tighter than ``x * x``: it is never negative).
+
+        Returns
+        -------
+        Interval
+            ``[0, max(lo², hi²)]`` where the interval holds 0, else ``[min(lo², hi²), max(lo², hi²)]``.
+        """
         a, b = np.abs(self.lo), np.abs(self.hi)
         zero = (self.lo <= 0) & (self.hi >= 0)
         return Interval._out(np.where(zero, 0.0, np.minimum(a, b) ** 2), np.maximum(a, b) ** 2)
@@ -154,7 +189,15 @@ class Interval:
 
 
 class Dual:
-    """Value interval and gradient-enclosure interval (last axis: variables); forward mode."""
+    """Value interval and gradient-enclosure interval (last axis: variables); forward mode.
+
+    Parameters
+    ----------
+    val : Interval
+        Enclosure of the value over the box, shape (...).
+    grad : Interval
+        Enclosure of the gradient with respect to the box's variables, shape (..., n).
+    """
 
     __array_priority__ = 1001
 
@@ -163,7 +206,21 @@ class Dual:
 
     @staticmethod
     def variables(lo, hi) -> list["Dual"]:
-        """One Dual per variable j over boxes ``[lo, hi]`` (arrays (..., n))."""
+        """One Dual per variable j over boxes ``[lo, hi]`` (arrays (..., n)).
+
+        Parameters
+        ----------
+        lo : array_like, shape (..., n)
+            Lower corners of the boxes (units of each variable, e.g. m or rad).
+        hi : array_like, shape (..., n)
+            Upper corners.
+
+        Returns
+        -------
+        list of Dual
+            n Duals: variable j's value interval ``[lo[..., j], hi[..., j]]`` and the unit
+            gradient e_j.
+        """
         lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
         n = lo.shape[-1]
         out = []
@@ -175,6 +232,20 @@ class Dual:
 
     @staticmethod
     def of(x, like: "Dual") -> "Dual":
+        """``x`` as a Dual: itself if it is one, else a constant (zero gradient).
+
+        Parameters
+        ----------
+        x : Dual, Interval or array_like
+            The value.
+        like : Dual
+            A Dual whose gradient shape the constant takes.
+
+        Returns
+        -------
+        Dual
+            ``x`` unchanged, or ``Dual(Interval.of(x), 0)``.
+        """
         if isinstance(x, Dual):
             return x
         return Dual(Interval.of(x), Interval(np.zeros(like.grad.shape)))

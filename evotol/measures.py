@@ -1,18 +1,20 @@
 """Accuracy measures of a linear error model: worst case (exact) and RSS.
 
-Notation: at one pose, source j (tolerance t_j, error vector e_j with |e_j| <= t_j, dimension 1, 2
+Notation: at one pose, source j (tolerance t_j, error vector e_j with ``|e_j| <= t_j``, dimension 1, 2
 or 3) moves the end-effector by B_j e_j, where B_j is the 3×dim block of the sensitivity for the
 position (m/m or m/rad) or the orientation (rad/...).
 
 Worst case. The reachable error set is the Minkowski sum of the segments/disks/balls t_j·B_j·𝔹,
 a convex symmetric set K. Its largest norm is the maximum of its support function over unit
-directions u:   max_{e ∈ K} |e| = max_{|u|=1} h(u),   h(u) = Σ_j t_j ‖B_jᵀ u‖.
+directions u:   ``max_{e ∈ K} |e| = max_{|u|=1} h(u)``,   h(u) = Σ_j t_j ‖B_jᵀ u‖.
 h is convex and positively homogeneous, so the fixed-point step u ← ∇h(u)/‖∇h(u)‖ never decreases
 h (h(v) ≥ ∇h(u)·v by convexity + Euler). We start it from the best point of a hemisphere grid
 with covering angle δ and report:
-  * ``value``  – h(u*) after refinement: *attained* by the explicit errors e_j = t_j B_jᵀu*/‖B_jᵀu*‖;
-  * ``bound``  – max over the grid / cos δ: a *proven* upper bound (for every u there is a grid
-    direction g with angle ≤ δ, and h(g) ≥ g·x* ≥ |x*| cos δ at the farthest point x*).
+
+* ``value``  – h(u*) after refinement: *attained* by the explicit errors ``e_j = t_j B_jᵀu*/‖B_jᵀu*‖``;
+* ``bound``  – max over the grid / cos δ: a *proven* upper bound (for every u there is a grid
+  direction g with angle ≤ δ, and ``h(g) ≥ g·x* ≥ |x*| cos δ`` at the farthest point x*).
+
 For a planar output (one non-zero row) the same formulas hold with a circle of directions.
 
 RSS (statistical). ``rss = sqrt(Σ_j (t_j ‖B_j‖₂)²)``: the root sum square of every source's
@@ -24,7 +26,9 @@ Asymmetric intervals (``docs/tolerances.md``). An interval source j may sit in
 (κ = (plus − minus)/2) and its half-width ρ_j t_j (ρ = (plus + minus)/2). The error set is then
 s(t) + K with the mean shift s(t) = Σ_j B_j c_j and K the centred set of half-widths ρ_j t_j; it
 is no longer centrally symmetric, so the support function
+
     h(u) = u·s(t) + Σ_j ρ_j t_j ‖B_jᵀu‖
+
 is maximised over the **full** sphere (both halves of the direction grid). h is still convex and
 positively homogeneous in u, so the same ascent, attained value and proven bound hold (the
 covering angle of the full grid equals that of ±hemisphere). For fixed u, h is affine in t:
@@ -62,7 +66,20 @@ def hemisphere(n: int = 600) -> tuple[np.ndarray, float]:
 
 
 def circle(n: int = 360) -> tuple[np.ndarray, float]:
-    """Half circle of directions in the xy plane, (n, 3), covering angle δ = π/(2n)."""
+    """Half circle of directions in the xy plane, (n, 3), covering angle δ = π/(2n).
+
+    Parameters
+    ----------
+    n : int
+        Number of directions.
+
+    Returns
+    -------
+    D : ndarray, shape (n, 3)
+        Unit directions at angles (i + 1/2)·π/n, i = 0 ... n − 1.
+    delta : float
+        Covering angle of the full circle by ±D (rad).
+    """
     a = (np.arange(n) + 0.5) * np.pi / n
     return np.stack([np.cos(a), np.sin(a), np.zeros(n)], 1), np.pi / (2 * n)
 
@@ -70,7 +87,25 @@ def circle(n: int = 360) -> tuple[np.ndarray, float]:
 def directions_for(blocks: np.ndarray, n: int = 600, full_sphere: bool = False) -> tuple[np.ndarray, float]:
     """Pick sphere or circle directions for position/orientation blocks (..., 3, k).
 
-    ``full_sphere``: both halves (±D), for error sets that are not centrally symmetric."""
+    ``full_sphere``: both halves (±D), for error sets that are not centrally symmetric.
+
+    Parameters
+    ----------
+    blocks : ndarray, shape (..., 3, k)
+        Sensitivity columns (rows x, y, z of the component); only which rows are non-zero matters.
+    n : int
+        Number of hemisphere directions (a circle gets ``max(n // 2, 90)``).
+    full_sphere : bool
+        Return ±D (both halves) instead of one half.
+
+    Returns
+    -------
+    D : ndarray, shape (n_dir, 3)
+        Unit directions: a half circle in the xy plane when the z row is zero, the single
+        direction z when only the z row is non-zero, else a Fibonacci hemisphere.
+    delta : float
+        Covering angle (rad) of the sphere (or circle) by ±D; 0 for the single direction.
+    """
     active = np.any(np.abs(blocks) > 0, axis=tuple(i for i in range(blocks.ndim) if i != blocks.ndim - 2))
     if not active[2] and active[:2].any():
         D, delta = circle(max(n // 2, 90))
@@ -85,7 +120,21 @@ def directions_for(blocks: np.ndarray, n: int = 600, full_sphere: bool = False) 
 
 @dataclass(frozen=True)
 class WorstCase:
-    """Worst-case error at each pose: attained value, certified bound, worst direction, errors."""
+    """Worst-case error at each pose: attained value, certified bound, worst direction, errors.
+
+    Units follow the component: m for position, rad for orientation.
+
+    Parameters
+    ----------
+    value : ndarray, shape (..., n_poses)
+        Attained maximum error norm h(u*) (m or rad).
+    bound : ndarray, shape (..., n_poses)
+        Proven upper bound on the error norm (grid maximum / cos δ, at least ``value``).
+    direction : ndarray, shape (..., n_poses, 3)
+        The worst direction u* (unit vector).
+    contributions : ndarray, shape (..., n_poses, n_sources)
+        Each source's share of h(u*) (dimensionless fraction, mean shift included).
+    """
 
     value: np.ndarray       # (..., n_poses) attained maximum |error|
     bound: np.ndarray       # (..., n_poses) proven upper bound
@@ -98,7 +147,15 @@ class IntervalShape:
     """Where each source's interval sits (see module docstring): error of interval source j in
     [offset_j + (κ_j − ρ_j) t_j, offset_j + (κ_j + ρ_j) t_j]; disks/balls have ρ = 1, κ = offset = 0.
 
-    rho, kappa: (n_src,) dimensionless; offset: (n_src,) SI (m or rad)."""
+    Parameters
+    ----------
+    rho : ndarray, shape (n_src,)
+        Half-width factor ρ_j = (plus + minus)/2 (dimensionless).
+    kappa : ndarray, shape (n_src,)
+        Centre factor κ_j = (plus − minus)/2 (dimensionless).
+    offset : ndarray, shape (n_src,)
+        Offset of the interval's nominal (SI: m or rad).
+    """
 
     rho: np.ndarray
     kappa: np.ndarray
@@ -106,6 +163,18 @@ class IntervalShape:
 
     @classmethod
     def symmetric_unit(cls, n: int) -> "IntervalShape":
+        """The plain shape ±t of ``n`` sources: ρ = 1, κ = 0, offset = 0.
+
+        Parameters
+        ----------
+        n : int
+            Number of sources.
+
+        Returns
+        -------
+        IntervalShape
+            The plain shape.
+        """
         return cls(np.ones(n), np.zeros(n), np.zeros(n))
 
     @property
@@ -124,7 +193,22 @@ def _interval_columns(blocks: list[np.ndarray]) -> list[int]:
 
 
 def mean_shift(blocks: list[np.ndarray], shape: IntervalShape, T: np.ndarray) -> np.ndarray:
-    """s(t) = Σ_j B_j (offset_j + κ_j t_j) over interval sources, shape (n_designs, n_poses, 3)."""
+    """s(t) = Σ_j B_j (offset_j + κ_j t_j) over interval sources, shape (n_designs, n_poses, 3).
+
+    Parameters
+    ----------
+    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
+        Sensitivity blocks B_j of one component (m or rad per unit of source error).
+    shape : IntervalShape
+        Where each interval sits.
+    T : array_like, shape (n_designs, n_src) or (n_src,)
+        Tolerances (SI: m or rad).
+
+    Returns
+    -------
+    ndarray, shape (n_designs, n_poses, 3)
+        Mean shift of the end-effector error (m or rad); disk/ball sources add nothing.
+    """
     T = np.atleast_2d(T)
     out = np.zeros((T.shape[0], blocks[0].shape[0], 3))
     for j in _interval_columns(blocks):
@@ -136,7 +220,22 @@ def mean_shift(blocks: list[np.ndarray], shape: IntervalShape, T: np.ndarray) ->
 
 def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalShape | None = None) -> np.ndarray:
     """c[p, d, j] = ρ_j ‖B_jᵀ u_d‖ + κ_j u_d·b_j for blocks B_j (n_poses, 3, dim_j); shape
-    (n_poses, n_dir, n_src). With the default shape (ρ = 1, κ = 0): ‖B_jᵀ u_d‖."""
+    (n_poses, n_dir, n_src). With the default shape (ρ = 1, κ = 0): ‖B_jᵀ u_d‖.
+
+    Parameters
+    ----------
+    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
+        Sensitivity blocks B_j of one component (m or rad per unit of source error).
+    D : ndarray, shape (n_dir, 3)
+        Unit directions u_d.
+    shape : IntervalShape or None
+        Interval shape; None: plain ±t.
+
+    Returns
+    -------
+    ndarray, shape (n_poses, n_dir, n_src)
+        Support coefficients c[p, d, j] (m or rad per unit of tolerance).
+    """
     out = np.empty((blocks[0].shape[0], D.shape[0], len(blocks)))
     for j, B in enumerate(blocks):
         proj = np.matmul(np.swapaxes(B, 1, 2), D.T)          # (p, k, d)
@@ -150,7 +249,22 @@ def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: Interva
 
 
 def support_constant(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalShape | None) -> np.ndarray:
-    """u_d·Σ_j B_j offset_j, shape (n_poses, n_dir): the part of h that does not scale with t."""
+    """u_d·Σ_j B_j offset_j, shape (n_poses, n_dir): the part of h that does not scale with t.
+
+    Parameters
+    ----------
+    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
+        Sensitivity blocks B_j of one component.
+    D : ndarray, shape (n_dir, 3)
+        Unit directions u_d.
+    shape : IntervalShape or None
+        Interval shape; None: no offsets (zeros).
+
+    Returns
+    -------
+    ndarray, shape (n_poses, n_dir)
+        The offsets' part of the support function (m or rad).
+    """
     s0 = np.zeros((blocks[0].shape[0], 3))
     if shape is not None:
         for j in _interval_columns(blocks):
@@ -183,9 +297,25 @@ def refine_direction(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray, ite
                      shift: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Ascent u ← ∇h/‖∇h‖ on h(u) = u·s + Σ_j t_j ‖B_jᵀu‖, vectorised over designs and poses.
 
-    blocks: list of (n_poses, 3, dim); t: (n_designs, n_src) half-widths; u: (n_designs, n_poses, 3);
-    shift: optional mean shift s (n_designs, n_poses, 3).
-    Returns (u*, h(u*)) with shapes (n_designs, n_poses, 3) and (n_designs, n_poses).
+    Parameters
+    ----------
+    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
+        Sensitivity blocks B_j of one component.
+    t : ndarray, shape (n_designs, n_src)
+        Half-widths ρ_j t_j (SI: m or rad).
+    u : ndarray, shape (n_designs, n_poses, 3)
+        Starting unit directions.
+    iters : int
+        Maximum number of ascent steps (stops earlier once h stops changing).
+    shift : ndarray, shape (n_designs, n_poses, 3), optional
+        Mean shift s (m or rad); None: centred set.
+
+    Returns
+    -------
+    u : ndarray, shape (n_designs, n_poses, 3)
+        The refined directions u*.
+    h : ndarray, shape (n_designs, n_poses)
+        h(u*), the attained error norm (m or rad).
     """
     Bcat, owner = _stack(blocks)
     starts = np.concatenate([[0], np.cumsum([B.shape[2] for B in blocks])[:-1]])
@@ -213,6 +343,28 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
     ``shape``: asymmetric intervals (:class:`IntervalShape`); the maximum is then taken over the
     full sphere of directions, and the ascent is also started from ``n_starts`` − 1 other good
     grid directions (h has more separated local maxima without central symmetry).
+
+    Parameters
+    ----------
+    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
+        Sensitivity blocks B_j of one component (m or rad per unit of source error).
+    t : array_like, shape (n_designs, n_src) or (n_src,)
+        Tolerances (SI: m or rad).
+    n_directions : int
+        Grid directions when ``coefficients`` is not given (more: smaller δ, tighter bound).
+    coefficients : tuple, optional
+        Precomputed ``(c, D, delta[, const])``.
+    top_only : bool
+        Refine only the poses that can hold the maximum.
+    shape : IntervalShape, optional
+        Interval shape; None: plain ±t.
+    n_starts : int
+        Ascent starts per pose for non-plain shapes.
+
+    Returns
+    -------
+    WorstCase
+        Per design and pose (the design axis dropped for a single design ``t``).
     """
     t = np.asarray(t, dtype=float)
     single = t.ndim == 1
@@ -282,7 +434,21 @@ def worst_case_errors(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray,
     (c_j: the interval's centre, 0 for centred tolerances; for an interval source this is the end
     of the interval on the side of u).
 
-    t: (n_src,), u: (n_poses, 3); returns a list of (n_poses, dim_j) arrays (SI).
+    Parameters
+    ----------
+    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
+        Sensitivity blocks B_j of one component.
+    t : ndarray, shape (n_src,)
+        One design (SI: m or rad).
+    u : ndarray, shape (n_poses, 3)
+        Worst direction at each pose (unit vectors).
+    shape : IntervalShape, optional
+        Interval shape; None: plain ±t.
+
+    Returns
+    -------
+    list of ndarray, each shape (n_poses, dim_j)
+        Source errors (SI: m or rad).
     """
     out = []
     for j, B in enumerate(blocks):
@@ -297,7 +463,18 @@ def worst_case_errors(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray,
 
 
 def spectral_norms(blocks: list[np.ndarray]) -> np.ndarray:
-    """‖B_j‖₂ at every pose, shape (n_poses, n_src): each source's largest effect per unit tolerance."""
+    """‖B_j‖₂ at every pose, shape (n_poses, n_src): each source's largest effect per unit tolerance.
+
+    Parameters
+    ----------
+    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
+        Sensitivity blocks B_j of one component.
+
+    Returns
+    -------
+    ndarray, shape (n_poses, n_src)
+        Largest singular value of each block (m or rad per m or rad of source error).
+    """
     return np.stack([np.linalg.norm(B, ord=2, axis=(1, 2)) if B.shape[2] > 1 else np.linalg.norm(B[:, :, 0], axis=1)
                      for B in blocks], axis=1)
 
@@ -305,8 +482,23 @@ def spectral_norms(blocks: list[np.ndarray]) -> np.ndarray:
 def rss(sens: np.ndarray, t: np.ndarray, shift_norm: np.ndarray | None = None) -> np.ndarray:
     """RSS error sqrt(Σ_j (t_j s_pj)²) for sensitivities (n_poses, n_src) and t (..., n_src) -> (..., n_poses).
 
-    ``shift_norm`` (..., n_poses): |mean shift|, added linearly (``|s| + RSS``, module docstring);
-    pass half-widths ρ_j t_j as ``t`` for asymmetric intervals."""
+    ``shift_norm`` (..., n_poses): ``|mean shift|``, added linearly (``|s| + RSS``, module docstring);
+    pass half-widths ρ_j t_j as ``t`` for asymmetric intervals.
+
+    Parameters
+    ----------
+    sens : ndarray, shape (n_poses, n_src)
+        Spectral norms ‖B_j‖₂ (:func:`spectral_norms`).
+    t : array_like, shape (..., n_src)
+        Tolerances or half-widths (SI: m or rad).
+    shift_norm : ndarray, shape (..., n_poses), optional
+        Norm of the mean shift (m or rad), added linearly.
+
+    Returns
+    -------
+    ndarray, shape (..., n_poses)
+        RSS error (m or rad).
+    """
     t = np.asarray(t, dtype=float)
     out = np.sqrt(np.einsum("pj,...j->...p", sens ** 2, t ** 2))
     return out if shift_norm is None else out + shift_norm

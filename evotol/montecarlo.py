@@ -43,7 +43,43 @@ LINEAR_OK, LINEAR_ROUGH = 0.01, 0.10
 
 @dataclass
 class MonteCarloResult:
-    """Per-pose statistics of sampled end-effector errors (SI units)."""
+    """Per-pose statistics of sampled end-effector errors (SI units).
+
+    Component dictionaries are keyed by the constrained components, ``"position"`` (m) and/or
+    ``"orientation"`` (rad).
+
+    Parameters
+    ----------
+    method : str
+        Sampling method, ``"lhs"`` or ``"mc"``.
+    n_samples : int
+        Samples per pose.
+    seed : int
+        The seed the samples were drawn from.
+    exceed_rate : dict of str to ndarray, shape (n_poses,)
+        Fraction of samples whose first-order error exceeds the requirement (dimensionless).
+    max_error : dict of str to ndarray, shape (n_poses,)
+        Largest sampled first-order error norm (m or rad).
+    quantile_95 : dict of str to ndarray, shape (n_poses,)
+        95 % quantile of the sampled first-order error norm (m or rad).
+    nonlinear_exceed_rate : dict of str to ndarray, shape (n_poses,)
+        The exceed rate on the robot's nonlinear ``pose_error`` (an unassembled sample counts
+        as a miss); empty without a nonlinear model.
+    linearisation_error : float, optional
+        ``max |nonlinear − linear| / max |linear|`` over the samples (dimensionless); None without
+        a nonlinear model.
+    max_error_over_worst_case : dict of str to float
+        Largest over the poses of the sampled maximum / the attained worst case (dimensionless;
+        normally below 1).
+    seconds : float
+        Wall-clock time (s).
+    yield_linear : ndarray, shape (n_poses,), optional
+        Fraction of samples inside every bound, first-order model.
+    yield_nonlinear : ndarray, shape (n_poses,), optional
+        The same on the nonlinear model (unassembled = miss).
+    yield_check : dict
+        :func:`yield_check` of the nonlinear yield where there is one, else the linear.
+    """
 
     method: str
     n_samples: int
@@ -66,6 +102,18 @@ class MonteCarloResult:
         return self.yield_check.get("verdict") == "missed"
 
     def max_exceed_rate(self, nonlinear: bool = False) -> float:
+        """Largest exceed rate over components and poses.
+
+        Parameters
+        ----------
+        nonlinear : bool
+            Read the nonlinear model's rates (falls back to the linear ones without them).
+
+        Returns
+        -------
+        float
+            The rate (dimensionless fraction of samples).
+        """
         rates = self.nonlinear_exceed_rate if nonlinear and self.nonlinear_exceed_rate else self.exceed_rate
         return float(max(np.max(v) for v in rates.values()))
 
@@ -91,6 +139,16 @@ class MonteCarloResult:
                 f"(> {100 * LINEAR_ROUGH:g} %); judge the design by the nonlinear Monte Carlo")
 
     def to_dict(self) -> dict:
+        """The summary as plain data (for JSON/YAML reports).
+
+        Returns
+        -------
+        dict
+            ``method``, ``n_samples``, ``seed``, ``seconds``, ``max_exceed_rate``,
+            ``linearisation_error``, ``max_error_over_worst_case`` and, where available,
+            ``linearisation_verdict``, ``max_exceed_rate_nonlinear`` and ``yield``
+            (:func:`yield_check`'s entries); no per-pose arrays.
+        """
         d = {"method": self.method, "n_samples": self.n_samples, "seed": self.seed, "seconds": self.seconds,
              "max_exceed_rate": self.max_exceed_rate(), "linearisation_error": self.linearisation_error,
              "max_error_over_worst_case": self.max_error_over_worst_case}
@@ -116,7 +174,29 @@ def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: 
     worst pose has the smallest bounds: "met" iff its lower end >= required, "missed" iff its
     upper end < required).
     The interval assumes independent samples (exact for method="mc"; Latin hypercube samples
-    usually vary less, so the interval is then conservative)."""
+    usually vary less, so the interval is then conservative).
+
+    Parameters
+    ----------
+    inside : ndarray, shape (n_poses,)
+        Fraction of the samples inside every bound, per pose (dimensionless).
+    n : int
+        Samples per pose.
+    required : float or None
+        Required yield (dimensionless, 0 to 1); None: no verdict.
+    confidence : float
+        Confidence level of the intervals, in (0, 1).
+    model : str
+        Label of the model sampled (``"linear"`` or ``"nonlinear"``), copied to the output.
+
+    Returns
+    -------
+    dict
+        ``model``, ``n_samples``, ``confidence``, ``worst_pose`` (index), ``yield_estimate``,
+        ``yield_lower``, ``yield_upper``, ``yield_required``, ``verdict_level``,
+        ``verdict_interval`` ([lower, upper]) and, when ``required`` is given, ``verdict``
+        (``"met"``, ``"missed"`` or ``"undecided"``).
+    """
     from scipy.stats import beta
 
     k = np.rint(np.asarray(inside) * n).astype(int)
@@ -276,6 +356,34 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
     grows with every tolerance, so the test is monotone in s). Locked and fixed sources keep their
     values; s stays within the tolerance bounds. Returns {"scale", "tolerances" (SI array),
     "certified" (bool), "n_samples", "confidence"}.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        A problem with a ``yield`` requirement and a robot with a nonlinear ``pose_error``.
+    tolerances : mapping or array_like
+        The design: source name -> tolerance, or one value per source (SI: m or rad).
+    n_samples : int
+        Size of the fresh common sample set (>= 10).
+    seed : int
+        Seed of the fresh samples (differ from the optimiser's to be independent).
+    confidence : float
+        One-sided confidence of the miss probability's upper bound, in (0, 1).
+    iters : int
+        Bisection steps on s.
+
+    Returns
+    -------
+    dict
+        ``scale`` (s, dimensionless), ``tolerances`` ((n_sources,) SI array, free sources scaled
+        by s), ``certified`` (False when even the lower tolerance bounds miss; ``scale`` is then
+        the one at the lower bounds), ``n_samples`` and ``confidence``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A requirement measure other than ``yield``, ``n_samples`` not an integer >= 10, a bad
+        design, or a robot without a nonlinear model.
     """
     from scipy.stats import beta
 

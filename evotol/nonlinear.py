@@ -38,9 +38,28 @@ def _check(problem: ToleranceProblem, seed=0) -> None:
 
 
 def worst_vertex_errors(problem: ToleranceProblem, t) -> dict[str, np.ndarray]:
-    """Nonlinear |error| per pose at each pose's linear worst-case error vector, per constrained
+    """Nonlinear ``|error|`` per pose at each pose's linear worst-case error vector, per constrained
     component (SI, (n_poses,)). The vertex is the one that attains the linear worst case of that
-    component."""
+    component.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        A problem whose robot has a nonlinear ``pose_error``.
+    t : mapping or array_like, shape (n_sources,)
+        The design (SI: m or rad).
+
+    Returns
+    -------
+    dict of str to ndarray, shape (n_poses,)
+        Constrained component -> nonlinear error norm at the worst vertex (m for position, rad
+        for orientation).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        The robot has no nonlinear model, or a bad design.
+    """
     _check(problem)
     t = problem.as_array(t)
     out = {}
@@ -57,7 +76,29 @@ def worst_vertex_errors(problem: ToleranceProblem, t) -> dict[str, np.ndarray]:
 def uniform_interval_samples(problem: ToleranceProblem, t, n_samples: int, seed: int = 0) -> np.ndarray:
     """(n_samples, n_columns) errors uniform in every interval [offset − minus·t, offset + plus·t]
     (Latin hypercube, one column per interval source; disks/balls: uniform direction, radius
-    uniform in [0, t] as :mod:`evotol.montecarlo`)."""
+    uniform in [0, t] as :mod:`evotol.montecarlo`).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (sources, interval shapes).
+    t : mapping or array_like, shape (n_sources,)
+        The design (SI: m or rad).
+    n_samples : int
+        Number of samples.
+    seed : int
+        Seed of the Latin hypercube.
+
+    Returns
+    -------
+    ndarray, shape (n_samples, n_columns)
+        Stacked source errors (SI: m or rad), the same for every pose.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A bad design.
+    """
     t = problem.as_array(t)
     dims = [s.dim for s in problem.robot.sources]
     U = qmc.LatinHypercube(d=sum(dims), seed=seed).random(int(n_samples))
@@ -70,7 +111,34 @@ def uniform_interval_samples(problem: ToleranceProblem, t, n_samples: int, seed:
 
 @dataclass
 class NonlinearCheck:
-    """Nonlinear verification of one design (SI units; ``*_over_requirement``: error / bound)."""
+    """Nonlinear verification of one design (SI units; ``*_over_requirement``: error / bound).
+
+    Component dictionaries are keyed by the constrained components, ``"position"`` (m) and/or
+    ``"orientation"`` (rad).
+
+    Parameters
+    ----------
+    worst_vertex : dict of str to ndarray, shape (n_poses,)
+        Nonlinear error norm at each pose's linear worst-case vertex.
+    linear_worst_case : dict of str to ndarray, shape (n_poses,)
+        The linear (first-order) worst case.
+    mc_max : dict of str to float
+        Largest nonlinear error norm over every Monte Carlo sample and pose.
+    mc_q999 : dict of str to float
+        99.9 % quantile of the nonlinear error norm over every sample and pose.
+    mc_exceed_rate : dict of str to float
+        Fraction of (pose, sample) pairs whose error exceeds the requirement (dimensionless).
+    n_samples : int
+        Monte Carlo samples (shared by every pose).
+    n_poses : int
+        Number of poses checked.
+    seed : int
+        Seed of the samples.
+    seconds : float
+        Wall-clock time (s).
+    requirement : dict of str to float
+        Component -> bound (m or rad).
+    """
 
     worst_vertex: dict[str, np.ndarray]        # component -> (n_poses,) nonlinear error at the worst vertex
     linear_worst_case: dict[str, np.ndarray]   # component -> (n_poses,) linear worst case
@@ -89,6 +157,17 @@ class NonlinearCheck:
         return all(np.max(v) <= self.requirement[c] * (1 + 1e-9) for c, v in self.worst_vertex.items())
 
     def to_dict(self) -> dict:
+        """The check as plain data (for JSON/YAML reports).
+
+        Returns
+        -------
+        dict
+            ``model``, ``n_samples``, ``n_poses``, ``seed``, ``seconds``,
+            ``meets_requirement_nonlinear``, ``max_exceed_rate``,
+            ``max_worst_vertex_over_requirement`` and per component ``<c>_worst_vertex_max``,
+            ``<c>_linear_worst_case_max``, ``<c>_mc_max``, ``<c>_mc_q999``,
+            ``<c>_mc_exceed_rate`` (SI).
+        """
         d = {"model": "nonlinear", "n_samples": self.n_samples, "n_poses": self.n_poses, "seed": self.seed,
              "seconds": self.seconds, "meets_requirement_nonlinear": self.meets_requirement,
              "max_exceed_rate": max(self.mc_exceed_rate.values()),
@@ -106,7 +185,31 @@ class NonlinearCheck:
 @single_threaded_blas
 def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: int = 0,
                      chunk_poses: int = 64) -> NonlinearCheck:
-    """Worst-vertex check and Monte Carlo through ``robot.pose_error`` (module docstring)."""
+    """Worst-vertex check and Monte Carlo through ``robot.pose_error`` (module docstring).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        A problem whose robot has a nonlinear ``pose_error``.
+    t : mapping or array_like, shape (n_sources,)
+        The design (SI: m or rad).
+    n_samples : int
+        Monte Carlo samples (>= 1), the same set at every pose.
+    seed : int
+        Seed of the samples (non-negative).
+    chunk_poses : int
+        Poses passed to ``pose_error`` at once (memory).
+
+    Returns
+    -------
+    NonlinearCheck
+        Worst-vertex errors, linear worst case and Monte Carlo statistics.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A robot without a nonlinear model, a bad ``seed`` or ``n_samples``, or a bad design.
+    """
     t0 = time.perf_counter()
     _check(problem, seed)
     if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) or n_samples < 1:

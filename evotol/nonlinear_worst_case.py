@@ -80,14 +80,14 @@ def nonlinear_worst_case(asm, t, *, rtol: float = 1e-6, max_boxes: int = 200_000
     -------
     dict
         ``max_over_limit`` (the largest proven bound / limit over responses), ``attained_over_limit``,
-        and per response ``name``, ``method`` ("monotone: vertex enumeration" or "branch and bound"),
+        and ``responses``: a list with, per response, ``name``, ``method`` ("monotone: vertex enumeration" or "branch and bound"),
         ``proven_bound_over_limit``, ``attained_over_limit``, ``worst_point_offsets`` (δx at the
         attained extreme, SI), ``side`` (+1: above the nominal response, −1: below), ``linear_over_limit``
         (the arithmetic stack), ``n_boxes``.
 
     Raises
     ------
-    ValidationError
+    evotol.errors.ValidationError
         Not an assembly function, or bad tolerances.
     """
     t = _check(asm, t)

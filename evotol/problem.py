@@ -133,7 +133,20 @@ class ToleranceProblem:
 
     def measure_cache(self, key: str, build):
         """The value a measure cached under ``key`` on this problem, built by ``build()`` on first
-        use (e.g. common Monte Carlo samples, the yield model's moments)."""
+        use (e.g. common Monte Carlo samples, the yield model's moments).
+
+        Parameters
+        ----------
+        key : str
+            Cache key (one per measure and purpose).
+        build : callable
+            Called without arguments to make the value when ``key`` is not cached yet.
+
+        Returns
+        -------
+        object
+            The cached value. The ``with_*`` copies start with an empty cache.
+        """
         if key not in self._measure_cache:
             self._measure_cache[key] = build()
         return self._measure_cache[key]
@@ -175,14 +188,17 @@ class ToleranceProblem:
 
     @property
     def n_sources(self) -> int:
+        """Number of error sources (tolerances), dimensionless."""
         return len(self.names)
 
     @property
     def n_poses(self) -> int:
+        """Number of workspace poses checked, dimensionless."""
         return len(self.poses)
 
     @property
     def n_variables(self) -> int:
+        """Number of free tolerance variables (a ``shared`` group counts once), dimensionless."""
         return int(self.free.sum())
 
     @property
@@ -201,13 +217,47 @@ class ToleranceProblem:
         return out
 
     def groups(self) -> list[str]:
+        """The robot's group label of each source, in source order.
+
+        Returns
+        -------
+        list of str
+            One group name per source (``robot.sources[j].group``).
+        """
         return [s.group for s in self.robot.sources]
 
     def units(self) -> list[str]:
+        """The SI unit of each source's tolerance, in source order.
+
+        Returns
+        -------
+        list of str
+            One unit per source (``"m"`` or ``"rad"``, ``robot.sources[j].unit``).
+        """
         return [s.unit for s in self.robot.sources]
 
     def with_requirement(self, **changes) -> "ToleranceProblem":
-        """A copy with some requirement fields changed (shares the cached sensitivities)."""
+        """A copy with some requirement fields changed (shares the cached sensitivities).
+
+        Parameters
+        ----------
+        **changes
+            :class:`Requirement` fields and their new values (``position`` in m, ``orientation``
+            in rad, ``measure`` ...), as for :func:`dataclasses.replace`.
+
+        Returns
+        -------
+        ToleranceProblem
+            The copy; measure caches start empty.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            The changed requirement is invalid, or its measure cannot judge the problem's
+            clearance sources.
+        TypeError
+            A name that is not a :class:`Requirement` field.
+        """
         new = copy.copy(self)
         new.requirement = dataclasses.replace(self.requirement, **changes)
         new.requirement.validate()
@@ -217,7 +267,24 @@ class ToleranceProblem:
 
     def with_poses(self, idx) -> "ToleranceProblem":
         """A copy on the subset ``idx`` of the poses (indices or boolean mask), reusing the
-        sensitivities already computed (no call to the robot)."""
+        sensitivities already computed (no call to the robot).
+
+        Parameters
+        ----------
+        idx : array_like of int, or bool ndarray, shape (n_poses,)
+            Pose indices (negative ones count from the end) or a boolean mask over the poses.
+
+        Returns
+        -------
+        ToleranceProblem
+            The copy on the selected poses.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A mask of the wrong shape, an empty selection, or indices that are not integers in
+            ``[-n_poses, n_poses)``.
+        """
         idx = np.asarray(idx)
         if idx.dtype == bool:
             if idx.shape != (self.n_poses,):
@@ -235,7 +302,25 @@ class ToleranceProblem:
         return new
 
     def at_poses(self, poses) -> "ToleranceProblem":
-        """A copy on other poses (same tolerances and requirement; sensitivities computed for them)."""
+        """A copy on other poses (same tolerances and requirement; sensitivities computed for them).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, workspace.dim)
+            The new workspace poses (SI: m, rad), at least one.
+
+        Returns
+        -------
+        ToleranceProblem
+            The copy on ``poses``.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            No pose, a malformed pose array, or sensitivities that are not finite there.
+        evotol.errors.KinematicsError
+            A pose outside the robot's workspace.
+        """
         P = self._check_pose_set(poses)
         J = np.asarray(self.robot.sensitivity(P), dtype=float)
         if J.shape != (len(P), 6, self.robot.n_columns) or not np.all(np.isfinite(J)):
@@ -249,7 +334,25 @@ class ToleranceProblem:
     def with_tolerances(self, **fields) -> "ToleranceProblem":
         """A copy with some :class:`Tolerance` fields changed for every source (a scalar, or an
         array/sequence in source order), e.g. ``with_tolerances(offset=c)`` to evaluate interval
-        designs [c − t, c + t]; reuses the sensitivities, re-validates every tolerance."""
+        designs [c − t, c + t]; reuses the sensitivities, re-validates every tolerance.
+
+        Parameters
+        ----------
+        **fields
+            Any of ``offset`` (SI: m or rad), ``minus``, ``plus`` (dimensionless factors),
+            ``cost_width`` and ``contains_nominal``; each a scalar for every source or one value
+            per source, shape (n_sources,).
+
+        Returns
+        -------
+        ToleranceProblem
+            The copy with the changed tolerances.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A field not in the list above, a value of the wrong shape, or a tolerance made invalid.
+        """
         allowed = ("offset", "minus", "plus", "cost_width", "contains_nominal")
         for k in fields:
             if k not in allowed:
@@ -275,7 +378,25 @@ class ToleranceProblem:
         return new
 
     def with_added_poses(self, poses) -> "ToleranceProblem":
-        """A copy with more poses appended (sensitivities computed only for the new ones)."""
+        """A copy with more poses appended (sensitivities computed only for the new ones).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, workspace.dim)
+            Poses to append (SI: m, rad).
+
+        Returns
+        -------
+        ToleranceProblem
+            The copy on the old poses followed by ``poses``.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A malformed pose array, or sensitivities that are not finite at the new poses.
+        evotol.errors.KinematicsError
+            A pose outside the robot's workspace.
+        """
         P = self.robot.check_poses(poses)
         J = np.asarray(self.robot.sensitivity(P), dtype=float)
         if not np.all(np.isfinite(J)):
@@ -288,7 +409,18 @@ class ToleranceProblem:
 
     def full(self, X_free: np.ndarray) -> np.ndarray:
         """Tolerances of every source from the free variables: (n, n_variables) -> (n, n_sources);
-        inserts locked/fixed values and copies each shared variable to all its members."""
+        inserts locked/fixed values and copies each shared variable to all its members.
+
+        Parameters
+        ----------
+        X_free : array_like, shape (n, n_variables) or (n_variables,)
+            Values of the free variables (SI: m or rad).
+
+        Returns
+        -------
+        ndarray, shape (n, n_sources)
+            Tolerance of every source (SI: m or rad).
+        """
         X_free = np.atleast_2d(X_free)
         T = np.empty((X_free.shape[0], self.n_sources))
         T[:, self.free] = X_free
@@ -299,18 +431,59 @@ class ToleranceProblem:
 
     def to_variables(self, A: np.ndarray) -> np.ndarray:
         """Row coefficients per source (..., n_sources) -> per free variable (..., n_variables)
-        (a shared variable collects its members' coefficients)."""
+        (a shared variable collects its members' coefficients).
+
+        Parameters
+        ----------
+        A : ndarray, shape (..., n_sources)
+            Coefficients per source (units of the row per unit of tolerance).
+
+        Returns
+        -------
+        ndarray, shape (..., n_variables)
+            ``A @ variable_matrix``: the coefficients per free variable.
+        """
         return A @ self.variable_matrix
 
     def locked_part(self, A: np.ndarray, power: int = 1) -> np.ndarray:
-        """Row values of the locked/fixed sources: A[:, locked] @ t_locked**power (zeros if none)."""
+        """Row values of the locked/fixed sources: ``A[:, locked] @ t_locked**power`` (zeros if none).
+
+        Parameters
+        ----------
+        A : ndarray, shape (n_rows, n_sources)
+            Row coefficients per source.
+        power : int
+            Power of the locked tolerances (1: linear rows, 2: squared rows as in RSS).
+
+        Returns
+        -------
+        ndarray, shape (n_rows,)
+            The constant part of each row due to the locked sources.
+        """
         lk = self.locked
         if not lk.any():
             return np.zeros(A.shape[0])
         return A[:, lk] @ self.locked_values[lk] ** power
 
     def as_array(self, tolerances: Mapping[str, float] | np.ndarray) -> np.ndarray:
-        """A design as an array in source order; accepts a name -> value mapping (SI)."""
+        """A design as an array in source order; accepts a name -> value mapping (SI).
+
+        Parameters
+        ----------
+        tolerances : Mapping[str, float] or array_like, shape (..., n_sources)
+            Tolerances (SI: m or rad), by source name or in source order.
+
+        Returns
+        -------
+        ndarray, shape (n_sources,) or (..., n_sources)
+            The tolerances as floats in source order.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A mapping without a value for every source, an array whose last axis is not
+            n_sources, or a value that is negative or not finite.
+        """
         if isinstance(tolerances, Mapping):
             missing = [n for n in self.names if n not in tolerances]
             if missing:
@@ -326,13 +499,42 @@ class ToleranceProblem:
 
     def intervals(self, t) -> np.ndarray:
         """(n_sources, 2) interval ends [offset − minus·t, offset + plus·t] of design t (SI); for
-        disk/ball sources [−t, t] (the bound on the norm)."""
+        disk/ball sources [−t, t] (the bound on the norm).
+
+        Parameters
+        ----------
+        t : Mapping[str, float] or array_like, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        ndarray, shape (n_sources, 2)
+            Lower and upper end of each source's interval (SI: m or rad).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A bad design (see :meth:`as_array`).
+        """
         t = self.as_array(t)
         return np.array([self.tolerances[n].interval(t[j]) for j, n in enumerate(self.names)])
 
     def source_errors(self, Z: list[np.ndarray], t: np.ndarray) -> list[np.ndarray]:
         """Map unit samples Z_j (n, dim_j; ``|z| <= 1``, centred) to errors inside the intervals of
-        design t (SI): e_j = offset_j + κ_j t_j + ρ_j t_j z_j (centred sources: t_j z_j)."""
+        design t (SI): e_j = offset_j + κ_j t_j + ρ_j t_j z_j (centred sources: t_j z_j).
+
+        Parameters
+        ----------
+        Z : list of ndarray, each shape (n, dim_j)
+            Unit samples per source (dimensionless).
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        list of ndarray, each shape (n, dim_j)
+            Source errors (SI: m or rad).
+        """
         sh = self.shape
         out = []
         for j, z in enumerate(Z):
@@ -346,7 +548,20 @@ class ToleranceProblem:
     def cost(self, T, include_locked: bool = True) -> np.ndarray:
         """Total cost of designs T (n, n_sources) -> (n,); a single design gives a scalar.
         Fixed sources cost nothing; with ``shared_cost="variable"`` a shared group pays once.
-        ``include_locked=False``: only the sources driven by a variable (what an optimiser moves)."""
+        ``include_locked=False``: only the sources driven by a variable (what an optimiser moves).
+
+        Parameters
+        ----------
+        T : array_like, shape (n, n_sources) or (n_sources,)
+            Designs (SI: m or rad).
+        include_locked : bool
+            Count the locked sources too (default); False: only the free ones.
+
+        Returns
+        -------
+        ndarray, shape (n,), or float
+            Total cost per design (cost units); a float for a single design.
+        """
         T = np.asarray(T, dtype=float)
         single = T.ndim == 1
         T2 = np.atleast_2d(T)
@@ -358,27 +573,93 @@ class ToleranceProblem:
 
     def free_cost(self, t: np.ndarray) -> float:
         """Cost of the sources driven by a variable at one design t (n_sources,), summed one scalar
-        at a time (what the optimum's objective uses; the locked part is a constant)."""
+        at a time (what the optimum's objective uses; the locked part is a constant).
+
+        Parameters
+        ----------
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        float
+            Cost of the free sources (cost units).
+        """
         return sum(float(self.tolerances[n].cost_of(t[j])) for j, n in enumerate(self.names)
                    if self.cost_weight[j] and not self.locked[j])
 
     def source_costs(self, t) -> np.ndarray:
+        """Cost of each source at one design (0 where no cost is counted: fixed sources, and
+        the members after the first of a group with ``shared_cost="variable"``).
+
+        Parameters
+        ----------
+        t : Mapping[str, float] or array_like, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        ndarray, shape (n_sources,)
+            Cost per source (cost units).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A bad design (see :meth:`as_array`).
+        """
         t = self.as_array(t)
         return np.array([float(self.tolerances[n].cost_of(t[j])) * self.cost_weight[j] for j, n in enumerate(self.names)])
 
     def dcost(self, t: np.ndarray) -> np.ndarray:
-        """∂cost/∂t_j per source (n_sources,)."""
+        """∂cost/∂t_j per source (n_sources,).
+
+        Parameters
+        ----------
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        ndarray, shape (n_sources,)
+            Cost derivative per source (cost units per m or rad; 0 where no cost is counted).
+        """
         return np.array([float(self.tolerances[n].dcost_of(t[j])) * self.cost_weight[j] if self.cost_weight[j] else 0.0
                          for j, n in enumerate(self.names)])
 
     def variable_dcost(self, t: np.ndarray) -> np.ndarray:
-        """∂cost/∂x_v per free variable (n_variables,) at source tolerances t."""
+        """∂cost/∂x_v per free variable (n_variables,) at source tolerances t.
+
+        Parameters
+        ----------
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        ndarray, shape (n_variables,)
+            Cost derivative per free variable (cost units per m or rad).
+        """
         return self.dcost(t) @ self.variable_matrix
 
     # --- accuracy -------------------------------------------------------------------------------
     def coefficients(self, component: str):
         """Cached (c[p, d, j], directions, δ[, const[p, d]]) of the worst-case support function
-        (const: the offsets' part, only for asymmetric intervals)."""
+        (const: the offsets' part, only for asymmetric intervals).
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component.
+
+        Returns
+        -------
+        tuple
+            ``(c, D, delta)`` or, for non-plain interval shapes, ``(c, D, delta, const)``:
+            ``c`` (n_poses, n_directions, n_sources) support coefficients (m or rad per unit of
+            tolerance), ``D`` (n_directions, 3) unit directions, ``delta`` their covering angle
+            (rad; see :func:`evotol.measures.directions_for`), ``const``
+            (n_poses, n_directions) the offsets' part (m or rad).
+        """
         if component not in self._coeff_cache:
             blocks = self.blocks[component]
             D, delta = measures.directions_for(np.concatenate(blocks, axis=2), self.n_directions,
@@ -391,7 +672,24 @@ class ToleranceProblem:
         return self._coeff_cache[component]
 
     def support_row(self, component: str, pose: int, u: np.ndarray) -> tuple[np.ndarray, float]:
-        """The worst-case row at one pose and direction u: h(u) = row·t + const (SI)."""
+        """The worst-case row at one pose and direction u: h(u) = row·t + const (SI).
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component.
+        pose : int
+            Pose index.
+        u : ndarray, shape (3,)
+            Unit direction.
+
+        Returns
+        -------
+        row : ndarray, shape (n_sources,)
+            Support coefficient of each source (m or rad per unit of tolerance).
+        const : float
+            The offsets' part (m or rad; 0 for plain centred intervals).
+        """
         if self.shape.plain:
             return np.array([np.linalg.norm(B[pose].T @ u) for B in self.blocks[component]]), 0.0
         blocks = [B[pose:pose + 1] for B in self.blocks[component]]
@@ -432,17 +730,43 @@ class ToleranceProblem:
     def first_order_yield(self):
         """The ``yield`` measure's statistical model of this problem (cached):
         :class:`evotol.statistical.FirstOrderYield`, or :class:`~evotol.statistical.SampledYield`
-        for ``Requirement(model="nonlinear")``."""
+        for ``Requirement(model="nonlinear")``.
+
+        Returns
+        -------
+        evotol.statistical.FirstOrderYield or evotol.statistical.SampledYield
+            The cached model.
+        """
         return first_order_yield(self)
 
     def max_errors(self, T, measure: str | None = None) -> dict[str, np.ndarray]:
-        """Largest error over the poses, per constrained component: name -> (n_designs,)."""
+        """Largest error over the poses, per constrained component: name -> (n_designs,).
+
+        Parameters
+        ----------
+        T : array_like, shape (n_designs, n_sources) or (n_sources,)
+            Designs (SI: m or rad), or one design as a name -> value mapping.
+        measure : str, optional
+            A registered measure; default the requirement's.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_designs,)
+            ``"position"`` (m) and/or ``"orientation"`` (rad) maximum over the poses, for the
+            components the requirement constrains.
+        """
         ev = self.evaluate(T, measure)
         return {c: np.max(getattr(ev, c), axis=1) for c, _ in self.components}
 
     def check_feasible(self) -> None:
         """Raise :class:`InfeasibleError` if even every free tolerance at its lower bound misses
-        the requirement (names the requirement, the smallest achievable error and its pose)."""
+        the requirement (names the requirement, the smallest achievable error and its pose).
+
+        Raises
+        ------
+        evotol.errors.InfeasibleError
+            The design with every free tolerance at its lower bound violates the requirement.
+        """
         T = self.full(self.lower[self.free][None])
         ev = self.evaluate(T)
         if ev.violation[0] <= 1e-9:
@@ -457,6 +781,14 @@ class ToleranceProblem:
 
     # --- summary --------------------------------------------------------------------------------
     def describe(self) -> str:
+        """A printable summary: robot, poses, measure, requirement and each source's range, cost
+        and interval shape (also the ``repr``).
+
+        Returns
+        -------
+        str
+            Several lines of text.
+        """
         r = self.requirement
         lines = [f"ToleranceProblem: {self.robot.name}, {self.n_poses} poses, measure {r.measure}",
                  f"  requirement: position <= {r.position} m, orientation <= {r.orientation} rad"]

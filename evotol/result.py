@@ -26,6 +26,30 @@ class AllocationResult:
 
     ``errors`` holds the exact per-pose errors under the problem's measure; ``certificate`` holds
     optimality evidence where the method has it (lower bound, gap, KKT residual).
+
+    Parameters
+    ----------
+    method : str
+        The allocator's name, as reports show it.
+    problem : ToleranceProblem
+        The problem the design was allocated for.
+    tolerances : dict of str to float
+        Source name -> tolerance (SI: m or rad), in the problem's source order.
+    cost : float
+        Total cost of the design (cost units, :meth:`ToleranceProblem.cost`).
+    feasible : bool
+        Within the tolerance bounds and meeting the requirement (in budget mode: within the
+        bounds and the budget; see :func:`make_result`).
+    errors : Evaluation
+        Errors of the design (one design row) at every pose under the problem's measure (m, rad).
+    history : pandas.DataFrame, optional
+        The allocator's progress per iteration or generation, if it keeps one.
+    certificate : dict, optional
+        Optimality evidence (``lower_bound`` in cost units, relative ``gap``, ``kkt_residual``).
+    seconds : float
+        Wall-clock time of the allocation (s).
+    info : dict
+        Further entries (``bound_ratio``, ``budget``, ``solver_message``, ``warnings`` ...).
     """
 
     method: str
@@ -41,13 +65,39 @@ class AllocationResult:
 
     @property
     def t(self) -> np.ndarray:
+        """The tolerances as an array in source order, shape (n_sources,) (SI: m or rad)."""
         return np.array([self.tolerances[n] for n in self.problem.names])
 
     def max_error(self, component: str = "position") -> float:
+        """Largest error over the poses under the problem's measure.
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component.
+
+        Returns
+        -------
+        float
+            The largest error (m for position, rad for orientation); NaN when the measure did
+            not compute this component.
+        """
         v = getattr(self.errors, component)
         return float(np.max(v)) if v is not None else float("nan")
 
     def worst_pose(self, component: str = "position") -> int:
+        """Index of the pose with the largest error.
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component (it must have been computed).
+
+        Returns
+        -------
+        int
+            Pose index into ``problem.poses``.
+        """
         return int(np.argmax(getattr(self.errors, component)[0]))
 
     def contributions(self, component: str = "position", pose: int | str = "worst",
@@ -71,6 +121,11 @@ class AllocationResult:
         pandas.DataFrame
             Columns source, group, tolerance (SI), unit (SI), ``±`` (the tolerance as text in
             display units, e.g. ``"±12.00 µm"``), cost (cost-model unit), percent; sorted by share.
+
+        Raises
+        ------
+        ValueError
+            The measure computed no contributions for ``component``.
         """
         c = getattr(self.errors, f"{component}_contrib")
         if c is None:
@@ -85,11 +140,32 @@ class AllocationResult:
                              "percent": share}).sort_values("percent", ascending=False, ignore_index=True)
 
     def contributions_per_pose(self, component: str = "position") -> pd.DataFrame:
-        """(n_poses × n_sources) table of % contributions."""
+        """(n_poses × n_sources) table of % contributions.
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component (its contributions must have been computed).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per pose, one column per source name: share of the error (percent).
+        """
         c = getattr(self.errors, f"{component}_contrib")
         return pd.DataFrame(100 * c[0], columns=list(self.problem.names))
 
     def to_dict(self) -> dict:
+        """The result as plain data (for JSON/YAML reports).
+
+        Returns
+        -------
+        dict
+            ``method``, ``tolerances`` (SI), ``cost``, ``feasible``, ``seconds``, ``measure``,
+            ``shared``/``shared_cost`` if any, ``max_<component>_error`` (and ``_bound``; m, rad),
+            ``certificate``, the scalar/list/dict/str ``info`` entries, ``verdict``, ``status``
+            and, if the solver left a message, ``diagnostics``.
+        """
         d = {"method": self.method, "tolerances": dict(self.tolerances), "cost": self.cost,
              "feasible": self.feasible, "seconds": self.seconds,
              "measure": self.problem.requirement.measure}
@@ -138,7 +214,19 @@ class AllocationResult:
 
     def status(self, units: DisplayUnits | None = None) -> str:
         """Whether the design meets the requirement, in words; in budget mode first whether it is
-        within the budget (``feasible`` then means within the budget and the bounds, issue 25)."""
+        within the budget (``feasible`` then means within the budget and the bounds, issue 25).
+
+        Parameters
+        ----------
+        units : DisplayUnits, optional
+            Display units of the errors quoted (default: from the mechanism's ``display``).
+
+        Returns
+        -------
+        str
+            E.g. ``"meets the requirement"``, ``"misses the requirement (position ..., ...)"``,
+            prefixed by ``"within budget ...; "`` or ``"over budget ...; "`` in budget mode.
+        """
         u = units or problem_units(self.problem)
         if "meets_requirement" in self.info:
             meets = bool(self.info["meets_requirement"])
@@ -163,6 +251,11 @@ class AllocationResult:
         ----------
         units : DisplayUnits, optional
             Display units (default: from the mechanism's ``display``, :func:`evotol.display.default_units`).
+
+        Returns
+        -------
+        str
+            Several lines of text.
         """
         u = units or problem_units(self.problem)
         lines = [f"{self.method}: cost {self.cost:.5g}; {self.status(u)}"]
@@ -204,10 +297,19 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
     Parameters
     ----------
     problem : ToleranceProblem
+        The problem the design belongs to.
     method : str
         The allocator's name, as reports show it.
     t : mapping or ndarray
-        The design (SI).
+        The design (SI: m or rad).
+    history : pandas.DataFrame, optional
+        The allocator's progress, stored as is.
+    certificate : dict, optional
+        Optimality evidence (``lower_bound``, ``gap``, ``kkt_residual``), stored as is.
+    seconds : float
+        Wall-clock time of the allocation (s).
+    info : dict, optional
+        Further entries; ``bound_ratio`` (and the budget entries) are added to a copy.
     budget : float, optional
         Budget mode: ``feasible`` then means within the bounds and the budget, and whether the
         requirement is met is ``info["meets_requirement"]`` (issue 15: "feasible" must mean what it says).
@@ -223,6 +325,11 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
     AllocationResult
         ``feasible``: within the bounds and meeting the requirement by the rule of
         :mod:`evotol.feasibility`; ``info["bound_ratio"]``: proven largest error / requirement.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A design ``t`` that is not one non-negative finite value per source.
     """
     t = np.asarray(problem.as_array(t), dtype=float)
     ev = feasibility.evaluate_proven(problem, t)

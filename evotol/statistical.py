@@ -10,12 +10,12 @@ With normal sources x ~ N(μ, Σ) exactly; with other sources x is replaced by t
 same mean and covariance (central limit theorem; CETOL's and 3DCS's "RSS" analysis do the same) and
 the result is flagged as approximate (:attr:`YieldResult.exact`).
 
-Probability of |x| ≤ E (a generalised chi-square CDF). Write x = μ + L z with L Lᵀ = Σ and
+Probability of ``|x| ≤ E`` (a generalised chi-square CDF). Write x = μ + L z with L Lᵀ = Σ and
 z ~ N(0, I₃) = ρ v, where ρ ~ χ₃ and v is uniform on the unit sphere, independent. Along the ray of
-direction v, |μ + ρ L v| > E exactly when ρ > ρ₊(v), the positive root of
-|L v|² ρ² + 2 (μ·L v) ρ + |μ|² − E² = 0 (one positive root whenever |μ| < E). Hence
+direction v, ``|μ + ρ L v| > E`` exactly when ρ > ρ₊(v), the positive root of
+``|L v|² ρ² + 2 (μ·L v) ρ + |μ|² − E² = 0`` (one positive root whenever ``|μ| < E``). Hence
 
-    P(|x| > E) = (1/4π) ∫_{S²} S_χ₃(ρ₊(v)) dv,     S_χ₃(r) = erfc(r/√2) + √(2/π) r e^{−r²/2},
+    P(``|x|`` > E) = (1/4π) ∫_{S²} S_χ₃(ρ₊(v)) dv,     S_χ₃(r) = erfc(r/√2) + √(2/π) r e^{−r²/2},
 
 an integral of a smooth, *positive* function over the sphere: the miss probability has small
 relative error even at ppm levels (no cancellation as in Imhof's formula). For μ = 0,
@@ -24,7 +24,7 @@ relative error even at ppm levels (no cancellation as in Imhof's formula). For �
 one octant, Gauss–Legendre in v_z × midpoint rule in the azimuth. With a mean, the full sphere
 in the eigenbasis is used. Rank-deficient Σ (planar robots) needs no special case.
 
-Both components. P(|δp| ≤ E and |δθ| ≤ Θ) is bounded from below by Bonferroni's inequality,
+Both components. P(``|δp|`` ≤ E and ``|δθ|`` ≤ Θ) is bounded from below by Bonferroni's inequality,
 P(A ∩ B) ≥ 1 − P(Aᶜ) − P(Bᶜ): the requirement "yield ≥ p" is checked on this proven lower bound
 (conservative by at most the probability that both components miss together).
 
@@ -49,7 +49,18 @@ _SQRT_2_PI = np.sqrt(2.0 / np.pi)
 
 
 def chi3_survival(r: np.ndarray) -> np.ndarray:
-    """P(ρ > r) for ρ ~ χ₃ (the norm of a standard normal 3-vector); r ≥ 0, inf allowed."""
+    """P(ρ > r) for ρ ~ χ₃ (the norm of a standard normal 3-vector); r ≥ 0, inf allowed.
+
+    Parameters
+    ----------
+    r : array_like
+        Radii (dimensionless, in standard deviations), r ≥ 0; values above 1e3 are clipped.
+
+    Returns
+    -------
+    ndarray
+        Survival probability S_χ₃(r), same shape as ``r``.
+    """
     x2 = 0.5 * np.minimum(np.asarray(r, dtype=float), 1e3) ** 2
     return _chi3_sf_half_square(x2)
 
@@ -67,6 +78,18 @@ def _chi3_sf_half_square(x2: np.ndarray) -> np.ndarray:
 
 
 def chi3_cdf(r: np.ndarray) -> np.ndarray:
+    """P(ρ ≤ r) for ρ ~ χ₃: erf(r/√2) − √(2/π) r e^{−r²/2}.
+
+    Parameters
+    ----------
+    r : array_like
+        Radii (dimensionless, in standard deviations), r ≥ 0, inf allowed.
+
+    Returns
+    -------
+    ndarray
+        Cumulative probability, same shape as ``r`` (1 at r = inf).
+    """
     r = np.asarray(r, dtype=float)
     with np.errstate(over="ignore", invalid="ignore"):
         out = special.erf(r / np.sqrt(2.0)) - _SQRT_2_PI * r * np.exp(-0.5 * r * r)
@@ -100,7 +123,18 @@ def sphere_rule(n_z: int = 32, n_phi: int = 64) -> tuple[np.ndarray, np.ndarray]
 
 def sym3_eigenvalues(S6: np.ndarray) -> np.ndarray:
     """Eigenvalues (..., 3), descending, of symmetric 3×3 matrices given by their six entries
-    (..., 6) = (xx, yy, zz, xy, xz, yz); closed form (Smith 1961, trigonometric), clipped at 0."""
+    (..., 6) = (xx, yy, zz, xy, xz, yz); closed form (Smith 1961, trigonometric), clipped at 0.
+
+    Parameters
+    ----------
+    S6 : ndarray, shape (..., 6)
+        Entries (xx, yy, zz, xy, xz, yz) of symmetric matrices (e.g. covariances in m² or rad²).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        Eigenvalues, descending, negative ones set to 0 (units of ``S6``).
+    """
     a, b, c, d, e, f = np.moveaxis(S6, -1, 0)
     q = (a + b + c) / 3
     p1 = d * d + e * e + f * f
@@ -124,11 +158,28 @@ def _full(S6: np.ndarray) -> np.ndarray:
 
 def miss_probability(cov6: np.ndarray, bound: float, mean: np.ndarray | None = None,
                      n_z: int = 8, n_phi: int = 8, chunk: int = 2048) -> np.ndarray:
-    """P(|x| > bound) for x ~ N(mean, Σ) in 3-D (see module docstring), vectorised.
+    """P(``|x|`` > bound) for x ~ N(mean, Σ) in 3-D (see module docstring), vectorised.
 
-    cov6: (..., 6) covariance entries (xx, yy, zz, xy, xz, yz) in units², bound: E (> 0),
-    mean: (..., 3) or None. ``n_z``, ``n_phi``: octant rule of the zero-mean case (the rule
-    with a mean uses 3× as many nodes per axis over the whole sphere). Returns (...,).
+    Parameters
+    ----------
+    cov6 : array_like, shape (..., 6)
+        Covariance entries (xx, yy, zz, xy, xz, yz) (m² or rad²).
+    bound : float
+        The bound E (> 0; m or rad).
+    mean : array_like, shape (..., 3), optional
+        Mean of x (m or rad); None or all zero: the zero-mean octant rule.
+    n_z : int
+        Gauss–Legendre nodes in v_z of the zero-mean octant rule (the rule with a mean uses
+        3× as many over the whole sphere).
+    n_phi : int
+        Azimuth nodes of the zero-mean octant rule (with a mean: 6× as many over 2π).
+    chunk : int
+        Covariances processed per block (memory; an eighth of it with a mean).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Miss probability ``P(|x| > E)`` (dimensionless).
     """
     cov6 = np.asarray(cov6, dtype=float)
     shape = cov6.shape[:-1]
@@ -185,13 +236,41 @@ def miss_probability(cov6: np.ndarray, bound: float, mean: np.ndarray | None = N
 
 
 def k_equivalent(q: np.ndarray) -> np.ndarray:
-    """Two-sided normal equivalent k(q) = Φ⁻¹(1 − q/2) of a miss probability q (inf for q = 0)."""
+    """Two-sided normal equivalent k(q) = Φ⁻¹(1 − q/2) of a miss probability q (inf for q = 0).
+
+    Parameters
+    ----------
+    q : array_like
+        Miss probabilities (clipped to [0, 1]).
+
+    Returns
+    -------
+    ndarray
+        k(q) (dimensionless, number of standard deviations), same shape as ``q``.
+    """
     q = np.clip(np.asarray(q, dtype=float), 0.0, 1.0)
     with np.errstate(divide="ignore"):
         return -special.ndtri(0.5 * q)
 
 
 def required_probability(probability: float) -> float:
+    """A required yield checked to be a probability in (0, 1).
+
+    Parameters
+    ----------
+    probability : float
+        The required yield p (dimensionless).
+
+    Returns
+    -------
+    float
+        ``probability`` as a float.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Not a number strictly between 0 and 1.
+    """
     if not (isinstance(probability, (int, float, np.floating)) and 0 < probability < 1):
         raise ValidationError("requirement.probability", probability, "a probability in (0, 1)")
     return float(probability)
@@ -201,11 +280,23 @@ def required_probability(probability: float) -> float:
 class YieldResult:
     """First-order yield of designs at every pose (SI units).
 
-    miss: component -> (n_designs, n_poses) P(|error| > bound); probability: lower bound of the
-    joint yield 1 − Σ miss (Bonferroni); equivalent: component -> k-sigma equivalent error
-    bound·k_req/k(miss); violation: (n_designs,) max over poses of k_req/k(Σ miss) − 1;
-    contributions: component -> (n_designs, n_poses, n_sources) variance shares;
-    exact: every contributing source is normal (otherwise moment-matched normal, CLT).
+    Parameters
+    ----------
+    miss : dict of str to ndarray, shape (n_designs, n_poses)
+        Component -> ``P(|error| > bound)`` (dimensionless).
+    probability : ndarray, shape (n_designs, n_poses)
+        Lower bound of the joint yield ``1 − Σ miss`` (Bonferroni); for :class:`SampledYield`
+        the joint yield counted directly.
+    equivalent : dict of str to ndarray, shape (n_designs, n_poses)
+        Component -> k-sigma equivalent error ``bound·k_req/k(miss)`` (m or rad); for
+        :class:`SampledYield` the sampled quantile of the error norm.
+    violation : ndarray, shape (n_designs,)
+        Max over poses of ``k_req/k(Σ miss) − 1`` (dimensionless; <= 0 meets the requirement).
+    contributions : dict of str to ndarray, shape (n_designs, n_poses, n_sources)
+        Component -> each source's variance share (dimensionless fraction); empty for
+        :class:`SampledYield`.
+    exact : bool
+        Every contributing source is normal (otherwise moment-matched normal, CLT).
     """
 
     miss: dict
@@ -219,11 +310,23 @@ class YieldResult:
 class FirstOrderYield:
     """Cached moments of one problem's linear error model for the ``yield`` measure.
 
-    blocks: component -> list over sources of (n_poses, 3, dim_j) sensitivity blocks;
-    dists: per-source :class:`evotol.distributions.Distribution`; bounds: component -> E;
-    shift: optional (rho, kappa, offset) per source of asymmetric intervals (``docs/tolerances.md``):
-    the unit distribution is placed on [offset + (κ − ρ)t, offset + (κ + ρ)t], i.e.
-    e = offset + t (κ + ρ z): mean offset + t (κ + ρ m), variance t² ρ² v.
+    With ``shift`` (asymmetric intervals, ``docs/tolerances.md``) the unit distribution is placed
+    on [offset + (κ − ρ)t, offset + (κ + ρ)t], i.e. e = offset + t (κ + ρ z): mean
+    offset + t (κ + ρ m), variance t² ρ² v.
+
+    Parameters
+    ----------
+    blocks : dict of str to list of ndarray, each shape (n_poses, 3, dim_j)
+        Component -> sensitivity blocks per source (m or rad per unit of source error).
+    dists : sequence of evotol.distributions.Distribution
+        Each source's distribution inside its tolerance.
+    bounds : dict of str to float or None
+        Component -> bound E (m or rad); None components are not constrained.
+    radial : str
+        Radial law of disk/ball sources (one of ``evotol.distributions.RADIAL``).
+    shift : tuple of three array_like, shape (n_sources,), optional
+        ``(rho, kappa, offset)`` of asymmetric intervals (dimensionless, dimensionless, SI);
+        None: centred ±t.
     """
 
     _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
@@ -251,13 +354,48 @@ class FirstOrderYield:
             self.Bmean[c] = np.stack([B[:, :, 0] if B.shape[2] == 1 else np.zeros(B.shape[:2]) for B in blocks[c]], 1)
 
     def moments(self, comp: str, T: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        """(cov6 (n, p, 6), mean (n, p, 3) or None) of the component for designs T (n, n_src)."""
+        """(cov6 (n, p, 6), mean (n, p, 3) or None) of the component for designs T (n, n_src).
+
+        Parameters
+        ----------
+        comp : str
+            A constrained component, ``"position"`` or ``"orientation"``.
+        T : ndarray, shape (n, n_src)
+            Designs (SI: m or rad).
+
+        Returns
+        -------
+        cov6 : ndarray, shape (n, n_poses, 6)
+            Covariance entries (xx, yy, zz, xy, xz, yz) of the error (m² or rad²).
+        mean : ndarray, shape (n, n_poses, 3), or None
+            Mean error (m or rad); None when every source is centred.
+        """
         S = np.einsum("pjk,nj->npk", self.G[comp], T * T * self.unit_var)
         m = T * self.unit_mean + self.offsets
         mean = np.einsum("pji,nj->npi", self.Bmean[comp], m) if np.any(m) else None
         return S, mean
 
     def evaluate(self, T: np.ndarray, probability: float) -> YieldResult:
+        """Miss probabilities, Bonferroni yield bound, equivalent errors and violation (module
+        docstring) of designs at every pose.
+
+        Parameters
+        ----------
+        T : array_like, shape (n_designs, n_sources) or (n_sources,)
+            Designs (SI: m or rad).
+        probability : float
+            Required yield p, in (0, 1).
+
+        Returns
+        -------
+        YieldResult
+            Per design and pose; ``exact`` as computed from the distributions.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            ``probability`` not in (0, 1).
+        """
         T = np.atleast_2d(np.asarray(T, dtype=float))
         k_req = float(k_equivalent(1.0 - required_probability(probability)))
         miss, eq, contrib = {}, {}, {}
@@ -277,7 +415,23 @@ class FirstOrderYield:
 
 def pose_error_nan(robot, poses: np.ndarray, errors: np.ndarray) -> np.ndarray:
     """robot.pose_error with samples that cannot be assembled as NaN (they count as misses):
-    robots whose ``pose_error`` accepts ``failures="nan"`` report them per sample."""
+    robots whose ``pose_error`` accepts ``failures="nan"`` report them per sample.
+
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        A robot with a nonlinear ``pose_error``.
+    poses : ndarray, shape (n_poses, workspace.dim)
+        Workspace poses (SI: m, rad).
+    errors : ndarray, shape (n_poses, n_samples, n_columns)
+        Stacked source errors per pose and sample (SI: m or rad).
+
+    Returns
+    -------
+    ndarray, shape (n_poses, n_samples, 6)
+        End-effector error twists (position m, orientation rad); NaN where a robot accepting
+        ``failures="nan"`` reports a sample that cannot be assembled.
+    """
     import inspect
 
     if "failures" in inspect.signature(robot.pose_error).parameters:
@@ -293,9 +447,38 @@ class SampledYield:
     the design and a GA compares designs without sampling noise. A sample misses when the position
     or the orientation error exceeds its bound, or when the mechanism cannot be assembled (NaN):
     the joint yield is counted directly (no Bonferroni bound). Per component, the reported error is
-    the sampled ``probability``-quantile of |error| (m or rad). The violation is
+    the sampled ``probability``-quantile of ``|error|`` (m or rad). The violation is
     k_req/k(miss) − 1 as for the first-order measure (piecewise constant in the design).
     Sources with a process mean shift or asymmetric interval are sampled as their distributions say.
+
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        A robot with a nonlinear ``pose_error``.
+    poses : array_like, shape (n_poses, workspace.dim)
+        Workspace poses (SI: m, rad).
+    dists : sequence of evotol.distributions.Distribution
+        Each source's distribution inside its tolerance.
+    bounds : dict of str to float or None
+        Component -> bound E (m or rad); None components are not constrained.
+    n_samples : int
+        Common samples per design and pose.
+    seed : int or None
+        Seed of the common samples.
+    method : str
+        ``"lhs"`` (Latin hypercube) or ``"mc"``.
+    radial : str
+        Radial law of disk/ball sources (one of ``evotol.distributions.RADIAL``).
+    shift : tuple of three array_like, shape (n_sources,), optional
+        ``(rho, kappa, offset)`` of asymmetric intervals (dimensionless, dimensionless, SI);
+        None: centred ±t.
+    max_rows : int
+        Largest number of (design, pose, sample) rows passed to ``pose_error`` at once (memory).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        The robot has no nonlinear model.
     """
 
     def __init__(self, robot, poses: np.ndarray, dists, bounds: dict, n_samples: int = 1024, seed=0,
@@ -318,12 +501,34 @@ class SampledYield:
         self.max_rows = int(max_rows)
 
     def errors(self, t: np.ndarray) -> np.ndarray:
-        """Stacked source errors (n_samples, n_columns) of one design t (n_sources,)."""
+        """Stacked source errors (n_samples, n_columns) of one design t (n_sources,).
+
+        Parameters
+        ----------
+        t : array_like, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        ndarray, shape (n_samples, n_columns)
+            ``offset + t (κ + ρ z)`` per sample and error column (SI: m or rad).
+        """
         tc = np.asarray(t, dtype=float)[self.owner]
         return self.offset + tc * (self.kappa + self.rho * self.unit)
 
     def norms(self, T: np.ndarray) -> dict:
-        """component -> |error| (n_designs, n_poses, n_samples), NaN where not assembled."""
+        """component -> ``|error|`` (n_designs, n_poses, n_samples), NaN where not assembled.
+
+        Parameters
+        ----------
+        T : array_like, shape (n_designs, n_sources) or (n_sources,)
+            Designs (SI: m or rad).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_designs, n_poses, n_samples)
+            Constrained component -> error norm of the nonlinear model (m or rad).
+        """
         T = np.atleast_2d(np.asarray(T, dtype=float))
         P, S = len(self.poses), self.n_samples
         out = {c: np.empty((len(T), P, S)) for c in self.bounds}
@@ -339,6 +544,25 @@ class SampledYield:
         return out
 
     def evaluate(self, T: np.ndarray, probability: float) -> YieldResult:
+        """Sampled miss rates, joint yield, error quantiles and violation of designs at every pose.
+
+        Parameters
+        ----------
+        T : array_like, shape (n_designs, n_sources) or (n_sources,)
+            Designs (SI: m or rad).
+        probability : float
+            Required yield p, in (0, 1).
+
+        Returns
+        -------
+        YieldResult
+            Per design and pose; ``exact`` False, no ``contributions``.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            ``probability`` not in (0, 1).
+        """
         k_req = float(k_equivalent(1.0 - required_probability(probability)))
         nrm = self.norms(T)
         miss, eq = {}, {}

@@ -7,7 +7,7 @@ sits up to ~0.3 % above L: enough to rank designs, too loose to *prove* that a d
 requirement it is allocated to hold with equality.
 
 Here the bound is tightened by branch and bound over spherical caps. Let x* be the farthest point
-of K, H = |x*| = max_{|u|=1} h(u), and u* = x*/H. For a cap C of centre c and angular radius r:
+of K, ``H = |x*| = max_{|u|=1} h(u)``, and u* = x*/H. For a cap C of centre c and angular radius r:
 if u* ∈ C then h(c) ≥ c·x* ≥ H cos r, so H ≤ h(c) / cos r. Hence a cap with
 h(c) / cos r < L (≤ H) cannot hold u* and is dropped; every other cap is split, and
 ``H ≤ max(L, max over live caps h(c) / cos r)`` at every step (the caps always cover every
@@ -65,7 +65,7 @@ def _children_arcs(C: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray
 def certified_max(blocks_p: list[np.ndarray], t: np.ndarray, D: np.ndarray, delta: float, attained: float,
                   shape=None, rtol: float = 1e-9, max_rounds: int = 40, max_caps: int = 200_000,
                   return_direction: bool = False):
-    """Proven upper bound and attained value of max_{|u|=1} h(u) at one pose.
+    """Proven upper bound and attained value of ``max_{|u|=1} h(u)`` at one pose.
 
     Parameters
     ----------
@@ -76,13 +76,20 @@ def certified_max(blocks_p: list[np.ndarray], t: np.ndarray, D: np.ndarray, delt
     D : ndarray
         The measure's direction grid (k, 3); ±D (or D, when it holds both halves) covers the
         sphere, or the xy circle, with angle ``delta`` (rad).
+    delta : float
+        Covering angle of the grid (rad); <= 0 means D is the single exact direction, and
+        ``attained`` is returned as the bound.
     attained : float
         A value of h already attained (the refined maximum), SI.
     shape : IntervalShape, optional
         Asymmetric intervals (D must then be the full-sphere grid).
     rtol : float
         Stop when the bound is within ``rtol`` (relative) of the best attained value.
-
+    max_rounds : int
+        Largest number of split rounds.
+    max_caps : int
+        Largest number of caps (or arcs) a round may split into; the search stops with the
+        current bound beyond it.
     return_direction : bool
         Also return the direction (3,) where ``attained`` was reached (``None`` when the value
         passed in was not beaten).

@@ -84,7 +84,26 @@ del _line, _x, _y, _lev, _z
 
 @dataclass(frozen=True)
 class DeltaGeometry:
-    """Nominal dimensions (m), Brahmia et al. 2023 Sec. 2.1.1 / 3.1."""
+    """Nominal dimensions (m), Brahmia et al. 2023 Sec. 2.1.1 / 3.1.
+
+    Parameters
+    ----------
+    La : float
+        Upper-arm length, m (0.260).
+    Lb : float
+        Length of the two parallelogram rods, m (0.480).
+    Ra : float
+        Base radius ``O0-A_i``, m (0.194).
+    Rb : float
+        Platform radius ``P-B_i``, m (0.030).
+    d : float
+        Half-width of the parallelogram bars, m (0.020).
+
+    Raises
+    ------
+    ValidationError
+        If a length is not finite and positive.
+    """
 
     La: float = 0.260   # upper arm
     Lb: float = 0.480   # parallelogram rods
@@ -105,7 +124,29 @@ class DeltaGeometry:
 
 
 def cylinder_poses(n: int, radius: float = 0.1, z_range=(0.25, 0.5), seed: int | None = 0) -> np.ndarray:
-    """``n`` scrambled-Halton points uniform in the cylindrical workspace, shape (n, 3), m."""
+    """``n`` scrambled-Halton points uniform in the cylindrical workspace, shape (n, 3), m.
+
+    Parameters
+    ----------
+    n : int
+        Number of points (at least 1).
+    radius : float
+        Radius of the cylinder about the base axis, m.
+    z_range : tuple of float
+        ``(z_min, z_max)`` heights of the cylinder, m.
+    seed : int or None
+        Seed of the scrambled Halton sequence (None: not reproducible).
+
+    Returns
+    -------
+    (n, 3) ndarray
+        Platform positions ``(x, y, z)``, m, uniform in the disk of ``radius`` times ``z_range``.
+
+    Raises
+    ------
+    ValidationError
+        If ``n`` is below 1.
+    """
     from scipy.stats import qmc
 
     if int(n) < 1:
@@ -144,6 +185,24 @@ class DeltaRobot(RobotErrorModel):
     Pose coordinates: platform centre ``(x, y, z)`` in metres, base frame (``z`` towards the
     platform). Sources: the 47 geometric error parameters (:data:`PARAMETER_NAMES`), each an
     interval, in m (group ``"linear"``) or rad (group ``"angular"``).
+
+    Parameters
+    ----------
+    geometry : DeltaGeometry or dict or None
+        Nominal dimensions, m; a dict takes keys among ``La, Lb, Ra, Rb, d`` (the others keep
+        their defaults); None: :class:`DeltaGeometry` ().
+    workspace : Workspace or None
+        Pose box; None: ``x, y`` in [-0.1, 0.1] m, ``z`` in [0.25, 0.5] m (displayed in mm).
+    newton_tol : float
+        Stopping step of the forward kinematics with errors, m / rad.
+    max_iter : int
+        Maximum number of chord-Newton iterations.
+
+    Raises
+    ------
+    ValidationError
+        If ``geometry`` has unknown keys or is neither a :class:`DeltaGeometry` nor a dict, or a
+        length is not positive.
     """
 
     name = "delta"
@@ -187,6 +246,22 @@ class DeltaRobot(RobotErrorModel):
         free joint q2; without it (the paper's open chain, eq. 5) j5 = q5 + Δq5 with q5 from
         the nominal relation. Returns two tuples (x, y, z) of arrays (..., 3): rod-1 and rod-2
         branch ends. Works with complex inputs (complex-step derivatives).
+
+        Parameters
+        ----------
+        q1, q2, q3 : array_like, shape (..., 3)
+            Actuated joint variables and the passive joint variables ``q2``, ``q3`` of the three
+            legs, rad (real or complex), broadcastable together and with ``errors``.
+        errors : array_like, shape (..., 47)
+            Error parameters in the order of :data:`PARAMETER_NAMES`, SI (m or rad).
+        level_on_actual : bool
+            True (closed-loop model): ``j5 = pi - j1 - j2 + Δq5``; False (open chain, eq. 5):
+            ``j5 = pi - q1 - q2 + Δq5``.
+
+        Returns
+        -------
+        branch1, branch2 : tuple of 3 ndarray, each shape (..., 3)
+            ``(x, y, z)`` of the rod-1 and rod-2 branch ends of each leg, base frame, m.
         """
         e = self._unpack(errors)
         j1, j2 = q1 + e["q1"], q2 + e["q2"]
@@ -215,7 +290,20 @@ class DeltaRobot(RobotErrorModel):
         return out[0], out[1]
 
     def leg_points(self, q1, q2, q3, errors):
-        """Leg end points (midpoint of the two branch ends), array (..., 3 legs, 3 xyz), m."""
+        """Leg end points (midpoint of the two branch ends), array (..., 3 legs, 3 xyz), m.
+
+        Parameters
+        ----------
+        q1, q2, q3 : array_like, shape (..., 3)
+            Actuated and passive joint variables of the three legs, rad (see :meth:`branch_points`).
+        errors : array_like, shape (..., 47)
+            Error parameters (:data:`PARAMETER_NAMES`), SI.
+
+        Returns
+        -------
+        ndarray, shape (..., 3, 3)
+            Leg end points, base frame, m: axis -2 is the leg, axis -1 is ``x, y, z``.
+        """
         b1, b2 = self.branch_points(q1, q2, q3, errors)
         return np.stack([(u + v) / 2 for u, v in zip(b1, b2)], axis=-1)
 
@@ -226,6 +314,23 @@ class DeltaRobot(RobotErrorModel):
         Solves eq. (3) leg by leg in closed form: in the leg frame, p' = Rot(z, -theta_i) P =
         (R + La c1 + Lb c3 c12, Lb s3, La s1 + Lb c3 s12) with R = Ra - Rb; the elbow-out solution
         of the actuated joint is kept. q4 = q7 = -q3, q6 = q3, q5 = pi - q1 - q2.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3) or (3,)
+            Platform positions ``(x, y, z)``, m.
+
+        Returns
+        -------
+        ndarray, shape (n, 3, 7)
+            Joint variables ``q1 .. q7`` of each leg, rad.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not a finite (n, 3) array.
+        KinematicsError
+            If a pose is outside the workspace or out of reach of a leg.
         """
         poses = self.check_poses(poses)
         q1, q2, q3 = self._ik(poses)
@@ -258,6 +363,21 @@ class DeltaRobot(RobotErrorModel):
 
         q1: (n, 3) actuated angles, rad. Returns (n, 3) platform positions, m (solution with z
         towards the platform). An independent check of :meth:`inverse_kinematics`.
+
+        Parameters
+        ----------
+        q1 : array_like, shape (n, 3) or (3,)
+            Actuated joint angles of the three legs, rad.
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            Platform positions, m.
+
+        Raises
+        ------
+        KinematicsError
+            If the three spheres do not intersect (no assembly) for some row of ``q1``.
         """
         g = self.geometry
         q1 = np.atleast_2d(np.asarray(q1, dtype=float))
@@ -328,11 +448,50 @@ class DeltaRobot(RobotErrorModel):
         (Jacobian at the nominal pose, exact by complex step), vectorised over poses and samples,
         until the step is below ``newton_tol`` (m / rad). Returns (n, s, 3) m. Raises
         ConvergenceError naming the pose if it does not converge.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3)
+            Commanded platform positions, m.
+        errors : array_like, shape (n, s, 47), (s, 47) or (47,)
+            Error parameters (:data:`PARAMETER_NAMES`), SI; ``s`` samples per pose.
+
+        Returns
+        -------
+        ndarray, shape (n, s, 3)
+            Actual platform positions, m.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` or ``errors`` has a wrong shape or non-finite entries.
+        KinematicsError
+            If a pose is outside the workspace, out of reach or (near) singular.
+        ConvergenceError
+            If the iteration does not converge within ``max_iter`` iterations.
         """
         return self._solve(poses, errors)[1][..., :3]
 
     def closure_residual(self, poses, errors) -> np.ndarray:
-        """Max over legs of |leg end point - P| (m) at the solution of :meth:`forward_kinematics`."""
+        """Max over legs of ``|leg end point - P|`` (m) at the solution of :meth:`forward_kinematics`.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3)
+            Commanded platform positions, m.
+        errors : array_like, shape (n, s, 47), (s, 47) or (47,)
+            Error parameters, SI.
+
+        Returns
+        -------
+        ndarray, shape (n, s)
+            Largest loop-closure residual over the three legs, m.
+
+        Raises
+        ------
+        ValidationError, KinematicsError, ConvergenceError
+            As :meth:`forward_kinematics`.
+        """
         q1, X, errors = self._solve(poses, errors)
         r = self._residual(X, q1[:, None, :], errors).reshape(*X.shape[:-1], 3, 3)
         return np.max(np.linalg.norm(r, axis=-1), axis=-1)
@@ -362,6 +521,27 @@ class DeltaRobot(RobotErrorModel):
         pose: (3,) m; errors: (s, 47) SI. Returns P (s, 3) m and dP/de (s, 3, 47) by the implicit
         function theorem at the solved loop closure (dX/de = -(dr/dX)^-1 dr/de, both by complex
         step). Used by gradient-based solvers of the paper's problem (12).
+
+        Parameters
+        ----------
+        pose : array_like, shape (3,)
+            Commanded platform position, m.
+        errors : array_like, shape (s, 47) or (47,)
+            Error parameters at which to evaluate, SI.
+        h : float
+            Complex step, dimensionless (exact to rounding for any small value).
+
+        Returns
+        -------
+        P : ndarray, shape (s, 3)
+            Actual platform positions, m.
+        dP_de : ndarray, shape (s, 3, 47)
+            Jacobian of ``P`` w.r.t. the errors, m per m or m per rad.
+
+        Raises
+        ------
+        ValidationError, KinematicsError, ConvergenceError
+            As :meth:`forward_kinematics`.
         """
         pose = self.check_poses(pose)
         q1, X, errors = self._solve(pose, np.atleast_2d(errors)[None])
@@ -395,6 +575,24 @@ class DeltaRobot(RobotErrorModel):
 
         ``d r / d e`` by complex step through the KK chains (exact to rounding). Rows 3-5 are zero
         (position-only model).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3)
+            Platform positions, m.
+
+        Returns
+        -------
+        ndarray, shape (n, 6, 47)
+            Sensitivity of the pose error to each error parameter, m per m or m per rad (rows 0-2);
+            rows 3-5 are zero.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not a finite (n, 3) array.
+        KinematicsError
+            If a pose is outside the workspace, out of reach or (near) singular.
         """
         poses = self.check_poses(poses)
         q1, X0, J0 = self._nominal_state(poses)
@@ -408,7 +606,25 @@ class DeltaRobot(RobotErrorModel):
         return out
 
     def pose_error(self, poses, errors) -> np.ndarray:
-        """Nonlinear position error (n, s, 6): forward kinematics with errors minus the pose."""
+        """Nonlinear position error (n, s, 6): forward kinematics with errors minus the pose.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3)
+            Commanded platform positions, m.
+        errors : array_like, shape (n, s, 47), (s, 47) or (47,)
+            Error parameters, SI.
+
+        Returns
+        -------
+        ndarray, shape (n, s, 6)
+            Position error ``P - pose``, m (columns 0-2); columns 3-5 (orientation) are zero.
+
+        Raises
+        ------
+        ValidationError, KinematicsError, ConvergenceError
+            As :meth:`forward_kinematics`.
+        """
         poses = self.check_poses(poses)
         P = self.forward_kinematics(poses, errors)
         out = np.zeros(P.shape[:2] + (6,))
@@ -422,6 +638,25 @@ class DeltaRobot(RobotErrorModel):
         This is the quantity the paper's objective (10) compares with P + ΔP: every serial
         sub-chain (3 legs x 2 branches) is evaluated with its errors, joints held at Q_k.
         poses (n, 3) m, errors (n, s, 47). Returns (n, s, 3 legs, 2 branches, 3) m.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3)
+            Platform positions, m, giving the nominal joint variables ``Q_k``.
+        errors : array_like, shape (n, s, 47)
+            Error parameters, SI.
+
+        Returns
+        -------
+        ndarray, shape (n, s, 3, 2, 3)
+            Branch end points, base frame, m (pose, sample, leg, branch, ``x, y, z``).
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not a finite (n, 3) array.
+        KinematicsError
+            If a pose is outside the workspace or out of reach of a leg.
         """
         poses = self.check_poses(poses)
         errors = np.asarray(errors)

@@ -23,11 +23,31 @@ IS_LINEAR = np.isin(PARAMETER_NAMES, LINEAR)
 
 
 def paper_bounds() -> np.ndarray:
-    """Bounds of eq. (13) in SI, (47,): 0.015 mm (m) for linear, 0.015 deg (rad) for angular."""
+    """Bounds of eq. (13) in SI, (47,): 0.015 mm (m) for linear, 0.015 deg (rad) for angular.
+
+    Returns
+    -------
+    ndarray, shape (47,)
+        Bound of each error parameter (order of :data:`robots.delta.PARAMETER_NAMES`):
+        ``1.5e-5`` m for the linear ones, ``radians(0.015)`` rad for the angular ones.
+    """
     return np.where(IS_LINEAR, BOUND_LINEAR_MM * 1e-3, np.radians(BOUND_ANGULAR_DEG))
 
 
 def postures_m(names=None) -> np.ndarray:
+    """Positions of the paper's postures (Fig. 5), in metres.
+
+    Parameters
+    ----------
+    names : iterable of str or None
+        Posture names, keys of :data:`robots.delta.POSTURES_MM` (``"P1"`` ... ``"P15"``);
+        None: all 15, in order.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        Platform positions ``(x, y, z)``, m.
+    """
     names = list(POSTURES_MM) if names is None else list(names)
     return np.array([POSTURES_MM[n] for n in names]) / 1e3
 
@@ -64,17 +84,48 @@ def solve_displacement(robot: DeltaRobot, pose, displacement, bounds=None, *, ob
                        min_magnitude=None, maxiter: int = 150) -> dict:
     """Problem (12)-(13) for one posture and one imposed displacement ΔP (m).
 
-    Minimises F = |P_e - P - ΔP|^2 (eq. 10; ``objective="open"`` sums it over the 6 serial
+    Minimises ``F = |P_e - P - ΔP|^2`` (eq. 10; ``objective="open"`` sums it over the 6 serial
     sub-chains at Q_k) over the 47 errors with ``scipy.optimize.minimize(method="trust-constr")``
     -- an interior-point method for the bound constraints, like the paper's fmincon -- with exact
     gradient and Gauss-Newton Hessian, in variables scaled by the bounds.
 
-    ``bounds`` (SI, default eq. 13) bound |Δ|. ``min_magnitude`` (SI) adds the lower limit of
+    ``bounds`` (SI, default eq. 13) bound ``|Δ|``. ``min_magnitude`` (SI) adds the lower limit of
     eq. (12), ``ΔL_min <= |ΔL|``: that set is two intervals per parameter, so the sign of each
     parameter is fixed first to the descent direction of F at zero error (``+`` when the
     parameter has no influence) and the problem is solved on ``sign * [min, max]``. Without it
-    the start is zero error. Returns errors (SI), F (in units of |ΔP|^2), the achieved
+    the start is zero error. Returns errors (SI), F (in units of ``|ΔP|^2``), the achieved
     displacement of the platform (closed-loop forward kinematics, m), iterations, status.
+
+    Parameters
+    ----------
+    robot : DeltaRobot
+        The robot whose kinematics are used.
+    pose : array_like, shape (3,)
+        Nominal platform position P, m.
+    displacement : array_like, shape (3,)
+        Imposed displacement ΔP, m.
+    bounds : array_like, shape (47,) or None
+        Upper bound of ``|Δ|`` of each parameter, SI (m or rad); None: :func:`paper_bounds`.
+    objective : {"closed", "open"}
+        ``"closed"``: loop-closure forward kinematics; ``"open"``: the 6 serial sub-chains (eq. 10).
+    min_magnitude : float or array_like, shape (47,), or None
+        Lower limit ``ΔL_min`` of ``|Δ|``, SI; None: no lower limit.
+    maxiter : int
+        Iteration limit of ``trust-constr``.
+
+    Returns
+    -------
+    dict
+        ``"errors"``: (47,) solution, SI; ``"F"``: objective value, dimensionless (relative to
+        ``|ΔP|^2``); ``"achieved"``: (3,) displacement of the platform with these errors, m;
+        ``"nit"``: iterations; ``"status"``: scipy's status code; ``"residual_mm"``: distance
+        between the achieved and the imposed displacement, mm.
+
+    Raises
+    ------
+    ValidationError
+        If ``objective`` is neither ``"closed"`` nor ``"open"``, or ``min_magnitude`` is negative
+        or not below ``bounds``.
     """
     if objective not in ("closed", "open"):
         raise ValidationError("objective", objective, "'closed' or 'open'")
@@ -116,10 +167,24 @@ def fig4_intervals(values, bounds=None, zero_tol: float = 1e-6):
 
     values: (n_runs, 47) parameter values of the solutions of problem (12). Per parameter, the
     lower limit is the largest negative value (max of y_neg), the upper limit the smallest
-    positive value (min of y_pos). Values with |v| <= zero_tol * bound are "not used" by a
+    positive value (min of y_pos). Values with ``|v| <= zero_tol * bound`` are "not used" by a
     solution and ignored. The paper does not say what to do when a side is empty: we mirror the
     other side, and use the bound of eq. (13) if the parameter is never used (it then has no
     influence at the postures). Returns (lower, upper) arrays in the units of ``values``.
+
+    Parameters
+    ----------
+    values : array_like, shape (n_runs, 47)
+        Error parameters of the solutions of problem (12), SI (m or rad).
+    bounds : array_like, shape (47,) or None
+        Bounds of eq. (13), same units; None: :func:`paper_bounds`.
+    zero_tol : float
+        Threshold of "not used", as a fraction of the bound, dimensionless.
+
+    Returns
+    -------
+    lower, upper : ndarray, shape (47,)
+        Interval limits (``lower <= 0 <= upper``), in the units of ``values``.
     """
     values = np.atleast_2d(np.asarray(values, float))
     bounds = paper_bounds() if bounds is None else np.asarray(bounds, float)
@@ -140,7 +205,19 @@ VERIFICATION_CASES = {
 
 
 def verification_error_vectors(lo, hi) -> dict[str, np.ndarray]:
-    """The four error vectors of Sec. 4.1 (SI, (47,)), from interval limits lo, hi (SI)."""
+    """The four error vectors of Sec. 4.1 (SI, (47,)), from interval limits lo, hi (SI).
+
+    Parameters
+    ----------
+    lo, hi : array_like, shape (47,)
+        Lower and upper interval limits of each parameter, SI (m or rad).
+
+    Returns
+    -------
+    dict of str to ndarray, shape (47,)
+        Keyed by the case names of ``VERIFICATION_CASES``: each linear parameter at its ``hi``
+        or ``lo`` limit and each angular one likewise, SI.
+    """
     lim = {"lo": np.asarray(lo, float), "hi": np.asarray(hi, float)}
     return {case: np.where(IS_LINEAR, lim[lin], lim[ang]) for case, (lin, ang) in VERIFICATION_CASES.items()}
 
@@ -148,9 +225,24 @@ def verification_error_vectors(lo, hi) -> dict[str, np.ndarray]:
 def verification_errors(robot: DeltaRobot, lo, hi, postures=None) -> dict[str, dict[str, np.ndarray]]:
     """Position error (mm) at the 15 postures for the 4 cases of Sec. 4.1 (Fig. 7).
 
-    ``closed``: |P_e - P| with the loop-closure forward kinematics with errors (ours);
-    ``open``: the largest |P_ei - P| over the 6 serial sub-chains at Q_k (the paper's eq. 6 read
-    literally); ``linear``: |S e| with the first-order map.
+    ``closed``: ``|P_e - P|`` with the loop-closure forward kinematics with errors (ours);
+    ``open``: the largest ``|P_ei - P|`` over the 6 serial sub-chains at Q_k (the paper's eq. 6 read
+    literally); ``linear``: ``|S e|`` with the first-order map.
+
+    Parameters
+    ----------
+    robot : DeltaRobot
+        The robot whose kinematics are used.
+    lo, hi : array_like, shape (47,)
+        Lower and upper interval limits of each parameter, SI (m or rad).
+    postures : iterable of str or None
+        Posture names (see :func:`postures_m`); None: all 15.
+
+    Returns
+    -------
+    dict of str to dict of str to ndarray
+        For each case of ``VERIFICATION_CASES``, ``{"closed", "open", "linear"}`` each an
+        (n_postures,) array of position errors, mm.
     """
     P = postures_m(postures)
     cases = verification_error_vectors(lo, hi)

@@ -40,7 +40,28 @@ def _wrap(a):
 
 @dataclass(frozen=True)
 class FiveBar:
-    """A 5-bar linkage (lengths in m) in a working mode ``modes = (leg1, leg2)``, +1 elbow-up."""
+    """A 5-bar linkage (lengths in m) in a working mode ``modes = (leg1, leg2)``, +1 elbow-up.
+
+    Parameters
+    ----------
+    L0 : float
+        Base length ``A-B``, m (thesis: 100 mm).
+    L1, L2 : float
+        Leg-1 links ``A-C`` and ``C-E``, m (50 mm each).
+    L3, L4 : float
+        Leg-2 links ``B-D`` and ``D-E``, m (50 mm each).
+    L5 : float
+        Offset ``E-P`` along link ``C-E`` extended, m (0 in the thesis: ``P = E``).
+    modes : tuple of int
+        Working mode ``(leg1, leg2)``, each +1 (elbow-up) or -1 (elbow-down); default ``(1, -1)``.
+    workspace : Workspace
+        Pose box; default the thesis's grid ``x`` in [-20, 20] mm, ``y`` in [30, 70] mm.
+
+    Raises
+    ------
+    ValidationError
+        If ``L0`` ... ``L4`` is not positive, ``L5`` is negative, or ``modes`` is not a pair of +1/-1.
+    """
 
     L0: float = THESIS_LENGTHS["L0"]
     L1: float = THESIS_LENGTHS["L1"]
@@ -65,7 +86,26 @@ class FiveBar:
     def inverse_geometry(self, poses) -> dict[str, np.ndarray]:
         """Joint angles theta1..theta5 (rad) and points A..E, P (m) for poses (n, 2), eqs. IV.1-IV.19.
 
-        Raises KinematicsError naming the pose when it is out of reach (no NaN)."""
+        Raises KinematicsError naming the pose when it is out of reach (no NaN).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            End-effector positions ``(x, y)``, m.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``"theta1"`` ... ``"theta5"``: (n,) joint angles, rad (``theta5`` wrapped to
+            ``[-pi, pi)``); ``"A"``, ``"B"``, ``"C"``, ``"D"``, ``"E"``, ``"P"``: (n, 2) points, m.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not an (n, 2) array.
+        KinematicsError
+            If leg 1 or leg 2 cannot reach a pose.
+        """
         P = np.atleast_2d(np.asarray(poses, float))
         if P.ndim != 2 or P.shape[1] != 2:
             raise ValidationError("poses shape", P.shape, "(n, 2): x, y in metres")
@@ -107,12 +147,45 @@ class FiveBar:
         return dict(theta1=th1, theta2=th2, theta3=th3, theta4=th4, theta5=th5, A=A, B=B, C=C, D=D, E=E, P=P)
 
     def joint_values(self, poses) -> dict[str, np.ndarray]:
+        """Joint angles ``theta1`` ... ``theta5`` of :meth:`inverse_geometry` (the clearance model's joint values).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            End-effector positions ``(x, y)``, m.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``"theta1"`` ... ``"theta5"``: (n,) joint angles, rad.
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`inverse_geometry`.
+        """
         g = self.inverse_geometry(poses)
         return {k: g[k] for k in ("theta1", "theta2", "theta3", "theta4", "theta5")}
 
     def parallel_singularity(self, poses) -> np.ndarray:
         """Type-2 singularity measure: sine of the angle between links C-E and D-E (0 when C, E, D
-        are aligned, the parallel singularity of the 5-bar)."""
+        are aligned, the parallel singularity of the 5-bar).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            End-effector positions ``(x, y)``, m.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Signed sine of the angle from ``C-E`` to ``D-E``, dimensionless, in [-1, 1].
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`inverse_geometry`.
+        """
         g = self.inverse_geometry(poses)
         u, v = g["E"] - g["C"], g["E"] - g["D"]
         return (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
@@ -120,7 +193,28 @@ class FiveBar:
     def singularity_locus(self, x, y_low: float, y_high: float, n_bisect: int = 60) -> np.ndarray:
         """Points (x, y) (m) of the parallel singularity (C, E, D aligned) inside ``[y_low, y_high]``
         for each x of ``x``: the sign change of :meth:`parallel_singularity` along y, found by
-        bisection (vectorised). x values with no crossing in the range give no point."""
+        bisection (vectorised). x values with no crossing in the range give no point.
+
+        Parameters
+        ----------
+        x : array_like, shape (k,)
+            Abscissae at which to look for the singularity, m.
+        y_low, y_high : float
+            Search range in ``y``, m, sampled at 81 points before bisection.
+        n_bisect : int
+            Bisection steps per crossing.
+
+        Returns
+        -------
+        ndarray, shape (p, 2)
+            Singular points ``(x, y)``, m, sorted by ``x`` then ``y`` (several per ``x`` if the
+            locus crosses the range more than once; (0, 2) if none).
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`inverse_geometry` (a grid point out of reach raises).
+        """
         x = np.asarray(x, float)
         ys = np.linspace(y_low, y_high, 81)
         X, Yg = np.meshgrid(x, ys, indexing="ij")
@@ -147,7 +241,27 @@ class FiveBar:
     def forward_geometry(self, theta1, theta3, lengths: dict | None = None, reference=None) -> np.ndarray:
         """End-effector position (n, 2) from the actuated angles (circle intersection at E), with
         optionally perturbed lengths ``lengths = {L0..L5: (n,) arrays}`` (m). The assembly
-        branch is the one closest to ``reference`` points E (n, 2) (the nominal E)."""
+        branch is the one closest to ``reference`` points E (n, 2) (the nominal E).
+
+        Parameters
+        ----------
+        theta1, theta3 : array_like
+            Actuated angles at ``A`` and ``B``, rad, broadcastable (e.g. (n,) or (n, m)).
+        lengths : dict of str to array_like, or None
+            Replacements for some of ``L0`` ... ``L5``, m, broadcastable with the angles; None: nominal.
+        reference : array_like, shape (..., 2), or None
+            Points ``E`` (m) selecting the assembly branch; None: the branch on the left of ``C -> D``.
+
+        Returns
+        -------
+        ndarray, shape (..., 2)
+            End-effector positions ``P``, m.
+
+        Raises
+        ------
+        KinematicsError
+            If the loop cannot close for some input (circles at ``C`` and ``D`` do not intersect).
+        """
         Ls = {k: getattr(self, k) for k in ("L0", "L1", "L2", "L3", "L4", "L5")}
         if lengths:
             Ls.update(lengths)
@@ -176,7 +290,13 @@ class FiveBar:
 
     # ------------------------------------------------------------------ clearance model
     def dh_tree(self) -> DHTree:
-        """Modified DH table IV.1 (frames 1..7; frames 5 and 6 both sit at E: the cut joint)."""
+        """Modified DH table IV.1 (frames 1..7; frames 5 and 6 both sit at E: the cut joint).
+
+        Returns
+        -------
+        DHTree
+            Frames ``"1"`` ... ``"7"`` with joint variables ``theta1`` ... ``theta5``, lengths in m.
+        """
         return DHTree([
             DHFrame("1", "0", sigma=0, mu=1, d=-self.L0 / 2, theta="theta1"),
             DHFrame("2", "1", sigma=0, d=self.L1, theta="theta2"),
@@ -195,7 +315,25 @@ class FiveBar:
         Defaults are the thesis's: ``beta_xy = 0.01 rad``, ``beta_z = 0.2 rad`` for the passive
         joints C, D, E and 0 for the actuated A, B, translational clearances 0.1 mm.
         Leg 1 = chain ``A, C`` (thesis joints (1,1), (1,2)); leg 2 = chain ``B, D, E``
-        ((2,1), (2,2), (2,3))."""
+        ((2,1), (2,2), (2,3)).
+
+        Parameters
+        ----------
+        b_xy, b_z : float
+            Radial and axial translational clearance of each joint, m (0.1 mm).
+        beta_xy : float
+            Tilt clearance about in-plane axes, rad (0.01).
+        beta_z_passive, beta_z_active : float
+            Rotational clearance about the joint axis of the passive (C, D, E) and actuated (A, B)
+            joints, rad (0.2 and 0).
+        bounds : dict of str to ClearanceBounds, or None
+            Per-joint bounds overriding the above, keyed by joint name ``A``, ``C``, ``B``, ``D``, ``E``.
+
+        Returns
+        -------
+        ClearanceMechanism
+            Planar closed-loop mechanism with end-effector ``P`` (frame 7).
+        """
         frames = dict(A="1", C="2", B="3", D="4", E="5")
         active = dict(A=True, B=True, C=False, D=False, E=False)
         joints = []
@@ -236,7 +374,16 @@ class FiveBarGeometric(RobotErrorModel):
     and actuated angles, so the core's finite-difference check applies.
 
     Poses at (or within ``singular_tol`` of) the parallel singularity raise KinematicsError: J_p
-    is unbounded there (the default workspace stays above the singular circle |OP| = 50 mm).
+    is unbounded there (the default workspace stays above the singular circle ``|OP| = 50 mm``).
+
+    Parameters
+    ----------
+    fivebar : FiveBar or None
+        The linkage; None: :class:`FiveBar` () (thesis lengths, modes ``(1, -1)``).
+    workspace : Workspace or None
+        Pose box, m; None: ``GEOMETRIC_WORKSPACE`` (``x`` in [-20, 20] mm, ``y`` in [55, 70] mm).
+    singular_tol : float
+        Poses with ``abs(parallel_singularity) < singular_tol`` (dimensionless sine) are refused.
     """
 
     name = "deng2012-5bar-geometric"
@@ -257,7 +404,28 @@ class FiveBarGeometric(RobotErrorModel):
         return poses, self.robot.inverse_geometry(poses)
 
     def jacobian_thesis(self, poses) -> np.ndarray:
-        """J_p (n, 2, 8) of eq. IV.43 and J_theta2 (n, 8) of eq. IV.40, columns dL0..dL5, dth1, dth3."""
+        """J_p (n, 2, 8) of eq. IV.43 and J_theta2 (n, 8) of eq. IV.40, columns dL0..dL5, dth1, dth3.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2)
+            End-effector positions, m.
+
+        Returns
+        -------
+        Jp : ndarray, shape (n, 2, 8)
+            ``d(p_x, p_y)`` per source, m per m (lengths) or m per rad (angles).
+        Jtheta2 : ndarray, shape (n, 8)
+            ``d theta2`` per source, rad per m or rad per rad.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not a finite (n, 2) array.
+        KinematicsError
+            If a pose is outside the workspace, out of reach, or within ``singular_tol`` of the
+            parallel singularity.
+        """
         poses, g = self._geometry(poses)
         r = self.robot
         n = len(poses)
@@ -286,6 +454,24 @@ class FiveBarGeometric(RobotErrorModel):
         return Jp, Jth2
 
     def sensitivity(self, poses) -> np.ndarray:
+        """First-order map of the 8 sources onto the pose error (eqs. IV.37-IV.43).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2)
+            End-effector positions, m.
+
+        Returns
+        -------
+        ndarray, shape (n, 6, 8)
+            Rows ``dp_x, dp_y`` (m per unit source) from :meth:`jacobian_thesis`, row 5 the rotation
+            ``dtheta1 + dtheta2`` of the end-effector link (rad per unit source); rows 2-4 zero.
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`jacobian_thesis`.
+        """
         Jp, Jth2 = self.jacobian_thesis(poses)
         out = np.zeros((len(Jp), 6, 8))
         out[:, 0:2] = Jp
@@ -294,6 +480,26 @@ class FiveBarGeometric(RobotErrorModel):
         return out
 
     def pose_error(self, poses, errors) -> np.ndarray:
+        """Exact pose error: the loop re-solved with perturbed lengths and actuated angles.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2)
+            End-effector positions, m.
+        errors : array_like, shape (n, m, 8)
+            Source values ``dL0 .. dL5`` (m), ``dtheta1, dtheta3`` (rad), ``m`` samples per pose.
+
+        Returns
+        -------
+        ndarray, shape (n, m, 6)
+            Columns 0-1: position error, m; column 5: rotation of link ``C-E``, rad, wrapped to
+            ``[-pi, pi)``; columns 2-4 zero.
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`jacobian_thesis`; KinematicsError also if the perturbed loop cannot close.
+        """
         poses, g = self._geometry(poses)
         errors = np.asarray(errors, float)
         n, m, _ = errors.shape
@@ -325,6 +531,32 @@ def combined_max_pose_error(fivebar: FiveBar, poses, *, clearance=None, geometri
     clearance: a ClearanceMechanism (default: the thesis's clearances) or None;
     geometric: dict source name -> tolerance (m or rad) over L0..L5, theta1, theta3 (missing = 0).
     Returns a MaxPoseError with ``p_extra``/``r_extra`` = the maximising geometric errors.
+
+    Parameters
+    ----------
+    fivebar : FiveBar
+        The linkage.
+    poses : array_like, shape (n, 2)
+        End-effector positions, m.
+    clearance : ClearanceMechanism or None
+        Clearance model; None: ``fivebar.clearance_mechanism()``.
+    geometric : dict of str to float, or None
+        Tolerance ``t_k`` per geometric source (names of ``GEOMETRIC_SOURCES``), m or rad.
+    tol : float
+        Relative tolerance of the certified branch and bound.
+
+    Returns
+    -------
+    MaxPoseError
+        Certified worst-case end-effector error at each pose (see
+        :func:`robots.clearance.max_pose_error`).
+
+    Raises
+    ------
+    ValidationError
+        If ``geometric`` names an unknown source.
+    KinematicsError
+        If a pose is out of reach or too near the parallel singularity.
     """
     mech = clearance if clearance is not None else fivebar.clearance_mechanism()
     poses = np.atleast_2d(np.asarray(poses, float))

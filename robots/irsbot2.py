@@ -48,7 +48,45 @@ class IRSBot2:
     """IRSBot-2 geometry (m, rad), Fig. II.4. ``modes``: sign of the square root in eqs. II.5/II.6
     per leg; the default ``(-1, -1)`` puts both elbows outside (``B_1`` left of ``A_1``, ``B_2``
     right of ``A_2``), the configuration of Figs. II.1-II.2, in which the type-2 singularity
-    (``psi_1 = psi_2``) closes a region below the base, as in Fig. VI.2."""
+    (``psi_1 = psi_2``) closes a region below the base, as in Fig. VI.2.
+
+    Parameters
+    ----------
+    b : float
+        Base radius ``O A_i`` (actuated joints at ``x = -+b``), m (thesis: 50 mm).
+    d : float
+        Length of the parallelogram bars ``A_iD_i`` and ``B_iC_i``, m (50 mm).
+    alpha_d : float
+        Angle between the first universal-joint axis at the elbow and ``z_0`` (Sec. II.2.2), rad,
+        in (0, pi/2) (pi/6).
+    beta : float
+        Angle of the offsets ``E_iE_ji`` (and ``H_hiF_ji``) about the ``x_0 z_0`` plane (Fig. II.4),
+        rad, in [0, pi/2) (pi/6; pi/4 for Tab. VI.4).
+    e : float
+        Offset of the elbow below the crank end ``B_i`` (eqs. II.3-II.4), m (0).
+    l1 : float
+        Proximal crank length ``A_iB_i``, m (50 mm).
+    l2 : float
+        Length of each distal link ``E_jiF_ji``, m (50 mm); must exceed
+        ``abs(a1 - a2) cos(beta)`` (``cos(beta)^2`` in the corrected variant).
+    a1 : float
+        Length ``E_iE_ji`` (elbow to a distal link's upper joint), m (30 mm).
+    a2 : float
+        Length of the platform-side counterpart (``H_hi`` to ``F_ji``), m (15 mm).
+    p : float
+        Horizontal offset ``H_hi P`` of the platform point, m (25 mm).
+    modes : tuple of int
+        Sign of the square root of eqs. II.5/II.6 per leg, each +1 or -1 (default elbows out).
+    l2eq_variant : {"corrected", "printed"}
+        Form of eq. II.1 used by :attr:`l2eq`.
+
+    Raises
+    ------
+    ValidationError
+        If a length ``b, d, l1, l2, a1, a2`` is not positive, ``alpha_d`` is not in (0, pi/2),
+        ``beta`` not in [0, pi/2), ``l2eq_variant`` or ``modes`` is invalid, or ``l2`` is too short
+        for the equivalent link ``l2eq`` to exist.
+    """
 
     b: float = THESIS_VI1["b"]
     d: float = THESIS_VI1["d"]
@@ -82,6 +120,27 @@ class IRSBot2:
 
     @classmethod
     def thesis(cls, table: str = "VI.1", **kw) -> "IRSBot2":
+        """The thesis's robot of Tab. VI.1 (``beta = pi/6``) or Tab. VI.4 (``beta = pi/4``).
+
+        Parameters
+        ----------
+        table : {"VI.1", "VI.4"}
+            Which parameter table.
+        **kw
+            Fields of :class:`IRSBot2` overriding the table's values (m, rad).
+
+        Returns
+        -------
+        IRSBot2
+            The robot.
+
+        Raises
+        ------
+        KeyError
+            If ``table`` is not one of the two.
+        ValidationError
+            If the resulting geometry is invalid.
+        """
         base = {"VI.1": THESIS_VI1, "VI.4": THESIS_VI4}[table]
         return cls(**{**base, **kw})
 
@@ -93,7 +152,7 @@ class IRSBot2:
 
     @property
     def base_x(self) -> float:
-        """|x| of the equivalent planar base points O_1, O_2 (eqs. II.3-II.4: b - a1 sin(beta) - p), m."""
+        """``|x|`` of the equivalent planar base points O_1, O_2 (eqs. II.3-II.4: b - a1 sin(beta) - p), m."""
         return self.b - self.a1 * math.sin(self.beta) - self.p
 
     # ------------------------------------------------------------------ inverse geometry
@@ -107,6 +166,24 @@ class IRSBot2:
         (actuated angles, x = ... + l1 cos q, z = ... - l1 sin q), ``psi1``, ``psi2`` (eqs. II.7-II.8),
         ``sin_t2`` = sin(psi_1 - psi_2) (Type 2 measure, det A of eq. II.38 / (2 l2eq)²) and
         ``sin_t1_1``, ``sin_t1_2`` = sin(q_i - psi_i) (Type 1 measures, eq. II.37).
+
+        Parameters
+        ----------
+        x, z : array_like
+            Platform point coordinates, m, broadcastable together.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``"reachable"``: bool, the shape of ``x``; ``"E1"``, ``"E2"``: (..., 2) elbow points
+            ``(x, z)``, m; ``"q1"``, ``"q2"``, ``"psi1"``, ``"psi2"``: rad; ``"sin_t2"``,
+            ``"sin_t1_1"``, ``"sin_t1_2"``: dimensionless. Entries at unreachable points are
+            meaningless (the elbow is put on the line ``O_i P``).
+
+        Raises
+        ------
+        ValidationError
+            If ``modes`` is not ``(-1, -1)``.
         """
         if tuple(self.modes) != (-1, -1):
             raise ValidationError("IRSBot2.modes", self.modes, "(-1, -1) (elbows out) for planar_legs")
@@ -137,7 +214,26 @@ class IRSBot2:
 
     def inverse_geometry(self, poses) -> dict[str, np.ndarray]:
         """Actuated angles q1, q2 (II.5-II.6), psi1, psi2 (II.7-II.8) and the universal-joint
-        angles of the four distal chains (II.18-II.35), for poses (n, 2) = (x, z) in metres."""
+        angles of the four distal chains (II.18-II.35), for poses (n, 2) = (x, z) in metres.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            Platform points ``(x, z)``, m.
+
+        Returns
+        -------
+        dict of str to ndarray, each shape (n,)
+            ``"q1"``, ``"q2"``, ``"psi1"``, ``"psi2"`` and ``"th{j}{i}_{k}"`` (``j, i`` in 1, 2;
+            ``k`` = 7 ... 10), rad.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not an (n, 2) array.
+        KinematicsError
+            If a leg or a distal chain cannot reach a pose.
+        """
         P = np.atleast_2d(np.asarray(poses, float))
         if P.ndim != 2 or P.shape[1] != 2:
             raise ValidationError("poses shape", P.shape, "(n, 2): x, z in metres")
@@ -199,7 +295,29 @@ class IRSBot2:
         ``theta_10 = -(theta_7 - o)`` with ``o`` the table's offset of ``theta_7`` (``+pi/2`` for
         frames 7 and 28, ``-pi/2`` for 12 and 23): eqs. II.22-II.23 in the thesis's angles.
         ``variant="thesis"`` returns eqs. II.18-II.35 instead; they agree in the default
-        (elbows-out) mode and flip the sign of ``theta_7`` in the elbows-in mode (arcsin branch)."""
+        (elbows-out) mode and flip the sign of ``theta_7`` in the elbows-in mode (arcsin branch).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            Platform points ``(x, z)``, m.
+        variant : str
+            ``"thesis"``: the universal-joint angles of eqs. II.18-II.35; anything else (default
+            ``"corrected"``): solved on the corrected DH tree.
+
+        Returns
+        -------
+        dict of str to ndarray, each shape (n,)
+            Values of the joint variables (``"t1"``, ``"g3"``, ... as named in :meth:`dh_tree`), rad.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not an (n, 2) array.
+        KinematicsError
+            If a pose is out of reach, or a distal link of the DH tree does not have length ``l2``
+            (``l2eq`` inconsistent with the tree, e.g. ``l2eq_variant="printed"``).
+        """
         from robots.clearance.kinematics import rot_x, rot_z, trans
 
         g = self.inverse_geometry(poses)
@@ -242,7 +360,23 @@ class IRSBot2:
         ``alpha = -alpha_d`` -- the printed ``+alpha_d`` puts ``E_22`` at ``+a1 sin(beta)`` instead
         of ``-a1 sin(beta)`` from the elbow and tilts its axis the wrong way, so chain ``E_22F_22``
         misses the platform (by 79 mm at the centre of the map); every other row closes its loop
-        (checked by :meth:`loop_residual`)."""
+        (checked by :meth:`loop_residual`).
+
+        Parameters
+        ----------
+        variant : {"corrected", "printed"}
+            Which form of row 28.
+
+        Returns
+        -------
+        DHTree
+            The 32 frames, lengths in m, angles in rad.
+
+        Raises
+        ------
+        ValidationError
+            If ``variant`` is neither ``"corrected"`` nor ``"printed"``.
+        """
         if variant not in ("corrected", "printed"):
             raise ValidationError("dh_tree variant", variant, "'corrected' or 'printed'")
         ad, sb, cb = self.alpha_d, np.sin(self.beta), np.cos(self.beta)
@@ -294,7 +428,27 @@ class IRSBot2:
     def loop_residual(self, poses, variant: str = "corrected") -> dict[str, float]:
         """Largest closure error of every loop on the DH tree (m for positions, rad for
         orientations): parallelograms (frame 5 vs 2, 21 vs 18) and the four distal chains
-        (frames 11, 16, 27, 32 vs the platform frame at ``P``, parallel to the base)."""
+        (frames 11, 16, 27, 32 vs the platform frame at ``P``, parallel to the base).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            Platform points ``(x, z)``, m.
+        variant : {"corrected", "printed"}
+            DH tree evaluated (the joint values are always those of :meth:`dh_values` on the corrected tree).
+
+        Returns
+        -------
+        dict of str to float
+            ``"parallelogram"`` (largest entry difference of the transforms, m or dimensionless) and
+            ``"platform_{f}_position"`` (m), ``"platform_{f}_rotation"`` (rad) for frames
+            ``f`` = 11, 16, 27, 32; maxima over the poses.
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`inverse_geometry`.
+        """
         from robots.clearance.kinematics import rotation_vector
 
         P = np.atleast_2d(np.asarray(poses, float))
@@ -310,17 +464,62 @@ class IRSBot2:
 
     def parallel_singularity(self, poses) -> np.ndarray:
         """Type-2 singularity measure ``sin(psi_1 - psi_2)`` (0 when the equivalent distal links
-        are parallel, eq. II.38 / Fig. II.9)."""
+        are parallel, eq. II.38 / Fig. II.9).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            Platform points ``(x, z)``, m.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            ``sin(psi_1 - psi_2)``, dimensionless.
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`inverse_geometry`.
+        """
         g = self.inverse_geometry(poses)
         return np.sin(g["psi1"] - g["psi2"])
 
     def serial_singularity(self, poses) -> np.ndarray:
-        """Type-1 measure ``min_i |sin(q_i - psi_i)|`` (0 at the workspace boundary, eq. II.37)."""
+        """Type-1 measure ``min_i |sin(q_i - psi_i)|`` (0 at the workspace boundary, eq. II.37).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            Platform points ``(x, z)``, m.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Type-1 measure, dimensionless, in [0, 1].
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`inverse_geometry`.
+        """
         g = self.inverse_geometry(poses)
         return np.minimum(np.abs(np.sin(g["q1"] - g["psi1"])), np.abs(np.sin(g["q2"] - g["psi2"])))
 
     def reachable(self, poses) -> np.ndarray:
-        """Boolean mask of the poses the inverse geometry can solve (no exception)."""
+        """Boolean mask of the poses the inverse geometry can solve (no exception).
+
+        Only the proximal condition of eqs. II.5-II.6 is tested, not the distal chains.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            Platform points ``(x, z)``, m.
+
+        Returns
+        -------
+        ndarray of bool, shape (n,)
+            True where both legs reach.
+        """
         P = np.atleast_2d(np.asarray(poses, float))
         ok = np.ones(len(P), bool)
         x, z = P[:, 0], P[:, 1]
@@ -348,6 +547,23 @@ class IRSBot2:
         parallelograms Tabs. VI.7-VI.9: actuated ``A_i`` beta_z = 0.001 rad, passive ``B_i, C_i, D_i``
         beta_z = 0.2 rad (the captions of Tabs. VI.8 and VI.9 are swapped in the thesis: the
         table indexed ``p,12,1`` -- leg 2's actuated joint -- has 0.001 rad).
+
+        Parameters
+        ----------
+        parallelograms : bool
+            Also model the clearances of the two parallelograms (Sec. VI.2).
+        distal : ClearanceBounds or None
+            Bounds of the 16 distal joints; None: Tab. VI.3 (0.01 rad, 0.2 rad, 0.1 mm, 0.1 mm).
+        actuated : ClearanceBounds or None
+            Bounds of the actuated joints ``A_i`` (with ``parallelograms``); None: 0.01 rad,
+            0.001 rad, 0.1 mm, 0.1 mm.
+        passive : ClearanceBounds or None
+            Bounds of the passive parallelogram joints ``B_i, C_i, D_i``; None: as ``distal``.
+
+        Returns
+        -------
+        ClearanceMechanism
+            Spatial mechanism with end-effector ``P`` and pose names ``("x", "z")``.
         """
         distal = distal or ClearanceBounds(0.01, 0.2, 0.1 * MM, 0.1 * MM)
         actuated = actuated or ClearanceBounds(0.01, 0.001, 0.1 * MM, 0.1 * MM)
@@ -379,7 +595,18 @@ class IRSBot2:
 def mirror_joint_map(mech: ClearanceMechanism) -> list[int]:
     """Joint ``k`` -> its mirror image under x -> -x: leg 1 <-> leg 2. :meth:`IRSBot2.clearance_mechanism`
     lists leg 2's joints in the same order as leg 1's, so the map swaps the two halves of the list;
-    :func:`robots.clearance.symmetry.prove_mirror` proves (per pose pair) that it is a symmetry."""
+    :func:`robots.clearance.symmetry.prove_mirror` proves (per pose pair) that it is a symmetry.
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        A mechanism from :meth:`IRSBot2.clearance_mechanism`.
+
+    Returns
+    -------
+    list of int
+        Index of the mirror joint of each joint.
+    """
     n = len(mech.joints)
     return [(k + n // 2) % n for k in range(n)]
 
@@ -394,7 +621,21 @@ MAP_WORKSPACE = Workspace(names=("x", "z"), low=(-30 * MM, -70 * MM), high=(30 *
 # --------------------------------------------------------------------------- sub-workspaces
 @dataclass(frozen=True)
 class SubWorkspace:
-    """A singularity-free rectangle of the x-z plane (SI units) and its Fig. VII.10 points."""
+    """A singularity-free rectangle of the x-z plane (SI units) and its Fig. VII.10 points.
+
+    Parameters
+    ----------
+    area : float
+        Area of the rectangle, m².
+    x : tuple of float
+        ``(x_min, x_max)``, m.
+    z : tuple of float
+        ``(z_min, z_max)``, m.
+    step : float
+        Grid step of the search, m.
+    n_kept : int
+        Number of grid points satisfying the criteria.
+    """
 
     area: float                 # m²
     x: tuple[float, float]      # (x_min, x_max), m
@@ -415,7 +656,29 @@ def singularity_free_rectangle(robot: IRSBot2, *, n: int = 161, margin_deg: floa
     its working mode, on the V side of the Type 2 singularity (sin(psi_1 - psi_2) < 0) and at least
     ``margin_deg`` away from both singularity types, by discretising the reachable region with
     n x n points -- the "cuboid-shaped sub-workspace" of Deng 2012 Sec. VII.2.1 ([BPC10]).
-    ``below_elbows``: also require the platform below both elbows (a stricter variant)."""
+    ``below_elbows``: also require the platform below both elbows (a stricter variant).
+
+    Parameters
+    ----------
+    robot : IRSBot2
+        The robot, in the elbows-out mode ``(-1, -1)``.
+    n : int
+        Grid points per axis.
+    margin_deg : float
+        Minimum distance to both singularity types, deg (as the sine of the angles).
+    below_elbows : bool
+        Also require the platform below both elbows.
+
+    Returns
+    -------
+    SubWorkspace
+        The rectangle (area 0 and zero ranges if no grid point qualifies).
+
+    Raises
+    ------
+    ValidationError
+        If ``robot.modes`` is not ``(-1, -1)`` (from :meth:`IRSBot2.planar_legs`).
+    """
     reach = robot.base_x + robot.l1 + robot.l2eq
     depth = robot.l1 + robot.l2eq
     xs = np.linspace(-reach, reach, n)
@@ -441,7 +704,32 @@ def centred_singularity_free_rectangle(robot: IRSBot2, margin: float = 0.2, step
     """Largest rectangle ``[-w, w] x [z_low, z_high]`` (m) symmetric about x = 0 inside the reachable
     workspace with ``|sin(psi1 - psi2)| >= margin`` and ``min_i |sin(q_i - psi_i)| >= margin``, on a
     grid of ``step`` (the rectangle of Deng 2012 Figs. VI.4-VI.5, whose criterion the thesis does
-    not state). Returns ``half_width``, ``z_low``, ``z_high`` and ``area`` (m, m²)."""
+    not state). Returns ``half_width``, ``z_low``, ``z_high`` and ``area`` (m, m²).
+
+    Parameters
+    ----------
+    robot : IRSBot2
+        The robot.
+    margin : float
+        Minimum of both singularity measures, dimensionless (a sine).
+    step : float
+        Grid step, m.
+    x_max : float
+        Largest half-width searched, m.
+    z_range : tuple of float
+        ``(z_min, z_max)`` searched, m.
+
+    Returns
+    -------
+    dict of str to float
+        ``"half_width"``, ``"z_low"``, ``"z_high"`` (m) and ``"area"`` (m²).
+
+    Raises
+    ------
+    KinematicsError
+        If no rectangle about ``x = 0`` satisfies the margins (or a reachable point fails a
+        distal chain).
+    """
     xs = np.arange(0.0, x_max + step / 2, step)
     zs = np.arange(z_range[0], z_range[1] + step / 2, step)
     X, Z = np.meshgrid(np.concatenate([-xs[:0:-1], xs]), zs)

@@ -15,6 +15,7 @@ Error sources (Sec. 2.3 and 5: "three length errors, nine revolute joints errors
   * ``U{i}b`` – radial clearance of R_i2 (axis w_i ∝ t_i × n_i): disk spanned by (t_i, w_i × t_i);
   * ``R{i}`` – radial clearance of the platform revolute joint (axis u_i): a_i moves in the disk
     spanned by the platform's radial and normal directions.
+
   Each clearance is the paper's eq. 12: a displacement of radius r ≤ ε in the plane ⊥ the axis.
 
 Two first-order error models (eq. 10: δl = J_x δx + J_p δp, solved for δx = [δp_c; δθ]):
@@ -75,7 +76,26 @@ def _log_so3(R: np.ndarray) -> np.ndarray:
 
 
 class UCR3(RobotErrorModel):
-    """3-UCR robot of Yao et al. 2013 (see module docstring). Lengths in m, angles in rad."""
+    """3-UCR robot of Yao et al. 2013 (see module docstring). Lengths in m, angles in rad.
+
+    Parameters
+    ----------
+    r_p : float
+        Radius of the platform-joint circle (``a_i``), m.
+    r_B : float
+        Radius of the base-joint circle (``A_i``), m.
+    variant : {"verified", "paper"}
+        First-order model used by :meth:`sensitivity` (see the module docstring).
+    alpha_range_deg, beta_range_deg : tuple of float
+        Workspace ranges of the Euler angles ``alpha`` and ``beta``, deg (stored in rad).
+    zc_range : tuple of float
+        Workspace range of the platform height ``Z_c``, m.
+
+    Raises
+    ------
+    ValidationError
+        If ``r_p`` or ``r_B`` is not a positive finite number, or ``variant`` is unknown.
+    """
 
     def __init__(self, r_p: float = 0.1, r_B: float = 0.14, variant: str = "verified",
                  alpha_range_deg=(-5.0, 5.0), beta_range_deg=(-5.0, 5.0), zc_range=(0.255, 0.305)):
@@ -106,7 +126,28 @@ class UCR3(RobotErrorModel):
 
     # --- geometry -------------------------------------------------------------------------
     def platform_pose(self, poses) -> tuple[np.ndarray, np.ndarray]:
-        """Rotation R (n,3,3) and centre p_c (n,3) for poses (α, β, Z_c); X_c, Y_c from eq. 5."""
+        """Rotation R (n,3,3) and centre p_c (n,3) for poses (α, β, Z_c); X_c, Y_c from eq. 5.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3) or (3,)
+            Poses ``(alpha, beta, Z_c)``: rad, rad, m.
+
+        Returns
+        -------
+        R : ndarray, shape (n, 3, 3)
+            Platform orientation (eq. 7), dimensionless.
+        p_c : ndarray, shape (n, 3)
+            Platform centre ``(X_c, Y_c, Z_c)``, m.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not a finite (n, 3) array.
+        KinematicsError
+            If a pose is outside the workspace, or the three constraints of eq. 5 are inconsistent
+            (least-squares residual above 1e-9 m).
+        """
         P = self.check_poses(poses)
         R = _rot_zxz(P[:, 0], P[:, 1])
         U = np.einsum("nij,kj->nki", R, self.u_e)                    # (n, 3 legs, 3)
@@ -124,7 +165,26 @@ class UCR3(RobotErrorModel):
         return R, p
 
     def legs(self, R: np.ndarray, p: np.ndarray):
-        """Leg vectors: s_i = R a_iᵉ, u_i = R u_iᵉ, lengths l_i and unit vectors n_i (eq. 4)."""
+        """Leg vectors: s_i = R a_iᵉ, u_i = R u_iᵉ, lengths l_i and unit vectors n_i (eq. 4).
+
+        Parameters
+        ----------
+        R : ndarray, shape (n, 3, 3)
+            Platform orientations.
+        p : ndarray, shape (n, 3)
+            Platform centres, m.
+
+        Returns
+        -------
+        s : ndarray, shape (n, 3, 3)
+            Platform joint vectors ``R a_i^e`` per leg, base frame, m.
+        u : ndarray, shape (n, 3, 3)
+            Axes ``R u_i^e`` of the platform revolute joints, unit.
+        l : ndarray, shape (n, 3)
+            Leg lengths, m.
+        n : ndarray, shape (n, 3, 3)
+            Unit leg vectors ``A_i -> a_i``.
+        """
         s = np.einsum("nij,kj->nki", R, self.a_e)
         u = np.einsum("nij,kj->nki", R, self.u_e)
         L = p[:, None, :] + s - self.A
@@ -132,7 +192,26 @@ class UCR3(RobotErrorModel):
         return s, u, l, L / l[..., None]
 
     def jacobian_x(self, poses, variant: str | None = None) -> np.ndarray:
-        """J_x of eq. 10–11, shape (n, 6, 6); ``variant`` 'verified' or 'paper' (see module doc)."""
+        """J_x of eq. 10–11, shape (n, 6, 6); ``variant`` 'verified' or 'paper' (see module doc).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3) or (3,)
+            Poses ``(alpha, beta, Z_c)``: rad, rad, m.
+        variant : {"verified", "paper"} or None
+            Which model; None: the robot's ``variant``.
+
+        Returns
+        -------
+        ndarray, shape (n, 6, 6)
+            ``J_x``: rows 0-2 ``[n_iᵀ, (s_i × n_i)ᵀ]`` (leg lengths), rows 3-5 the joint
+            constraints; applied to ``δx = [δp_c (m); δθ (rad)]`` it gives m.
+
+        Raises
+        ------
+        ValidationError, KinematicsError
+            As :meth:`platform_pose`.
+        """
         variant = variant or self.variant
         R, p = self.platform_pose(poses)
         s, u, l, n = self.legs(R, p)
@@ -151,7 +230,21 @@ class UCR3(RobotErrorModel):
         return Jx
 
     def clearance_bases(self, R: np.ndarray, n: np.ndarray):
-        """Orthonormal disk bases (base frame) of the clearances: U_a, U_b, R; each (n, 3 legs, 3, 2)."""
+        """Orthonormal disk bases (base frame) of the clearances: U_a, U_b, R; each (n, 3 legs, 3, 2).
+
+        Parameters
+        ----------
+        R : ndarray, shape (n, 3, 3)
+            Platform orientations.
+        n : ndarray, shape (n, 3, 3)
+            Unit leg vectors (from :meth:`legs`).
+
+        Returns
+        -------
+        Ua, Ub, Rb : ndarray, each shape (n, 3, 3, 2)
+            For each leg, two orthonormal columns (unit) spanning the clearance disk of ``R_i1``,
+            ``R_i2`` and ``R_i4``.
+        """
         N = len(R)
         Ua = np.broadcast_to(np.stack([self.e_rad, np.tile([0.0, 0.0, 1.0], (3, 1))], -1), (N, 3, 3, 2))
         t = np.broadcast_to(self.t_base, n.shape)
@@ -164,7 +257,27 @@ class UCR3(RobotErrorModel):
 
     # --- contract -------------------------------------------------------------------------
     def sensitivity(self, poses) -> np.ndarray:
-        """First-order map (n, 6, 21): δx = J_x⁻¹ (δl − J_p δp) per unit source error (eq. 10)."""
+        """First-order map (n, 6, 21): δx = J_x⁻¹ (δl − J_p δp) per unit source error (eq. 10).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3) or (3,)
+            Poses ``(alpha, beta, Z_c)``: rad, rad, m.
+
+        Returns
+        -------
+        ndarray, shape (n, 6, 21)
+            ``[δp_c (m); δθ (rad)]`` per unit source error (m), columns in the order of ``sources``:
+            ``l1..l3``, then two columns per disk ``U1a..U3a``, ``U1b..U3b``, ``R1..R3``.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not a finite (n, 3) array.
+        KinematicsError
+            If a pose is outside the workspace, eq. 5 is inconsistent, or ``J_x`` is singular
+            (condition number above 1e10).
+        """
         R, p = self.platform_pose(poses)
         s, u, l, n = self.legs(R, p)
         Jx = self._jx(s, u, l, n, self.variant)
@@ -190,8 +303,32 @@ class UCR3(RobotErrorModel):
         """Nonlinear error: re-solve the six loop equations with perturbed lengths and joints.
 
         errors: (n_poses, n_samples, 21) stacked source errors (m). chord-Newton iterations on
-        |p + R a_i' − A_i'| = l_i + δl_i and (R u_iᵉ)·(p + R a_i' − A_i') = 0 with the verified
+        ``|p + R a_i' − A_i'| = l_i + δl_i`` and ``(R u_iᵉ)·(p + R a_i' − A_i') = 0`` with the verified
         Jacobian; returns (n_poses, n_samples, 6) = [δp_c (m); rotation vector of R R₀ᵀ (rad)].
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 3) or (3,)
+            Poses ``(alpha, beta, Z_c)``: rad, rad, m.
+        errors : array_like, shape (n, s, 21)
+            Source errors, m, in the column order of :meth:`sensitivity`.
+        tol : float
+            Stopping threshold on the largest loop-equation residual, m.
+        max_iter : int
+            Maximum number of chord-Newton iterations.
+
+        Returns
+        -------
+        ndarray, shape (n, s, 6)
+            ``[δp_c (m); δθ (rad)]``.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` or ``errors`` has a wrong shape.
+        KinematicsError
+            If a pose is outside the workspace, eq. 5 is inconsistent, or the iteration does not
+            converge within ``max_iter`` iterations.
         """
         P = self.check_poses(poses)
         E = np.asarray(errors, dtype=float)
@@ -247,11 +384,37 @@ DESCRIPTION_COLUMNS = (tuple((f"l{i}", 1) for i in (1, 2, 3))
 
 def columns_from_description(S: np.ndarray, source_names) -> np.ndarray:
     """The description's sensitivity ``S`` (n, 6, n_columns; columns named ``source_names``) in the
-    column order and signs of :meth:`UCR3.sensitivity` (n, 6, 21) (:data:`DESCRIPTION_COLUMNS`)."""
+    column order and signs of :meth:`UCR3.sensitivity` (n, 6, 21) (:data:`DESCRIPTION_COLUMNS`).
+
+    Parameters
+    ----------
+    S : ndarray, shape (n, 6, m)
+        Sensitivity computed from the description, m per source unit.
+    source_names : sequence of str
+        Names of its ``m`` columns (must include every name of :data:`DESCRIPTION_COLUMNS`).
+
+    Returns
+    -------
+    ndarray, shape (n, 6, 21)
+        The selected, sign-corrected columns.
+    """
     names = list(source_names)
     return np.stack([sign * S[:, :, names.index(c)] for c, sign in DESCRIPTION_COLUMNS], -1)
 
 
 def yao2013_poses(n_alpha: int = 11, n_beta: int = 11, n_z: int = 6, robot: UCR3 | None = None) -> np.ndarray:
-    """Grid over the paper's workspace α, β ∈ [-5°, 5°], Z_c ∈ [0.255, 0.305] m."""
+    """Grid over the paper's workspace α, β ∈ [-5°, 5°], Z_c ∈ [0.255, 0.305] m.
+
+    Parameters
+    ----------
+    n_alpha, n_beta, n_z : int
+        Points per coordinate ``alpha``, ``beta``, ``Z_c``.
+    robot : UCR3 or None
+        Robot whose workspace is gridded; None: ``UCR3()``.
+
+    Returns
+    -------
+    ndarray, shape ``(n_alpha * n_beta * n_z, 3)``
+        Poses ``(alpha, beta, Z_c)``: rad, rad, m.
+    """
     return (robot or UCR3()).workspace.grid([n_alpha, n_beta, n_z])

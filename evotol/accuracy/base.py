@@ -22,7 +22,36 @@ Problem = Any
 
 @dataclass
 class Evaluation:
-    """Errors of designs at every pose under one measure."""
+    """Errors of designs at every pose under one measure.
+
+    A measure leaves the fields it does not compute None.
+
+    Parameters
+    ----------
+    position : ndarray, shape (n_designs, n_poses), or None
+        The measure's position error (m).
+    orientation : ndarray, shape (n_designs, n_poses), or None
+        The measure's orientation error (rad).
+    position_bound : ndarray, shape (n_designs, n_poses), optional
+        A proven upper bound of ``position`` (m), e.g. the worst case's certified bound.
+    orientation_bound : ndarray, shape (n_designs, n_poses), optional
+        A proven upper bound of ``orientation`` (rad).
+    position_contrib : ndarray, shape (n_designs, n_poses, n_sources), optional
+        Each source's share of the position error (dimensionless fraction).
+    orientation_contrib : ndarray, shape (n_designs, n_poses, n_sources), optional
+        Each source's share of the orientation error (dimensionless fraction).
+    position_direction : ndarray, shape (n_designs, n_poses, 3), optional
+        Worst position-error direction (unit vector).
+    orientation_direction : ndarray, shape (n_designs, n_poses, 3), optional
+        Worst orientation-error direction (unit vector).
+    violation : ndarray, shape (n_designs,)
+        Largest error / bound − 1 over the poses and constrained components (dimensionless;
+        <= 0: the design meets the requirement).
+    probability : ndarray, shape (n_designs, n_poses), optional
+        ``yield`` measure: a lower bound of the yield at each pose (dimensionless, 0 to 1).
+    exact : bool
+        ``yield`` measure: False when sources were moment-matched (central limit theorem).
+    """
 
     position: np.ndarray | None      # (n_designs, n_poses) m
     orientation: np.ndarray | None   # (n_designs, n_poses) rad
@@ -41,9 +70,16 @@ class Evaluation:
 class ComponentErrors:
     """One component's errors of designs at every pose (m for position, rad for orientation).
 
-    value: (n_designs, n_poses) the measure's error; bound: a proven upper bound of it (None when
-    the measure has none); contrib: (n_designs, n_poses, n_sources) each source's share;
-    direction: (n_designs, n_poses, 3) the worst direction (unit vector), where the measure has one.
+    Parameters
+    ----------
+    value : ndarray, shape (n_designs, n_poses)
+        The measure's error (m or rad).
+    bound : ndarray, shape (n_designs, n_poses), optional
+        A proven upper bound of ``value`` (None when the measure has none).
+    contrib : ndarray, shape (n_designs, n_poses, n_sources), optional
+        Each source's share (dimensionless fraction).
+    direction : ndarray, shape (n_designs, n_poses, 3), optional
+        The worst direction (unit vector), where the measure has one.
     """
 
     value: np.ndarray
@@ -54,7 +90,20 @@ class ComponentErrors:
 
 def violation(problem: Problem, parts: Mapping[str, ComponentErrors]) -> np.ndarray:
     """(n_designs,) largest error over the poses and the constrained components, divided by its
-    bound, minus 1 (<= 0: the design meets the requirement)."""
+    bound, minus 1 (<= 0: the design meets the requirement).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        Supplies the constrained components and their bounds (``problem.components``).
+    parts : Mapping[str, ComponentErrors]
+        Component name -> errors; must hold every constrained component.
+
+    Returns
+    -------
+    ndarray, shape (n_designs,)
+        ``max(value / bound) − 1`` (dimensionless).
+    """
     n = next(iter(parts.values())).value.shape[0]
     out = np.full(n, -np.inf)
     for comp, lim in problem.components:
@@ -64,7 +113,22 @@ def violation(problem: Problem, parts: Mapping[str, ComponentErrors]) -> np.ndar
 
 def evaluation_of(parts: Mapping[str, ComponentErrors], violation: np.ndarray, **extra) -> Evaluation:
     """The :class:`Evaluation` holding ``parts`` (component -> errors; a missing component stays
-    None), the ``violation`` and any further field (``probability``, ``exact``)."""
+    None), the ``violation`` and any further field (``probability``, ``exact``).
+
+    Parameters
+    ----------
+    parts : Mapping[str, ComponentErrors]
+        ``"position"`` and/or ``"orientation"`` -> errors (m, rad).
+    violation : ndarray, shape (n_designs,)
+        As :func:`violation` returns (dimensionless).
+    **extra
+        Further :class:`Evaluation` fields (``probability``, ``exact``).
+
+    Returns
+    -------
+    Evaluation
+        The fields of ``parts`` spread over ``position*`` / ``orientation*``.
+    """
     pos, ori = parts.get("position"), parts.get("orientation")
     return Evaluation(
         position=None if pos is None else pos.value, orientation=None if ori is None else ori.value,
@@ -117,12 +181,37 @@ class Measure:
         Evaluation
             ``position`` (m) / ``orientation`` (rad) errors (n_designs, n_poses) and the
             ``violation`` (n_designs,) of the requirement's bounds.
+
+        Raises
+        ------
+        NotImplementedError
+            Always, in the protocol class: a measure overrides it.
         """
         raise NotImplementedError
 
     def brute_force(self, problem: Problem, t: np.ndarray) -> dict[str, np.ndarray]:
         """A slow, independent computation of one design ``t`` (n_sources,) on a small problem
-        (conformance check): Evaluation field name -> (n_poses,) values. Optional."""
+        (conformance check): Evaluation field name -> (n_poses,) values. Optional.
+
+        Parameters
+        ----------
+        problem : evotol.problem.ToleranceProblem
+            A small problem (few sources and poses).
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_poses,)
+            :class:`Evaluation` field name (e.g. ``"position"`` in m, ``"orientation"`` in rad,
+            ``"probability"``) -> values per pose.
+
+        Raises
+        ------
+        NotImplementedError
+            Always, in the protocol class: a measure without a brute force (the conformance
+            check then skips that comparison).
+        """
         raise NotImplementedError
 
     def __repr__(self) -> str:

@@ -11,7 +11,19 @@ from evotol.accuracy.base import COMPONENTS, ComponentErrors, Evaluation, Measur
 
 def unit_samples(problem) -> list[np.ndarray]:
     """The problem's common unit samples, one (mc_samples, dim_j) array per source (cached on the
-    problem: every design sees the same samples, so the quantile is a smooth function of t)."""
+    problem: every design sees the same samples, so the quantile is a smooth function of t).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        Supplies the sources' dimensions and distributions and the requirement's ``mc_samples``
+        and ``seed``.
+
+    Returns
+    -------
+    list of ndarray, each shape (mc_samples, dim_j)
+        Unit samples per source (dimensionless; Latin hypercube).
+    """
     r = problem.requirement
     return problem.measure_cache(
         "mc_quantile.samples",
@@ -20,7 +32,7 @@ def unit_samples(problem) -> list[np.ndarray]:
 
 
 class MCQuantileMeasure(Measure):
-    """Quantile of |error| (m or rad) over common samples of the linear model, per pose."""
+    """Quantile of ``|error|`` (m or rad) over common samples of the linear model, per pose."""
 
     name = "mc_quantile"
     #: the exact quantile grows with every t_j (symmetric unimodal sources: Anderson's theorem);
@@ -30,7 +42,23 @@ class MCQuantileMeasure(Measure):
     monotone_rtol = 3e-2
 
     def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
-        """The quantile per pose and design; see :meth:`Measure.evaluate`."""
+        """The quantile per pose and design; see :meth:`Measure.evaluate`.
+
+        Parameters
+        ----------
+        problem : evotol.problem.ToleranceProblem
+            The problem (robot sensitivities, tolerances, requirement, poses).
+        T : ndarray, shape (n_designs, n_sources)
+            Source tolerances (SI: m or rad), already validated.
+        top_only : bool
+            Ignored: every pose is computed.
+
+        Returns
+        -------
+        Evaluation
+            ``position`` (m) / ``orientation`` (rad): the requirement's ``quantile`` of the
+            error norm (n_designs, n_poses), also as the ``*_bound``; and the ``violation``.
+        """
         Z = unit_samples(problem)
         parts = {}
         for comp in COMPONENTS:
@@ -44,7 +72,20 @@ class MCQuantileMeasure(Measure):
 
     def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
         """Sample by sample through the whole sensitivity matrix J (n_poses, 6, n_columns): the
-        error twist J·e of each sample's stacked source errors, its norm, the quantile per pose."""
+        error twist J·e of each sample's stacked source errors, its norm, the quantile per pose.
+
+        Parameters
+        ----------
+        problem : evotol.problem.ToleranceProblem
+            A small problem.
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_poses,)
+            ``"position"`` (m) and ``"orientation"`` (rad) quantiles per pose.
+        """
         E = np.concatenate(problem.source_errors(unit_samples(problem), t), axis=1)   # (n_samples, n_columns)
         rows = {"position": slice(0, 3), "orientation": slice(3, 6)}
         q = problem.requirement.quantile

@@ -45,7 +45,13 @@ def _entry_points() -> dict:
 
 
 def names() -> tuple[str, ...]:
-    """Names of every registered measure: the built-ins, then the entry points."""
+    """Names of every registered measure: the built-ins, then the entry points.
+
+    Returns
+    -------
+    tuple of str
+        The built-in names, then the other entry-point names sorted.
+    """
     return tuple(BUILTIN) + tuple(sorted(set(_entry_points()) - set(BUILTIN)))
 
 
@@ -63,6 +69,7 @@ def get(name: str, field: str = "measure") -> Measure:
     Returns
     -------
     Measure
+        The measure instance (loaded once, then cached).
 
     Raises
     ------
@@ -86,5 +93,16 @@ def get(name: str, field: str = "measure") -> Measure:
 
 
 def available() -> dict[str, Measure]:
-    """Every registered measure by name (loads the entry points)."""
+    """Every registered measure by name (loads the entry points).
+
+    Returns
+    -------
+    dict of str to Measure
+        Name -> measure, in the order of :func:`names`.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An entry point that does not load a measure named as the entry point.
+    """
     return {n: get(n) for n in names()}

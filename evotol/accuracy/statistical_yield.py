@@ -1,4 +1,4 @@
-"""The ``yield`` measure: at every pose P(|δp| ≤ position and |δθ| ≤ orientation) ≥ the required
+"""The ``yield`` measure: at every pose P(``|δp|`` ≤ position and ``|δθ|`` ≤ orientation) ≥ the required
 yield, for the first-order model (:class:`evotol.statistical.FirstOrderYield`; Bonferroni bound
 for both components) or the robot's own ``pose_error`` on common samples
 (:class:`evotol.statistical.SampledYield`, ``Requirement(model="nonlinear")``); ``docs/statistical.md``."""
@@ -12,7 +12,18 @@ from evotol.accuracy.base import ComponentErrors, Evaluation, Measure, evaluatio
 
 def first_order_yield(problem) -> "statistical.FirstOrderYield | statistical.SampledYield":
     """The problem's statistical model for the ``yield`` measure (moments of the linear model, or
-    the nonlinear model's samples), cached on the problem."""
+    the nonlinear model's samples), cached on the problem.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem; its requirement's ``model`` chooses the model.
+
+    Returns
+    -------
+    evotol.statistical.FirstOrderYield or evotol.statistical.SampledYield
+        ``SampledYield`` for ``Requirement(model="nonlinear")``, else ``FirstOrderYield``.
+    """
     r = problem.requirement
 
     def build():
@@ -35,14 +46,44 @@ class YieldMeasure(Measure):
 
     def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
         """Equivalent errors of the constrained components, the yield's lower bound and whether it
-        is exact (every source normal); see :meth:`Measure.evaluate`."""
+        is exact (every source normal); see :meth:`Measure.evaluate`.
+
+        Parameters
+        ----------
+        problem : evotol.problem.ToleranceProblem
+            The problem (robot sensitivities, tolerances, requirement, poses).
+        T : ndarray, shape (n_designs, n_sources)
+            Source tolerances (SI: m or rad), already validated.
+        top_only : bool
+            Ignored: the yield is computed at every pose.
+
+        Returns
+        -------
+        Evaluation
+            ``position`` (m) / ``orientation`` (rad): the k-sigma equivalent errors of the
+            constrained components (n_designs, n_poses); ``probability`` the yield's lower
+            bound per pose; ``exact``; the ``violation``.
+        """
         y = first_order_yield(problem).evaluate(T, problem.requirement.required_yield)
         parts = {c: ComponentErrors(y.equivalent[c], y.equivalent[c], y.contributions.get(c)) for c in y.miss}
         return evaluation_of(parts, y.violation, probability=y.probability, exact=y.exact)
 
     def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
         """The yield per pose by direct Monte Carlo of the linear model (40 000 samples of the
-        sources' distributions, seed 7): the share of samples whose errors meet every bound."""
+        sources' distributions, seed 7): the share of samples whose errors meet every bound.
+
+        Parameters
+        ----------
+        problem : evotol.problem.ToleranceProblem
+            A small problem.
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_poses,)
+            ``"probability"``: the estimated yield per pose (dimensionless, 0 to 1).
+        """
         Z = distributions.unit_samples([s.dim for s in problem.robot.sources], problem.distributions, 40_000,
                                        method="mc", seed=7)
         E = np.concatenate(problem.source_errors(Z, t), axis=1)

@@ -21,7 +21,29 @@ class WorstCaseMeasure(Measure):
 
     def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
         """Attained worst case (``position``), proven bound (``position_bound``), worst direction
-        and each source's share, per component; see :meth:`Measure.evaluate`."""
+        and each source's share, per component; see :meth:`Measure.evaluate`.
+
+        Parameters
+        ----------
+        problem : evotol.problem.ToleranceProblem
+            The problem (robot sensitivities, tolerances, requirement, poses).
+        T : ndarray, shape (n_designs, n_sources)
+            Source tolerances (SI: m or rad), already validated.
+        top_only : bool
+            Refine only the poses that can hold the largest error (others keep a lower grid
+            estimate); not used with clearance sources.
+
+        Returns
+        -------
+        Evaluation
+            ``position`` (m) / ``orientation`` (rad) attained worst case (n_designs, n_poses),
+            ``*_bound`` the proven bound, ``*_direction``, ``*_contrib`` and the ``violation``.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Clearance sources next to intervals that are not centred ±t.
+        """
         if problem.clearances is not None:
             return self._with_clearances(problem, T)
         shape = None if problem.shape.plain else problem.shape
@@ -44,7 +66,25 @@ class WorstCaseMeasure(Measure):
 
     def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
         """The largest error norm over every vertex of the box of interval ends (exact for a
-        problem of interval sources only: the norm is convex, its maximum sits at a vertex)."""
+        problem of interval sources only: the norm is convex, its maximum sits at a vertex).
+
+        Parameters
+        ----------
+        problem : evotol.problem.ToleranceProblem
+            A small problem.
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_poses,)
+            ``"position"`` (m) and ``"orientation"`` (rad) worst case per pose.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A source that is not an interval (1-D), or a problem with clearance sources.
+        """
         if any(s.dim != 1 for s in problem.robot.sources) or problem.clearances is not None:
             raise ValidationError("problem", problem.robot.name, "interval (1-D) sources only for the vertex search")
         ends = problem.intervals(t)                          # (n_sources, 2)

@@ -36,7 +36,17 @@ from evotol.reporting.html import write_json
 
 @dataclass
 class StudyResult:
-    """What a study computes: a JSON-ready ``summary`` and named entry ``tables`` (DataFrames)."""
+    """What a study computes: a JSON-ready ``summary`` and named entry ``tables`` (DataFrames).
+
+    Parameters
+    ----------
+    summary : dict
+        JSON-ready numbers, lists and strings; written as ``NAME.json``. Quantities carry the
+        units named by the study's ``units`` block (docs/units.md).
+    tables : dict of str to pandas.DataFrame, optional
+        Named entry tables, each written as ``NAME_<key>.csv`` and ``.parquet``. Empty by
+        default (studies without design tables).
+    """
 
     summary: dict
     tables: dict = field(default_factory=dict)
@@ -44,7 +54,27 @@ class StudyResult:
 
 @dataclass(frozen=True)
 class Study:
-    """A reproducible study: name, title, seed paper, configs and the compute/render pair."""
+    """A reproducible study: name, title, seed paper, configs and the compute/render pair.
+
+    Parameters
+    ----------
+    name : str
+        Short name; the stem of the output files (``NAME.html``, ``NAME.json``) and the name
+        ``evotol reproduce NAME`` takes.
+    title : str
+        Human-readable title of the report.
+    compute : callable
+        ``compute(config) -> StudyResult``: the physics and statistics, from the config dict.
+    render : callable
+        ``render(result) -> Report``: the HTML report, drawn from the :class:`StudyResult` alone.
+    config : mapping
+        Default config of a full run (plain keys to values).
+    quick : mapping, optional
+        Keys that override ``config`` for a small run (``--quick``; used by tests). Empty by
+        default.
+    seed_paper : str, optional
+        Citation of the paper the study reproduces; empty when there is none.
+    """
 
     name: str
     title: str
@@ -55,7 +85,26 @@ class Study:
     seed_paper: str = ""
 
     def make_config(self, quick: bool = False, **overrides) -> dict:
-        """The full-run config, updated by the quick config (``quick=True``) and then ``overrides``."""
+        """The full-run config, updated by the quick config (``quick=True``) and then ``overrides``.
+
+        Parameters
+        ----------
+        quick : bool, optional
+            Apply the study's ``quick`` config (small run). The result's ``"quick"`` key is set
+            to this flag.
+        **overrides
+            Config keys to set last; each must be a key of the config (or ``out_dir``).
+
+        Returns
+        -------
+        dict
+            The merged config.
+
+        Raises
+        ------
+        ValidationError
+            If an override names a key the config does not have (other than ``out_dir``).
+        """
         cfg = dict(self.config)
         if quick:
             cfg.update(self.quick)
@@ -68,13 +117,42 @@ class Study:
 
     def units_block(self) -> dict:
         """The ``units`` block written into ``NAME.json`` (docs/units.md): the common keys and
-        rules plus this study's own keys (``evotol/studies/_units.py``)."""
+        rules plus this study's own keys (``evotol/studies/_units.py``).
+
+        Returns
+        -------
+        dict
+            The units block, as made by :func:`evotol.units.make_units_block`.
+        """
         from evotol.studies._units import study_units
         from evotol.units import make_units_block
         return make_units_block(**study_units(self.name))
 
     def run(self, out_dir, quick: bool = False, seed: int = 0, **overrides) -> dict:
-        """Compute, render and write the study into ``out_dir``; returns the JSON summary."""
+        """Compute, render and write the study into ``out_dir``; returns the JSON summary.
+
+        Parameters
+        ----------
+        out_dir : str or path-like
+            Folder to write ``NAME.html``, ``NAME.json`` and the table files into (created if
+            missing).
+        quick : bool, optional
+            Small run with the study's ``quick`` config.
+        seed : int, optional
+            Random seed, passed as the ``seed`` config key.
+        **overrides
+            Further config keys (see :meth:`make_config`).
+
+        Returns
+        -------
+        dict
+            The summary as written to ``NAME.json`` (read back).
+
+        Raises
+        ------
+        ValidationError
+            If an override is not a config key (from :meth:`make_config`).
+        """
         return reproduce(self, out_dir, self.make_config(quick, seed=seed, **overrides)).summary
 
 
@@ -84,6 +162,22 @@ def reproduce(study: Study, out_dir, config: dict) -> StudyResult:
     ``summary["seconds"]`` is set here when the study did not time itself (wall time of
     ``compute``). The report is rendered from the summary *as written to JSON* (read back), so
     a page can only show what its JSON holds. Returns the result with that summary.
+
+    Parameters
+    ----------
+    study : Study
+        The study to run.
+    out_dir : str or path-like
+        Folder for the outputs (created if missing); also passed to ``compute`` as the config
+        key ``out_dir``.
+    config : dict
+        The full config (usually from :meth:`Study.make_config`).
+
+    Returns
+    -------
+    StudyResult
+        The summary read back from ``NAME.json`` (with ``seconds`` and ``units`` filled in when
+        the study did not set them) and the computed tables.
     """
     out_dir = Path(out_dir)
     config = {**config, "out_dir": str(out_dir)}
@@ -100,7 +194,24 @@ def reproduce(study: Study, out_dir, config: dict) -> StudyResult:
 def write_outputs(name: str, out_dir, result: StudyResult, report=None) -> dict[str, Path]:
     """The one writer of study files: ``NAME_<table>.csv``/``.parquet`` for every table,
     ``NAME.json`` and, given a ``report``, ``NAME.html``. Returns the paths by kind (``json``,
-    ``html`` -- also when no report was given --, ``<table>_parquet``, ``<table>_csv``)."""
+    ``html`` -- also when no report was given --, ``<table>_parquet``, ``<table>_csv``).
+
+    Parameters
+    ----------
+    name : str
+        Study name; the stem of every file name.
+    out_dir : str or path-like
+        Output folder (created if missing).
+    result : StudyResult
+        The summary (written as JSON) and tables (written as CSV and Parquet).
+    report : Report, optional
+        The HTML report to write as ``NAME.html``; ``None`` writes no HTML.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The paths by kind: ``json``, ``html`` and ``<table>_parquet``, ``<table>_csv`` per table.
+    """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {}
@@ -113,7 +224,13 @@ def write_outputs(name: str, out_dir, result: StudyResult, report=None) -> dict[
 
 
 def available() -> dict[str, Study]:
-    """All studies, by name, in name order."""
+    """All studies, by name, in name order.
+
+    Returns
+    -------
+    dict of str to Study
+        Every ``STUDY`` of a public module of this package, keyed by its name, sorted by name.
+    """
     found = {}
     for info in pkgutil.iter_modules(__path__):
         if info.name.startswith("_"):
@@ -126,6 +243,23 @@ def available() -> dict[str, Study]:
 
 
 def get(name: str) -> Study:
+    """The study called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        Study name, as listed by :func:`available`.
+
+    Returns
+    -------
+    Study
+        The study.
+
+    Raises
+    ------
+    ValidationError
+        If no study has that name.
+    """
     studies = available()
     if name not in studies:
         raise ValidationError("study", name, f"one of {sorted(studies)} or 'all'")

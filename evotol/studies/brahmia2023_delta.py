@@ -8,7 +8,7 @@ holds the paper's data, the runs and the report.
 1. joint variables Q_k at the postures (eq. 11) -- :meth:`robots.delta.DeltaRobot.inverse_kinematics`;
 2. per posture P1, P3, P6, P9 and per imposed displacement of 0.2 mm along +-x, +-y, +-z
    (Tables A1-A2), problem (12)-(13): minimise F (eq. 10) over the 47 error parameters under
-   |ΔL| <= 0.015 mm, |Δφ| <= 0.015 deg, with scipy's ``trust-constr`` (interior point, as the
+   ``|ΔL| <= 0.015 mm``, ``|Δφ| <= 0.015 deg``, with scipy's ``trust-constr`` (interior point, as the
    paper's fmincon "interior-point"), :func:`solve_displacement`;
 3. tolerance interval per parameter by the rule of Fig. 4 (:func:`fig4_intervals`) and the
    verification of Sec. 4.1 (4 cases, 15 postures, :func:`verification_errors`).
@@ -47,8 +47,14 @@ def inferred_min_magnitude() -> np.ndarray:
     """Lower limits of eq. (12) read off Tables A1-A2 (SI, (47,)): 0.0095 mm and 0.001 deg.
 
     The paper does not print ΔL_min, Δφ_min; in its 24 solutions every linear value has
-    |v| >= 0.0095 mm and every angular one |v| >= 0.00104 deg, with many values pinned at exactly
+    ``|v| >= 0.0095 mm`` and every angular one ``|v| >= 0.00104 deg``, with many values pinned at exactly
     0.00958 mm / 0.00104 deg (P1, test 1) -- an interior-point solution sitting on a lower bound.
+
+    Returns
+    -------
+    (47,) ndarray
+        Lower limit of ``|Δ|`` per parameter, in :data:`robots.delta.PARAMETER_NAMES` order:
+        9.5e-6 m for the linear parameters, ``radians(0.001)`` rad for the angular ones.
     """
     return np.where(IS_LINEAR, 0.0095e-3, np.radians(0.001))
 
@@ -56,7 +62,42 @@ def inferred_min_magnitude() -> np.ndarray:
 def synthesis_runs(robot: DeltaRobot, postures=SYNTHESIS_POSTURES, tests=tuple(TEST_DIRECTIONS), *,
                    objective: str = "closed", min_magnitude=None, maxiter: int = 150,
                    required_mm: float = REQUIRED_MM) -> list[dict]:
-    """Step 2 for every (posture, test) of Tables A1-A2; one dict per run (see solve_displacement)."""
+    """Step 2 for every (posture, test) of Tables A1-A2; one dict per run (see solve_displacement).
+
+    Parameters
+    ----------
+    robot : robots.delta.DeltaRobot
+        The Delta robot model.
+    postures : sequence of str, optional
+        Posture names (keys of :data:`robots.delta.POSTURES_MM`); default P1, P3, P6, P9.
+    tests : sequence of str, optional
+        Imposed-displacement directions, keys of :data:`TEST_DIRECTIONS` (``"+x"`` ... ``"-z"``);
+        default all six, in the order of tests 1..6.
+    objective : {"closed", "open"}, optional
+        F of eq. (10): loop-closure forward kinematics (``"closed"``) or every serial sub-chain at
+        Q_k (``"open"``, the paper read literally).
+    min_magnitude : (47,) array_like or float, optional
+        Lower limits of ``|Δ|`` of eq. (12), SI (m or rad); ``None`` solves with the bounds of
+        eq. (13) only (see :func:`inferred_min_magnitude`).
+    maxiter : int, optional
+        Iteration limit of scipy's ``trust-constr`` per run.
+    required_mm : float, optional
+        Magnitude of the imposed displacement ΔP, mm (default 0.2 mm, Sec. 3.1).
+
+    Returns
+    -------
+    list of dict
+        One dict per (posture, test), postures outer: the output of
+        :func:`robots.delta_synthesis.solve_displacement` (``errors`` (47,) SI, ``F``,
+        ``achieved`` (3,) m, ``nit``, ``status``, ``residual_mm`` in mm) plus ``posture`` and
+        ``test``.
+
+    Raises
+    ------
+    ValidationError
+        If ``objective`` is not ``"closed"`` or ``"open"``, or ``min_magnitude`` is not within
+        [0, bound) for every parameter (from ``solve_displacement``).
+    """
     runs = []
     for p in postures:
         pose = postures_m([p])[0]
@@ -70,13 +111,26 @@ def synthesis_runs(robot: DeltaRobot, postures=SYNTHESIS_POSTURES, tests=tuple(T
 
 
 def table3_si() -> tuple[np.ndarray, np.ndarray]:
-    """The paper's Table 3 intervals in SI, (lower, upper) arrays (47,)."""
+    """The paper's Table 3 intervals in SI, (lower, upper) arrays (47,).
+
+    Returns
+    -------
+    lower, upper : (47,) ndarray
+        Interval limits per parameter in :data:`robots.delta.PARAMETER_NAMES` order, m (linear)
+        or rad (angular).
+    """
     t = np.array([TABLE_3[n] for n in PARAMETER_NAMES])
     return t[:, 0] / TO_PAPER, t[:, 1] / TO_PAPER
 
 
 def table_a_si() -> np.ndarray:
-    """The paper's Tables A1-A2 as (24 runs, 47) SI values, runs ordered P1, P3, P6, P9 x tests 1..6."""
+    """The paper's Tables A1-A2 as (24 runs, 47) SI values, runs ordered P1, P3, P6, P9 x tests 1..6.
+
+    Returns
+    -------
+    (24, 47) ndarray
+        Printed solutions of problem (12), m (linear parameters) or rad (angular).
+    """
     return np.concatenate([np.array(TABLE_A[p]).T for p in SYNTHESIS_POSTURES], axis=0) / TO_PAPER
 
 
@@ -92,6 +146,12 @@ def family_cost_models():
     Reciprocal model c = a0 + a1/x (Chase & Greenwood 1988) with a0 = 1, a1 = 10 and x the
     tolerance in micrometres (linear family) or millidegrees (angular family): a +-10 µm length
     or +-10 mdeg angle costs 2 units, +-1 µm or +-1 mdeg costs 11.
+
+    Returns
+    -------
+    dict of str to cost_models.ReciprocalCost
+        ``"linear"`` (tolerance scaled by 1 µm) and ``"angular"`` (scaled by 1 mdeg); both take
+        the tolerance in SI (m or rad) and return cost units.
     """
     from cost_models import ReciprocalCost
 
@@ -99,10 +159,27 @@ def family_cost_models():
 
 
 def tolerance_problem(robot: DeltaRobot, poses, position_mm: float = REQUIRED_MM, n_directions: int = 400):
-    """ToleranceProblem of the 47 Delta parameters: worst-case |δp| <= position_mm at ``poses``.
+    """ToleranceProblem of the 47 Delta parameters: worst-case ``|δp| <= position_mm`` at ``poses``.
 
     Tolerances range over [0.5, 100] µm or mdeg. Sources with no first-order effect anywhere
     (Δd_i and Δq2_i, see docs/delta.md) are locked at the upper bound.
+
+    Parameters
+    ----------
+    robot : robots.delta.DeltaRobot
+        The Delta robot model (its 47 sources).
+    poses : (n, 3) array_like
+        Platform positions, m.
+    position_mm : float, optional
+        Required worst-case position error, mm (default 0.2 mm).
+    n_directions : int, optional
+        Number of directions of the worst-case measure (passed to the problem).
+
+    Returns
+    -------
+    evotol.problem.ToleranceProblem
+        Problem with the cost models of :func:`family_cost_models` and the requirement
+        ``position = position_mm`` (converted to m), ``measure="worst_case"``.
     """
     from evotol.problem import Requirement, Tolerance, ToleranceProblem
 
@@ -123,19 +200,67 @@ def interval_problem(problem, lo, hi):
     asymmetric tolerances: ``Tolerance.offset`` = (lo + hi)/2 and the design t = (hi − lo)/2.
     Costs follow the core's ``cost_width="half"`` (the cost model sees the half-width), the
     worst case keeps the offset (full sphere of directions, :mod:`evotol.measures`).
-    Returns (problem, t)."""
+    Returns (problem, t).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The symmetric problem (e.g. from :func:`tolerance_problem`).
+    lo, hi : (n_sources,) array_like
+        Lower and upper interval limits per source, SI (m or rad).
+
+    Returns
+    -------
+    problem : evotol.problem.ToleranceProblem
+        Copy with ``offset = (lo + hi)/2`` and ``cost_width="half"`` for every source.
+    t : (n_sources,) ndarray
+        The design: half-widths ``(hi - lo)/2``, SI.
+
+    Raises
+    ------
+    ValidationError
+        If a changed tolerance does not validate (from ``ToleranceProblem.with_tolerances``).
+    """
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     return problem.with_tolerances(offset=(lo + hi) / 2, cost_width="half"), (hi - lo) / 2
 
 
 def table3_problem(problem):
-    """Table 3 of the paper with its printed asymmetric intervals, through the core (SI)."""
+    """Table 3 of the paper with its printed asymmetric intervals, through the core (SI).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The symmetric 47-source problem (from :func:`tolerance_problem`).
+
+    Returns
+    -------
+    problem : evotol.problem.ToleranceProblem
+        Copy with the Table 3 interval centres as offsets (see :func:`interval_problem`).
+    t : (47,) ndarray
+        Table 3 half-widths, m or rad.
+    """
     return interval_problem(problem, *table3_si())
 
 
 def critical_poses(problem, designs, k: int = 8) -> np.ndarray:
     """Indices of the poses that hold the largest worst-case errors of some probe designs
-    (top ``k`` per design) -- the screening set the allocators run on before dense verification."""
+    (top ``k`` per design) -- the screening set the allocators run on before dense verification.
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        Problem over the dense pose set.
+    designs : (n_designs, n_sources) or (n_sources,) array_like
+        Probe tolerance designs, SI (m or rad).
+    k : int, optional
+        Number of worst poses kept per design.
+
+    Returns
+    -------
+    1-D ndarray of int
+        Sorted, unique pose indices into ``problem``'s poses.
+    """
     ev = problem.evaluate(np.atleast_2d(designs), top_only=True)
     val = ev.position
     return np.unique(np.concatenate([np.argsort(-v)[:k] for v in val]))
@@ -167,7 +292,21 @@ QUICK: dict = {}   # the quick run's sizes are set by config["quick"] below
 
 
 def compute(config: dict) -> StudyResult:
-    """Reproduce Brahmia et al. 2023 and allocate its tolerances by cost (JSON-ready summary)."""
+    """Reproduce Brahmia et al. 2023 and allocate its tolerances by cost (JSON-ready summary).
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed`` (int) and ``quick`` (bool: 2 postures x 2 tests, one variant,
+        150 instead of 1000 dense poses, smaller GA/NSGA-II and Monte Carlo runs).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only (no tables): the reproduced intervals (mm or deg) and verification
+        errors (mm), the variants of problem (12), the allocations (costs in cost units, errors
+        in mm, tolerances in SI), the Pareto front, model checks, timing (s) and ``figures``.
+    """
     from evotol.allocators import allocate_ga, allocate_nsga2, allocate_optimum, allocate_sensitivity
     from evotol.montecarlo import verify
     from evotol.nonlinear import verify_nonlinear
@@ -318,7 +457,18 @@ def compute(config: dict) -> StudyResult:
 
 
 def render(result: StudyResult):
-    """Model checks, Tables A/3 and Fig. 7 reproduced, and the cost-optimal allocation."""
+    """Model checks, Tables A/3 and Fig. 7 reproduced, and the cost-optimal allocation.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary, possibly read back from JSON).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     import plotly.graph_objects as go
 
     from evotol.reporting.html import Report, table_html

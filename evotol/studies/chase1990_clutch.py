@@ -20,11 +20,38 @@ CASES = {"worst_case": "worst-case limit |Δφ| <= 2° (arithmetic stack)",
 
 
 def compute(config: dict) -> StudyResult:
+    """Solve the clutch under both limits of ``CASES`` (worst case and RSS).
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed``, ``pop_size`` and ``n_gen`` (GA and NSGA-II), ``n_mc`` (nonlinear
+        Monte Carlo samples).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: the published data, the worst-case case's headline costs (cost units,
+        arbitrary) and per case the optimum (with its enumeration check), GA, baselines, fronts
+        and Monte Carlo; tolerances in mm.
+    """
     cases = {m: run_case(clutch_problem(m), config, enumerate_all=True) for m in CASES}
     return StudyResult(summarise(cases, CLUTCH_PUBLISHED, "worst_case"))
 
 
 def render(result: StudyResult):
+    """The HTML report of the study, from its summary.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     return render_cases("One-way clutch: process selection and tolerance allocation",
                         "Chase handbook §14.7 / Chase, Greenwood, Loosli & Hauglund 1990; contact angle "
                         "φ = arccos((a + c)/(e − c)), φ0 = 7.018°, limit ±2°. Process data: evotol's illustrative catalogue.",

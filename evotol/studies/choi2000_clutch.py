@@ -31,7 +31,26 @@ QUICK = {"pop_size": 30, "n_gen": 30, "n_mc": 20_000}
 
 def design(pp: ProcessProblem, ids, t_mm) -> dict:
     """One design judged on ``pp``: processes (1-based ids), t (mm), machining cost, expected loss,
-    total, RSS and worst-case angle (rad) and whether it holds the problem's limit."""
+    total, RSS and worst-case angle (rad) and whether it holds the problem's limit.
+
+    Parameters
+    ----------
+    pp : evotol.allocators.process.ProcessProblem
+        The clutch problem (from ``_choi2000.problem``); its requirement's measure (``"rss"`` or
+        ``"worst_case"``) decides which angle is held against the limit.
+    ids : sequence of int
+        Process per dimension X1..X4, 1-based as in the source.
+    t_mm : sequence of float
+        Tolerance per dimension, mm.
+
+    Returns
+    -------
+    dict
+        ``processes``, ``tolerances_mm`` (mm), ``machining_cost``, ``quality_loss`` and
+        ``total_cost`` (cost units of the data), ``rss_rad`` and ``worst_case_rad`` (first-order
+        contact-angle variation, rad), ``limit_rad`` (rad), ``measure_over_limit``
+        (dimensionless), ``holds_limit`` and ``in_process_ranges`` (bool).
+    """
     ch = np.asarray(ids, dtype=int) - 1
     T = np.asarray(t_mm, dtype=float) * MM
     S = pp.robot.gradient[0]
@@ -47,12 +66,40 @@ def design(pp: ProcessProblem, ids, t_mm) -> dict:
 
 
 def of_result(pp: ProcessProblem, r: ProcessResult) -> dict:
+    """An allocator's result judged on ``pp`` by :func:`design`.
+
+    Parameters
+    ----------
+    pp : evotol.allocators.process.ProcessProblem
+        The clutch problem.
+    r : evotol.allocators.process.ProcessResult
+        Result whose ``processes`` (1-based ids) and ``tolerances`` (m) are judged.
+
+    Returns
+    -------
+    dict
+        The :func:`design` dict of those processes and tolerances.
+    """
     ids = [int(r.processes[n]) for n in pp.names]
     return design(pp, ids, [r.tolerances[n] / MM for n in pp.names])
 
 
 def optimum_on(pp: ProcessProblem, ids) -> dict:
-    """The certified convex optimum with the processes fixed at ``ids`` (1-based)."""
+    """The certified convex optimum with the processes fixed at ``ids`` (1-based).
+
+    Parameters
+    ----------
+    pp : evotol.allocators.process.ProcessProblem
+        The clutch problem.
+    ids : sequence of int
+        Process per dimension, 1-based.
+
+    Returns
+    -------
+    dict
+        The :func:`design` dict of the optimum, plus ``certificate_gap`` (relative gap of
+        :func:`evotol.allocators.optimum.allocate_optimum`'s certificate).
+    """
     ch = np.asarray(ids, dtype=int) - 1
     r = allocate_optimum(pp.subproblem(ch))
     out = design(pp, ids, r.t / MM)
@@ -62,7 +109,24 @@ def optimum_on(pp: ProcessProblem, ids) -> dict:
 
 def onto_limit(pp: ProcessProblem, ids, t_mm) -> np.ndarray:
     """A design outside the RSS limit pulled onto it inside its process ranges: t ← clip(t·L/RSS)
-    repeated (tolerances at a range's lower end stay there), in mm."""
+    repeated (tolerances at a range's lower end stay there), in mm.
+
+    Parameters
+    ----------
+    pp : evotol.allocators.process.ProcessProblem
+        The clutch problem (its first response's gradient and limit define the RSS).
+    ids : sequence of int
+        Process per dimension, 1-based (its range clips the tolerances).
+    t_mm : sequence of float
+        Tolerances, mm.
+
+    Returns
+    -------
+    (n_sources,) ndarray
+        Tolerances, mm: unchanged when the RSS already holds the limit, otherwise scaled down
+        and clipped (at most 200 rounds; the limit may still be exceeded if every tolerance
+        reaches its range's lower end).
+    """
     ch = np.asarray(ids, dtype=int) - 1
     idx = np.arange(pp.n_sources)
     lo, hi = pp.lo[idx, ch], pp.hi[idx, ch]
@@ -78,7 +142,28 @@ def onto_limit(pp: ProcessProblem, ids, t_mm) -> np.ndarray:
 
 def explain(opt: dict, pub: dict, same_proc_opt: dict, scaled: dict) -> dict:
     """Split published − optimum into the process choice and the tolerances on those processes;
-    ``scaled``: the published design scaled onto the limit when it lies outside (t × L / RSS)."""
+    ``scaled``: the published design scaled onto the limit when it lies outside (t × L / RSS).
+
+    Parameters
+    ----------
+    opt : dict
+        The optimum, a :func:`design` dict.
+    pub : dict
+        The published allocation, a :func:`design` dict.
+    same_proc_opt : dict
+        The optimum on the published processes (:func:`optimum_on`).
+    scaled : dict
+        The published design pulled onto the limit (:func:`design` of :func:`onto_limit`); used
+        only when ``pub`` does not hold the limit.
+
+    Returns
+    -------
+    dict
+        ``same_processes`` (bool), ``process_choice_part`` and ``tolerance_part`` (cost units),
+        ``max_relative_tolerance_difference`` (dimensionless), ``text`` (the explanation) and,
+        when the published design exceeds the limit, ``published_scaled_to_limit_total_cost``
+        (cost units) and ``published_scaled_to_limit_over_optimum`` (relative).
+    """
     process_part = same_proc_opt["total_cost"] - opt["total_cost"]
     tolerance_part = pub["total_cost"] - same_proc_opt["total_cost"]
     same = pub["processes"] == opt["processes"]
@@ -106,6 +191,35 @@ def explain(opt: dict, pub: dict, same_proc_opt: dict, scaled: dict) -> dict:
 
 
 def run_case(data: dict, cage: float, A: float, pub: dict | None, config: dict) -> dict:
+    """One quality-loss case: the RSS and worst-case optima and the published allocation.
+
+    Branch and bound checked by enumeration, GA and NSGA-II front, nonlinear Monte Carlo at the
+    optimum, the published design with its split of the difference (:func:`explain`), the
+    worst-case optimum and the allocation that holds the nonlinear worst-case limit.
+
+    Parameters
+    ----------
+    data : dict
+        The Choi 2000 data (``_choi2000.load``).
+    cage : float
+        Cage nominal X4, mm (101.69 or 101.6).
+    A : float
+        Taguchi loss coefficient A (cost units); K = A/T² with T = 0.035 rad.
+    pub : dict or None
+        The published allocation for this A (``_choi2000.published``: ``processes`` 1-based,
+        ``t_mm`` in mm, ``processes_stated``), or ``None`` if there is none.
+    config : dict
+        Study config: ``seed``, ``pop_size``, ``n_gen`` (GA and NSGA-II) and ``n_mc`` (Monte
+        Carlo samples).
+
+    Returns
+    -------
+    dict
+        JSON-ready case: ``optimum``, ``enumeration``, ``ga``, ``nsga2``,
+        ``mc_nonlinear_at_optimum``, ``worst_case`` and, given ``pub``, ``published``,
+        ``optimum_on_published_processes`` and ``difference``. Costs in cost units,
+        tolerances in mm, angles in rad.
+    """
     kw = {k: config[k] for k in ("pop_size", "n_gen", "seed")}
     pp = choi.problem(data, cage, "rss", A)
     bb = allocate_process_optimum(pp)
@@ -158,6 +272,19 @@ def run_case(data: dict, cage: float, A: float, pub: dict | None, config: dict) 
 
 
 def compute(config: dict) -> StudyResult:
+    """Settle the cage nominal, then run the cases A = 0, 20, 100 (:func:`run_case`).
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed``, ``pop_size``, ``n_gen`` and ``n_mc`` (see :func:`run_case`).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: source and provenance, ``cage_nominal_mm`` (mm) with its evidence and
+        rule, ``limit_rad`` (rad), the three ``cases`` and ``seconds`` (wall time, s).
+    """
     t0 = time.perf_counter()
     data = choi.load()
     evidence = choi.nominal_evidence(data)
@@ -173,6 +300,18 @@ def compute(config: dict) -> StudyResult:
 
 
 def render(result: StudyResult):
+    """The HTML report of the study, from its summary.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     from evotol.studies._choi2000_report import render_report
 
     return render_report(result.summary)

@@ -79,7 +79,26 @@ QUICK = {"n_grid": 9, "n_mc": 2000, "n_starts": 2, "baseline_poses_m": ((0.0, 0.
 
 
 def compute(config: dict) -> StudyResult:
-    """Four certified maps, the singular locus, symmetry, Monte Carlo shortfall and the multistart baseline."""
+    """Four certified maps, the singular locus, symmetry, Monte Carlo shortfall and the multistart baseline.
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``n_grid`` (points per axis of the square grid; 41 as in the thesis),
+        ``b_mm`` (translational clearances b_xy = b_z, mm), ``seed``, ``workers`` and
+        ``scheduler`` (parallel map evaluation; a Dask address or ``None``), ``n_mc`` (Monte Carlo
+        clearance states per pose), ``n_starts`` (multistart starts per pose),
+        ``baseline_poses_m`` (poses of the multistart comparison, (n, 2), m) and ``quick``.
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: grid ``x``, ``y`` (mm), closed-loop maps ``p_max``, ``p_upper`` (mm)
+        and ``r_max``, ``r_upper`` (rad) as ``(n_grid, n_grid)`` nested lists (row = y index),
+        the same for ``leg1``, ``leg2``, ``redundant``, the largest relative gap, clearances,
+        singular locus, symmetry, Monte Carlo ratios (dimensionless), multistart baseline,
+        thesis claims, ``figures`` and ``seconds`` (s).
+    """
     from robots.clearance import max_pose_error, multistart_max_pose_error
     from robots.clearance.grid import grid_max_pose_error
     from robots.clearance.sampling import sample_max_errors
@@ -206,7 +225,18 @@ def compute(config: dict) -> StudyResult:
 
 
 def render(result: StudyResult) -> Report:
-    """Figs. IV.5-IV.6, IV.9-IV.14 with the singular locus, the thesis's statements and the checks."""
+    """Figs. IV.5-IV.6, IV.9-IV.14 with the singular locus, the thesis's statements and the checks.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     import plotly.graph_objects as go
 
     data = result.summary

@@ -39,7 +39,20 @@ QUICK = {"n_entries": 256, "pop_size": 8, "n_gen": 3, "max_evaluations": 40, "mc
 
 def make_problem(p_max_mm: float = 0.05) -> ToleranceProblem:
     """The thesis's ten clearance classes of the description-driven 5-bar at pose (0, 70) mm,
-    tolerances in [1e-4, 0.1] mm (the DOE's range), requirement p_max <= ``p_max_mm``."""
+    tolerances in [1e-4, 0.1] mm (the DOE's range), requirement p_max <= ``p_max_mm``.
+
+    Parameters
+    ----------
+    p_max_mm : float, optional
+        Required maximum positional error, mm (default 0.05 mm, the filter of Fig. VII.4).
+
+    Returns
+    -------
+    evotol.problem.ToleranceProblem
+        Ten clearance sources (``thesis_classes`` with h = 10 mm), each with
+        :func:`~evotol.studies.deng2012_tolsynth.default_cost_model`, at the single pose
+        (0, 70) mm.
+    """
     robot = MechanismModel(resolve_description("fivebar"))
     mech = robot.clearance_mechanism()
     cl = ClearanceSources(mech, thesis_classes(JOINTS, h=H_MM * MM))
@@ -51,7 +64,21 @@ def make_problem(p_max_mm: float = 0.05) -> ToleranceProblem:
 
 def factorial(n_entries: int | None, seed: int) -> np.ndarray:
     """The thesis's level sets (n, 10) in SI, class order bxy_A, bxy_C, bxy_B, bxy_D, bxy_E,
-    bz_A ... bz_E; ``n_entries``: a random subset."""
+    bz_A ... bz_E; ``n_entries``: a random subset.
+
+    Parameters
+    ----------
+    n_entries : int or None
+        Number of entries drawn at random without replacement (kept in factorial order);
+        ``None`` (or 0) returns all 4^5 x 2^5 = 32 768.
+    seed : int
+        Random seed of the subset.
+
+    Returns
+    -------
+    (n, 10) ndarray
+        Clearances, m.
+    """
     L = np.array(list(itertools.product(LEVELS_XY_MM, repeat=5)))
     Z = np.array(list(itertools.product(LEVELS_Z_MM, repeat=5)))
     T = np.concatenate([np.repeat(L, len(Z), 0), np.tile(Z, (len(L), 1))], 1) * MM
@@ -65,6 +92,23 @@ def _design(problem, t) -> dict:
 
 
 def compute(config: dict) -> StudyResult:
+    """DOE, GA, polyblock lower bound and Monte Carlo on :func:`make_problem`.
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed``, ``quick``, ``p_max_mm`` (mm), ``n_entries`` (DOE subset or
+        ``None``), ``pop_size`` and ``n_gen`` (GA), ``max_evaluations`` (polyblock) and
+        ``mc_samples`` (Monte Carlo).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: per method (``doe``, ``ga``, ``bracket``) its cost (cost units),
+        attained and certified p_max (mm), clearances (mm) and time (s); the proven lower bound
+        and gap, the relative differences ``ga_vs_doe`` and ``ga_over_lower_bound``, the Monte
+        Carlo check and ``seconds``.
+    """
     t0 = time.perf_counter()
     seed = config["seed"]
     pr = make_problem(config["p_max_mm"])
@@ -105,6 +149,18 @@ def compute(config: dict) -> StudyResult:
 
 
 def render(result: StudyResult):
+    """The comparison table, the clearances per method and the Monte Carlo note.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     import plotly.graph_objects as go
 
     from evotol.reporting.html import Report

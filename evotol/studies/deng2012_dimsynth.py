@@ -51,7 +51,32 @@ TAB_VII_2 = ((200.0, 100.0, 50.0, 15.0, 15.0), (200.0, 100.0, 50.0, 5.0, 15.0))
 
 
 def design_robot(l1: float, l2: float, a1: float, a2: float, p: float) -> IRSBot2:
-    """The IRSBot-2 of a design (m): Tab. VI.4's fixed parameters with the five design variables."""
+    """The IRSBot-2 of a design (m): Tab. VI.4's fixed parameters with the five design variables.
+
+    Parameters
+    ----------
+    l1 : float
+        Proximal crank length ``A_iB_i``, m.
+    l2 : float
+        Length of each distal link ``E_jiF_ji``, m.
+    a1 : float
+        Length ``E_iE_ji`` (elbow to a distal link's upper joint), m.
+    a2 : float
+        Length of the platform-side counterpart (``H_hi`` to ``F_ji``), m.
+    p : float
+        Horizontal offset ``H_hi P`` of the platform point, m.
+
+    Returns
+    -------
+    robots.irsbot2.IRSBot2
+        The robot with the fixed parameters of Tab. VI.4.
+
+    Raises
+    ------
+    ValidationError
+        If the dimensions are invalid (see :class:`robots.irsbot2.IRSBot2`), e.g. ``l2`` too
+        short for the equivalent link to exist.
+    """
     return IRSBot2.thesis("VI.4", l1=l1, l2=l2, a1=a1, a2=a2, p=p)
 
 
@@ -66,7 +91,19 @@ THESIS_RANGES = {"p_max_mm": (7.3, 30.6), "r_max_deg": (5.8, 24.3)}
 
 
 def factors(continuous: bool = False) -> list[Factor]:
-    """l1, l2, a1, a2, p (mm) on the levels of Tab. VII.1 (or their continuous span)."""
+    """l1, l2, a1, a2, p (mm) on the levels of Tab. VII.1 (or their continuous span).
+
+    Parameters
+    ----------
+    continuous : bool, optional
+        Continuous factors on [min, max] of the levels (for NSGA-II) instead of the three levels.
+
+    Returns
+    -------
+    list of evotol.doe.Factor
+        Factors ``l1_mm``, ``l2_mm``, ``a1_mm``, ``a2_mm``, ``p_mm`` (values in mm, ``si_scale``
+        1e-3).
+    """
     out = []
     for k, lv in TAB_VII_1.items():
         if continuous:
@@ -77,7 +114,13 @@ def factors(continuous: bool = False) -> list[Factor]:
 
 
 def presets() -> list[Preset]:
-    """The filters of Figs. VII.12-VII.16."""
+    """The filters of Figs. VII.12-VII.16.
+
+    Returns
+    -------
+    list of evotol.filtering.Preset
+        Five filters on ``area_mm2`` (mm²), ``p_max_mm`` (mm) and ``r_max_deg`` (deg).
+    """
     return [Preset("f_a ≥ 4e4 mm²", {"area_mm2": (4e4, None)}, "Fig. VII.12"),
             Preset("f_a ≤ 3e3 mm²", {"area_mm2": (None, 3e3)}, "Fig. VII.13"),
             Preset("f_p ≤ 10 mm", {"p_max_mm": (None, 10.0)}, "Fig. VII.14"),
@@ -89,7 +132,14 @@ def presets() -> list[Preset]:
 def clearance_bounds():
     """Sec. VII.2.2: Δb_xy = Δb_z = 0.1 mm, Δβ_xy = 0.01 rad on every joint; Δβ_z "very small" on the
     actuated joints (0.001 rad, Tab. VI.7) and "relatively higher" on the passive ones (0.2 rad,
-    Tab. VI.3). Returns (distal, actuated, passive) ClearanceBounds."""
+    Tab. VI.3). Returns (distal, actuated, passive) ClearanceBounds.
+
+    Returns
+    -------
+    distal, actuated, passive : robots.clearance.ClearanceBounds
+        Bounds (Δβ_xy, Δβ_z in rad; Δb_xy, Δb_z in m) of the distal-module joints, the actuated
+        joints (Δβ_z = 0.001 rad) and the passive parallelogram joints (Δβ_z = 0.2 rad).
+    """
     from robots.clearance import ClearanceBounds
 
     b, bz, bxy = CLEARANCE["b_xy"], CLEARANCE["b_z"], CLEARANCE["beta_xy"]
@@ -99,13 +149,39 @@ def clearance_bounds():
 
 def engine_mechanism(robot: IRSBot2):
     """A design's IRSBot-2 with the clearances of Sec. VII.2.2 in the distal modules and the
-    parallelograms (Ch. V-VI, 114 variables)."""
+    parallelograms (Ch. V-VI, 114 variables).
+
+    Parameters
+    ----------
+    robot : robots.irsbot2.IRSBot2
+        The design (e.g. from :func:`design_robot`).
+
+    Returns
+    -------
+    ClearanceMechanism
+        The robot's clearance mechanism with the bounds of :func:`clearance_bounds`.
+    """
     distal, actuated, passive = clearance_bounds()
     return robot.clearance_mechanism(parallelograms=True, distal=distal, actuated=actuated, passive=passive)
 
 
 def engine_pose_errors(robot: IRSBot2, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Certified maximum positional (m) and rotational (rad) error at ``points`` (k, 2) [x, z] (m)."""
+    """Certified maximum positional (m) and rotational (rad) error at ``points`` (k, 2) [x, z] (m).
+
+    Parameters
+    ----------
+    robot : robots.irsbot2.IRSBot2
+        The design.
+    points : (k, 2) ndarray
+        Platform positions [x, z], m.
+
+    Returns
+    -------
+    p_max : (k,) ndarray
+        Maximum positional error, m.
+    r_max : (k,) ndarray
+        Maximum rotational error, rad.
+    """
     from robots.clearance import max_pose_error
 
     res = max_pose_error(engine_mechanism(robot), points)
@@ -114,7 +190,20 @@ def engine_pose_errors(robot: IRSBot2, points: np.ndarray) -> tuple[np.ndarray, 
 
 def engine_pose_errors_batch(robots: list, points: list) -> list[tuple[np.ndarray, np.ndarray]]:
     """:func:`engine_pose_errors` for many designs in one engine call
-    (:func:`robots.clearance.stacked.max_pose_error_stacked`: the designs share joints and chains)."""
+    (:func:`robots.clearance.stacked.max_pose_error_stacked`: the designs share joints and chains).
+
+    Parameters
+    ----------
+    robots : list of robots.irsbot2.IRSBot2
+        The designs.
+    points : list of (k_i, 2) array_like
+        ``points[i]``: platform positions [x, z] of ``robots[i]``, m.
+
+    Returns
+    -------
+    list of (ndarray, ndarray)
+        Per design, ``(p_max (k_i,) in m, r_max (k_i,) in rad)``.
+    """
     from robots.clearance.stacked import max_pose_error_stacked
 
     return max_pose_error_stacked([engine_mechanism(r) for r in robots], points)
@@ -129,6 +218,19 @@ class IRSBot2DesignEvaluator:
     the certified engine by default (tests plug in closed forms).
     Returns ``area_mm2, p_max_mm, r_max_deg``, the rectangle ``x0_mm, x1_mm, z0_mm, z1_mm``, the
     errors at the three points of Fig. VII.10 (``p_rd_mm, p_c_mm, p_lu_mm``, ``r_rd_deg`` ...).
+    A design without a singularity-free rectangle (zero area) gets NaN errors and
+    ``feasible = False``.
+
+    Parameters
+    ----------
+    n_grid : int, optional
+        Points per side of the workspace discretisation (default 161).
+    margin_deg : float, optional
+        Distance kept from the singular loci, deg (default 2).
+    pose_errors : callable or None, optional
+        ``pose_errors(robot, points) -> (p, r)`` with ``points`` (3, 2) m, ``p`` in m and ``r``
+        in rad; ``None`` (default) uses the certified engine in one stacked call
+        (:func:`engine_pose_errors_batch`).
     """
 
     n_grid: int = 161
@@ -210,7 +312,25 @@ _COLS = [f"{k}_mm" for k in DESIGN_VARS] + list(OBJECTIVES)
 def compute(config: dict) -> StudyResult:
     """Evaluate the 243 designs of Tab. VII.1 (``n_designs``: a random subset), find the grid's
     Pareto designs and knees, run NSGA-II on continuous dimensions. ``pose_errors`` replaces the
-    certified engine (tests plug in closed forms); ``out_dir`` holds the resumable chunk store."""
+    certified engine (tests plug in closed forms); ``out_dir`` holds the resumable chunk store.
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed``, ``quick``, ``n_grid`` (workspace grid per side), ``n_designs``
+        (random subset size or ``None`` for all 243), ``pop_size`` and ``n_gen`` (NSGA-II),
+        ``workers``, ``scheduler`` (Dask address or ``None``), ``progress`` (bool),
+        ``pose_errors`` (see :class:`IRSBot2DesignEvaluator`) and, set by the framework,
+        ``out_dir`` (no chunk store without it).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` (presets, findings, objective ranges in mm², mm and deg, the thesis's
+        designs, grid Pareto designs and knees, NSGA-II knees, timing in s) and the tables
+        ``entries`` (every evaluated design with the columns of :class:`IRSBot2DesignEvaluator`)
+        and ``pareto`` (the NSGA-II front).
+    """
     t0 = time.perf_counter()
     quick, seed, workers = config["quick"], config["seed"], config["workers"]
     scheduler = scheduler_of(config["scheduler"])   # `evotol reproduce` on a cluster
@@ -317,7 +437,18 @@ def _axes(f):
 
 def render(result: StudyResult):
     """Findings, Tab. VII.2 in our model, the parallel coordinates with the presets of Figs.
-    VII.12-VII.16, ranges vs the thesis, the grid's Pareto designs and the NSGA-II knees."""
+    VII.12-VII.16, ranges vs the thesis, the grid's Pareto designs and the NSGA-II knees.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute`: its summary and the tables ``entries`` and ``pareto``.
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     from evotol.reporting.html import Report
     from evotol.reporting.parcoords import format_tick
 

@@ -10,7 +10,7 @@
   beta_z = 0.4 rad (Tab. VI.6), parallelogram joints Tabs. VI.7-VI.9, at the four corners and the
   centre of the largest rectangle of the workspace. The thesis does not state the rectangle's
   criterion; we take the largest rectangle symmetric about x = 0 in which the robot is at least
-  ``margin`` away from both singularity types (|sin(psi1 - psi2)| and min |sin(q_i - psi_i)|),
+  ``margin`` away from both singularity types (``|sin(psi1 - psi2)|`` and ``min |sin(q_i - psi_i)|``),
   :func:`robots.irsbot2.centred_singularity_free_rectangle`.
 """
 from __future__ import annotations
@@ -59,7 +59,26 @@ QUICK = {"n_grid": 7, "rectangle_step": 2e-3, "n_starts": 1}
 
 
 def compute(config: dict) -> StudyResult:
-    """The two error maps, the five points of the largest rectangle and the multistart baseline."""
+    """The two error maps, the five points of the largest rectangle and the multistart baseline.
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``n_grid`` (points per axis of the map grid; 41), ``seed``, ``quick``,
+        ``workers`` and ``scheduler`` (parallel map evaluation; a Dask address or ``None``),
+        ``margin`` (smallest allowed magnitude of the singularity sines, dimensionless),
+        ``rectangle_step`` (search step of the largest rectangle, m) and ``n_starts``
+        (multistart starts of the baseline).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: grid ``x``, ``z`` (mm); per clearance case (``distal``,
+        ``distal_parallelograms``) the maps ``p_max``, ``p_upper`` (mm) and ``r_max``,
+        ``r_upper`` (rad) as ``(n_grid, n_grid)`` nested lists (row = z index); the geometries
+        (SI), the singularity data, the five points (mm, rad), the multistart baseline, the
+        mirror-reuse check, ``figures`` and ``seconds`` (s).
+    """
     from robots.clearance import ClearanceBounds, max_pose_error, multistart_max_pose_error
     from robots.clearance.symmetry import grid_max_pose_error_mirrored
     from robots.irsbot2 import MAP_WORKSPACE, IRSBot2, centred_singularity_free_rectangle, mirror_joint_map
@@ -159,7 +178,18 @@ def compute(config: dict) -> StudyResult:
 
 
 def render(result: StudyResult) -> Report:
-    """Figs. VI.1/VI.3 maps with the singular locus, the five points of Figs. VI.4-VI.5, the baseline."""
+    """Figs. VI.1/VI.3 maps with the singular locus, the five points of Figs. VI.4-VI.5, the baseline.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     import plotly.graph_objects as go
 
     data = result.summary

@@ -54,7 +54,15 @@ THESIS_RANGES = {"p_max_mm": (0.0038, 1.41), "r_max_deg": (0.0024, 1.38)}
 
 
 def factors() -> list[Factor]:
-    """Δb_xy (4 levels) and Δb_z (2 levels) of the five joints, in mm (Sec. VII.1.2)."""
+    """Δb_xy (4 levels) and Δb_z (2 levels) of the five joints, in mm (Sec. VII.1.2).
+
+    Returns
+    -------
+    list of evotol.doe.Factor
+        Ten log-scaled factors ``db_xy_<joint>_mm`` (levels 1e-4, 1e-3, 1e-2, 1e-1 mm) then
+        ``db_z_<joint>_mm`` (1e-3, 1e-1 mm), joints in the order A, C, B, D, E; ``si_scale``
+        1e-3 (mm to m).
+    """
     out = []
     for j in JOINTS:
         kind = "act." if ACTIVE[j] else "pas."
@@ -68,7 +76,14 @@ def factors() -> list[Factor]:
 
 
 def presets() -> list[Preset]:
-    """The filters of Figs. VII.3-VII.8."""
+    """The filters of Figs. VII.3-VII.8.
+
+    Returns
+    -------
+    list of evotol.filtering.Preset
+        Six filters on ``p_max_mm`` (mm: >= 1, <= 0.05, <= 0.01) and ``r_max_deg`` (deg: >= 1,
+        <= 0.05, <= 0.01).
+    """
     return [Preset("p_max ≥ 1 mm", {"p_max_mm": (1.0, None)}, "Fig. VII.3"),
             Preset("p_max ≤ 0.05 mm", {"p_max_mm": (None, 0.05)}, "Fig. VII.4"),
             Preset("p_max ≤ 0.01 mm", {"p_max_mm": (None, 0.01)}, "Fig. VII.5"),
@@ -79,7 +94,13 @@ def presets() -> list[Preset]:
 
 def default_cost_model():
     """Reciprocal cost per clearance, c = 1 + 1/(t / 1 µm) (cost_models.ReciprocalCost):
-    a 0.1 µm fit costs 11 units, a 100 µm one 1.01 -- an illustrative shop model."""
+    a 0.1 µm fit costs 11 units, a 100 µm one 1.01 -- an illustrative shop model.
+
+    Returns
+    -------
+    cost_models.ReciprocalCost
+        ``ReciprocalCost(1.0, 1.0, scale=1e-6)``: takes a clearance in m, returns cost units.
+    """
     from cost_models import ReciprocalCost
 
     return ReciprocalCost(1.0, 1.0, scale=1e-6)
@@ -95,6 +116,19 @@ class FiveBarToleranceEvaluator:
     pose_mm: end-effector position (mm); h_mm: joint length of eq. III.2 (mm); beta_z_passive /
     beta_z_active: Δβ_z (rad); tol: relative certificate gap of the engine.
     Returns ``p_max_mm, r_max_deg, p_upper_mm, r_upper_deg, cost``.
+
+    Parameters
+    ----------
+    pose_mm : tuple of float, optional
+        End-effector position (x, y), mm; default (0, 70) mm.
+    h_mm : float, optional
+        Joint length h of eq. III.2 (Δβ_xy = Δb_xy / h), mm; default 10 mm.
+    beta_z_passive : float, optional
+        Rotational clearance Δβ_z about the axis of the passive joints C, D, E, rad; default 0.2.
+    beta_z_active : float, optional
+        Δβ_z of the actuated joints A, B, rad; default 0 (locked).
+    tol : float, optional
+        Relative certificate gap of the clearance engine (dimensionless); default 1e-3.
     """
 
     pose_mm: tuple[float, float] = POSE_MM
@@ -116,7 +150,23 @@ class FiveBarToleranceEvaluator:
 
     def bounds(self, X: pd.DataFrame) -> np.ndarray:
         """Clearance bounds (n, 5, 4) [Δβ_xy, Δβ_z, Δb_xy, Δb_z] (rad, m) in the engine's joint order;
-        Δβ_xy = Δb_xy / h (eq. III.2), Δβ_z by the thesis's actuated/passive convention."""
+        Δβ_xy = Δb_xy / h (eq. III.2), Δβ_z by the thesis's actuated/passive convention.
+
+        Parameters
+        ----------
+        X : pandas.DataFrame
+            Entries (n rows) with the columns ``db_xy_<joint>_mm`` and ``db_z_<joint>_mm``, mm.
+
+        Returns
+        -------
+        (n, 5, 4) ndarray
+            Per entry and joint: Δβ_xy (rad), Δβ_z (rad), Δb_xy (m), Δb_z (m).
+
+        Raises
+        ------
+        EvotolError
+            If the engine's 5-bar joints are not actuated as in Fig. IV.4 (A and B actuated).
+        """
         mech = self._model().mech
         names = [j.name for j in mech.joints]
         if {j.name: j.active for j in mech.joints} != {j: ACTIVE[j] for j in names}:
@@ -205,7 +255,24 @@ def thesis_endpoints(df: pd.DataFrame, n_sample: int = 1000) -> dict:
     For each endpoint: the distinct value of ours nearest to it (log distance, values equal to 7
     significant digits grouped), how many entries take it, how many entries lie beyond it (more
     extreme), and the probability that a random ``n_sample``-entry sample of the factorial misses
-    all of those -- i.e. that the sample's extreme is this value or a less extreme one."""
+    all of those -- i.e. that the sample's extreme is this value or a less extreme one.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Evaluated entries with the columns ``p_max_mm`` (mm) and ``r_max_deg`` (deg), all
+        positive (their log10 is taken).
+    n_sample : int, optional
+        Size of the thesis's random sample (1000 entries).
+
+    Returns
+    -------
+    dict
+        Keyed ``p_max_mm_min``, ``p_max_mm_max``, ``r_max_deg_min``, ``r_max_deg_max``; each a
+        dict: ``thesis`` and ``ours_nearest`` (mm or deg), ``relative_difference``,
+        ``n_entries_at_value``, ``n_entries_beyond``, ``rank_from_the_end`` and
+        ``probability_sample_misses_those_beyond`` (sampling without replacement).
+    """
     out = {}
     n = len(df)
     for col, (lo, hi) in THESIS_RANGES.items():
@@ -241,7 +308,24 @@ def _axes(f):
 def compute(config: dict) -> StudyResult:
     """Evaluate the full factorial (``n_entries``: a random sample), read off the thesis's sample,
     apply the presets, derive the findings and run NSGA-II on continuous tolerances. ``out_dir``
-    holds the resumable chunk store."""
+    holds the resumable chunk store.
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed``, ``quick``, ``n_entries`` (random subset size; ``None`` for the
+        full 32 768-entry factorial), ``n_sample`` (the thesis's sample size), ``pop_size`` and
+        ``n_gen`` (NSGA-II), ``workers``, ``scheduler`` (Dask address or ``None``), ``progress``
+        (bool) and, set by the framework, ``out_dir`` (no chunk store without it).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` (objective ranges in mm and deg, presets, findings, certificate gap,
+        evaluation log, NSGA-II knees, timing in s) and the tables ``entries`` (every evaluated
+        entry: tolerances in mm, ``p_max_mm``, ``r_max_deg``, certified bounds, ``cost`` in cost
+        units) and ``pareto`` (the NSGA-II front).
+    """
     t0 = time.perf_counter()
     quick, seed = config["quick"], config["seed"]
     scheduler = scheduler_of(config["scheduler"])   # `evotol reproduce` on a cluster
@@ -306,7 +390,18 @@ def compute(config: dict) -> StudyResult:
 
 def render(result: StudyResult):
     """Findings, the parallel coordinates with the presets of Figs. VII.3-VII.8, ranges vs the
-    thesis, main effects and the NSGA-II knees."""
+    thesis, main effects and the NSGA-II knees.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute`: its summary and the tables ``entries`` and ``pareto``.
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     from evotol.reporting.html import Report
     from evotol.reporting.parcoords import format_tick, preset_table_rows
 

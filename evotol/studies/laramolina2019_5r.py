@@ -40,7 +40,28 @@ QUICK = dict(grid=61, n_samples=300, cloud=60, conv_sizes=(16, 64), conv_rep=10,
 # physics (no plotting)
 # ----------------------------------------------------------------------------------------------
 def analyse_case(case: str, cfg: dict, seed: int, model: U.UncertaintyModel) -> dict:
-    """Workspace, MIC, LCI and the sampled clouds of one design case (non-dimensional, D = 1)."""
+    """Workspace, MIC, LCI and the sampled clouds of one design case (non-dimensional, D = 1).
+
+    Parameters
+    ----------
+    case : {"a", "b", "c", "d"}
+        Design case of Table 2.
+    cfg : dict
+        Settings: ``grid`` (workspace grid points per side), ``n_samples`` (LHS samples shared by
+        the poses) and ``cloud`` (samples kept per pose for the figures).
+    seed : int
+        Random seed of the samples.
+    model : robots.planar5r.uncertainty.UncertaintyModel
+        Distributions of the uncertain parameters (Table 1, Sec. 2.5).
+
+    Returns
+    -------
+    dict
+        Link lengths, MIC (closed form and numeric), usable area, LCI statistics, forward/inverse
+        kinematics round-trip errors, per-pose deviation statistics (with eq. 24 as printed and
+        without clearance), all non-dimensional (lengths in units of D); ``_plot`` holds the
+        figure arrays (ndarrays, not JSON-ready).
+    """
     d = CASES[case]
     r1, r2, r3 = d.r1, d.r2, d.r3
     mic = K.mic_closed_form(r1, r2, r3)
@@ -106,6 +127,13 @@ def default_costs() -> dict:
       actuated joints ``1 + 20 / x`` (motor-side bearing), elbows ``0.5 + 10 / x``;
     * actuator accuracy (encoder + servo), power ``c = 4 (std / 0.01 deg)^-0.7``, i.e. of the
       tolerance t = 3 std: ``4 (t / 0.03 deg)^-0.7``.
+
+    Returns
+    -------
+    dict of str to cost model
+        ``"clearance_A"`` and ``"clearance_B"`` (:class:`cost_models.ReciprocalCost`, clearance
+        in m) and ``"theta"`` (:class:`cost_models.PowerCost`, tolerance t = 3 std in rad); costs
+        in cost units per part.
     """
     from cost_models import PowerCost, ReciprocalCost
 
@@ -116,10 +144,35 @@ def default_costs() -> dict:
 def allocation_problem(case: str, n_samples: int, seed: int, D: float = 0.2, radius: float = 0.2e-3,
                        p_max: float = 0.01, measure: str = "yield"):
     """The core problem: link lengths fixed at 3 std of Table 1 (normal, no cost); actuator errors
-    normal with t = 3 std; contact-mode clearances |c| = r_c (Sec. 2.5); one shared tolerance per
-    joint pair / motor pair (cost counted per part); requirement P(|dp| <= radius) >= 1 − p_max at
+    normal with t = 3 std; contact-mode clearances ``|c| = r_c`` (Sec. 2.5); one shared tolerance per
+    joint pair / motor pair (cost counted per part); requirement ``P(|dp| <= radius) >= 1 − p_max`` at
     every MIW pose on the nonlinear loop closure (common LHS rows, unassembled = miss), or the
-    exact worst case (``measure="worst_case"``)."""
+    exact worst case (``measure="worst_case"``).
+
+    Parameters
+    ----------
+    case : {"a", "b", "c", "d"}
+        Design case of Table 2.
+    n_samples : int
+        Monte Carlo samples of the yield requirement (ignored for other measures).
+    seed : int
+        Random seed of those samples.
+    D : float, optional
+        Scale of the mechanism, m (physical length = non-dimensional length x D); default 0.2 m.
+    radius : float, optional
+        Allowed position deviation, m (default 0.2 mm).
+    p_max : float, optional
+        Allowed probability of exceeding ``radius`` at each pose (default 0.01).
+    measure : str, optional
+        ``"yield"`` (default; nonlinear Monte Carlo) or another registered measure, e.g.
+        ``"worst_case"``.
+
+    Returns
+    -------
+    evotol.problem.ToleranceProblem
+        Problem at the MIW poses with the shared variables of :data:`SHARED` (clearances in m,
+        actuator tolerance t = 3 std in rad) and the link lengths fixed.
+    """
     from evotol.problem import Requirement, Tolerance, ToleranceProblem
 
     robot = Planar5R(case, D=D)
@@ -160,7 +213,36 @@ def allocate_case(case: str, cfg: dict, seed: int, pareto: bool, grid: int, p_ma
     The GA starts from the tightest design (every tolerance at its lower bound: feasible whenever
     anything is), the Lagrange baseline and ``seed_designs`` (e.g. the worst-case optimum, whose
     exceedance is 0); its search runs on the tolerances themselves (the feasible region of case a
-    is a small corner of the box)."""
+    is a small corner of the box).
+
+    Parameters
+    ----------
+    case : {"a", "b", "c", "d"}
+        Design case of Table 2.
+    cfg : dict
+        Settings: ``n_alloc_samples`` (samples of the yield problem), ``pop`` and ``n_gen`` (GA
+        and NSGA-II), ``n_verify`` (verification samples).
+    seed : int
+        Random seed.
+    pareto : bool
+        Also run NSGA-II (cost vs exceedance).
+    grid : int
+        Points per axis of the equal-clearance x actuator-tolerance grid; 0 for none.
+    p_max : float, optional
+        Allowed exceedance probability per pose (default 0.01).
+    radius : float, optional
+        Allowed position deviation, m (default 0.2 mm).
+    seed_designs : sequence of array_like, optional
+        Extra GA start designs, source tolerances in SI (m, rad).
+
+    Returns
+    -------
+    dict
+        Problem description and ``feasible``; when feasible the calibrated design
+        ``tolerances`` (clearances in m, ``theta`` as actuator std in rad), ``cost`` (cost units),
+        the optimiser's and verified exceedance probabilities with a 95 % upper bound, cost
+        parts, and optionally ``pareto`` and ``grid``; otherwise a ``message``.
+    """
     from scipy.stats import beta
 
     from evotol.allocators import allocate_ga, allocate_nsga2
@@ -238,7 +320,29 @@ def allocate_case(case: str, cfg: dict, seed: int, pareto: bool, grid: int, p_ma
 def worst_case_case(case: str, seed: int) -> dict:
     """The deterministic counterpart: the same sources and shared tolerances under the exact
     worst-case measure, certified :func:`evotol.allocators.allocate_optimum`; its exceedance under
-    the probabilistic model on 20 000 fresh samples."""
+    the probabilistic model on 20 000 fresh samples.
+
+    Parameters
+    ----------
+    case : {"a", "b", "c", "d"}
+        Design case of Table 2.
+    seed : int
+        Random seed of the probabilistic check (``seed + 31``).
+
+    Returns
+    -------
+    dict
+        ``tolerances`` (SI, m or rad), ``cost`` (cost units), ``feasible``,
+        ``max_position_error`` (m), ``certificate``, ``as_variables`` (clearances in m, actuator
+        std in rad), ``p_exceed_probabilistic_model``, ``sigma_multiple`` and ``_design`` (the
+        source tolerances as an ndarray, not JSON-ready).
+
+    Raises
+    ------
+    EvotolError
+        If the allocation fails, e.g. ``InfeasibleError`` when the fixed link-length tolerances
+        alone break the requirement (from :func:`evotol.allocators.allocate_optimum`).
+    """
     from evotol.allocators import allocate_optimum
 
     Pw = allocation_problem(case, 0, seed, measure="worst_case")
@@ -256,7 +360,21 @@ def worst_case_case(case: str, seed: int) -> dict:
 # study
 # ----------------------------------------------------------------------------------------------
 def compute(config: dict) -> StudyResult:
-    """Workspace, MIC, LCI and clouds of the four cases, LHS-vs-MC convergence, allocation."""
+    """Workspace, MIC, LCI and clouds of the four cases, LHS-vs-MC convergence, allocation.
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed``, ``quick`` and the keys of ``SETTINGS`` (grid and sample sizes,
+        convergence sizes, the allocation cases, GA sizes, ``n_verify``, ``alloc_grid``).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: settings, uncertainty model, per case the workspace and cloud
+        statistics (non-dimensional), the convergence study, the allocation per case (SI
+        tolerances, cost units), timing (s), ``figures`` and ``seconds``.
+    """
     from evotol.errors import EvotolError
 
     t0 = time.perf_counter()
@@ -302,7 +420,18 @@ def compute(config: dict) -> StudyResult:
 
 
 def render(result: StudyResult) -> Report:
-    """Table 2 with the workspace indices, Figs. 5-12 per case, LHS vs MC, the allocation."""
+    """Table 2 with the workspace indices, Figs. 5-12 per case, LHS vs MC, the allocation.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     summary = result.summary
     cases, conv, alloc = summary["cases"], summary["convergence"], summary["allocation"]
     rep = Report("Planar 5R symmetrical mechanism under clearances and uncertainties",

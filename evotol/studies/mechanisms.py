@@ -98,7 +98,26 @@ def _ucr3(model, cfg) -> dict:
 
 def delta_columns(model, robot) -> list[int]:
     """Column of ``robots.delta`` for every source of ``delta.toml``: the names are equal except the
-    joint offsets (``dq2_i``/``dq5_i`` are parameters there, q3, q4, q6, q7 the DH entries ``<j>_i.theta``)."""
+    joint offsets (``dq2_i``/``dq5_i`` are parameters there, q3, q4, q6, q7 the DH entries ``<j>_i.theta``).
+
+    Parameters
+    ----------
+    model : robots.mechanism.model.MechanismModel
+        The model of ``robots/mechanisms/delta.toml``.
+    robot : robots.delta.DeltaRobot
+        The hand-written Delta model.
+
+    Returns
+    -------
+    list of int
+        For each of ``model``'s sources, in order, the index of the same parameter among
+        ``robot.source_names``.
+
+    Raises
+    ------
+    ValueError
+        If a source of ``model`` has no counterpart in ``robot`` (from ``list.index``).
+    """
     hn = list(robot.source_names)
 
     def hand(n):
@@ -145,6 +164,23 @@ BUILTIN = {"5-bar": _fivebar, "IRSBot-2": _irsbot2, "3-UCR": _ucr3, "Delta": _de
 
 
 def compute(cfg: dict) -> StudyResult:
+    """Check every shipped description and compare it with its hand-written model.
+
+    Parameters
+    ----------
+    cfg : dict
+        Study config: ``seed``, ``n_poses`` (poses of the FD and rank checks), ``map_grid``
+        (points per axis of the 5-bar's timed clearance map) and ``n_configurations`` (random
+        configurations of the URDF arms).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: ``seed`` and ``mechanisms``, per mechanism name its file, sources,
+        ``fd_rel_error`` and ``builtin_rel_diff`` (relative, dimensionless), closure residual,
+        ranks, blind and duplicated sources and ``seconds``; plus the built-in comparison blocks
+        (5-bar: ``p_max_mm`` in mm, ``r_max_rad`` in rad) and the URDF ``configurations``.
+    """
     from robots.mechanism.checks import check_mechanism
     from robots.mechanism.model import SHIPPED, MechanismModel
 
@@ -167,6 +203,18 @@ def compute(cfg: dict) -> StudyResult:
 
 
 def render(result: StudyResult) -> Report:
+    """The table of mechanisms, the URDF arms, the 5-bar's certified errors and the comparisons.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     m = result.summary["mechanisms"]
     rep = Report("Mechanisms from description files",
                  "every robots/mechanisms/*.toml: sources generated, FD agreement, equality with the hand-written model")

@@ -25,13 +25,40 @@ PUBLISHED = {"source": "B. G. Loosli, 'Manufacturing tolerance cost minimization
 
 
 def enumeration_solves(pp) -> int:
-    """Convex solves full enumeration needs: combinations whose tightest design holds the requirement."""
+    """Convex solves full enumeration needs: combinations whose tightest design holds the requirement.
+
+    Parameters
+    ----------
+    pp : evotol.allocators.process.ProcessProblem
+        The process-selection problem.
+
+    Returns
+    -------
+    int
+        Number of process combinations whose tightest design (every tolerance at its process's
+        lower limit) has normalised error <= 1.
+    """
     combos = np.array(list(itertools.product(*[range(k) for k in pp.n_processes])))
     T = pp.lo[np.arange(pp.n_sources), combos]
     return int(np.sum(pp.normalised_error(T) <= 1 + 1e-9))
 
 
 def compute(config: dict) -> StudyResult:
+    """Solve the stack under both limits of ``CASES`` (worst case and RSS).
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed``, ``pop_size`` and ``n_gen`` (GA and NSGA-II), ``n_mc`` (nonlinear
+        Monte Carlo samples).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: the published-source note, the worst-case case's headline costs (cost
+        units, arbitrary) and per case the optimum, GA, baselines, fronts, Monte Carlo and
+        ``enumeration_convex_solves``; tolerances in mm.
+    """
     cases = {}
     for m in CASES:
         pp = stack_problem(m)
@@ -42,6 +69,18 @@ def compute(config: dict) -> StudyResult:
 
 
 def render(result: StudyResult):
+    """The HTML report of the study, from its summary.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     return render_cases("Linear stack with process selection", "Shaft-housing axial gap, six dimensions × four processes; "
                         "process data: evotol's illustrative catalogue.", result.summary, CASES)
 

@@ -36,7 +36,30 @@ _DESIGNS = ("paper_table1", "paper_table2", "ga", "sensitivity", "optimum")
 
 def yao2013_problem(variant: str, measure: str = "rss", grid=(11, 11, 6), lower=0.1 * UNIT, upper=20 * UNIT) -> ToleranceProblem:
     """The paper's problem: 12 sources, exponential costs (a0, a1) = (1.9, 0.5) for lengths and
-    (1.1, 0.6) for joints with t in units of 1e-5 m, |δp| <= 5e-5 m over the workspace grid."""
+    (1.1, 0.6) for joints with t in units of 1e-5 m, ``|δp| <= 5e-5 m`` over the workspace grid.
+
+    Parameters
+    ----------
+    variant : {"paper", "verified"}
+        Error model of :class:`robots.ucr3.UCR3`: eqs. 10-11 as printed or the derived one.
+    measure : str, optional
+        Accuracy measure of the requirement (default ``"rss"``; ``"worst_case"`` for the exact
+        worst case).
+    grid : sequence of 3 int, optional
+        Points per workspace coordinate (α, β, Z_c) of the pose grid; default (11, 11, 6).
+    lower, upper : float, optional
+        Tolerance range of every source, m (default 1e-6 m and 2e-4 m).
+
+    Returns
+    -------
+    evotol.problem.ToleranceProblem
+        The 12-source problem with the requirement ``position = 5e-5 m``.
+
+    Raises
+    ------
+    ValidationError
+        If ``variant`` is unknown (from :class:`robots.ucr3.UCR3`).
+    """
     robot = UCR3(variant=variant)
     tol = {}
     for s in robot.sources:
@@ -56,7 +79,22 @@ QUICK = {"grid": (5, 5, 3), "pop_size": 40, "n_gen": 40, "n_mc": 200}
 
 def compute(config: dict) -> StudyResult:
     """Both error models: GA (pymoo and paper operators), sensitivity, Lagrange, certified optimum
-    (RSS and worst case), NSGA-II front and Monte Carlo checks of every allocation (Sec. 5)."""
+    (RSS and worst case), NSGA-II front and Monte Carlo checks of every allocation (Sec. 5).
+
+    Parameters
+    ----------
+    config : dict
+        Study config: ``seed``, ``grid`` (points per workspace coordinate), ``pop_size`` and
+        ``n_gen`` (GA and NSGA-II), ``n_mc`` (Monte Carlo samples).
+
+    Returns
+    -------
+    StudyResult
+        ``summary`` only: the costs of the paper's Tables 1-2 (cost units), per error model
+        (``variants``) every allocator's cost, tolerances (m), certificates, the Monte Carlo
+        checks (errors in m, exceed rates as fractions), the NSGA-II front; ``figures``, GA time
+        and ``seconds`` (s).
+    """
     t_start = time.perf_counter()
     seed, grid = config["seed"], tuple(config["grid"])
     pop, gens, n_mc = config["pop_size"], config["n_gen"], config["n_mc"]
@@ -132,7 +170,18 @@ def compute(config: dict) -> StudyResult:
 
 
 def render(result: StudyResult) -> Report:
-    """The report: what holds, costs, Tables 1-2 with ours, Figs. 4-5 and the NSGA-II front."""
+    """The report: what holds, costs, Tables 1-2 with ours, Figs. 4-5 and the NSGA-II front.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Output of :func:`compute` (its summary).
+
+    Returns
+    -------
+    evotol.reporting.html.Report
+        The HTML report.
+    """
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
 

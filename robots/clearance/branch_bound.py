@@ -18,7 +18,21 @@ from robots.clearance.support import solve_support, true_dual
 @dataclass
 class NormMaximum:
     """max ||Ct sigma|| of every case: attained value, certified bound, attaining scaled screws,
-    and the work done (support problems solved, Newton iterations summed over problems)."""
+    and the work done (support problems solved, Newton iterations summed over problems).
+
+    Parameters
+    ----------
+    lower : (K,) ndarray
+        Attained norm per case (units of the target: m or rad).
+    upper : (K,) ndarray
+        Certified upper bound per case, same units.
+    sigma : (K, R) ndarray
+        Scaled screws (dimensionless, in the unit cones) attaining ``lower``.
+    n_solves : int, optional
+        Support problems solved (default 0).
+    n_newton : int, optional
+        Newton iterations summed over the problems (default 0).
+    """
 
     lower: np.ndarray      # (K,) attained norm
     upper: np.ndarray      # (K,) certified bound
@@ -33,6 +47,23 @@ class SupportEvaluator:
     ``exact`` solves the convex problem (certified upper value + feasible primal point);
     ``cheap`` only evaluates the dual objective at a given ``mu`` -- still a certified upper
     bound of the support value (weak duality), at the cost of one matrix-vector product.
+
+    Parameters
+    ----------
+    Ct : (K, k, R) ndarray
+        Scaled target rows of each case (m or rad per unit scaled screw).
+    Bt : (K, R, m) ndarray
+        Scaled loop-equation maps.
+    gi : (K, m, m) ndarray
+        ``pinv(Bt^T Bt)`` of each case.
+    nd : int
+        Number of disk cones (rows ``0 .. 2 nd - 1`` in pairs; intervals after).
+    tol_solve : float
+        Default relative precision of each support solve.
+    groups : tuple or None, optional
+        Block sparsity of ``Bt`` (:attr:`robots.clearance.model.PoseMaps.groups`); None: dense.
+    options : EngineOptions, optional
+        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
     """
 
     def __init__(self, Ct, Bt, gi, nd, tol_solve, groups=None, options: EngineOptions = DEFAULT):
@@ -47,6 +78,30 @@ class SupportEvaluator:
         self.n_cheap = 0
 
     def exact(self, case, u, mu0=None, scale=None, rtol=None, stop_below=None):
+        """Solve the support problems of cases ``case`` in directions ``u``; record improved points.
+
+        Parameters
+        ----------
+        case : (n,) int ndarray
+            Case of each problem (repeats allowed).
+        u : (n, k) ndarray
+            Unit directions.
+        mu0 : (n, m) ndarray or None, optional
+            Warm-start dual points; the barrier then starts at their certified gap.
+        scale : (n,) ndarray or None, optional
+            Value scale: the absolute gap target is ``rtol * scale`` (None: 0, relative only).
+        rtol : float or None, optional
+            Relative gap target (None: ``tol_solve``).
+        stop_below : (n,) ndarray or None, optional
+            Stop a problem once its certified upper bound is below this value.
+
+        Returns
+        -------
+        upper : (n,) ndarray
+            Certified upper values of the support function.
+        mu : (n, m) ndarray
+            Final dual points (warm starts).
+        """
         a = np.einsum("kqr,kq->kr", self.Ct[case], u)
         rtol = self.tol_solve if rtol is None else rtol
         tol = 0.0 if scale is None else rtol * scale
@@ -71,16 +126,57 @@ class SupportEvaluator:
         return res.upper, res.mu
 
     def cheap(self, case, u, mu):
+        """Dual objective at given dual points: a certified upper bound without solving.
+
+        Parameters
+        ----------
+        case : (n,) int ndarray
+            Case of each problem.
+        u : (n, k) ndarray
+            Directions.
+        mu : (n, m) ndarray
+            Dual points.
+
+        Returns
+        -------
+        (n,) ndarray
+            ``f(mu) = sum_c ||y_c||`` with ``y = Ct^T u + Bt mu`` (upper bounds of ``h(u)``).
+        """
         self.n_cheap += len(case)
         return true_dual(self.dual_vectors(case, u, mu), self.nd)
 
     def dual_vectors(self, case, u, mu):
-        """``y = D C^T u + D B mu`` (K, R): the cone-wise vectors whose norms sum to the dual bound."""
+        """``y = D C^T u + D B mu`` (K, R): the cone-wise vectors whose norms sum to the dual bound.
+
+        Parameters
+        ----------
+        case : (n,) int ndarray
+            Case of each problem.
+        u : (n, k) ndarray
+            Directions.
+        mu : (n, m) ndarray
+            Dual points.
+
+        Returns
+        -------
+        (n, R) ndarray
+            The vectors ``y``.
+        """
         return np.einsum("kqr,kq->kr", self.Ct[case], u) + (self.Bt[case] @ mu[..., None])[..., 0]
 
     def polish(self, n_iter: int = 2, rtol: float | None = None, cases=None):
-        """Local ascent from the best attained point: u <- x / ||x||, x <- argmax u^T x; monotone
-        (||x_new|| >= u^T x_new = h(u) >= u^T x_old = ||x_old||). Tightens the attained value."""
+        """Local ascent from the best attained point: ``u <- x / ||x||``, ``x <- argmax u^T x``; monotone
+        (``||x_new|| >= u^T x_new = h(u) >= u^T x_old = ||x_old||``). Tightens the attained value.
+
+        Parameters
+        ----------
+        n_iter : int, optional
+            Ascent steps (default 2).
+        rtol : float or None, optional
+            Relative precision of the solves (None: ``options.polish_rtol``).
+        cases : (n,) int ndarray or None, optional
+            Cases to polish (None: all).
+        """
         cases = np.arange(len(self.best)) if cases is None else cases
         rtol = self.options.polish_rtol if rtol is None else rtol
         for _ in range(n_iter):
@@ -103,16 +199,27 @@ def maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, gr
         Scaled target rows of each case (k in 1..3 error components).
     Bt : ndarray, shape (K, R, m)
         Scaled loop-equation maps; ``gi``: their ``pinv(Bt^T Bt)`` (K, m, m).
+    gi : ndarray, shape (K, m, m)
+        ``pinv(Bt^T Bt)`` of each case.
     nd : int
         Number of disk cones (rows 0 .. 2 nd - 1 in pairs; intervals after).
     tol : float
-        Relative gap between the attained value and the certified bound.
+        Relative gap between the attained value and the certified bound (default 1e-3).
+    tol_solve : float
+        Relative precision of the support solves at the initial vertices (default 1e-5).
+    max_rounds : int
+        Most patch-splitting rounds (default 40); patches still alive then enter the upper
+        bound with their patch bounds.
+    groups : tuple or None
+        Block sparsity of ``Bt`` (:attr:`robots.clearance.model.PoseMaps.groups`); None: dense.
     options : EngineOptions
         The engine's settings (:mod:`robots.clearance.options`).
 
     Returns
     -------
     NormMaximum
+        Per case the attained norm, the certified bound (units of ``Ct``: m or rad) and the
+        attaining scaled screws.
     """
     K, k, R = Ct.shape
     m = Bt.shape[-1]

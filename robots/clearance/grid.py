@@ -36,7 +36,38 @@ def grid_max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: fl
     """:func:`max_pose_error` over many poses, chunked and run in parallel (see module doc).
 
     bounds: None, (n_joints, 4) or (n, n_joints, 4); options: the engine's settings, sent to every
-    worker with its chunk. ``seconds`` of the result is the wall time."""
+    worker with its chunk. ``seconds`` of the result is the wall time.
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism.
+    poses : (n, d) array_like
+        Poses in the mechanism's pose coordinates (m).
+    bounds : array_like or None, optional
+        None (default: the joints' own bounds), ``(n_joints, 4)`` or ``(n, n_joints, 4)``; columns
+        ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
+    tol : float, optional
+        Relative gap between the attained value and the certified bound (default 1e-3).
+    chunk_size : int, optional
+        Poses per chunk (default 256).
+    workers : int or None, optional
+        Local processes (default None: the number of CPUs; 1: in this process).
+    scheduler : str or distributed.Client or None, optional
+        Dask scheduler address or client (default None: local processes).
+    options : EngineOptions, optional
+        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
+
+    Returns
+    -------
+    MaxPoseError
+        One case per pose, in order (``seconds``: wall time).
+
+    Raises
+    ------
+    ValidationError
+        ``chunk_size < 1``, or bounds rejected by :func:`max_pose_error`.
+    """
     t0 = time.perf_counter()
     poses = np.atleast_2d(np.asarray(poses, float))
     n = len(poses)

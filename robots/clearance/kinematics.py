@@ -36,6 +36,37 @@ class DHFrame:
     base frame); sigma: 0 revolute, 1 prismatic, 2 fixed; mu: 1 actuated, 0 passive (only a
     label here -- clearance bounds say what is locked). gamma, b, alpha, d, theta, r: numbers
     (m, rad) or names of pose-dependent variables.
+
+    Parameters
+    ----------
+    name : str
+        Frame name (e.g. ``"1"`` or ``"E11"``).
+    antecedent : str
+        Name of the antecedent frame ``a(j)`` (``"0"``: the base frame).
+    sigma : int, optional
+        0 (default): revolute joint about ``z_j``; 1: prismatic joint along ``z_j``; 2: fixed
+        frame (no joint).
+    mu : int, optional
+        1: actuated, 0 (default): passive (a label only).
+    gamma : float or str, optional
+        Rotation about ``z_{a(j)}``, rad, or the name of a variable (default 0).
+    b : float or str, optional
+        Translation along ``z_{a(j)}``, m, or a variable name (default 0).
+    alpha : float or str, optional
+        Rotation about ``x``, rad, or a variable name (default 0).
+    d : float or str, optional
+        Translation along ``x``, m, or a variable name (default 0).
+    theta : float or str, optional
+        Rotation about ``z_j``, rad, or a variable name (default 0; the joint variable of a
+        revolute joint).
+    r : float or str, optional
+        Translation along ``z_j``, m, or a variable name (default 0; the joint variable of a
+        prismatic joint).
+
+    Raises
+    ------
+    ValidationError
+        ``sigma`` not 0, 1 or 2; ``mu`` not 0 or 1; or the frame its own antecedent.
     """
 
     name: str
@@ -59,10 +90,23 @@ class DHFrame:
 
     @property
     def is_joint(self) -> bool:
+        """bool: True when the frame carries a joint (revolute or prismatic, ``sigma`` 0 or 1)."""
         return self.sigma in (0, 1)
 
 
 def rot_x(a):
+    """Homogeneous rotation about the ``x`` axis, broadcast over arrays.
+
+    Parameters
+    ----------
+    a : float or array_like
+        Rotation angle(s), rad, any shape ``(...)``.
+
+    Returns
+    -------
+    (..., 4, 4) ndarray
+        Homogeneous transforms ``Rot(x, a)`` (no translation).
+    """
     a = np.asarray(a, float)
     c, s = np.cos(a), np.sin(a)
     T = np.zeros(a.shape + (4, 4))
@@ -73,6 +117,18 @@ def rot_x(a):
 
 
 def rot_y(a):
+    """Homogeneous rotation about the ``y`` axis, broadcast over arrays.
+
+    Parameters
+    ----------
+    a : float or array_like
+        Rotation angle(s), rad, any shape ``(...)``.
+
+    Returns
+    -------
+    (..., 4, 4) ndarray
+        Homogeneous transforms ``Rot(y, a)`` (no translation).
+    """
     a = np.asarray(a, float)
     c, s = np.cos(a), np.sin(a)
     T = np.zeros(a.shape + (4, 4))
@@ -83,6 +139,18 @@ def rot_y(a):
 
 
 def rot_z(a):
+    """Homogeneous rotation about the ``z`` axis, broadcast over arrays.
+
+    Parameters
+    ----------
+    a : float or array_like
+        Rotation angle(s), rad, any shape ``(...)``.
+
+    Returns
+    -------
+    (..., 4, 4) ndarray
+        Homogeneous transforms ``Rot(z, a)`` (no translation).
+    """
     a = np.asarray(a, float)
     c, s = np.cos(a), np.sin(a)
     T = np.zeros(a.shape + (4, 4))
@@ -93,6 +161,18 @@ def rot_z(a):
 
 
 def trans(x=0.0, y=0.0, z=0.0):
+    """Homogeneous translation, broadcast over arrays.
+
+    Parameters
+    ----------
+    x, y, z : float or array_like, optional
+        Translation components, m (default 0); broadcast together to a shape ``(...)``.
+
+    Returns
+    -------
+    (..., 4, 4) ndarray
+        Homogeneous transforms ``Trans(x, y, z)`` (identity rotation).
+    """
     x, y, z = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float), np.asarray(z, float))
     T = np.zeros(x.shape + (4, 4))
     T[..., 0, 0] = T[..., 1, 1] = T[..., 2, 2] = T[..., 3, 3] = 1
@@ -101,13 +181,48 @@ def trans(x=0.0, y=0.0, z=0.0):
 
 
 def kk_transform(gamma, b, alpha, d, theta, r) -> np.ndarray:
-    """^{a(j)}T_j of the modified DH convention, broadcast over arrays; shape (..., 4, 4)."""
+    """^{a(j)}T_j of the modified DH convention, broadcast over arrays; shape (..., 4, 4).
+
+    ``Rot(z, gamma) Trans(z, b) Rot(x, alpha) Trans(x, d) Rot(z, theta) Trans(z, r)`` (module
+    docstring; Deng 2012 eqs. III.7-III.11 with ``gamma = b = 0``).
+
+    Parameters
+    ----------
+    gamma : float or array_like
+        Rotation about the antecedent's ``z``, rad.
+    b : float or array_like
+        Translation along the antecedent's ``z``, m.
+    alpha : float or array_like
+        Rotation about ``x``, rad.
+    d : float or array_like
+        Translation along ``x``, m.
+    theta : float or array_like
+        Rotation about the new ``z``, rad.
+    r : float or array_like
+        Translation along the new ``z``, m.
+
+    Returns
+    -------
+    (..., 4, 4) ndarray
+        Homogeneous transforms, the six parameters broadcast together to the shape ``(...)``.
+    """
     g, b, al, d, th, r = np.broadcast_arrays(*(np.asarray(v, float) for v in (gamma, b, alpha, d, theta, r)))
     return rot_z(g) @ trans(z=b) @ rot_x(al) @ trans(x=d) @ rot_z(th) @ trans(z=r)
 
 
 def skew(v: np.ndarray) -> np.ndarray:
-    """Skew-symmetric matrix ``[v]x`` with ``[v]x w = v x w``; v (..., 3) -> (..., 3, 3)."""
+    """Skew-symmetric matrix ``[v]x`` with ``[v]x w = v x w``; v (..., 3) -> (..., 3, 3).
+
+    Parameters
+    ----------
+    v : (..., 3) array_like
+        Vectors (any units).
+
+    Returns
+    -------
+    (..., 3, 3) ndarray
+        Skew-symmetric matrices ``[v]x``, in the units of ``v``.
+    """
     v = np.asarray(v, float)
     S = np.zeros(v.shape[:-1] + (3, 3))
     S[..., 0, 1], S[..., 0, 2] = -v[..., 2], v[..., 1]
@@ -118,7 +233,18 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 def adjoint(T: np.ndarray) -> np.ndarray:
     """adj(S) of Deng 2012 eq. III.14 for twists ordered [rotation; translation]:
-    ``[[R, 0], [[t]x R, R]]``; maps a screw in frame j+1 to frame j. T (..., 4, 4) -> (..., 6, 6)."""
+    ``[[R, 0], [[t]x R, R]]``; maps a screw in frame j+1 to frame j. T (..., 4, 4) -> (..., 6, 6).
+
+    Parameters
+    ----------
+    T : (..., 4, 4) ndarray
+        Homogeneous transforms ``^jT_{j+1}`` (rotation ``R``, translation ``t`` in m).
+
+    Returns
+    -------
+    (..., 6, 6) ndarray
+        Adjoint matrices; the lower-left block ``[t]x R`` is in m (maps rad to m).
+    """
     R, t = T[..., :3, :3], T[..., :3, 3]
     A = np.zeros(T.shape[:-2] + (6, 6))
     A[..., :3, :3] = R
@@ -128,6 +254,18 @@ def adjoint(T: np.ndarray) -> np.ndarray:
 
 
 def inv_transform(T: np.ndarray) -> np.ndarray:
+    """Inverse of rigid homogeneous transforms, ``[[R^T, -R^T t], [0, 1]]``.
+
+    Parameters
+    ----------
+    T : (..., 4, 4) ndarray
+        Rigid homogeneous transforms (rotation ``R``, translation ``t`` in m).
+
+    Returns
+    -------
+    (..., 4, 4) ndarray
+        The inverse transforms (``R`` assumed orthonormal).
+    """
     R, t = T[..., :3, :3], T[..., :3, 3]
     Ti = np.zeros_like(T)
     Rt = np.swapaxes(R, -1, -2)
@@ -138,7 +276,18 @@ def inv_transform(T: np.ndarray) -> np.ndarray:
 
 
 def exp_screw(s: np.ndarray) -> np.ndarray:
-    """Homogeneous transform exp([s]) of a screw s = [rotation; translation] (..., 6) (Rodrigues)."""
+    """Homogeneous transform exp([s]) of a screw s = [rotation; translation] (..., 6) (Rodrigues).
+
+    Parameters
+    ----------
+    s : (..., 6) array_like
+        Screws ``[rotation (rad); translation (m)]``.
+
+    Returns
+    -------
+    (..., 4, 4) ndarray
+        Homogeneous transforms ``exp([s])`` (series expansions below a rotation of 1e-12 rad).
+    """
     s = np.asarray(s, float)
     w, v = s[..., :3], s[..., 3:]
     th = np.linalg.norm(w, axis=-1)
@@ -160,7 +309,19 @@ def exp_screw(s: np.ndarray) -> np.ndarray:
 
 
 def rotation_vector(R: np.ndarray) -> np.ndarray:
-    """Rotation vector (axis * angle, rad) of rotation matrices R (..., 3, 3)."""
+    """Rotation vector (axis * angle, rad) of rotation matrices R (..., 3, 3).
+
+    Parameters
+    ----------
+    R : (..., 3, 3) array_like
+        Rotation matrices.
+
+    Returns
+    -------
+    (..., 3) ndarray
+        Rotation vectors, rad (angle in ``[0, pi]``). Inaccurate near an angle of ``pi``, where
+        the formula divides by ``sin(angle)``; meant for small error rotations.
+    """
     R = np.asarray(R, float)
     cos = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1) / 2, -1.0, 1.0)
     th = np.arccos(cos)
@@ -171,7 +332,21 @@ def rotation_vector(R: np.ndarray) -> np.ndarray:
 
 
 class DHTree:
-    """A tree of :class:`DHFrame` s rooted at the base frame ``"0"``, evaluated over many poses."""
+    """A tree of :class:`DHFrame` s rooted at the base frame ``"0"``, evaluated over many poses.
+
+    Parameters
+    ----------
+    frames : sequence of DHFrame
+        The frames (rows of the DH table), in any order.
+    base : str, optional
+        Name of the base frame (default ``"0"``); no frame may use it.
+
+    Raises
+    ------
+    ValidationError
+        Duplicate frame names; a frame named like the base; an antecedent that is neither the
+        base nor a frame of the tree; or a cycle in the antecedents.
+    """
 
     def __init__(self, frames: Sequence[DHFrame], base: str = "0"):
         self.base = base
@@ -201,7 +376,18 @@ class DHTree:
         return order
 
     def path(self, frame: str) -> list[str]:
-        """Frames from the base (excluded) to ``frame`` (included)."""
+        """Frames from the base (excluded) to ``frame`` (included).
+
+        Parameters
+        ----------
+        frame : str
+            Name of a frame of the tree (or the base: empty path).
+
+        Returns
+        -------
+        list of str
+            Frame names, base side first.
+        """
         out = []
         while frame != self.base:
             out.append(frame)
@@ -209,10 +395,36 @@ class DHTree:
         return out[::-1]
 
     def variables(self) -> set[str]:
+        """Names of the pose-dependent variables used by the frames' DH parameters.
+
+        Returns
+        -------
+        set of str
+            Every DH parameter given as a name instead of a number.
+        """
         return {getattr(f, k) for f in self.frames.values() for k in DH_FIELDS if isinstance(getattr(f, k), str)}
 
     def local_transforms(self, values: Mapping[str, np.ndarray], n: int) -> dict[str, np.ndarray]:
-        """^{a(j)}T_j for every frame, shape (n, 4, 4)."""
+        """^{a(j)}T_j for every frame, shape (n, 4, 4).
+
+        Parameters
+        ----------
+        values : mapping of str to array_like
+            Value of each variable (m or rad, as its DH parameter), a scalar or an ``(n,)``
+            array over poses.
+        n : int
+            Number of poses.
+
+        Returns
+        -------
+        dict of str to (n, 4, 4) ndarray
+            Transform from each frame's antecedent to the frame, per pose.
+
+        Raises
+        ------
+        ValidationError
+            A variable used by a frame is missing from ``values``.
+        """
         out = {}
         for name, f in self.frames.items():
             args = []
@@ -228,7 +440,25 @@ class DHTree:
         return out
 
     def world_transforms(self, values: Mapping[str, np.ndarray], n: int) -> dict[str, np.ndarray]:
-        """^0T_j for every frame, shape (n, 4, 4) (the base frame ``"0"`` is the identity)."""
+        """^0T_j for every frame, shape (n, 4, 4) (the base frame ``"0"`` is the identity).
+
+        Parameters
+        ----------
+        values : mapping of str to array_like
+            Value of each variable (m or rad), a scalar or an ``(n,)`` array over poses.
+        n : int
+            Number of poses.
+
+        Returns
+        -------
+        dict of str to (n, 4, 4) ndarray
+            Transform from the base to each frame (and the base itself), per pose.
+
+        Raises
+        ------
+        ValidationError
+            A variable used by a frame is missing from ``values``.
+        """
         local = self.local_transforms(values, n)
         world = {self.base: np.broadcast_to(np.eye(4), (n, 4, 4)).copy()}
         for name in self.order:

@@ -3,7 +3,7 @@
 The thesis maximises ``||dp||^2`` (or ``||dtheta||^2``) over the clearance screws -- a nonconvex
 problem it attacks with 200 local solves per pose. The feasible error twists form a convex,
 centrally symmetric set ``P`` (an intersection over chains of Minkowski sums of the joints'
-disk x interval x disk x interval sets), so
+disk x interval x disk x interval sets), so::
 
     p_max = max_{x in P} ||x_pos|| = max_{|u| = 1} h_P(u),      h_P = support function of P.
 
@@ -26,7 +26,7 @@ and likewise for the rotation. Their relative gap is at most ``tol`` (default 1e
 
 Modules: :mod:`.branch_bound` (the branch and bound of one block), :mod:`.patches` (patches of
 directions and their bounds), :mod:`.options` (the settings, one frozen value passed down),
-:mod:`.result` (:class:`MaxPoseError`), :mod:`.sampling` (random clearance states, for comparison).
+:mod:`~robots.clearance.result` (:class:`MaxPoseError`), :mod:`.sampling` (random clearance states, for comparison).
 """
 from __future__ import annotations
 
@@ -47,6 +47,28 @@ __all__ = ["ClearanceEvaluator", "MaxPoseError", "as_bounds", "evaluate_cases", 
 
 
 def as_bounds(mech: ClearanceMechanism, bounds, n: int) -> np.ndarray:
+    """Check a bounds array against a mechanism (the joints' own bounds when None).
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism (its number of joints, and its default bounds).
+    bounds : array_like or None
+        ``(..., n_joints, 4)``, columns ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]`` in the
+        order of ``mech.joints``; None: ``mech.default_bounds()``.
+    n : int
+        Number of poses or cases (not used by the check).
+
+    Returns
+    -------
+    (..., n_joints, 4) ndarray
+        The bounds as a float array.
+
+    Raises
+    ------
+    ValidationError
+        A shape not ending in ``(n_joints, 4)``, or negative or non-finite entries.
+    """
     if bounds is None:
         b = mech.default_bounds()
     else:
@@ -63,7 +85,46 @@ def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: n
                    tol: float = 1e-3, tol_solve: float = 2e-5, extra=None,
                    options: EngineOptions = DEFAULT) -> MaxPoseError:
     """Maximum pose errors of the cases ``(pose_index[i], bounds[i])`` (see :func:`_evaluate_cases`)
-    with the engine's settings ``options`` (:mod:`robots.clearance.options`)."""
+    with the engine's settings ``options`` (:mod:`robots.clearance.options`).
+
+    Identical sub-problems (same pose and same bounds on a decoupled block) are solved once; the
+    BLAS runs on one thread during the call.
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism (its joints name the screws of the result).
+    maps : list of PoseMaps
+        Precomputed per-pose maps, ``mech.pose_maps(poses)``.
+    pose_index : (n_cases,) int array_like
+        Pose (index into the poses of ``maps``) of each case.
+    bounds : array_like
+        Clearance bounds broadcasting to ``(n_cases, n_joints, 4)``, columns ``[beta_xy (rad),
+        beta_z (rad), b_xy (m), b_z (m)]``.
+    tol : float, optional
+        Relative gap between the attained value and the certified bound (default 1e-3).
+    tol_solve : float, optional
+        Relative precision of each support-function solve (default 2e-5).
+    extra : tuple or None, optional
+        ``(J, t)``: other independent interval error sources added to the clearance error.
+        ``J`` (n_poses, 6, q) maps them to the end-effector twist ``[dtheta; dp]`` (rad, m; base
+        axes), ``t`` (q,) or (n_cases, q) are their half-widths (in the sources' units). Each
+        source must act on one decoupled block only. None (default): clearances only.
+    options : EngineOptions, optional
+        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
+
+    Returns
+    -------
+    MaxPoseError
+        Per case: attained and certified maxima (m, rad), maximising screws and twists, and the
+        values of the extra sources at the maximisers (when ``extra`` is given).
+
+    Raises
+    ------
+    ValidationError
+        ``J`` not of shape ``(n_poses, 6, q)``; negative or non-finite half-widths ``t``; or a
+        source acting on two decoupled blocks.
+    """
     # the batched 30x30 solves are several times faster without OpenBLAS threading, and grid
     # workers must not oversubscribe the cores
     with one_blas_thread():
@@ -174,6 +235,38 @@ def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float =
     :func:`evaluate_cases`), e.g. geometric tolerances through the 5-bar's J_p.
     options: the engine's settings (:data:`robots.clearance.options.DEFAULT`; ``LEGACY``: before
     issue 13; ``NUMPY``: the NumPy Newton iteration).
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism.
+    poses : (n, d) or (d,) array_like
+        Poses in the mechanism's pose coordinates (m).
+    bounds : array_like or None, optional
+        None (default: the joints' own bounds), ``(n_joints, 4)`` for all poses or
+        ``(n, n_joints, 4)`` per pose; columns ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
+    tol : float, optional
+        Relative gap between the attained value and the certified bound (default 1e-3).
+    extra : tuple or None, optional
+        ``(J, t)`` of other interval error sources (see :func:`evaluate_cases`); None (default):
+        clearances only.
+    options : EngineOptions, optional
+        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
+
+    Returns
+    -------
+    MaxPoseError
+        One case per pose: ``p_max``/``p_upper`` (m), ``r_max``/``r_upper`` (rad), the
+        maximising screws and twists.
+
+    Raises
+    ------
+    ValidationError
+        Bounds of a wrong shape, negative or non-finite; or a bad ``extra`` (see
+        :func:`evaluate_cases`).
+    KinematicsError
+        The chains do not determine every body's error twist at a pose
+        (:meth:`~robots.clearance.model.ClearanceMechanism.pose_maps`).
     """
     poses = np.atleast_2d(np.asarray(poses, float))
     b = as_bounds(mech, bounds, len(poses))
@@ -194,6 +287,24 @@ class ClearanceEvaluator:
     >>> ev = ClearanceEvaluator(mech, poses)           # poses (n, d), metres
     >>> ev.evaluate(bounds, pose_index=0)              # bounds (n_sets, n_joints, 4)
     >>> ev.evaluate_poses(bounds)                      # bounds (n_joints, 4) or (n, n_joints, 4)
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism.
+    poses : (n, d) or (d,) array_like
+        Poses in the mechanism's pose coordinates (m); their maps are computed here.
+    tol : float, optional
+        Relative gap between the attained value and the certified bound (default 1e-3).
+    options : EngineOptions, optional
+        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
+
+    Raises
+    ------
+    KinematicsError
+        The chains do not determine every body's error twist at a pose.
+    ValidationError
+        A planar mechanism whose blocks do not decouple.
     """
 
     def __init__(self, mech: ClearanceMechanism, poses, *, tol: float = 1e-3, options: EngineOptions = DEFAULT):
@@ -206,7 +317,33 @@ class ClearanceEvaluator:
     def evaluate(self, bounds, pose_index=0, *, workers: int = 1, scheduler=None, chunk_size: int = 4096) -> MaxPoseError:
         """All bound sets at their poses. ``workers > 1`` (local processes) or ``scheduler`` (a
         Dask address or Client) split the sets into chunks of ``chunk_size`` solved in parallel;
-        results come back in order."""
+        results come back in order.
+
+        Parameters
+        ----------
+        bounds : array_like
+            Bound sets ``(..., n_joints, 4)`` (flattened to ``(n_sets, n_joints, 4)``), columns
+            ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
+        pose_index : int or (n_sets,) int array_like, optional
+            Pose (index into ``poses``) of each set (default 0: the first pose).
+        workers : int or None, optional
+            Local processes (default 1: in this process; None: all CPUs).
+        scheduler : str or distributed.Client or None, optional
+            Dask scheduler address or client (default None: local).
+        chunk_size : int, optional
+            Sets per parallel chunk (default 4096); no parallel run for at most ``chunk_size``
+            sets.
+
+        Returns
+        -------
+        MaxPoseError
+            One case per set, in the order of ``bounds`` (``seconds``: wall time).
+
+        Raises
+        ------
+        ValidationError
+            Bounds of a wrong shape, negative or non-finite, or a pose index out of range.
+        """
         b = as_bounds(self.mech, bounds, 0)
         b = b.reshape((-1,) + b.shape[-2:])
         idx = np.broadcast_to(np.asarray(pose_index, int), (len(b),))
@@ -223,6 +360,24 @@ class ClearanceEvaluator:
         return evaluate_cases(self.mech, self.maps, idx, b, tol=self.tol, options=self.options)
 
     def evaluate_poses(self, bounds=None) -> MaxPoseError:
+        """One bound set (or one per pose) at every pose.
+
+        Parameters
+        ----------
+        bounds : array_like or None, optional
+            None (default: the joints' own bounds), ``(n_joints, 4)`` for all poses or
+            ``(n_poses, n_joints, 4)``; columns ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
+
+        Returns
+        -------
+        MaxPoseError
+            One case per pose.
+
+        Raises
+        ------
+        ValidationError
+            Bounds of a wrong shape, negative or non-finite.
+        """
         n = len(self.poses)
         b = as_bounds(self.mech, bounds, n)
         return evaluate_cases(self.mech, self.maps, np.arange(n), np.broadcast_to(b, (n,) + b.shape[-2:]), tol=self.tol,

@@ -61,6 +61,38 @@ class ClearanceMechanism:
     between bodies; end_effector: the body whose error is reported; joint_values: the inverse
     geometric model, ``poses (n, d) -> {variable: (n,) array}`` for the DH variables; planar: the
     joint axes are all parallel to the base ``z`` axis (enables the exact in/out-of-plane split).
+
+    Parameters
+    ----------
+    name : str
+        Mechanism name (used in messages and by :meth:`sub_mechanism`).
+    tree : DHTree
+        The modified-DH frame tree (lengths in m, angles in rad).
+    joints : sequence of Joint
+        The joints with clearance (unique names; each frame a revolute or prismatic frame of
+        ``tree``). Their order is the order of the joints in bounds arrays and screws.
+    bodies : mapping of str to str
+        Body name -> DH frame of its reference point; ``"base"`` is added with the tree's base
+        frame when absent.
+    chains : sequence of Chain
+        Serial chains between bodies (joints listed in path order).
+    end_effector : str
+        The body whose error is reported (not ``"base"``).
+    joint_values : callable
+        Inverse geometric model: ``poses (n, d) ndarray -> {variable name: (n,) array}`` giving the
+        DH variables (m, rad) at each pose.
+    planar : bool, optional
+        True: all joint axes parallel to the base ``z`` axis; the in-plane and out-of-plane blocks
+        are solved separately (default False: one spatial block).
+    pose_names : sequence of str, optional
+        Names of the pose coordinates (default ``("x", "y")``).
+
+    Raises
+    ------
+    ValidationError
+        Duplicate joint names; a joint frame that is not a joint frame of the tree; an unknown
+        end effector; a chain naming an unknown body or joint, or listing its joints out of path
+        order (or off the path).
     """
 
     def __init__(self, *, name: str, tree: DHTree, joints: Sequence[Joint], bodies: Mapping[str, str],
@@ -101,14 +133,23 @@ class ClearanceMechanism:
     # ------------------------------------------------------------------ bounds helpers
     @property
     def n_joints(self) -> int:
+        """int: number of joints with clearance."""
         return len(self.joints)
 
     @property
     def n_screw_variables(self) -> int:
+        """int: number of scalar screw components, ``6 * n_joints``."""
         return 6 * self.n_joints
 
     def default_bounds(self) -> np.ndarray:
-        """Bounds array (n_joints, 4) [beta_xy, beta_z, b_xy, b_z] from the joints' own bounds."""
+        """Bounds array (n_joints, 4) [beta_xy, beta_z, b_xy, b_z] from the joints' own bounds.
+
+        Returns
+        -------
+        (n_joints, 4) ndarray
+            Rows in the order of ``joints``; columns ``[beta_xy (rad), beta_z (rad), b_xy (m),
+            b_z (m)]``.
+        """
         return np.array([j.bounds.as_array() for j in self.joints])
 
     def thesis_bounds(self, *, b_xy=1e-4, b_z=1e-4, beta_xy=0.01, h=None, beta_z_passive: float = 0.2,
@@ -119,7 +160,33 @@ class ClearanceMechanism:
         (one column per joint, in the order of ``self.joints``); ``beta_xy = b_xy / h`` (eq.
         III.2) when ``h`` is given; ``beta_z`` = ``beta_z_active`` for actuated joints,
         ``beta_z_passive`` for passive ones. E.g. 32 768 tolerance combinations of the 5-bar:
-        ``mech.thesis_bounds(b_xy=B_XY, b_z=B_Z)`` with ``B_XY, B_Z`` of shape (32768, 5)."""
+        ``mech.thesis_bounds(b_xy=B_XY, b_z=B_Z)`` with ``B_XY, B_Z`` of shape (32768, 5).
+
+        Parameters
+        ----------
+        b_xy : float or array_like, optional
+            Radial play, m (default 1e-4 m), broadcasting to ``(..., n_joints)``.
+        b_z : float or array_like, optional
+            Axial play, m (default 1e-4 m), broadcasting to ``(..., n_joints)``.
+        beta_xy : float or array_like, optional
+            Tilt of the joint axes, rad (default 0.01 rad); ignored when ``h`` is given.
+        h : float or array_like or None, optional
+            Joint lengths, m: ``beta_xy = b_xy / h``. None (default): use ``beta_xy``.
+        beta_z_passive : float, optional
+            Rotation bound about the axis of passive joints, rad (default 0.2 rad).
+        beta_z_active : float, optional
+            Rotation bound about the axis of actuated joints, rad (default 0: locked).
+
+        Returns
+        -------
+        (..., n_joints, 4) ndarray
+            Columns ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
+
+        Raises
+        ------
+        ValidationError
+            A joint length ``h <= 0``, or a resulting bound negative or not finite.
+        """
         nj = self.n_joints
         bxy, bz = np.asarray(b_xy, float), np.asarray(b_z, float)
         if h is not None:
@@ -143,7 +210,19 @@ class ClearanceMechanism:
         return out
 
     def with_bounds(self, bounds: Mapping[str, ClearanceBounds] | Callable[[Joint], ClearanceBounds]) -> "ClearanceMechanism":
-        """A copy with other clearance bounds (a dict by joint name or a function of the joint)."""
+        """A copy with other clearance bounds (a dict by joint name or a function of the joint).
+
+        Parameters
+        ----------
+        bounds : mapping of str to ClearanceBounds, or callable
+            New bounds by joint name (joints not named keep theirs), or a function
+            ``Joint -> ClearanceBounds``.
+
+        Returns
+        -------
+        ClearanceMechanism
+            A shallow copy whose joints carry the new bounds (tree, chains and model shared).
+        """
         new = object.__new__(ClearanceMechanism)
         new.__dict__.update(self.__dict__)
         fn = bounds if callable(bounds) else (lambda j: bounds.get(j.name, j.bounds))
@@ -151,7 +230,25 @@ class ClearanceMechanism:
         return new
 
     def with_active(self, names: Sequence[str], beta_z_active: float = 0.0) -> "ClearanceMechanism":
-        """Actuation redundancy (Sec. IV.4): the named joints become actuated (``beta_z`` locked)."""
+        """Actuation redundancy (Sec. IV.4): the named joints become actuated (``beta_z`` locked).
+
+        Parameters
+        ----------
+        names : sequence of str
+            Names of the joints to actuate.
+        beta_z_active : float, optional
+            Their rotation bound about the axis, rad (default 0: locked).
+
+        Returns
+        -------
+        ClearanceMechanism
+            A copy with these joints marked active and their ``beta_z`` set to ``beta_z_active``.
+
+        Raises
+        ------
+        ValidationError
+            A name that is not a joint of the mechanism.
+        """
         for n in names:
             if n not in self.joint_index:
                 raise ValidationError("with_active joint", n, f"one of {sorted(self.joint_index)}")
@@ -160,7 +257,27 @@ class ClearanceMechanism:
         return new
 
     def sub_mechanism(self, chains: Sequence[str], name: str | None = None) -> "ClearanceMechanism":
-        """The mechanism restricted to some chains (e.g. one open serial leg, Sec. IV.4)."""
+        """The mechanism restricted to some chains (e.g. one open serial leg, Sec. IV.4).
+
+        Parameters
+        ----------
+        chains : sequence of str
+            Names of the chains to keep.
+        name : str or None, optional
+            Name of the new mechanism (default: ``"<name>[<chains>]"``).
+
+        Returns
+        -------
+        ClearanceMechanism
+            A mechanism with the kept chains, the joints they use and the bodies they connect;
+            same tree, end effector, inverse geometric model and planarity.
+
+        Raises
+        ------
+        ValidationError
+            A chain name that is not a chain of the mechanism, or a restricted mechanism that is
+            not valid (e.g. the end effector not on the kept chains).
+        """
         keep = [c for c in self.chains if c.name in chains]
         if len(keep) != len(chains):
             raise ValidationError("sub_mechanism chains", chains, f"names among {[c.name for c in self.chains]}")
@@ -174,13 +291,41 @@ class ClearanceMechanism:
 
     # ------------------------------------------------------------------ kinematics
     def world(self, poses: np.ndarray) -> dict[str, np.ndarray]:
+        """World transforms of every frame at the nominal joint values of each pose.
+
+        Parameters
+        ----------
+        poses : (n, d) or (d,) array_like
+            Poses in the mechanism's pose coordinates (m).
+
+        Returns
+        -------
+        dict of str to (n, 4, 4) ndarray
+            ``^0T_j`` for every frame of the tree and the base (translations in m).
+        """
         poses = np.atleast_2d(np.asarray(poses, float))
         values = self.joint_values(poses)
         return self.tree.world_transforms(values, len(poses))
 
     def error_mapping(self, poses: np.ndarray, chain: str | Chain) -> tuple[np.ndarray, np.ndarray]:
         """Error mapping matrices of one chain (eqs. III.22-III.24, V.1): ``M`` (n, 6, 6 n_joints)
-        for its joints' screws and ``M^e`` (n, 6, 6) for the start body's twist."""
+        for its joints' screws and ``M^e`` (n, 6, 6) for the start body's twist.
+
+        Parameters
+        ----------
+        poses : (n, d) or (d,) array_like
+            Poses in the mechanism's pose coordinates (m).
+        chain : str or Chain
+            The chain, or its name.
+
+        Returns
+        -------
+        M : (n, 6, 6 * n_chain_joints) ndarray
+            ``[M_j ...]`` for the chain's joints in order: the end body's twist ``[dtheta; dp]``
+            (rad, m; base axes) per unit joint screw ``[dr; dt]`` (in the joint's frame).
+        Me : (n, 6, 6) ndarray
+            ``M^e_AB``: the end body's twist per unit twist of the start body.
+        """
         W = self.world(poses)
         return self._chain_maps(W, self._chain(chain))
 
@@ -199,7 +344,20 @@ class ClearanceMechanism:
         """The thesis's literal eq. III.24 for a chain starting at the base:
         ``M_j = (prod_l N_l) prod_{k=n_f}^{j+1} adj(S_k)^-1`` (products of adjoints of the DH
         transforms along the chain's path, then ``N`` = the end frame's orientation in the base).
-        Kept to check :meth:`error_mapping` (which uses world poses) against the thesis."""
+        Kept to check :meth:`error_mapping` (which uses world poses) against the thesis.
+
+        Parameters
+        ----------
+        poses : (n, d) or (d,) array_like
+            Poses in the mechanism's pose coordinates (m).
+        chain : str or Chain
+            The chain, or its name (one that starts at the base).
+
+        Returns
+        -------
+        (n, 6, 6 * n_chain_joints) ndarray
+            ``[M_j ...]`` for the chain's joints in order, as :meth:`error_mapping` ``M``.
+        """
         from robots.clearance.kinematics import adjoint
         c, n, local, W = self._chain_transforms(poses, chain)
         end_frame = c.path_end or self.bodies[c.end]
@@ -241,7 +399,20 @@ class ClearanceMechanism:
 
     def linear_system(self, poses: np.ndarray):
         """``E_s`` (n, 6 n_chains, 6 n_joints) and ``E_d`` (n, 6 n_chains, 6 n_bodies) of
-        ``E_s s + E_d delta = 0`` (all chains; the end-effector is body 0 of ``delta``)."""
+        ``E_s s + E_d delta = 0`` (all chains; the end-effector is body 0 of ``delta``).
+
+        Parameters
+        ----------
+        poses : (n, d) or (d,) array_like
+            Poses in the mechanism's pose coordinates (m).
+
+        Returns
+        -------
+        Es : (n, 6 * n_chains, 6 * n_joints) ndarray
+            Screw part (six rows per chain, six columns per joint in the order of ``joints``).
+        Ed : (n, 6 * n_chains, 6 * n_bodies) ndarray
+            Body-twist part (six columns per non-base body, the end effector first).
+        """
         W = self.world(poses)
         n = len(next(iter(W.values())))
         bodies = [self.end_effector] + [b for b in self.body_names if b != self.end_effector]
@@ -267,7 +438,30 @@ class ClearanceMechanism:
         ``split=False`` keeps one 6-D block even for a planar mechanism (the thesis's form).
 
         Raises KinematicsError if the chains do not determine the bodies' twists (a body left
-        free) -- never returns NaN."""
+        free) -- never returns NaN.
+
+        Parameters
+        ----------
+        poses : (n, d) or (d,) array_like
+            Poses in the mechanism's pose coordinates (m).
+        split : bool, optional
+            True (default): one map per decoupled block (two for a planar mechanism); False: one
+            6-D block.
+
+        Returns
+        -------
+        list of PoseMaps
+            One per block, each holding the maps at all ``n`` poses.
+
+        Raises
+        ------
+        KinematicsError
+            The chains do not determine every body's error twist at some pose (``poses`` of the
+            exception: the offending ones).
+        ValidationError
+            A block that splits a clearance cone, or a planar block that does not decouple
+            (joint axes not all parallel to ``z``).
+        """
         poses = np.atleast_2d(np.asarray(poses, float))
         Es, Ed = self.linear_system(poses)
         nb = Ed.shape[2] // 6
@@ -420,7 +614,26 @@ class ClearanceMechanism:
         """Nonlinear pose (n, 4, 4) of a chain's end body with joint error screws applied
         (``T_j -> T_j exp([s_j])``, s_j in frame j) and an optional start-body twist
         ``[dtheta; dp]`` (base axes, at the start body's point). Used to check the error
-        mapping matrices against finite differences."""
+        mapping matrices against finite differences.
+
+        Parameters
+        ----------
+        poses : (n, d) or (d,) array_like
+            Poses in the mechanism's pose coordinates (m).
+        chain : str or Chain
+            The chain, or its name.
+        screws : mapping of str to array_like or None, optional
+            Error screw ``[dr; dt]`` (rad, m; ``(6,)`` or ``(n, 6)``) by joint name; joints not
+            named have none. None (default): no joint error.
+        start_twist : array_like or None, optional
+            Twist ``[dtheta; dp]`` (rad, m) of the start body, ``(6,)`` or ``(n, 6)``; None
+            (default): none.
+
+        Returns
+        -------
+        (n, 4, 4) ndarray
+            World transform of the chain's end body (translation in m).
+        """
         c, n, local, W = self._chain_transforms(poses, chain)
         start_frame = self.bodies[c.start]
         end_frame = c.path_end or self.bodies[c.end]
@@ -443,6 +656,19 @@ class ClearanceMechanism:
 
 
 def twist_between(T0: np.ndarray, T1: np.ndarray) -> np.ndarray:
-    """Finite displacement ``[rotation vector; dp]`` (base axes) from pose T0 to T1, (..., 6)."""
+    """Finite displacement ``[rotation vector; dp]`` (base axes) from pose T0 to T1, (..., 6).
+
+    Parameters
+    ----------
+    T0 : (..., 4, 4) ndarray
+        Homogeneous transforms of the reference poses (m).
+    T1 : (..., 4, 4) ndarray
+        Homogeneous transforms of the displaced poses (m).
+
+    Returns
+    -------
+    (..., 6) ndarray
+        Rotation vector of ``R1 R0^T`` (rad) followed by ``p1 - p0`` (m).
+    """
     return np.concatenate([rotation_vector(T1[..., :3, :3] @ np.swapaxes(T0[..., :3, :3], -1, -2)),
                            T1[..., :3, 3] - T0[..., :3, 3]], axis=-1)

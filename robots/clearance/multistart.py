@@ -25,6 +25,24 @@ from robots.clearance.model import ClearanceMechanism, PoseMaps
 
 @dataclass
 class MultistartResult:
+    """Result of the thesis's multistart method (:func:`multistart_max_pose_error`): lower bounds only.
+
+    Parameters
+    ----------
+    p_max : (n,) ndarray
+        Best local maximum of ``||dp||`` per pose, m.
+    r_max : (n,) ndarray
+        Best local maximum of ``||dtheta||`` per pose, rad.
+    p_locals : list of ndarray
+        Per pose: the ``||dp||`` (m) reached from each start, ``(n_starts,)``.
+    r_locals : list of ndarray
+        Per pose: the ``||dtheta||`` (rad) reached from each start.
+    n_variables : int
+        Number of free variables ``v`` of the thesis (screw rows minus loop equations).
+    seconds : float
+        Wall-clock time, s.
+    """
+
     p_max: np.ndarray        # (n,) best local maximum of ||dp|| (m)
     r_max: np.ndarray        # (n,) best local maximum of ||dtheta|| (rad)
     p_locals: list           # per pose: the local maxima reached by each start
@@ -62,7 +80,30 @@ def _local_problem(C: np.ndarray, B: np.ndarray, D: np.ndarray, nd: int):
 
 
 def multistart_max(C: np.ndarray, B: np.ndarray, D: np.ndarray, nd: int, n_starts: int, rng) -> tuple[float, np.ndarray]:
-    """Best local maximum of ||C s|| over the clearance set by SLSQP from ``n_starts`` starts."""
+    """Best local maximum of ``||C s||`` over the clearance set by SLSQP from ``n_starts`` starts.
+
+    Parameters
+    ----------
+    C : (k, n_rows) ndarray
+        Target rows (m or rad per unit screw row) at one pose.
+    B : (n_rows, m) ndarray
+        Loop-equation map at the pose (``B^T s = 0``).
+    D : (n_rows,) ndarray
+        Bound of each row (rad or m); rows with a zero bound are fixed at 0.
+    nd : int
+        Number of disk cones (their ``2 * nd`` rows come first).
+    n_starts : int
+        Number of random feasible starting points.
+    rng : numpy.random.Generator
+        Random number generator of the starts.
+
+    Returns
+    -------
+    best : float
+        Largest local maximum of ``||C s||`` (units of ``C s``: m or rad), a lower bound.
+    values : (n_starts,) ndarray
+        The value reached from each start (after scaling back into the feasible set).
+    """
     from scipy.optimize import minimize
 
     Ct, Z, cones = _local_problem(C, B, D, nd)
@@ -96,7 +137,27 @@ def multistart_max(C: np.ndarray, B: np.ndarray, D: np.ndarray, nd: int, n_start
 
 def multistart_max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, n_starts: int = 20,
                               seed: int = 0) -> MultistartResult:
-    """The thesis's method at each pose (QR elimination + ``n_starts`` SLSQP local solves)."""
+    """The thesis's method at each pose (QR elimination + ``n_starts`` SLSQP local solves).
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism (solved as one 6-D block, as in the thesis).
+    poses : (n, d) array_like
+        Poses in the mechanism's pose coordinates (m).
+    bounds : array_like or None, optional
+        ``(n_joints, 4)`` or ``(n, n_joints, 4)``, columns ``[beta_xy (rad), beta_z (rad),
+        b_xy (m), b_z (m)]``; None (default): the joints' own bounds.
+    n_starts : int, optional
+        Local solves per pose and target (default 20; the thesis used 200).
+    seed : int, optional
+        Seed of the random starts (default 0).
+
+    Returns
+    -------
+    MultistartResult
+        Best local maxima per pose (m, rad): lower bounds, not certified.
+    """
     t0 = time.perf_counter()
     poses = np.atleast_2d(np.asarray(poses, float))
     pm = _spatial_maps(mech, poses)

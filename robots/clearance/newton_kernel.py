@@ -56,7 +56,29 @@ def group_arrays(grows, nd: int):
     """Flat description of the column groups for the kernel: per group the disk-cone range
     ``[d0, d1)``, the interval-row range ``[i0, i1)`` (rows of the permuted problem), its
     columns ``cols[off[g]:off[g+1]]`` and the offset ``boff[g]`` of its block in
-    :func:`group_blocks`."""
+    :func:`group_blocks`.
+
+    Parameters
+    ----------
+    grows : sequence of tuple
+        Per group ``(disk-row slice, interval-row slice, columns, disk-cone slice)`` of the
+        permuted problem (as built in :func:`robots.clearance.support.solve_support`).
+    nd : int
+        Number of disk cones (not used by the layout).
+
+    Returns
+    -------
+    gd : (G, 2) int64 ndarray
+        Disk-cone range ``[d0, d1)`` of each group.
+    gi : (G, 2) int64 ndarray
+        Interval-row range ``[i0, i1)`` of each group.
+    cols : (sum s_g,) int64 ndarray
+        The groups' loop columns, concatenated.
+    off : (G + 1,) int64 ndarray
+        Offsets of each group's columns in ``cols``.
+    boff : (G + 1,) int64 ndarray
+        Offsets of each group's block in the rows of :func:`group_blocks`.
+    """
     gd = np.array([(s.start, s.stop) for *_, s in grows], np.int64).reshape(-1, 2)
     gi = np.array([(ir.start, ir.stop) for _, ir, _, _ in grows], np.int64).reshape(-1, 2)
     cols = [np.asarray(c, np.int64) for _, _, c, _ in grows]
@@ -100,7 +122,21 @@ def _chol_solve(L, rhs, out, m):
 def group_blocks(B, grows):
     """Each group's rows x columns of ``B`` (K, R, m), flattened side by side: (K, sum nr_g s_g),
     the layout :func:`_newton_iterate_py` reads with :func:`group_arrays`' offsets. One group over
-    all rows and columns in order (the IRSBot-2 distal module) is ``B`` itself: a view, no copy."""
+    all rows and columns in order (the IRSBot-2 distal module) is ``B`` itself: a view, no copy.
+
+    Parameters
+    ----------
+    B : (K, R, m) ndarray
+        Scaled loop maps of the permuted problems.
+    grows : sequence of tuple
+        Per group ``(disk-row slice, interval-row slice, columns, disk-cone slice)``.
+
+    Returns
+    -------
+    (K, sum nr_g s_g) ndarray
+        C-contiguous; each group's ``(nr_g, s_g)`` block (disk rows, then interval rows, by its
+        columns) flattened, groups side by side.
+    """
     if len(grows) == 1:
         dr, ir, cols, _ = grows[0]
         if (dr.start == 0 and ir.start == dr.stop and ir.stop == B.shape[1]
@@ -465,7 +501,44 @@ def _compiled():
 def newton_iterate(Y, mu, GB, rows, tau, nd, groups, want_dual: bool):
     """Run one iteration on every working problem ``i`` (original problem ``rows[i]``: its group
     blocks are ``GB[rows[i]]``, :func:`group_blocks`); see :func:`_newton_iterate_py`. Returns
-    ``(H, lam2, dual, fail)``; ``groups`` is :func:`group_arrays`'s output."""
+    ``(H, lam2, dual, fail)``; ``groups`` is :func:`group_arrays`'s output.
+
+    Parameters
+    ----------
+    Y : (k, R) ndarray
+        Dual vectors ``y = a + B mu`` of the working problems (writeable C-contiguous float64;
+        updated in place).
+    mu : (k, m) ndarray
+        Dual points (writeable C-contiguous float64; updated in place).
+    GB : (K, sum nr_g s_g) ndarray
+        Group blocks of ``B`` of the original problems (:func:`group_blocks`).
+    rows : (k,) int array_like
+        Original problem of each working problem.
+    tau : (k,) ndarray
+        Barrier parameters.
+    nd : int
+        Number of disk cones.
+    groups : tuple
+        Output of :func:`group_arrays`.
+    want_dual : bool
+        Also compute the dual value after the step.
+
+    Returns
+    -------
+    H : (k, m, m) ndarray
+        Hessians at the start points (for the path predictor).
+    lam2 : (k,) ndarray
+        Squared Newton decrements (0 where ``H`` is singular).
+    dual : (k,) ndarray
+        ``sum_c ||y_c||`` after the step (undefined unless ``want_dual``).
+    fail : (k,) int64 ndarray
+        1 where ``H`` is exactly singular (no step taken), else 0.
+
+    Raises
+    ------
+    ValueError
+        ``Y`` or ``mu`` not a writeable C-contiguous float64 array.
+    """
     for name, x in (("Y", Y), ("mu", mu)):     # updated in place
         if not (x.flags.c_contiguous and x.flags.writeable and x.dtype == np.float64):
             raise ValueError(f"newton_iterate: {name} must be a writeable C-contiguous float64 array")
@@ -483,7 +556,36 @@ def newton_iterate(Y, mu, GB, rows, tau, nd, groups, want_dual: bool):
 
 def project_centred(cidx, rows, Y, a, B, gram_inv, tau, nd):
     """Feasible points of the centred working problems ``cidx`` (original problems ``rows[cidx]``
-    of ``a``, ``B``, ``gram_inv``; see :func:`_project_centred_py`); returns ``(s0, s, lower)``."""
+    of ``a``, ``B``, ``gram_inv``; see :func:`_project_centred_py`); returns ``(s0, s, lower)``.
+
+    Parameters
+    ----------
+    cidx : (n,) int array_like
+        Working indices of the centred problems.
+    rows : (k,) int array_like
+        Original problem of each working problem.
+    Y : (k, R) ndarray
+        Dual vectors of the working problems.
+    a : (K, R) ndarray
+        Scaled linear terms of the original problems.
+    B : (K, R, m) ndarray
+        Scaled loop maps of the original problems.
+    gram_inv : (K, m, m) ndarray
+        ``pinv(B^T B)`` of the original problems.
+    tau : (k,) ndarray
+        Barrier parameters of the working problems.
+    nd : int
+        Number of disk cones.
+
+    Returns
+    -------
+    s0 : (n, R) ndarray
+        Barrier points ``y_c / t_c``.
+    s : (n, R) ndarray
+        Feasible scaled screws (loop residual removed, scaled into the unit cones).
+    lower : (n,) ndarray
+        ``a^T s``: lower bounds of the support values.
+    """
     n, R = len(cidx), Y.shape[1]
     s0, s, lo = np.empty((n, R)), np.empty((n, R)), np.empty(n)
     _kernel()[1](np.asarray(cidx, np.int64), np.asarray(rows, np.int64), Y, a, B, gram_inv, tau, int(nd), s0, s, lo)
@@ -492,7 +594,31 @@ def project_centred(cidx, rows, Y, a, B, gram_inv, tau, nd):
 
 def predict_centred(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
     """The path predictor on the centred working problems ``cidx`` (``B`` of the original
-    problems ``rows[cidx]``), in place on Y and mu (see :func:`_predict_centred_py`)."""
+    problems ``rows[cidx]``), in place on Y and mu (see :func:`_predict_centred_py`).
+
+    Parameters
+    ----------
+    cidx : (n,) int array_like
+        Working indices of the centred problems.
+    rows : (k,) int array_like
+        Original problem of each working problem.
+    Y : (k, R) ndarray
+        Dual vectors of the working problems (updated in place).
+    mu : (k, m) ndarray
+        Dual points of the working problems (updated in place).
+    B : (K, R, m) ndarray
+        Scaled loop maps of the original problems.
+    H : (k, m, m) ndarray
+        Hessians of the working problems (from :func:`newton_iterate`).
+    told : (n,) ndarray
+        Barrier parameters at the centred points.
+    tnew : (n,) ndarray
+        New barrier parameters.
+    cand : (n, c) ndarray
+        Candidate scales of the predictor step (the one with the lowest barrier is taken).
+    nd : int
+        Number of disk cones.
+    """
     _kernel()[2](np.asarray(cidx, np.int64), np.asarray(rows, np.int64), Y, mu, B, H, np.ascontiguousarray(told, float),
                  np.ascontiguousarray(tnew, float), np.ascontiguousarray(cand, float), int(nd))
 

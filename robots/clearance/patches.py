@@ -16,7 +16,19 @@ from robots.clearance.support import true_dual
 
 
 def octa_hemisphere(levels: int = 2):
-    """Upper-hemisphere triangles of a subdivided octahedron: (T, 3, 3) unit vertices."""
+    """Upper-hemisphere triangles of a subdivided octahedron: (T, 3, 3) unit vertices.
+
+    Parameters
+    ----------
+    levels : int, optional
+        Number of subdivisions (default 2); each splits every triangle into four.
+
+    Returns
+    -------
+    (T, 3, 3) ndarray
+        ``T = 4 * 4 ** levels`` triangles as three unit vertices each (dimensionless directions,
+        ``z >= 0``).
+    """
     e = np.eye(3)
     tris = [np.stack([a, b, e[2]]) for a, b in ((e[0], e[1]), (e[1], -e[0]), (-e[0], -e[1]), (-e[1], e[0]))]
     tris = np.array(tris)
@@ -26,33 +38,97 @@ def octa_hemisphere(levels: int = 2):
 
 
 def normalise(v):
+    """Vectors scaled to unit length along the last axis.
+
+    Parameters
+    ----------
+    v : (..., k) ndarray
+        Nonzero vectors.
+
+    Returns
+    -------
+    (..., k) ndarray
+        ``v / ||v||``.
+    """
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
 def split_tris(t):
+    """Split spherical triangles into four at their edge midpoints (projected to the sphere).
+
+    Parameters
+    ----------
+    t : (T, 3, 3) ndarray
+        Triangles as three unit vertices.
+
+    Returns
+    -------
+    (4 T, 3, 3) ndarray
+        The children, stacked child-kind by child-kind (corner 0, 1, 2 children, then the middle).
+    """
     a, b, c = t[:, 0], t[:, 1], t[:, 2]
     ab, bc, ca = normalise(a + b), normalise(b + c), normalise(c + a)
     return np.concatenate([np.stack(x, 1) for x in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
 
 
 def tri_depth(t):
+    """Distance from the origin to the plane through each triangle's three vertices.
+
+    Parameters
+    ----------
+    t : (T, 3, 3) ndarray
+        Triangles as three unit vertices.
+
+    Returns
+    -------
+    (T,) ndarray
+        Distances (dimensionless, in (0, 1] for unit vertices).
+    """
     n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     n = normalise(n)
     return np.abs((n * t[:, 0]).sum(-1))
 
 
 def depth(U):
-    """Distance from the origin to the flat patch spanned by unit vectors U (P, q, k)."""
+    """Distance from the origin to the flat patch spanned by unit vectors U (P, q, k).
+
+    Parameters
+    ----------
+    U : (P, q, k) ndarray
+        Unit vertices of ``P`` patches (``q = 2``: arcs, ``q = 3``: triangles with ``k = 3``).
+
+    Returns
+    -------
+    (P,) ndarray
+        Distance to the chord's midpoint (arcs) or to the triangle's plane, dimensionless.
+    """
     if U.shape[1] == 2:
         return np.linalg.norm(U[:, 0] + U[:, 1], axis=-1) / 2
     return tri_depth(U)
 
 
 def arc_bound(A, B, HA, HB):
-    """``max u . X`` over the unit vectors ``u`` of the arc from A to B (P, k), where ``A . X = HA``
-    and ``B . X = HB``: with ``X_p = alpha A + beta B`` the projection of X on the plane of the arc
+    """``max u^T X`` over the unit vectors ``u`` of the arc from A to B (P, k), where ``A^T X = HA``
+    and ``B^T X = HB``: with ``X_p = alpha A + beta B`` the projection of X on the plane of the arc
     (Gram system), the maximum is ``|X_p|`` if ``alpha, beta >= 0`` (X_p points into the arc),
-    else the larger end value."""
+    else the larger end value.
+
+    Parameters
+    ----------
+    A : (P, k) ndarray
+        Unit start vectors of the arcs.
+    B : (P, k) ndarray
+        Unit end vectors of the arcs.
+    HA : (P,) ndarray
+        Values ``A . X`` (upper values of the support function at ``A``; m or rad).
+    HB : (P,) ndarray
+        Values ``B . X``, same units.
+
+    Returns
+    -------
+    (P,) ndarray
+        ``max u . X`` over the arc, in the units of ``HA``.
+    """
     c = (A * B).sum(-1)
     det = 1.0 - c * c
     with np.errstate(all="ignore"):
@@ -75,6 +151,22 @@ def patch_bound(U, H, legacy: bool = False):
     patch's edges (:func:`arc_bound`). Before issue 13 the looser ``min(max_i H_i / d, |X|)``
     (``d`` = distance from the origin to the flat patch) was used; it is kept as the fall-back
     for degenerate patches and as a second valid bound (``legacy=True`` returns it alone).
+
+    Parameters
+    ----------
+    U : (P, q, k) ndarray
+        Unit vertices of ``P`` patches.
+    H : (P, q) ndarray
+        Certified upper values of ``h`` at the vertices (m or rad, or scaled).
+    legacy : bool, optional
+        True: the bound before issue 13, ``min(max_i H_i / d, |X|)``; False (default): the exact
+        sublinearity bound (never above the legacy one).
+
+    Returns
+    -------
+    (P,) ndarray
+        Upper bound of ``h`` over each patch, in the units of ``H`` (``max_i H_i / d`` when
+        ``q != k``).
     """
     b1 = H.max(-1) / depth(U)
     q, k = U.shape[1], U.shape[2]
@@ -102,7 +194,22 @@ def patch_bound(U, H, legacy: bool = False):
 def sub_points(q: int, n: int):
     """Conic weights (S, q) of the sub-points of a patch split ``n`` times along each edge, and the
     sub-patches (T, q) as indices into them: the arc cut into ``n`` arcs, or the triangle into
-    ``n^2`` triangles."""
+    ``n^2`` triangles.
+
+    Parameters
+    ----------
+    q : int
+        Vertices per patch (2: arc, 3: triangle).
+    n : int
+        Divisions per edge (>= 1).
+
+    Returns
+    -------
+    W : (S, q) ndarray
+        Conic (barycentric) weights of the sub-points, rows summing to 1.
+    sub : (T, q) int ndarray
+        Sub-patches as indices into the rows of ``W``.
+    """
     if q == 2:
         t = np.arange(n + 1) / n
         return np.stack([1 - t, t], 1), np.stack([np.arange(n), np.arange(1, n + 1)], 1)
@@ -129,7 +236,24 @@ def interpolated_bound(U, Y, nd: int, n: int):
     inequality) and is exact where the optimal dual is linear across the patch (a round part of the
     error set), so patches on curved parts prune without being split. G is sublinear on the patch's
     cone, so its maximum over the patch is bounded by :func:`patch_bound` on ``n`` sub-patches per
-    edge with G at their vertices."""
+    edge with G at their vertices.
+
+    Parameters
+    ----------
+    U : (P, q, k) ndarray
+        Unit vertices of ``P`` patches.
+    Y : (P, q, R) ndarray
+        Dual vectors ``y_i`` (scaled rows) at the vertices.
+    nd : int
+        Number of disk cones (the first ``2 nd`` entries of ``y`` in pairs; intervals after).
+    n : int
+        Sub-patches per edge (>= 1).
+
+    Returns
+    -------
+    (P,) ndarray
+        Upper bound of ``h`` over each patch, in the units of the dual values.
+    """
     P, q, k = U.shape
     W, sub = sub_points(q, n)
     V = np.einsum("sq,pqk->psk", W, U)                              # (P, S, k) sub-points in the cone
@@ -148,7 +272,20 @@ _KIDS = ((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5))   # a triangle's four child
 def children(parent, mid):
     """A per-vertex array of the children of split patches: ``parent`` (P, q, ...) at the patches'
     vertices, ``mid`` (P, e, ...) at their new midpoints (edges 01, 12, 20). An arc gives two arcs,
-    a triangle four triangles; children are stacked child-kind by child-kind (as ``np.tile(pc, .)``)."""
+    a triangle four triangles; children are stacked child-kind by child-kind (as ``np.tile(pc, .)``).
+
+    Parameters
+    ----------
+    parent : (P, q, ...) ndarray
+        A per-vertex quantity of the parent patches (directions, values, dual points ...).
+    mid : (P, e, ...) ndarray
+        The same quantity at the new edge midpoints (``e = 1`` for arcs, 3 for triangles).
+
+    Returns
+    -------
+    (2 P, 2, ...) or (4 P, 3, ...) ndarray
+        The quantity at the vertices of the children.
+    """
     if parent.shape[1] == 2:
         return np.concatenate([np.stack([parent[:, 0], mid[:, 0]], 1), np.stack([mid[:, 0], parent[:, 1]], 1)])
     v = [parent[:, 0], parent[:, 1], parent[:, 2], mid[:, 0], mid[:, 1], mid[:, 2]]
@@ -157,7 +294,25 @@ def children(parent, mid):
 
 def initial_patches(k: int, options: EngineOptions = DEFAULT):
     """The first patches of the branch and bound: unit vertices (V, k), patches as vertex indices
-    (T, q) and the sign of each patch vertex (T, q) (a vertex stored once for an antipodal pair)."""
+    (T, q) and the sign of each patch vertex (T, q) (a vertex stored once for an antipodal pair).
+
+    Parameters
+    ----------
+    k : int
+        Number of target components (2: half circle of arcs; otherwise 3: half sphere of triangles).
+    options : EngineOptions, optional
+        The engine's settings: ``n_circle0``, ``level0``, ``dedup_antipodes`` (default
+        :data:`robots.clearance.options.DEFAULT`).
+
+    Returns
+    -------
+    verts : (V, k) ndarray
+        Unit vertices to solve.
+    patches : (T, q) int ndarray
+        Patches as indices into ``verts``.
+    sign : (T, q) ndarray
+        +1 or -1: a patch vertex is ``sign * verts[index]``.
+    """
     if k == 2:
         n0 = options.n_circle0
         phi = np.arange(n0 + 1) * np.pi / n0

@@ -20,6 +20,32 @@ class PoseMaps:
     (``n_disk`` cones of 2 rows), then intervals (1 row each).
     C_pos, C_rot: (n_poses, k, n_rows) -- target twist components (base frame) of a consistent
     screw vector; B: (n_poses, n_rows, m) -- consistency ``B^T s = 0``.
+
+    Parameters
+    ----------
+    block : Block
+        The decoupled block of components these maps belong to.
+    cols : (n_rows,) int ndarray
+        Index of each row in the stacked screw vector (``6 * n_joints``), in cone order.
+    cone_joint : (n_cones,) int ndarray
+        Joint index of each cone.
+    cone_kind : (n_cones,) int ndarray
+        Bound kind of each cone (0-3: ``beta_xy, beta_z, b_xy, b_z``).
+    n_disk : int
+        Number of disk cones (2 rows each), which come first.
+    pos_comps : tuple of int
+        Twist components (3-5) of the position rows of ``C_pos``.
+    rot_comps : tuple of int
+        Twist components (0-2) of the rotation rows of ``C_rot``.
+    C_pos : (n_poses, k_pos, n_rows) ndarray
+        End-effector position error (m, base axes) per unit screw row (rad or m).
+    C_rot : (n_poses, k_rot, n_rows) ndarray
+        End-effector rotation error (rad, base axes) per unit screw row.
+    B : (n_poses, n_rows, m) ndarray
+        Loop-equation map: consistent screws satisfy ``B^T s = 0`` (``m`` loop columns).
+    groups : tuple, optional
+        Sparsity of ``B``: tuples ``(disk cone indices, interval row indices, loop columns)``;
+        the rows of a group are zero outside its columns. Empty (default): dense.
     """
 
     block: Block
@@ -38,19 +64,44 @@ class PoseMaps:
 
     @property
     def n_rows(self) -> int:
+        """int: number of screw rows (scalar screw components) in the block."""
         return len(self.cols)
 
     @property
     def n_loops(self) -> int:
+        """int: number of loop-equation columns ``m`` of ``B``."""
         return self.B.shape[-1]
 
     def row_bounds(self, bounds: np.ndarray) -> np.ndarray:
-        """Bound of every row, (..., n_rows), from a bounds array (..., n_joints, 4)."""
+        """Bound of every row, (..., n_rows), from a bounds array (..., n_joints, 4).
+
+        Parameters
+        ----------
+        bounds : (..., n_joints, 4) ndarray
+            Columns ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
+
+        Returns
+        -------
+        (..., n_rows) ndarray
+            The bound (rad or m) of each row's cone; a disk's bound repeated on its two rows.
+        """
         per_cone = bounds[..., self.cone_joint, self.cone_kind]
         nd = self.n_disk
         return np.concatenate([np.repeat(per_cone[..., :nd], 2, axis=-1), per_cone[..., nd:]], axis=-1)
 
     def take(self, idx) -> "PoseMaps":
+        """The maps at some poses.
+
+        Parameters
+        ----------
+        idx : int array or slice
+            Pose indices (or a boolean mask).
+
+        Returns
+        -------
+        PoseMaps
+            A copy with ``C_pos``, ``C_rot`` and ``B`` indexed by ``idx`` along the pose axis.
+        """
         return replace(self, C_pos=self.C_pos[idx], C_rot=self.C_rot[idx], B=self.B[idx])
 
     def sample_screws(self, i: int, bounds: np.ndarray, n: int, rng, mode: str = "uniform") -> np.ndarray:
@@ -58,7 +109,27 @@ class PoseMaps:
         (n, n_rows), m and rad. Each joint's screw is drawn in its clearance set (``"uniform"``:
         uniformly inside the disks and intervals; ``"boundary"``: on their boundaries), the part
         violating the loop equations is removed (orthogonal projection onto ``B^T s = 0``, rows
-        scaled by their bounds) and the sample is scaled back into the set. ``bounds``: (n_joints, 4)."""
+        scaled by their bounds) and the sample is scaled back into the set. ``bounds``: (n_joints, 4).
+
+        Parameters
+        ----------
+        i : int
+            Pose index.
+        bounds : (n_joints, 4) ndarray
+            Columns ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
+        n : int
+            Number of samples.
+        rng : numpy.random.Generator
+            Random number generator.
+        mode : str, optional
+            ``"boundary"``: on the boundaries of the disks and intervals; ``"uniform"`` (default,
+            and any other value): uniformly inside.
+
+        Returns
+        -------
+        (n, n_rows) ndarray
+            Consistent screw rows (rad, m) inside the clearance set, in the order of ``cols``.
+        """
         D = self.row_bounds(bounds[None])[0]
         nd = self.n_disk
         ni = self.n_rows - 2 * nd

@@ -17,6 +17,38 @@ class MaxPoseError:
     ``[dtheta; dp]`` (base axes) produced by those screws; gap: largest relative gap per case;
     n_solves: support problems solved; n_newton: Newton iterations summed over the problems
     (the solver's work, counted per call: no global counter).
+
+    Parameters
+    ----------
+    p_max : (n,) ndarray
+        Largest position error attained per case, m.
+    p_upper : (n,) ndarray
+        Certified upper bound on the position error per case, m.
+    r_max : (n,) ndarray
+        Largest orientation error attained per case, rad.
+    r_upper : (n,) ndarray
+        Certified upper bound on the orientation error per case, rad.
+    p_screws : (n, n_joints, 6) ndarray
+        Joint error screws ``[dr; dt]`` (rad, m; each in its joint's frame) attaining ``p_max``.
+    r_screws : (n, n_joints, 6) ndarray
+        Joint error screws attaining ``r_max``.
+    p_twist : (n, 6) ndarray
+        End-effector error twist ``[dtheta; dp]`` (rad, m; base axes) produced by ``p_screws``.
+    r_twist : (n, 6) ndarray
+        End-effector error twist produced by ``r_screws``.
+    joint_names : tuple of str
+        Names of the joints, in the order of the screws' second axis.
+    n_solves : int, optional
+        Support problems solved (default 0).
+    seconds : float, optional
+        Wall-clock time, s (default 0).
+    n_newton : int, optional
+        Newton iterations summed over the support problems (default 0).
+    p_extra : (n, q) ndarray or None, optional
+        Values of the extra interval sources at the ``p_max`` maximiser (in their own units), or
+        None without extra sources.
+    r_extra : (n, q) ndarray or None, optional
+        Values of the extra sources at the ``r_max`` maximiser, or None.
     """
 
     p_max: np.ndarray
@@ -37,14 +69,38 @@ class MaxPoseError:
     @classmethod
     def concat(cls, parts) -> "MaxPoseError":
         """The cases of several results in order (chunks of a grid); ``n_solves``, ``n_newton``,
-        ``seconds`` summed."""
+        ``seconds`` summed.
+
+        Parameters
+        ----------
+        parts : sequence of MaxPoseError
+            Results with the same joints, in case order.
+
+        Returns
+        -------
+        MaxPoseError
+            All cases of ``parts`` concatenated (``joint_names`` from the first part; ``p_extra``
+            and ``r_extra`` are not carried over: None).
+        """
         cat = {f: np.concatenate([getattr(p, f) for p in parts]) for f in
                ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")}
         return cls(**cat, joint_names=parts[0].joint_names, n_solves=sum(p.n_solves for p in parts),
                    seconds=sum(p.seconds for p in parts), n_newton=sum(p.n_newton for p in parts))
 
     def take(self, idx) -> "MaxPoseError":
-        """The cases ``idx`` (index array), in that order."""
+        """The cases ``idx`` (index array), in that order.
+
+        Parameters
+        ----------
+        idx : int array or slice
+            Indices (or a boolean mask) of the cases to keep.
+
+        Returns
+        -------
+        MaxPoseError
+            A copy with the per-case arrays (and ``p_extra``, ``r_extra`` when present) indexed by
+            ``idx``; the counters and ``seconds`` unchanged.
+        """
         per_case = {f: getattr(self, f)[idx] for f in
                     ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")}
         extra = {f: None if getattr(self, f) is None else getattr(self, f)[idx] for f in ("p_extra", "r_extra")}
@@ -52,18 +108,36 @@ class MaxPoseError:
 
     @property
     def p_gap(self) -> np.ndarray:
+        """(n,) ndarray: relative gap ``(p_upper - p_max) / p_upper`` per case, dimensionless."""
         return (self.p_upper - self.p_max) / np.maximum(self.p_upper, 1e-300)
 
     @property
     def r_gap(self) -> np.ndarray:
+        """(n,) ndarray: relative gap ``(r_upper - r_max) / r_upper`` per case, dimensionless."""
         return (self.r_upper - self.r_max) / np.maximum(self.r_upper, 1e-300)
 
     @property
     def gap(self) -> np.ndarray:
+        """(n,) ndarray: the larger of ``p_gap`` and ``r_gap`` per case, dimensionless."""
         return np.maximum(self.p_gap, self.r_gap)
 
     def dominant_joints(self, i: int = 0, which: str = "p") -> list[tuple[str, float]]:
-        """Joints ranked by the share of their clearance used at the maximiser of case ``i``."""
+        """Joints ranked by the share of their clearance used at the maximiser of case ``i``.
+
+        Parameters
+        ----------
+        i : int, optional
+            Case index (default 0).
+        which : str, optional
+            ``"p"`` (default): the position-error maximiser ``p_screws``; anything else: the
+            orientation-error maximiser ``r_screws``.
+
+        Returns
+        -------
+        list of (str, float)
+            ``(joint name, norm of its error screw)`` pairs, largest first. The norm mixes rad
+            and m components (the Euclidean norm of the 6-vector ``[dr; dt]``).
+        """
         S = (self.p_screws if which == "p" else self.r_screws)[i]
         mag = np.linalg.norm(S, axis=1)
         order = np.argsort(mag)[::-1]

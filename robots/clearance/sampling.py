@@ -19,6 +19,37 @@ def sample_max_errors(mech: ClearanceMechanism, pose, bounds=None, *, n_samples:
     clearance fully taken up in a random direction), removes the part that violates the loop
     equations (orthogonal projection onto ``B^T s = 0``) and scales back into the clearance set,
     so every sample is a feasible, consistent clearance state. Returns (p, r) in m and rad.
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism.
+    pose : (d,) array_like
+        One pose in the mechanism's pose coordinates (m).
+    bounds : array_like or None, optional
+        ``(n_joints, 4)``, columns ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``; None
+        (default): the joints' own bounds.
+    n_samples : int, optional
+        Number of random states (default ``10 ** 6``).
+    seed : int, optional
+        Seed of the random generator (default 0).
+    mode : str, optional
+        ``"boundary"`` (default) or ``"uniform"``.
+    chunk : int, optional
+        Samples drawn at a time (memory; default 100 000).
+
+    Returns
+    -------
+    p : float
+        Largest position error of the samples, m.
+    r : float
+        Largest orientation error of the samples, rad.
+
+    Raises
+    ------
+    ValidationError
+        ``mode`` not ``"uniform"`` or ``"boundary"``; bounds of a wrong shape, negative or
+        non-finite.
     """
     if mode not in ("uniform", "boundary"):
         raise ValidationError("mode", mode, "'uniform' or 'boundary'")

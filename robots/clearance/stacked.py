@@ -29,6 +29,18 @@ def max_pose_error_stacked(mechanisms: list, points: list) -> list[tuple[np.ndar
 
     One vectorised engine call when the mechanisms' pose maps and default bounds stack; one
     :func:`~robots.clearance.max_pose_error` call per mechanism otherwise.
+
+    Parameters
+    ----------
+    mechanisms : list of ClearanceMechanism
+        One mechanism per design (each evaluated with its joints' own bounds).
+    points : list of array_like
+        ``points[k]``: poses ``(n_k, d)`` of ``mechanisms[k]``, m.
+
+    Returns
+    -------
+    list of (ndarray, ndarray)
+        Per mechanism, ``(p_max (n_k,) in m, r_max (n_k,) in rad)``: the attained maxima.
     """
     if not mechanisms:
         return []

@@ -39,6 +39,27 @@ _LS = np.array([1.0, 0.5, 0.25, 0.12])
 
 @dataclass
 class SupportResult:
+    """Certified result of a batch of support-function problems (:func:`solve_support`).
+
+    Values are in the units of ``a`` (the scaled problem: m or rad for a target row scaled by the
+    bounds).
+
+    Parameters
+    ----------
+    upper : (K,) ndarray
+        Certified upper bound ``f(mu) >= h(w)`` per problem.
+    lower : (K,) ndarray
+        ``a^T sigma`` of the feasible ``sigma`` (``<= h(w)``) per problem.
+    sigma : (K, R) ndarray
+        Feasible scaled screws (``||sigma_c|| <= 1``, loop residual about 1e-13), dimensionless.
+    mu : (K, m) ndarray
+        Dual points attaining ``upper`` (warm starts).
+    iterations : int
+        Newton iterations of the batch (the longest problem's count).
+    newton : int, optional
+        Newton iterations summed over the problems (the work done; default 0).
+    """
+
     upper: np.ndarray   # (K,) certified upper bound f(mu) >= h(w)
     lower: np.ndarray   # (K,) a^T sigma of the feasible sigma (<= h(w))
     sigma: np.ndarray   # (K, R) feasible scaled screws (||sigma_c|| <= 1, loop residual ~ 1e-13)
@@ -54,6 +75,21 @@ def _cone_norms(Y: np.ndarray, nd: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def true_dual(Y: np.ndarray, nd: int) -> np.ndarray:
+    """Dual objective ``f = sum_c ||y_c||`` of the cone-wise vectors ``y``.
+
+    Parameters
+    ----------
+    Y : (..., R) ndarray
+        Vectors ``y = a + B mu``: ``nd`` disk pairs first, then interval rows.
+    nd : int
+        Number of disk cones.
+
+    Returns
+    -------
+    (...,) ndarray
+        Sum of the disks' Euclidean norms and the intervals' absolute values (a certified upper
+        bound of the support value by weak duality).
+    """
     nd_, ni_ = _cone_norms(Y, nd)
     return nd_.sum(-1) + ni_.sum(-1)
 
@@ -67,7 +103,33 @@ def _smooth(Y: np.ndarray, nd: int, eps: np.ndarray) -> np.ndarray:
 
 def recover_primal(Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, eps: np.ndarray,
                    gram_inv: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Feasible scaled screws from the smoothed optimality condition; returns (sigma, a^T sigma)."""
+    """Feasible scaled screws from the smoothed optimality condition; returns (sigma, a^T sigma).
+
+    ``sigma_c = y_c / sqrt(||y_c||^2 + eps^2)``, then the loop residual is projected out and
+    ``sigma`` scaled back into the unit cones.
+
+    Parameters
+    ----------
+    Y : (K, R) ndarray
+        Dual vectors ``y = a + B mu``.
+    a : (K, R) ndarray
+        Scaled linear terms.
+    B : (K, R, m) ndarray
+        Scaled loop maps.
+    nd : int
+        Number of disk cones (rows in pairs first; intervals after).
+    eps : (K,) ndarray
+        Smoothing parameters (0: ``sigma_c = y_c / ||y_c||``).
+    gram_inv : (K, m, m) ndarray or None, optional
+        Precomputed ``pinv(B^T B)`` (None: computed here).
+
+    Returns
+    -------
+    sigma : (K, R) ndarray
+        Feasible scaled screws.
+    lower : (K,) ndarray
+        ``a^T sigma``: lower bounds of the support values.
+    """
     K = Y.shape[0]
     Yd = Y[:, :2 * nd].reshape(K, nd, 2)
     rd = np.sqrt((Yd ** 2).sum(-1) + eps[:, None] ** 2)
@@ -174,6 +236,49 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     search. On the central path ``sigma_c = y_c / t_c`` is strictly feasible for the primal and
     the duality gap is ``2 n_cones / tau``; ``tau`` grows by ``growth`` each time the Newton
     decrement is small. The certificate (upper, lower) is evaluated exactly at each centring.
+
+    Parameters
+    ----------
+    a : (K, R) array_like
+        Scaled linear terms ``a = D C^T w``.
+    B : (K, R, m) ndarray
+        Scaled loop maps ``D B`` (rows: ``nd`` disks as pairs, then intervals).
+    nd : int
+        Number of disk cones.
+    tol : float or (K,) ndarray
+        Absolute duality-gap target per problem (units of ``a``).
+    mu0 : (K, m) ndarray or None, optional
+        Warm start (None: the least-squares point).
+    gap0 : float or (K,) ndarray or None, optional
+        Barrier gap to start the path from (None: 10 % of ``f(mu0)``).
+    max_iter : int, optional
+        Most Newton iterations of the batch (default 100).
+    gram_inv : (K, m, m) ndarray or None, optional
+        Precomputed ``pinv(B^T B)`` (None: computed here).
+    growth : float or None, optional
+        Factor of ``tau`` at each centring (None: ``options.growth``).
+    rtol : float, optional
+        Also stop when the gap is below ``rtol * upper`` (default 0).
+    groups : tuple or None, optional
+        Block sparsity of ``B`` (:attr:`robots.clearance.model.PoseMaps.groups`); None: dense.
+    stop_below : float or (K,) ndarray or None, optional
+        Stop a problem once its certified upper bound is below this value.
+    kernel : bool or None, optional
+        Compiled (True) or NumPy (False) Newton iteration; None: ``options.kernel``.
+    options : EngineOptions, optional
+        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
+
+    Returns
+    -------
+    SupportResult
+        Per problem the certified ``upper`` and attained ``lower`` values, the feasible scaled
+        screws and the dual points. With ``m = 0`` the closed form (``lower = upper``).
+
+    Raises
+    ------
+    ValidationError
+        The compiled iteration required (``kernel=True``, or ``options.kernel=True``) but numba
+        not available.
     """
     a = np.asarray(a, float)
     K, R = a.shape
@@ -412,7 +517,14 @@ def warm_up() -> bool:
     """Compile (or load from numba's cache) all the kernels of :mod:`.newton_kernel` in this process
     by solving one tiny support problem. Called before a pool of worker processes starts: the
     forked workers inherit the kernels instead of each importing numba and loading them (or, on a
-    fresh install, compiling them). Returns whether the compiled kernels are available."""
+    fresh install, compiling them). Returns whether the compiled kernels are available.
+
+    Returns
+    -------
+    bool
+        True when the compiled kernels are available (and now loaded), False when the NumPy
+        iteration is used.
+    """
     if newton_kernel._kernel() is None:
         return False
     rng = np.random.default_rng(0)

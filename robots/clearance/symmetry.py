@@ -46,6 +46,38 @@ def prove_mirror(mech, poses, mirrored, joint_map, reflection, rtol: float = 1e-
 
     joint_map: sequence, ``joint_map[k]`` = index of the joint that joint ``k`` becomes.
     reflection: (3, 3) orthogonal matrix of the mirror in base axes (e.g. diag(-1, 1, 1)).
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism (one decoupled block: not split as planar); its joints' own bounds are
+        the ones checked.
+    poses : (n_pairs, d) array_like
+        Original poses in the mechanism's pose coordinates (m).
+    mirrored : (n_pairs, d) array_like
+        Their mirror poses, in the same order.
+    joint_map : sequence of int
+        ``joint_map[k]``: index of the joint that joint ``k`` becomes (a permutation).
+    reflection : (3, 3) array_like
+        Orthogonal matrix of the mirror in base axes, dimensionless.
+    rtol : float, optional
+        Relative tolerance of the residuals, dimensionless (default 1e-9: round-off).
+
+    Returns
+    -------
+    dict
+        ``"signs"`` (n_pairs, n_rows) row signs; ``"row_permutation"`` (n_rows,) row index at the
+        mirrored pose of each row; ``"cols"`` the rows' screw indices; ``"joint_map"``;
+        ``"max_map_residual"`` and ``"max_consistency_residual"`` (relative, dimensionless);
+        ``"reflection"`` (3, 3); ``"n_pairs"``.
+
+    Raises
+    ------
+    KinematicsError
+        ``reflection`` not an orthogonal 3 x 3 matrix; ``joint_map`` not a permutation of the
+        joints, or one that sends a clearance row to a component without one; a joint and its
+        mirror with different bounds; a mechanism with more than one decoupled block; or the
+        symmetry failing at a pose pair (the first one is named).
     """
     S = np.asarray(reflection, float)
     if S.shape != (3, 3) or not np.allclose(S @ S.T, np.eye(3), atol=1e-12):
@@ -88,7 +120,21 @@ def prove_mirror(mech, poses, mirrored, joint_map, reflection, rtol: float = 1e-
 def mirror_maxima(result, proof: dict):
     """The certified maxima at the mirrored poses of :func:`prove_mirror`, from ``result`` (a
     :class:`~robots.clearance.maxerror.MaxPoseError` at the original poses, in the same order):
-    equal values and bounds, maximising screws renamed and sign-changed, twists reflected."""
+    equal values and bounds, maximising screws renamed and sign-changed, twists reflected.
+
+    Parameters
+    ----------
+    result : MaxPoseError
+        Result at the original poses of the proof, in the same order.
+    proof : dict
+        The return value of :func:`prove_mirror`.
+
+    Returns
+    -------
+    MaxPoseError
+        The result at the mirrored poses (``n_solves = 0``, ``seconds = 0``; ``n_newton``,
+        ``p_extra`` and ``r_extra`` copied unchanged).
+    """
     jm, cols, signs, S = proof["joint_map"], proof["cols"], proof["signs"], proof["reflection"]
     det = np.linalg.det(S)
 
@@ -112,7 +158,41 @@ def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflec
     every mirror pair: pose ``j`` is the mirror of pose ``i`` when ``poses[j] = pose_reflection *
     poses[i]`` (element-wise, e.g. ``(-1, 1)`` for x -> -x in the x-z plane). The symmetry is proven
     for every pair (:func:`prove_mirror`) before the maxima are reused. Returns the result in the
-    order of ``poses`` and a summary: poses solved, pairs reused, largest proof residuals."""
+    order of ``poses`` and a summary: poses solved, pairs reused, largest proof residuals.
+
+    Parameters
+    ----------
+    mech : ClearanceMechanism
+        The mechanism (one decoupled block, see :func:`prove_mirror`).
+    poses : (n, d) array_like
+        Poses in the mechanism's pose coordinates (m); mirror partners are matched after
+        rounding to 12 decimals.
+    joint_map : sequence of int
+        ``joint_map[k]``: index of the joint that joint ``k`` becomes under the mirror.
+    reflection : (3, 3) array_like
+        Orthogonal matrix of the mirror in base axes.
+    pose_reflection : (d,) array_like
+        Element-wise factors mapping a pose to its mirror (e.g. ``(-1, 1)``).
+    **grid_kw
+        Passed to :func:`~robots.clearance.grid.grid_max_pose_error` (``tol``, ``workers``,
+        ``scheduler``, ``options``, ...); without ``chunk_size`` and ``scheduler`` the chunk size
+        is chosen to give equal chunks on the local processes. The proof uses the joints' own
+        bounds, so ``bounds`` should not be given here.
+
+    Returns
+    -------
+    result : MaxPoseError
+        One case per pose, in the order of ``poses`` (``seconds``: wall time; ``n_solves``: those
+        of the solved poses).
+    summary : dict
+        ``"n_poses"``, ``"n_solved"``, ``"n_reused"``, ``"max_map_residual"`` and
+        ``"max_consistency_residual"`` (relative, dimensionless).
+
+    Raises
+    ------
+    KinematicsError
+        The mirror symmetry cannot be proven for a reused pair (:func:`prove_mirror`).
+    """
     import time
 
     from robots.clearance.grid import grid_max_pose_error

@@ -28,6 +28,21 @@ class Design5R:
 
     r1: crank ``A_iB_i``; r2: coupler ``B_iP``; r3: half base ``OA_i``; all divided by ``D``.
     Constraints (eqs. 2 and 4): ``r1 + r2 + r3 = 3``, ``0 < r1, r2 < 3``, ``0 <= r3 <= 1.5``.
+
+    Parameters
+    ----------
+    r1 : float
+        Crank ``A_iB_i`` divided by ``D``, dimensionless, in (0, 3).
+    r2 : float
+        Coupler ``B_iP`` divided by ``D``, dimensionless, in (0, 3).
+    r3 : float
+        Half base ``OA_i`` divided by ``D``, dimensionless, in [0, 1.5].
+
+    Raises
+    ------
+    ValidationError
+        If a length is not a finite number, violates eq. 4, or the three do not sum to 3
+        (within 1e-6).
     """
 
     r1: float
@@ -51,7 +66,23 @@ class Design5R:
 
     @classmethod
     def from_lengths(cls, r1_bar: float, r2_bar: float, r3_bar: float) -> "Design5R":
-        """Non-dimensionalise physical lengths (any unit) by ``D`` (eq. 1)."""
+        """Non-dimensionalise physical lengths (any unit) by ``D`` (eq. 1).
+
+        Parameters
+        ----------
+        r1_bar, r2_bar, r3_bar : float
+            Physical crank, coupler and half-base lengths, in one unit (e.g. m).
+
+        Returns
+        -------
+        Design5R
+            The non-dimensional design (``D`` itself is not kept).
+
+        Raises
+        ------
+        ValidationError
+            If ``D`` is not positive or the resulting design violates eq. 4.
+        """
         D = (r1_bar + r2_bar + r3_bar) / 3.0
         if not D > 0:
             raise ValidationError("link lengths", (r1_bar, r2_bar, r3_bar), "positive lengths")
@@ -59,7 +90,23 @@ class Design5R:
 
     @classmethod
     def from_st(cls, s: float, t: float) -> "Design5R":
-        """Inverse of eqs. 5-6: ``r3 = t``, ``r1 = (sqrt(3) s - t) / 2``, ``r2 = 3 - r1 - r3``."""
+        """Inverse of eqs. 5-6: ``r3 = t``, ``r1 = (sqrt(3) s - t) / 2``, ``r2 = 3 - r1 - r3``.
+
+        Parameters
+        ----------
+        s, t : float
+            Design-space coordinates (eqs. 5-6), dimensionless.
+
+        Returns
+        -------
+        Design5R
+            The design at ``(s, t)``.
+
+        Raises
+        ------
+        ValidationError
+            If ``(s, t)`` lies outside the design space (eq. 4).
+        """
         r3 = float(t)
         r1 = (SQRT3 * float(s) - r3) / 2.0
         return cls(r1, 3.0 - r1 - r3, r3)
@@ -96,7 +143,23 @@ FIG3_DESIGN = Design5R(1.2, 1.0, 0.8)
 
 
 def get_case(case) -> Design5R:
-    """A :class:`Design5R` from a case letter of Table 2 or a design itself."""
+    """A :class:`Design5R` from a case letter of Table 2 or a design itself.
+
+    Parameters
+    ----------
+    case : str or Design5R
+        ``"a"`` ... ``"d"`` (case-insensitive) or a design, returned as is.
+
+    Returns
+    -------
+    Design5R
+        The design.
+
+    Raises
+    ------
+    ValidationError
+        If ``case`` is neither a known letter nor a :class:`Design5R`.
+    """
     if isinstance(case, Design5R):
         return case
     if isinstance(case, str) and case.lower() in CASES:

@@ -42,6 +42,23 @@ DEFAULT_WORKING_MODE = "+-"
 
 
 def working_mode_signs(working_mode) -> tuple[int, int]:
+    """Signs ``(m_1, m_2)`` of a working mode (see the module docstring).
+
+    Parameters
+    ----------
+    working_mode : str or tuple of int
+        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+
+    Returns
+    -------
+    tuple of int
+        ``(m_1, m_2)``, each +1 or -1.
+
+    Raises
+    ------
+    ValidationError
+        If ``working_mode`` is neither a known string nor a pair of +1/-1.
+    """
     if isinstance(working_mode, str) and working_mode in WORKING_MODES:
         return WORKING_MODES[working_mode]
     if isinstance(working_mode, (tuple, list)) and len(working_mode) == 2 and all(m in (1, -1) for m in working_mode):
@@ -82,7 +99,18 @@ def _common_float(*xs) -> list[np.ndarray]:
 
 
 def cross2(ax, ay, bx, by):
-    """z component of the cross product of two planar vectors."""
+    """z component of the cross product of two planar vectors.
+
+    Parameters
+    ----------
+    ax, ay, bx, by : array_like
+        Components of the vectors ``a`` and ``b``, broadcastable.
+
+    Returns
+    -------
+    ndarray or float
+        ``ax * by - ay * bx``, in the product of their units.
+    """
     return ax * by - ay * bx
 
 
@@ -96,6 +124,28 @@ def inverse_kinematics_raw(px, py, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE
     ``rho_i = |P - A_i|`` (law of cosines in the triangle ``A_i B_i P``). A pose is reachable by
     chain ``i`` when ``|r1 - r2| <= rho_i <= r1 + r2`` (inside the annulus of eqs. 16-19).
     Returns ``theta1, theta2, reachable`` (unreachable entries hold a clipped, meaningless value).
+
+    Parameters
+    ----------
+    px, py : array_like
+        End-effector coordinates, length unit, broadcastable.
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    working_mode : str or tuple of int
+        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+
+    Returns
+    -------
+    theta1, theta2 : ndarray
+        Crank angles, rad, of the broadcast shape of ``px, py``.
+    reachable : ndarray of bool
+        True where both chains reach ``P``.
+
+    Raises
+    ------
+    ValidationError
+        If ``working_mode`` is invalid.
     """
     m1, m2 = working_mode_signs(working_mode)
     px, py, r1, r2, r3 = _common_float(px, py, r1, r2, r3)
@@ -115,6 +165,28 @@ def inverse_kinematics(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -> np.n
     """Crank angles (rad), shape (..., 2), for end-effector positions ``p`` (..., 2).
 
     Raises :class:`KinematicsError` naming the first pose outside the theoretical workspace.
+
+    Parameters
+    ----------
+    p : array_like, shape (..., 2)
+        End-effector positions ``(x, y)``, length unit.
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    working_mode : str or tuple of int
+        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        Crank angles ``theta_1, theta_2``, rad.
+
+    Raises
+    ------
+    ValidationError
+        If ``p`` is not a finite (..., 2) array or ``working_mode`` is invalid.
+    KinematicsError
+        If a pose is outside the theoretical workspace (eqs. 16-19).
     """
     p = _as_points(p)
     t1, t2, ok = inverse_kinematics_raw(p[..., 0], p[..., 1], r1, r2, r3, working_mode)
@@ -134,6 +206,26 @@ def circle_intersection(c1x, c1y, rho1, c2x, c2y, rho2, assembly=1):
     ``P = C1 + (a/d)(C2 - C1) + sigma (h/d) rot90(C2 - C1)``, ``a = (d^2 + rho1^2 - rho2^2)/(2d)``,
     ``h = sqrt(rho1^2 - a^2)``. Returns ``px, py, h2_over_d2``; ``h2_over_d2 < 0`` means the two
     circles do not meet (no assembly), ``== 0`` a type II singularity.
+
+    Parameters
+    ----------
+    c1x, c1y : array_like
+        Centre ``C1``, length unit.
+    rho1 : array_like
+        Radius about ``C1``, length unit.
+    c2x, c2y : array_like
+        Centre ``C2``, length unit.
+    rho2 : array_like
+        Radius about ``C2``, length unit.
+    assembly : {1, -1} or array_like
+        sigma: +1 puts ``P`` on the left of ``C1 -> C2``.
+
+    Returns
+    -------
+    px, py : ndarray
+        Intersection point, length unit (on the line ``C1C2`` when the circles do not meet).
+    h2_over_d2 : ndarray
+        ``(h / d)^2``, dimensionless.
     """
     dx, dy = c2x - c1x, c2y - c1y
     d2 = dx * dx + dy * dy
@@ -146,7 +238,20 @@ def circle_intersection(c1x, c1y, rho1, c2x, c2y, rho2, assembly=1):
 
 
 def crank_points(theta, r1, r3) -> np.ndarray:
-    """Elbows ``B_i = A_i + r1 (cos theta_i, sin theta_i)``, shape (..., 2 chains, 2)."""
+    """Elbows ``B_i = A_i + r1 (cos theta_i, sin theta_i)``, shape (..., 2 chains, 2).
+
+    Parameters
+    ----------
+    theta : array_like, shape (..., 2)
+        Crank angles, rad.
+    r1, r3 : float
+        Crank and half-base lengths (the length unit of the positions).
+
+    Returns
+    -------
+    ndarray, shape (..., 2, 2)
+        ``B_1`` and ``B_2`` (axis -2), ``(x, y)`` in the length unit (axis -1).
+    """
     theta = _as_float(theta)
     bx = np.stack([-r3 + r1 * np.cos(theta[..., 0]), r3 + r1 * np.cos(theta[..., 1])], axis=-1)
     by = r1 * np.sin(theta)
@@ -160,6 +265,28 @@ def forward_kinematics(theta, r1, r2, r3, assembly=1) -> np.ndarray:
     constraints eqs. 9-12), which is what eqs. 13-15 do, without eq. 13's division by
     ``2 r3 + r1 (cos theta_2 - cos theta_1)`` (zero when ``B_1B_2`` is vertical).
     Raises :class:`KinematicsError` when the couplers cannot close the loop.
+
+    Parameters
+    ----------
+    theta : array_like, shape (..., 2)
+        Crank angles ``theta_1, theta_2``, rad.
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    assembly : {1, -1}
+        Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        End-effector positions ``(x, y)``, length unit.
+
+    Raises
+    ------
+    ValidationError
+        If ``assembly`` is not +1 or -1.
+    KinematicsError
+        If the couplers cannot close the loop for some ``theta``.
     """
     assembly = _check_assembly(assembly)
     theta, r1, r2, r3 = _common_float(theta, r1, r2, r3)
@@ -181,6 +308,23 @@ def forward_kinematics_eq15(theta, r1, r2, r3, sigma=1, printed=False) -> np.nda
     not satisfy the constraints. ``sigma = +1`` is the larger root ``y`` (the paper's choice).
     Kept for reference and for the test that checks eqs. 11-15 against :func:`forward_kinematics`;
     it divides by zero when ``B_1B_2`` is vertical.
+
+    Parameters
+    ----------
+    theta : array_like, shape (..., 2)
+        Crank angles, rad.
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    sigma : {1, -1}
+        Root of eq. 14 (+1: the larger ``y``).
+    printed : bool
+        Use eq. 13's ``e`` as printed (a typo) instead of the derived one.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        End-effector positions, length unit (NaN where the root is complex).
     """
     theta = np.asarray(theta, dtype=float)
     c1, c2 = np.cos(theta[..., 0]), np.cos(theta[..., 1])
@@ -216,6 +360,26 @@ def perturbed_position(theta, r1, r2, r3, errors: dict, assembly=1):
     all samples are one array pass. ``cos(theta + dth)`` is expanded as
     ``cos theta cos dth - sin theta sin dth`` so the trigonometry runs once per pose and once
     per sample, not once per pose-sample. Returns ``px, py, h2`` (``h2 < 0``: no assembly).
+
+    Parameters
+    ----------
+    theta : array_like, shape (..., 2)
+        Nominal crank angles, rad.
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    errors : dict of str to array_like
+        Error values by name of :data:`ERROR_PARAMETERS` (lengths and clearance components in
+        the length unit, ``dth*`` in rad); missing names are zero.
+    assembly : {1, -1}
+        Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
+
+    Returns
+    -------
+    px, py : ndarray
+        Perturbed end-effector position, length unit, of the broadcast shape.
+    h2 : ndarray
+        ``(h / d)^2`` of :func:`circle_intersection`, dimensionless (``< 0``: no assembly).
     """
     g = errors.get
     theta = np.asarray(theta, dtype=float)
@@ -243,6 +407,22 @@ def jacobians(p, theta, r1, r3):
 
     ``J_x`` (..., 2, 2) has rows ``(P - B_i)^T``; ``J_q`` (..., 2) is the diagonal
     ``cross(B_i - A_i, P - B_i)``. Type II singular: ``det J_x = 0``; type I: ``J_q,i = 0``.
+
+    Parameters
+    ----------
+    p : array_like, shape (..., 2)
+        End-effector positions, length unit.
+    theta : array_like, shape (..., 2)
+        Crank angles ``theta_1, theta_2`` at ``p``, rad.
+    r1, r3 : float
+        Crank and half-base lengths (the length unit of the positions).
+
+    Returns
+    -------
+    J_x : ndarray, shape (..., 2, 2)
+        Rows ``P - B_i``, length unit.
+    J_q : ndarray, shape (..., 2)
+        Diagonal of ``J_q``, length unit squared per rad.
     """
     p = np.asarray(p, dtype=float)
     B = crank_points(theta, r1, r3)
@@ -254,13 +434,43 @@ def jacobians(p, theta, r1, r3):
 
 
 def jacobian(p, theta, r1, r3) -> np.ndarray:
-    """``J = J_x^{-1} diag(J_q)``, (..., 2, 2): ``dP = J dtheta`` (length per radian)."""
+    """``J = J_x^{-1} diag(J_q)``, (..., 2, 2): ``dP = J dtheta`` (length per radian).
+
+    Parameters
+    ----------
+    p : array_like, shape (..., 2)
+        End-effector positions, length unit.
+    theta : array_like, shape (..., 2)
+        Crank angles ``theta_1, theta_2`` at ``p``, rad.
+    r1, r3 : float
+        Crank and half-base lengths (the length unit of the positions).
+
+    Returns
+    -------
+    ndarray, shape (..., 2, 2)
+        ``dP / dtheta``, length unit per rad.
+    """
     jx, jq = jacobians(p, theta, r1, r3)
     return np.linalg.solve(jx, jq[..., :, None] * np.eye(2))
 
 
 def type2_determinant(p, theta, r1, r3) -> np.ndarray:
-    """``det J_x = cross(P - B_1, P - B_2)``; its sign is the assembly mode sigma."""
+    """``det J_x = cross(P - B_1, P - B_2)``; its sign is the assembly mode sigma.
+
+    Parameters
+    ----------
+    p : array_like, shape (..., 2)
+        End-effector positions, length unit.
+    theta : array_like, shape (..., 2)
+        Crank angles ``theta_1, theta_2`` at ``p``, rad.
+    r1, r3 : float
+        Crank and half-base lengths (the length unit of the positions).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``det J_x``, length unit squared.
+    """
     jx, _ = jacobians(p, theta, r1, r3)
     return jx[..., 0, 0] * jx[..., 1, 1] - jx[..., 0, 1] * jx[..., 1, 0]
 
@@ -270,6 +480,16 @@ def inverse_condition_number(M) -> np.ndarray:
 
     With ``k = ||M||_F^2 / (2 |det M|)``: ``sigma_max / sigma_min = k + sqrt(k^2 - 1)``.
     Returns 0 for a singular matrix.
+
+    Parameters
+    ----------
+    M : array_like, shape (..., 2, 2)
+        Matrices.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        Inverse condition number, dimensionless, in [0, 1].
     """
     M = np.asarray(M, dtype=float)
     fro2 = np.sum(M * M, axis=(-2, -1))
@@ -285,6 +505,26 @@ def local_conditioning_index(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -
 
     Uses ``adj(J_x) diag(J_q)``, which has the condition number of ``J`` and stays finite at
     type II singularities (LCI = 0 there).
+
+    Parameters
+    ----------
+    p : array_like, shape (..., 2)
+        End-effector positions, length unit.
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    working_mode : str or tuple of int
+        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        LCI, dimensionless, in [0, 1].
+
+    Raises
+    ------
+    ValidationError, KinematicsError
+        As :func:`inverse_kinematics`.
     """
     p = _as_points(p)
     theta = inverse_kinematics(p, r1, r2, r3, working_mode)
@@ -298,7 +538,20 @@ def local_conditioning_index(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -
 # Singular loci, MIC, usable workspace
 # --------------------------------------------------------------------------------------------
 def type1_circles(r1, r2, r3) -> list[dict]:
-    """The circles bounding the theoretical workspace, eqs. 16-19 (type I singular loci)."""
+    """The circles bounding the theoretical workspace, eqs. 16-19 (type I singular loci).
+
+    Parameters
+    ----------
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+
+    Returns
+    -------
+    list of dict
+        Four dicts with ``"name"``, centre abscissa ``"cx"`` (on ``y = 0``) and ``"radius"``,
+        length unit.
+    """
     return [dict(name="C1o (eq. 16)", cx=-r3, radius=r1 + r2), dict(name="C1i (eq. 17)", cx=-r3, radius=abs(r1 - r2)),
             dict(name="C2o (eq. 18)", cx=r3, radius=r1 + r2), dict(name="C2i (eq. 19)", cx=r3, radius=abs(r1 - r2))]
 
@@ -311,6 +564,26 @@ def type2_locus(r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, n: int = 20000) -
     ``A_2 + r2 u``), and ``B_1 = B_2`` (possible when ``r1 >= r3``): ``P`` on the circle of
     radius r2 about ``(0, +-sqrt(r1^2 - r3^2))``. Only points whose elbows are in the requested
     working mode are kept.
+
+    Parameters
+    ----------
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    working_mode : str or tuple of int
+        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+    n : int
+        Samples of the coupler direction (and of each ``B_1 = B_2`` circle).
+
+    Returns
+    -------
+    ndarray, shape (k, 2)
+        Points of the locus, length unit.
+
+    Raises
+    ------
+    ValidationError
+        If ``working_mode`` is invalid.
     """
     m1, m2 = working_mode_signs(working_mode)
     phi = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
@@ -343,6 +616,23 @@ def mic_closed_form(r1, r2, r3) -> dict:
     ``y_MIC = ((r1 + r2 + y_col)^2 - r3^2) / (2 (r1 + r2 + y_col))``, ``r_MIC = |y_MIC| - y_col``.
     ``y_col`` is the height of the type II posture with ``B_1 = (-r2, y)``, ``P = (0, y)``,
     ``B_2 = (r2, y)``; eq. 22's circle touches it and the outer circles eqs. 16/18.
+
+    Parameters
+    ----------
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+
+    Returns
+    -------
+    dict
+        ``"radius"`` (``r_MIC``) and ``"center_y"`` (``y_MIC``), length unit; ``"equation"``:
+        ``"eq21"`` or ``"eq22"``; for eq. 22 also ``"y_col"``, length unit.
+
+    Raises
+    ------
+    KinematicsError
+        If eq. 22 applies and ``r1 < abs(r2 - r3)``.
     """
     if r1 + r3 < r2:
         return dict(radius=(r1 + r2 - abs(r1 - r2)) / 2,
@@ -357,7 +647,25 @@ def mic_closed_form(r1, r2, r3) -> dict:
 
 
 def distance_to_singular_loci(points, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, locus=None) -> np.ndarray:
-    """Distance (n,) from points (n, 2) to the nearest singular locus (eqs. 16-19 and type II)."""
+    """Distance (n,) from points (n, 2) to the nearest singular locus (eqs. 16-19 and type II).
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 2)
+        Points, length unit.
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    working_mode : str or tuple of int
+        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+    locus : ndarray, shape (k, 2), or None
+        Precomputed type II locus; None: :func:`type2_locus`.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Distance to the nearest type I circle or type II locus point, length unit.
+    """
     points = np.atleast_2d(np.asarray(points, dtype=float))
     d = np.full(len(points), np.inf)
     for c in type1_circles(r1, r2, r3):
@@ -373,6 +681,31 @@ def distance_to_singular_loci(points, r1, r2, r3, working_mode=DEFAULT_WORKING_M
 def mic_numeric(r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, assembly=1, n: int = 4001) -> dict:
     """MIC found numerically: the largest circle centred on the symmetry axis ``x = 0``,
     inside the usable workspace, and touching no singular locus (independent check of eqs. 21-22).
+
+    Parameters
+    ----------
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    working_mode : str or tuple of int
+        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+    assembly : {1, -1}
+        Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
+    n : int
+        Grid size on the axis ``0 <= y <= r1 + r2`` (``y = 0`` dropped) before the local
+        refinement.
+
+    Returns
+    -------
+    dict
+        ``"radius"`` and ``"center_y"``, length unit.
+
+    Raises
+    ------
+    ValidationError
+        If ``working_mode`` is invalid.
+    KinematicsError
+        If no point of the axis is reachable in the working and assembly modes.
     """
     from scipy.optimize import minimize_scalar
 
@@ -397,7 +730,21 @@ def mic_numeric(r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, assembly=1, n: in
 @dataclass(frozen=True)
 class UsableWorkspaceMap:
     """The usable workspace on a grid: ``mask[j, i]`` for the point ``(x[i], y[j])``; ``lci`` is
-    NaN outside the mask (a plotting array, not a kinematic result)."""
+    NaN outside the mask (a plotting array, not a kinematic result).
+
+    Parameters
+    ----------
+    x : ndarray, shape (nx,)
+        Grid abscissae, length unit.
+    y : ndarray, shape (ny,)
+        Grid ordinates, length unit.
+    mask : ndarray of bool, shape (ny, nx)
+        True in the usable workspace.
+    lci : ndarray, shape (ny, nx)
+        Local conditioning index, dimensionless (NaN outside ``mask``).
+    seed : tuple of float
+        Point ``(x, y)`` the region was grown from, length unit.
+    """
 
     x: np.ndarray
     y: np.ndarray
@@ -407,13 +754,22 @@ class UsableWorkspaceMap:
 
     @property
     def area(self) -> float:
+        """Area of the masked grid cells, length unit squared."""
         return float(self.mask.sum() * (self.x[1] - self.x[0]) * (self.y[1] - self.y[0]))
 
     @property
     def lci_max(self) -> float:
+        """Largest LCI in the usable workspace, dimensionless."""
         return float(np.nanmax(self.lci))
 
     def points(self) -> np.ndarray:
+        """Grid points of the usable workspace.
+
+        Returns
+        -------
+        ndarray, shape (k, 2)
+            Points ``(x, y)`` where ``mask`` is True, length unit.
+        """
         X, Y = np.meshgrid(self.x, self.y)
         return np.stack([X[self.mask], Y[self.mask]], -1)
 
@@ -425,6 +781,35 @@ def usable_workspace(r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, assembly=1, 
     assembly mode, i.e. bounded by singular loci. A first ``n x n`` grid covers the theoretical
     workspace's bounding box; with ``refine`` a second grid of equal spacing (``n`` points along
     the longer side) covers the bounding box of the region found. The LCI map is computed on it.
+
+    Parameters
+    ----------
+    r1, r2, r3 : float
+        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+    working_mode : str or tuple of int
+        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+    assembly : {1, -1}
+        Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
+    n : int
+        Grid points per side of the first grid.
+    seed : tuple of float or None
+        Point ``(x, y)`` of the region, length unit; None: the centre of :func:`mic_numeric`.
+    refine : bool
+        Recompute on a second grid fitted to the region.
+
+    Returns
+    -------
+    UsableWorkspaceMap
+        The region and its LCI map.
+
+    Raises
+    ------
+    ValidationError
+        If ``working_mode`` is invalid.
+    KinematicsError
+        If the seed point is not in the usable workspace (or, with no ``seed``, as
+        :func:`mic_numeric`).
     """
     from scipy import ndimage
 

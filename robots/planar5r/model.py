@@ -9,7 +9,7 @@ A1B1, A2B2              1     m     crank length errors (eq. 7, one per physical
 B1P, B2P                1     m     coupler length errors
 OA1, OA2                1     m     base half-length errors (A_1 = (-(r3 + e), 0))
 theta1, theta2          1     rad   actuator angle errors (eqs. 8 / 23)
-clearance_A1, _A2       2     m     radial clearance of the active joints, a disk |c| <= r_c
+clearance_A1, _A2       2     m     radial clearance of the active joints, a disk ``|c| <= r_c``
 clearance_B1, _B2       2     m     radial clearance of the passive elbow joints (Sec. 2.5)
 ======================  ====  ====  ==========================================================
 
@@ -60,9 +60,30 @@ class Planar5R(RobotErrorModel):
     """5R symmetrical parallel mechanism of design ``case`` (Table 2 letter or :class:`Design5R`)
     scaled by ``D`` metres (eq. 1: physical length = non-dimensional length x D).
 
-    working_mode: elbow signs (``"+-"``: both elbows outward, see :mod:`.kinematics`).
+    working_mode: elbow signs (``"+-"``: both elbows outward, see :mod:`robots.planar5r.kinematics`).
     assembly: sigma of eq. 15 (+1 = the paper's choice).
     lci_min: poses with a smaller local conditioning index are refused (KinematicsError).
+
+    Parameters
+    ----------
+    case : str or Design5R
+        Table 2 letter ``"a"`` ... ``"d"`` or a non-dimensional design.
+    D : float
+        Scale, m: physical lengths are the design's times ``D``.
+    working_mode : str or tuple of int
+        Elbow signs (see :func:`robots.planar5r.kinematics.working_mode_signs`).
+    assembly : {1, -1}
+        Assembly mode sigma of eq. 15.
+    lci_min : float
+        Smallest accepted local conditioning index, dimensionless.
+
+    Raises
+    ------
+    ValidationError
+        If ``case`` is unknown, ``D`` is not a positive finite number, or ``working_mode`` or
+        ``assembly`` is invalid.
+    KinematicsError
+        If the MIC closed form (eq. 22) does not exist for the design.
     """
 
     def __init__(self, case="b", D: float = 1.0, working_mode=K.DEFAULT_WORKING_MODE, assembly: int = 1,
@@ -91,7 +112,19 @@ class Planar5R(RobotErrorModel):
     # --- poses ------------------------------------------------------------------------------
     def evaluation_poses(self, ring: float = 0.7) -> np.ndarray:
         """The nine poses a..i (m): the MIC centre and eight points at ``ring x r_MIC`` every
-        45 deg counter-clockwise from +x (the paper's pose coordinates are not printed)."""
+        45 deg counter-clockwise from +x (the paper's pose coordinates are not printed).
+
+        Parameters
+        ----------
+        ring : float
+            Radius of the ring of eight poses as a fraction of ``r_MIC``, dimensionless (up to
+            ``1 / sqrt(2)`` the poses stay in the declared square workspace).
+
+        Returns
+        -------
+        ndarray, shape (9, 2)
+            Poses ``(x, y)``, m: the MIC centre first.
+        """
         ang = np.deg2rad(np.arange(0, 360, 45))
         rr = ring * self.mic_radius
         ring_pts = np.stack([rr * np.cos(ang), self.mic_center_y + rr * np.sin(ang)], -1)
@@ -99,7 +132,21 @@ class Planar5R(RobotErrorModel):
 
     def miw_poses(self, rings=(0.35, 0.7), n_per_ring: int = 8) -> np.ndarray:
         """Poses (m) spread over the maximum inscribed workspace: centre + rings (fractions of
-        r_MIC, <= 1/sqrt(2) so they stay in the declared square workspace)."""
+        r_MIC, <= 1/sqrt(2) so they stay in the declared square workspace).
+
+        Parameters
+        ----------
+        rings : sequence of float
+            Ring radii as fractions of ``r_MIC``, dimensionless; the 2nd, 4th, ... rings are rotated
+            by half a step.
+        n_per_ring : int
+            Poses per ring.
+
+        Returns
+        -------
+        ndarray, shape (1 + len(rings) n_per_ring, 2)
+            Poses ``(x, y)``, m: the MIC centre first.
+        """
         pts = [[0.0, self.mic_center_y]]
         for k, f in enumerate(rings):
             ang = 2 * np.pi * (np.arange(n_per_ring) + 0.5 * (k % 2)) / n_per_ring
@@ -107,7 +154,26 @@ class Planar5R(RobotErrorModel):
         return np.asarray(pts)
 
     def nominal_angles(self, poses) -> np.ndarray:
-        """Crank angles (rad), (n, 2), after checking that every pose is usable."""
+        """Crank angles (rad), (n, 2), after checking that every pose is usable.
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            End-effector positions ``(x, y)``, m.
+
+        Returns
+        -------
+        ndarray, shape (n, 2)
+            Crank angles ``theta_1, theta_2``, rad.
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not a finite (n, 2) array.
+        KinematicsError
+            If a pose is outside the declared workspace or the theoretical workspace, in the other
+            assembly mode, or has an LCI below ``lci_min``.
+        """
         poses = self.check_poses(poses)
         theta = K.inverse_kinematics(poses, self.r1, self.r2, self.r3, self.working_mode)
         jx, jq = K.jacobians(poses, theta, self.r1, self.r3)
@@ -122,7 +188,27 @@ class Planar5R(RobotErrorModel):
 
     # --- contract -----------------------------------------------------------------------------
     def sensitivity(self, poses) -> np.ndarray:
-        """First-order map (n, 6, 16): ``[dx, dy, 0, 0, 0, 0]`` per unit source error (see module)."""
+        """First-order map (n, 6, 16): ``[dx, dy, 0, 0, 0, 0]`` per unit source error (see module).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            End-effector positions ``(x, y)``, m.
+
+        Returns
+        -------
+        ndarray, shape (n, 6, 16)
+            Rows ``dx, dy`` in m per unit source error (m or rad); rows 2-5 zero. Columns in the
+            order of :data:`SOURCES` (two per clearance).
+
+        Raises
+        ------
+        ValidationError
+            If ``poses`` is not a finite (n, 2) array.
+        KinematicsError
+            If a pose is outside the declared workspace or the theoretical workspace, in the other
+            assembly mode, or has an LCI below ``lci_min``.
+        """
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
         theta = self.nominal_angles(poses)
         B = K.crank_points(theta, self.r1, self.r3)
@@ -146,7 +232,23 @@ class Planar5R(RobotErrorModel):
         return out
 
     def errors_dict(self, errors: np.ndarray) -> dict:
-        """Stacked source errors (..., 16) -> keyword arrays of :func:`kinematics.perturbed_position`."""
+        """Stacked source errors (..., 16) -> keyword arrays of :func:`kinematics.perturbed_position`.
+
+        Parameters
+        ----------
+        errors : array_like, shape (..., 16)
+            Stacked source errors, m or rad, in the column order of :meth:`sensitivity`.
+
+        Returns
+        -------
+        dict of str to ndarray, each shape (...)
+            Errors keyed by the names of :data:`COLUMN_PARAMETERS`.
+
+        Raises
+        ------
+        ValidationError
+            If the last axis is not of length 16.
+        """
         errors = np.asarray(errors, dtype=float)
         if errors.shape[-1] != self.n_columns:
             raise ValidationError("errors shape", errors.shape, f"(..., {self.n_columns}) stacked as {self.source_names}")
@@ -158,7 +260,30 @@ class Planar5R(RobotErrorModel):
 
         failures: a sample whose loop cannot close (the two couplers cannot meet) raises
         :class:`KinematicsError` naming the pose (``"raise"``) or gives a NaN row (``"nan"``; the
-        core's nonlinear yield counts it as a miss)."""
+        core's nonlinear yield counts it as a miss).
+
+        Parameters
+        ----------
+        poses : array_like, shape (n, 2) or (2,)
+            End-effector positions ``(x, y)``, m.
+        errors : array_like, shape (n, s, 16)
+            Stacked source errors, m or rad.
+        failures : {"raise", "nan"}
+            What a sample that cannot be assembled gives.
+
+        Returns
+        -------
+        ndarray, shape (n, s, 6)
+            Columns ``dx, dy`` in m, the others zero; NaN rows for failed samples with ``"nan"``.
+
+        Raises
+        ------
+        ValidationError
+            If ``failures`` is invalid, or ``poses`` or ``errors`` has a wrong shape.
+        KinematicsError
+            If a pose is not usable (see :meth:`nominal_angles`), or, with ``failures="raise"``, a
+            sample cannot be assembled.
+        """
         if failures not in ("raise", "nan"):
             raise ValidationError("failures", failures, "'raise' or 'nan'")
         poses = np.atleast_2d(np.asarray(poses, dtype=float))

@@ -62,6 +62,27 @@ class UncertaintyModel:
     clearance_model: ``"contact"``, ``"eq24_printed"`` or ``"none"`` (module docstring).
     shared_lengths: one random variable per symmetric pair (paper) or six independent lengths.
     renormalise: divide the random lengths by the random ``D(Omega)`` (paper, Sec. 2.2).
+
+    Parameters
+    ----------
+    length_rel_std : float
+        ``delta_r``, dimensionless (default 4e-5, i.e. 0.004 %).
+    theta_std : float
+        ``delta_theta``, rad (default 0.05 deg).
+    clearance : float
+        Radial clearance ``r_c``, length unit of the design (default 2e-4).
+    clearance_model : {"contact", "eq24_printed", "none"}
+        Model of the passive-joint clearances.
+    shared_lengths : bool
+        True: 3 length columns (paper); False: 6.
+    renormalise : bool
+        Divide the random lengths by ``D(Omega)``.
+
+    Raises
+    ------
+    ValidationError
+        If a standard deviation or the clearance is negative or not finite, or
+        ``clearance_model`` is unknown.
     """
 
     length_rel_std: float = DELTA_R
@@ -81,6 +102,7 @@ class UncertaintyModel:
 
     @property
     def n_length_dims(self) -> int:
+        """Columns of the unit hypercube used by the link lengths: 3 (shared) or 6."""
         return 3 if self.shared_lengths else 6
 
     @property
@@ -90,7 +112,27 @@ class UncertaintyModel:
 
     def errors_from_unit(self, u: np.ndarray, r1: float, r2: float, r3: float) -> dict:
         """Map unit-hypercube rows ``u`` (n, n_dims) to the error parameters of
-        :func:`robots.planar5r.kinematics.perturbed_position` (arrays of shape (n,))."""
+        :func:`robots.planar5r.kinematics.perturbed_position` (arrays of shape (n,)).
+
+        Parameters
+        ----------
+        u : ndarray, shape (n, n_dims)
+            Rows of the unit hypercube ``[0, 1)^n_dims``.
+        r1, r2, r3 : float
+            Nominal crank, coupler and half-base lengths, in the length unit of the design
+            (dimensionless in the paper).
+
+        Returns
+        -------
+        dict of str to ndarray, each shape (n,)
+            ``dA1B1 .. dOA2`` (length unit), ``dth1``, ``dth2`` (rad) and, unless the clearance model
+            is ``"none"`` or ``clearance`` is 0, ``cA1x .. cB2y`` (length unit).
+
+        Raises
+        ------
+        ValidationError
+            If ``u`` is not of shape (n, n_dims).
+        """
         u = np.asarray(u, dtype=float)
         if u.ndim != 2 or u.shape[1] != self.n_dims:
             raise ValidationError("unit samples shape", u.shape, f"(n, {self.n_dims})")
@@ -126,7 +168,29 @@ class UncertaintyModel:
 
 def unit_samples(n: int, d: int, method: str = "lhs", seed=0) -> np.ndarray:
     """``n`` points of ``[0, 1)^d``: plain Monte Carlo or a scrambled Latin hypercube
-    (scipy.stats.qmc.LatinHypercube), reproducible from ``seed``."""
+    (scipy.stats.qmc.LatinHypercube), reproducible from ``seed``.
+
+    Parameters
+    ----------
+    n : int
+        Number of points (at least 1).
+    d : int
+        Dimension.
+    method : {"lhs", "mc"}
+        Scrambled Latin hypercube or plain Monte Carlo.
+    seed : int, numpy.random.Generator or None
+        Seed of ``numpy.random.default_rng``.
+
+    Returns
+    -------
+    ndarray, shape (n, d)
+        Points in ``[0, 1)^d``.
+
+    Raises
+    ------
+    ValidationError
+        If ``n`` is below 1 or ``method`` is unknown.
+    """
     if int(n) < 1:
         raise ValidationError("n_samples", n, "a positive integer")
     if method == "mc":
@@ -146,6 +210,39 @@ def position_deviations(poses, r1, r2, r3, model: UncertaintyModel, unit: np.nda
     which happens next to a type II singularity. ``failures="raise"`` raises
     :class:`KinematicsError` naming the pose; ``failures="mask"`` returns ``(dp, assembled)``
     with ``dp = 0`` where ``assembled`` (n_poses, n_samples) is False.
+
+    Parameters
+    ----------
+    poses : array_like, shape (n_poses, 2) or (2,)
+        Nominal end-effector positions, length unit.
+    r1, r2, r3 : float
+        Nominal crank, coupler and half-base lengths, in the length unit of the design
+        (dimensionless in the paper).
+    model : UncertaintyModel
+        Distributions of the uncertain parameters.
+    unit : ndarray, shape (n_samples, n_dims)
+        Unit-hypercube rows (see :func:`unit_samples`).
+    working_mode : str or tuple of int
+        Elbow signs (see :func:`robots.planar5r.kinematics.working_mode_signs`).
+    assembly : {1, -1}
+        Assembly mode sigma of eq. 15.
+    failures : {"raise", "mask"}
+        What a sample that cannot be assembled gives.
+
+    Returns
+    -------
+    dp : ndarray, shape (n_poses, n_samples, 2)
+        Deviations ``(dx, dy)``, length unit.
+    assembled : ndarray of bool, shape (n_poses, n_samples)
+        Only with ``failures="mask"``: True where the sample was assembled.
+
+    Raises
+    ------
+    ValidationError
+        If ``failures`` is invalid, or ``poses`` or ``unit`` has a wrong shape.
+    KinematicsError
+        If a pose is outside the theoretical workspace, or, with ``failures="raise"``, a sample
+        cannot be assembled.
     """
     if failures not in ("raise", "mask"):
         raise ValidationError("failures", failures, "'raise' or 'mask'")
@@ -173,6 +270,39 @@ def sample_deviations(poses, r1, r2, r3, model: UncertaintyModel | None = None, 
     The same ``n_samples`` parameter rows are used at every pose (common random numbers), so
     per-pose differences come from the kinematics, not from sampling noise. ``failures`` as in
     :func:`position_deviations`.
+
+    Parameters
+    ----------
+    poses : array_like, shape (n_poses, 2) or (2,)
+        Nominal end-effector positions, length unit.
+    r1, r2, r3 : float
+        Nominal crank, coupler and half-base lengths, in the length unit of the design
+        (dimensionless in the paper).
+    model : UncertaintyModel or None
+        Distributions; None: :class:`UncertaintyModel` () (Table 1).
+    n_samples : int
+        Samples per pose.
+    method : {"lhs", "mc"}
+        Sampling method.
+    seed : int, numpy.random.Generator or None
+        Seed of the unit samples.
+    working_mode : str or tuple of int
+        Elbow signs (see :func:`robots.planar5r.kinematics.working_mode_signs`).
+    assembly : {1, -1}
+        Assembly mode sigma of eq. 15.
+    failures : {"raise", "mask"}
+        As :func:`position_deviations`.
+
+    Returns
+    -------
+    ndarray or tuple of ndarray
+        As :func:`position_deviations`: ``dp`` (n_poses, n_samples, 2), length unit, and with
+        ``failures="mask"`` also ``assembled``.
+
+    Raises
+    ------
+    ValidationError, KinematicsError
+        As :func:`unit_samples` and :func:`position_deviations`.
     """
     model = model or UncertaintyModel()
     return position_deviations(poses, r1, r2, r3, model, unit_samples(n_samples, model.n_dims, method, seed),
@@ -187,6 +317,26 @@ def pose_statistics(dp: np.ndarray, radius: float = PAPER_CIRCLE, assembled: np.
     0.005 non-dimensional circle by default). Arrays of shape (n_poses,). With an
     ``assembled`` mask (see :func:`position_deviations`) the moments use assembled samples only,
     a sample that cannot be assembled counts as exceeding, and ``p_unassembled`` is reported.
+
+    Parameters
+    ----------
+    dp : ndarray, shape (n_poses, n_samples, 2)
+        Deviations, length unit.
+    radius : float
+        Radius of the tolerance circle, length unit (default 0.005, non-dimensional).
+    assembled : ndarray of bool, shape (n_poses, n_samples), or None
+        Which samples were assembled; None: all.
+
+    Returns
+    -------
+    dict of str to ndarray, each shape (n_poses,)
+        ``mean_dx``, ``mean_dy``, ``std_dx``, ``std_dy``, ``mean_dev``, ``rms_dev``, ``max_dev``,
+        ``q99_dev`` (length unit), ``p_exceed`` and ``p_unassembled`` (fractions).
+
+    Raises
+    ------
+    KinematicsError
+        If fewer than 2 samples are assembled at some pose.
     """
     dev = np.hypot(dp[..., 0], dp[..., 1])
     if assembled is None:
@@ -221,6 +371,40 @@ def convergence_study(poses, r1, r2, r3, model: UncertaintyModel | None = None,
     replications, averaged over poses (the mean error in units of the reference rms deviation,
     the others relative). ``variance_ratio`` = MC error^2 / LHS error^2 = how many times more
     samples plain MC needs for the same accuracy.
+
+    Parameters
+    ----------
+    poses : array_like, shape (n_poses, 2) or (2,)
+        Nominal end-effector positions, length unit.
+    r1, r2, r3 : float
+        Nominal crank, coupler and half-base lengths, in the length unit of the design
+        (dimensionless in the paper).
+    model : UncertaintyModel or None
+        Distributions; None: :class:`UncertaintyModel` ().
+    sizes : sequence of int
+        Sample sizes N compared.
+    n_rep : int
+        Replications per size and method.
+    n_reference : int
+        Samples of the reference LHS run.
+    seed : int
+        Seed of the replications (the reference uses ``seed + 10000``).
+    working_mode : str or tuple of int
+        Elbow signs (see :func:`robots.planar5r.kinematics.working_mode_signs`).
+    assembly : {1, -1}
+        Assembly mode sigma of eq. 15.
+
+    Returns
+    -------
+    dict
+        ``"sizes"``, ``"n_rep"``, ``"n_reference"``; ``"mc"`` and ``"lhs"``: dicts
+        ``{"mean_dx", "rms_dev", "p_exceed_q90"}`` of lists (one dimensionless error per size);
+        ``"variance_ratio"``: the same keys, MC over LHS squared error per size.
+
+    Raises
+    ------
+    ValidationError, KinematicsError
+        As :func:`position_deviations` (a sample that cannot be assembled raises).
     """
     model = model or UncertaintyModel()
     poses = np.atleast_2d(np.asarray(poses, dtype=float))
