@@ -3,7 +3,7 @@
 An :class:`Interval` holds arrays ``lo <= hi`` (any broadcastable shape). Arithmetic operators and
 the numpy ufuncs an assembly function is usually written with (``+ − × /``, ``negative``,
 ``square``, ``sqrt``, ``exp``, ``log``, ``arccos``, ``arcsin``, ``arctan``, ``sin``, ``cos``,
-``absolute``, integer ``power``) return an enclosure of the function's range over the box: the
+``absolute``, ``power`` with a constant exponent) return an enclosure of the function's range over the box: the
 *natural interval extension* (Moore 1966). Every result bound is moved outwards by one ulp
 (``np.nextafter``), which covers the round-off of numpy's correctly-rounded-or-better elementary
 operations and functions (the libm functions used are accurate to < 1 ulp). A function outside
@@ -130,14 +130,44 @@ class Interval:
         return Interval._out(np.where(zero, 0.0, np.minimum(a, b) ** 2), np.maximum(a, b) ** 2)
 
     def __pow__(self, k):
-        if not float(k).is_integer() or k < 0:
-            raise TypeError("Interval ** k needs a non-negative integer k")
-        k = int(k)
-        if k == 0:
-            return Interval(np.ones(self.shape))
-        if k % 2 == 0:
-            return Interval._out(self.square().lo ** (k // 2), self.square().hi ** (k // 2))
-        return Interval._out(self.lo ** k, self.hi ** k)
+        """Enclosure of ``x ** k`` for a real constant ``k``, rounded outwards.
+
+        An integer ``k`` is defined for every x (a negative one through :meth:`reciprocal`); a
+        fractional ``k`` only for x >= 0 (``x ** 0.5`` is ``sqrt``), so an interval reaching below
+        0 gives the whole real line, as ``sqrt`` of a negative does.
+
+        Parameters
+        ----------
+        k : float
+            The exponent, a real constant (dimensionless).
+
+        Returns
+        -------
+        Interval
+            The enclosure of ``x ** k`` over the interval.
+
+        Raises
+        ------
+        TypeError
+            ``k`` is not a real scalar (an interval exponent is not supported).
+        """
+        try:
+            k = float(k)
+        except (TypeError, ValueError):
+            raise TypeError(f"Interval ** k needs a real constant k, got {k!r}") from None
+        if k.is_integer():
+            n = int(k)
+            if n == 0:
+                return Interval(np.ones(self.shape))
+            if n < 0:
+                return self.reciprocal() ** (-n)
+            if n % 2 == 0:
+                return Interval._out(self.square().lo ** (n // 2), self.square().hi ** (n // 2))
+            return Interval._out(self.lo ** n, self.hi ** n)
+        # a fractional power: monotone on x >= 0 (x ** k at 0 is 0 for k > 0 and +inf for k < 0)
+        if k > 0:
+            return self._increasing(lambda a: a ** k, 0.0)
+        return self._decreasing(lambda a: a ** k, 0.0)
 
     # monotone functions ------------------------------------------------------------------------
     def _increasing(self, f, dom_lo=-_INF, dom_hi=_INF):
@@ -283,7 +313,30 @@ class Dual:
         return Dual.of(o, self) / self
 
     def __pow__(self, k):
-        k = int(k)
+        """``x ** k`` for a real constant ``k``: value ``x ** k``, gradient ``k x ** (k - 1) ∇x``.
+
+        A fractional ``k`` is kept as it is (``x ** 0.5`` is ``sqrt``); the value and gradient
+        enclosures are those of :meth:`Interval.__pow__`.
+
+        Parameters
+        ----------
+        k : float
+            The exponent, a real constant (dimensionless).
+
+        Returns
+        -------
+        Dual
+            Value and gradient enclosures of ``x ** k``.
+
+        Raises
+        ------
+        TypeError
+            ``k`` is not a real scalar (a variable exponent is not supported).
+        """
+        try:
+            k = float(k)
+        except (TypeError, ValueError):
+            raise TypeError(f"Dual ** k needs a real constant k, got {k!r}") from None
         return Dual(self.val ** k, self._g(k * self.val ** (k - 1))) if k else Dual.of(1.0, self)
 
     def __array_ufunc__(self, ufunc, method, *inputs, **kw):

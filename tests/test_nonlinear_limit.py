@@ -51,6 +51,43 @@ def test_interval_and_gradient_enclosures_contain_sampled_values(f, lo, hi):
     assert np.allclose(D.val.lo, I.lo) and np.allclose(D.val.hi, I.hi)
 
 
+def _powers(a, b, c):
+    return a ** 0.5 + b ** -1.5 * np.power(c, 2.5) + (a * c) ** -2 + np.power(b, 3)
+
+
+def test_fractional_and_negative_powers_are_enclosed_not_truncated():
+    """``x ** 0.5`` is ``sqrt`` (a fractional exponent used to be cut to an integer: ``x ** 0.5``
+    gave [1, 1] with a zero gradient, a wrong "proof"); negative and fractional exponents
+    enclose sampled values and central-difference gradients; below 0 a fractional power has no
+    bound (the whole line), as ``sqrt`` of a negative."""
+    rng = np.random.default_rng(3)
+    lo, hi = np.array([0.2, 0.5, 0.1]), np.array([3.0, 2.0, 1.5])
+    edges = rng.uniform(lo, hi, size=(100, 2, 3))
+    blo, bhi = edges.min(1), edges.max(1)
+    I = _powers(*[Interval(blo[:, j], bhi[:, j]) for j in range(3)])
+    D = _powers(*Dual.variables(blo, bhi))
+    np.testing.assert_allclose(D.val.lo, I.lo, rtol=1e-12)
+    for _ in range(20):
+        x = rng.uniform(blo, bhi)
+        y = _powers(*x.T)
+        assert np.all((I.lo <= y) & (y <= I.hi))
+        for j in range(3):
+            e = np.zeros(3)
+            e[j] = 1e-7
+            g = (_powers(*(x + e).T) - _powers(*(x - e).T)) / 2e-7
+            tol = 1e-5 * (np.abs(g) + 1)
+            assert np.all((D.grad.lo[:, j] - tol <= g) & (g <= D.grad.hi[:, j] + tol))
+    half = Interval(np.array([0.25]), np.array([4.0])) ** 0.5
+    assert half.lo[0] == pytest.approx(0.5, rel=1e-15) and half.hi[0] == pytest.approx(2.0, rel=1e-15)
+    assert half.lo[0] <= 0.5 <= 2.0 <= half.hi[0]
+    d = Dual.variables(np.array([[4.0]]), np.array([[4.0]]))[0] ** 0.5
+    assert d.val.lo[0] == pytest.approx(2.0) and d.grad.lo[0, 0] == pytest.approx(0.25)
+    neg = Interval(np.array([-1.0]), np.array([4.0])) ** 0.5
+    assert neg.lo[0] == -np.inf and neg.hi[0] == np.inf
+    with pytest.raises(TypeError, match="real constant"):
+        Interval(np.array([1.0]), np.array([2.0])) ** np.array([1.0, 2.0])
+
+
 def test_clutch_worst_case_is_monotone_and_attained_at_a_vertex():
     """The Chase clutch's first-order worst-case optimum: proven monotone on its box, exact worst case
     1.2103 × the limit at a vertex (the 1.187 of 10⁵ uniform samples is below it), none of 2·10⁵
