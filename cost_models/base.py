@@ -19,7 +19,38 @@ from evotol.errors import ValidationError
 
 
 class CostModel:
-    """Base class: subclasses define ``name``, ``param_names`` and ``_f(x)``, ``_df(x)`` in shop units."""
+    """Base class: subclasses define ``name``, ``param_names`` and ``_f(x)``, ``_df(x)`` in shop units.
+
+    Every model evaluates its textbook formula ``f(x)`` at ``x = t / scale``: ``t`` is the
+    tolerance in SI units (m or rad), ``scale`` the SI size of the shop unit its coefficients are
+    quoted for. Costs are in the cost units of the coefficients (e.g. relative cost).
+
+    Parameters
+    ----------
+    *params : float
+        The coefficients in the order of ``param_names`` (shop units, i.e. for ``x = t / scale``).
+        Give them positionally or by keyword (``**kw``), not both.
+    scale : float, default 1.0
+        SI size (m or rad) of the tolerance unit the coefficients refer to, e.g. ``1e-5`` m for
+        Yao et al. (2013); 1.0 means the coefficients are for SI tolerances.
+    t_min : float, optional
+        Smallest tolerance the model is used at (SI). When ``t_min`` or ``t_max`` is given, the
+        construction checks the model on ``[t_min, t_max]`` with :meth:`validate_range` (a
+        missing ``t_min`` then means 0); when neither is given, no range is checked.
+    t_max : float, optional
+        Largest tolerance the model is used at (SI); missing while ``t_min`` is given means
+        ``100 * scale``.
+    **kw : float
+        The coefficients by name (every name of ``param_names``, no other), instead of ``*params``.
+
+    Raises
+    ------
+    ValidationError
+        Coefficients given both positionally and by keyword, an unknown or missing name, the
+        wrong number of them, a coefficient that is not a finite real number, ``scale`` not a
+        positive finite number, a parameter check of the subclass failing, or the cost being
+        negative or increasing in ``t`` on ``[t_min, t_max]``.
+    """
 
     name: ClassVar[str] = "cost"
     param_names: ClassVar[tuple[str, ...]] = ()
@@ -68,7 +99,18 @@ class CostModel:
 
     @classmethod
     def example(cls) -> "CostModel":
-        """A representative instance (``example_params``, ``scale = 1e-5`` m, used on 0.5-8 x scale)."""
+        """A representative instance (``example_params``, ``scale = 1e-5`` m, used on 0.5-8 x scale).
+
+        Returns
+        -------
+        CostModel
+            An instance of the class built from ``example_params`` with ``scale = 1e-5``.
+
+        Raises
+        ------
+        NotImplementedError
+            The class sets no ``example_params``.
+        """
         if cls.example_params is None:
             raise NotImplementedError(f"{cls.__name__} sets no example_params (needed by the conformance test)")
         return cls(*cls.example_params, scale=1e-5)
@@ -90,30 +132,107 @@ class CostModel:
     # --- public API --------------------------------------------------------------------------
     @property
     def params(self) -> dict[str, float]:
+        """The coefficients by name, ``{name: value}`` (shop units, for ``x = t / scale``)."""
         return dict(zip(self.param_names, self.p.tolist()))
 
     def cost(self, t) -> np.ndarray:
-        """Cost of tolerance ``t`` (SI), vectorised."""
+        """Cost of tolerance ``t`` (SI), vectorised.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) in SI units (m or rad), any shape.
+
+        Returns
+        -------
+        ndarray
+            The cost (cost units), same shape as ``t``.
+        """
         return self._f(np.asarray(t, dtype=float) / self.scale)
 
     def dcost(self, t) -> np.ndarray:
-        """d cost / d t (per SI unit), vectorised."""
+        """d cost / d t (per SI unit), vectorised.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) in SI units (m or rad), any shape.
+
+        Returns
+        -------
+        ndarray
+            The derivative of the cost with respect to ``t`` (cost units per m or per rad), same
+            shape as ``t``.
+        """
         return self._df(np.asarray(t, dtype=float) / self.scale) / self.scale
 
     def d2cost(self, t) -> np.ndarray:
-        """d² cost / d t² (per SI unit²), vectorised."""
+        """d² cost / d t² (per SI unit²), vectorised.
+
+        Finite differences of ``dcost`` unless the model gives the second derivative in closed form.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) in SI units (m or rad), any shape.
+
+        Returns
+        -------
+        ndarray
+            The second derivative of the cost with respect to ``t`` (cost units per m² or per
+            rad²), same shape as ``t``.
+        """
         return self._d2f(np.asarray(t, dtype=float) / self.scale) / self.scale ** 2
 
     __call__ = cost
 
     def is_convex(self, t_min: float, t_max: float, n: int = 257) -> bool:
-        """Whether the cost is convex on [t_min, t_max] (checked on a log-spaced grid)."""
+        """Whether the cost is convex on [t_min, t_max] (checked on a log-spaced grid).
+
+        The grid joins ``n`` log-spaced and ``n`` linearly spaced tolerances; ``t = 0`` is
+        excluded (``t_min = 0`` starts the grid at ``1e-6 * t_max``). Small negative second
+        derivatives (relative ``1e-9``) count as convex.
+
+        Parameters
+        ----------
+        t_min : float
+            Smallest tolerance (SI: m or rad).
+        t_max : float
+            Largest tolerance (SI).
+        n : int, default 257
+            Number of points of each of the two grids.
+
+        Returns
+        -------
+        bool
+            True when ``d2cost`` is non-negative on the grid.
+        """
         t = _range_grid(t_min, t_max, n)
         d2 = self.d2cost(t)
         return bool(np.all(d2 >= -1e-9 * np.max(np.abs(d2)) - 1e-300))
 
     def validate_range(self, t_min: float, t_max: float | None, n: int = 257) -> None:
-        """Reject parameters that make the cost negative or increasing in t on [t_min, t_max] (SI)."""
+        """Reject parameters that make the cost negative or increasing in t on [t_min, t_max] (SI).
+
+        Checked on ``n`` log-spaced plus ``n`` linearly spaced tolerances (``t = 0`` excluded), or
+        at ``t_max`` alone when ``t_min == t_max``.
+
+        Parameters
+        ----------
+        t_min : float
+            Smallest tolerance (SI: m or rad), >= 0.
+        t_max : float or None
+            Largest tolerance (SI); None means ``100 * scale``.
+        n : int, default 257
+            Number of points of each of the two grids.
+
+        Raises
+        ------
+        ValidationError
+            The range is not finite with ``0 <= t_min <= t_max``, the cost is negative or not
+            finite somewhere on it, or ``dcost`` is positive somewhere (the message names the
+            model, its parameters and the first tolerance where it fails).
+        """
         if t_max is None:
             t_max = 100 * self.scale
         if not (np.isfinite(t_min) and np.isfinite(t_max) and 0 <= t_min <= t_max):
@@ -137,6 +256,13 @@ class CostModel:
         return f"{type(self).__name__}({ps}, scale={self.scale:g})"
 
     def to_dict(self) -> dict:
+        """The model as a study-file table, which :func:`cost_models.registry.from_dict` rebuilds.
+
+        Returns
+        -------
+        dict
+            ``{"model": name, <coefficient>: value, ..., "scale": scale}`` (``scale`` in SI).
+        """
         return {"model": self.name, **self.params, "scale": self.scale}
 
 

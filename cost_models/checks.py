@@ -33,13 +33,54 @@ def _grid(t_min: float, t_max: float, n: int = 50) -> np.ndarray:
 
 
 def check_named(model: CostModel, t_min: float, t_max: float) -> dict:
-    """The model has a name (study files and reports refer to it by name)."""
+    """The model has a name (study files and reports refer to it by name).
+
+    Parameters
+    ----------
+    model : CostModel
+        The model checked.
+    t_min : float
+        Smallest tolerance of the range (SI: m or rad); unused here (every check takes the range).
+    t_max : float
+        Largest tolerance of the range (SI); unused here.
+
+    Returns
+    -------
+    dict
+        Empty (nothing measured).
+
+    Raises
+    ------
+    CheckFailed
+        The model has no (or an empty) ``name``.
+    """
     require(getattr(model, "name", ""), f"{type(model).__name__}: cost model has no name")
     return {}
 
 
 def check_vectorised(model: CostModel, t_min: float, t_max: float) -> dict:
-    """``cost`` and ``dcost`` keep the shape of ``t`` and agree with element-wise calls."""
+    """``cost`` and ``dcost`` keep the shape of ``t`` and agree with element-wise calls.
+
+    Parameters
+    ----------
+    model : CostModel
+        The model checked.
+    t_min : float
+        Smallest tolerance of the range (SI: m or rad).
+    t_max : float
+        Largest tolerance of the range (SI).
+
+    Returns
+    -------
+    dict
+        Empty (nothing measured).
+
+    Raises
+    ------
+    CheckFailed
+        A shape is not kept (1-D and 2-D grids on the range) or a scalar call differs from the
+        vectorised one.
+    """
     t = _grid(t_min, t_max)
     c = model.cost(t)
     require(c.shape == t.shape, f"{model.name}: cost(t) shape {c.shape} != {t.shape}")
@@ -55,7 +96,29 @@ def check_vectorised(model: CostModel, t_min: float, t_max: float) -> dict:
 
 def check_positive_and_monotone(model: CostModel, t_min: float, t_max: float) -> dict:
     """On the range the cost is finite, non-negative and non-increasing in t (a looser tolerance
-    never costs more), measured on the cost values themselves, not only on ``dcost``."""
+    never costs more), measured on the cost values themselves, not only on ``dcost``.
+
+    Parameters
+    ----------
+    model : CostModel
+        The model checked.
+    t_min : float
+        Smallest tolerance of the range (SI: m or rad).
+    t_max : float
+        Largest tolerance of the range (SI).
+
+    Returns
+    -------
+    dict
+        Empty (nothing measured).
+
+    Raises
+    ------
+    CheckFailed
+        The cost is negative, not finite, or rises between two of 200 log-spaced tolerances.
+    ValidationError
+        :meth:`~cost_models.base.CostModel.validate_range` rejects the range.
+    """
     model.validate_range(t_min, t_max)        # raises ValidationError naming where it fails
     t = np.geomspace(t_min, t_max, 200)
     c = model.cost(t)
@@ -69,7 +132,29 @@ def check_positive_and_monotone(model: CostModel, t_min: float, t_max: float) ->
 
 
 def check_derivative_matches_fd(model: CostModel, t_min: float, t_max: float, rtol: float = 1e-5) -> dict:
-    """``dcost`` matches central finite differences of ``cost`` (relative to its largest value)."""
+    """``dcost`` matches central finite differences of ``cost`` (relative to its largest value).
+
+    Parameters
+    ----------
+    model : CostModel
+        The model checked.
+    t_min : float
+        Smallest tolerance of the range (SI: m or rad).
+    t_max : float
+        Largest tolerance of the range (SI).
+    rtol : float, default 1e-5
+        Largest allowed difference, relative to the largest ``|dcost|`` on the range.
+
+    Returns
+    -------
+    dict
+        ``{"dcost_fd_relative_error": err}``, the measured relative difference.
+
+    Raises
+    ------
+    CheckFailed
+        The relative difference exceeds ``rtol``.
+    """
     t = _grid(t_min, t_max)[1:-1]
     h = 1e-6 * (t_max - t_min)
     fd = (model.cost(t + h) - model.cost(t - h)) / (2 * h)
@@ -81,7 +166,28 @@ def check_derivative_matches_fd(model: CostModel, t_min: float, t_max: float, rt
 
 def check_convexity_flag(model: CostModel, t_min: float, t_max: float) -> dict:
     """A model that declares ``convex = True`` is convex on the range: second differences of the
-    cost values (independent of ``d2cost``) are >= 0, and ``is_convex`` agrees."""
+    cost values (independent of ``d2cost``) are >= 0, and ``is_convex`` agrees.
+
+    Parameters
+    ----------
+    model : CostModel
+        The model checked.
+    t_min : float
+        Smallest tolerance of the range (SI: m or rad).
+    t_max : float
+        Largest tolerance of the range (SI).
+
+    Returns
+    -------
+    dict
+        ``{"convex": bool}``, the model's flag (a model declaring ``convex = False`` is not checked).
+
+    Raises
+    ------
+    CheckFailed
+        The model declares ``convex = True`` but its chord slopes on 400 log-spaced tolerances
+        decrease, or :meth:`~cost_models.base.CostModel.is_convex` says False on the range.
+    """
     if not model.convex:
         return {"convex": False}
     t = np.geomspace(t_min, t_max, 400)
@@ -97,7 +203,27 @@ def check_convexity_flag(model: CostModel, t_min: float, t_max: float) -> dict:
 
 
 def check_dict_round_trip(model: CostModel, t_min: float, t_max: float) -> dict:
-    """``cost_models.from_dict(model.to_dict())`` rebuilds the same model (same class, same costs)."""
+    """``cost_models.from_dict(model.to_dict())`` rebuilds the same model (same class, same costs).
+
+    Parameters
+    ----------
+    model : CostModel
+        The model checked.
+    t_min : float
+        Smallest tolerance of the range (SI: m or rad).
+    t_max : float
+        Largest tolerance of the range (SI).
+
+    Returns
+    -------
+    dict
+        Empty (nothing measured).
+
+    Raises
+    ------
+    CheckFailed
+        The rebuilt model has another class, other costs on the range, or another ``to_dict()``.
+    """
     d = model.to_dict()
     back = from_dict(dict(d))
     require(type(back) is type(model), f"{model.name}: from_dict(to_dict()) gives {type(back).__name__}")
@@ -108,7 +234,27 @@ def check_dict_round_trip(model: CostModel, t_min: float, t_max: float) -> dict:
 
 
 def check_pickle_round_trip(model: CostModel, t_min: float, t_max: float) -> dict:
-    """The model pickles (cost models travel to worker processes and Dask) and costs the same after."""
+    """The model pickles (cost models travel to worker processes and Dask) and costs the same after.
+
+    Parameters
+    ----------
+    model : CostModel
+        The model checked.
+    t_min : float
+        Smallest tolerance of the range (SI: m or rad).
+    t_max : float
+        Largest tolerance of the range (SI).
+
+    Returns
+    -------
+    dict
+        Empty (nothing measured).
+
+    Raises
+    ------
+    CheckFailed
+        The unpickled model's costs differ on the range.
+    """
     back = pickle.loads(pickle.dumps(model))
     t = _grid(t_min, t_max)
     require(np.array_equal(back.cost(t), model.cost(t)),
@@ -129,6 +275,25 @@ def cost_model_checks(model: CostModel, t_min: float | None = None, t_max: float
 
     The dict round trip applies to models a study file can name (registered or entry points,
     and sums of them); a :class:`~cost_models.user.CallableCost` wraps Python code and has none.
+
+    Parameters
+    ----------
+    model : CostModel
+        The model to check.
+    t_min : float, optional
+        Smallest tolerance of the range (SI: m or rad); default ``0.05 * model.scale``.
+    t_max : float, optional
+        Largest tolerance of the range (SI); default ``10 * model.scale``.
+    rtol : float, default 1e-5
+        Tolerance of :func:`check_derivative_matches_fd`.
+
+    Yields
+    ------
+    name : str
+        The check's function name (e.g. ``"check_vectorised"``).
+    check : callable
+        The check bound to the model and range, called with no argument; returns a dict of
+        measurements, raises :class:`~evotol.errors.CheckFailed` when it fails.
     """
     t_max = float(t_max) if t_max is not None else 10 * model.scale
     t_min = float(t_min) if t_min is not None else 0.05 * model.scale
@@ -146,5 +311,27 @@ def check_cost_model(model: CostModel, t_min: float | None = None, t_max: float 
                      rtol: float = 1e-5) -> dict:
     """Run every check of :func:`cost_model_checks`; returns the merged measurements.
 
-    Raises one :class:`evotol.errors.CheckFailed` listing every failed check (not only the first)."""
+    Raises one :class:`evotol.errors.CheckFailed` listing every failed check (not only the first).
+
+    Parameters
+    ----------
+    model : CostModel
+        The model to check.
+    t_min : float, optional
+        Smallest tolerance of the range (SI: m or rad); default ``0.05 * model.scale``.
+    t_max : float, optional
+        Largest tolerance of the range (SI); default ``10 * model.scale``.
+    rtol : float, default 1e-5
+        Tolerance of :func:`check_derivative_matches_fd`.
+
+    Returns
+    -------
+    dict
+        The merged measurements of the checks (e.g. ``dcost_fd_relative_error``, ``convex``).
+
+    Raises
+    ------
+    CheckFailed
+        One or more checks failed (every failure listed).
+    """
     return run_checks(str(getattr(model, 'name', model)), cost_model_checks(model, t_min, t_max, rtol))

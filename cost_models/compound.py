@@ -11,6 +11,31 @@ class LinearExponentialCost(CostModel):
     """``c = a0 + a1·x + a2·exp(-a3·x)``: the linear + exponential hybrid of Dong, Hu & Xue (1994).
 
     Monotone decreasing needs a1 <= 0 or a range check (``t_max``); convex for a2, a3 >= 0.
+
+    Parameters
+    ----------
+    *params : float
+        ``a0, a1, a2, a3``: ``a0`` the fixed cost (cost units), ``a1`` the linear slope (cost
+        units per shop unit), ``a2 >= 0`` the exponential amplitude (cost units), ``a3 >= 0`` its
+        decay rate (per shop unit).
+    scale : float, default 1.0
+        SI size (m or rad) of the tolerance unit the coefficients refer to, e.g. ``1e-5`` m.
+    t_min : float, optional
+        Smallest tolerance used (SI). When ``t_min`` or ``t_max`` is given, the construction
+        checks that the cost is non-negative and non-increasing on the range
+        (:meth:`~cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
+    t_max : float, optional
+        Largest tolerance used (SI); missing while ``t_min`` is given means ``100 * scale``.
+    **kw : float
+        The coefficients by name (``a0=..., a1=..., a2=..., a3=...``) instead of positionally,
+        not both.
+
+    Raises
+    ------
+    ValidationError
+        ``a2 < 0`` or ``a3 < 0``; ``a1 > 0`` while ``a2·a3 = 0``. Coefficients missing, unknown or
+        not finite, ``scale`` not positive, or the cost negative or increasing on a given range
+        (as for every :class:`~cost_models.base.CostModel`).
     """
 
     name = "linear_exponential"
@@ -39,7 +64,20 @@ class LinearExponentialCost(CostModel):
 
 
 class SumCost(CostModel):
-    """Sum of cost models (e.g. machining + inspection), each with its own scale."""
+    """Sum of cost models (e.g. machining + inspection), each with its own scale.
+
+    Convex (``convex``) when every term is. Its own ``scale`` is 1.0 (each term keeps its own).
+
+    Parameters
+    ----------
+    *models : CostModel
+        The terms, one or more, each a function of the same SI tolerance ``t``.
+
+    Raises
+    ------
+    ValidationError
+        No model given, or a term that is not a :class:`~cost_models.base.CostModel`.
+    """
 
     name = "sum"
     param_names = ()
@@ -54,20 +92,64 @@ class SumCost(CostModel):
 
     @property
     def params(self):
+        """The terms' coefficients, keyed ``"<index>.<model name>.<coefficient>"``."""
         return {f"{i}.{m.name}.{k}": v for i, m in enumerate(self.models) for k, v in m.params.items()}
 
     def cost(self, t):
+        """Sum of the terms' costs at tolerance ``t`` (SI), vectorised.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) in SI units (m or rad), any shape.
+
+        Returns
+        -------
+        ndarray
+            The total cost (cost units), same shape as ``t``.
+        """
         return sum(m.cost(t) for m in self.models)
 
     def dcost(self, t):
+        """Sum of the terms' d cost / d t (per SI unit), vectorised.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) in SI units (m or rad), any shape.
+
+        Returns
+        -------
+        ndarray
+            The derivative (cost units per m or per rad), same shape as ``t``.
+        """
         return sum(m.dcost(t) for m in self.models)
 
     def d2cost(self, t):
+        """Sum of the terms' d² cost / d t² (per SI unit²), vectorised.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) in SI units (m or rad), any shape.
+
+        Returns
+        -------
+        ndarray
+            The second derivative (cost units per m² or per rad²), same shape as ``t``.
+        """
         return sum(m.d2cost(t) for m in self.models)
 
     __call__ = cost
 
     def to_dict(self):
+        """The sum as a study-file table, which :func:`cost_models.registry.from_dict` rebuilds.
+
+        Returns
+        -------
+        dict
+            ``{"model": "sum", "terms": [<each term's to_dict()>, ...]}``.
+        """
         return {"model": "sum", "terms": [m.to_dict() for m in self.models]}
 
     def __repr__(self):

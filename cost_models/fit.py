@@ -12,6 +12,22 @@ from evotol.errors import ValidationError
 
 @dataclass(frozen=True)
 class FitResult:
+    """A fitted cost model and the quality of its fit to the data (returned by :func:`fit`).
+
+    Parameters
+    ----------
+    model : CostModel
+        The fitted model (coefficients in units of its ``scale``).
+    r2 : float
+        Coefficient of determination of the costs (dimensionless; 1.0 when the data costs are
+        all equal).
+    rmse : float
+        Root-mean-square residual (cost units).
+    max_relative_error : float
+        Largest ``|residual| / |cost|`` over the data points (dimensionless; 0.01 is 1 %).
+    residuals : (n,) ndarray
+        Fitted cost minus data cost at each data point, in the data's order (cost units).
+    """
     model: CostModel
     r2: float              #: coefficient of determination
     rmse: float            #: root-mean-square residual (cost units)
@@ -19,6 +35,13 @@ class FitResult:
     residuals: np.ndarray
 
     def summary(self) -> str:
+        """One line: the model, R², RMSE and the largest relative error (in %).
+
+        Returns
+        -------
+        str
+            The summary line.
+        """
         return (f"{self.model!r}: R² = {self.r2:.5f}, RMSE = {self.rmse:.4g}, "
                 f"max relative error = {100 * self.max_relative_error:.2f} %")
 
@@ -54,6 +77,36 @@ def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
     ``tolerances`` are in SI units, coefficients are fitted in units of ``scale``. Returns the
     fitted model with R², RMSE and the largest relative error. Raises ValidationError when the
     data are unusable or the best fit violates the model's validity (negative/increasing cost).
+
+    Parameters
+    ----------
+    model : type or str
+        The :class:`~cost_models.base.CostModel` subclass, or its registered name or alias
+        (e.g. ``"exponential"``, ``"index"``).
+    tolerances : array_like
+        Tolerances of the data points (SI: m or rad), positive; flattened.
+    costs : array_like
+        Costs at those tolerances (cost units), non-negative, as many as ``tolerances``.
+    scale : float, default 1.0
+        SI size of the tolerance unit the fitted coefficients refer to (e.g. ``1e-5`` m).
+    p0 : array_like, optional
+        Initial coefficients (in units of ``scale``, order of ``param_names``); by default a
+        guess by log-linear or linear least squares on the data for the built-in models, ones
+        for other models.
+
+    Returns
+    -------
+    FitResult
+        The fitted model, checked on the data's tolerance range, with R², RMSE, largest
+        relative error and the residuals.
+
+    Raises
+    ------
+    ValidationError
+        ``model`` is an unknown name; ``costs`` and ``tolerances`` differ in size; fewer than
+        (number of coefficients + 1) data points; tolerances not positive and finite; costs
+        negative or not finite; or the fitted coefficients are invalid for the model or make
+        the cost negative or increasing between the smallest and largest tolerance.
     """
     from cost_models.registry import get
 

@@ -22,6 +22,34 @@ class _Polynomial(CostModel):
 
 
 class Polynomial3Cost(_Polynomial):
+    """Cubic cost ``c = a0 + a1·x + a2·x² + a3·x³``, ``x = t / scale`` (Dong, Hu & Xue 1994).
+
+    Positive and decreasing only on a range: give ``t_min``/``t_max``. Not flagged convex
+    (``convex = False``); :meth:`~cost_models.base.CostModel.is_convex` checks a range.
+
+    Parameters
+    ----------
+    *params : float
+        ``a0, a1, a2, a3``: ``a_k`` the coefficient of ``x^k`` (cost units per shop unit to the
+        power k).
+    scale : float, default 1.0
+        SI size (m or rad) of the tolerance unit the coefficients refer to, e.g. ``1e-5`` m.
+    t_min : float, optional
+        Smallest tolerance used (SI). When ``t_min`` or ``t_max`` is given, the construction
+        checks that the cost is non-negative and non-increasing on the range
+        (:meth:`~cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
+    t_max : float, optional
+        Largest tolerance used (SI); missing while ``t_min`` is given means ``100 * scale``.
+    **kw : float
+        The coefficients by name (``a0=..., a1=..., a2=..., a3=...``) instead of positionally, not both.
+
+    Raises
+    ------
+    ValidationError
+        Coefficients missing, unknown or not finite, ``scale`` not positive, or the cost negative
+        or increasing on a given range (as for every :class:`~cost_models.base.CostModel`).
+    """
+
     name = "polynomial3"
     param_names = ("a0", "a1", "a2", "a3")
     example_params = (10.0, -3.0, 0.3, -0.01)
@@ -29,6 +57,34 @@ class Polynomial3Cost(_Polynomial):
 
 
 class Polynomial4Cost(_Polynomial):
+    """Quartic cost ``c = a0 + a1·x + a2·x² + a3·x³ + a4·x⁴``, ``x = t / scale`` (Dong, Hu & Xue 1994).
+
+    Positive and decreasing only on a range: give ``t_min``/``t_max``. Not flagged convex
+    (``convex = False``); :meth:`~cost_models.base.CostModel.is_convex` checks a range.
+
+    Parameters
+    ----------
+    *params : float
+        ``a0, ..., a4``: ``a_k`` the coefficient of ``x^k`` (cost units per shop unit to the
+        power k).
+    scale : float, default 1.0
+        SI size (m or rad) of the tolerance unit the coefficients refer to, e.g. ``1e-5`` m.
+    t_min : float, optional
+        Smallest tolerance used (SI). When ``t_min`` or ``t_max`` is given, the construction
+        checks that the cost is non-negative and non-increasing on the range
+        (:meth:`~cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
+    t_max : float, optional
+        Largest tolerance used (SI); missing while ``t_min`` is given means ``100 * scale``.
+    **kw : float
+        The coefficients by name (``a0=..., a1=..., ..., a4=...``) instead of positionally, not both.
+
+    Raises
+    ------
+    ValidationError
+        Coefficients missing, unknown or not finite, ``scale`` not positive, or the cost negative
+        or increasing on a given range (as for every :class:`~cost_models.base.CostModel`).
+    """
+
     name = "polynomial4"
     param_names = ("a0", "a1", "a2", "a3", "a4")
     example_params = (12.0, -4.0, 0.6, -0.04, 0.0009)

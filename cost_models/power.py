@@ -6,6 +6,34 @@ from evotol.errors import ValidationError
 
 
 class PowerCost(CostModel):
+    """Reciprocal power cost ``c = a0·x^(-a1)``, ``x = t / scale`` (Speckhart; Chase & Greenwood).
+
+    Positive, decreasing and convex for every valid parameter set.
+
+    Parameters
+    ----------
+    *params : float
+        ``a0, a1``: ``a0 > 0`` the cost at ``x = 1`` (cost units), ``a1 > 0`` the exponent
+        (dimensionless).
+    scale : float, default 1.0
+        SI size (m or rad) of the tolerance unit the coefficients refer to, e.g. ``1e-5`` m.
+    t_min : float, optional
+        Smallest tolerance used (SI). When ``t_min`` or ``t_max`` is given, the construction
+        checks that the cost is non-negative and non-increasing on the range
+        (:meth:`~cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
+    t_max : float, optional
+        Largest tolerance used (SI); missing while ``t_min`` is given means ``100 * scale``.
+    **kw : float
+        The coefficients by name (``a0=..., a1=...``) instead of positionally, not both.
+
+    Raises
+    ------
+    ValidationError
+        ``a0 <= 0`` or ``a1 <= 0``. Coefficients missing, unknown or not finite, ``scale`` not
+        positive, or the cost negative or increasing on a given range (as for every
+        :class:`~cost_models.base.CostModel`).
+    """
+
     name = "power"
     param_names = ("a0", "a1")
     example_params = (2.0, 1.3)

@@ -4,6 +4,35 @@ from evotol.errors import ValidationError
 
 
 class ReciprocalSquareCost(CostModel):
+    """Reciprocal-square ("negative square") cost ``c = a0 + a1/x²``, ``x = t / scale`` (Spotts 1973).
+
+    Decreasing and convex for ``a1 > 0``; positive where ``a0 + a1/x² >= 0`` (checked on a given
+    range).
+
+    Parameters
+    ----------
+    *params : float
+        ``a0, a1``: ``a0`` the fixed cost (cost units), ``a1 > 0`` the coefficient (cost units
+        times squared shop units).
+    scale : float, default 1.0
+        SI size (m or rad) of the tolerance unit the coefficients refer to, e.g. ``1e-5`` m.
+    t_min : float, optional
+        Smallest tolerance used (SI). When ``t_min`` or ``t_max`` is given, the construction
+        checks that the cost is non-negative and non-increasing on the range
+        (:meth:`~cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
+    t_max : float, optional
+        Largest tolerance used (SI); missing while ``t_min`` is given means ``100 * scale``.
+    **kw : float
+        The coefficients by name (``a0=..., a1=...``) instead of positionally, not both.
+
+    Raises
+    ------
+    ValidationError
+        ``a1 <= 0``. Coefficients missing, unknown or not finite, ``scale`` not positive, or the
+        cost negative or increasing on a given range (as for every
+        :class:`~cost_models.base.CostModel`).
+    """
+
     name = "reciprocal_square"
     param_names = ("a0", "a1")
     example_params = (0.1, 2.0)

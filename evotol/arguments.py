@@ -19,7 +19,23 @@ SCHEDULER_TIMEOUT_S = 3.0
 
 
 def seed(text: str) -> int:
-    """``--seed``: a non-negative integer (NumPy and pymoo seeds must be >= 0)."""
+    """``--seed``: a non-negative integer (NumPy and pymoo seeds must be >= 0).
+
+    Parameters
+    ----------
+    text : str
+        The option's value, in base 10.
+
+    Returns
+    -------
+    int
+        The seed, ``0 <= seed < 2**32``.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        ``text`` is not a base-10 integer, or is negative or ``>= 2**32``.
+    """
     try:
         value = int(text, 10)
     except (TypeError, ValueError):
@@ -30,7 +46,23 @@ def seed(text: str) -> int:
 
 
 def jobs(text: str) -> int:
-    """``--jobs``: a positive integer (studies at the same time)."""
+    """``--jobs``: a positive integer (studies at the same time).
+
+    Parameters
+    ----------
+    text : str
+        The option's value, in base 10.
+
+    Returns
+    -------
+    int
+        The number of studies run at the same time, ``>= 1``.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        ``text`` is not a base-10 integer, or is below 1.
+    """
     try:
         value = int(text, 10)
     except (TypeError, ValueError):
@@ -41,7 +73,23 @@ def jobs(text: str) -> int:
 
 
 def parse_scheduler(address: str) -> tuple[str, str, int]:
-    """Split ``tcp://host:port`` into (scheme, host, port); ValidationError on any other form."""
+    """Split ``tcp://host:port`` into (scheme, host, port); ValidationError on any other form.
+
+    Parameters
+    ----------
+    address : str
+        The scheduler address (surrounding blanks ignored); scheme one of ``SCHEDULER_SCHEMES``.
+
+    Returns
+    -------
+    tuple of (str, str, int)
+        The scheme, the host name and the port.
+
+    Raises
+    ------
+    ValidationError
+        ``address`` is not a string, has another scheme, no host, no valid port, or a path.
+    """
     expected = f"an address of the form tcp://host:port (schemes: {', '.join(SCHEDULER_SCHEMES)})"
     parts = urlsplit(address.strip()) if isinstance(address, str) else None
     if parts is None or parts.scheme not in SCHEDULER_SCHEMES or not parts.hostname:
@@ -56,7 +104,23 @@ def parse_scheduler(address: str) -> tuple[str, str, int]:
 
 
 def scheduler(text: str) -> str:
-    """argparse type of ``--scheduler``: checks the address form only (no network)."""
+    """argparse type of ``--scheduler``: checks the address form only (no network).
+
+    Parameters
+    ----------
+    text : str
+        The option's value.
+
+    Returns
+    -------
+    str
+        ``text`` unchanged.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        ``text`` is not of the form :func:`parse_scheduler` accepts (its message).
+    """
     try:
         parse_scheduler(text)
     except ValidationError as exc:
@@ -83,6 +147,20 @@ def check_scheduler_answers(address: str, timeout: float = SCHEDULER_TIMEOUT_S) 
 
     A bare TCP connect is not enough (a firewall or proxy may accept any connection), so this
     performs Dask's handshake and asks the server's identity, then disconnects.
+
+    Parameters
+    ----------
+    address : str
+        The scheduler address, ``tcp://host:port``.
+    timeout : float, optional
+        Seconds to wait for the connection and the answer (default ``SCHEDULER_TIMEOUT_S`` = 3 s).
+
+    Raises
+    ------
+    ValidationError
+        The address has a bad form (:func:`parse_scheduler`); ``distributed`` is not installed;
+        nothing answering Dask's protocol is there within ``timeout``; or the server that answers
+        is not a Dask scheduler (e.g. a worker).
     """
     import asyncio
 

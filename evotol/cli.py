@@ -40,6 +40,30 @@ def _write_index(out: Path, summaries: dict[str, dict]) -> Path:
 
 
 def cmd_reproduce(args) -> int:
+    """Run ``evotol reproduce NAME|all``: seed studies into HTML + JSON, and an ``index.html``.
+
+    One study at a time in this process, or with ``--jobs`` > 1 and several studies, each in its
+    own process (:func:`evotol.jobs.reproduce_concurrently`). A study that fails with an
+    evotol error (or, among several, with a bug) is reported and the others still run; Ctrl-C
+    stops after the current study.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``study`` (a name or ``"all"``), ``out`` (folder), ``seed``, ``quick`` (bool),
+        ``scheduler`` (Dask address or None) and ``jobs`` (None: up to 2, by the cores).
+
+    Returns
+    -------
+    int
+        Exit status: 0, 1 when a study failed, 130 after Ctrl-C.
+
+    Raises
+    ------
+    ValidationError
+        An unknown study name, an output folder that cannot be written, or a scheduler that does
+        not answer (:func:`evotol.arguments.check_scheduler_answers`).
+    """
     from evotol import studies
     from evotol.arguments import check_scheduler_answers
     from evotol.interrupt import CtrlC
@@ -153,6 +177,27 @@ def _print_time_table(seconds: dict, failed: list, total: float, jobs: int = 1) 
 
 
 def cmd_run(args) -> int:
+    """Run ``evotol run STUDY.toml`` (:func:`evotol.studyfile.run_study_file`) and print a line
+    per method; plausibility warnings are printed one line each.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``study_file``, ``out`` (folder, or None: beside the study file), ``seed`` (or None: the
+        file's), ``keep_going`` and ``force`` (bool).
+
+    Returns
+    -------
+    int
+        Exit status: 0, or 130 when Ctrl-C stopped a method (0 with ``--keep-going``).
+
+    Raises
+    ------
+    ValidationError
+        An unreadable study file, an unwritable output folder, or a bad study file.
+    evotol.errors.InfeasibleError
+        No allowed design meets the requirement.
+    """
     from evotol.outputs import input_file, output_folder
     from evotol.plausibility import reported
     from evotol.studyfile import run_study_file
@@ -195,6 +240,18 @@ def _print_results(summary: dict) -> None:
 
 
 def cmd_list(args) -> int:
+    """Run ``evotol list``: the seed studies, each with its expected full-run time and title.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        No options are read.
+
+    Returns
+    -------
+    int
+        Exit status 0.
+    """
     from evotol import studies
 
     from evotol.progress import expected
@@ -206,6 +263,15 @@ def cmd_list(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``evotol`` argument parser: ``reproduce``, ``run``, ``list`` and the sub-commands of
+    every :mod:`evotol.commands` module with a ``register`` function.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser; each sub-command sets ``func``, the function to call with the parsed
+        arguments.
+    """
     from evotol import arguments
 
     p = argparse.ArgumentParser(prog="evotol", description="Cost-optimal tolerance allocation for robots.")
@@ -247,6 +313,27 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """The ``evotol`` command: parse the arguments and run the sub-command.
+
+    Sets ``OPENBLAS_NUM_THREADS``, ``OMP_NUM_THREADS`` and ``MKL_NUM_THREADS`` to 1 unless
+    already set. An evotol error is printed as one line ``evotol: error: ...``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: the sub-command's; 2 after an evotol error; 130 after Ctrl-C; 0 on a
+        broken pipe.
+
+    Raises
+    ------
+    SystemExit
+        From argparse: status 2 on a usage error, 0 after ``--help``.
+    """
     import os
 
     # small matrices: one BLAS thread per process (see evotol.threads); override with the usual variables

@@ -36,10 +36,15 @@ class DisplayUnits:
 
     Parameters
     ----------
-    length : str
-        ``"µm"`` or ``"mm"``.
-    angle : str
-        ``"arcsec"``, ``"mrad"`` or ``"deg"``.
+    length : str, optional
+        ``"µm"`` or ``"mm"`` (default µm; aliases such as ``"um"`` accepted).
+    angle : str, optional
+        ``"arcsec"``, ``"mrad"`` or ``"deg"`` (default arcsec; ``"°"`` accepted).
+
+    Raises
+    ------
+    ValidationError
+        An unknown length or angle unit.
     """
 
     length: str = DEFAULT_LENGTH
@@ -55,11 +60,33 @@ class DisplayUnits:
 
     def unit_for(self, si_unit: str) -> str:
         """Display unit of a value in ``si_unit`` (``"m"`` -> length, ``"rad"`` -> angle; anything
-        else is shown as it is)."""
+        else is shown as it is).
+
+        Parameters
+        ----------
+        si_unit : str
+            The value's SI unit: ``"m"``, ``"rad"`` or another (e.g. ``"1"``).
+
+        Returns
+        -------
+        str
+            The display unit: :attr:`length`, :attr:`angle`, or ``si_unit`` itself.
+        """
         return self.length if si_unit == "m" else self.angle if si_unit == "rad" else si_unit
 
     def factor(self, si_unit: str) -> float:
-        """Multiply an SI value by this to get it in :meth:`unit_for` ``(si_unit)``."""
+        """Multiply an SI value by this to get it in :meth:`unit_for` ``(si_unit)``.
+
+        Parameters
+        ----------
+        si_unit : str
+            The value's SI unit (``"m"``, ``"rad"``; any other gives 1).
+
+        Returns
+        -------
+        float
+            Display units per SI unit, e.g. 1e6 for m -> µm, about 206265 for rad -> arcsec.
+        """
         if si_unit == "m":
             return 1.0 / LENGTHS[self.length]
         if si_unit == "rad":
@@ -67,22 +94,72 @@ class DisplayUnits:
         return 1.0
 
     def convert(self, value, si_unit: str):
-        """``value`` (SI, scalar or array) in the display unit of ``si_unit``."""
+        """``value`` (SI, scalar or array) in the display unit of ``si_unit``.
+
+        Parameters
+        ----------
+        value : float or ndarray
+            The value(s) in SI (m or rad).
+        si_unit : str
+            Their SI unit.
+
+        Returns
+        -------
+        float or ndarray
+            ``value`` times :meth:`factor`, same shape, in :meth:`unit_for` ``(si_unit)``.
+        """
         return value * self.factor(si_unit)
 
     def format(self, value, si_unit: str, digits: int = 4, sign: str = "") -> str:
-        """``value`` (SI) as text in its display unit, e.g. ``"44.67 µm"``; ``sign="±"`` prefixes it."""
+        """``value`` (SI) as text in its display unit, e.g. ``"44.67 µm"``; ``sign="±"`` prefixes it.
+
+        Parameters
+        ----------
+        value : float or None
+            The value in SI (m or rad).
+        si_unit : str
+            Its SI unit.
+        digits : int, optional
+            Significant digits (default 4; see :func:`number`).
+        sign : str, optional
+            Text put before the number (default none).
+
+        Returns
+        -------
+        str
+            The number and its display unit; ``"–"`` for None or NaN.
+        """
         if value is None or (isinstance(value, float) and math.isnan(value)):
             return "–"
         return f"{sign}{number(self.convert(float(value), si_unit), digits)} {self.unit_for(si_unit)}"
 
     def to_dict(self) -> dict:
-        """JSON form (``{"length": "µm", "angle": "arcsec"}``), the ``display_units`` of a result file."""
+        """JSON form (``{"length": "µm", "angle": "arcsec"}``), the ``display_units`` of a result file.
+
+        Returns
+        -------
+        dict
+            ``{"length": str, "angle": str}``.
+        """
         return {"length": self.length, "angle": self.angle}
 
 
 def number(v: float, digits: int = 4) -> str:
-    """A number with ``digits`` significant digits, in plain decimals from 1e-4 to 1e6."""
+    """A number with ``digits`` significant digits, in plain decimals from 1e-4 to 1e6.
+
+    Parameters
+    ----------
+    v : float
+        The number (any unit; it is only formatted).
+    digits : int, optional
+        Significant digits (default 4).
+
+    Returns
+    -------
+    str
+        Plain decimals when ``1e-4 <= |v| < 1e6``, scientific notation otherwise; ``"0"``,
+        ``"inf"``, ``"nan"`` as ``format(v, "g")`` gives them.
+    """
     if v == 0 or not math.isfinite(v):
         return f"{v:g}"
     if 1e-4 <= abs(v) < 1e6:
@@ -103,6 +180,7 @@ def default_units(display_units: Sequence[str] = ()) -> DisplayUnits:
     Returns
     -------
     DisplayUnits
+        The first length unit and the first angle unit among them; µm and arcsec otherwise.
     """
     shown = [_canonical(u) for u in display_units]
     return DisplayUnits(next((u for u in shown if u in LENGTHS), DEFAULT_LENGTH),
@@ -125,6 +203,7 @@ def parse_units(spec, default: DisplayUnits | None = None, field: str = "report.
     Returns
     -------
     DisplayUnits
+        The units chosen, the others from ``default``.
 
     Raises
     ------
@@ -162,25 +241,77 @@ def parse_units(spec, default: DisplayUnits | None = None, field: str = "report.
 
 
 def problem_units(problem) -> DisplayUnits:
-    """Default display units of a :class:`evotol.problem.ToleranceProblem` (from its robot's workspace)."""
+    """Default display units of a :class:`evotol.problem.ToleranceProblem` (from its robot's workspace).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem; its ``robot.workspace.display_units`` are read.
+
+    Returns
+    -------
+    DisplayUnits
+        As :func:`default_units` gives them.
+    """
     return default_units(problem.robot.workspace.display_units)
 
 
 def error_unit(problem, component: str) -> str:
     """SI unit of the ``component`` error (``"m"``, ``"rad"``; ``"1"`` for an assembly function,
-    whose errors are fractions of the limits, ``robots.assembly``)."""
+    whose errors are fractions of the limits, ``robots.assembly``).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        The problem; an assembly function has the workspace units ``("1",)``.
+    component : str
+        ``"position"`` or ``"orientation"``.
+
+    Returns
+    -------
+    str
+        ``"m"`` for position, ``"rad"`` otherwise, ``"1"`` for an assembly function.
+    """
     if tuple(problem.robot.workspace.units) == ("1",):
         return "1"
     return "m" if component == "position" else "rad"
 
 
 def pose_coordinates(workspace, pose) -> list[tuple[str, float, str]]:
-    """``(name, value, unit)`` of a workspace pose in the workspace's display units."""
+    """``(name, value, unit)`` of a workspace pose in the workspace's display units.
+
+    Parameters
+    ----------
+    workspace : robots.base.Workspace
+        Its ``names``, ``display_scale`` and ``display_units``.
+    pose : array_like, shape (dim,)
+        The pose in SI (m, rad).
+
+    Returns
+    -------
+    list of (str, float, str)
+        Per coordinate: its name, its value times the display scale, its display unit.
+    """
     return [(n, float(v) * k, u) for n, v, k, u in zip(workspace.names, pose, workspace.display_scale,
                                                       workspace.display_units)]
 
 
 def pose_text(workspace, pose, digits: int = 4) -> str:
-    """A workspace pose as text in its display units, e.g. ``"x = 12.5 mm, y = -3 mm"``."""
+    """A workspace pose as text in its display units, e.g. ``"x = 12.5 mm, y = -3 mm"``.
+
+    Parameters
+    ----------
+    workspace : robots.base.Workspace
+        Its coordinate names and display units.
+    pose : array_like, shape (dim,)
+        The pose in SI (m, rad).
+    digits : int, optional
+        Significant digits (default 4).
+
+    Returns
+    -------
+    str
+        ``name = value unit`` per coordinate, comma-separated (no unit for ``"1"`` or ``""``).
+    """
     return ", ".join(f"{n} = {number(v, digits)}" + (f" {u}" if u not in ("1", "") else "")
                      for n, v, u in pose_coordinates(workspace, pose))

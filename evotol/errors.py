@@ -7,7 +7,21 @@ class EvotolError(Exception):
 
 
 class ValidationError(EvotolError, ValueError):
-    """Bad input: names the field, the value, and what was expected."""
+    """Bad input: names the field, the value, and what was expected.
+
+    The message reads ``field = value!r: expected ...``. Also a ``ValueError``.
+
+    Parameters
+    ----------
+    field : str
+        The name of the offending input (a keyword, a study-file key such as ``"[cost] model"``).
+        Kept as ``self.field``.
+    value : object
+        The value given; a 0-d numpy value is shown (and kept as ``self.value``) as its Python
+        scalar.
+    expected : str
+        What was expected, in words. Kept as ``self.expected``.
+    """
 
     def __init__(self, field: str, value, expected: str):
         if hasattr(value, "item") and getattr(value, "ndim", 1) == 0:
@@ -20,6 +34,14 @@ class KinematicsError(EvotolError):
     """A pose is out of reach of the mechanism or at a singularity.
 
     ``poses`` holds the offending pose(s), in the units of the robot's workspace coordinates.
+
+    Parameters
+    ----------
+    message : str
+        The error message.
+    poses : array_like, optional
+        The offending pose(s), ``(d,)`` or ``(n, d)`` in the robot's workspace coordinates (m, rad);
+        kept as ``self.poses`` (default None: not known).
     """
 
     def __init__(self, message: str, poses=None):
@@ -33,7 +55,21 @@ class ConvergenceError(EvotolError):
 
 class InfeasibleError(EvotolError):
     """No allowed design meets the requirement: names the requirement, the smallest achievable
-    error (every tolerance at its lower bound) and the pose where it occurs."""
+    error (every tolerance at its lower bound) and the pose where it occurs.
+
+    Parameters
+    ----------
+    requirement : str
+        The requirement that cannot be met, in words (e.g. ``"worst_case position error <= 0.0001 m"``).
+        Kept as ``self.requirement``.
+    smallest_error : float
+        The error with every free tolerance at its lower bound, in the requirement's units (m or
+        rad, as the error component). Kept as ``self.smallest_error``.
+    pose : array_like
+        The pose where that error occurs, in workspace coordinates (m, rad). Kept as ``self.pose``.
+    detail : str, optional
+        Extra explanation appended to the message in parentheses (default: none).
+    """
 
     def __init__(self, requirement: str, smallest_error: float, pose, detail: str = ""):
         self.requirement, self.smallest_error, self.pose = requirement, smallest_error, pose

@@ -39,7 +39,19 @@ N_TIGHTNESS = 24
 def cost_model_spec(model: CostModel | None) -> dict | None:
     """``{"model": kind, "params": [...], "scale": s}`` of a model the page can evaluate (a sum:
     ``{"model": "sum", "terms": [...]}``); ``{"model": "none"}`` for a fixed source; None when
-    the page cannot express it (a subclass or plugin may change the formula)."""
+    the page cannot express it (a subclass or plugin may change the formula).
+
+    Parameters
+    ----------
+    model : CostModel or None
+        A source's cost model; None for a fixed source (no cost).
+
+    Returns
+    -------
+    dict or None
+        The model's kind (one of ``JS_COST_MODELS``), coefficients ``params`` and ``scale`` (the
+        model's unit of t, m or rad), or a sum's ``terms``; None when the page cannot evaluate it.
+    """
     if model is None:
         return {"model": "none"}
     if type(model) is SumCost:
@@ -51,7 +63,19 @@ def cost_model_spec(model: CostModel | None) -> dict | None:
 
 
 def omitted_reason(problem: ToleranceProblem) -> str | None:
-    """Why the page has no explorer for ``problem`` (None when it has one)."""
+    """Why the page has no explorer for ``problem`` (None when it has one).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The study's problem.
+
+    Returns
+    -------
+    str or None
+        The reason, one sentence: joint clearances, a cost model the page cannot evaluate, or
+        more than ``MAX_NUMBERS`` sensitivity numbers; None when the explorer can be drawn.
+    """
     if problem.clearances is not None:
         return ("the problem allocates joint clearances, whose certified worst case the page cannot recompute "
                 "(it is not a fixed linear map of the tolerances)")
@@ -67,7 +91,24 @@ def omitted_reason(problem: ToleranceProblem) -> str | None:
 
 
 def sampled_worst_case(problem: ToleranceProblem, T: np.ndarray, component: str) -> np.ndarray:
-    """The page's worst case: max over the direction sample of h(u), (n_designs, n_poses) (m or rad)."""
+    """The page's worst case: max over the direction sample of h(u), (n_designs, n_poses) (m or rad).
+
+    A lower bound of the certified worst case (module docstring).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        Its support coefficients (:meth:`ToleranceProblem.coefficients`) are used.
+    T : ndarray, shape (n_designs, n_sources) or (n_sources,)
+        Tolerance vectors, SI (m or rad), in source order.
+    component : {"position", "orientation"}
+        The error component.
+
+    Returns
+    -------
+    ndarray, shape (n_designs, n_poses)
+        The sampled worst-case error at every pose, m (position) or rad (orientation).
+    """
     coeff = problem.coefficients(component)
     c = coeff[0]
     grid = np.einsum("pdj,nj->npd", c, np.atleast_2d(T))
@@ -82,10 +123,12 @@ def sample_tightness(problem: ToleranceProblem, designs: dict[str, np.ndarray], 
     Parameters
     ----------
     problem : ToleranceProblem
+        The study's problem.
     designs : dict
         Method name -> tolerance vector (SI, source order); :data:`N_TIGHTNESS` random vectors
         (log-uniform within the bounds, ``seed``) are added.
     seed : int
+        Seed of those random vectors (default 0).
 
     Returns
     -------
@@ -122,6 +165,7 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
     Parameters
     ----------
     problem : ToleranceProblem
+        The study's problem.
     designs : dict
         Method name -> tolerance vector (SI, source order): the explorer's starting points.
     seed : int

@@ -23,7 +23,19 @@ WHAT = {"study": "a study file ([robot], [requirement], [methods], ...)",
 
 
 def kind_of(spec: Mapping) -> str | None:
-    """``"study"``, ``"mechanism"`` or None (both kinds' keys, or neither)."""
+    """``"study"``, ``"mechanism"`` or None (both kinds' keys, or neither).
+
+    Parameters
+    ----------
+    spec : mapping
+        The parsed TOML document; anything else is of no kind.
+
+    Returns
+    -------
+    {"study", "mechanism"} or None
+        ``"study"`` when only study-file top-level keys occur, ``"mechanism"`` when only
+        mechanism-description keys occur, None otherwise (or when ``spec`` is not a mapping).
+    """
     if not isinstance(spec, Mapping):
         return None
     keys = set(spec)

@@ -36,8 +36,22 @@ _KEYWORDS = {"and", "or", "not", "in", "True", "False", "None", "inf", "nan"}
 class Preset:
     """A named filter: per-column closed bounds ``{column: (low or None, high or None)}``.
 
-    figure: where it comes from (``"Deng 2012 Fig. VII.4"``). Bounds map one-to-one to the axis
-    constraint ranges of the parallel-coordinate report.
+    Bounds map one-to-one to the axis constraint ranges of the parallel-coordinate report.
+
+    Parameters
+    ----------
+    name : str
+        The preset's name (``evotol filter --preset NAME``).
+    bounds : mapping of str to (float or None, float or None)
+        Column -> closed ``(low, high)`` bounds in the column's unit (its suffix, e.g. mm for
+        ``p_max_mm``); None leaves that side open.
+    figure : str, optional
+        Where it comes from (``"Deng 2012 Fig. VII.4"``).
+
+    Raises
+    ------
+    ValidationError
+        No bound at all, a bound that is not a pair with at least one number, or ``low > high``.
     """
 
     name: str
@@ -55,6 +69,7 @@ class Preset:
 
     @property
     def query(self) -> str:
+        """The bounds as a pandas query, ``col >= low and col <= high and ...`` (str)."""
         parts = []
         for col, (lo, hi) in self.bounds.items():
             if lo is not None:
@@ -64,13 +79,40 @@ class Preset:
         return " and ".join(parts)
 
     def to_dict(self) -> dict:
+        """JSON form of the preset.
+
+        Returns
+        -------
+        dict
+            ``name``, ``query`` (:attr:`query`), ``figure`` and ``bounds`` (column ->
+            ``[low, high]``, None for an open side).
+        """
         return {"name": self.name, "query": self.query, "figure": self.figure,
                 "bounds": {k: list(v) for k, v in self.bounds.items()}}
 
 
 @dataclass
 class FilterResult:
-    """Entries kept by a query, with the range each input keeps."""
+    """Entries kept by a query, with the range each input keeps.
+
+    Parameters
+    ----------
+    query : str
+        The query as given (a preset's query for a preset).
+    resolved_query : str
+        The query run, bare names replaced by their unit-suffixed columns (:func:`resolve_query`).
+    count : int
+        Entries kept.
+    total : int
+        Entries filtered.
+    kept : pandas.DataFrame
+        The kept entries.
+    ranges : dict, optional
+        Input column -> ``{"min", "max"}`` over the kept entries (the column's unit; None when
+        nothing is kept), plus ``levels`` (list of float) for a levelled factor.
+    objective_ranges : dict, optional
+        Objective column -> ``{"min", "max"}`` over the kept entries.
+    """
 
     query: str
     resolved_query: str
@@ -81,12 +123,25 @@ class FilterResult:
     objective_ranges: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        """JSON-ready summary: ``{query, count, total, ranges, objective_ranges}``."""
+        """JSON-ready summary: ``{query, count, total, ranges, objective_ranges}``.
+
+        Returns
+        -------
+        dict
+            ``query`` (the resolved query), ``count``, ``total``, ``ranges``, ``objective_ranges``.
+        """
         return {"query": self.resolved_query, "count": self.count, "total": self.total,
                 "ranges": self.ranges, "objective_ranges": self.objective_ranges}
 
     def describe(self) -> str:
-        """Plain-text summary, one line per input (what ``evotol filter`` prints)."""
+        """Plain-text summary, one line per input (what ``evotol filter`` prints).
+
+        Returns
+        -------
+        str
+            The query and the count kept, then each input's levels or ``[min, max]`` and each
+            objective's ``[min, max]``; one line only when nothing is kept.
+        """
         lines = [f"{self.resolved_query}: {self.count} of {self.total} entries kept"]
         if not self.count:
             return lines[0] + " (no entry satisfies the query; no ranges to report)"
@@ -106,6 +161,25 @@ def resolve_query(query: str, columns: Sequence[str]) -> str:
 
     A name that is a column stays; a name with exactly one ``name_<unit>`` column
     (:data:`UNIT_SUFFIXES`) is replaced; an ambiguous or unknown name raises ValidationError.
+    Python keywords, ``@variables`` and names inside quoted strings are left alone.
+
+    Parameters
+    ----------
+    query : str
+        A pandas ``DataFrame.query`` expression.
+    columns : sequence of str
+        The columns of the entries.
+
+    Returns
+    -------
+    str
+        The query with bare names replaced.
+
+    Raises
+    ------
+    ValidationError
+        ``query`` is not a non-empty string, or a name is neither a column nor the stem of exactly
+        one unit-suffixed column.
     """
     if not isinstance(query, str) or not query.strip():
         raise ValidationError("query", query, "a non-empty pandas query such as 'p_max_mm <= 0.05'")
@@ -143,11 +217,26 @@ def _ranges(df: pd.DataFrame, columns: Sequence[str], factors: Mapping[str, Fact
 class DesignStudy:
     """An evaluated design study: entries, inputs, objectives and named presets.
 
-    entries: DataFrame from :func:`evotol.doe.evaluate` (or loaded with :meth:`load`).
-    inputs: factor columns (default: the factors stored in the entries' metadata, else every
-        numeric column that is not an objective or bookkeeping column).
-    objectives: objective columns (default: from the metadata, else ``--objectives``-less CSVs
-        use the numeric columns that are not inputs).
+    Parameters
+    ----------
+    entries : pandas.DataFrame
+        DataFrame from :func:`evotol.doe.evaluate` (or loaded with :meth:`load`).
+    inputs : sequence of str, optional
+        Factor columns (default: the factors stored in the entries' metadata, else every numeric
+        column that is not an objective or bookkeeping column).
+    objectives : sequence of str, optional
+        Objective columns (default: from the metadata, else ``--objectives``-less CSVs use the
+        numeric columns that are not inputs).
+    presets : sequence of Preset, optional
+        Named filters, kept by name in ``self.presets``.
+    name : str, optional
+        The study's name (shown in its repr).
+
+    Raises
+    ------
+    ValidationError
+        ``entries`` is not a DataFrame; neither the metadata nor the arguments give inputs or
+        objectives; or a named column is not in ``entries``.
     """
 
     def __init__(self, entries: pd.DataFrame, *, inputs: Sequence[str] | None = None,
@@ -179,9 +268,40 @@ class DesignStudy:
     # --- construction ---------------------------------------------------------------------
     @classmethod
     def load(cls, path: str | Path, **kw) -> "DesignStudy":
+        """A study of the entries saved in a file (:func:`evotol.doe.load_entries`).
+
+        Parameters
+        ----------
+        path : str or Path
+            A ``.parquet`` file (with the factor metadata) or a ``.csv`` file.
+        **kw
+            ``inputs``, ``objectives``, ``presets``, ``name`` of :class:`DesignStudy`.
+
+        Returns
+        -------
+        DesignStudy
+            The study of the loaded entries.
+
+        Raises
+        ------
+        ValidationError
+            The file does not exist or is neither Parquet nor CSV, or as :class:`DesignStudy`.
+        """
         return cls(load_entries(path), **kw)
 
     def save(self, stem: str | Path) -> dict[str, Path]:
+        """Write the entries to ``stem.parquet`` (with the factor metadata) and ``stem.csv``.
+
+        Parameters
+        ----------
+        stem : str or Path
+            The files' path without suffix (its folder is created).
+
+        Returns
+        -------
+        dict of str to Path
+            ``{"parquet": path, "csv": path}``.
+        """
         return save_entries(self.entries, stem)
 
     def __len__(self) -> int:
@@ -193,7 +313,27 @@ class DesignStudy:
 
     # --- filtering ------------------------------------------------------------------------
     def filter(self, query: str | Preset, among: pd.DataFrame | None = None) -> FilterResult:
-        """Entries satisfying ``query`` (a pandas query string, a Preset, or a preset's name)."""
+        """Entries satisfying ``query`` (a pandas query string, a Preset, or a preset's name).
+
+        Parameters
+        ----------
+        query : str or Preset
+            A pandas query (bare objective names resolved by :func:`resolve_query`, values in
+            the columns' units), a preset, or the name of one of the study's presets.
+        among : pandas.DataFrame, optional
+            Entries to filter instead of the study's (e.g. a previous result's ``kept``).
+
+        Returns
+        -------
+        FilterResult
+            The kept entries and the ranges of the inputs and objectives over them.
+
+        Raises
+        ------
+        ValidationError
+            An unknown or ambiguous name (:func:`resolve_query`), or a query pandas cannot
+            evaluate.
+        """
         df = self.entries if among is None else among
         if isinstance(query, str) and query in self.presets:
             query = self.presets[query]
@@ -208,13 +348,59 @@ class DesignStudy:
                             objective_ranges=_ranges(kept, self.objectives, {}))
 
     def preset_results(self, among: pd.DataFrame | None = None) -> dict[str, FilterResult]:
+        """Every preset's :meth:`filter` result.
+
+        Parameters
+        ----------
+        among : pandas.DataFrame, optional
+            Entries to filter instead of the study's.
+
+        Returns
+        -------
+        dict of str to FilterResult
+            Preset name -> its result.
+        """
         return {name: self.filter(p, among) for name, p in self.presets.items()}
 
     def objective_ranges(self, among: pd.DataFrame | None = None) -> dict:
+        """Range of every objective over the entries (unfiltered).
+
+        Parameters
+        ----------
+        among : pandas.DataFrame, optional
+            Entries to use instead of the study's.
+
+        Returns
+        -------
+        dict
+            Objective column -> ``{"min", "max"}`` of its finite values (the column's unit; None
+            when there are none).
+        """
         df = self.entries if among is None else among
         return _ranges(df, self.objectives, {})
 
     def main_effects(self, objective: str, log: bool = True, among: pd.DataFrame | None = None) -> pd.DataFrame:
+        """Main effect of each of the study's inputs on ``objective`` (:func:`main_effects`).
+
+        Parameters
+        ----------
+        objective : str
+            An objective column.
+        log : bool, optional
+            Average log10 of the objective (default True: effects in decades).
+        among : pandas.DataFrame, optional
+            Entries to use instead of the study's.
+
+        Returns
+        -------
+        pandas.DataFrame
+            As :func:`main_effects`.
+
+        Raises
+        ------
+        ValidationError
+            ``objective`` is not a column.
+        """
         return main_effects(self.entries if among is None else among, self.inputs, objective, log=log)
 
 
@@ -225,7 +411,32 @@ def main_effects(df: pd.DataFrame, inputs: Sequence[str], objective: str, log: b
     when ``log``), ``low_level_mean`` and ``high_level_mean`` (at the input's smallest and
     largest level) and ``levels``. On a full factorial this is the classical main effect (every
     level is averaged over all combinations of the other inputs); on samples it is an estimate.
-    Continuous inputs are binned into quartiles.
+    Continuous inputs (more than 12 distinct values) are binned into quartiles, each level
+    then the bin's median. With ``log``, entries whose objective is not positive are left out.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The evaluated entries.
+    inputs : sequence of str
+        Input (factor) columns.
+    objective : str
+        The objective column.
+    log : bool, optional
+        Average log10 of the objective (default True); otherwise the objective itself, in its
+        column's unit.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per input, largest ``effect`` first: ``input``, ``effect`` (decades with
+        ``log``, else the objective's unit), ``low_level_mean``, ``high_level_mean``, ``levels``
+        (the inputs' unit) and ``level_means``.
+
+    Raises
+    ------
+    ValidationError
+        ``objective`` is not a column of ``df``.
     """
     if objective not in df:
         raise ValidationError("objective", objective, f"a column of {list(df.columns)}")

@@ -37,7 +37,24 @@ class JobsOutcome:
     """What :func:`reproduce_concurrently` did: summaries (read back from the JSON files) of the
     studies that completed, wall seconds per study, the failed ones, and on Ctrl-C the studies
     that were running (``stopped``, with ``written`` those that still wrote their files) and those
-    never started (``not_run``)."""
+    never started (``not_run``).
+
+    Parameters
+    ----------
+    summaries : dict, optional
+        Study name -> its JSON summary (``OUT/NAME.json``, read back), for the studies that
+        completed (and those stopped that still wrote their files).
+    seconds : dict, optional
+        Study name -> wall time of its process, s.
+    failed : list of str, optional
+        Studies whose process ended with a non-zero exit code.
+    stopped : list of str, optional
+        Studies running when Ctrl-C came.
+    written : list of str, optional
+        Those of ``stopped`` that still wrote their JSON file.
+    not_run : list of str, optional
+        Studies not started when Ctrl-C came.
+    """
 
     summaries: dict = field(default_factory=dict)
     seconds: dict = field(default_factory=dict)
@@ -48,11 +65,23 @@ class JobsOutcome:
 
     @property
     def interrupted(self) -> bool:
+        """True when Ctrl-C stopped the run (a study was stopped or never started)."""
         return bool(self.stopped or self.not_run)
 
 
 def longest_first(names) -> list[str]:
-    """Names ordered by expected full-run time, longest first (unknown ones last, order kept)."""
+    """Names ordered by expected full-run time, longest first (unknown ones last, order kept).
+
+    Parameters
+    ----------
+    names : iterable of str
+        Seed study names.
+
+    Returns
+    -------
+    list of str
+        The names sorted by :data:`evotol.progress.EXPECTED_SECONDS`, descending (stable sort).
+    """
     return sorted(names, key=lambda n: -EXPECTED_SECONDS.get(n, 0))
 
 
@@ -80,7 +109,38 @@ def _written_since(out: Path, name: str, t0: float) -> bool:
 def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: bool = False,
                            scheduler: str | None = None, titles: dict | None = None,
                            poll: float = 0.2, report_every: float = 30.0, stream=None) -> JobsOutcome:
-    """Run the studies ``names`` into ``out``, ``jobs`` at a time (see the module docstring)."""
+    """Run the studies ``names`` into ``out``, ``jobs`` at a time (see the module docstring).
+
+    Parameters
+    ----------
+    names : iterable of str
+        Seed study names, each run as ``evotol reproduce NAME`` (longest expected first).
+    out : str or Path
+        The output folder: each study's ``NAME.json`` and ``NAME.html``, and ``logs/NAME.log``
+        (created).
+    jobs : int, optional
+        Studies running at the same time (default 2).
+    seed : int, optional
+        ``--seed`` of every study (default 0).
+    quick : bool, optional
+        Pass ``--quick`` (shorter runs).
+    scheduler : str, optional
+        Dask scheduler address passed as ``--scheduler`` (default: none, local processes).
+    titles : dict, optional
+        Study name -> title shown in its "started" line.
+    poll : float, optional
+        Seconds between checks of the running processes (default 0.2).
+    report_every : float, optional
+        Seconds between "running: ..." lines (default 30).
+    stream : file, optional
+        Where the progress lines go (default ``sys.stdout``; a failure's log tail goes to stderr).
+
+    Returns
+    -------
+    JobsOutcome
+        What ran, how long, what failed and, on Ctrl-C, what was stopped or not run. Ctrl-C does
+        not propagate: each running study gets one SIGINT and is waited for (killed after 60 s).
+    """
     stream = stream or sys.stdout
     out = Path(out)
     logs = out / "logs"

@@ -15,19 +15,58 @@ from evotol.errors import ValidationError
 
 
 def nearest(name: str, valid: Iterable[str]) -> str | None:
-    """The valid name closest to ``name`` (difflib ratio >= 0.6), or None."""
+    """The valid name closest to ``name`` (difflib ratio >= 0.6), or None.
+
+    Parameters
+    ----------
+    name : str
+        The name given (a possible typo).
+    valid : iterable of str
+        The names accepted.
+
+    Returns
+    -------
+    str or None
+        The closest valid name, or None when none is close enough.
+    """
     close = difflib.get_close_matches(str(name), list(valid), n=1, cutoff=0.6)
     return close[0] if close else None
 
 
 def did_you_mean(name: str, valid: Iterable[str]) -> str:
-    """``" (did you mean 'x'?)"`` when a valid name is close to ``name``, else ``""``."""
+    """``" (did you mean 'x'?)"`` when a valid name is close to ``name``, else ``""``.
+
+    Parameters
+    ----------
+    name : str
+        The name given.
+    valid : iterable of str
+        The names accepted.
+
+    Returns
+    -------
+    str
+        The suffix to append to an error message (with its leading space), or ``""``.
+    """
     guess = nearest(name, valid)
     return f" (did you mean {guess!r}?)" if guess else ""
 
 
 def unknown_key_message(key: str, valid: Iterable[str]) -> str:
-    """'a key among [...]' with '(did you mean ...?)' when one is close."""
+    """'a key among [...]' with '(did you mean ...?)' when one is close.
+
+    Parameters
+    ----------
+    key : str
+        The unknown key.
+    valid : iterable of str
+        The keys accepted (listed sorted).
+
+    Returns
+    -------
+    str
+        The ``expected`` text of a :class:`~evotol.errors.ValidationError`.
+    """
     valid = sorted(valid)
     return f"a key among {valid}" + did_you_mean(key, valid)
 
@@ -59,7 +98,21 @@ def check_table_keys(table, valid: Iterable[str], where: str) -> None:
 
 
 def keywords_of(func: Callable, exclude: Iterable[str] = ()) -> list[str] | None:
-    """Keyword names ``func`` accepts (None if it takes ``**kwargs``: anything goes)."""
+    """Keyword names ``func`` accepts (None if it takes ``**kwargs``: anything goes).
+
+    Parameters
+    ----------
+    func : callable
+        The function whose signature is read.
+    exclude : iterable of str, optional
+        Names to leave out (those evotol sets itself).
+
+    Returns
+    -------
+    list of str or None
+        The positional-or-keyword and keyword-only parameter names in signature order, less
+        ``exclude``; None when ``func`` takes ``**kwargs``.
+    """
     params = inspect.signature(func).parameters.values()
     if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params):
         return None
@@ -72,7 +125,25 @@ def keywords_of(func: Callable, exclude: Iterable[str] = ()) -> list[str] | None
 def check_keywords(func: Callable, kwargs: Mapping, field: str, exclude: Iterable[str] = ()) -> None:
     """ValidationError ``field.KEY = value: expected a key among [...] (did you mean 'x'?)`` for the
     first key of ``kwargs`` that ``func`` does not accept (or that is in ``exclude``, i.e. set by
-    evotol itself); also when ``kwargs`` is not a table."""
+    evotol itself); also when ``kwargs`` is not a table.
+
+    Parameters
+    ----------
+    func : callable
+        The function the keywords will be passed to; nothing is checked when it takes ``**kwargs``.
+    kwargs : mapping
+        The keyword arguments from the study file.
+    field : str
+        The study-file table they come from, named in the error (e.g. ``"methods.ga"``).
+    exclude : iterable of str, optional
+        Keywords evotol sets itself, not accepted from the file.
+
+    Raises
+    ------
+    ValidationError
+        ``kwargs`` is not a mapping, or one of its keys is not a keyword of ``func`` (or is
+        excluded).
+    """
     if not isinstance(kwargs, Mapping):
         raise ValidationError(field, kwargs, "a table of keyword arguments, e.g. { pop_size = 60 }")
     valid = keywords_of(func, exclude)

@@ -30,6 +30,26 @@ def output_folder(path, field: str = "--out", shown=None) -> Path:
 
     Raises ValidationError naming ``field`` and ``path`` when ``path`` is an existing file, cannot
     be created, or is not writable. Returns the folder as a Path.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder (``~`` expanded).
+    field : str, optional
+        The option named in the error (default ``"--out"``).
+    shown : str, optional
+        The path as named in the error (default: ``str(path)``).
+
+    Returns
+    -------
+    Path
+        The folder, existing and writable.
+
+    Raises
+    ------
+    ValidationError
+        ``path`` is empty, an existing file, cannot be created, or a test file cannot be written
+        in it.
     """
     shown = str(path) if shown is None else shown
     if not str(path).strip():
@@ -48,7 +68,26 @@ def output_folder(path, field: str = "--out", shown=None) -> Path:
 
 def output_file(path, field: str) -> Path:
     """Make sure the file ``path`` can be written: not a folder, its folder exists or can be
-    created and is writable. Creates the folder; does not create the file."""
+    created and is writable. Creates the folder; does not create the file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (``~`` expanded).
+    field : str
+        The option named in the error (e.g. ``"--html"``).
+
+    Returns
+    -------
+    Path
+        The file's path.
+
+    Raises
+    ------
+    ValidationError
+        ``path`` is empty, a folder (or ends with a separator), an existing read-only file, or its
+        folder cannot be created or written (:func:`output_folder`).
+    """
     shown = str(path)
     if not shown.strip():
         raise ValidationError(field, shown, "a file path")
@@ -62,7 +101,27 @@ def output_file(path, field: str) -> Path:
 
 
 def input_file(path, field: str, expected: str = "an existing file") -> Path:
-    """An existing, readable regular file (not a folder)."""
+    """An existing, readable regular file (not a folder).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to read (``~`` expanded).
+    field : str
+        The option or argument named in the error.
+    expected : str, optional
+        What the file should be, in words (default ``"an existing file"``).
+
+    Returns
+    -------
+    Path
+        The file's path.
+
+    Raises
+    ------
+    ValidationError
+        ``path`` does not exist, is a folder, or cannot be read.
+    """
     shown = str(path)
     p = Path(path).expanduser()
     if not p.exists():

@@ -40,7 +40,20 @@ class PlausibilityWarning(UserWarning):
 
 
 def shown(value: float, unit: str) -> str:
-    """``0.05 m`` -> ``'0.05 m (50 mm)'``; ``0.5 rad`` -> ``'0.5 rad (28.6 deg)'``."""
+    """``0.05 m`` -> ``'0.05 m (50 mm)'``; ``0.5 rad`` -> ``'0.5 rad (28.6 deg)'``.
+
+    Parameters
+    ----------
+    value : float
+        The value in ``unit``.
+    unit : str
+        ``"m"``, ``"rad"`` or another unit (then shown without a conversion).
+
+    Returns
+    -------
+    str
+        The value (6 significant digits) with its unit, and in mm or deg for m or rad.
+    """
     if unit == "m":
         return f"{value:.6g} m ({value * 1e3:.6g} mm)"
     if unit == "rad":
@@ -49,7 +62,20 @@ def shown(value: float, unit: str) -> str:
 
 
 def units_hint(value: float, unit: str) -> str:
-    """What the number would be if it was written in mm or deg: ``'if 0.05 was meant in mm, write 5e-05'``."""
+    """What the number would be if it was written in mm or deg: ``'if 0.05 was meant in mm, write 5e-05'``.
+
+    Parameters
+    ----------
+    value : float
+        The number as written in the study file (read as SI).
+    unit : str
+        Its SI unit, ``"m"`` or ``"rad"``.
+
+    Returns
+    -------
+    str
+        The hint, with ``value`` read as mm (times 1e-3) or deg (in rad); ``""`` for another unit.
+    """
     if unit == "m":
         return f"if {value:g} was meant in mm, write {value * 1e-3:.6g}"
     if unit == "rad":
@@ -112,12 +138,16 @@ def result_warnings(problem, result) -> list[str]:
     Parameters
     ----------
     problem : ToleranceProblem
+        The problem ``result`` solves (requirement, bounds, free sources).
     result : AllocationResult
         An allocator's result (tolerances, errors, info).
 
     Returns
     -------
     list of str
+        One line per component whose largest error is at least ``INACTIVE_FACTOR`` times below
+        its requirement while every free tolerance is at its upper bound; empty otherwise, and
+        always for the yield measure or in budget mode.
     """
     out = []
     if problem.requirement.measure == "yield" or "budget" in (result.info or {}):
@@ -139,7 +169,20 @@ def result_warnings(problem, result) -> list[str]:
 
 
 def study_warnings(problem, results) -> list[str]:
-    """Every line of a study, once: the problem's, then each result's ``info["warnings"]``."""
+    """Every line of a study, once: the problem's, then each result's ``info["warnings"]``.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The study's problem (:func:`problem_warnings`).
+    results : iterable of AllocationResult
+        The methods' results; their ``info["warnings"]`` are read.
+
+    Returns
+    -------
+    list of str
+        The distinct lines, in that order.
+    """
     out = problem_warnings(problem)
     for r in results:
         out += [w for w in (r.info or {}).get("warnings", ()) if w not in out]
@@ -150,7 +193,18 @@ def study_warnings(problem, results) -> list[str]:
 def reported(stream=None):
     """Within the block, each :class:`PlausibilityWarning` is printed once as one line
     ``evotol: warning: ...`` on ``stream`` (default stderr) instead of Python's two-line format;
-    other warnings are shown as usual. Yields the list of lines printed."""
+    other warnings are shown as usual. Yields the list of lines printed.
+
+    Parameters
+    ----------
+    stream : file, optional
+        Where the lines go (default: ``sys.stderr``).
+
+    Yields
+    ------
+    list of str
+        The distinct warning lines printed so far; it grows while the block runs.
+    """
     lines = []
     with warnings.catch_warnings():
         warnings.simplefilter("always", PlausibilityWarning)
@@ -168,6 +222,14 @@ def reported(stream=None):
 
 
 def warn(lines, stacklevel: int = 3) -> None:
-    """Issue each line as a :class:`PlausibilityWarning` (Python shows each distinct line once)."""
+    """Issue each line as a :class:`PlausibilityWarning` (Python shows each distinct line once).
+
+    Parameters
+    ----------
+    lines : iterable of str
+        The warning lines (from :func:`problem_warnings` or :func:`result_warnings`).
+    stacklevel : int, optional
+        Passed to :func:`warnings.warn` (default 3: the caller of the function that calls this).
+    """
     for line in lines:
         warnings.warn(line, PlausibilityWarning, stacklevel=stacklevel)

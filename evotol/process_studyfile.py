@@ -45,7 +45,24 @@ from evotol.units import COST, COUNT, RELATIVE, units_block
 PROCESS_KEYS = ("name", "cost", "lower", "upper", "fixed_cost")
 def allocate_process_nonlinear_limit(pp: ProcessProblem, *, max_iter: int = 12, rtol: float = 1e-9):
     """The exact optimum re-linearised until the assembly's nonlinear worst case holds
-    (:func:`evotol.allocators.nonlinear_limit.allocate_nonlinear_limit`; worst-case measure)."""
+    (:func:`evotol.allocators.nonlinear_limit.allocate_nonlinear_limit`; worst-case measure).
+
+    Parameters
+    ----------
+    pp : ProcessProblem
+        The process-selection problem, on an assembly function.
+    max_iter : int, optional
+        Re-linearisations at most (default 12).
+    rtol : float, optional
+        Relative amount (dimensionless) by which the nonlinear worst case may exceed the limit
+        (default 1e-9).
+
+    Returns
+    -------
+    evotol.allocators.nonlinear_limit.NonlinearLimitResult
+        The re-linearised design (``result``), the first-order optimum's nonlinear worst case and
+        the cost difference.
+    """
     return allocate_nonlinear_limit(pp, allocate_process_optimum, max_iter=max_iter, rtol=rtol)
 
 
@@ -61,7 +78,29 @@ def _number(field: str, v, what: str) -> float:
 
 
 def parse_process(field: str, name: str, table) -> Process:
-    """One process from its table (``field`` names it in errors: ``processes.X1.turn``)."""
+    """One process from its table (``field`` names it in errors: ``processes.X1.turn``).
+
+    Parameters
+    ----------
+    field : str
+        The table's place in the study file, named in errors.
+    name : str
+        The process's name.
+    table : mapping
+        Its keys: ``cost`` (a cost-model table), ``lower``, ``upper`` (SI tolerances, m or rad),
+        optional ``fixed_cost`` (cost units, default 0) and ``name``.
+
+    Returns
+    -------
+    evotol.allocators.process.Process
+        The process.
+
+    Raises
+    ------
+    ValidationError
+        An unknown or missing key, a ``cost`` that is not a valid cost-model table, or a bound or
+        fixed cost that is not a number.
+    """
     check_table_keys(table, PROCESS_KEYS, field)
     for k in ("cost", "lower", "upper"):
         if k not in table:
@@ -78,7 +117,26 @@ def parse_process(field: str, name: str, table) -> Process:
 
 
 def parse_processes(table, source_names) -> dict[str, list[Process]]:
-    """``[processes]``: source name -> list of :class:`Process` (both spellings of the module docstring)."""
+    """``[processes]``: source name -> list of :class:`Process` (both spellings of the module docstring).
+
+    Parameters
+    ----------
+    table : mapping
+        The ``[processes]`` table of the study file.
+    source_names : collection of str
+        The sources of the problem (an assembly's ``nominal`` dimensions or the robot's sources).
+
+    Returns
+    -------
+    dict of str to list of Process
+        Source name -> its candidate processes, in file order.
+
+    Raises
+    ------
+    ValidationError
+        ``table`` is not a table, names an unknown source, an array entry has no ``name``, or a
+        process table is bad (:func:`parse_process`).
+    """
     if not isinstance(table, dict):
         raise ValidationError("processes", table, "a table [processes.<dimension>] per source")
     out = {}
@@ -106,6 +164,21 @@ def load_process_problem(spec: dict, load_problem, base_dir=None) -> ProcessProb
     The geometry (robot, poses, requirement) comes from ``load_problem`` (the study-file reader,
     :func:`evotol.studyfile.load_problem`, passed in by its caller) with the processes' ranges as
     bounds and a placeholder cost (never used: every process brings its own cost).
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file, with a ``processes`` table.
+    load_problem : callable
+        ``load_problem(spec, base_dir) -> ToleranceProblem``, the study-file reader of the
+        geometry.
+    base_dir : str or Path, optional
+        Where relative files named in the study file are looked up.
+
+    Returns
+    -------
+    ProcessProblem
+        The problem, with the quality loss when ``quality_loss`` is given.
 
     Raises
     ------
@@ -147,7 +220,33 @@ def _result_dict(pp: ProcessProblem, r) -> dict:
 
 def run_process_study(spec: dict, path: Path, out, seed: int, load_problem) -> dict:
     """Run the methods of a process-selection study file and write ``NAME.json`` / ``NAME.html``
-    (``load_problem``: the study-file reader of the geometry, see :func:`load_process_problem`)."""
+    (``load_problem``: the study-file reader of the geometry, see :func:`load_process_problem`).
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file, with a ``processes`` table.
+    path : Path
+        The study file (its stem is the default name, its folder the base of relative files).
+    out : str or Path
+        The output folder.
+    seed : int
+        Seed of the GA and NSGA-II (unless their tables set one).
+    load_problem : callable
+        The study-file reader of the geometry (:func:`evotol.studyfile.load_problem`).
+
+    Returns
+    -------
+    dict
+        The JSON summary written (SI, cost units, with its ``units`` block), plus the ``html``
+        and ``json`` paths written.
+
+    Raises
+    ------
+    ValidationError
+        An unknown method or keyword in ``[methods]``, or a bad study file
+        (:func:`load_process_problem`).
+    """
     t0 = time.perf_counter()
     name = spec.get("name", path.stem)
     pp = load_process_problem(spec, load_problem, base_dir=path.parent)
@@ -214,7 +313,16 @@ def run_process_study(spec: dict, path: Path, out, seed: int, load_problem) -> d
 
 
 def front_figure(rep: Report, front) -> None:
-    """Add the cost vs. normalised error scatter of a :class:`evotol.pareto.ParetoFront` to a study report."""
+    """Add the cost vs. normalised error scatter of a :class:`evotol.pareto.ParetoFront` to a study report.
+
+    Parameters
+    ----------
+    rep : evotol.reporting.Report
+        The report the figure is added to.
+    front : evotol.pareto.ParetoFront
+        The front: ``cost`` (cost units) against ``error`` (dimensionless, largest error /
+        requirement).
+    """
     import plotly.graph_objects as go
 
     fig = go.Figure(go.Scatter(x=front.error, y=front.cost, mode="markers", name="NSGA-II"))

@@ -32,7 +32,18 @@ EXPECTED_SECONDS = {
 
 
 def expected(name: str) -> str:
-    """'about 21 s' / 'about 3 min' for a seed study, '' when unknown."""
+    """'about 21 s' / 'about 3 min' for a seed study, '' when unknown.
+
+    Parameters
+    ----------
+    name : str
+        The seed study's name, a key of ``EXPECTED_SECONDS``.
+
+    Returns
+    -------
+    str
+        The expected full-run time in words (seconds below 100 s, else minutes), or ``""``.
+    """
     s = EXPECTED_SECONDS.get(name)
     if s is None:
         return ""
@@ -44,7 +55,24 @@ class Heartbeat:
 
     ``bar=True``: on a terminal, a tqdm line with the elapsed time instead (shown after 2 s,
     redrawn every second, on ``bar_stream``, default stderr) -- for a method of unknown length,
-    such as the exact optimum's cutting planes in ``evotol run`` (issue 27 item 5)."""
+    such as the exact optimum's cutting planes in ``evotol run`` (issue 27 item 5).
+
+    Parameters
+    ----------
+    name : str
+        What runs, named in each line; a seed study's name also gives the expected time
+        (:func:`expected`).
+    every : float, optional
+        Seconds between lines (default 10).
+    stream : file, optional
+        Where the lines go (default: ``sys.stdout``); lines only when it is not a terminal.
+    force : bool, optional
+        Print the lines even on a terminal.
+    bar : bool, optional
+        On a terminal (and without ``force``), show the elapsed-time tqdm line instead.
+    bar_stream : file, optional
+        Where that line goes (default: ``sys.stderr``); shown only when it is a terminal.
+    """
 
     def __init__(self, name: str, every: float = 10.0, stream=None, force: bool = False, bar: bool = False,
                  bar_stream=None):

@@ -45,13 +45,36 @@ KEYS = {
 
 
 def study_units_block(problem: ToleranceProblem) -> dict:
-    """The ``units`` block of a user study's JSON."""
+    """The ``units`` block of a user study's JSON.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        Its sources' SI units (m or rad) fill ``tolerances``.
+
+    Returns
+    -------
+    dict
+        :func:`evotol.units.make_units_block` with this module's ``KEYS`` added.
+    """
     return make_units_block(keys=KEYS, tolerances=dict(zip(problem.names, problem.units())))
 
 
 def source_nominals(robot) -> dict[str, float]:
     """Nominal values (SI) of the sources where the model knows them: an assembly's dimensions, a
-    mechanism description's named lengths and angles; none for joint errors and encoder offsets."""
+    mechanism description's named lengths and angles; none for joint errors and encoder offsets.
+
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        The problem's robot (an assembly function with ``dimension_names`` and ``x0``, or a model
+        with a ``mechanism`` description).
+
+    Returns
+    -------
+    dict of str to float
+        Source name -> nominal value, m or rad; empty when the model knows none.
+    """
     inner = getattr(robot, "robot", robot)        # clearances.WithClearances wraps the robot
     if hasattr(inner, "dimension_names") and hasattr(inner, "x0"):
         return {n: float(v) for n, v in zip(inner.dimension_names, np.ravel(inner.x0))}
@@ -64,7 +87,21 @@ def source_nominals(robot) -> dict[str, float]:
 
 def source_table(problem: ToleranceProblem) -> list[dict]:
     """Per source: name, group, SI unit, dimension, nominal (SI, where known), the interval
-    [offset − minus·t, offset + plus·t], and whether it is fixed (no cost) or locked."""
+    [offset − minus·t, offset + plus·t], and whether it is fixed (no cost) or locked.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The study's problem.
+
+    Returns
+    -------
+    list of dict
+        One row per source, in source order: ``name``, ``group``, ``unit`` (``"m"`` or
+        ``"rad"``), ``dim``, ``offset`` (m or rad), ``minus``, ``plus`` (dimensionless, per unit
+        t), ``fixed`` (bool), ``locked`` (m or rad, or None) and, where known, ``nominal`` (m or
+        rad).
+    """
     nominal = source_nominals(problem.robot)
     out = []
     for j, (n, s) in enumerate(zip(problem.names, problem.robot.sources)):
@@ -81,7 +118,24 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
 def result_details(problem: ToleranceProblem, r) -> dict:
     """Per-method additions to ``AllocationResult.to_dict``: normalised error, worst pose (index
     and SI coordinates) and errors at every pose per component, contributions at the worst pose,
-    the yield at the worst pose for a yield design."""
+    the yield at the worst pose for a yield design.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem ``r`` solves.
+    r : evotol.result.AllocationResult
+        One method's result.
+
+    Returns
+    -------
+    dict
+        ``normalised_error`` (dimensionless: largest error / requirement), ``worst_pose`` (index
+        per component), ``worst_pose_coordinates`` (SI), ``errors_per_pose`` (m or rad),
+        ``contributions`` (``source``, ``percent``), ``source_costs`` (cost units); a GA's
+        ``history`` and, for a yield design, ``yield_at_worst_pose`` and ``required_yield``
+        (probabilities).
+    """
     d = {"normalised_error": float(r.errors.violation[0] + 1), "worst_pose": {}, "worst_pose_coordinates": {},
          "errors_per_pose": {}, "contributions": {},
          "source_costs": dict(zip(problem.names, problem.source_costs(r.t).tolist()))}
@@ -103,7 +157,28 @@ def result_details(problem: ToleranceProblem, r) -> dict:
 
 def front_summary(problem: ToleranceProblem, front, results: dict) -> dict:
     """The NSGA-II front's cheapest feasible point and knee (row, cost, normalised error, largest
-    errors, tolerances), and the cheapest's cost over the certified optimum's when there is one."""
+    errors, tolerances), and the cheapest's cost over the certified optimum's when there is one.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem the front was computed for.
+    front : evotol.pareto.ParetoFront
+        The NSGA-II front (its ``table`` has ``cost``, ``normalised_error``, ``COMP_error`` and
+        one column per source).
+    results : dict
+        Method -> :class:`evotol.result.AllocationResult`; ``"optimum"``, if certified optimal,
+        gives the reference cost.
+
+    Returns
+    -------
+    dict
+        ``knee`` and, when a front point meets the requirement, ``cheapest_feasible``: each with
+        ``row``, ``cost`` (cost units), ``normalised_error``, ``max_COMP_error`` (m or rad),
+        ``worst_pose``, ``worst_pose_coordinates`` (SI) and ``tolerances`` (SI);
+        ``cheapest_feasible_over_optimum`` (dimensionless, cost / optimum cost - 1) when there is
+        a certified optimum.
+    """
     table = front.table
     out = {}
     rows = {"knee": int(front.knee())}
@@ -132,7 +207,9 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
     Parameters
     ----------
     name : str
+        The study's name.
     problem : ToleranceProblem
+        The study's problem.
     results : dict
         Method -> :class:`evotol.result.AllocationResult`.
     front : evotol.pareto.ParetoFront or None
@@ -140,15 +217,21 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
     checks : dict
         Method -> ``MonteCarloResult.to_dict()``.
     seed : int
+        The study's seed (stored; also seeds the explorer's tightness sample).
     units : DisplayUnits
         The study's display units (stored; values stay SI).
     seconds : float
+        Wall time of the study, s.
     maps : bool
-        Compute the error maps over workspace slices.
+        Compute the error maps over workspace slices (default True; not for a workspace that is
+        a list of responses).
 
     Returns
     -------
     dict
+        JSON-ready, SI: the problem, requirement, workspace, sources, per-method results with
+        :func:`result_details`, the Monte Carlo checks, the NSGA-II front and
+        :func:`front_summary`, ``figures`` (error maps), ``explorer`` and the ``units`` block.
     """
     ws = problem.robot.workspace
     summary = {"name": name, "problem": problem.describe(), "seed": seed, "measure": problem.requirement.measure,

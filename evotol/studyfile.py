@@ -65,7 +65,20 @@ REFINING_METHODS = ("optimum", "ga")
 
 def check_study_keys(spec: dict) -> None:
     """Check every table of a study file whose keys evotol defines (typos like ``lowr`` or
-    ``[requirment]`` are errors, not silently ignored)."""
+    ``[requirment]`` are errors, not silently ignored).
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file.
+
+    Raises
+    ------
+    ValidationError
+        An unknown key in the top level, ``[poses]``, ``[poses.refine]``, ``[requirement]``,
+        ``[report]``, ``[bounds]`` or a ``[sources.NAME]`` table; a ``refine`` that is neither a
+        bool nor a table; a ``seed`` that is not a non-negative integer.
+    """
     check_table_keys(spec, TOP_KEYS, "")
     check_table_keys(spec.get("poses", {}), POSE_KEYS, "poses")
     ref = spec.get("poses", {}).get("refine")
@@ -86,12 +99,41 @@ def check_study_keys(spec: dict) -> None:
 
 
 def report_units(spec: dict, problem: ToleranceProblem) -> DisplayUnits:
-    """The study's display units: ``[report] units``, else the mechanism's ``display`` (evotol.display)."""
+    """The study's display units: ``[report] units``, else the mechanism's ``display`` (evotol.display).
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file.
+    problem : ToleranceProblem
+        The study's problem (its robot's workspace gives the defaults).
+
+    Returns
+    -------
+    DisplayUnits
+        The units of the report, the terminal and the drawing export.
+
+    Raises
+    ------
+    ValidationError
+        A bad ``[report] units`` (:func:`evotol.display.parse_units`).
+    """
     return parse_units(spec.get("report", {}).get("units"), problem_units(problem))
 
 
 def refine_option(spec: dict):
-    """The ``[poses] refine`` setting as allocator keyword: False, True or a dict of options."""
+    """The ``[poses] refine`` setting as allocator keyword: False, True or a dict of options.
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file.
+
+    Returns
+    -------
+    bool or dict
+        False when absent; the options table as a dict; else ``bool(refine)``.
+    """
     ref = spec.get("poses", {}).get("refine", False)
     return dict(ref) if isinstance(ref, dict) else bool(ref)
 
@@ -154,7 +196,30 @@ def _bound(override: dict, bounds: dict, source, which: str, default: float) -> 
 
 def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     """Build the problem from a parsed study file (dict); ``base_dir``: where relative files
-    (``[robot] mechanism = "my_robot.toml"``) are looked up."""
+    (``[robot] mechanism = "my_robot.toml"``) are looked up.
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file (keys checked by :func:`check_study_keys`).
+    base_dir : str or Path, optional
+        Where relative files are looked up (default: the current folder).
+
+    Returns
+    -------
+    ToleranceProblem
+        The problem (with the Taguchi loss when ``quality_loss`` is given); tolerances and
+        requirement in SI (m, rad).
+
+    Raises
+    ------
+    ValidationError
+        An unknown key or bad value anywhere in the file: a ``[processes]`` table (read by
+        :func:`evotol.process_studyfile.load_process_problem` instead), no robot model, robot
+        parameters the model does not take, a bad ``[poses]`` table, an unknown source in
+        ``[sources]``, a bad ``[bounds]`` table or bound, a fixed source with a range, lock or
+        cost, a source without a cost model; and what the problem's own checks refuse.
+    """
     check_study_keys(spec)
     if "processes" in spec:
         raise ValidationError("processes", sorted(spec["processes"]), "no [processes.*] here: a process-selection study "
@@ -208,7 +273,40 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
 def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: bool = False) -> dict:
     """Run the study; Ctrl-C stops the running method (GA/NSGA-II keep their best so far), skips the
     remaining ones unless ``keep_going``, and the partial results are still written, marked
-    ``"interrupted": true`` in the JSON and in the report's header (issue 15)."""
+    ``"interrupted": true`` in the JSON and in the report's header (issue 15).
+
+    A study file with ``[processes]`` is run by
+    :func:`evotol.process_studyfile.run_process_study`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The study file (TOML).
+    out : str or Path, optional
+        The output folder (default: the study file's folder).
+    seed : int, optional
+        Overrides the file's ``seed`` (default: the file's, else 0).
+    keep_going : bool, optional
+        After a Ctrl-C, still run the remaining methods and Monte Carlo checks.
+    force : bool, optional
+        Overwrite another study's files of the same name in ``out``.
+
+    Returns
+    -------
+    dict
+        The JSON summary written (:func:`evotol.study_outputs.study_summary`, SI), with
+        ``study_file``, ``warnings``, ``notes``, ``interrupted`` and the ``html`` and ``json``
+        paths written.
+
+    Raises
+    ------
+    ValidationError
+        The file does not exist, is not valid TOML, is a mechanism description, would overwrite
+        another study's files, or has a bad key or value (:func:`load_problem`, an unknown
+        method, a keyword a method or ``verify`` does not take, a bad budget).
+    evotol.errors.InfeasibleError
+        No allowed design meets the requirement (checked before the first method).
+    """
     path = Path(path)
     if not path.exists():
         raise ValidationError("study file", str(path), "an existing TOML file")

@@ -13,12 +13,31 @@ from threadpoolctl import threadpool_limits
 
 
 def one_blas_thread():
-    """Context manager: BLAS limited to one thread inside the ``with`` block (restored after)."""
+    """Context manager: BLAS limited to one thread inside the ``with`` block (restored after).
+
+    Returns
+    -------
+    threadpoolctl.threadpool_limits
+        The context manager; entering it limits the BLAS thread pools to one thread, leaving it
+        restores the previous limits.
+    """
     return threadpool_limits(limits=1, user_api="blas")
 
 
 def single_threaded_blas(func):
-    """Decorator: run ``func`` with BLAS limited to one thread."""
+    """Decorator: run ``func`` with BLAS limited to one thread.
+
+    Parameters
+    ----------
+    func : callable
+        The function to wrap.
+
+    Returns
+    -------
+    callable
+        A wrapper with ``func``'s name and docstring that calls ``func`` inside
+        :func:`one_blas_thread` and returns its result.
+    """
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):

@@ -56,7 +56,18 @@ RATIO_PARENTS = {"max_error_over_worst_case": RELATIVE + ": sampled max / worst 
 
 
 def units_block(problem) -> dict:
-    """The ``units`` block of a JSON file about ``problem`` (see the module docstring)."""
+    """The ``units`` block of a JSON file about ``problem`` (see the module docstring).
+
+    Parameters
+    ----------
+    problem : evotol.problem.ToleranceProblem
+        Its source ``names`` and their SI ``units()`` (m or rad) fill ``tolerances``.
+
+    Returns
+    -------
+    dict
+        The block of :func:`make_units_block` with the common ``keys`` only.
+    """
     return make_units_block(tolerances=dict(zip(problem.names, problem.units())))
 
 
@@ -64,7 +75,24 @@ def make_units_block(keys: Mapping[str, str] | None = None, tolerances: Mapping[
                      tables: Mapping[str, Mapping[str, str]] | None = None) -> dict:
     """A ``units`` block: the common ``keys`` updated by a writer's own ``keys``, per-source SI
     units (``tolerances``), tolerance ``tables`` in stated units (key -> {source: unit}) and the
-    generic name rules (``patterns``)."""
+    generic name rules (``patterns``).
+
+    Parameters
+    ----------
+    keys : mapping of str to str, optional
+        The writer's own key -> unit entries; they override the common :data:`KEYS`.
+    tolerances : mapping of str to str, optional
+        Source name -> SI unit (``"m"`` or ``"rad"``) of the tolerance tables.
+    tables : mapping of str to mapping, optional
+        Key of a tolerance table given in stated units -> {source name: unit}, e.g. the paper's
+        mm/deg.
+
+    Returns
+    -------
+    dict
+        ``convention`` (str), ``keys``, ``ratio_parents``, ``tolerances``, ``tables`` (dicts) and
+        ``patterns`` (list of ``[fnmatch pattern, unit]``); JSON-serialisable.
+    """
     return {"convention": CONVENTION, "keys": {**KEYS, **dict(keys or {})},
             "ratio_parents": dict(RATIO_PARENTS), "tolerances": dict(tolerances or {}),
             "tables": {k: dict(v) for k, v in (tables or {}).items()},
@@ -109,6 +137,18 @@ def unit_of(path: Sequence, block: dict) -> str | None:
     from ``tolerances``; finally the nearest enclosing key that names a unit (by ``keys`` or
     a suffix, not by a name rule: a list or table of numbers inherits its key's unit,
     ``verification_error_mm/case 1/3`` is in mm).
+
+    Parameters
+    ----------
+    path : sequence of str or int
+        The JSON path of the number: dict keys (str) and list indices (int, ignored).
+    block : dict
+        A ``units`` block, as made by :func:`make_units_block`.
+
+    Returns
+    -------
+    str or None
+        The unit (``"m"``, ``"rad"``, ``"mm"``, ``COST``, ...), or None when no rule applies.
     """
     keys = [p for p in path if isinstance(p, str)]
     if not keys:
@@ -136,7 +176,24 @@ def unit_of(path: Sequence, block: dict) -> str | None:
 
 
 def numbers_without_unit(data, block: dict, path=()) -> list[str]:
-    """JSON paths of the numbers in ``data`` whose unit :func:`unit_of` cannot resolve."""
+    """JSON paths of the numbers in ``data`` whose unit :func:`unit_of` cannot resolve.
+
+    Booleans are not numbers here; a ``units`` key is skipped wherever it occurs.
+
+    Parameters
+    ----------
+    data : object
+        Parsed JSON (dicts, lists, numbers, ...), searched recursively.
+    block : dict
+        The ``units`` block to resolve against.
+    path : tuple, optional
+        The JSON path of ``data`` itself (default: the root).
+
+    Returns
+    -------
+    list of str
+        The paths, keys and indices joined by ``/``; empty when every number has a unit.
+    """
     missing = []
     if isinstance(data, dict):
         for k, v in data.items():

@@ -23,11 +23,32 @@ SHARED_COSTS = ("part", "variable")
 class ToleranceVariables:
     """The map from free variables to source tolerances.
 
-    shared: group -> member names; lower, upper: (n_sources,) ranges (SI) after the groups'
-    intersections; leader: (n_sources,) index of the source whose variable drives each source;
-    follower / locked / free: (n_sources,) masks (free: carries a variable); variable_matrix:
-    (n_sources, n_variables) 0/1, t = M x for the unlocked sources; variables: each variable's
-    name (the group's or the source's); cost_weight: (n_sources,) 1 where a cost is counted.
+    Built by :func:`tolerance_variables`.
+
+    Parameters
+    ----------
+    shared : dict
+        Group name -> tuple of member source names.
+    shared_cost : {"part", "variable"}
+        Cost counted per part (every member) or once per variable (the group's first member).
+    lower, upper : ndarray, shape (n_sources,)
+        Tolerance ranges (SI: m or rad) after the groups' intersections.
+    leader : ndarray of int, shape (n_sources,)
+        Index of the source whose variable drives each source (itself unless a follower).
+    follower : ndarray of bool, shape (n_sources,)
+        True for a group member other than the group's first.
+    locked : ndarray of bool, shape (n_sources,)
+        True for a locked or fixed source (no variable).
+    free : ndarray of bool, shape (n_sources,)
+        True where the source carries a variable (neither locked nor a follower).
+    variable_matrix : ndarray, shape (n_sources, n_variables)
+        0/1 map ``t = M x`` from the variables to the unlocked sources' tolerances (rows of locked
+        sources are zero).
+    variables : tuple of str
+        Each variable's name (the group's or the source's).
+    cost_weight : ndarray, shape (n_sources,)
+        1 where a source's cost is counted, 0 for fixed sources (and followers under
+        ``shared_cost="variable"``).
     """
 
     shared: dict
@@ -65,6 +86,7 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
     Returns
     -------
     ToleranceVariables
+        The map from the free variables to the sources' tolerances.
 
     Raises
     ------

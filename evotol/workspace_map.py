@@ -32,16 +32,24 @@ def slice_specs(workspace, anchor, n: int = DEFAULT_N) -> list[dict]:
     Parameters
     ----------
     workspace : robots.base.Workspace
+        The workspace box: ``low``, ``high`` (SI: m, rad) and ``dim``. Only coordinates with
+        ``high > low`` are varied.
     anchor : array-like
         The pose (SI) that fixes the coordinates not varied, usually the worst allocation pose.
     n : int
-        Grid points per varied axis.
+        Grid points per varied axis (default ``DEFAULT_N`` = 21).
 
     Returns
     -------
     list of dict
         ``axes`` (indices varied), ``fixed`` (index -> SI value), ``grid`` ((m, dim) poses, SI),
-        ``shape`` (rows, columns of the map).
+        ``shape`` (rows, columns of the map), ``axis_values`` (each varied axis's ``n`` grid
+        values, SI).
+
+    Raises
+    ------
+    ValidationError
+        No coordinate of the workspace has a range (``high > low``) to map.
     """
     anchor = np.asarray(anchor, dtype=float)
     lo, hi = np.asarray(workspace.low, float), np.asarray(workspace.high, float)
@@ -96,6 +104,7 @@ def error_map_slices(problem: ToleranceProblem, T, anchor, n: int = DEFAULT_N) -
     Parameters
     ----------
     problem : ToleranceProblem
+        The problem whose measure and robot are evaluated.
     T : array-like
         Designs, (n_designs, n_sources) SI tolerances (one evaluation for all of them).
     anchor : array-like

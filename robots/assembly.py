@@ -123,7 +123,26 @@ class AssemblyFunction(RobotErrorModel):
 
     # --- evaluation -------------------------------------------------------------------------------
     def evaluate(self, X) -> np.ndarray:
-        """Responses at dimensions X (..., n_dims) -> (..., n_responses). Real or complex."""
+        """Responses at dimensions X (..., n_dims) -> (..., n_responses). Real or complex.
+
+        Parameters
+        ----------
+        X : (..., n_dims) array_like
+            Dimension values (SI: m or rad), last axis in the order of ``dimension_names``; may
+            be complex (complex-step differentiation).
+
+        Returns
+        -------
+        (..., n_responses) ndarray
+            The function's responses, last axis in the order of ``response_names`` (each in the
+            response's own unit); complex when the input is and the function is complex-safe.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            ``X`` whose last axis is not ``n_dims`` long, or a function result that is not one
+            value per response and point.
+        """
         X = np.asarray(X)
         if X.shape[-1] != len(self.dimension_names):
             raise ValidationError("assembly dimensions shape", X.shape, f"(..., {len(self.dimension_names)})")
@@ -161,7 +180,22 @@ class AssemblyFunction(RobotErrorModel):
         return np.maximum(np.abs(self.x0), 1e-3)
 
     def central_differences(self, points, rel_step: float = 1e-6) -> np.ndarray:
-        """∂f_k/∂x_j at points (n, n_dims) by central differences -> (n, n_responses, n_dims)."""
+        """∂f_k/∂x_j at points (n, n_dims) by central differences -> (n, n_responses, n_dims).
+
+        Parameters
+        ----------
+        points : (n, n_dims) or (n_dims,) array_like
+            Dimension values (SI: m or rad).
+        rel_step : float, optional
+            Step relative to ``max(|x0_j|, 1e-3)`` of each dimension's nominal ``x0_j``
+            (dimensionless; the step itself is in the dimension's unit).
+
+        Returns
+        -------
+        (n, n_responses, n_dims) ndarray
+            Derivatives (response unit per dimension unit); NaN or inf where the function is not
+            finite (floating-point warnings are silenced).
+        """
         P = np.atleast_2d(np.asarray(points, dtype=float))
         n, d = P.shape
         h = rel_step * self._steps()
@@ -183,7 +217,26 @@ class AssemblyFunction(RobotErrorModel):
         return [slice(i, min(i + m, n)) for i in range(0, n, m)]
 
     def complex_step(self, points) -> np.ndarray:
-        """∂f_k/∂x_j at points (n, n_dims) by complex step -> (n, n_responses, n_dims)."""
+        """∂f_k/∂x_j at points (n, n_dims) by complex step -> (n, n_responses, n_dims).
+
+        The step is ``step * max(|x0_j|, 1e-3)`` along the imaginary axis (``step`` of the
+        constructor); the derivative is ``Im f(x + i h e_j) / h`` (Squire & Trapp 1998).
+
+        Parameters
+        ----------
+        points : (n, n_dims) or (n_dims,) array_like
+            Dimension values (SI: m or rad), real.
+
+        Returns
+        -------
+        (n, n_responses, n_dims) ndarray
+            Derivatives (response unit per dimension unit).
+
+        Raises
+        ------
+        TypeError
+            The function returned a real array for complex input (it is not complex-safe).
+        """
         P = np.atleast_2d(np.asarray(points, dtype=float))
         n, d = P.shape
         h = self.step * self._steps()
@@ -198,7 +251,27 @@ class AssemblyFunction(RobotErrorModel):
         return out
 
     def jacobian(self, points) -> np.ndarray:
-        """∂f_k/∂x_j at points (n, n_dims), with the method chosen at construction."""
+        """∂f_k/∂x_j at points (n, n_dims), with the method chosen at construction.
+
+        Complex step when ``derivative_method == "complex step"``, else central differences
+        (default relative step).
+
+        Parameters
+        ----------
+        points : (n, n_dims) or (n_dims,) array_like
+            Dimension values (SI: m or rad).
+
+        Returns
+        -------
+        (n, n_responses, n_dims) ndarray
+            Derivatives (response unit per dimension unit).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A point where some response is not finite (outside the function's domain); names
+            the first one.
+        """
         P = np.atleast_2d(np.asarray(points, dtype=float))
         with np.errstate(all="ignore"):
             y = np.asarray(self.evaluate(P), dtype=float)
@@ -243,12 +316,55 @@ class AssemblyFunction(RobotErrorModel):
         return k
 
     def sensitivity(self, poses) -> np.ndarray:
+        """Normalised response gradients at the nominal: row 2 holds ``∂f_k/∂x_j / L_k``.
+
+        Parameters
+        ----------
+        poses : (n, 1) array_like
+            Response indices ``k`` (0 .. K-1) as workspace poses.
+
+        Returns
+        -------
+        (n, 6, n_dims) ndarray
+            Zero except row 2 (position z): the gradient of response ``k`` divided by its limit
+            ``L_k`` (1 per dimension unit, m or rad), evaluated once at the nominal.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A pose that is not an integer response index, or of the wrong shape.
+        evotol.errors.KinematicsError
+            An index outside 0 .. K-1.
+        """
         k = self._response_index(poses)
         J = np.zeros((len(k), 6, len(self.dimension_names)))
         J[:, ROW, :] = self.gradient[k] / self.limits[k, None]
         return J
 
     def pose_error(self, poses, errors) -> np.ndarray:
+        """Nonlinear response errors: ``(f_k(x0 + δx) - f_k(x0)) / L_k`` in row 2.
+
+        Parameters
+        ----------
+        poses : (n_poses, 1) array_like
+            Response indices ``k`` (0 .. K-1) as workspace poses.
+        errors : (n_poses, n_samples, n_dims) array_like
+            Dimension errors ``δx`` (SI: m or rad), added to the nominal.
+
+        Returns
+        -------
+        (n_poses, n_samples, 6) ndarray
+            Zero except row 2: the response's deviation divided by its limit (dimensionless;
+            within ``[-1, 1]`` means within the limit). NaN where the function is not finite.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A pose that is not an integer response index, or errors whose last axis is not
+            ``n_dims`` long.
+        evotol.errors.KinematicsError
+            An index outside 0 .. K-1.
+        """
         k = self._response_index(poses)
         E = np.asarray(errors, dtype=float)
         with np.errstate(all="ignore"):
@@ -319,7 +435,24 @@ class LinearStack(AssemblyFunction):
 
 
 def resolve(spec: str) -> Callable:
-    """``"package.module:function"`` -> the function (for study files)."""
+    """``"package.module:function"`` -> the function (for study files).
+
+    Parameters
+    ----------
+    spec : str
+        Import path with exactly one ``:``, e.g. ``"mypkg.clutch:contact_angle"``.
+
+    Returns
+    -------
+    callable
+        The named object.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Not a string with one ``:``, a module or attribute that does not import, or an object
+        that is not callable.
+    """
     import importlib
 
     if not isinstance(spec, str) or spec.count(":") != 1:
@@ -339,6 +472,25 @@ def assembly_from_spec(spec: Mapping) -> AssemblyFunction:
 
     ``assembly = "module:function"``, ``nominal = {dim = value (SI), ...}``,
     ``limits = {response = allowed deviation, ...}``, optional ``name``, ``units``, ``groups``.
+
+    Parameters
+    ----------
+    spec : Mapping
+        The table: ``assembly`` (str, ``"module:function"``), ``nominal`` (dimension -> value,
+        SI: m or rad), ``limits`` (response -> allowed deviation, the response's unit), and
+        optionally ``name`` (default: the ``assembly`` string), ``units`` (dimension -> ``"m"``
+        or ``"rad"``), ``groups`` (dimension -> group).
+
+    Returns
+    -------
+    AssemblyFunction
+        The assembly's error model.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown key, ``nominal`` or ``limits`` that is not a table, an ``assembly`` path that
+        does not resolve (:func:`resolve`), or invalid values (see :class:`AssemblyFunction`).
     """
     spec = dict(spec)
     known = {"assembly", "nominal", "limits", "name", "units", "groups"}

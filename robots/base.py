@@ -71,6 +71,7 @@ class SourceSpec:
 
     @property
     def shape(self) -> str:
+        """The error set's shape: ``"interval"``, ``"disk"`` or ``"ball"`` (from ``dim``)."""
         return SHAPES[self.dim]
 
 
@@ -80,6 +81,27 @@ class Workspace:
 
     ``units`` are the SI units of the coordinates as the robot takes them (``"m"``, ``"rad"``).
     ``display_scale`` converts each coordinate to the unit shown in reports (e.g. rad -> deg).
+
+    Parameters
+    ----------
+    names : tuple of str
+        Coordinate names, e.g. ``("x", "y", "z")``; their count is the workspace dimension.
+    low, high : tuple of float
+        Lower and upper bound of each coordinate, in its SI unit (m or rad); ``low == high``
+        fixes a coordinate.
+    units : tuple of str
+        SI unit of each coordinate as the robot takes it (``"m"``, ``"rad"``).
+    display_units : tuple of str, optional
+        Unit of each coordinate in reports (e.g. ``"mm"``, ``"deg"``); empty (default): ``units``.
+    display_scale : tuple of float, optional
+        Factor from the SI value to the displayed value, per coordinate (e.g. ``1000`` for m ->
+        mm); empty (default): all 1.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        ``low``, ``high`` or ``units`` without one entry per name, or a range that is not
+        finite with ``low <= high``.
     """
 
     names: tuple[str, ...]
@@ -104,10 +126,30 @@ class Workspace:
 
     @property
     def dim(self) -> int:
+        """Number of pose coordinates (dimensionless count)."""
         return len(self.names)
 
     def grid(self, counts: int | Sequence[int]) -> np.ndarray:
-        """Full grid with ``counts`` points per coordinate, shape (prod(counts), dim)."""
+        """Full grid with ``counts`` points per coordinate, shape (prod(counts), dim).
+
+        Parameters
+        ----------
+        counts : int or sequence of int
+            Points per coordinate, one count for all or one per coordinate; a count of 1 takes the
+            range's midpoint, more are evenly spaced from ``low`` to ``high`` inclusive. Whole
+            floats (``3.0``) are accepted.
+
+        Returns
+        -------
+        (prod(counts), dim) ndarray
+            The grid poses in SI units (m, rad), first coordinate varying slowest
+            (``indexing="ij"``).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Not one count per coordinate, a non-whole count, or a count below 1.
+        """
         counts = [counts] * self.dim if np.isscalar(counts) else list(counts)
         whole = all(isinstance(c, (int, np.integer)) and not isinstance(c, bool) or
                     isinstance(c, (float, np.floating)) and float(c).is_integer() for c in counts)
@@ -119,7 +161,25 @@ class Workspace:
         return np.stack([m.ravel() for m in mesh], axis=1)
 
     def latin_hypercube(self, n: int, seed: int | None = 0) -> np.ndarray:
-        """``n`` Latin-hypercube poses (scipy.stats.qmc), shape (n, dim), reproducible from seed."""
+        """``n`` Latin-hypercube poses (scipy.stats.qmc), shape (n, dim), reproducible from seed.
+
+        Parameters
+        ----------
+        n : int
+            Number of poses, at least 1.
+        seed : int or None, optional
+            Seed of the Latin hypercube sampler; ``None`` draws a fresh one (not reproducible).
+
+        Returns
+        -------
+        (n, dim) ndarray
+            Poses inside ``[low, high]`` per coordinate, in SI units (m, rad).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            ``n`` is not a positive integer (bools and floats are refused).
+        """
         from scipy.stats import qmc
 
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:   # 3.5 was truncated to 3
@@ -130,6 +190,21 @@ class Workspace:
         return lo + u * (hi - lo)
 
     def contains(self, poses: np.ndarray, rtol: float = 1e-9) -> np.ndarray:
+        """Which poses lie inside the workspace box, with a small tolerance.
+
+        Parameters
+        ----------
+        poses : (n, dim) or (dim,) array_like
+            Poses in SI units (m, rad).
+        rtol : float, optional
+            Tolerance, relative to each coordinate's span (a span below 1 counts as 1, so it is
+            absolute there, in m or rad); dimensionless.
+
+        Returns
+        -------
+        (n,) ndarray of bool
+            True where every coordinate is within ``[low - rtol span, high + rtol span]``.
+        """
         poses = np.atleast_2d(poses)
         lo, hi = np.asarray(self.low), np.asarray(self.high)
         span = np.maximum(hi - lo, 1.0)
@@ -149,24 +224,58 @@ class RobotErrorModel:
 
     # --- contract -----------------------------------------------------------------------
     def sensitivity(self, poses: np.ndarray) -> np.ndarray:
-        """First-order map, shape (n_poses, 6, n_columns): [dp (m); dtheta (rad)] per unit error."""
+        """First-order map, shape (n_poses, 6, n_columns): [dp (m); dtheta (rad)] per unit error.
+
+        Parameters
+        ----------
+        poses : (n_poses, workspace.dim) ndarray
+            Poses in the workspace coordinates, SI units (m, rad).
+
+        Returns
+        -------
+        (n_poses, 6, n_columns) ndarray
+            End-effector error twist per unit of each stacked source component: rows 0-2
+            position (m per source unit), rows 3-5 small rotation (rad per source unit), base frame.
+
+        Raises
+        ------
+        NotImplementedError
+            Always, in the base class: a subclass implements it.
+        """
         raise NotImplementedError
 
     def pose_error(self, poses: np.ndarray, errors: np.ndarray) -> np.ndarray:
         """Nonlinear end-effector error twist for given source errors.
 
-        poses: (n_poses, workspace.dim); errors: (n_poses, n_samples, n_columns) in SI units.
-        Returns (n_poses, n_samples, 6): [dp (m); small-rotation vector (rad)].
+        Parameters
+        ----------
+        poses : (n_poses, workspace.dim) ndarray
+            Poses in the workspace coordinates, SI units (m, rad).
+        errors : (n_poses, n_samples, n_columns) ndarray
+            Stacked source error vectors, in each source's unit (m or rad).
+
+        Returns
+        -------
+        (n_poses, n_samples, 6) ndarray
+            [dp (m); small-rotation vector (rad)] of the end effector, base frame.
+
+        Raises
+        ------
+        NotImplementedError
+            Always, in the base class (the robot has no nonlinear error model); a subclass may
+            implement it.
         """
         raise NotImplementedError(f"{self.name} has no nonlinear error model")
 
     @property
     def has_nonlinear_model(self) -> bool:
+        """True when the subclass overrides :meth:`pose_error` (nonlinear model available)."""
         return type(self).pose_error is not RobotErrorModel.pose_error
 
     # --- helpers ------------------------------------------------------------------------
     @property
     def source_names(self) -> tuple[str, ...]:
+        """Names of the error sources, in source order."""
         return tuple(s.name for s in self.sources)
 
     @property
@@ -180,10 +289,29 @@ class RobotErrorModel:
 
     @property
     def n_columns(self) -> int:
+        """Length of the stacked error vector, ``sum(dim_j)`` over the sources (dimensionless)."""
         return sum(s.dim for s in self.sources)
 
     def check_poses(self, poses) -> np.ndarray:
-        """Validate an array of poses against the workspace; returns float array (n, dim)."""
+        """Validate an array of poses against the workspace; returns float array (n, dim).
+
+        Parameters
+        ----------
+        poses : (n, workspace.dim) or (workspace.dim,) array_like
+            Poses in SI units (m, rad); a single pose is promoted to one row.
+
+        Returns
+        -------
+        (n, workspace.dim) ndarray of float
+            The poses.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Not convertible to numbers, the wrong shape, or a non-finite entry.
+        evotol.errors.KinematicsError
+            A pose outside the workspace (see :meth:`Workspace.contains`); names the first one.
+        """
         try:
             arr = np.asarray(poses, dtype=float)
         except (TypeError, ValueError) as exc:

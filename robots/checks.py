@@ -39,7 +39,24 @@ class _Settings:
 
 
 def check_sources_declared(s: _Settings) -> dict:
-    """At least one error source, unique names, dimensions 1-3."""
+    """At least one error source, unique names, dimensions 1-3.
+
+    Parameters
+    ----------
+    s : _Settings
+        The robot under check, its validated poses (SI units) and the finite-difference
+        settings, shared by every check of one :func:`robot_checks` call.
+
+    Returns
+    -------
+    dict
+        ``{"n_columns": ...}``: the length of the stacked error vector.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        No source, duplicate source names, or a dimension outside 1-3.
+    """
     r = s.robot
     require(r.sources, f"{r.name}: no error sources declared")
     names = [x.name for x in r.sources]
@@ -51,7 +68,25 @@ def check_sources_declared(s: _Settings) -> dict:
 
 def check_units_declared(s: _Settings) -> dict:
     """Every source declares an SI unit (m or rad), every workspace coordinate one too (m, rad,
-    or "1" when dimensionless), and the display scales (to mm, deg...) are positive numbers."""
+    or "1" when dimensionless), and the display scales (to mm, deg...) are positive numbers.
+
+    Parameters
+    ----------
+    s : _Settings
+        The robot under check, its validated poses (SI units) and the finite-difference
+        settings, shared by every check of one :func:`robot_checks` call.
+
+    Returns
+    -------
+    dict
+        Empty: nothing measured.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        A source unit not in ``("m", "rad")``, a workspace unit not in ``("m", "rad", "1")``
+        or not one per coordinate, or a display scale that is not finite and positive.
+    """
     r, ws = s.robot, s.robot.workspace
     bad = [x.name for x in r.sources if x.unit not in UNITS]
     require(not bad, f"{r.name}: sources {bad} have no SI unit (one of {UNITS})")
@@ -65,7 +100,24 @@ def check_units_declared(s: _Settings) -> dict:
 
 
 def check_sensitivity_shape(s: _Settings) -> dict:
-    """``sensitivity(poses)`` has shape (n_poses, 6, n_columns) and finite entries."""
+    """``sensitivity(poses)`` has shape (n_poses, 6, n_columns) and finite entries.
+
+    Parameters
+    ----------
+    s : _Settings
+        The robot under check, its validated poses (SI units) and the finite-difference
+        settings, shared by every check of one :func:`robot_checks` call.
+
+    Returns
+    -------
+    dict
+        ``{"n_poses": ...}``: the number of poses checked.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        The wrong shape or a non-finite entry.
+    """
     r = s.robot
     J = np.asarray(r.sensitivity(s.poses))
     expected = (len(s.poses), 6, r.n_columns)
@@ -76,7 +128,27 @@ def check_sensitivity_shape(s: _Settings) -> dict:
 
 def check_pose_subset_invariance(s: _Settings) -> dict:
     """The sensitivity (and the nonlinear error) of a subset of poses equals the same rows of the
-    full call: no pose leaks into another one's result (batching, caches, reordering)."""
+    full call: no pose leaks into another one's result (batching, caches, reordering).
+
+    The sensitivity must agree to ``1e-10`` of its largest entry; the nonlinear error (random
+    source errors of about 1e-6 m or rad, 2 samples per pose) to ``1e-6`` of its largest entry.
+
+    Parameters
+    ----------
+    s : _Settings
+        The robot under check, its validated poses (SI units) and the finite-difference
+        settings, shared by every check of one :func:`robot_checks` call.
+
+    Returns
+    -------
+    dict
+        Empty: nothing measured.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        A subset's result differs from the same rows of the full call.
+    """
     r, P = s.robot, s.poses
     idx = np.arange(len(P))[::-2][: max(1, len(P) // 2)]
     J = np.asarray(r.sensitivity(P))
@@ -98,7 +170,29 @@ def check_pose_subset_invariance(s: _Settings) -> dict:
 
 
 def check_pickle_round_trip(s: _Settings) -> dict:
-    """The robot pickles (it travels to worker processes and Dask) and gives the same sensitivity."""
+    """The robot pickles (it travels to worker processes and Dask) and gives the same sensitivity.
+
+    Parameters
+    ----------
+    s : _Settings
+        The robot under check, its validated poses (SI units) and the finite-difference
+        settings, shared by every check of one :func:`robot_checks` call.
+
+    Returns
+    -------
+    dict
+        Empty: nothing measured.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        The unpickled robot's sensitivity is not bit-for-bit equal to the original's.
+
+    Notes
+    -----
+    A robot that does not pickle raises the pickling error itself (``pickle.PicklingError``,
+    ``TypeError``, ``AttributeError``...), not ``CheckFailed``.
+    """
     r = s.robot
     back = pickle.loads(pickle.dumps(r))
     require(np.array_equal(np.asarray(back.sensitivity(s.poses)), np.asarray(r.sensitivity(s.poses))),
@@ -108,7 +202,28 @@ def check_pickle_round_trip(s: _Settings) -> dict:
 
 def check_out_of_reach_raises(s: _Settings) -> dict:
     """A pose far outside the workspace raises KinematicsError (naming the pose) from
-    ``sensitivity`` and ``pose_error`` -- never a NaN that travels on."""
+    ``sensitivity`` and ``pose_error`` -- never a NaN that travels on.
+
+    The pose is ``high + 10 (high - low) + 1`` per coordinate (SI units); ``pose_error`` is called
+    only when the robot has a nonlinear model, with zero source errors.
+
+    Parameters
+    ----------
+    s : _Settings
+        The robot under check, its validated poses (SI units) and the finite-difference
+        settings, shared by every check of one :func:`robot_checks` call.
+
+    Returns
+    -------
+    dict
+        Empty: nothing measured.
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        A call returns (numbers or NaN) instead of raising
+        :class:`evotol.errors.KinematicsError`.
+    """
     r, ws = s.robot, s.robot.workspace
     hi, lo = np.asarray(ws.high, float), np.asarray(ws.low, float)
     far = hi + 10 * (hi - lo) + 1.0
@@ -128,7 +243,30 @@ def check_out_of_reach_raises(s: _Settings) -> dict:
 def check_pose_error_consistency(s: _Settings) -> dict:
     """Where a nonlinear ``pose_error`` exists: shape (n_poses, n_samples, 6), zero source errors
     give zero pose error, and its central finite differences equal ``sensitivity`` to ``rtol``
-    relative to the largest entry (+ ``atol``)."""
+    relative to the largest entry (+ ``atol``).
+
+    The finite differences step each stacked source component by ``+-step`` (SI: m or rad).
+
+    Parameters
+    ----------
+    s : _Settings
+        The robot under check, its validated poses (SI units) and the finite-difference
+        settings, shared by every check of one :func:`robot_checks` call.
+
+    Returns
+    -------
+    dict
+        ``{"nonlinear_model": False}`` when the robot has no nonlinear model (nothing checked);
+        otherwise ``{"fd_mismatch": ..., "fd_relative_mismatch": ...}``: the largest absolute
+        difference between finite differences and ``sensitivity`` (m or rad per source unit) and
+        that difference over the sensitivity's largest entry (dimensionless).
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        The wrong shape, a pose error above ``atol`` at zero source errors, or a mismatch
+        above ``rtol * max|sensitivity| + atol``.
+    """
     r, P = s.robot, s.poses
     if not r.has_nonlinear_model:
         return {"nonlinear_model": False}
@@ -156,7 +294,40 @@ CHECKS = (check_sources_declared, check_units_declared, check_sensitivity_shape,
 def robot_checks(robot: Robot, poses=None, *, step: float = 1e-7, rtol: float = 1e-4,
                  atol: float = 1e-9) -> Iterator[tuple[str, Callable[[], dict]]]:
     """The named checks of ``robot`` at ``poses`` (default: 8 Latin-hypercube poses of its
-    workspace); ``step`` (SI) and ``rtol``/``atol`` set the finite-difference Jacobian check."""
+    workspace); ``step`` (SI) and ``rtol``/``atol`` set the finite-difference Jacobian check.
+
+    Parameters
+    ----------
+    robot : RobotErrorModel
+        Any object following :class:`robots.base.RobotErrorModel`'s contract.
+    poses : (n, workspace.dim) array_like, optional
+        Poses to check at, in SI units (m, rad); default (None): 8 Latin-hypercube poses of the
+        workspace (seed 1).
+    step : float, optional
+        Finite-difference step of each source component, in the source's SI unit (m or rad).
+    rtol : float, optional
+        Tolerated finite-difference mismatch relative to the sensitivity's largest entry
+        (dimensionless).
+    atol : float, optional
+        Absolute tolerance added to it, and the largest pose error accepted at zero source
+        errors (m or rad).
+
+    Yields
+    ------
+    name : str
+        The check's function name, e.g. ``"check_sensitivity_shape"``.
+    check : callable
+        The check bound to this robot's settings: no argument, returns a dict of measured numbers,
+        raises :class:`evotol.errors.CheckFailed` on failure.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        ``poses`` of the wrong shape or not finite (from ``robot.check_poses``, at the first
+        ``next``).
+    evotol.errors.KinematicsError
+        A pose outside the workspace (same).
+    """
     settings = _Settings(robot, poses, step, rtol, atol)
     for c in CHECKS:
         yield c.__name__, functools.partial(c, settings)
@@ -167,5 +338,36 @@ def check_robot(robot: Robot, poses=None, *, step: float = 1e-7, rtol: float = 1
     """Run every check of :func:`robot_checks` (like sklearn's ``check_estimator``); returns the
     merged measurements (e.g. ``fd_relative_mismatch``).
 
-    Raises one :class:`evotol.errors.CheckFailed` listing every failed check (not only the first)."""
+    Raises one :class:`evotol.errors.CheckFailed` listing every failed check (not only the first).
+
+    Parameters
+    ----------
+    robot : RobotErrorModel
+        Any object following :class:`robots.base.RobotErrorModel`'s contract.
+    poses : (n, workspace.dim) array_like, optional
+        Poses to check at, in SI units (m, rad); default (None): 8 Latin-hypercube poses of the
+        workspace (seed 1).
+    step : float, optional
+        Finite-difference step of each source component, in the source's SI unit (m or rad).
+    rtol : float, optional
+        Tolerated finite-difference mismatch relative to the sensitivity's largest entry
+        (dimensionless).
+    atol : float, optional
+        Absolute tolerance added to it, and the largest pose error accepted at zero source
+        errors (m or rad).
+
+    Returns
+    -------
+    dict
+        The measurements of every check merged into one dict (see each ``check_*`` function).
+
+    Raises
+    ------
+    evotol.errors.CheckFailed
+        One or more checks failed; the message lists them all.
+    evotol.errors.ValidationError
+        ``poses`` of the wrong shape or not finite (from ``robot.check_poses``).
+    evotol.errors.KinematicsError
+        A pose outside the workspace.
+    """
     return run_checks(str(robot.name), robot_checks(robot, poses, step=step, rtol=rtol, atol=atol))

@@ -11,6 +11,26 @@ def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int, int]:
     counts cell spans ``(r1 - r0) * (c1 - c0)`` (point grid: the rectangle's corners are grid
     points that are all kept). Histogram-stack algorithm (largest rectangle under a histogram,
     row by row), O(rows x cols); of equal areas, the first found (lowest last row) is kept.
+
+    Parameters
+    ----------
+    mask : (rows, cols) array_like of bool
+        True at the kept grid points (e.g. workspace samples that satisfy a criterion).
+
+    Returns
+    -------
+    area : int
+        Number of cell spans ``(r1 - r0) * (c1 - c0)`` (multiply by the grid spacings for an
+        area in m^2); 0 when no rectangle spans a cell.
+    r0, r1 : int
+        First and last row, inclusive.
+    c0, c1 : int
+        First and last column, inclusive.
+
+    Notes
+    -----
+    When no rectangle of positive area exists the result is ``(0, 0, -1, 0, -1)`` (an empty
+    range), even if single True points or lines exist.
     """
     mask = np.asarray(mask, bool)
     nr, nc = mask.shape
@@ -41,6 +61,23 @@ def largest_centred_rectangle(mask: np.ndarray, column: int) -> tuple[int, int, 
     cell spans. Reduces to :func:`largest_rectangle` on the mask of half-widths: entry ``(r, k)``
     is True when row ``r`` is True from ``column - k`` to ``column + k``, a prefix in ``k``, so
     its largest rectangle starts at ``k = 0``.
+
+    Parameters
+    ----------
+    mask : (rows, cols) array_like of bool
+        True at the kept grid points.
+    column : int
+        Index of the symmetry column (e.g. the column of ``x = 0`` for a robot symmetric about
+        the y axis).
+
+    Returns
+    -------
+    area : int
+        ``2 half_width (r1 - r0)`` cell spans; 0 when none.
+    r0, r1 : int
+        First and last row, inclusive.
+    half_width : int
+        Columns on each side of ``column`` (-1 when no rectangle was found).
     """
     mask = np.asarray(mask, bool)
     half = min(column, mask.shape[1] - 1 - column)

@@ -23,7 +23,18 @@ def _load(path: str):
 
 
 def available() -> dict[str, type]:
-    """Every registered robot class by name: the built-ins and the ``evotol.robots`` entry points."""
+    """Every registered robot class by name: the built-ins and the ``evotol.robots`` entry points.
+
+    Returns
+    -------
+    dict of str to type
+        Robot classes by registered name; an entry point overrides a built-in of the same name.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A built-in's ``module:Class`` path does not import.
+    """
     from importlib.metadata import entry_points
 
     found = {name: _load(path) for name, path in BUILTIN.items()}
@@ -32,7 +43,27 @@ def available() -> dict[str, type]:
 
 
 def get(name: str):
-    """The robot class registered as ``name`` (or at import path ``module:Class``)."""
+    """The robot class registered as ``name`` (or at import path ``module:Class``).
+
+    An entry point of group ``evotol.robots`` takes precedence over a built-in of the same name.
+
+    Parameters
+    ----------
+    name : str
+        A registered name (``"ucr3"``, ``"delta"``, ``"planar5r"``, ``"fivebar"`` or an entry
+        point's), or an import path ``"package.module:ClassName"`` (recognised by its ``:``).
+
+    Returns
+    -------
+    type
+        The robot class (not an instance).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown name (the message lists the known ones), or an import path whose module or
+        class does not import.
+    """
     if ":" in name:
         return _load(name)
     from importlib.metadata import entry_points

@@ -17,6 +17,14 @@ import math
 
 
 def register(subparsers) -> None:
+    """Add the ``check-mechanism`` sub-command to the ``evotol`` parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        What ``ArgumentParser.add_subparsers()`` returned; the new parser's ``func`` default
+        is :func:`cmd_check_mechanism`.
+    """
     p = subparsers.add_parser("check-mechanism", help="check a mechanism description: sources, loop closure, FD agreement",
                               description=__doc__.split("\n\n", 1)[1])
     p.add_argument("file", help="mechanism description (TOML), or the name of a shipped one (fivebar, irsbot2, ...)")
@@ -42,7 +50,15 @@ def _shown(value, unit: str) -> str:
 
 def print_understood(out: dict) -> None:
     """The parameters, the assembly (declared and solved joints) and the end-effector pose, in mm
-    and deg (:func:`robots.mechanism.checks.understood`)."""
+    and deg (:func:`robots.mechanism.checks.understood`).
+
+    Parameters
+    ----------
+    out : dict
+        The check's result: ``parameters``, ``assembly`` (``pose``, ``joints``) and
+        ``end_effector`` (``frame``, ``position`` in m, ``yaw_pitch_roll`` in rad); values SI,
+        printed to stdout in mm and deg.
+    """
     params = [f"{p['name']} = {_shown(p['value'], p['unit'])}" for p in out.get("parameters", [])]
     for i in range(0, len(params), 6):
         print(("  parameters: " if i == 0 else "              ") + ", ".join(params[i:i + 6]))
@@ -58,6 +74,28 @@ def print_understood(out: dict) -> None:
 
 
 def cmd_check_mechanism(args) -> int:
+    """Run ``evotol check-mechanism FILE`` (module docstring); a ``.urdf`` file goes to
+    :func:`cmd_check_urdf`.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``file``, ``poses`` (count), ``sources`` (comma-separated names/patterns or None),
+        ``rtol`` (dimensionless), ``json`` (bool), ``tip``.
+
+    Returns
+    -------
+    int
+        Exit status: 0, or 1 when the finite-difference agreement is worse than ``rtol``.
+
+    Raises
+    ------
+    ValidationError
+        A description that cannot be read or checked (from
+        :func:`robots.mechanism.checks.check_mechanism`), or a URDF file without ``--tip``.
+    KinematicsError
+        The loops do not close at the assembly, or close far from the declared joints.
+    """
     srcs = [s.strip() for s in args.sources.split(",")] if args.sources else None
     if str(args.file).lower().endswith(".urdf"):
         return cmd_check_urdf(args, srcs)
@@ -92,7 +130,14 @@ def cmd_check_mechanism(args) -> int:
 # ------------------------------------------------------------------ issue 23: URDF files, limits, rank
 def print_limits_and_rank(out: dict) -> None:
     """Workspace box, joint limits and the rank of the sources over the workspace, in mm and deg,
-    naming blind and duplicated sources (:mod:`robots.mechanism.inspection`)."""
+    naming blind and duplicated sources (:mod:`robots.mechanism.inspection`).
+
+    Parameters
+    ----------
+    out : dict
+        The check's result; its optional ``workspace``, ``limits`` (SI values), ``redundancy``
+        and ``identifiability`` entries are printed to stdout.
+    """
     if "workspace" in out:
         print("  workspace box: " + ", ".join(f"{c['name']} {_shown(c['low'], c['unit'])} .. {_shown(c['high'], c['unit'])}"
                                               for c in out["workspace"]))
@@ -123,7 +168,26 @@ def print_limits_and_rank(out: dict) -> None:
 
 
 def cmd_check_urdf(args, srcs) -> int:
-    """``evotol check-mechanism arm.urdf --tip tool0``: the URDF's chain, sources, rank, FD agreement."""
+    """``evotol check-mechanism arm.urdf --tip tool0``: the URDF's chain, sources, rank, FD agreement.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        As for :func:`cmd_check_mechanism`; ``file`` is the URDF file, ``tip`` its end-effector
+        link or frame.
+    srcs : list of str or None
+        Source names/patterns overriding the default sources.
+
+    Returns
+    -------
+    int
+        Exit status: 0, or 1 when the finite-difference agreement is worse than ``args.rtol``.
+
+    Raises
+    ------
+    ValidationError
+        No ``--tip`` given.
+    """
     from evotol.errors import ValidationError
     from robots.mechanism.urdf_check import check_urdf_file
 

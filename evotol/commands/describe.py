@@ -16,6 +16,14 @@ import json
 
 
 def register(subparsers) -> None:
+    """Add the ``describe`` sub-command to the ``evotol`` parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        What ``ArgumentParser.add_subparsers()`` returned; the new parser's ``func`` default
+        is :func:`cmd_describe`.
+    """
     p = subparsers.add_parser(
         "describe", help="list a robot's error sources (groups, units, shapes) and its workspace",
         description=__doc__.split("\n\n", 1)[1])
@@ -45,7 +53,20 @@ def _parse_set(items: list[str]) -> dict:
 
 
 def describe(robot) -> dict:
-    """JSON-ready description of a robot: sources and workspace (SI units, with display units)."""
+    """JSON-ready description of a robot: sources and workspace (SI units, with display units).
+
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        The robot or mechanism model.
+
+    Returns
+    -------
+    dict
+        ``robot`` (name), ``nonlinear_model`` (bool), ``sources`` (name, group, unit, shape,
+        dim, description), ``groups`` (sorted) and ``workspace`` (per coordinate: name, SI
+        ``unit``, ``low``/``high`` in it, ``display_unit`` and ``display_low``/``display_high``).
+    """
     ws = robot.workspace
     return {
         "robot": robot.name,
@@ -63,6 +84,19 @@ def describe(robot) -> dict:
 def robot_for(name: str, settings: list[str]):
     """The robot ``evotol describe NAME`` means: a description file, a registered robot (with
     ``--set`` arguments), else a shipped mechanism description.
+
+    Parameters
+    ----------
+    name : str
+        A description file, a robot name (built-in, entry point or ``module:Class``) or the name
+        of a shipped description.
+    settings : list of str
+        The ``--set KEY=VALUE`` items (VALUE read as TOML, else as a string).
+
+    Returns
+    -------
+    robots.base.RobotErrorModel
+        The robot, or a :class:`robots.mechanism.model.MechanismModel` of the description.
 
     Raises
     ------
@@ -99,6 +133,24 @@ def robot_for(name: str, settings: list[str]):
 
 
 def cmd_describe(args) -> int:
+    """Run ``evotol describe ROBOT`` (module docstring): print the robot's sources and workspace.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``robot`` (name or file), ``set`` (list of ``KEY=VALUE``) and ``json`` (bool: print
+        :func:`describe` as JSON).
+
+    Returns
+    -------
+    int
+        Exit status 0.
+
+    Raises
+    ------
+    ValidationError
+        As :func:`robot_for`: an unknown robot, bad ``--set`` arguments, or a study file.
+    """
     robot = robot_for(args.robot, args.set)
     d = describe(robot)
     if args.json:

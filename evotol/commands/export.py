@@ -10,6 +10,14 @@ from __future__ import annotations
 
 
 def register(subparsers) -> None:
+    """Add the ``export`` sub-command to the ``evotol`` parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        What ``ArgumentParser.add_subparsers()`` returned; the new parser's ``func`` default
+        is :func:`cmd_export`.
+    """
     p = subparsers.add_parser("export", help="write a user study's tolerance table as CSV or Excel (drawing units)",
                               description=__doc__.split("\n\n", 1)[1])
     p.add_argument("study_json", help="the NAME.json that 'evotol run' wrote")
@@ -21,6 +29,26 @@ def register(subparsers) -> None:
 
 
 def cmd_export(args) -> int:
+    """Run ``evotol export STUDY.json`` (module docstring).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``study_json`` (the JSON ``evotol run`` wrote), ``method`` (or None) and ``out`` (a
+        ``.csv`` or ``.xlsx`` file, or None: ``NAME_tolerances.xlsx`` beside the JSON).
+
+    Returns
+    -------
+    int
+        Exit status 0.
+
+    Raises
+    ------
+    ValidationError
+        The JSON file is missing, unreadable or not valid JSON, or not a user study's summary
+        (no ``display_units`` or ``sources``); and what the table writer refuses (an unknown
+        method or file type).
+    """
     import json
     from pathlib import Path
 

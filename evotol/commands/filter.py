@@ -10,6 +10,14 @@ from pathlib import Path
 
 
 def register(subparsers) -> None:
+    """Add the ``filter`` sub-command to the ``evotol`` parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        What ``ArgumentParser.add_subparsers()`` returned; the new parser's ``func`` default
+        is :func:`cmd_filter`.
+    """
     p = subparsers.add_parser(
         "filter", help="filter evaluated design entries with a query; print counts and kept input ranges",
         description="Filter an entries table written by a design study (Parquet or CSV). The query is a "
@@ -27,6 +35,27 @@ def register(subparsers) -> None:
 
 
 def cmd_filter(args) -> int:
+    """Run ``evotol filter ENTRIES QUERY`` (module docstring).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``entries`` (file), ``query`` (pandas expression, values in the columns' units),
+        ``inputs`` / ``objectives`` (comma-separated columns or None), ``out``, ``json``, ``html``
+        (output files or None) and ``show`` (kept entries to print).
+
+    Returns
+    -------
+    int
+        Exit status 0 (also when the query keeps no entry).
+
+    Raises
+    ------
+    ValidationError
+        An unreadable entries file or unwritable output (checked before loading), entries
+        without evotol metadata and no ``--inputs``/``--objectives``, or a bad query
+        (:meth:`evotol.filtering.DesignStudy.filter`).
+    """
     import pandas as pd
 
     from evotol.errors import ValidationError

@@ -77,7 +77,26 @@ def _fingerprint(entries: pd.DataFrame, evaluator) -> str:
 
 @dataclass
 class EvaluationLog:
-    """What :func:`evaluate` did: chunks evaluated now, chunks reused from the store, time."""
+    """What :func:`evaluate` did: chunks evaluated now, chunks reused from the store, time.
+
+    Pass one to :func:`evaluate` (``log=``) and read it afterwards; the defaults are an empty log.
+
+    Parameters
+    ----------
+    n_entries : int, default 0
+        Number of entries evaluated (rows of ``entries``).
+    n_chunks : int, default 0
+        Number of chunks the entries were split into.
+    chunks_evaluated : list of int
+        Indices of the chunks run by this call, in the order they finished.
+    chunks_resumed : list of int
+        Indices of the chunks read back from the store (sorted).
+    seconds : float, default 0.0
+        Wall-clock time of the call (s).
+    backend : str, default ""
+        Where the chunks ran (``"in-process"``, ``"2 local processes"``, ``"dask ..."``), or
+        ``"store"`` when every chunk was resumed.
+    """
 
     n_entries: int = 0
     n_chunks: int = 0
@@ -93,18 +112,57 @@ def evaluate(entries: pd.DataFrame, evaluator: Evaluator, *, store: str | Path |
              ) -> pd.DataFrame:
     """Evaluate every entry; returns inputs + objectives + ``feasible`` + ``error`` columns.
 
-    entries: a DataFrame from :func:`full_factorial` & co. (any columns; all go to the evaluator).
-    evaluator: picklable ``DataFrame -> DataFrame`` computing one chunk in one vectorised call;
-        an optional ``cache_key`` attribute/method identifies its settings for resuming.
-    store: folder for finished chunks (``chunk_00012.parquet``) and a manifest; on a later call
+    An entry whose evaluation raises an :class:`~evotol.errors.EvotolError` (e.g. a pose out of
+    reach) is re-run alone and recorded with its message in ``error``, NaN objectives and
+    ``feasible`` False; an entry with a non-finite objective is infeasible too.
+
+    Parameters
+    ----------
+    entries : pandas.DataFrame
+        A DataFrame from :func:`~evotol.doe.designs.full_factorial` & co. (any columns; all go to
+        the evaluator), non-empty.
+    evaluator : callable
+        Picklable ``DataFrame -> DataFrame`` (or dict of arrays) computing one chunk in one
+        vectorised call, one output row per input row, with column names other than the
+        inputs'; an optional ``feasible`` column is combined with the finiteness check. An
+        optional ``cache_key`` attribute/method identifies its settings for resuming.
+    store : str or Path, optional
+        Folder for finished chunks (``chunk_00012.parquet``) and a manifest; on a later call
         with the same entries and evaluator only the missing chunks run (resume after an
-        interruption); a store holding another study's chunks is cleared first.
-    chunk_size: entries per chunk (default: about 8 chunks per worker, at most 2048).
-    workers: local processes (default: all cores; 1 = in this process, no pickling).
-    scheduler: address of a Dask scheduler (``"tcp://host:8786"``); chunks then run on that
-        cluster (dask.distributed) instead of local processes.
-    progress: show a tqdm bar counting entries done.
-    log: an :class:`EvaluationLog` to fill (which chunks ran, which were resumed, time, backend).
+        interruption); a store holding another study's chunks is cleared first. None: nothing
+        is stored.
+    chunk_size : int, optional
+        Entries per chunk (default: about 8 chunks per worker, at most 2048).
+    workers : int, optional
+        Local processes (default: all cores; 1 = in this process, no pickling).
+    scheduler : str, optional
+        Address of a Dask scheduler (``"tcp://host:8786"``); chunks then run on that cluster
+        (dask.distributed) instead of local processes.
+    progress : bool, default True
+        Show a tqdm bar counting entries done.
+    description : str, default "entries"
+        Label of the progress bar.
+    log : EvaluationLog, optional
+        An :class:`EvaluationLog` to fill (which chunks ran, which were resumed, time, backend).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The entries (index reset) with the evaluator's columns, ``feasible`` (bool) and
+        ``error`` (str, empty when evaluated) appended; ``attrs`` are the entries' with
+        ``attrs["evotol"]["objectives"]`` listing the evaluator's output columns.
+
+    Raises
+    ------
+    ValidationError
+        ``entries`` is not a non-empty DataFrame, ``evaluator`` is not callable, ``chunk_size``
+        or ``workers`` is not a positive integer, or the evaluator's columns repeat input column
+        names. (An evaluator output that is not a DataFrame or dict of arrays with one row per
+        entry is a ValidationError too, but like any EvotolError it is recorded in ``error``
+        entry by entry, unless the chunk holds a single entry.)
+    EvotolError
+        The evaluation of a chunk of a single entry fails (the error propagates instead of
+        being recorded).
     """
     from tqdm.auto import tqdm
 

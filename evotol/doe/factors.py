@@ -23,13 +23,38 @@ FEASIBLE, ERROR, ENTRY, SOURCE = "feasible", "error", "entry", "source"
 class Factor:
     """One design variable of a study.
 
-    name: column name in the entries table; says its unit when not SI (``"db_xy_A_mm"``).
-    levels: the discrete levels (full factorial / random subset); empty for a continuous factor.
-    low, high: the continuous range (Latin hypercube, NSGA-II); defaults to the levels' span.
-    log: sample and draw on a log scale (tolerances spanning decades).
-    label: axis label for reports (``"Δb_xy A (mm)"``); defaults to ``name``.
-    si_scale: SI value = column value * si_scale (1e-3 for mm, pi/180 for deg).
-    group: family used by reports and findings (``"radial clearance"``, ``"link length"``).
+    Values (``levels``, ``low``, ``high``) are in the factor's column unit, the one its name says
+    (mm for ``db_xy_A_mm``); ``si_scale`` converts them to SI.
+
+    Parameters
+    ----------
+    name : str
+        Column name in the entries table, a Python identifier; says its unit when not SI
+        (``"db_xy_A_mm"``).
+    levels : tuple of float, default ()
+        The discrete levels (full factorial / random subset), distinct and finite; stored
+        sorted. Empty for a continuous factor.
+    low : float, optional
+        Lower end of the continuous range (Latin hypercube, NSGA-II), column unit; defaults to
+        the smallest level.
+    high : float, optional
+        Upper end of the continuous range, column unit, >= ``low``; defaults to the largest
+        level.
+    log : bool, default False
+        Sample and draw on a log scale (tolerances spanning decades); needs ``low > 0``.
+    label : str, default ""
+        Axis label for reports (``"Δb_xy A (mm)"``); empty means ``name``.
+    si_scale : float, default 1.0
+        ``SI value = column value * si_scale`` (1e-3 for mm, pi/180 for deg); positive.
+    group : str, default ""
+        Family used by reports and findings (``"radial clearance"``, ``"link length"``).
+
+    Raises
+    ------
+    ValidationError
+        ``name`` is not an identifier; levels not distinct and finite; neither levels nor both
+        ``low`` and ``high``; a range not finite or with ``low > high``; ``log`` with
+        ``low <= 0``; or ``si_scale`` not positive.
     """
 
     name: str
@@ -70,10 +95,23 @@ class Factor:
 
     @property
     def is_discrete(self) -> bool:
+        """True when the factor has discrete ``levels`` (else it is continuous on ``[low, high]``)."""
         return bool(self.levels)
 
     def to_unit(self, u: np.ndarray) -> np.ndarray:
-        """Map u in [0, 1] to the factor's range (log-uniform when ``log``); continuous."""
+        """Map u in [0, 1] to the factor's range (log-uniform when ``log``); continuous.
+
+        Parameters
+        ----------
+        u : array_like
+            Unit coordinates, nominally in [0, 1] (not clipped), any shape.
+
+        Returns
+        -------
+        ndarray
+            ``low + u * (high - low)``, or ``low * (high / low) ** u`` when ``log``, in the
+            factor's column unit; same shape as ``u``. Levels are ignored.
+        """
         u = np.asarray(u, dtype=float)
         if self.log:
             a, b = math.log10(self.low), math.log10(self.high)
@@ -81,12 +119,31 @@ class Factor:
         return self.low + u * (self.high - self.low)
 
     def to_dict(self) -> dict:
+        """The factor as a plain dict (stored in ``df.attrs`` and Parquet metadata).
+
+        Returns
+        -------
+        dict
+            Every field by name, ``levels`` as a list.
+        """
         d = asdict(self)
         d["levels"] = list(self.levels)
         return d
 
     @classmethod
     def from_dict(cls, d: Mapping) -> "Factor":
+        """Rebuild a factor from :meth:`to_dict` output.
+
+        Parameters
+        ----------
+        d : mapping
+            Field values by name; ``levels`` optional (any sequence).
+
+        Returns
+        -------
+        Factor
+            The factor, validated as by the constructor.
+        """
         return cls(**{**d, "levels": tuple(d.get("levels", ()))})
 
 
@@ -109,14 +166,40 @@ def _attach(df: pd.DataFrame, factors: Sequence[Factor], design: str, **extra) -
 
 
 def factors_of(df: pd.DataFrame) -> tuple[Factor, ...]:
-    """The factors stored with an entries table (empty when it carries none, e.g. a plain CSV)."""
+    """The factors stored with an entries table (empty when it carries none, e.g. a plain CSV).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        An entries table (from a design, :func:`~evotol.doe.evaluation.evaluate` or a Parquet
+        file), read through ``df.attrs["evotol"]["factors"]``.
+
+    Returns
+    -------
+    tuple of Factor
+        The factors, in their design order.
+    """
     meta = df.attrs.get("evotol", {})
     return tuple(Factor.from_dict(d) for d in meta.get("factors", ()))
 
 
 
 def from_unit(f: Factor, x: np.ndarray) -> np.ndarray:
-    """Inverse of :meth:`Factor.to_unit`: values in the factor's unit -> u in [0, 1] (clipped)."""
+    """Inverse of :meth:`Factor.to_unit`: values in the factor's unit -> u in [0, 1] (clipped).
+
+    Parameters
+    ----------
+    f : Factor
+        The factor.
+    x : array_like
+        Values in the factor's column unit, any shape; clipped to ``[low, high]`` first.
+
+    Returns
+    -------
+    ndarray
+        Unit coordinates in [0, 1] (log-scaled when ``f.log``), same shape as ``x``; zeros when
+        ``low == high``.
+    """
     x = np.clip(np.asarray(x, dtype=float), f.low, f.high)
     if f.high == f.low:
         return np.zeros_like(x)

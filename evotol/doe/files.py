@@ -10,7 +10,21 @@ from evotol.errors import ValidationError
 
 
 def save_entries(df: pd.DataFrame, stem: str | Path) -> dict[str, Path]:
-    """Write ``stem.parquet`` (with the factor metadata) and ``stem.csv``; returns both paths."""
+    """Write ``stem.parquet`` (with the factor metadata) and ``stem.csv``; returns both paths.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The entries table (its ``attrs`` travel in the Parquet metadata; the index is not
+        written).
+    stem : str or Path
+        Path without suffix (any suffix is replaced); missing parent folders are created.
+
+    Returns
+    -------
+    dict of str to Path
+        ``{"parquet": <stem>.parquet, "csv": <stem>.csv}``.
+    """
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     pq, csv = stem.with_suffix(".parquet"), stem.with_suffix(".csv")
@@ -20,7 +34,24 @@ def save_entries(df: pd.DataFrame, stem: str | Path) -> dict[str, Path]:
 
 
 def load_entries(path: str | Path) -> pd.DataFrame:
-    """Read entries from Parquet (with metadata) or CSV."""
+    """Read entries from Parquet (with metadata) or CSV.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.parquet`` / ``.pq`` file (factor metadata restored in ``df.attrs``) or a ``.csv``
+        file (no metadata; a missing ``error`` is read back as the empty string).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The entries table.
+
+    Raises
+    ------
+    ValidationError
+        The file does not exist or has another suffix.
+    """
     path = Path(path)
     if not path.exists():
         raise ValidationError("entries file", str(path), "an existing .parquet or .csv file")

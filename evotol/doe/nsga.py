@@ -19,7 +19,22 @@ from evotol.pareto import ParetoFront, knee_points, non_dominated
 
 @dataclass(frozen=True)
 class Objective:
-    """An objective column and whether it is minimised (``sense=+1``) or maximised (``-1``)."""
+    """An objective column and whether it is minimised (``sense=+1``) or maximised (``-1``).
+
+    Parameters
+    ----------
+    column : str
+        Name of the evaluator's output column (its unit is the one the name says).
+    sense : int, default 1
+        +1 to minimise, -1 to maximise.
+    log : bool, default False
+        Compare and normalise in log10 (values spanning decades), e.g. for the knee points.
+
+    Raises
+    ------
+    ValidationError
+        ``sense`` is not +1 or -1.
+    """
 
     column: str
     sense: int = 1
@@ -38,6 +53,26 @@ class DesignProblem(Problem):
     F: the objectives times their ``sense`` (pymoo minimises); G: <= 0 for a feasible entry
     (``feasible`` and, when given, the ``constraint`` column <= 0). ``seen`` keeps every
     evaluated entry (inputs + evaluator output): the archive the Pareto front is taken from.
+
+    Parameters
+    ----------
+    factors : sequence of Factor
+        The design variables; their continuous ``[low, high]`` ranges (log-scaled where ``log``)
+        are searched, levels are ignored.
+    evaluator : callable
+        Picklable ``DataFrame -> DataFrame`` computing the objective columns (and optionally
+        ``feasible`` and the ``constraint`` column) of a whole population, as for
+        :func:`~evotol.doe.evaluation.evaluate`.
+    objectives : sequence of Objective
+        The objective columns and their senses.
+    constraint : str, optional
+        Column of the evaluator output that must be <= 0 for a feasible entry.
+    workers : int, default 1
+        Local processes; above 1 (or with ``scheduler``) a generation is split into one chunk
+        per worker and run by :func:`~evotol.doe.evaluation.evaluate`, else it runs in this
+        process.
+    scheduler : str, optional
+        Address of a Dask scheduler (``"tcp://host:8786"``) to run the chunks on.
     """
 
     def __init__(self, factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[Objective], *,
@@ -48,6 +83,18 @@ class DesignProblem(Problem):
         self.seen: list[pd.DataFrame] = []
 
     def to_frame(self, U: np.ndarray) -> pd.DataFrame:
+        """The entries of a population: unit coordinates mapped by :meth:`Factor.to_unit`.
+
+        Parameters
+        ----------
+        U : (n, n_factors) ndarray
+            Decision variables in [0, 1], one row per individual, one column per factor.
+
+        Returns
+        -------
+        pandas.DataFrame
+            ``n`` rows, one column per factor (column units).
+        """
         return pd.DataFrame({f.name: f.to_unit(U[:, j]) for j, f in enumerate(self.factors)})
 
     def _evaluate(self, U, out, *args, **kwargs):
@@ -84,6 +131,52 @@ def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[
     Returns the :class:`evotol.pareto.ParetoFront` of the non-dominated feasible entries: its
     ``table`` has ``source = "NSGA-II"`` and a boolean ``knee`` column (:func:`knee_points`), sorted
     by the first objective; ``objectives`` are the study's (column, sense, log).
+
+    Parameters
+    ----------
+    factors : sequence of Factor
+        The design variables; their continuous ``[low, high]`` ranges (log-scaled where ``log``)
+        are searched, levels are ignored.
+    evaluator : callable
+        Picklable ``DataFrame -> DataFrame`` computing the objective columns (and optionally
+        ``feasible`` and the ``constraint`` column) of a whole population, as for
+        :func:`~evotol.doe.evaluation.evaluate`.
+    objectives : sequence of Objective
+        The objective columns and their senses.
+    pop_size : int, default 64
+        Population size.
+    n_gen : int, default 40
+        Number of generations.
+    seed : int, default 0
+        Seed of NSGA-II and of the random individuals that complete an ``initial`` population.
+    constraint : str, optional
+        Column of the evaluator output that must be <= 0 for a feasible entry.
+    initial : pandas.DataFrame, optional
+        Known entries (one column per factor name, column units) seeding the population; the
+        first ``pop_size`` are used (clipped to the ranges), random individuals fill the rest.
+    progress : bool, default False
+        Print pymoo's per-generation output.
+    workers : int, default 1
+        Local processes; above 1 (or with ``scheduler``) each generation is split into one
+        chunk per worker.
+    scheduler : str, optional
+        Address of a Dask scheduler (``"tcp://host:8786"``) to run the chunks on.
+
+    Returns
+    -------
+    ParetoFront
+        Its ``table``: the non-dominated feasible entries among every entry evaluated (inputs,
+        evaluator output, ``source``, ``knee``), duplicates of the factor values dropped;
+        ``table.attrs["evotol"]`` records the factors, ``design = "NSGA-II"``, ``pop_size``,
+        ``n_gen``, ``seed`` and ``n_evaluations``; ``seconds`` is the wall time (s).
+
+    Raises
+    ------
+    ValidationError
+        ``factors`` is empty, holds a non-Factor or has duplicate or reserved names, or
+        ``objectives`` is empty.
+    EvotolError
+        No evaluated entry is feasible.
     """
     t0 = time.perf_counter()
     factors = _check_factors(factors)

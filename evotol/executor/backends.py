@@ -36,7 +36,23 @@ def scheduler_of(configured=None):
 
 
 def worker_count(workers: int | None) -> int:
-    """Number of local processes: ``workers``, or all cores when None; a ValidationError below 1."""
+    """Number of local processes: ``workers``, or all cores when None; a ValidationError below 1.
+
+    Parameters
+    ----------
+    workers : int or None
+        The processes asked for (anything ``int()`` accepts); None: ``os.cpu_count()``.
+
+    Returns
+    -------
+    int
+        The number of processes, at least 1.
+
+    Raises
+    ------
+    ValidationError
+        ``workers`` is not an integer or is below 1.
+    """
     if workers is None:
         return os.cpu_count() or 1
     try:
@@ -52,13 +68,39 @@ def run_chunks(fn: Callable, items: Sequence, on_done: OnDone, *, common: tuple 
                workers: int | None = None, scheduler=None) -> str:
     """Call ``fn(*common, items[i])`` for every i and ``on_done(i, result)`` as each finishes.
 
-    fn: picklable (a module-level function) when it runs in other processes.
-    common: arguments shared by all items (e.g. an evaluator); on Dask they are scattered to
-        every worker once instead of travelling with every item.
-    workers: local processes (None: all cores; 1 or a single item: in this process, no pickling).
-    scheduler: a Dask scheduler address (``"tcp://host:8786"``, ``"inproc://..."``) or a
+    An exception in ``fn`` or ``on_done``, or a Ctrl-C, stops the running items (local
+    processes are terminated, Dask futures cancelled) and is raised again; the items finished
+    before it have been handed to ``on_done``.
+
+    Parameters
+    ----------
+    fn : callable
+        Picklable (a module-level function) when it runs in other processes.
+    items : sequence
+        The items, one call each.
+    on_done : callable
+        ``on_done(i, result)``, called in this process for every finished item, in the order
+        they finish.
+    common : tuple, optional
+        Arguments shared by all items (e.g. an evaluator); on Dask they are scattered to every
+        worker once instead of travelling with every item.
+    workers : int, optional
+        Local processes (None: all cores; 1 or a single item: in this process, no pickling).
+    scheduler : str or distributed.Client, optional
+        A Dask scheduler address (``"tcp://host:8786"``, ``"inproc://..."``) or a
         ``distributed.Client``; the items then run on that cluster (``workers`` is ignored).
-    Returns a short description of the backend used ("in-process", "2 local processes", "dask ...").
+
+    Returns
+    -------
+    str
+        A short description of the backend used ("in-process", "2 local processes",
+        "dask ...", or "nothing to run" for no items).
+
+    Raises
+    ------
+    ValidationError
+        ``workers`` below 1 (:func:`worker_count`), or a ``scheduler`` without
+        ``dask.distributed`` installed.
     """
     items = list(items)
     if not items:
@@ -77,7 +119,31 @@ def run_chunks(fn: Callable, items: Sequence, on_done: OnDone, *, common: tuple 
 
 def parallel_map(fn: Callable, items: Sequence, *, common: tuple = (), workers: int | None = None,
                  scheduler=None) -> list:
-    """``[fn(*common, x) for x in items]`` on local processes or a Dask cluster; order preserved."""
+    """``[fn(*common, x) for x in items]`` on local processes or a Dask cluster; order preserved.
+
+    Parameters
+    ----------
+    fn : callable
+        Picklable (a module-level function) when it runs in other processes.
+    items : sequence
+        The items, one call each.
+    common : tuple, optional
+        Arguments shared by all items, passed before the item.
+    workers : int, optional
+        Local processes (None: all cores); see :func:`run_chunks`.
+    scheduler : str or distributed.Client, optional
+        A Dask scheduler; see :func:`run_chunks`.
+
+    Returns
+    -------
+    list
+        ``fn``'s result for every item, in the order of ``items``.
+
+    Raises
+    ------
+    ValidationError
+        As :func:`run_chunks`.
+    """
     items = list(items)
     out: list = [None] * len(items)
 

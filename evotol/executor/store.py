@@ -15,6 +15,14 @@ class ChunkStore:
     evaluator, the number of entries, the chunk size). Opening the store with the same manifest
     returns the chunks already there (an interrupted run resumes with the missing ones); with
     another manifest the old chunks belong to another study and are removed first.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder of the chunks and of ``manifest.json`` (created by :meth:`open`).
+    **manifest
+        JSON-serialisable values recording what the chunks belong to (e.g. ``key``, the number
+        of entries, the chunk size); compared with the stored manifest after a JSON round trip.
     """
 
     def __init__(self, path: str | Path, **manifest):
@@ -22,7 +30,16 @@ class ChunkStore:
         self.manifest = dict(manifest)
 
     def open(self) -> dict[int, pd.DataFrame]:
-        """The chunks finished by an earlier run with the same manifest, by chunk index."""
+        """The chunks finished by an earlier run with the same manifest, by chunk index.
+
+        Creates the folder; with another (or no readable) manifest, removes the old chunks and
+        writes this one. A chunk that cannot be read (cut short by a kill) is deleted.
+
+        Returns
+        -------
+        dict of int to pandas.DataFrame
+            Chunk index -> the finished chunk; empty for a new or another study.
+        """
         path = self.path
         path.mkdir(parents=True, exist_ok=True)
         manifest = path / "manifest.json"
@@ -46,7 +63,15 @@ class ChunkStore:
         return {}
 
     def save(self, index: int, chunk: pd.DataFrame) -> None:
-        """Write one finished chunk atomically (a kill mid-write leaves no half chunk behind)."""
+        """Write one finished chunk atomically (a kill mid-write leaves no half chunk behind).
+
+        Parameters
+        ----------
+        index : int
+            The chunk's index (the file ``chunk_{index:05d}.parquet``).
+        chunk : pandas.DataFrame
+            The finished chunk.
+        """
         tmp = self.path / f".chunk_{index:05d}.parquet.tmp"
         chunk.to_parquet(tmp)
         os.replace(tmp, self.path / f"chunk_{index:05d}.parquet")

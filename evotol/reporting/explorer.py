@@ -19,7 +19,22 @@ ASSET = Path(__file__).with_name("explorer.js")
 
 
 def page_config(summary: dict) -> dict:
-    """What the script reads: the explorer data, unit factors and labels, the workspace and poses."""
+    """What the script reads: the explorer data, unit factors and labels, the workspace and poses.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (:mod:`evotol.study_outputs`), read through its
+        ``display_units``, ``sources``, ``error_units``, ``explorer``, ``workspace`` and
+        ``poses`` entries.
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``explorer`` (:func:`evotol.explorer_data.explorer_data`), ``error_units``,
+        ``factors`` (SI-to-display factor per unit name), ``labels`` (display label per unit
+        name, empty for ``"1"``), ``workspace`` and ``poses``.
+    """
     u = DisplayUnits(**summary["display_units"])
     units = {s["unit"] for s in summary["sources"]} | set(summary["error_units"].values()) | {"m", "rad"}
     return {"explorer": summary["explorer"], "error_units": summary["error_units"],
@@ -28,7 +43,20 @@ def page_config(summary: dict) -> dict:
 
 
 def tightness_text(tightness: dict) -> str:
-    """The sentence saying how far the page's sampled worst case can be and was below the certified one."""
+    """The sentence saying how far the page's sampled worst case can be and was below the certified one.
+
+    Parameters
+    ----------
+    tightness : dict
+        Per error component, the dict of :func:`evotol.explorer_data.sample_tightness`
+        (``n_directions``, ``covering_angle`` in rad, ``guaranteed``, ``measured``,
+        ``measured_any_pose`` as fractions, ``n_designs``).
+
+    Returns
+    -------
+    str
+        One clause per component (fractions shown in %), joined by ``"; "``.
+    """
     parts = []
     for comp, t in tightness.items():
         if t["guaranteed"] == 0:
@@ -43,7 +71,18 @@ def tightness_text(tightness: dict) -> str:
 
 
 def explorer_section(rep, summary: dict) -> None:
-    """Add the explorer (or the reason it is omitted) to ``rep``."""
+    """Add the explorer (or the reason it is omitted) to ``rep``.
+
+    Nothing is added when the summary has no explorer data.
+
+    Parameters
+    ----------
+    rep : Report
+        The page being built (:class:`evotol.reporting.html.Report`), appended to in place.
+    summary : dict
+        A user study's JSON summary (:mod:`evotol.study_outputs`) with its ``explorer`` entry
+        (or ``{"omitted": reason}``).
+    """
     data = summary.get("explorer")
     if not data:
         return

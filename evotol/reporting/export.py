@@ -22,7 +22,25 @@ FORMATS = ("csv", "xlsx")
 
 def chosen_method(summary: dict) -> str:
     """The allocation a drawing would carry: the certified optimum when it meets the requirement,
-    else the cheapest method that meets it, else the first method run."""
+    else the cheapest method that meets it, else the first method run.
+
+    Budget methods (whose result has a ``budget`` entry) are not candidates for the cheapest.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (:mod:`evotol.study_outputs`) with its ``results`` by method.
+
+    Returns
+    -------
+    str
+        The method's name, a key of ``summary["results"]``.
+
+    Raises
+    ------
+    ValidationError
+        The summary has no results.
+    """
     results = summary.get("results") or {}
     if not results:
         raise ValidationError("results", None, "a study summary with at least one allocation")
@@ -54,7 +72,7 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     Raises
     ------
     ValidationError
-        An unknown method.
+        An unknown method, or a summary without results.
     """
     method = method or chosen_method(summary)
     results = summary.get("results") or {}
@@ -83,7 +101,18 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
 
 
 def about_table(summary: dict) -> pd.DataFrame:
-    """The ``about`` sheet: study, units, requirement and each method's cost and status."""
+    """The ``about`` sheet: study, units, requirement and each method's cost and status.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (:mod:`evotol.study_outputs`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Two columns, ``item`` and ``value`` (text; requirement in display units).
+    """
     u = DisplayUnits(**summary["display_units"])
     rows = [("study", summary["name"]), ("robot", summary["robot"]), ("measure", summary["measure"]),
             ("length unit", u.length), ("angle unit", u.angle)]
@@ -100,18 +129,21 @@ def write_tolerance_table(summary: dict, path, method: str | None = None) -> Pat
     Parameters
     ----------
     summary : dict
+        A user study's JSON summary (``evotol run``).
     path : str or Path
-        Ends in ``.csv`` or ``.xlsx``.
+        Ends in ``.csv`` or ``.xlsx``; missing parent folders are created.
     method : str, optional
+        A method of ``summary["results"]``; the only one written when given.
 
     Returns
     -------
     Path
+        ``path``, written.
 
     Raises
     ------
     ValidationError
-        Another file ending, or an unknown method.
+        Another file ending, an unknown method, or a summary without results.
     """
     path = Path(path)
     kind = path.suffix.lower().lstrip(".")

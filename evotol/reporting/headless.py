@@ -39,7 +39,14 @@ WEBGL_BACKENDS = {
 
 
 def find_chromium() -> str | None:
-    """Path of a Chromium/Chrome executable, or None when there is none on this machine."""
+    """Path of a Chromium/Chrome executable, or None when there is none on this machine.
+
+    Returns
+    -------
+    str or None
+        The first of ``chromium``, ``chromium-browser``, ``google-chrome``,
+        ``google-chrome-stable``, ``chrome`` found on ``PATH``.
+    """
     for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable", "chrome"):
         path = shutil.which(name)
         if path:
@@ -52,16 +59,66 @@ class BrowserError(EvotolError):
 
 
 class Page:
-    """One tab, attached with a flat DevTools session."""
+    """One tab, attached with a flat DevTools session.
+
+    Made by :meth:`HeadlessChromium.open`.
+
+    Parameters
+    ----------
+    browser : HeadlessChromium
+        The browser the tab belongs to (its pipe carries the tab's commands).
+    session_id : str
+        The DevTools session id of the tab.
+    """
 
     def __init__(self, browser: "HeadlessChromium", session_id: str):
         self.browser, self.session_id = browser, session_id
 
     def send(self, method: str, params: dict | None = None, timeout: float = 60.0) -> dict:
+        """Send one DevTools command to this tab and wait for its reply.
+
+        Parameters
+        ----------
+        method : str
+            The DevTools method, e.g. ``"Page.navigate"``.
+        params : dict, optional
+            Its parameters.
+        timeout : float, default 60.0
+            Seconds to wait for the reply.
+
+        Returns
+        -------
+        dict
+            The reply's ``result``.
+
+        Raises
+        ------
+        BrowserError
+            The command failed, timed out, or the browser closed the pipe.
+        """
         return self.browser.send(method, params, session_id=self.session_id, timeout=timeout)
 
     def evaluate(self, expression: str, timeout: float = 60.0):
-        """Evaluate a JavaScript expression (awaiting a returned promise) and return its value."""
+        """Evaluate a JavaScript expression (awaiting a returned promise) and return its value.
+
+        Parameters
+        ----------
+        expression : str
+            JavaScript source evaluated in the page.
+        timeout : float, default 60.0
+            Seconds to wait for the result.
+
+        Returns
+        -------
+        object
+            The value, converted from JSON (None for ``undefined``).
+
+        Raises
+        ------
+        BrowserError
+            The expression raised (the message carries its description), or the command failed
+            or timed out.
+        """
         reply = self.send("Runtime.evaluate", {"expression": expression, "awaitPromise": True,
                                                "returnByValue": True}, timeout=timeout)
         if "exceptionDetails" in reply:
@@ -71,7 +128,27 @@ class Page:
         return reply.get("result", {}).get("value")
 
     def wait_for(self, expression: str, timeout: float = 60.0, poll: float = 0.05):
-        """Poll ``expression`` until it is truthy; returns its value."""
+        """Poll ``expression`` until it is truthy; returns its value.
+
+        Parameters
+        ----------
+        expression : str
+            JavaScript expression evaluated at each poll.
+        timeout : float, default 60.0
+            Seconds after which polling stops (also the timeout of each evaluation).
+        poll : float, default 0.05
+            Seconds between polls.
+
+        Returns
+        -------
+        object
+            The first truthy value.
+
+        Raises
+        ------
+        BrowserError
+            Still falsy after ``timeout``, or the expression raised.
+        """
         t_end = time.monotonic() + timeout
         while True:
             value = self.evaluate(expression, timeout=timeout)
@@ -83,7 +160,25 @@ class Page:
 
 
 class HeadlessChromium:
-    """A headless Chromium process spoken to over ``--remote-debugging-pipe``."""
+    """A headless Chromium process spoken to over ``--remote-debugging-pipe``.
+
+    The process starts with :meth:`start` (or on entering a ``with`` block) and stops with
+    :meth:`close` (or on leaving it), in a temporary profile folder.
+
+    Parameters
+    ----------
+    executable : str, optional
+        Path of the browser; by default :func:`find_chromium`.
+    extra_flags : tuple of str, default ()
+        Command-line flags added after :data:`CHROMIUM_FLAGS` and the WebGL flags.
+    webgl : str, default "swiftshader"
+        WebGL back end, a key of :data:`WEBGL_BACKENDS` (``"swiftshader"`` or ``"llvmpipe"``).
+
+    Raises
+    ------
+    BrowserError
+        No executable is found, or ``webgl`` is unknown.
+    """
 
     def __init__(self, executable: str | None = None, extra_flags: tuple[str, ...] = (), webgl: str = "swiftshader"):
         self.executable = executable or find_chromium()
@@ -107,6 +202,7 @@ class HeadlessChromium:
         self.close()
 
     def start(self) -> None:
+        """Launch the browser process (headless, on a fresh temporary profile) and connect the pipes."""
         self._profile = tempfile.TemporaryDirectory(prefix="evotol-chromium-")
         cmd_r, cmd_w = os.pipe()    # we write commands, chromium reads fd 3
         out_r, out_w = os.pipe()    # chromium writes replies on fd 4, we read
@@ -126,6 +222,7 @@ class HeadlessChromium:
         self._write, self._read = cmd_w, out_r
 
     def close(self) -> None:
+        """Ask the browser to close (killed after 10 s), close the pipes and remove the profile."""
         if self._proc is not None:
             try:
                 self.send("Browser.close", timeout=5)
@@ -149,7 +246,29 @@ class HeadlessChromium:
     # --- protocol ---------------------------------------------------------------------
     def send(self, method: str, params: dict | None = None, *, session_id: str | None = None,
              timeout: float = 60.0) -> dict:
-        """Send one DevTools command and wait for its reply (events in between are dropped)."""
+        """Send one DevTools command and wait for its reply (events in between are dropped).
+
+        Parameters
+        ----------
+        method : str
+            The DevTools method, e.g. ``"Target.createTarget"``.
+        params : dict, optional
+            Its parameters.
+        session_id : str, optional
+            The session of a tab (flat sessions); None sends to the browser.
+        timeout : float, default 60.0
+            Seconds to wait for the reply.
+
+        Returns
+        -------
+        dict
+            The reply's ``result``.
+
+        Raises
+        ------
+        BrowserError
+            The reply is an error, none came within ``timeout``, or the browser closed the pipe.
+        """
         self._next_id += 1
         msg = {"id": self._next_id, "method": method, "params": params or {}}
         if session_id:
@@ -175,7 +294,27 @@ class HeadlessChromium:
                 self._buffer += chunk
 
     def open(self, path_or_url, timeout: float = 120.0) -> Page:
-        """Open a file path or URL in a new tab and wait until the document has loaded."""
+        """Open a file path or URL in a new tab and wait until the document has loaded.
+
+        Parameters
+        ----------
+        path_or_url : str or Path
+            A URL (``http:``, ``https:``, ``file:``, ``about:``, ``data:``) or a file path,
+            relative to the working directory or absolute.
+        timeout : float, default 120.0
+            Seconds to wait for the navigation and for ``document.readyState`` to be
+            ``"complete"``.
+
+        Returns
+        -------
+        Page
+            The new tab.
+
+        Raises
+        ------
+        BrowserError
+            A command failed or the page did not load within ``timeout``.
+        """
         url = Path(path_or_url).resolve().as_uri() if not str(path_or_url).startswith(("http:", "https:", "file:", "about:", "data:")) else str(path_or_url)
         target = self.send("Target.createTarget", {"url": "about:blank"})["targetId"]
         session = self.send("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]

@@ -33,7 +33,13 @@ table.ev th{background:#f3f3f3} table.ev td:first-child,table.ev th:first-child{
 
 def plotlyjs_name() -> str:
     """File name of the shared plotly.js bundle, versioned so that reports of different plotly
-    versions in one folder do not overwrite each other's copy."""
+    versions in one folder do not overwrite each other's copy.
+
+    Returns
+    -------
+    str
+        ``"plotly-<version>.min.js"``, the version of the plotly.js bundled with plotly.
+    """
     from plotly.offline import get_plotlyjs_version
 
     return f"plotly-{get_plotlyjs_version()}.min.js"
@@ -41,7 +47,20 @@ def plotlyjs_name() -> str:
 
 def write_plotlyjs(folder: str | Path) -> Path:
     """Write the plotly.js bundle into ``folder`` unless an identical copy is there already
-    (atomic: parallel writers of one folder never leave a half-written file)."""
+    (atomic: parallel writers of one folder never leave a half-written file).
+
+    A copy of the same size counts as identical.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The folder of the reports (created when missing).
+
+    Returns
+    -------
+    Path
+        Path of the bundle, ``folder / plotlyjs_name()``.
+    """
     from plotly.offline import get_plotlyjs
 
     folder = Path(folder)
@@ -69,7 +88,27 @@ def _fmt(v, digits: int = 4) -> str:
 
 def table_html(rows: Sequence[Sequence], header: Sequence[str] | None = None, digits: int = 4,
                table_id: str | None = None) -> str:
-    """An HTML table; floats are printed with ``digits`` significant digits."""
+    """An HTML table; floats are printed with ``digits`` significant digits.
+
+    Floats below 1e-3 or from 1e5 in magnitude are printed in exponent notation, booleans as
+    yes/no; other values as text, HTML-escaped.
+
+    Parameters
+    ----------
+    rows : sequence of sequence
+        The cells, row by row (values as they are, no unit conversion).
+    header : sequence of str, optional
+        Column titles; no header row when None or empty.
+    digits : int, default 4
+        Significant digits of floats.
+    table_id : str, optional
+        ``id`` attribute of the ``<table>`` (for scripts of the page).
+
+    Returns
+    -------
+    str
+        The ``<table class="ev">`` element.
+    """
     out = [f'<table class="ev"{f" id={html.escape(table_id)!r}" if table_id else ""}>']
     if header:
         out.append("<tr>" + "".join(f"<th>{html.escape(str(h))}</th>" for h in header) + "</tr>")
@@ -80,7 +119,19 @@ def table_html(rows: Sequence[Sequence], header: Sequence[str] | None = None, di
 
 
 class Report:
-    """Collects sections and writes one self-contained HTML file."""
+    """Collects sections and writes one self-contained HTML file.
+
+    Sections are added in page order by :meth:`heading`, :meth:`text`, :meth:`table`,
+    :meth:`figure` and :meth:`html`; :meth:`write` writes the page (plotly.js beside it unless
+    ``inline_plotly``).
+
+    Parameters
+    ----------
+    title : str
+        Page title (``<title>`` and the ``<h1>`` heading).
+    subtitle : str, default ""
+        A line of small print under the title; none when empty.
+    """
 
     def __init__(self, title: str, subtitle: str = ""):
         self.title, self.subtitle = title, subtitle
@@ -88,23 +139,95 @@ class Report:
         self._n_fig = 0
 
     def heading(self, text: str) -> "Report":
+        """Add a section heading (``<h2>``).
+
+        Parameters
+        ----------
+        text : str
+            The heading (HTML-escaped).
+
+        Returns
+        -------
+        Report
+            This report, so that calls chain.
+        """
         self._parts.append(f"<h2>{html.escape(text)}</h2>")
         return self
 
     def text(self, text: str, note: bool = False, raw: bool = False) -> "Report":
+        """Add a paragraph, or a highlighted note.
+
+        Parameters
+        ----------
+        text : str
+            The prose.
+        note : bool, default False
+            Show it as a highlighted note box instead of a paragraph.
+        raw : bool, default False
+            ``text`` is HTML and inserted as it is (else it is escaped).
+
+        Returns
+        -------
+        Report
+            This report, so that calls chain.
+        """
         body = text if raw else html.escape(text)
         self._parts.append(f'<div class="note">{body}</div>' if note else f"<p>{body}</p>")
         return self
 
     def html(self, fragment: str) -> "Report":
+        """Add an HTML fragment as it is (no escaping).
+
+        Parameters
+        ----------
+        fragment : str
+            The HTML.
+
+        Returns
+        -------
+        Report
+            This report, so that calls chain.
+        """
         self._parts.append(fragment)
         return self
 
     def table(self, rows, header=None, digits: int = 4, table_id: str | None = None) -> "Report":
+        """Add a table (:func:`table_html`).
+
+        Parameters
+        ----------
+        rows : sequence of sequence
+            The cells, row by row.
+        header : sequence of str, optional
+            Column titles.
+        digits : int, default 4
+            Significant digits of floats.
+        table_id : str, optional
+            ``id`` attribute of the table.
+
+        Returns
+        -------
+        Report
+            This report, so that calls chain.
+        """
         self._parts.append(table_html(rows, header, digits, table_id))
         return self
 
     def figure(self, fig, div_id: str | None = None) -> "Report":
+        """Add a plotly figure (responsive, drawn by the page's plotly.js).
+
+        Parameters
+        ----------
+        fig : plotly.graph_objects.Figure
+            The figure.
+        div_id : str, optional
+            ``id`` of its ``<div>``; by default ``fig<k>`` for the k-th figure added.
+
+        Returns
+        -------
+        Report
+            This report, so that calls chain.
+        """
         self._n_fig += 1
         div_id = div_id or f"fig{self._n_fig}"
         self._parts.append(fig.to_html(full_html=False, include_plotlyjs=False, div_id=div_id,
@@ -112,7 +235,18 @@ class Report:
         return self
 
     def render(self, inline_plotly: bool = False) -> str:
-        """The page; plotly.js is loaded from :func:`plotlyjs_name` beside it, or embedded."""
+        """The page; plotly.js is loaded from :func:`plotlyjs_name` beside it, or embedded.
+
+        Parameters
+        ----------
+        inline_plotly : bool, default False
+            Embed plotly.js (4.8 MB) in the page instead of loading the file beside it.
+
+        Returns
+        -------
+        str
+            The HTML document.
+        """
         if inline_plotly:
             from plotly.offline import get_plotlyjs
 
@@ -126,7 +260,20 @@ class Report:
                 f"<h1>{html.escape(self.title)}</h1>{sub}" + "\n".join(self._parts) + "</body></html>")
 
     def write(self, path: str | Path, inline_plotly: bool = False) -> Path:
-        """Write the page to ``path`` and, unless ``inline_plotly``, the shared plotly.js beside it."""
+        """Write the page to ``path`` and, unless ``inline_plotly``, the shared plotly.js beside it.
+
+        Parameters
+        ----------
+        path : str or Path
+            The HTML file (missing parent folders are created; an existing file is replaced).
+        inline_plotly : bool, default False
+            Embed plotly.js in the page (a single file to send on its own).
+
+        Returns
+        -------
+        Path
+            ``path``.
+        """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         if not inline_plotly:
@@ -153,7 +300,22 @@ def _jsonable(obj):
 
 
 def write_json(path: str | Path, data: dict) -> Path:
-    """Write ``data`` as JSON; numpy values are converted, non-finite floats become null."""
+    """Write ``data`` as JSON; numpy values are converted, non-finite floats become null.
+
+    Dict keys become strings, tuples and arrays lists.
+
+    Parameters
+    ----------
+    path : str or Path
+        The JSON file (missing parent folders are created).
+    data : dict
+        The data (nested dicts, lists, numbers, strings, numpy arrays and scalars).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(_jsonable(data), indent=1), encoding="utf-8")

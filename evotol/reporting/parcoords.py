@@ -49,13 +49,40 @@ GPU_MAX_DRAWN = 200_000
 
 @dataclass(frozen=True)
 class Axis:
-    """One parallel-coordinate axis: a column, its label and whether it is drawn on log10."""
+    """One parallel-coordinate axis: a column, its label and whether it is drawn on log10.
+
+    Parameters
+    ----------
+    column : str
+        Column of the entries table (values in the unit its name says).
+    label : str, default ""
+        Axis title; empty means ``column``.
+    log : bool, default False
+        Draw ``log10`` of the values (for positive values spanning decades).
+    """
 
     column: str
     label: str = ""
     log: bool = False
 
     def values(self, s: pd.Series) -> np.ndarray:
+        """The plotted values of a column: as they are, or their ``log10`` on a log axis.
+
+        Parameters
+        ----------
+        s : pandas.Series
+            The column's values (column unit).
+
+        Returns
+        -------
+        ndarray
+            Float values, ``log10`` of them when ``log``; same length as ``s``.
+
+        Raises
+        ------
+        ValidationError
+            A log axis has a value <= 0.
+        """
         v = s.to_numpy(dtype=float)
         if self.log:
             if np.any(v <= 0):
@@ -64,11 +91,35 @@ class Axis:
         return v
 
     def transform(self, x: float) -> float:
+        """One value in plotted units (``log10(x)`` on a log axis).
+
+        Parameters
+        ----------
+        x : float
+            A value in the column unit (> 0 on a log axis).
+
+        Returns
+        -------
+        float
+            The position on the axis.
+        """
         return math.log10(x) if self.log else float(x)
 
 
 def format_tick(v: float) -> str:
-    """Readable tick text: plain decimals from 0.0001 to 99 999, else ``2·10⁻⁵``."""
+    """Readable tick text: plain decimals from 0.0001 to 99 999, else ``2·10⁻⁵``.
+
+    Parameters
+    ----------
+    v : float
+        The value (axis unit).
+
+    Returns
+    -------
+    str
+        Four significant digits, or mantissa (three digits, none when 1) times a power of ten
+        with a superscript exponent.
+    """
     if v == 0:
         return "0"
     if 1e-4 <= abs(v) < 1e5:
@@ -80,7 +131,25 @@ def format_tick(v: float) -> str:
 
 
 def log_ticks(lo: float, hi: float) -> tuple[list[float], list[str]]:
-    """Tick positions (log10 units) and labels (axis units) for a log axis spanning [lo, hi] (log10)."""
+    """Tick positions (log10 units) and labels (axis units) for a log axis spanning [lo, hi] (log10).
+
+    Ticks at 1 per decade over three decades or more, at 1, 2, 5 over one or more, else at 1,
+    1.5, 2, 3, 5, 7; the two ends when fewer than two ticks fall in the range.
+
+    Parameters
+    ----------
+    lo : float
+        Lower end of the axis, ``log10`` of the axis unit.
+    hi : float
+        Upper end, ``log10`` of the axis unit.
+
+    Returns
+    -------
+    tickvals : list of float
+        Tick positions (log10 units).
+    ticktext : list of str
+        Their labels in the axis unit (:func:`format_tick`).
+    """
     d0, d1 = math.floor(lo + 1e-9), math.ceil(hi - 1e-9)
     mults = (1,) if d1 - d0 >= 3 else ((1, 2, 5) if d1 - d0 >= 1 else (1, 1.5, 2, 3, 5, 7))
     vals = [math.log10(m) + d for d in range(d0, d1 + 1) for m in mults]
@@ -92,7 +161,21 @@ def log_ticks(lo: float, hi: float) -> tuple[list[float], list[str]]:
 
 def default_axes(study: DesignStudy, log_objectives: Sequence[str] | None = None) -> list[Axis]:
     """Inputs then objectives; factors with ``log=True`` on log10; objectives on log10 when listed
-    in ``log_objectives`` or, by default, when positive and spanning more than two decades."""
+    in ``log_objectives`` or, by default, when positive and spanning more than two decades.
+
+    Parameters
+    ----------
+    study : DesignStudy
+        The evaluated entries, with their inputs, objectives and factors.
+    log_objectives : sequence of str, optional
+        The objective columns drawn on log10; None decides from the values (positive, max/min
+        above 100).
+
+    Returns
+    -------
+    list of Axis
+        One axis per input (the factor's label, its ``log``), then one per objective.
+    """
     axes = []
     for c in study.inputs:
         f = study.factors.get(c)
@@ -116,7 +199,25 @@ def _viridis(n: int = 9) -> list[str]:
 
 def parcoords_frame(study: DesignStudy, among: pd.DataFrame | None = None,
                     extra: pd.DataFrame | None = None) -> pd.DataFrame:
-    """The lines to draw: the (feasible) study entries, then the ``extra`` (NSGA-II) entries."""
+    """The lines to draw: the (feasible) study entries, then the ``extra`` (NSGA-II) entries.
+
+    Parameters
+    ----------
+    study : DesignStudy
+        The evaluated entries.
+    among : pandas.DataFrame, optional
+        Draw these entries instead of all of the study's (e.g. a filtered subset).
+    extra : pandas.DataFrame, optional
+        NSGA-II entries (the axis columns, optional bool ``knee``) drawn after the grid; without
+        an ``entry`` column they are numbered -1, -2, ...
+
+    Returns
+    -------
+    pandas.DataFrame
+        The feasible grid entries (``source = "level grid"``; the ``feasible`` column, when
+        present, selects them), then the extra ones (``source`` ``"NSGA-II"`` or ``"knee"``,
+        knees last), index reset.
+    """
     grid = study.entries if among is None else among
     if "feasible" in grid:
         grid = grid[grid["feasible"].astype(bool)]
@@ -134,7 +235,36 @@ def parcoords_frame(study: DesignStudy, among: pd.DataFrame | None = None,
 
 def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, title: str = "",
                      height: int = 600):
-    """A plotly Parcoords figure of ``frame`` (see :func:`parcoords_frame`), coloured by ``color``."""
+    """A plotly Parcoords figure of ``frame`` (see :func:`parcoords_frame`), coloured by ``color``.
+
+    The level-grid lines use the Viridis part of the colour scale (scaled to the grid's range of
+    ``color``); NSGA-II lines are orange, knees red, and a ``source`` axis is added first when
+    there are any.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The lines, with every axis column and optionally ``source``.
+    axes : sequence of Axis
+        The axes, in drawing order.
+    color : str
+        The axis column that colours the lines.
+    title : str, default ""
+        Figure title; none when empty.
+    height : int, default 600
+        Figure height (pixels).
+
+    Returns
+    -------
+    plotly.graph_objects.Figure
+        One ``Parcoords`` trace.
+
+    Raises
+    ------
+    ValidationError
+        ``color`` is not an axis column, an axis column is missing from ``frame``, or a log
+        axis has a value <= 0.
+    """
     import plotly.graph_objects as go
 
     by_col = {a.column: a for a in axes}
@@ -200,6 +330,33 @@ def drawn_lines(frame: pd.DataFrame, axes: Sequence[Axis], presets: Sequence[Pre
     that keeps few entries shows all of them; the entries at both ends of every axis; then a seeded
     uniform sample of the rest. Returns all positions when ``len(frame) <= max_drawn``.
     ``kept``: each preset's kept index in ``frame``, when the caller has filtered already.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The lines (:func:`parcoords_frame`).
+    axes : sequence of Axis
+        The drawn axes (their extreme entries are kept).
+    presets : sequence of Preset
+        The presets whose kept entries are sampled.
+    study : DesignStudy
+        Filters ``frame`` by each preset when ``kept`` is None.
+    max_drawn : int or None
+        Most lines to draw; None draws all.
+    seed : int, default 0
+        Seed of the random choices.
+    kept : mapping of str to pandas.Index, optional
+        Each preset's kept index in ``frame``, by preset name.
+
+    Returns
+    -------
+    ndarray of int
+        Sorted positions into ``frame``.
+
+    Raises
+    ------
+    ValidationError
+        ``max_drawn`` is below 1 while ``frame`` has lines, or a log axis has a value <= 0.
     """
     n = len(frame)
     if max_drawn is None or n <= max_drawn:
@@ -382,16 +539,52 @@ def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = N
                   max_drawn: int | None = DEFAULT_MAX_DRAWN, seed: int = 0) -> dict:
     """Add the interactive parallel-coordinate section to ``report`` (an :class:`html.Report`).
 
-    study: the evaluated entries; among: draw only these entries (e.g. a filtered subset);
-    extra: NSGA-II Pareto entries (columns of the axes, optional bool ``knee``) drawn on top;
-    presets: filters shown as buttons (default: the study's presets); color: objective column
-    colouring the lines (default: the first objective).
+    Above ``max_drawn`` lines the page first draws the sample :func:`drawn_lines` picks and
+    draws all of them on request or when WebGL is hardware-accelerated.
 
-    max_drawn: above this many lines the page first draws the sample :func:`drawn_lines` picks
-    (seeded by ``seed``) and draws all of them on request or when WebGL is hardware-accelerated;
-    ``None`` always draws all of them.
+    Parameters
+    ----------
+    report : Report
+        The page (:class:`evotol.reporting.html.Report`), appended to in place.
+    study : DesignStudy
+        The evaluated entries.
+    axes : sequence of Axis, optional
+        The axes; default :func:`default_axes`.
+    color : str, optional
+        Objective column colouring the lines (an axis column); default the first objective.
+    presets : sequence of Preset, optional
+        Filters shown as buttons (their columns must be axis columns); default the study's
+        presets.
+    extra : pandas.DataFrame, optional
+        NSGA-II Pareto entries (columns of the axes, optional bool ``knee``) drawn on top.
+    among : pandas.DataFrame, optional
+        Draw only these entries (e.g. a filtered subset).
+    log_objectives : sequence of str, optional
+        Objectives on log10, for the default axes (see :func:`default_axes`).
+    table_rows : int, default 50
+        Rows of the page's table of kept entries.
+    div_id : str, default "pc"
+        ``id`` of the figure's ``<div>``, prefix of the ids of its controls (unique per page).
+    title : str, default ""
+        Figure title.
+    height : int, default 600
+        Figure height (pixels).
+    max_drawn : int or None, default DEFAULT_MAX_DRAWN
+        Lines drawn at first (1000); ``None`` always draws all of them.
+    seed : int, default 0
+        Seed of the drawn sample.
 
-    Returns ``{"n_lines", "n_drawn", "presets": {name: count}}`` -- the Python counts the page shows.
+    Returns
+    -------
+    dict
+        ``{"n_lines", "n_drawn", "presets": {name: count}}`` -- the Python counts the page shows.
+
+    Raises
+    ------
+    ValidationError
+        ``extra`` lacks an axis column, no entry is left to draw, ``color`` or a preset column
+        is not an axis column, an axis column is missing, a log axis has a value <= 0, or
+        ``max_drawn`` is below 1.
     """
     axes = list(axes) if axes is not None else default_axes(study, log_objectives)
     color = color or study.objectives[0]
@@ -451,7 +644,23 @@ def add_parcoords(report, study: DesignStudy, *, axes: Sequence[Axis] | None = N
 
 def preset_table_rows(study: DesignStudy, presets: Sequence[Preset] | None = None,
                       among: pd.DataFrame | None = None) -> list[list]:
-    """Rows ``[preset, figure, query, kept count, kept input ranges]`` for a static report table."""
+    """Rows ``[preset, figure, query, kept count, kept input ranges]`` for a static report table.
+
+    Parameters
+    ----------
+    study : DesignStudy
+        The evaluated entries, filtered by :meth:`evotol.filtering.DesignStudy.filter`.
+    presets : sequence of Preset, optional
+        The presets; default the study's.
+    among : pandas.DataFrame, optional
+        Filter these entries instead of all of the study's.
+
+    Returns
+    -------
+    list of list
+        One row per preset: name, figure, resolved query, kept count and the kept range (or
+        levels) of each input as text.
+    """
     presets = list(presets) if presets is not None else list(study.presets.values())
     rows = []
     for p in presets:

@@ -35,7 +35,20 @@ def _error_text(summary: dict, comp: str, value) -> str:
 
 
 def pose_cells(summary: dict, pose) -> str:
-    """A pose (SI) in the workspace's display units: ``x = 12.00 mm, y = -3.000 mm``."""
+    """A pose (SI) in the workspace's display units: ``x = 12.00 mm, y = -3.000 mm``.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+    pose : sequence of float
+        Workspace coordinates in SI (m, rad), in the order of ``summary["workspace"]["names"]``.
+
+    Returns
+    -------
+    str
+        ``name = value unit`` per coordinate, comma-separated (no unit for dimensionless ones).
+    """
     ws = summary["workspace"]
     return ", ".join(f"{n} = {number(v * k)}" + (f" {u}" if u not in ("1", "") else "")
                      for n, v, k, u in zip(ws["names"], pose, ws["display_scale"], ws["display_units"]))
@@ -44,7 +57,20 @@ def pose_cells(summary: dict, pose) -> str:
 def yield_cell(y: dict) -> str:
     """Report cell of a yield check: worst-pose estimate with its interval at the stated
     confidence, then the verdict with the interval it is read from (Bonferroni level over the
-    poses), so an interval above the requirement next to "undecided" is explained."""
+    poses), so an interval above the requirement next to "undecided" is explained.
+
+    Parameters
+    ----------
+    y : dict
+        A Monte Carlo yield check: ``yield_estimate``, ``yield_lower``, ``yield_upper``,
+        ``confidence``, ``model``, and when judged ``verdict``, ``verdict_interval``,
+        ``yield_required``, ``verdict_level`` (yields and levels as fractions).
+
+    Returns
+    -------
+    str
+        The cell text (confidence levels in %).
+    """
     pct = lambda c: f"{100 * c:.4g} %"
     cell = (f"{y['yield_estimate']:.5f} [{y['yield_lower']:.5f}, {y['yield_upper']:.5f}] at {pct(y['confidence'])} "
             f"({y['model']} model)")
@@ -65,7 +91,22 @@ def _certificate_cell(r: dict) -> str:
 
 
 def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
-    """Rows of the top table: one per method and, for NSGA-II, its cheapest feasible point and knee."""
+    """Rows of the top table: one per method and, for NSGA-II, its cheapest feasible point and knee.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+
+    Returns
+    -------
+    rows : list of list
+        Method, cost, the largest error of each requirement component (display units), the
+        yield (yield measure only), worst pose, status, verdict or certificate, and the Monte
+        Carlo exceed rate.
+    header : list of str
+        The column titles.
+    """
     comps = list(summary["requirement"])
     yield_measure = summary["measure"] == "yield"
     kind = ", yield-equivalent" if yield_measure else ""   # the error whose bound the yield requirement is
@@ -106,7 +147,23 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
 
 def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     """The terminal table of ``evotol run``: every method run, NSGA-II as its cheapest feasible
-    point and its knee; errors in the study's display units."""
+    point and its knee; errors in the study's display units.
+
+    A process-selection study (a summary without ``display_units``) gets cost, normalised error
+    and status instead, the NSGA-II points read from its ``pareto_front``.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+
+    Returns
+    -------
+    rows : list of list of str
+        One row per method and NSGA-II point, formatted.
+    header : list of str
+        The column titles (error columns name their display unit).
+    """
     if "display_units" not in summary:    # a process-selection study (evotol/process_studyfile.py): no lengths
         header = ["method", "cost", "max error / requirement", "status"]
         rows = [[m, f"{r['cost']:.6g}", number(r["normalised_error"]) if "normalised_error" in r else "",
@@ -143,7 +200,21 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
 
 
 def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
-    """Source × method table of the tolerances in display units (± values)."""
+    """Source × method table of the tolerances in display units (± values).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+
+    Returns
+    -------
+    rows : list of list
+        Per source: name, group, ``"± <unit>"``, then the tolerance of each method and of the
+        NSGA-II cheapest feasible point and knee (display units, formatted).
+    header : list of str
+        The column titles.
+    """
     u = _units(summary)
     methods = list(summary["results"])
     extra = {k: summary["nsga2"][k]["tolerances"] for k in ("cheapest_feasible", "knee") if k in summary.get("nsga2", {})}
@@ -212,7 +283,25 @@ def _error_map_figure(summary: dict, method: str, comp: str):
 
 
 def map_caption(summary: dict, method: str, comp: str) -> str:
-    """The largest error on the map against the largest over the allocation poses."""
+    """The largest error on the map against the largest over the allocation poses.
+
+    Says when the map finds a larger error between the allocation poses, and how many map poses
+    are out of reach.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+    method : str
+        A method with an error map (``summary["figures"]["error_maps"]``).
+    comp : str
+        The error component (a key of ``summary["requirement"]``).
+
+    Returns
+    -------
+    str
+        The caption (errors and pose in display units).
+    """
     slices = summary["figures"]["error_maps"][method]
     best = (-np.inf, None, None)
     for s in slices:
@@ -287,7 +376,18 @@ def _linearisation_rows(summary: dict) -> list[list]:
 
 
 def render_user_study(summary: dict) -> Report:
-    """The HTML report of ``evotol run`` from its JSON summary (see the module docstring)."""
+    """The HTML report of ``evotol run`` from its JSON summary (see the module docstring).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+
+    Returns
+    -------
+    Report
+        The page, not yet written (:meth:`evotol.reporting.html.Report.write`).
+    """
     u = _units(summary)
     req = ", ".join(f"{c} ≤ {_error_text(summary, c, v)}" for c, v in summary["requirement"].items())
     rep = Report(f"evotol study: {summary['name']}",

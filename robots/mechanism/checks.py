@@ -17,7 +17,22 @@ import numpy as np
 
 def end_effector_pose(model, q: dict) -> dict:
     """Position (m) and Z-Y-X Euler angles (rad: yaw about z, pitch about y, roll about x; ``R =
-    Rz(yaw) Ry(pitch) Rx(roll)``) of the end-effector frame at joint values ``q`` (scalars)."""
+    Rz(yaw) Ry(pitch) Rx(roll)``) of the end-effector frame at joint values ``q`` (scalars).
+
+    Parameters
+    ----------
+    model : robots.mechanism.model.MechanismModel
+        The mechanism's error model (its kinematics and description).
+    q : dict of str to float
+        Every joint variable -> its value (rad, or m for a prismatic joint), in the base frame
+        ``"0"``.
+
+    Returns
+    -------
+    dict
+        ``{"frame": name, "position": [x, y, z] (m), "yaw_pitch_roll": [yaw, pitch, roll] (rad)}``
+        of the end-effector frame, in the base frame.
+    """
     kin = model.kin
     st = kin.state({k: np.atleast_1d(v) for k, v in q.items()}, 1, twists=False)
     T = st.world[model.mechanism.end_effector][0]
@@ -29,7 +44,30 @@ def end_effector_pose(model, q: dict) -> dict:
 def understood(model) -> dict:
     """What evotol read from the description (SI): parameters with their units, and the assembly:
     pose, joints as declared and as solved, and the end-effector pose there. Raises the
-    assembly's KinematicsError (declared joints far from the solved ones, issue 27)."""
+    assembly's KinematicsError (declared joints far from the solved ones, issue 27).
+
+    Parameters
+    ----------
+    model : robots.mechanism.model.MechanismModel
+        The mechanism's error model.
+
+    Returns
+    -------
+    dict
+        ``"parameters"``: a list of ``{name, value, unit}`` (m or rad); ``"assembly"``:
+        ``{"pose": [{name, value, unit}], "joints": [{name, unit, declared, solved}]}``
+        (``declared`` None when the description gives none); ``"end_effector"``: see
+        :func:`end_effector_pose`.
+
+    Raises
+    ------
+    evotol.errors.KinematicsError
+        The loops do not close at the assembly pose, the solved joints are far from the
+        declared ones (other working mode), or a joint is outside its limits
+        (:meth:`robots.mechanism.kinematics.Kinematics.assembly`).
+    evotol.errors.ValidationError
+        An ``[assembly] joints`` key that is not a joint variable.
+    """
     mech, kin = model.mechanism, model.kin
     x0, q = kin.assembly()
     return {"parameters": [{"name": k, "value": float(v), "unit": "m" if k in mech.lengths else "rad"}

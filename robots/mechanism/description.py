@@ -53,7 +53,32 @@ UNIT_SCALE = {"m": 1.0, "mm": 1e-3, "rad": 1.0, "deg": np.pi / 180}
 @dataclass(frozen=True)
 class Frame:
     """One row of the modified-DH (Khalil-Kleinfinger) table. Entries: numbers (m, rad) or
-    expression strings. ``joint``: revolute / prismatic / fixed; ``actuated``: a motor drives it."""
+    expression strings. ``joint``: revolute / prismatic / fixed; ``actuated``: a motor drives it.
+
+    Parameters
+    ----------
+    name : str
+        Frame name: non-empty, without ``.``, not ``"0"`` (the base).
+    antecedent : str
+        Name of the frame ``a(j)`` it is placed from (``"0"``: the base).
+    joint : {"fixed", "revolute", "prismatic"}, optional
+        Joint between the antecedent and this frame (default ``"fixed"``, a rigid offset).
+    actuated : bool, optional
+        A motor drives the joint (its variable is held in the inverse geometry); not for a fixed
+        frame.
+    gamma, b, alpha, d, theta, r : float or str, optional
+        The modified-DH entries of ``Rot(z, gamma) Trans(z, b) Rot(x, alpha) Trans(x, d)
+        Rot(z, theta) Trans(z, r)``: ``gamma``, ``alpha``, ``theta`` in rad, ``b``, ``d``, ``r`` in m;
+        numbers or expression strings (``"-L0/2"``, ``"q1 - pi"``); default 0. ``theta`` holds a
+        revolute joint's variable, ``r`` a prismatic one's.
+    description : str, optional
+        One line for reports.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An empty name or one with ``.``, an unknown joint type, or an actuated fixed frame.
+    """
 
     name: str
     antecedent: str
@@ -77,10 +102,12 @@ class Frame:
 
     @property
     def joint_field(self) -> str | None:
+        """DH entry holding the joint variable: ``"theta"`` (revolute), ``"r"`` (prismatic), None (fixed)."""
         return {"revolute": "theta", "prismatic": "r"}.get(self.joint)
 
     @property
     def sigma(self) -> int:
+        """Joint type index (Khalil-Kleinfinger sigma): 0 revolute, 1 prismatic, 2 fixed."""
         return JOINT_TYPES.index(self.joint)
 
 
@@ -88,7 +115,20 @@ class Frame:
 class Loop:
     """A cut joint: frames ``a`` and ``b`` coincide (``components="all"``: pose, 6 equations; or
     ``"position"``: only their origins, 3 equations -- a spherical cut joint). In a planar
-    mechanism only the in-plane components (x, y, rotation about z) are used."""
+    mechanism only the in-plane components (x, y, rotation about z) are used.
+
+    Parameters
+    ----------
+    a, b : str
+        Names of the two frames (or, for ``"position"``, points) that coincide.
+    components : {"all", "position"}, optional
+        ``"all"`` (default): the whole pose; ``"position"``: only the origins.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Another ``components``.
+    """
 
     a: str
     b: str
@@ -102,7 +142,22 @@ class Loop:
 @dataclass(frozen=True)
 class Point:
     """The mean of the origins of ``frames`` (m), oriented like ``frames[0]``: usable in position
-    loops and as a position-only end-effector (see the module docstring)."""
+    loops and as a position-only end-effector (see the module docstring).
+
+    Parameters
+    ----------
+    name : str
+        Point name: non-empty, without ``.``.
+    frames : tuple of str
+        Two or more different frame names whose origins are averaged (``mean_of`` in TOML).
+    description : str, optional
+        One line for reports.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An empty name or one with ``.``, or fewer than two different frames.
+    """
 
     name: str
     frames: tuple[str, ...]
@@ -119,7 +174,24 @@ class Point:
 class Coordinate:
     """A pose coordinate: ``axis`` x/y/z of the end-effector origin in the base frame (m), or
     ``"angle"`` (rad; used only in the end-effector's target ``orientation``). ``low, high``: the
-    workspace box in SI; ``display``: the unit shown in reports (mm, deg)."""
+    workspace box in SI; ``display``: the unit shown in reports (mm, deg).
+
+    Parameters
+    ----------
+    name : str
+        Coordinate name (e.g. ``"x"``, ``"phi"``).
+    axis : {"x", "y", "z", "angle"}
+        Base axis of the end-effector origin's coordinate (m), or ``"angle"`` (rad).
+    low, high : float
+        Workspace range, SI (m, or rad for an angle); finite, ``low <= high``.
+    display : {"", "m", "mm", "rad", "deg"}, optional
+        Unit shown in reports; empty (default): the SI unit.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown axis or display unit, or a range that is not finite with ``low <= high``.
+    """
 
     name: str
     axis: str
@@ -137,6 +209,7 @@ class Coordinate:
 
     @property
     def unit(self) -> str:
+        """SI unit of the coordinate: ``"rad"`` for an angle, else ``"m"``."""
         return "rad" if self.axis == "angle" else "m"
 
 
@@ -148,7 +221,20 @@ ClearanceChain = Chain
 @dataclass(frozen=True)
 class ClearanceSpec:
     """Joint clearances: bodies (name -> frame), chains, and the bounds of each joint (by joint frame
-    name; ``default`` / ``actuated`` / ``passive`` apply to the rest)."""
+    name; ``default`` / ``actuated`` / ``passive`` apply to the rest).
+
+    Parameters
+    ----------
+    bodies : Mapping[str, str]
+        Body name -> the DH frame it is attached to.
+    chains : tuple of robots.clearance.parts.Chain
+        Serial chains of joints with clearance between bodies (Deng 2012 Ch. III, V).
+    end_effector : str
+        Name of the end-effector body.
+    bounds : Mapping[str, robots.clearance.parts.ClearanceBounds]
+        Joint frame name, or ``default`` / ``actuated`` / ``passive`` -> clearance bounds
+        (``beta_xy``, ``beta_z`` in rad; ``b_xy``, ``b_z`` in m).
+    """
 
     bodies: Mapping[str, str]
     chains: tuple[ClearanceChain, ...]
@@ -158,7 +244,60 @@ class ClearanceSpec:
 
 @dataclass(frozen=True)
 class Mechanism:
-    """A whole description (see the module docstring)."""
+    """A whole description (see the module docstring).
+
+    Parameters
+    ----------
+    name : str
+        Mechanism name (reports, messages).
+    frames : tuple of Frame
+        The modified-DH rows; unique names, each antecedent ``"0"`` or one of them.
+    end_effector : str
+        Name of the end-effector frame or point.
+    coordinates : tuple of Coordinate
+        Pose coordinates of the workspace box; at least one of axis x, y, z.
+    loops : tuple of Loop, optional
+        Cut joints closing the tree (default: none, an open chain).
+    lengths : Mapping[str, float], optional
+        Design lengths by name (m).
+    angles : Mapping[str, float], optional
+        Design angles by name (rad); names distinct from ``lengths`` and from the expression
+        functions and constants.
+    orientation : tuple of (str, str), optional
+        Target orientation of the end-effector: ``(axis, angle expression)`` pairs, a product
+        of rotations about base axes (e.g. ``(("z", "phi"),)``); empty: the mechanism decides it.
+    planar : bool, optional
+        Planar mechanism: only in-plane components (x, y, rotation about z) are used.
+    assembly_pose : tuple of float, optional
+        Pose (SI, one value per coordinate) of the assembly configuration; empty: the middle of
+        the box.
+    assembly_joints : Mapping[str, float], optional
+        Joint variable -> its value (rad or m) at the assembly pose, Newton's starting point.
+    sources : tuple of str, optional
+        Source names or fnmatch patterns of ``[tolerances]`` (see :meth:`select_sources`).
+    clearance : ClearanceSpec or None, optional
+        Joint clearances, if the description has a ``[clearance]`` table.
+    description : str, optional
+        Free text.
+    path : str, optional
+        The file the description was read from (empty if built in code).
+    points : tuple of Point, optional
+        Mean points of frames' origins, usable in position loops and as end-effector.
+    limits : Mapping[str, tuple of (float, float)], optional
+        Joint variable -> (lower, upper), SI (rad or m).
+    urdf : tuple of str, optional
+        ``(resolved URDF path, tip frame)`` of a description read from a URDF; empty otherwise.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Duplicate frame names or a frame named ``"0"``, an unknown antecedent, a bad point or
+        loop (unknown frame, a point in a loop that is not ``"position"``), an unknown
+        end-effector or an orientation for a point end-effector, no x/y/z coordinate, a
+        parameter name that clashes with a constant, a function or the other table, an
+        ``assembly_pose`` of the wrong length, or a workspace coordinate that moves nothing
+        (:func:`robots.mechanism.plausibility.check_workspace`).
+    """
 
     name: str
     frames: tuple[Frame, ...]
@@ -222,26 +361,67 @@ class Mechanism:
     # ------------------------------------------------------------------ names
     @property
     def parameters(self) -> dict[str, float]:
+        """Every design parameter by name: ``lengths`` (m) then ``angles`` (rad)."""
         return {**self.lengths, **self.angles}
 
     @property
     def frame(self) -> dict[str, Frame]:
+        """The frames by name."""
         return {f.name: f for f in self.frames}
 
     def entry_names(self) -> list[str]:
         """Every DH entry as ``"<frame>.<entry>"`` (e.g. ``"A.theta"``, ``"C.d"``), then every
-        placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`robots.mechanism.placement`)."""
+        placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`robots.mechanism.placement`).
+
+        Returns
+        -------
+        list of str
+            Per frame in table order: its six DH entries (``gamma b alpha d theta r``), then its
+            six placement errors.
+        """
         return [f"{f.name}.{k}" for f in self.frames for k in DH_FIELDS + PLACEMENT_FIELDS]
 
     def candidate_sources(self, actuated: Sequence[str] = ()) -> list[str]:
         """Names a tolerance may be put on: design parameters, actuated joint variables (actuator
-        offsets), then every DH entry."""
+        offsets), then every DH entry.
+
+        Parameters
+        ----------
+        actuated : sequence of str, optional
+            The actuated joint variables (their names are actuator-offset sources).
+
+        Returns
+        -------
+        list of str
+            ``lengths``, ``angles``, ``actuated``, then :meth:`entry_names` (with the placement
+            errors), in that order.
+        """
         return list(self.lengths) + list(self.angles) + list(actuated) + self.entry_names()
 
     def select_sources(self, patterns: Sequence[str] | None = None, actuated: Sequence[str] = ()) -> list[str]:
         """Source names matching ``patterns`` (fnmatch: ``"*.d"``, ``"A*.theta"``, ``"L?"``), in
         candidate order. A pattern that matches nothing is an error (a typo would silently drop a
-        tolerance otherwise)."""
+        tolerance otherwise).
+
+        Parameters
+        ----------
+        patterns : sequence of str or None, optional
+            Names or fnmatch patterns; None (default): the description's ``sources``.
+        actuated : sequence of str, optional
+            The actuated joint variables (candidates too, see :meth:`candidate_sources`).
+
+        Returns
+        -------
+        list of str
+            The matching candidates without repeats, pattern by pattern, each pattern's matches
+            in candidate order.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A pattern that is not a string, or that matches no candidate (the message lists the
+            kinds of valid names).
+        """
         patterns = list(self.sources if patterns is None else patterns)
         cands = self.candidate_sources(actuated)
         out = []
@@ -272,7 +452,38 @@ def _number(v, where: str) -> float:
 
 
 def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
-    """Build a :class:`Mechanism` from a parsed TOML document (dict); errors name the field."""
+    """Build a :class:`Mechanism` from a parsed TOML document (dict); errors name the field.
+
+    With a ``urdf`` key the frames, lengths, angles, default sources and joint limits come from
+    the URDF chain to ``tip`` (:func:`robots.mechanism.urdf.urdf_frames`); the table's own
+    ``[lengths]``, ``[angles]``, ``[limits]`` override them. Written values are checked for
+    plausibility (:mod:`robots.mechanism.plausibility`).
+
+    Parameters
+    ----------
+    spec : Mapping
+        The parsed description (``docs/mechanisms.md``): numbers in SI (m, rad) or expression
+        strings.
+    path : str, optional
+        File the document was read from: names the default mechanism (its stem), resolves a
+        relative ``urdf`` path, and checks that the file is a mechanism description and not a
+        study; empty (default): built in code.
+
+    Returns
+    -------
+    Mechanism
+        The description.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown key, a missing or malformed table or entry (frames, points, loops,
+        end-effector, coordinates, orientation, assembly, limits, clearance), a non-constant
+        number where a constant is needed, ``[[frame]]`` rows next to ``urdf`` or a ``urdf``
+        without ``tip``, an implausible value (a length beyond ``max_length``, an angle in
+        degrees written as radians...), or any check of :class:`Mechanism` and its parts; the
+        message names the field.
+    """
     if path:
         check_kind(spec, "mechanism", path)     # a study file given as a description (issue 27)
     check_table_keys(spec, TOP_KEYS, "mechanism")
@@ -365,7 +576,27 @@ def _limits(table) -> dict:
 
 
 def joint_units(frames, params) -> dict[str, str]:
-    """Joint variable -> "m" (in the r of a prismatic frame) or "rad" (in the theta of a revolute one)."""
+    """Joint variable -> "m" (in the r of a prismatic frame) or "rad" (in the theta of a revolute one).
+
+    Parameters
+    ----------
+    frames : iterable of Frame
+        The DH rows.
+    params : set of str
+        Design parameter names (not joint variables, even when they appear in ``theta``/``r``).
+
+    Returns
+    -------
+    dict of str to str
+        Every name in a joint entry that is not a parameter -> its unit; the first frame using a
+        name decides.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A joint entry that does not parse (:meth:`Expression.parse
+        <robots.mechanism.expressions.Expression.parse>`).
+    """
     out = {}
     for f in frames:
         if f.joint_field:
@@ -401,7 +632,23 @@ def _clearance_from_dict(c: Mapping) -> ClearanceSpec:
 
 
 def load_mechanism(path) -> Mechanism:
-    """Read a mechanism description file (TOML); errors name the file and the field."""
+    """Read a mechanism description file (TOML); errors name the file and the field.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file.
+
+    Returns
+    -------
+    Mechanism
+        The description (:func:`mechanism_from_dict`), with ``path`` set.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        No such file, invalid TOML, or a mistake in the description (names the field).
+    """
     p = Path(path)
     if not p.is_file():
         raise ValidationError("mechanism file", str(p), "an existing TOML file")

@@ -32,7 +32,21 @@ STEP = 1e-30
 
 @dataclass(frozen=True)
 class Expression:
-    """A parsed entry: ``text`` (as written), ``names`` (the names it uses, constants excluded)."""
+    """A parsed entry: ``text`` (as written), ``names`` (the names it uses, constants excluded).
+
+    Build one with :meth:`parse` (which checks the text); calling it, ``expr(env)``, evaluates it
+    with ``env`` (name -> value) plus the functions and constants. It pickles as its text.
+
+    Parameters
+    ----------
+    text : str
+        The expression as written (a number is kept as its ``repr``).
+    names : frozenset of str
+        The names it uses: design parameters, joint variables, pose coordinates (functions and
+        the constants ``pi``, ``deg``, ``mm`` excluded).
+    code : code object
+        The compiled, ast-checked expression.
+    """
 
     text: str
     names: frozenset
@@ -40,6 +54,27 @@ class Expression:
 
     @classmethod
     def parse(cls, text, field: str) -> "Expression":
+        """Parse and check an entry: a number or an expression string (see the module docstring).
+
+        Parameters
+        ----------
+        text : str or int or float
+            The entry as written, e.g. ``"-L0/2"``, ``"30*deg"`` or ``0.1`` (values in SI: m, rad).
+        field : str
+            Where the entry is (e.g. ``"frame.A.d"``), for the error message.
+
+        Returns
+        -------
+        Expression
+            The parsed entry.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Not a number or string (a bool included), a non-finite number, a syntax error, or a
+            construct other than numbers, names, ``+ - * / **``, unary signs and one-argument
+            calls of the allowed functions (strings, attributes, other calls...).
+        """
         if isinstance(text, bool) or not isinstance(text, (str, int, float)):
             raise ValidationError(field, text, "a number or an expression string such as '-L0/2' or 'q1 - pi'")
         if not isinstance(text, str):
@@ -71,6 +106,7 @@ class Expression:
 
     @property
     def is_constant(self) -> bool:
+        """True when the expression uses no name (its value is fixed)."""
         return not self.names
 
     def __call__(self, env: Mapping[str, object]):
@@ -78,7 +114,24 @@ class Expression:
 
     def value_and_gradient(self, env: Mapping[str, np.ndarray], wrt) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """Value and the derivatives with respect to the names in ``wrt`` that the expression uses
-        (complex step, exact to rounding). Arrays broadcast over poses."""
+        (complex step, exact to rounding). Arrays broadcast over poses.
+
+        Parameters
+        ----------
+        env : mapping of str to float or (n,) ndarray
+            Every name the expression uses -> its value (SI: m, rad).
+        wrt : iterable of str
+            Names to differentiate with respect to; those the expression does not use are
+            skipped.
+
+        Returns
+        -------
+        value : ndarray or float
+            The expression's (real) value, broadcast over ``env``'s arrays.
+        gradient : dict of str to ndarray
+            Name in ``wrt`` and used -> derivative of the value with respect to it (value's unit
+            per the name's unit), step ``1e-30``.
+        """
         val = np.real(self(env))
         grad = {}
         for name in self.names & set(wrt):

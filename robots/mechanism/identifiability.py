@@ -41,6 +41,7 @@ def stacked_rank(S: np.ndarray, rtol: float = 1e-9) -> int:
     Returns
     -------
     int
+        Number of independent source directions over all poses (0 for no sources).
     """
     A, _ = _stack(S)
     if A.size == 0:

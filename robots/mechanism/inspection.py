@@ -15,7 +15,20 @@ from robots.mechanism.placement import PLACEMENT_FIELDS
 
 def sources_with_nominal(model) -> list[dict]:
     """Each source: name, group, unit, description and nominal value (a design parameter's value;
-    0 for a placement error, a DH-entry offset or a joint offset, which are errors about the nominal)."""
+    0 for a placement error, a DH-entry offset or a joint offset, which are errors about the nominal).
+
+    Parameters
+    ----------
+    model : robots.mechanism.model.MechanismModel
+        The mechanism's error model.
+
+    Returns
+    -------
+    list of dict
+        One ``{"name", "group", "unit", "description", "nominal"}`` per source, in source order;
+        ``unit`` is ``"m"`` or ``"rad"``, or ``"1"`` for a URDF mimic joint's ``J_multiplier``
+        (a ratio); ``nominal`` in that unit.
+    """
     params = model.mechanism.parameters
     mimic = {f"{j}_multiplier" for j in _mimic_joints(model)}
     return [{"name": s.name, "group": s.group, "unit": "1" if s.name in mimic else s.unit, "description": s.description
@@ -33,7 +46,20 @@ def _mimic_joints(model) -> list[str]:
 
 
 def limits_and_box(model) -> dict:
-    """The workspace box (coordinates, SI) and the joint limits (rad or m; none: unlimited)."""
+    """The workspace box (coordinates, SI) and the joint limits (rad or m; none: unlimited).
+
+    Parameters
+    ----------
+    model : robots.mechanism.model.MechanismModel
+        The mechanism's error model.
+
+    Returns
+    -------
+    dict
+        ``"workspace"``: a list of ``{name, unit, low, high}`` per pose coordinate (SI);
+        ``"limits"``: a list of ``{name, unit, lower, upper}`` per joint variable (rad or m;
+        ``None`` for an unlimited joint).
+    """
     ws = model.workspace
     lim = model.mechanism.limits
     return {"workspace": [{"name": n, "unit": u, "low": float(lo), "high": float(hi)}
@@ -44,7 +70,26 @@ def limits_and_box(model) -> dict:
 
 def rank_report(model, q: dict, where: str) -> dict:
     """Rank, blind and duplicated sources over the configurations ``q``; for a URDF arm also the
-    rank of Pinocchio's placement regressor of the chain there and of both together."""
+    rank of Pinocchio's placement regressor of the chain there and of both together.
+
+    Parameters
+    ----------
+    model : robots.mechanism.model.MechanismModel
+        The mechanism's error model.
+    q : dict of str to (n,) ndarray
+        Every joint variable -> its values (rad or m) at ``n`` configurations.
+    where : str
+        What the configurations are (copied to ``"over"``), e.g. ``"20 Latin-hypercube poses"``.
+
+    Returns
+    -------
+    dict
+        ``"over"``, ``"n_configurations"`` and the result of
+        :func:`robots.mechanism.identifiability.analyse` (``rank``, ``blind``, ``duplicated``,
+        ``dependent``...); for a URDF arm also ``pinocchio_rank``, ``combined_rank``,
+        ``rank_without_multipliers``, ``missing`` (placement directions no source reproduces)
+        and ``pinocchio_reference``.
+    """
     S = model.sensitivity_at_joints(q)
     out = {"over": where, "n_configurations": int(len(next(iter(q.values())))), **analyse(S, model.source_names)}
     if model.mechanism.urdf:
@@ -66,7 +111,29 @@ def rank_report(model, q: dict, where: str) -> dict:
 
 def model_report(model, poses) -> dict:
     """The sources with nominal values, box and limits, and the rank over the workspace ``poses``
-    (joint values from the inverse geometry), for :func:`robots.mechanism.checks.check_mechanism`."""
+    (joint values from the inverse geometry), for :func:`robots.mechanism.checks.check_mechanism`.
+
+    Parameters
+    ----------
+    model : robots.mechanism.model.MechanismModel
+        The mechanism's error model.
+    poses : (n, n_coordinates) ndarray
+        Workspace poses (SI: m, rad), e.g. Latin-hypercube ones.
+
+    Returns
+    -------
+    dict
+        ``"sources"`` (:func:`sources_with_nominal`), ``"workspace"`` and ``"limits"``
+        (:func:`limits_and_box`), ``"urdf"`` (the description's URDF path and tip, or empty),
+        ``"redundancy"`` (:attr:`MechanismModel.redundancy
+        <robots.mechanism.model.MechanismModel.redundancy>`) and ``"identifiability"``
+        (:func:`rank_report` over ``poses``).
+
+    Raises
+    ------
+    evotol.errors.KinematicsError
+        A pose the inverse geometry cannot reach (from ``model.joint_values``).
+    """
     q = model.joint_values(poses)
     return {"sources": sources_with_nominal(model), **limits_and_box(model), "urdf": list(model.mechanism.urdf),
             "redundancy": model.redundancy,

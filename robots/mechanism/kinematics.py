@@ -36,7 +36,24 @@ from robots.mechanism.rotations import AXIS_ROT, cross_rows, rot_z_inverse
 IN_PLANE = (0, 1, 5)            # x, y, rotation about z
 @dataclass
 class State:
-    """Kinematic state at ``n`` configurations: world transforms, entry derivatives, entry twists."""
+    """Kinematic state at ``n`` configurations: world transforms, entry derivatives, entry twists.
+
+    Parameters
+    ----------
+    n : int
+        Number of configurations.
+    world : dict
+        Frame or point name (``"0"``: the base) -> (n, 4, 4) transform in the base frame
+        (position in m).
+    grads : dict
+        DH entry ``(frame, field)`` -> {name: (n,) derivative of the entry with respect to that
+        name} for the names asked for (``wrt`` of :meth:`Kinematics.state`); m or rad per unit
+        of the name.
+    twists : dict
+        DH entry ``(frame, field)`` (or placement error ``(frame, "shift_x")``...) -> (n, 6)
+        spatial twist ``[omega; v0]`` of a unit change of it (rad and m per m or rad); empty when
+        not computed.
+    """
 
     n: int
     world: dict            # frame -> (n, 4, 4)
@@ -45,7 +62,24 @@ class State:
 
 
 class Kinematics:
-    """Kinematics of a described mechanism (see the module docstring)."""
+    """Kinematics of a described mechanism (see the module docstring).
+
+    Parameters
+    ----------
+    mech : robots.mechanism.description.Mechanism
+        The description; its DH entries are parsed here and its joint variables (names in the
+        entries that are not design parameters) found.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A DH entry that uses a pose coordinate, a name that is neither a parameter nor a joint
+        variable (a name in the ``theta`` of a revolute / ``r`` of a prismatic frame), an actuated
+        joint whose entry has not exactly one joint variable, an orientation entry with an
+        unknown name, a loop whose two frames are on one branch, a loop group without an
+        actuated joint, a ``[limits]`` key that is not a joint variable, or a closed-loop
+        mechanism without a usable ``[assembly]`` (:mod:`robots.mechanism.working_mode`).
+    """
 
     def __init__(self, mech: Mechanism):
         self.mech = mech
@@ -140,6 +174,27 @@ class Kinematics:
 
     # ------------------------------------------------------------------ forward kinematics
     def env(self, q: dict, n: int, params: dict | None = None) -> dict:
+        """Values of every name the DH entries may use, for evaluating the expressions.
+
+        Parameters
+        ----------
+        q : dict of str to float or (n,) ndarray
+            Joint variable -> its value(s) (rad or m); every joint variable is required.
+        n : int
+            Number of configurations.
+        params : dict or None, optional
+            Overrides of design parameters (scalars or (n,) arrays, m or rad).
+
+        Returns
+        -------
+        dict
+            The design parameters (with the overrides) and the joint variables broadcast to (n,).
+
+        Raises
+        ------
+        KeyError
+            A joint variable missing from ``q``.
+        """
         env = {k: v for k, v in self.mech.parameters.items()}
         if params:
             env.update(params)
@@ -153,7 +208,33 @@ class Kinematics:
         overrides of design parameters (scalars or (n,) arrays); offsets: additive errors of DH
         entries ``{(frame, field): (n,) array}`` and placement errors ``{(frame, "tilt_x"): ...}``
         (:mod:`robots.mechanism.placement`); wrt: names whose derivatives are wanted; placement:
-        frames whose placement twists are wanted (``twists[(frame, "shift_x")]`` ...)."""
+        frames whose placement twists are wanted (``twists[(frame, "shift_x")]`` ...).
+
+        Parameters
+        ----------
+        q : dict of str to (n,) ndarray
+            Every joint variable -> its values (rad or m).
+        n : int
+            Number of configurations.
+        wrt : iterable of str, optional
+            Names (joint variables or parameters) whose derivatives of the entries are wanted in
+            ``State.grads``.
+        params : dict or None, optional
+            Overrides of design parameters (scalars or (n,) arrays, m or rad).
+        offsets : dict or None, optional
+            Additive errors ``{(frame, field): (n,) array}`` of DH entries (m or rad) and
+            placement errors ``{(frame, "shift_x" ... "tilt_z"): (n,) array}`` (m, rad).
+        twists : bool, optional
+            Compute the spatial twists of the entries (needed by :meth:`frame_jacobian`);
+            False: ``State.twists`` is empty (faster forward kinematics).
+        placement : collection of str, optional
+            Frames whose placement-error twists are also wanted.
+
+        Returns
+        -------
+        State
+            World transforms of every frame and point, the entry derivatives and twists.
+        """
         env = self.env(q, n, params)
         world = {"0": np.broadcast_to(np.eye(4), (n, 4, 4))}
         grads, tw = {}, {}
@@ -231,7 +312,25 @@ class Kinematics:
     def frame_jacobian(self, st: State, frame: str, columns) -> np.ndarray:
         """Motion ``[dp_k; dphi]`` (n, 6, n_columns) of frame ``k`` per unit change of each column:
         a name (joint variable or parameter, through every entry that uses it) or a DH entry
-        ``(frame, field)``. For a point: the mean of its frames' motions, the rotation of its first."""
+        ``(frame, field)``. For a point: the mean of its frames' motions, the rotation of its first.
+
+        Parameters
+        ----------
+        st : State
+            State with twists (``twists=True``) and the derivatives with respect to the name
+            columns (``wrt``).
+        frame : str
+            Frame or point ``k``.
+        columns : sequence of str or (str, str)
+            Each a name (joint variable or design parameter) or a DH entry / placement error
+            ``(frame, field)``; a column that does not move ``k`` gives zeros.
+
+        Returns
+        -------
+        (n, 6, len(columns)) ndarray
+            ``[dp_k (m); dphi (rad)]`` in the base frame per unit change of each column (m or
+            rad).
+        """
         if frame in self.points:
             frs = self.points[frame]
             J = [self.frame_jacobian(st, f, columns) for f in frs]
@@ -260,11 +359,36 @@ class Kinematics:
 
     # ------------------------------------------------------------------ loop equations
     def loop_rows(self, lp) -> list[int]:
+        """Residual components a loop constrains.
+
+        Parameters
+        ----------
+        lp : robots.mechanism.description.Loop
+            The loop.
+
+        Returns
+        -------
+        list of int
+            Indices into ``[p_b - p_a (0-2); rotation vector (3-5)]``: all six, or 0-2 for a
+            ``"position"`` loop; in a planar mechanism only those of 0, 1, 5 (x, y, rotation about z).
+        """
         comps = [0, 1, 2, 3, 4, 5] if lp.components == "all" else [0, 1, 2]
         return [c for c in comps if c in IN_PLANE] if self.mech.planar else comps
 
     def loop_residual(self, st: State) -> np.ndarray:
-        """Closure error of every loop (n, m): [p_b - p_a; rotation vector of R_b R_a^T] (m, rad)."""
+        """Closure error of every loop (n, m): [p_b - p_a; rotation vector of R_b R_a^T] (m, rad).
+
+        Parameters
+        ----------
+        st : State
+            Kinematic state (world transforms).
+
+        Returns
+        -------
+        (n, m) ndarray
+            The constrained components (:meth:`loop_rows`) of every loop, stacked in loop order;
+            (n, 0) without loops.
+        """
         out = []
         for lp in self.mech.loops:
             Ta, Tb = st.world[lp.a], st.world[lp.b]
@@ -274,6 +398,21 @@ class Kinematics:
         return np.concatenate(out, axis=1) if out else np.zeros((st.n, 0))
 
     def loop_jacobian(self, st: State, columns) -> np.ndarray:
+        """Derivative of :meth:`loop_residual` per unit change of each column (first order).
+
+        Parameters
+        ----------
+        st : State
+            State with twists and the derivatives with respect to the name columns.
+        columns : sequence of str or (str, str)
+            As in :meth:`frame_jacobian`.
+
+        Returns
+        -------
+        (n, m, len(columns)) ndarray
+            Motion of frame ``b`` minus that of frame ``a`` for each loop, the constrained rows
+            (m or rad per m or rad).
+        """
         out = []
         for lp in self.mech.loops:
             J = self.frame_jacobian(st, lp.b, columns) - self.frame_jacobian(st, lp.a, columns)
@@ -281,6 +420,13 @@ class Kinematics:
         return np.concatenate(out, axis=1) if out else np.zeros((st.n, 0, len(columns)))
 
     def loop_row_is_length(self) -> np.ndarray:
+        """Which rows of :meth:`loop_residual` are lengths (m) rather than angles (rad).
+
+        Returns
+        -------
+        (m,) ndarray of bool
+            True for a position row; used to scale the residual by the mechanism's length.
+        """
         return np.array([r < 3 for lp in self.mech.loops for r in self.loop_rows(lp)], bool)
 
     # ------------------------------------------------------------------ inverse geometry
@@ -358,7 +504,27 @@ class Kinematics:
         return q, res
 
     def assembly(self) -> tuple[np.ndarray, dict]:
-        """The declared assembly configuration, closed by Newton at the assembly pose."""
+        """The declared assembly configuration, closed by Newton at the assembly pose.
+
+        Newton starts from ``[assembly] joints`` (0 for a joint not given) at ``assembly_pose``
+        (default: the middle of the box); the result is cached.
+
+        Returns
+        -------
+        pose : (n_coordinates,) ndarray
+            The assembly pose (SI: m, rad).
+        q : dict of str to float
+            Every joint variable there (rad or m).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            An ``[assembly] joints`` key that is not a joint variable.
+        evotol.errors.KinematicsError
+            The loops do not close there (scaled residual above 1e-9), the solution is far from
+            the declared joints (another working mode, :func:`working_mode.check_reached
+            <robots.mechanism.working_mode.check_reached>`), or a joint is outside its limits.
+        """
         if self._assembly is None:
             m = self.mech
             pose = np.array(m.assembly_pose if m.assembly_pose else [(c.low + c.high) / 2 for c in m.coordinates], float)[None]
@@ -381,7 +547,32 @@ class Kinematics:
         """All joint variables (n,) at poses (n, n_coordinates) in SI units, continued from the
         assembly configuration along straight paths in steps of at most ``max_step`` of the
         workspace box. Raises KinematicsError naming the first pose where the loops cannot close
-        (out of reach) or the Newton system is singular."""
+        (out of reach) or the Newton system is singular.
+
+        A redundant mechanism takes the solution nearest to the assembly joints. The last few
+        results are cached by the poses' bytes: the returned dict is shared, do not modify it.
+
+        Parameters
+        ----------
+        poses : (n, n_coordinates) array_like
+            Target poses (SI: m, rad).
+        max_step : float, optional
+            Largest continuation step, as a fraction of each coordinate's range (dimensionless;
+            at most 200 steps).
+
+        Returns
+        -------
+        dict of str to (n,) ndarray
+            Every joint variable at the poses (rad or m).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            An ``[assembly] joints`` key that is not a joint variable (from :meth:`assembly`).
+        evotol.errors.KinematicsError
+            A pose where the loops cannot close (scaled residual not below 1e-9), or a joint
+            outside its limits, naming the first such pose; or a failed :meth:`assembly`.
+        """
         poses = np.atleast_2d(np.asarray(poses, float))
         key = poses.tobytes()
         if key in self._cache:
@@ -412,7 +603,33 @@ class Kinematics:
 
     def solve_passive(self, q: dict, n: int, *, params=None, offsets=None, max_iter: int = 40):
         """Close the loops with the actuated joints held (forward geometry with errors): Newton on
-        the passive joints from ``q``; returns (q, state, scaled residual)."""
+        the passive joints from ``q``; returns (q, state, scaled residual).
+
+        Parameters
+        ----------
+        q : dict of str to (n,) ndarray
+            Every joint variable (rad or m): the actuated ones are held, the passive ones are the
+            starting point.
+        n : int
+            Number of configurations.
+        params : dict or None, optional
+            Overrides of design parameters (perturbed values, m or rad).
+        offsets : dict or None, optional
+            Additive DH-entry and placement errors, as in :meth:`state`.
+        max_iter : int, optional
+            Largest number of Gauss-Newton iterations.
+
+        Returns
+        -------
+        q : dict of str to (n,) ndarray
+            The joint variables with the passive ones solved.
+        state : State
+            The state there (no twists).
+        residual : (n,) ndarray
+            Largest loop-closure residual per configuration, lengths divided by the mechanism's
+            largest length (dimensionless); zeros without loops or passive joints. Not checked
+            here: the caller decides what is closed.
+        """
         def system(qq):
             st = self.state(qq, n, wrt=self.passive, params=params, offsets=offsets)
             return self.loop_residual(st), self._full(self.loop_jacobian(st, self.passive)), self.loop_row_is_length()

@@ -19,6 +19,13 @@ LIMIT_SLACK = 1e-9
 def check_limit_names(limits, variables) -> None:
     """Every ``[limits]`` key is a joint variable of the description.
 
+    Parameters
+    ----------
+    limits : mapping
+        Joint variable -> (lower, upper), rad or m.
+    variables : sequence of str
+        The description's joint variables.
+
     Raises
     ------
     ValidationError

@@ -111,7 +111,25 @@ class MechanismModel(RobotErrorModel):
 
     # ------------------------------------------------------------------ helpers
     def joint_values(self, poses) -> dict:
-        """All joint variables at poses (SI), from the continued Newton inverse geometry."""
+        """All joint variables at poses (SI), from the continued Newton inverse geometry.
+
+        Parameters
+        ----------
+        poses : (n, n_coordinates) or (n_coordinates,) array_like
+            Workspace poses (SI: m, rad); not checked against the workspace box.
+
+        Returns
+        -------
+        dict of str to (n,) ndarray
+            Every joint variable (rad, or m for a prismatic joint) at the poses.
+
+        Raises
+        ------
+        evotol.errors.KinematicsError
+            A pose out of reach or singular, or a joint outside its limits
+            (:meth:`Kinematics.inverse_geometry
+            <robots.mechanism.kinematics.Kinematics.inverse_geometry>`).
+        """
         return self._inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
 
     @property
@@ -134,7 +152,13 @@ class MechanismModel(RobotErrorModel):
                         "the tolerances hold for that posture (docs/mechanisms.md, Redundant arms)."}
 
     def notes(self) -> list[str]:
-        """Statements a report should carry about how this model was evaluated (the redundancy resolution)."""
+        """Statements a report should carry about how this model was evaluated (the redundancy resolution).
+
+        Returns
+        -------
+        list of str
+            The redundancy text of :attr:`redundancy` for a redundant mechanism, else empty.
+        """
         r = self.redundancy
         return [r["text"]] if r else []
 
@@ -154,7 +178,29 @@ class MechanismModel(RobotErrorModel):
         return q, st
 
     def sensitivity(self, poses) -> np.ndarray:
-        """First-order map (n, 6, n_sources): ``[dp (m); dphi (rad)]`` of the end-effector frame."""
+        """First-order map (n, 6, n_sources): ``[dp (m); dphi (rad)]`` of the end-effector frame.
+
+        ``S = J_e - J_p H_p^+ H_e`` (module docstring); the out-of-plane rows of a planar
+        mechanism are zero.
+
+        Parameters
+        ----------
+        poses : (n, n_coordinates) array_like
+            Workspace poses (SI: m, rad).
+
+        Returns
+        -------
+        (n, 6, n_sources) ndarray
+            End-effector error twist per unit of each source (m or rad per m or rad), base frame.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Poses of the wrong shape or not finite.
+        evotol.errors.KinematicsError
+            A pose outside the workspace or out of reach, a joint outside its limits, a parallel
+            (type-2) singularity, or a source that opens an over-constrained loop.
+        """
         poses = self.check_poses(poses)
         if self._serial is not None:
             return self._serial.sensitivity(self._serial.joints_array(self._inverse_geometry(poses)))
@@ -163,7 +209,27 @@ class MechanismModel(RobotErrorModel):
 
     def sensitivity_at_joints(self, q) -> np.ndarray:
         """First-order map (n, 6, n_sources) at given joint values: a dict ``{variable: (n,)}`` or an
-        array (n, n_variables) in the order of ``kin.variables`` (rad, m); no inverse geometry."""
+        array (n, n_variables) in the order of ``kin.variables`` (rad, m); no inverse geometry.
+
+        Parameters
+        ----------
+        q : dict of str to (n,) array_like, or (n, n_variables) array_like
+            Every joint variable's values (rad, or m for a prismatic joint); the actuated and
+            passive ones must close the loops (not checked).
+
+        Returns
+        -------
+        (n, 6, n_sources) ndarray
+            End-effector error twist per unit of each source (m or rad per m or rad).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            An array without one column per joint variable, or a dict missing one.
+        evotol.errors.KinematicsError
+            A parallel singularity or an over-constrained loop at a configuration (the pose
+            reported is zeros: the poses are not known here).
+        """
         q, n = self._joint_dict(q)
         if self._serial is not None:
             return self._serial.sensitivity(self._serial.joints_array(q))
@@ -241,7 +307,33 @@ class MechanismModel(RobotErrorModel):
 
     def pose_error(self, poses, errors) -> np.ndarray:
         """Nonlinear end-effector error (n, m, 6) for source errors (n, m, n_sources): the loops
-        re-closed with the perturbed description, actuated joints held at their nominal values."""
+        re-closed with the perturbed description, actuated joints held at their nominal values.
+
+        An actuator-offset source is added to its joint variable; parameter sources perturb the
+        parameter wherever it is used; DH-entry and placement sources perturb that entry only.
+
+        Parameters
+        ----------
+        poses : (n, n_coordinates) array_like
+            Workspace poses (SI: m, rad).
+        errors : (n, m, n_sources) array_like
+            Source errors (m or rad), ``m`` samples per pose.
+
+        Returns
+        -------
+        (n, m, 6) ndarray
+            ``[dp (m); rotation vector of R R0^T (rad)]`` of the end-effector frame relative to
+            the nominal, base frame; out-of-plane rows zero for a planar mechanism.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Poses of the wrong shape or not finite, or ``errors`` not of shape
+            ``(n, m, n_sources)``.
+        evotol.errors.KinematicsError
+            A pose outside the workspace or out of reach, or loops that do not close with the
+            given errors (names the pose).
+        """
         poses = self.check_poses(poses)
         errors = np.asarray(errors, float)
         n = len(poses)
@@ -251,7 +343,29 @@ class MechanismModel(RobotErrorModel):
 
     def pose_error_at_joints(self, q, errors) -> np.ndarray:
         """:meth:`pose_error` at given joint values (a dict or (n, n_variables), rad and m) instead
-        of poses: errors (n, m, n_sources) -> (n, m, 6); no inverse geometry."""
+        of poses: errors (n, m, n_sources) -> (n, m, 6); no inverse geometry.
+
+        Parameters
+        ----------
+        q : dict of str to (n,) array_like, or (n, n_variables) array_like
+            Every joint variable's nominal values (rad, or m for a prismatic joint).
+        errors : (n, m, n_sources) array_like
+            Source errors (m or rad), ``m`` samples per configuration.
+
+        Returns
+        -------
+        (n, m, 6) ndarray
+            ``[dp (m); rotation vector (rad)]`` of the end-effector frame relative to the
+            nominal at ``q``.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Joint values without every variable, or ``errors`` not of shape
+            ``(n, m, n_sources)``.
+        evotol.errors.KinematicsError
+            Loops that do not close with the given errors (the pose reported is zeros).
+        """
         q, n = self._joint_dict(q)
         errors = np.asarray(errors, float)
         if errors.ndim != 3 or errors.shape[0] != n or errors.shape[2] != self.n_columns:
@@ -282,7 +396,27 @@ class MechanismModel(RobotErrorModel):
 
     # ------------------------------------------------------------------ checks and clearances
     def closure_residual(self, poses=None) -> float:
-        """Largest loop-closure and pose residual (m or rad) of the inverse geometry at poses."""
+        """Largest loop-closure and pose residual (m or rad) of the inverse geometry at poses.
+
+        Parameters
+        ----------
+        poses : (n, n_coordinates) array_like or None, optional
+            Workspace poses (SI); None (default): 20 Latin-hypercube poses of the workspace
+            (seed 0).
+
+        Returns
+        -------
+        float
+            Largest absolute residual of the loop-closure, coordinate and orientation equations
+            (unscaled: m for position rows, rad for rotation rows); 0.0 when there are none.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Poses of the wrong shape or not finite.
+        evotol.errors.KinematicsError
+            A pose outside the workspace or out of reach.
+        """
         poses = self.workspace.latin_hypercube(20, seed=0) if poses is None else self.check_poses(poses)
         q = self._inverse_geometry(poses)
         Rt = self.kin._target_orientation(poses)
@@ -292,7 +426,23 @@ class MechanismModel(RobotErrorModel):
     def clearance_mechanism(self) -> ClearanceMechanism:
         """The description's joint clearances as a :class:`ClearanceMechanism` (Deng 2012 Ch. III-V)
         for the certified engine (``robots.clearance.max_pose_error``); joint values come from the
-        Newton inverse geometry."""
+        Newton inverse geometry.
+
+        DH entries that use a joint variable become named variables ``"<frame>.<field>"`` of the
+        clearance tree; the others are evaluated with the nominal parameters. A joint's bounds
+        are those under its frame name, else under ``actuated``/``passive``, else ``default``.
+
+        Returns
+        -------
+        robots.clearance.model.ClearanceMechanism
+            The clearance model (bounds: ``beta_xy``, ``beta_z`` in rad, ``b_xy``, ``b_z`` in m).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            No ``[clearance]`` table, a chain joint that is not a revolute or prismatic frame, or
+            a joint without bounds.
+        """
         spec = self.mechanism.clearance
         if spec is None:
             raise ValidationError(f"{self.name} clearance", None, "a [clearance] table in the description")
@@ -343,7 +493,26 @@ SHIPPED = Path(__file__).resolve().parents[1] / "mechanisms"
 
 def resolve_description(name, base_dir=None) -> Path:
     """A description file by path (relative to ``base_dir``, then to the working directory) or by
-    the name of a shipped one (``"fivebar"`` -> ``robots/mechanisms/fivebar.toml``)."""
+    the name of a shipped one (``"fivebar"`` -> ``robots/mechanisms/fivebar.toml``).
+
+    Parameters
+    ----------
+    name : str or Path
+        A file path, or the name of a shipped description (with or without ``.toml``).
+    base_dir : str or Path or None, optional
+        Directory a relative path is tried against first (e.g. the study file's directory).
+
+    Returns
+    -------
+    Path
+        The first existing file among ``base_dir / name``, ``name``, the shipped ``name`` and
+        ``name.toml``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        No such file; the message lists the shipped descriptions.
+    """
     p = Path(str(name))
     for cand in ([Path(base_dir) / p] if base_dir and not p.is_absolute() else []) + [p, SHIPPED / p, SHIPPED / f"{p}.toml"]:
         if cand.is_file():
@@ -356,7 +525,27 @@ def model_from_table(table: dict, base_dir=None) -> MechanismModel:
     """The ``[robot]`` table of a study file: ``mechanism = "file.toml"`` (optionally ``sources =
     [...]`` patterns overriding the file's ``[tolerances]``), or ``urdf = "arm.urdf"`` with the
     rest of a description inline (``tip``, ``[robot.end_effector]``, ``[robot.assembly]``,
-    ``[robot.tolerances]``)."""
+    ``[robot.tolerances]``).
+
+    Parameters
+    ----------
+    table : dict
+        The ``[robot]`` table as parsed from TOML.
+    base_dir : str or Path or None, optional
+        Directory of the study file: relative ``mechanism`` and ``urdf`` paths are resolved
+        against it.
+
+    Returns
+    -------
+    MechanismModel
+        The error model of the description.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A key other than ``mechanism`` and ``sources`` next to ``mechanism``, a description
+        that is not found or has a mistake (names the field), or no toleranced source.
+    """
     if "urdf" in table:
         spec = {k: v for k, v in table.items() if k != "sources"}
         where = str(Path(base_dir) / "study.toml") if base_dir else ""

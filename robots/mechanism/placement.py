@@ -25,7 +25,26 @@ PLACEMENT_FIELDS = SHIFT_FIELDS + TILT_FIELDS
 
 
 def placement_error(errors: dict, n: int) -> np.ndarray:
-    """``exp(delta)`` (n, 4, 4) for placement errors ``{field: (n,) array}`` (fields missing are 0)."""
+    """``exp(delta)`` (n, 4, 4) for placement errors ``{field: (n,) array}`` (fields missing are 0).
+
+    Parameters
+    ----------
+    errors : dict of str to (n,) ndarray or float
+        Placement field (``"shift_x"`` ... ``"tilt_z"``) -> its error: shifts in m, tilts in rad,
+        in the placement's local axes.
+    n : int
+        Number of configurations.
+
+    Returns
+    -------
+    (n, 4, 4) ndarray
+        The homogeneous transform ``exp(delta)`` that right-multiplies the nominal placement.
+
+    Raises
+    ------
+    ValueError
+        A key that is not a placement field (from ``tuple.index``).
+    """
     s = np.zeros((n, 6))                       # exp_screw order: [rotation; translation]
     for k, v in errors.items():
         i = PLACEMENT_FIELDS.index(k)
@@ -36,7 +55,19 @@ def placement_error(errors: dict, n: int) -> np.ndarray:
 def placement_twists(T: np.ndarray) -> dict:
     """Spatial twists ``[omega; v0]`` (n, 6) of a unit placement error of each field, for the
     placement's world transform T (n, 4, 4): a rotation about axis ``k`` through the origin ``p``
-    is ``[R e_k; p x R e_k]``, a translation ``[0; R e_k]``."""
+    is ``[R e_k; p x R e_k]``, a translation ``[0; R e_k]``.
+
+    Parameters
+    ----------
+    T : (n, 4, 4) ndarray
+        World transform of the placement (position in m).
+
+    Returns
+    -------
+    dict of str to (n, 6) ndarray
+        Placement field -> spatial twist ``[omega (rad); v0 (m)]`` at the base origin per unit
+        error (per m for a shift, per rad for a tilt).
+    """
     R, p = T[:, :3, :3], T[:, :3, 3]
     zero = np.zeros_like(p)
     out = {}

@@ -56,7 +56,26 @@ def _check_angle(where: str, raw) -> None:
 
 
 def check_options(spec: Mapping) -> tuple[float, frozenset]:
-    """``[checks]``: ``max_length`` (m) and ``negative_lengths`` (names of ``[lengths]``)."""
+    """``[checks]``: ``max_length`` (m) and ``negative_lengths`` (names of ``[lengths]``).
+
+    Parameters
+    ----------
+    spec : mapping
+        The description as parsed from TOML; its ``[checks]`` table (optional) is read.
+
+    Returns
+    -------
+    max_length : float
+        Largest plausible length (m); :data:`MAX_LENGTH` (10 m) unless ``[checks]`` sets it.
+    negative_lengths : frozenset of str
+        Names of ``[lengths]`` allowed to be negative.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown ``[checks]`` key, a ``max_length`` that is not a positive constant, or a
+        ``negative_lengths`` that is not a list of names of ``[lengths]``.
+    """
     opts = spec.get("checks", {})
     check_table_keys(opts, CHECK_KEYS, "checks")
     max_length = _constant(opts.get("max_length", MAX_LENGTH), "checks.max_length")

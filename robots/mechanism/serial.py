@@ -71,7 +71,23 @@ class SerialChain:
     # ------------------------------------------------------------------ construction
     @classmethod
     def build(cls, kin, columns) -> "SerialChain | None":
-        """The fast path for ``kin`` (a :class:`Kinematics`) and source ``columns``, or None."""
+        """The fast path for ``kin`` (a :class:`Kinematics`) and source ``columns``, or None.
+
+        Parameters
+        ----------
+        kin : robots.mechanism.kinematics.Kinematics
+            Kinematics of the description.
+        columns : sequence of str or (str, str)
+            The model's source columns: a parameter or actuated joint variable name, or a DH
+            entry / placement error ``(frame, field)``
+            (:class:`~robots.mechanism.model.MechanismModel` ``.columns``).
+
+        Returns
+        -------
+        SerialChain or None
+            The stages and terms, or None when the chain or a source does not qualify (see the
+            module docstring): the general path serves then.
+        """
         mech = kin.mech
         if mech.loops or mech.points or mech.planar or mech.end_effector not in kin.tree.frames:
             return None
@@ -207,10 +223,40 @@ class SerialChain:
         return self.P, self.ident, self.kind, self.var, self.a, self.c, self.mark, self.n_marks
 
     def joints_array(self, q: dict) -> np.ndarray:
+        """Joint values as the kernels take them.
+
+        Parameters
+        ----------
+        q : dict of str to (n,) array_like
+            Every joint variable of the chain -> its values (rad or m).
+
+        Returns
+        -------
+        (n, n_vars) ndarray
+            C-contiguous, columns in the order of ``variables``.
+
+        Raises
+        ------
+        KeyError
+            A joint variable missing from ``q``.
+        """
         return np.ascontiguousarray(np.stack([np.asarray(q[v], float) for v in self.variables], axis=1))
 
     def sensitivity(self, Q: np.ndarray) -> np.ndarray:
-        """(n, 6, n_cols) at joint values Q (n, n_vars)."""
+        """(n, 6, n_cols) at joint values Q (n, n_vars).
+
+        Parameters
+        ----------
+        Q : (n, n_vars) ndarray
+            Joint values (rad or m), columns in the order of ``variables``.
+
+        Returns
+        -------
+        (n, 6, n_cols) ndarray
+            ``[dp (m); dphi (rad)]`` of the tip in the base frame per unit of each source column
+            (m or rad), as :meth:`MechanismModel.sensitivity
+            <robots.mechanism.model.MechanismModel.sensitivity>`.
+        """
         K = _kernels()
 
         vs = [(c, s) for c, v in zip(self.v_col, self.v_var) for s in np.flatnonzero((self.var == v) & (self.kind > 0))]
@@ -226,7 +272,21 @@ class SerialChain:
         return K.sensitivity(*self._args(), np.ascontiguousarray(Q, float), t_col, t_mark, t_field, t_coef, t_var, self.n_cols)
 
     def pose_error(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
-        """(n, m, 6) nonlinear tip error for errors (n, m, n_cols) at joint values Q (n, n_vars)."""
+        """(n, m, 6) nonlinear tip error for errors (n, m, n_cols) at joint values Q (n, n_vars).
+
+        Parameters
+        ----------
+        Q : (n, n_vars) ndarray
+            Nominal joint values (rad or m), columns in the order of ``variables``.
+        errors : (n, m, n_cols) array_like
+            Source errors (m or rad), ``m`` samples per configuration.
+
+        Returns
+        -------
+        (n, m, 6) ndarray
+            ``[dp (m); rotation vector (rad)]`` of the perturbed tip relative to the nominal, base
+            frame.
+        """
         K = _kernels()
 
         p = self.p_terms
@@ -235,7 +295,31 @@ class SerialChain:
                             self.v_col, self.v_var)
 
     def inverse_geometry(self, q0: np.ndarray, targets: np.ndarray, Rts: np.ndarray | None, axes, scale: float):
-        """(Q (n, n_vars), scaled residual (n,)) continued from q0 through targets (K, n, n_axes)."""
+        """(Q (n, n_vars), scaled residual (n,)) continued from q0 through targets (K, n, n_axes).
+
+        One Gauss-Newton correction per intermediate step, up to 40 iterations (tolerance 1e-12)
+        at the last; a redundant arm keeps the posture nearest ``q0``.
+
+        Parameters
+        ----------
+        q0 : (n_vars,) array_like
+            Assembly joint values (rad or m), the starting point of every pose.
+        targets : (K, n, n_axes) ndarray
+            Target tip coordinates (m) of the ``K`` continuation steps, the last the poses.
+        Rts : (K, n, 3, 3) ndarray or None
+            Target orientations of the tip per step, or None when the orientation is free.
+        axes : sequence of int
+            Base axis (0 x, 1 y, 2 z) of each target coordinate.
+        scale : float
+            Length (m) dividing the position residuals (the mechanism's largest length).
+
+        Returns
+        -------
+        Q : (n, n_vars) ndarray
+            Joint values at the poses (rad or m).
+        residual : (n,) ndarray
+            Largest scaled residual per pose (dimensionless); the caller checks it.
+        """
         K = _kernels()
 
         js = np.array([s for s in range(len(self.kind)) if self.kind[s] > 0], np.int64)
@@ -251,7 +335,36 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
     """:meth:`Kinematics.inverse_geometry` for a serial chain, compiled: the same continuation from
     the assembly configuration (straight paths, steps of at most ``max_step`` of the box, one
     Gauss-Newton correction per intermediate step, full convergence at the pose, the posture
-    nearest the assembly for a redundant arm), the same errors (out of reach, joint limits)."""
+    nearest the assembly for a redundant arm), the same errors (out of reach, joint limits).
+
+    Shares the cache of ``kin`` (the returned dict is shared, do not modify it).
+
+    Parameters
+    ----------
+    kin : robots.mechanism.kinematics.Kinematics
+        Kinematics of the description (its assembly, coordinates and orientation targets).
+    chain : SerialChain
+        The fast path built from ``kin``.
+    poses : (n, n_coordinates) array_like
+        Target poses (SI: m, rad).
+    max_step : float, optional
+        Largest continuation step, as a fraction of each coordinate's range (dimensionless; at
+        most 200 steps).
+
+    Returns
+    -------
+    dict of str to (n,) ndarray
+        Every joint variable at the poses (rad or m).
+
+    Raises
+    ------
+    evotol.errors.KinematicsError
+        A pose out of reach or singular (scaled residual not below 1e-9), or a joint outside its
+        limits, naming the first such pose; or a failed assembly
+        (:meth:`Kinematics.assembly <robots.mechanism.kinematics.Kinematics.assembly>`).
+    evotol.errors.ValidationError
+        From the assembly (an ``[assembly] joints`` key that is not a joint variable).
+    """
     from evotol.errors import KinematicsError
     from robots.mechanism.limits import check_joint_limits
 

@@ -129,7 +129,42 @@ def _column(marks, m, field, p, coef, S, col):
 def sensitivity(P, ident, kind, var, a, c, mark, n_marks, Q, t_col, t_mark, t_field, t_coef, t_var, n_cols):
     """(n, 6, n_cols) first-order map at joint values Q (n, n_vars); terms: column, mark, field,
     coefficient, variable (coefficient times q[var] when var >= 0). The columns are those of
-    :func:`_column`, written out here so the loop over terms touches no array views."""
+    :func:`_column`, written out here so the loop over terms touches no array views.
+
+    Parameters
+    ----------
+    P : (ns, 4, 4) ndarray
+        Constant transform of each stage (m).
+    ident : (ns,) ndarray of bool
+        True where ``P_s`` is the identity (skipped).
+    kind : (ns,) ndarray of int64
+        0 fixed, 1 revolute (``Rot(z, value)``), 2 prismatic (``Trans(z, value)``).
+    var : (ns,) ndarray of int64
+        Joint variable index of each joint stage.
+    a, c : (ns,) ndarray
+        Joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
+    mark : (ns,) ndarray of int64
+        Mark (placement frame) index of each stage, -1 for none.
+    n_marks : int
+        Number of marks.
+    Q : (n, n_vars) ndarray
+        Joint values (rad or m).
+    t_col, t_mark, t_field : (nt,) ndarray of int64
+        Per term: source column, mark, and placement field index (0-2 ``shift_x..z``, 3-5
+        ``tilt_x..z``; a joint term is ``tilt_z`` (revolute) or ``shift_z`` (prismatic) of its
+        stage's mark).
+    t_coef : (nt,) ndarray
+        Per term: coefficient (dimensionless, or per unit of ``q[var]``).
+    t_var : (nt,) ndarray of int64
+        Per term: joint variable multiplying the coefficient, -1 for none.
+    n_cols : int
+        Number of source columns.
+
+    Returns
+    -------
+    (n, 6, n_cols) ndarray
+        ``[dp (m); dphi (rad)]`` of the tip, base frame, per unit of each column (m or rad).
+    """
     n = Q.shape[0]
     S = np.empty((n, 6, n_cols))
     marks = np.empty((n_marks, 3, 4))
@@ -178,7 +213,46 @@ def pose_error(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mar
     """(n, m, 6) nonlinear tip error for errors (n, m, n_cols): placement terms (column, mark, field),
     joint terms (column, stage, coefficient, variable: times the *perturbed* q[var]), joint offsets
     (column, variable: q[var] += e), so an error of a mimic multiplier and of its leader's offset
-    combine exactly as in the description (``(m + dm) (q + dq)``)."""
+    combine exactly as in the description (``(m + dm) (q + dq)``).
+
+    Parameters
+    ----------
+    P : (ns, 4, 4) ndarray
+        Constant transform of each stage (m).
+    ident : (ns,) ndarray of bool
+        True where ``P_s`` is the identity (skipped).
+    kind : (ns,) ndarray of int64
+        0 fixed, 1 revolute (``Rot(z, value)``), 2 prismatic (``Trans(z, value)``).
+    var : (ns,) ndarray of int64
+        Joint variable index of each joint stage.
+    a, c : (ns,) ndarray
+        Joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
+    mark : (ns,) ndarray of int64
+        Mark (placement frame) index of each stage, -1 for none.
+    n_marks : int
+        Number of marks.
+    Q : (n, n_vars) ndarray
+        Nominal joint values (rad or m).
+    errors : (n, m, n_cols) ndarray
+        Source errors (m or rad).
+    p_col, p_mark, p_field : (np,) ndarray of int64
+        Placement terms: source column, mark, placement field index (0-5, ``shift_x`` ...
+        ``tilt_z``).
+    j_col, j_stage : (nj,) ndarray of int64
+        Joint terms: source column and stage whose joint value moves.
+    j_coef : (nj,) ndarray
+        Joint terms: coefficient.
+    j_var : (nj,) ndarray of int64
+        Joint terms: joint variable multiplying the coefficient (perturbed value), -1 for none.
+    v_col, v_var : (nv,) ndarray of int64
+        Joint offsets: source column added to joint variable ``v_var``.
+
+    Returns
+    -------
+    (n, m, 6) ndarray
+        ``[dp (m); rotation vector of R R0^T (rad)]`` of the perturbed tip relative to the
+        nominal, base frame.
+    """
     n, m = errors.shape[0], errors.shape[1]
     out = np.empty((n, m, 6))
     marks = np.empty((n_marks, 3, 4))
@@ -314,7 +388,52 @@ def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts,
                      n_final, tol):
     """Joint values (n, n_vars) continued from q0 through the targets (K, n, n_axes) (rotations
     Rts (K, n, 3, 3)): one Gauss-Newton step per intermediate target, up to n_final at the last;
-    redundant tasks step to the solution nearest q0 (see Kinematics._newton). Returns (q, residual)."""
+    redundant tasks step to the solution nearest q0 (see Kinematics._newton). Returns (q, residual).
+
+    Parameters
+    ----------
+    P : (ns, 4, 4) ndarray
+        Constant transform of each stage (m).
+    ident : (ns,) ndarray of bool
+        True where ``P_s`` is the identity (skipped).
+    kind : (ns,) ndarray of int64
+        0 fixed, 1 revolute (``Rot(z, value)``), 2 prismatic (``Trans(z, value)``).
+    var : (ns,) ndarray of int64
+        Joint variable index of each joint stage.
+    a, c : (ns,) ndarray
+        Joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
+    mark : (ns,) ndarray of int64
+        Mark (placement frame) index of each stage, -1 for none.
+    n_marks : int
+        Number of marks.
+    q0 : (n_vars,) ndarray
+        Starting (assembly) joint values (rad or m).
+    targets : (K, n, n_axes) ndarray
+        Target tip coordinates (m) per continuation step.
+    Rts : (K, n, 3, 3) ndarray
+        Target tip orientations per step (ignored unless ``has_rot``).
+    has_rot : bool
+        The orientation is part of the task.
+    axes : (n_axes,) ndarray of int64
+        Base axis (0-2) of each target coordinate.
+    jstage, jvar : (nj,) ndarray of int64
+        Joint stages and their joint variable indices.
+    jcoef : (nj,) ndarray
+        ``a_s`` of those stages (d value / d q).
+    scale : float
+        Length (m) dividing the position rows.
+    n_final : int
+        Largest number of Gauss-Newton iterations at the last target.
+    tol : float
+        Convergence tolerance of the scaled residual (dimensionless).
+
+    Returns
+    -------
+    Q : (n, n_vars) ndarray
+        Joint values at the last targets (rad or m).
+    residual : (n,) ndarray
+        Largest absolute scaled residual per pose (dimensionless).
+    """
     K, n = targets.shape[0], targets.shape[1]
     nv = q0.shape[0]
     m = axes.shape[0] + (3 if has_rot else 0)

@@ -117,7 +117,27 @@ def _origin_rows(prefix: str, antecedent: str, M, lengths: dict, angles: dict, p
 
 def joint_axis(model, j: int) -> tuple[str, np.ndarray]:
     """('revolute' | 'prismatic', unit axis in the joint frame) of Pinocchio joint ``j``; continuous
-    joints are revolute (one angle, Pinocchio's (cos, sin) pair)."""
+    joints are revolute (one angle, Pinocchio's (cos, sin) pair).
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+        The model built from the URDF.
+    j : int
+        Pinocchio joint id (1 .. ``model.njoints - 1``).
+
+    Returns
+    -------
+    kind : {"revolute", "prismatic"}
+        The joint type.
+    axis : (3,) ndarray
+        Unit vector of the joint axis in the joint frame (dimensionless).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Any other joint model (floating, planar, spherical...): not a serial chain's joint.
+    """
     short = model.joints[j].shortname()
     m = re.fullmatch(r"JointModel(R|P)(?:UB)?([XYZ])", short)
     if m:
@@ -132,7 +152,20 @@ def joint_axis(model, j: int) -> tuple[str, np.ndarray]:
 
 
 def axis_angles(a: np.ndarray) -> tuple[float, float]:
-    """(gamma, alpha) with Rot(z, gamma) Rot(x, alpha) e_z = a (a unit vector)."""
+    """(gamma, alpha) with Rot(z, gamma) Rot(x, alpha) e_z = a (a unit vector).
+
+    Parameters
+    ----------
+    a : (3,) ndarray
+        Unit axis vector (dimensionless).
+
+    Returns
+    -------
+    gamma : float
+        Rotation about z (rad), in ``(-pi, pi]``; 0 when ``a`` is along z.
+    alpha : float
+        Rotation about the new x (rad), in ``[0, pi]``.
+    """
     alpha = float(np.arccos(np.clip(a[2], -1.0, 1.0)))
     gamma = float(np.arctan2(a[0], -a[1])) if np.hypot(a[0], a[1]) > 1e-15 else 0.0
     return gamma, alpha
@@ -149,7 +182,26 @@ def _along_axis(kind: str, a: np.ndarray) -> str | None:
 def urdf_joints(path) -> dict:
     """The URDF's joints as written: ``{name: {"type", "mimic": (leader, multiplier, offset) | None,
     "limit": (lower, upper) | None}}`` (``<limit>`` of revolute and prismatic joints; continuous
-    joints have none; SI as in URDF)."""
+    joints have none; SI as in URDF).
+
+    Parameters
+    ----------
+    path : str or Path
+        The URDF file.
+
+    Returns
+    -------
+    dict of str to dict
+        Joint name as written -> ``{"type": str, "mimic": (leader, multiplier, offset) or None,
+        "limit": (lower, upper) or None}``: limits in rad (revolute) or m (prismatic), the
+        multiplier dimensionless, the offset in the joint's unit. Joints without a name or type
+        are skipped.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A file that is not well-formed XML.
+    """
     import xml.etree.ElementTree as ET
 
     try:
@@ -172,7 +224,28 @@ def urdf_joints(path) -> dict:
 
 
 def frame_id(model, name: str) -> int:
-    """Pinocchio's id of frame ``name``: the link (BODY) when a link and a joint share the name."""
+    """Pinocchio's id of frame ``name``: the link (BODY) when a link and a joint share the name.
+
+    Frame types are tried in the order BODY, OP_FRAME, FIXED_JOINT, JOINT, then any.
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+        The model built from the URDF.
+    name : str
+        Name of a link, operational frame or joint.
+
+    Returns
+    -------
+    int
+        Index into ``model.frames`` (for an unknown name, whatever Pinocchio's
+        ``getFrameId`` returns: callers check ``existFrame`` first).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Pinocchio (package ``pin``) is not installed.
+    """
     pin = _pin()
     for kind in (pin.FrameType.BODY, pin.FrameType.OP_FRAME, pin.FrameType.FIXED_JOINT, pin.FrameType.JOINT):
         if model.existFrame(name, kind):
@@ -181,7 +254,21 @@ def frame_id(model, name: str) -> int:
 
 
 def chain_joints(model, frame_id: int) -> list[int]:
-    """Pinocchio joint ids from the root to the joint that carries frame ``frame_id``."""
+    """Pinocchio joint ids from the root to the joint that carries frame ``frame_id``.
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+        The model built from the URDF.
+    frame_id : int
+        Index into ``model.frames``.
+
+    Returns
+    -------
+    list of int
+        Joint ids, root side first (the universe joint 0 excluded); empty for a frame fixed to
+        the root.
+    """
     chain, j = [], model.frames[frame_id].parentJoint
     while j > 0:
         chain.append(j)
@@ -206,7 +293,35 @@ def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
     mimic joint: its offset; its multiplier ``J_multiplier`` is a source on request), less the one placement error the offset duplicates
     (the rotation about a revolute joint's own axis, the translation along a prismatic joint's),
     when the axis is a coordinate axis of the origin -- the span of Pinocchio's joint placement
-    regressor."""
+    regressor.
+
+    Parameters
+    ----------
+    path : str or Path
+        The URDF file.
+    tip : str
+        The end-effector link or frame (e.g. ``"tool0"``).
+
+    Returns
+    -------
+    rows : list of dict
+        The modified-DH rows as ``[[frame]]`` tables (numbers in m, rad, or expression strings).
+    lengths : dict of str to float
+        Design lengths (m): each origin's ``J_x``, ``J_y``, ``J_z`` (and a prismatic mimic
+        joint's ``J_offset``).
+    angles : dict of str to float
+        Design angles (rad): each origin's ``J_roll``, ``J_pitch``, ``J_yaw``, a revolute mimic
+        joint's ``J_offset`` and every mimic ``J_multiplier`` (dimensionless).
+    info : dict
+        As described above.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Pinocchio not installed, a file Pinocchio cannot read or that is not well-formed XML,
+        an unknown tip or one no joint moves, or a joint on the chain that is not revolute,
+        continuous or prismatic.
+    """
     pin = _pin()
     try:
         model = pin.buildModelFromUrdf(str(path))
@@ -269,7 +384,25 @@ def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
 def pinocchio_configuration(model, chain_values: dict, mimic: dict | None = None) -> np.ndarray:
     """Pinocchio's ``q`` (n, model.nq) for joint values ``{joint name: (n,)}`` (rad, m; other joints
     at 0): a continuous joint's angle becomes its (cos, sin) pair, a mimic joint ``{name: (leader,
-    multiplier, offset)}`` follows its leader."""
+    multiplier, offset)}`` follows its leader.
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+        The model built from the URDF.
+    chain_values : dict of str to (n,) array_like
+        Joint variable (the description's identifier of the URDF joint name) -> values (rad or
+        m); at least one entry, whose length sets ``n``.
+    mimic : dict or None, optional
+        Mimic joint identifier -> (leader variable, multiplier, offset), as ``info["mimic"]`` of
+        :func:`urdf_frames`; None: no mimic joints.
+
+    Returns
+    -------
+    (n, model.nq) ndarray
+        Pinocchio configurations; joints without a value at 0 (a continuous joint at angle 0:
+        ``(1, 0)``).
+    """
     n = len(np.atleast_1d(next(iter(chain_values.values()))))
     vals = {k: np.broadcast_to(np.asarray(v, float), (n,)) for k, v in chain_values.items()}
     for jn, (leader, m, o) in (mimic or {}).items():
@@ -290,7 +423,27 @@ def pinocchio_configuration(model, chain_values: dict, mimic: dict | None = None
 def pinocchio_tip_pose(path, tip: str, q) -> np.ndarray:
     """Pinocchio's own forward kinematics of the tip frame, (n, 4, 4): ``q`` is an array (n, nq)
     of Pinocchio configurations, or a dict of the description's joint values (see
-    :func:`pinocchio_configuration`; mimic joints follow their leaders)."""
+    :func:`pinocchio_configuration`; mimic joints follow their leaders).
+
+    Parameters
+    ----------
+    path : str or Path
+        The URDF file.
+    tip : str
+        The tip link or frame.
+    q : (n, nq) array_like or dict of str to (n,) array_like
+        Pinocchio configurations, or the description's joint values (rad or m).
+
+    Returns
+    -------
+    (n, 4, 4) ndarray
+        Homogeneous transforms of the tip frame in the root frame (position in m).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Pinocchio (package ``pin``) is not installed.
+    """
     pin = _pin()
     model = pin.buildModelFromUrdf(str(path))
     data = model.createData()
@@ -312,7 +465,9 @@ def pinocchio_placement_regressor(model, frame_id: int, Q: np.ndarray, with_tip:
     Parameters
     ----------
     model : pinocchio.Model
+        The model built from the URDF.
     frame_id : int
+        Index into ``model.frames`` of the frame.
     Q : ndarray (n, model.nq)
         Pinocchio configurations.
     with_tip : bool

@@ -24,7 +24,31 @@ from robots.mechanism.urdf import _pin, chain_joints, pinocchio_configuration, p
 
 
 def random_joints(variables, limits, n: int, seed: int = 0) -> dict:
-    """Uniform joint values inside the limits (a joint without limits: [-pi, pi] or [-0.1, 0.1] m)."""
+    """Uniform joint values inside the limits (a joint without limits: [-pi, pi] or [-0.1, 0.1] m).
+
+    Parameters
+    ----------
+    variables : sequence of str
+        The joint variables.
+    limits : mapping of str to (float, float)
+        Joint variable -> (lower, upper), rad or m.
+    n : int
+        Number of configurations.
+    seed : int, optional
+        Seed of the random generator (reproducible draws).
+
+    Returns
+    -------
+    dict of str to (n,) ndarray
+        Joint variable -> ``n`` values drawn uniformly from its limits intersected with
+        ``[-pi, pi]`` (rad or m); a variable without limits is drawn from ``[-pi, pi]``, a
+        range of zero width gives its lower value.
+
+    Notes
+    -----
+    As written, the code treats every joint alike: an unlimited prismatic joint is drawn from
+    ``[-pi, pi]`` m, not ``[-0.1, 0.1]`` m.
+    """
     rng = np.random.default_rng(seed)
     out = {}
     for v in variables:
@@ -43,13 +67,15 @@ def check_urdf_chain(robot, n: int = 8, seed: int = 0, step: float = 1e-6) -> di
         Built from a description with ``urdf`` and ``tip``.
     n : int
         Number of random configurations (inside the joint limits).
+    seed : int
+        Seed of the random configurations (:func:`random_joints`).
     step : float
         Central-difference step (m or rad).
 
     Returns
     -------
     dict
-        ``fk_vs_pinocchio`` (largest |T - T_pin|), ``fd_rel_error`` (largest |FD - S| / largest |S|),
+        ``fk_vs_pinocchio`` (largest ``|T - T_pin|``), ``fd_rel_error`` (largest ``|FD - S|`` / largest ``|S|``),
         ``n_sources``, ``rank`` (the sources), ``pinocchio_rank`` (the chain's placement regressor),
         ``combined_rank`` (both together) and the same three with the tip's placement
         (``rank_with_tip`` ...), ``n_joints``.
