@@ -102,6 +102,7 @@ class ClearanceClass:
 
     @property
     def source(self) -> SourceSpec:
+        """The class as a one-dimensional source of the problem (name, unit m or rad, group, description)."""
         d = self.description or (", ".join(f"{k} = {v:g} t" for k, v in self.bounds.items())
                                  + f" of joint{'s' if len(self.joints) > 1 else ''} {', '.join(self.joints)}")
         return SourceSpec(self.name, 1, self.unit, self.group, d)
@@ -109,7 +110,27 @@ class ClearanceClass:
 
 def thesis_classes(joints: Sequence[str], h: float, axial: bool = True) -> list[ClearanceClass]:
     """Deng 2012 Sec. VII.1.1: per joint a radial class ``bxy_<J>`` (Δb_xy = t, Δβ_xy = t / h,
-    eq. III.2; h: joint length, m) and, with ``axial``, an axial class ``bz_<J>`` (Δb_z = t)."""
+    eq. III.2; h: joint length, m) and, with ``axial``, an axial class ``bz_<J>`` (Δb_z = t).
+
+    Parameters
+    ----------
+    joints : sequence of str
+        Names of the joints with clearance.
+    h : float
+        Joint length (m): the radial tilt bound is Δβ_xy = t / h (rad).
+    axial : bool
+        Whether to add an axial class per joint.
+
+    Returns
+    -------
+    list of ClearanceClass
+        The radial classes (one per joint, unit m), then the axial ones.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        If ``h`` is not a positive number (or a class is invalid, e.g. no joints).
+    """
     if not (isinstance(h, (int, float, np.floating)) and h > 0):
         raise ValidationError("h", h, "a positive joint length (m)")
     out = [ClearanceClass(f"bxy_{j}", (j,), {"b_xy": 1.0, "beta_xy": 1.0 / h}, "m",
@@ -137,6 +158,8 @@ class ClearanceSources:
         class sets (default: the joints' own bounds).
     tol : float
         Relative certificate gap of the engine (1, dimensionless).
+    _maps : dict
+        Internal cache of the engine's pose maps (keyed by the poses); leave the default.
 
     Raises
     ------
@@ -195,10 +218,12 @@ class ClearanceSources:
 
     @property
     def names(self) -> tuple[str, ...]:
+        """Names of the clearance classes (source names), in order."""
         return tuple(c.name for c in self.classes)
 
     @property
     def sources(self) -> tuple[SourceSpec, ...]:
+        """The classes as one-dimensional sources (:attr:`ClearanceClass.source`), in order."""
         return tuple(c.source for c in self.classes)
 
     @property
@@ -208,7 +233,24 @@ class ClearanceSources:
         return not np.any(self.base_bounds > 0)
 
     def bounds(self, C) -> np.ndarray:
-        """Engine bounds (n, n_joints, 4) [beta_xy, beta_z, b_xy, b_z] (rad, m) of class tolerances C (n, n_classes)."""
+        """Engine bounds (n, n_joints, 4) [beta_xy, beta_z, b_xy, b_z] (rad, m) of class tolerances C (n, n_classes).
+
+        Parameters
+        ----------
+        C : array_like, (n, n_classes) or (n_classes,)
+            Tolerances of the clearance classes (each in its class's unit, m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n, n_joints, 4) bounds: ``factor * t`` where a class sets the bound, the fixed
+            ``base_bounds`` elsewhere (rad for ``beta_*``, m for ``b_*``).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            If the last axis of ``C`` is not ``n_classes`` long.
+        """
         C = np.atleast_2d(np.asarray(C, float))
         if C.shape[-1] != len(self.classes):
             raise ValidationError("clearance tolerances shape", C.shape, f"(n, {len(self.classes)})")
@@ -218,7 +260,20 @@ class ClearanceSources:
         return out
 
     def maps(self, poses: np.ndarray):
-        """The engine's per-pose maps at ``poses`` (cached by the poses' bytes)."""
+        """The engine's per-pose maps at ``poses`` (cached by the poses' bytes).
+
+        Only the last poses asked for are cached.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray, (n_poses, d) or (d,)
+            Poses in the mechanism's (the robot's) pose coordinates (m or rad).
+
+        Returns
+        -------
+        list of robots.clearance.PoseMaps
+            One per decoupled block (:meth:`robots.clearance.ClearanceMechanism.pose_maps`).
+        """
         key = np.ascontiguousarray(poses, float).tobytes()
         if key not in self._maps:
             self._maps.clear()
@@ -235,7 +290,28 @@ def from_table(table: dict, robot) -> ClearanceSources:
     optional ``joints`` (default: every joint with clearance), ``axial = false`` for radial only)
     and/or explicit ``[[clearances.class]]`` tables (``name``, ``joints``, ``bounds = {b_xy = 1.0,
     beta_xy = 100.0}``, optional ``unit``, ``group``). ``robot.clearance_mechanism()`` gives the
-    joints and the fixed bounds (the description's ``[clearance]``)."""
+    joints and the fixed bounds (the description's ``[clearance]``).
+
+    Parameters
+    ----------
+    table : dict
+        The ``[clearances]`` table (keys ``h``, ``joints``, ``axial``, ``class``, ``tol``,
+        ``geometric``; ``tol`` is the engine's relative gap, default 1e-3).
+    robot : RobotErrorModel
+        The robot; it must have ``clearance_mechanism()``.
+
+    Returns
+    -------
+    ClearanceSources
+        The classes on the robot's clearance mechanism.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown key, a robot without joint clearances, ``joints`` or ``axial`` without ``h``,
+        a class table without ``name``, ``joints`` or ``bounds``, or an invalid class or
+        class set (:class:`ClearanceClass`, :class:`ClearanceSources`).
+    """
     check_table_keys(table, TABLE_KEYS, "clearances")
     if not hasattr(robot, "clearance_mechanism"):
         raise ValidationError("clearances", robot.name, "a robot with joint clearances (clearance_mechanism())")
@@ -259,7 +335,23 @@ class WithClearances(RobotErrorModel):
 
     The clearance classes have no linear column: ``sensitivity`` gives them zero columns, and the
     problem evaluates them only through the certified engine (:func:`worst_case`). Not a robot to
-    use on its own (its first-order map omits the clearances)."""
+    use on its own (its first-order map omits the clearances).
+
+    Parameters
+    ----------
+    robot : RobotErrorModel
+        The robot whose geometric sources come first (interval sources only).
+    clearances : ClearanceSources
+        The clearance classes, appended as sources after the geometric ones.
+    geometric : bool
+        Whether the robot's geometric sources are included (False: clearances only).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A class named like a geometric source, or a geometric source that is not an interval
+        (dim != 1).
+    """
 
     def __init__(self, robot: RobotErrorModel, clearances: ClearanceSources, geometric: bool = True):
         self.base, self.clearances, self.geometric = robot, clearances, bool(geometric)
@@ -277,15 +369,43 @@ class WithClearances(RobotErrorModel):
         self.n_geometric = len(own)
 
     def sensitivity(self, poses) -> np.ndarray:
+        """First-order map of the geometric sources, with zero columns for the clearance classes.
+
+        Parameters
+        ----------
+        poses : array_like, (n_poses, d)
+            Poses in the robot's pose coordinates (m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n_poses, 6, n_sources) Jacobian of the twist ``[dp; dtheta]`` (m, rad) with respect
+            to the sources (per SI unit of each source); the clearance columns are 0.
+        """
         J = np.asarray(self.base.sensitivity(poses), float) if self.geometric else \
             np.zeros((len(self.check_poses(poses)), 6, 0))
         return np.concatenate([J, np.zeros(J.shape[:2] + (len(self.clearances.classes),))], axis=2)
 
     def pose_error(self, poses, errors) -> np.ndarray:   # pragma: no cover - guarded by has_nonlinear_model
+        """Not available: clearances have no nonlinear model (:attr:`has_nonlinear_model` is False).
+
+        Parameters
+        ----------
+        poses : array_like
+            Poses (unused).
+        errors : array_like
+            Source errors (unused).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Always.
+        """
         raise ValidationError("pose_error", self.name, "geometric sources only: clearances are first order")
 
     @property
     def has_nonlinear_model(self) -> bool:
+        """False: clearances are evaluated first order only (certified engine)."""
         return False
 
 
@@ -294,7 +414,22 @@ class ClearanceWorstCase:
     """Certified worst case at every pose of designs (n_designs, n_poses) per component
     (``"position"`` m, ``"orientation"`` rad): attained value, proven bound, worst direction (unit,
     base axes, (n, P, 3)) and each source's share of the error at that direction ((n, P, n_src);
-    the shares miss what the fixed, unallocated clearance bounds contribute)."""
+    the shares miss what the fixed, unallocated clearance bounds contribute).
+
+    Parameters
+    ----------
+    value : dict
+        Component -> (n_designs, n_poses) attained worst-case error (m or rad).
+    bound : dict
+        Component -> (n_designs, n_poses) proven upper bound (m or rad).
+    direction : dict
+        Component -> (n_designs, n_poses, 3) unit direction of the worst error (base axes).
+    contrib : dict
+        Component -> (n_designs, n_poses, n_sources) each source's share of the attained error,
+        as a fraction of it (dimensionless).
+    n_solves : int
+        Number of support problems the engine solved (its work).
+    """
 
     value: dict
     bound: dict
@@ -319,7 +454,26 @@ def worst_case(robot: WithClearances, poses: np.ndarray, jacobian: np.ndarray, T
     at every pose: the geometric intervals through ``jacobian`` (n_poses, 6, n_sources; the
     clearance columns are ignored) plus the consistent clearance screws inside the classes' bounds
     (Minkowski sum; :func:`robots.clearance.evaluate_cases` with ``extra``). Only the listed
-    ``components`` are computed."""
+    ``components`` are computed.
+
+    Parameters
+    ----------
+    robot : WithClearances
+        The robot with its clearance classes.
+    poses : numpy.ndarray, (n_poses, d)
+        Poses (m or rad).
+    jacobian : numpy.ndarray, (n_poses, 6, n_sources)
+        First-order map of the twist ``[dp; dtheta]`` (:meth:`WithClearances.sensitivity`).
+    T : array_like, (n, n_sources) or (n_sources,)
+        Designs: geometric tolerances first, then the class tolerances (m or rad).
+    components : sequence of {"position", "orientation"}
+        Error components to compute.
+
+    Returns
+    -------
+    ClearanceWorstCase
+        Attained values, proven bounds, worst directions and shares per component.
+    """
     from robots.clearance import evaluate_cases
 
     cl = robot.clearances
@@ -367,7 +521,28 @@ def sample_twists(robot: WithClearances, poses: np.ndarray, c: np.ndarray, n_sam
     states for class tolerances c (n_classes,): every joint's screw drawn uniformly inside (or, with
     ``mode="boundary"``, on the boundary of) its disks and intervals, projected onto the loop
     equations ``B^T s = 0`` and scaled back into the set -- the sampling of
-    :func:`robots.clearance.sample_max_errors`, per sample instead of its maximum."""
+    :func:`robots.clearance.sample_max_errors`, per sample instead of its maximum.
+
+    Parameters
+    ----------
+    robot : WithClearances
+        The robot with its clearance classes.
+    poses : numpy.ndarray, (n_poses, d)
+        Poses (m or rad).
+    c : array_like, (n_classes,)
+        Class tolerances (m or rad).
+    n_samples : int
+        Samples per pose.
+    rng : numpy.random.Generator
+        Random generator.
+    mode : {"uniform", "boundary"}
+        Screws drawn inside their sets or on their boundaries.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_poses, n_samples, 6) twists ``[dp; dtheta]`` (m, rad).
+    """
     cl = robot.clearances
     b = cl.bounds(np.asarray(c, float)[None])[0]
     maps = cl.maps(poses)

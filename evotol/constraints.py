@@ -1,9 +1,11 @@
 """The accuracy requirement as explicit constraint rows, for optimisers.
 
 Both measures are positively homogeneous and convex in the tolerances t:
-  * worst case: |error| <= E at pose p  ⇔  Σ_j t_j ‖B_jᵀu‖ / E <= 1 for every unit direction u,
-    an infinite family of *linear* rows a·t <= 1 (one per pose and direction);
-  * RSS: Σ_j (s_pj / E)² t_j² <= 1, one *quadratic* row b·t² <= 1 per pose.
+
+* worst case: ``|error| <= E`` at pose p  ⇔  Σ_j t_j ‖B_jᵀu‖ / E <= 1 for every unit direction u,
+  an infinite family of *linear* rows a·t <= 1 (one per pose and direction);
+* RSS: Σ_j (s_pj / E)² t_j² <= 1, one *quadratic* row b·t² <= 1 per pose.
+
 Worst-case rows are generated lazily (cutting planes): a working set starts from each pose's
 worst grid direction at a few probe designs and grows whenever an exact evaluation
 (:meth:`ToleranceProblem.evaluate`, refined direction) finds a row the set misses. The working set
@@ -12,7 +14,7 @@ the designs it is given. Optimisers must judge their final answers with ``Tolera
 
 Asymmetric intervals (offsets, minus != plus; :mod:`evotol.measures`): a worst-case row becomes
 affine, a·t + a0 <= 1 with a0 = u·Σ_j B_j offset_j / E (``A0``); directions cover the full sphere.
-RSS rows with a mean shift, |s_p(t)|/E + sqrt(b·t²) <= 1, are not in ``B`` (they are not
+RSS rows with a mean shift, ``|s_p(t)|/E + sqrt(b·t²) <= 1``, are not in ``B`` (they are not
 quadratic): ``violation`` evaluates them exactly through the problem.
 Rows are in *source* space (one coefficient per source); optimisers map them to the free
 variables with :meth:`ToleranceProblem.to_variables` (shared tolerances).
@@ -25,6 +27,26 @@ from evotol.problem import ToleranceProblem
 
 
 class ConstraintRows:
+    """The accuracy requirement of a ``worst_case`` or ``rss`` problem as a working set of convex
+    rows in source space (module docstring): linear rows ``A t + A0 <= 1`` (worst case, grown
+    lazily by :meth:`check`) and quadratic rows ``B t² <= 1`` (RSS, all of them).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem; its requirement's measure must be ``worst_case`` or ``rss``.
+    n_probe : int
+        Number of random probe designs (log-uniform between the bounds; the geometric mean and
+        the upper bounds are added) whose worst grid directions seed the worst-case working set.
+    seed : int
+        Seed of the probe designs.
+
+    Raises
+    ------
+    ValueError
+        If the problem's measure is neither ``worst_case`` nor ``rss``.
+    """
+
     def __init__(self, problem: ToleranceProblem, n_probe: int = 16, seed: int = 0):
         self.problem = problem
         measure = problem.requirement.measure
@@ -73,11 +95,24 @@ class ConstraintRows:
 
     @property
     def n_rows(self) -> int:
+        """Number of rows in the working set (linear + quadratic)."""
         return self.A.shape[0] + self.B.shape[0]
 
     def violation(self, T: np.ndarray) -> np.ndarray:
         """max over working rows of (row value − 1), per design (n_designs,). A lower estimate for
-        the worst case until ``check``ed; exact for RSS."""
+        the worst case until checked (:meth:`check`); exact for RSS.
+
+        Parameters
+        ----------
+        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+            Tolerance designs in source space (m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n_designs,) violation, dimensionless (normalised error − 1; <= 0 meets the rows).
+            With a mean-shifted RSS requirement, the problem's exact RSS violation.
+        """
         T = np.atleast_2d(T)
         v = np.full(T.shape[0], -np.inf)
         if self.A.shape[0]:
@@ -89,12 +124,37 @@ class ConstraintRows:
         return v
 
     def normalised_error(self, T: np.ndarray) -> np.ndarray:
-        """max error / bound over poses and components (working rows)."""
+        """max error / bound over poses and components (working rows).
+
+        Parameters
+        ----------
+        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+            Tolerance designs in source space (m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n_designs,) normalised error, dimensionless (<= 1 meets the rows).
+        """
         return self.violation(T) + 1
 
     def check(self, T: np.ndarray) -> tuple[np.ndarray, int]:
         """Exact violation of designs T (refined worst directions); adds the rows it finds.
-        Returns (violation (n_designs,), number of rows added)."""
+        Returns (violation (n_designs,), number of rows added).
+
+        Parameters
+        ----------
+        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+            Tolerance designs in source space (m or rad).
+
+        Returns
+        -------
+        violation : numpy.ndarray
+            (n_designs,) exact violation (normalised error − 1, dimensionless) from
+            :meth:`ToleranceProblem.evaluate`; for RSS, :meth:`violation`.
+        added : int
+            Number of linear rows added to the working set (0 for RSS).
+        """
         T = np.atleast_2d(T)
         if self.measure == "rss":
             return self.violation(T), 0
@@ -115,7 +175,21 @@ class ConstraintRows:
         """Drop linear rows below ``keep_ratio`` × the largest row value for every design in T.
 
         Safe: the working set only ever under-estimates the error, and ``check`` re-adds any
-        row that becomes the maximum. Returns the number of rows dropped."""
+        row that becomes the maximum. Returns the number of rows dropped.
+
+        Parameters
+        ----------
+        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+            Designs (m or rad) at which the rows are compared; a row is kept if it reaches the
+            threshold for at least one design.
+        keep_ratio : float
+            Threshold as a fraction of each design's largest row value (dimensionless).
+
+        Returns
+        -------
+        int
+            Number of linear rows dropped.
+        """
         if self.A.shape[0] == 0:
             return 0
         V = np.atleast_2d(T) @ self.A.T + self.A0
@@ -131,7 +205,22 @@ class ConstraintRows:
     def scale_to_boundary(self, T: np.ndarray, iters: int = 40) -> np.ndarray:
         """Scale each design's free tolerances by one factor so it meets the working rows with
         equality (within bounds), by bisection on the factor; locked tolerances are kept (the
-        error is nondecreasing in the factor, offsets included, so bisection is exact)."""
+        error is nondecreasing in the factor, offsets included, so bisection is exact).
+
+        Parameters
+        ----------
+        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+            Designs in source space (m or rad).
+        iters : int
+            Bisection steps on the factor (after doubling it until infeasible, at most 30 times).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n_designs, n_sources) scaled designs (m or rad), clipped to the bounds; feasible on
+            the working rows (the factor's lower end). A design infeasible even at the lower
+            bounds comes back at them.
+        """
         p = self.problem
         T = np.atleast_2d(np.array(T, dtype=float))
         free = p.free
@@ -160,7 +249,13 @@ class ExactRows(ConstraintRows):
     """The requirement judged by the problem's exact measure, with no rows: the interface of
     :class:`ConstraintRows` for a measure that has no convex rows -- the certified worst case of
     clearance sources (:mod:`evotol.clearances`), which is not convex in the tolerances.
-    ``violation`` is exact (one engine evaluation per call); ``check`` adds nothing."""
+    ``violation`` is exact (one engine evaluation per call); ``check`` adds nothing.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem, judged by its own measure (:meth:`ToleranceProblem.evaluate`).
+    """
 
     def __init__(self, problem: ToleranceProblem):
         self.problem = problem
@@ -171,19 +266,76 @@ class ExactRows(ConstraintRows):
         self.shifted_rss = False
 
     def violation(self, T: np.ndarray) -> np.ndarray:
+        """Exact violation of designs T (normalised error − 1) by the problem's measure.
+
+        Parameters
+        ----------
+        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+            Tolerance designs in source space (m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n_designs,) violation, dimensionless (<= 0 meets the requirement).
+        """
         return self.problem.evaluate(np.atleast_2d(T), top_only=True).violation
 
     def check(self, T: np.ndarray) -> tuple[np.ndarray, int]:
+        """Exact violation of designs T; no rows to add.
+
+        Parameters
+        ----------
+        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+            Tolerance designs in source space (m or rad).
+
+        Returns
+        -------
+        violation : numpy.ndarray
+            (n_designs,) as :meth:`violation`.
+        added : int
+            Always 0.
+        """
         return self.violation(T), 0
 
     def prune(self, T: np.ndarray, keep_ratio: float = 0.8) -> int:
+        """Nothing to drop (no rows).
+
+        Parameters
+        ----------
+        T : numpy.ndarray
+            Designs (ignored).
+        keep_ratio : float
+            Ignored.
+
+        Returns
+        -------
+        int
+            Always 0.
+        """
         return 0
 
     def boundary_scale(self, T: np.ndarray, iters: int = 4, rtol: float = 1e-6) -> np.ndarray:
         """Designs scaled onto the requirement's boundary: t <- clip(t / error) on the free
         tolerances (exact when the measure is positively homogeneous and no bound clips; the
         engine's attained value is homogeneous to its certificate gap), then shrunk by
-        (1 - rtol) / error until none is outside. A few exact evaluations per call."""
+        (1 - rtol) / error until none is outside. A few exact evaluations per call.
+
+        Parameters
+        ----------
+        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+            Designs in source space (m or rad).
+        iters : int
+            Rescaling passes onto the boundary (``|error − 1| > rtol`` moves); then up to 8
+            shrinking passes for designs still outside.
+        rtol : float
+            Relative tolerance on the normalised error (dimensionless).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n_designs, n_sources) scaled designs (m or rad), clipped to the bounds; a design
+            that a bound stops may remain outside.
+        """
         p = self.problem
         f = p.free
         T = np.atleast_2d(np.array(T, dtype=float))
@@ -203,7 +355,20 @@ class ExactRows(ConstraintRows):
 
 def constraint_rows(problem: ToleranceProblem, seed: int = 0) -> ConstraintRows | None:
     """The requirement as optimisers use it: lazy convex rows for ``worst_case`` / ``rss``,
-    :class:`ExactRows` for clearance sources, None for the sampled measures."""
+    :class:`ExactRows` for clearance sources, None for the sampled measures.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+    seed : int
+        Seed of the probe designs of :class:`ConstraintRows`.
+
+    Returns
+    -------
+    ConstraintRows, ExactRows or None
+        The rows, or None when the measure has none (Monte Carlo, yield, ...).
+    """
     if problem.clearances is not None:
         return ExactRows(problem)
     if problem.requirement.measure in ("worst_case", "rss"):

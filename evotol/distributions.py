@@ -106,7 +106,30 @@ class Distribution:
 
 
 def as_distribution(value, field: str = "distribution", dim: int | None = None) -> Distribution:
-    """A :class:`Distribution` from a Distribution, a kind name or a mapping (study files)."""
+    """A :class:`Distribution` from a Distribution, a kind name or a mapping (study files).
+
+    Parameters
+    ----------
+    value : Distribution, str or dict
+        A distribution, a kind name of :data:`KINDS`, or a mapping with keys among ``kind``,
+        ``sigma_k``, ``mean_shift``.
+    field : str
+        Name of the field in error messages.
+    dim : {1, 2, 3} or None
+        Dimension of the source, to check that the distribution suits it; None checks the
+        settings alone.
+
+    Returns
+    -------
+    Distribution
+        The validated distribution.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown mapping key, a value of another type, or settings that
+        :meth:`Distribution.validate` refuses.
+    """
     if isinstance(value, Distribution):
         d = value
     elif isinstance(value, str):
@@ -134,6 +157,21 @@ def unit_moments(dist: Distribution, dim: int, radial: str = "uniform") -> tuple
     1/3; uniform radius r ~ U(0,1) on a disk/ball E[r²]/dim = 1/(3·dim); area-uniform
     E[r²] = dim/(dim+2); contact E[r²] = 1; normal 1/k²; truncated normal radius
     var_trunc(k)/(k²·dim) (interval: var_trunc(k)/k²).
+
+    Parameters
+    ----------
+    dist : Distribution
+        The source's distribution.
+    dim : {1, 2, 3}
+        Dimension of the source's error vector.
+    radial : {"uniform", "area"}
+        Radius law of a ``uniform`` disk/ball source (module docstring); ignored otherwise.
+
+    Returns
+    -------
+    tuple of float
+        ``(mean, variance)`` per component of z, per unit tolerance (dimensionless: multiply the
+        mean by t and the variance by t² for SI units).
     """
     k = float(dist.sigma_k)
     if dist.kind == "normal":
@@ -149,7 +187,29 @@ def unit_moments(dist: Distribution, dim: int, radial: str = "uniform") -> tuple
 
 
 def uniforms(n: int, d: int, method: str = "lhs", seed=0) -> np.ndarray:
-    """(n, d) uniforms in [0, 1): Latin hypercube (scipy.stats.qmc) or plain Monte Carlo."""
+    """(n, d) uniforms in [0, 1): Latin hypercube (scipy.stats.qmc) or plain Monte Carlo.
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    d : int
+        Number of columns (the sum of the source dimensions).
+    method : {"lhs", "mc"}
+        Latin hypercube or plain pseudo-random sampling.
+    seed : int, numpy.random.Generator or None
+        Seed of the generator (default 0: reproducible).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, d) uniforms in [0, 1).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown ``method``.
+    """
     if method not in METHODS:
         raise ValidationError("method", method, f"one of {METHODS}")
     if method == "lhs":
@@ -178,6 +238,28 @@ def draw(U: np.ndarray, dims, dists, radial: str = "uniform") -> list[np.ndarray
     dims: source dimensions (1, 2, 3); dists: :class:`Distribution` or kind names, one per source.
     Each source uses ``dim_j`` columns of U (interval: the value; disk: radius, angle; ball:
     radius, cos(polar angle), azimuth; a normal disk/ball: one column per component).
+
+    Parameters
+    ----------
+    U : numpy.ndarray, (n, sum(dims))
+        Uniforms in [0, 1), e.g. from :func:`uniforms`.
+    dims : sequence of int
+        Dimension of each source (1, 2 or 3).
+    dists : sequence of Distribution or str
+        Distribution of each source (anything :func:`as_distribution` takes).
+    radial : {"uniform", "area"}
+        Radius law of ``uniform`` disk/ball sources (module docstring).
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Per source, the (n, dim_j) errors per unit tolerance (dimensionless; multiply by t_j for
+        m or rad).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown ``radial``, or a distribution unfit for its source (:func:`as_distribution`).
     """
     if radial not in RADIAL:
         raise ValidationError("radial", radial, f"one of {RADIAL}")
@@ -216,5 +298,31 @@ def draw(U: np.ndarray, dims, dists, radial: str = "uniform") -> list[np.ndarray
 
 def unit_samples(dims, dists, n: int, method: str = "lhs", seed=0, radial: str = "uniform") -> list[np.ndarray]:
     """One set of unit-tolerance samples (list over sources of (n, dim_j)), e.g. shared by all
-    poses as common random numbers."""
+    poses as common random numbers.
+
+    Parameters
+    ----------
+    dims : sequence of int
+        Dimension of each source (1, 2 or 3).
+    dists : sequence of Distribution or str
+        Distribution of each source.
+    n : int
+        Number of samples.
+    method : {"lhs", "mc"}
+        Latin hypercube or plain Monte Carlo (:func:`uniforms`).
+    seed : int, numpy.random.Generator or None
+        Seed of the uniforms (default 0).
+    radial : {"uniform", "area"}
+        Radius law of ``uniform`` disk/ball sources.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Per source, (n, dim_j) errors per unit tolerance (dimensionless).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        As :func:`uniforms` and :func:`draw`.
+    """
     return draw(uniforms(n, int(sum(dims)), method, seed), dims, dists, radial)

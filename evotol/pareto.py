@@ -23,7 +23,25 @@ def _normalised(F: np.ndarray, log: Sequence[bool] | None) -> np.ndarray:
 def ideal_point_knee(F: np.ndarray, log: Sequence[bool] | None = None) -> int:
     """Index of the knee of a Pareto front ``F`` (n, m), all objectives minimised: the point
     nearest (Euclidean) to the ideal point after normalising every objective to [0, 1] over the
-    front (log10 first where ``log``). On the front ``y = 1/x`` in log-log axes it is ``x = 1``."""
+    front (log10 first where ``log``). On the front ``y = 1/x`` in log-log axes it is ``x = 1``.
+
+    Parameters
+    ----------
+    F : array_like, (n, m)
+        Objective values of the n front members (any units; all minimised).
+    log : sequence of bool, optional
+        Per objective, whether it is taken as log10 before normalising. Default: none.
+
+    Returns
+    -------
+    int
+        Row index (0-based) of the knee in ``F``.
+
+    Raises
+    ------
+    ValidationError
+        If ``F`` is not a non-empty 2-D array.
+    """
     F = np.asarray(F, dtype=float)
     if F.ndim != 2 or len(F) == 0:
         raise ValidationError("Pareto front F", F.shape, "a non-empty (n, m) array")
@@ -36,6 +54,19 @@ def knee_points(F: np.ndarray, log: Sequence[bool] | None = None) -> np.ndarray:
     Both marks of the one knee definition, deduplicated: :func:`ideal_point_knee` and the high
     trade-off points of pymoo's ``HighTradeoffPoints`` (Rachmawati & Srinivasan 2009) on the same
     normalised front.
+
+    Parameters
+    ----------
+    F : array_like, (n, m)
+        Objective values of the n front members (any units; all minimised).
+    log : sequence of bool, optional
+        Per objective, whether it is taken as log10 before normalising. Default: none.
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Sorted row indices of the knee points in ``F``; empty if ``F`` is empty or not 2-D. The
+        high trade-off points are added only for ``n >= 4`` and skipped on a degenerate front.
     """
     F = np.asarray(F, dtype=float)
     if F.ndim != 2 or len(F) == 0:
@@ -55,7 +86,18 @@ def knee_points(F: np.ndarray, log: Sequence[bool] | None = None) -> np.ndarray:
 
 
 def non_dominated(F: np.ndarray) -> np.ndarray:
-    """Indices of the non-dominated rows of ``F`` (n, m), all objectives minimised (pymoo's sort)."""
+    """Indices of the non-dominated rows of ``F`` (n, m), all objectives minimised (pymoo's sort).
+
+    Parameters
+    ----------
+    F : array_like, (n, m)
+        Objective values of n points (any units; all minimised).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Row indices of the points that no other point dominates.
+    """
     from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
     return NonDominatedSorting().do(np.asarray(F, dtype=float), only_non_dominated_front=True)
@@ -93,6 +135,11 @@ class ParetoFront:
         what :meth:`cheapest_feasible` optimises (a design study's front, e.g. workspace area vs.
         p_max vs. r_max from :func:`evotol.doe.nsga2`, has no cost: its "cheapest" is the best in
         its first objective).
+
+    Raises
+    ------
+    ValidationError
+        If ``table`` lacks a column of ``objectives``.
     """
 
     table: pd.DataFrame
@@ -123,6 +170,12 @@ class ParetoFront:
     def cheapest_feasible(self) -> pd.Series:
         """The cheapest member with ``objective <= limit × (1 + rtol)``.
 
+        Returns
+        -------
+        pandas.Series
+            That row of ``table`` (best in the first of ``objectives``: least cost, or greatest
+            if that objective is maximised).
+
         Raises
         ------
         ValidationError
@@ -139,10 +192,27 @@ class ParetoFront:
 
     def knee(self) -> int:
         """Row of the knee (:func:`ideal_point_knee`: nearest to the ideal point with every
-        objective scaled to [0, 1] over the front, log10 first where an objective says so)."""
+        objective scaled to [0, 1] over the front, log10 first where an objective says so).
+
+        Returns
+        -------
+        int
+            Positional row index (for ``table.iloc``) of the knee.
+
+        Raises
+        ------
+        ValidationError
+            If the front is empty.
+        """
         return ideal_point_knee(self._minimised(), [lg and sense > 0 for _, sense, lg in self.objectives])
 
     def knees(self) -> pd.DataFrame:
         """Every knee point (:func:`knee_points`: the ideal-point knee and pymoo's high trade-off
-        points), as rows of the table."""
+        points), as rows of the table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            The knee rows of ``table`` (empty for an empty front).
+        """
         return self.table.iloc[knee_points(self._minimised(), [lg and sense > 0 for _, sense, lg in self.objectives])]

@@ -99,7 +99,27 @@ def loss_coefficients(problem: ToleranceProblem, A) -> np.ndarray:
 
 
 def expected_loss(problem: ToleranceProblem, A, T) -> np.ndarray:
-    """Expected quality loss ``Σ_j q_j t_j²`` of designs ``T`` (n, n_sources) SI -> (n,) cost units."""
+    """Expected quality loss ``Σ_j q_j t_j²`` of designs ``T`` (n, n_sources) SI -> (n,) cost units.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (first-order sensitivities at its poses).
+    A : float or mapping
+        Loss at the limit (cost units); see :func:`loss_coefficients`.
+    T : array_like, (n, n_sources) or (n_sources,)
+        Tolerance designs (m or rad per source); one design may be given as a vector.
+
+    Returns
+    -------
+    numpy.ndarray
+        Expected loss of each design, (n,), cost units.
+
+    Raises
+    ------
+    ValidationError
+        As :func:`loss_coefficients`.
+    """
     T = np.atleast_2d(np.asarray(T, dtype=float))
     return T ** 2 @ loss_coefficients(problem, A)
 
@@ -141,5 +161,16 @@ def _wrap(tol: Tolerance, q: float) -> Tolerance:
 
 def has_quality_loss(problem: ToleranceProblem) -> bool:
     """Whether some source's cost carries a positive loss term (then the cost is not monotone in t:
-    the GA's boundary repair only pulls infeasible designs onto the limit)."""
+    the GA's boundary repair only pulls infeasible designs onto the limit).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (e.g. one made by :func:`with_quality_loss`).
+
+    Returns
+    -------
+    bool
+        True if some cost model is a :class:`QualityLossCost` with ``q > 0``.
+    """
     return any(isinstance(t.cost, QualityLossCost) and t.cost.q > 0 for t in problem.tolerances.values())

@@ -3,10 +3,12 @@ largest normalised error, add it and re-solve, until the requirement holds every
 
 Cutting planes over poses. A design that holds the requirement on a subset of poses may miss it
 elsewhere; the error is a continuous function of the pose, so the search is
-  1. a dense pose set -- ``candidates`` given by the user (e.g. Halton points of a cylinder) or a
-     regular grid of the workspace box (``grid`` points per axis) -- evaluated exactly, and
-  2. (``local=True``) a local maximisation of the normalised error over the pose coordinates
-     (a vectorised pattern search inside the workspace box) from the worst dense poses,
+
+1. a dense pose set -- ``candidates`` given by the user (e.g. Halton points of a cylinder) or a
+   regular grid of the workspace box (``grid`` points per axis) -- evaluated exactly, and
+2. (``local=True``) a local maximisation of the normalised error over the pose coordinates
+   (a vectorised pattern search inside the workspace box) from the worst dense poses,
+
 so the worst pose found may lie between grid points. The ``add`` worst violating poses are added
 and the allocation repeated until the worst error found is within the requirement (relative
 ``tol``). A lower bound certified on a subset of poses is a lower bound for the whole workspace,
@@ -29,7 +31,25 @@ from evotol.problem import ToleranceProblem
 
 @dataclass
 class WorstPose:
-    """The pose of largest normalised error found by the search (SI pose coordinates)."""
+    """The pose of largest normalised error found by the search (SI pose coordinates).
+
+    Parameters
+    ----------
+    pose : numpy.ndarray, (dim,)
+        The worst pose found (workspace coordinates, m or rad).
+    normalised_error : float
+        Its normalised error: max over constrained components of error / bound (dimensionless;
+        <= 1 meets the requirement).
+    grid_errors : numpy.ndarray, (n_dense,)
+        Normalised error at every dense pose.
+    dense_poses : numpy.ndarray, (n_dense, dim)
+        The dense poses (m or rad).
+    local_poses : numpy.ndarray, (k, dim), optional
+        End points of the k local searches (m or rad); None without local search.
+    local_errors : numpy.ndarray, (k,), optional
+        Their normalised errors by the cheaper search evaluation (for the worst case a lower
+        estimate); None without local search.
+    """
 
     pose: np.ndarray
     normalised_error: float      # max over constrained components of error / bound
@@ -58,7 +78,23 @@ def _normalised_search(problem: ToleranceProblem, T: np.ndarray, n_directions: i
 
 
 def dense_problem(problem: ToleranceProblem, candidates=None, grid: int | list | None = None) -> ToleranceProblem:
-    """The problem on the dense search set: ``candidates`` (array of poses) or a workspace grid."""
+    """The problem on the dense search set: ``candidates`` (array of poses) or a workspace grid.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (its robot's workspace box gives the grid).
+    candidates : array_like, (n, dim), optional
+        Poses to search (m or rad); take precedence over ``grid``.
+    grid : int or list of int, optional
+        Grid points per axis of the workspace box (one count, or one per axis). Default:
+        ``4 * max(2, round(n_poses ** (1 / dim)))``.
+
+    Returns
+    -------
+    ToleranceProblem
+        The same problem at the dense poses.
+    """
     if candidates is not None:
         return problem.at_poses(candidates)
     counts = grid if grid is not None else 4 * max(2, round(problem.n_poses ** (1 / problem.robot.workspace.dim)))
@@ -70,7 +106,29 @@ def worst_pose(problem: ToleranceProblem, t, dense: ToleranceProblem, local: boo
     """Largest normalised error of design t over the dense poses, then refined by local
     maximisation over the pose coordinates inside the workspace box: a vectorised pattern search
     from the ``n_local`` worst dense poses (each level evaluates the 3^dim neighbours at step h
-    of every start in one call, moves to the best, halves h; h starts at half the dense spacing)."""
+    of every start in one call, moves to the best, halves h; h starts at half the dense spacing).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (requirement, robot and its workspace box).
+    t : array_like or mapping
+        The design: tolerances per source (m or rad), anything ``problem.as_array`` takes.
+    dense : ToleranceProblem
+        The problem on the dense pose set (:func:`dense_problem`).
+    local : bool
+        Whether to refine by local pattern search between the dense poses.
+    n_local : int
+        Number of worst dense poses the local searches start from.
+    levels : int
+        Number of step halvings of each local search.
+
+    Returns
+    -------
+    WorstPose
+        The worst pose and its normalised error; a local maximum replaces the worst dense pose
+        only if its exact normalised error is larger.
+    """
     t = problem.as_array(t)
     ne = _normalised(dense, t[None], top_only=True)[0]
     k = int(np.argmax(ne))
@@ -119,6 +177,51 @@ def refine_poses(problem: ToleranceProblem, allocate, *, candidates=None, grid=N
     before the search is declared done.
     Returns (result on the last pose set, info dict: rounds, worst_pose, worst_normalised_error,
     n_poses, poses_added).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The coarse problem; its poses start the set unless ``start`` is given.
+    allocate : callable
+        ``allocate(sub_problem)`` -> a result with the design ``t`` (e.g. an
+        ``AllocationResult``).
+    candidates : array_like, (n, dim), optional
+        The dense search poses (m or rad); with them no local search is done.
+    grid : int or list of int, optional
+        Grid points per axis of the workspace box when ``candidates`` is None
+        (:func:`dense_problem`).
+    start : array_like of int, optional
+        Indices into the dense poses of the initial pose set (index mode: later poses are added
+        as indices too, listed in ``info["pose_indices"]``).
+    local : bool
+        Whether to search locally between dense poses (only without ``candidates``).
+    add : int
+        At most this many worst violating dense poses are added per round (plus, with local
+        search, the worst pose and up to ``add`` violating local maxima).
+    max_rounds : int
+        Maximum number of allocations (>= 1).
+    tol : float
+        The requirement holds when the normalised error is <= 1 + tol (dimensionless).
+    dense : ToleranceProblem, optional
+        A ready dense problem (overrides ``candidates`` and ``grid``).
+    n_final : int
+        Number of local searches of the final sweep before the search is declared done.
+    n_local : int
+        Number of local searches per round (from the worst dense poses).
+
+    Returns
+    -------
+    result : object
+        What ``allocate`` returned on the last pose set.
+    info : dict
+        ``rounds``, ``worst_pose`` (list, m or rad), ``worst_normalised_error``, ``n_poses``,
+        ``poses_added`` (dense poses added), ``n_dense_poses``, ``holds`` (bool), and
+        ``pose_indices`` in index mode.
+
+    Raises
+    ------
+    ValidationError
+        If ``allocate`` is not callable or ``max_rounds`` is not a positive integer.
     """
     if not callable(allocate):
         raise ValidationError("allocate", allocate, "a function problem -> AllocationResult")
@@ -166,7 +269,29 @@ def refine_poses(problem: ToleranceProblem, allocate, *, candidates=None, grid=N
 def scale_into_requirement(problem: ToleranceProblem, t) -> np.ndarray:
     """Scale the free tolerances of ``t`` by one factor (bisection, 40 halvings) so the exact
     error at every pose of ``problem`` meets the requirement; returns t unchanged if it already
-    does (the error is nondecreasing in the factor, offsets included)."""
+    does (the error is nondecreasing in the factor, offsets included).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem whose poses and requirement are to be met.
+    t : array_like, (n_sources,)
+        The design (m or rad per source).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) the design (m or rad), free tolerances scaled down (clipped to their
+        bounds) to the largest factor found that meets the requirement; ``t`` itself if it
+        already holds. Never scaled up.
+
+    Raises
+    ------
+    InfeasibleError
+        If even the lower bounds miss the requirement (``problem.check_feasible``).
+    ValidationError
+        If no factor down to 1e-12 meets the requirement otherwise.
+    """
     t = np.asarray(t, float)
     f = problem.free
 
@@ -196,7 +321,43 @@ def hold_on_workspace(problem: ToleranceProblem, t, *, candidates=None, grid=Non
                       max_rounds: int = 10, tol: float = 1e-9, dense: ToleranceProblem | None = None,
                       n_final: int = 12):
     """The GA's final check: scale design t until it holds at the worst poses found on the
-    dense set (+ local maxima). Returns (t, info)."""
+    dense set (+ local maxima). Returns (t, info).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (requirement, robot and workspace).
+    t : array_like or mapping
+        The design (m or rad per source).
+    candidates : array_like, (n, dim), optional
+        Dense search poses (m or rad); with them (or ``local=False``) the design is scaled
+        once to hold at every dense pose.
+    grid : int or list of int, optional
+        Grid points per axis of the workspace box (:func:`dense_problem`).
+    local : bool
+        Whether to search locally between the dense poses.
+    max_rounds : int
+        Maximum number of search-and-scale rounds.
+    tol : float
+        The requirement holds when the normalised error is <= 1 + tol (dimensionless).
+    dense : ToleranceProblem, optional
+        A ready dense problem (overrides ``candidates`` and ``grid``).
+    n_final : int
+        Number of local searches of the final sweep.
+
+    Returns
+    -------
+    t : numpy.ndarray
+        (n_sources,) the scaled design (m or rad).
+    info : dict
+        ``rounds``, ``scaled`` (bool), ``worst_pose`` (list, m or rad),
+        ``worst_normalised_error`` and ``n_dense_poses``.
+
+    Raises
+    ------
+    InfeasibleError, ValidationError
+        As :func:`scale_into_requirement`.
+    """
     dense = dense if dense is not None else dense_problem(problem, candidates, grid)
     t = problem.as_array(t)
     if candidates is not None or not local:

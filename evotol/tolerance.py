@@ -65,41 +65,90 @@ class Tolerance:
 
     @classmethod
     def fixed(cls, t: float, **kwargs) -> "Tolerance":
-        """A source with a known error bound t (SI) and no cost: not optimised, never priced."""
+        """A source with a known error bound t (SI) and no cost: not optimised, never priced.
+
+        Parameters
+        ----------
+        t : float
+            The fixed tolerance (m or rad): ``lower = upper = locked = t``.
+        **kwargs
+            Further fields of :class:`Tolerance` (``distribution``, ``offset``, ``minus``,
+            ``plus``, ``cost_width``, ``contains_nominal``).
+
+        Returns
+        -------
+        Tolerance
+            A tolerance with ``cost=None``, locked at t.
+        """
         return cls(cost=None, lower=t, upper=t, locked=t, **kwargs)
 
     @property
     def is_fixed(self) -> bool:
+        """True if the source has no cost model (made by :meth:`fixed`): never optimised or priced."""
         return self.cost is None
 
     @property
     def rho(self) -> float:
-        """Half-width per unit t: (minus + plus)/2."""
+        """Half-width per unit t: (minus + plus)/2 (dimensionless)."""
         return 0.5 * (float(self.minus) + float(self.plus))
 
     @property
     def kappa(self) -> float:
-        """Centre shift per unit t: (plus − minus)/2."""
+        """Centre shift per unit t: (plus − minus)/2 (dimensionless)."""
         return 0.5 * (float(self.plus) - float(self.minus))
 
     @property
     def width_factor(self) -> float:
-        """Width the cost model sees per unit t: ρ (``cost_width="half"``) or 2ρ (``"full"``)."""
+        """Width the cost model sees per unit t: ρ (``cost_width="half"``) or 2ρ (``"full"``) (dimensionless)."""
         return self.rho if self.cost_width == "half" else 2 * self.rho
 
     def interval(self, t: float) -> tuple[float, float]:
-        """The interval [offset − minus·t, offset + plus·t] (SI) at tolerance t."""
+        """The interval [offset − minus·t, offset + plus·t] (SI) at tolerance t.
+
+        Parameters
+        ----------
+        t : float
+            Tolerance (m or rad).
+
+        Returns
+        -------
+        tuple of float
+            ``(lo, hi)``, the interval's ends (m or rad).
+        """
         return self.offset - self.minus * t, self.offset + self.plus * t
 
     def cost_of(self, t):
-        """Cost at tolerance t (array-like): the cost model at the width ``cost_width`` says; 0 if fixed."""
+        """Cost at tolerance t (array-like): the cost model at the width ``cost_width`` says; 0 if fixed.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) (m or rad).
+
+        Returns
+        -------
+        float or ndarray
+            Cost (cost units) at each t, shaped like t; zeros for a fixed source.
+        """
         if self.cost is None:
             return np.zeros_like(np.asarray(t, dtype=float))
         w = self.width_factor
         return self.cost.cost(t if w == 1 else w * np.asarray(t, dtype=float))
 
     def dcost_of(self, t):
-        """d cost / d t (chain rule through the width factor)."""
+        """d cost / d t (chain rule through the width factor).
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) (m or rad).
+
+        Returns
+        -------
+        float or ndarray
+            Derivative of the cost with respect to t (cost units per m or rad), shaped like t;
+            zeros for a fixed source.
+        """
         if self.cost is None:
             return np.zeros_like(np.asarray(t, dtype=float))
         w = self.width_factor

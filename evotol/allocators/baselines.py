@@ -1,17 +1,23 @@
 """Textbook allocation baselines, usable as GA seeds.
 
 All use the aggregated sensitivity s_j of :func:`aggregated_sensitivity` (largest effect of source j
-per unit tolerance over the poses, relative to the bound), i.e. the single-stack-up model
+per unit tolerance over the poses, relative to the bound), i.e. the single-stack-up model::
+
     worst case:  Σ_j s_j t_j <= 1          RSS:  Σ_j s_j² t_j² <= 1,
+
 which is conservative for the real multi-pose problem (so the baselines are feasible).
 
 * equal tolerance: every free t_j equal, the largest value that holds the *exact* requirement;
 * proportional scaling: t_j ∝ w_j (default: the upper bounds), scaled to hold it exactly;
 * Lagrange closed forms (Spotts 1973; Chase & Greenwood 1988): minimise Σ c_j(t_j) on the
-  single stack-up. Stationarity c_j'(t_j) + λ ∂g/∂t_j = 0 gives, with c = a0·exp(-a1 t/σ):
+  single stack-up. Stationarity c_j'(t_j) + λ ∂g/∂t_j = 0 gives, with c = a0·exp(-a1 t/σ)::
+
       worst case  t_j = (σ/a1)·ln(a0 a1 / (σ λ s_j));   RSS  t_j = (σ/a1)·W(a0 a1² / (2 λ s_j² σ²))
-  (W: Lambert W), and with c = a0·(t/σ)^(-k):
+
+  (W: Lambert W), and with c = a0·(t/σ)^(-k)::
+
       worst case  t_j = σ·(a0 k / (σ λ s_j))^(1/(k+1));   RSS  t_j = (a0 k σ^k / (2 λ s_j²))^(1/(k+2)).
+
   λ > 0 is found by a 1-D root solve so the stack-up holds with equality; other cost models use
   a 1-D bisection for each t_j(λ). Results are clipped to the bounds.
 """
@@ -58,12 +64,48 @@ def _scale_exact(problem: ToleranceProblem, t: np.ndarray, rows: ConstraintRows 
 
 
 def equal_design(problem: ToleranceProblem, rows: ConstraintRows | None = None) -> np.ndarray:
+    """The equal-tolerance design: one common t for every free source, scaled so the exact
+    requirement holds with equality (start: the smallest geometric mean of the free bounds).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    rows : ConstraintRows or None
+        Constraint rows to reuse (``worst_case``/``rss``); default: built from ``problem``.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) the design (m or rad), clipped to the bounds.
+    """
     f = problem.free
     t = problem.full(np.full(int(f.sum()), np.sqrt(problem.lower[f] * problem.upper[f]).min())[None])[0]
     return _scale_exact(problem, t, rows)
 
 
 def proportional_design(problem: ToleranceProblem, weights=None) -> np.ndarray:
+    """The proportional-scaling design: t_j ∝ w_j on the free sources, scaled so the exact
+    requirement holds with equality.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    weights : array_like, mapping or None
+        Weights w_j per source (anything ``problem.as_array`` takes; only ratios matter);
+        default: the upper bounds.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) the design (m or rad), clipped to the bounds.
+
+    Raises
+    ------
+    ValidationError
+        If a weight of a free source is not positive.
+    """
     f = problem.free
     w = problem.upper if weights is None else problem.as_array(weights)
     if np.any(w[f] <= 0):
@@ -118,6 +160,27 @@ def _t_of_lambda(problem: ToleranceProblem, s: np.ndarray, lam: float, measure: 
 
 
 def lagrange_design(problem: ToleranceProblem, measure: str | None = None) -> np.ndarray:
+    """The Lagrange closed-form design on the single stack-up (module docstring): λ found by a
+    root solve in log λ so the stack-up of the aggregated sensitivities equals 1.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    measure : {"worst_case", "rss"} or None
+        Stack-up (default: the requirement's measure; any other measure uses ``"rss"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) the design (m or rad), clipped to the bounds; every free tolerance at its
+        upper bound if those already hold the stack-up. Not rescaled onto the exact requirement.
+
+    Raises
+    ------
+    ValidationError
+        If the lower tolerance limits cannot hold the stack-up.
+    """
     measure = measure or problem.requirement.measure
     if measure not in ("worst_case", "rss"):
         measure = "rss"

@@ -28,18 +28,61 @@ from evotol.quality_loss import has_quality_loss
 
 
 def cheapest_design(problem: ToleranceProblem) -> np.ndarray:
-    """Every free tolerance at its upper bound (locked ones at their value), SI."""
+    """Every free tolerance at its upper bound (locked ones at their value), SI.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) the design (m or rad), the cheapest the bounds allow.
+    """
     return problem.full(problem.upper[problem.free][None])[0]
 
 
 def dearest_design(problem: ToleranceProblem) -> np.ndarray:
-    """Every free tolerance at its lower bound: the most accurate design the bounds allow."""
+    """Every free tolerance at its lower bound: the most accurate design the bounds allow.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) the design (m or rad; locked tolerances at their value).
+    """
     return problem.full(problem.lower[problem.free][None])[0]
 
 
 def check_budget(problem: ToleranceProblem, budget, field: str = "budget") -> float:
     """The budget as a float, or a ValidationError naming ``field``, the budget and the cost of
-    the cheapest design."""
+    the cheapest design.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+    budget : float
+        The budget (cost models' unit).
+    field : str
+        Name of the field in the error message.
+
+    Returns
+    -------
+    float
+        The budget (cost units).
+
+    Raises
+    ------
+    ValidationError
+        A budget that is not a finite positive number, a problem with a quality-loss term (its
+        cost is not monotone in t), or a budget below the cost of :func:`cheapest_design`.
+    """
     if isinstance(budget, bool) or not isinstance(budget, numbers.Real) or not np.isfinite(float(budget)) \
             or float(budget) <= 0:
         raise ValidationError(field, budget, "a finite positive cost, in the cost models' unit")
@@ -61,6 +104,31 @@ def spend_budget(problem: ToleranceProblem, family: Callable[[float], np.ndarray
     ``family(log_p) -> t`` (full design, SI) must have a cost non-increasing in ``log_p``, with
     ``family(log_p[1])`` within the budget. Bisection keeps the affordable end, so the returned
     design never exceeds the budget.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (its cost prices the designs).
+    family : callable
+        ``family(log_p)`` -> (n_sources,) full design (m or rad), cost non-increasing in
+        ``log_p``.
+    budget : float
+        The budget (cost units).
+    log_p : tuple of float
+        ``(lo, hi)`` range of ``log p`` searched.
+    iters : int
+        Maximum number of bisection steps (it also stops when the bracket is below 1e-13).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) the design (m or rad) with cost <= budget: ``family(lo)`` if it already
+        fits, else the affordable end of the bisection bracket.
+
+    Raises
+    ------
+    ValidationError
+        If even ``family(log_p[1])`` costs more than the budget.
     """
     lo, hi = log_p
     cost = lambda x: float(problem.cost(family(x)))  # noqa: E731
@@ -81,7 +149,29 @@ def spend_budget(problem: ToleranceProblem, family: Callable[[float], np.ndarray
 
 def scaled_family(problem: ToleranceProblem, shape: np.ndarray) -> tuple[Callable[[float], np.ndarray], tuple]:
     """t(p) = clip(exp(p) · shape, lower, upper) on the free sources, and the range of p from every
-    free tolerance at its lower bound to every one at its upper bound."""
+    free tolerance at its lower bound to every one at its upper bound.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+    shape : array_like, (n_sources,)
+        Relative tolerances of the design (m or rad; only ratios matter). Positive on the free
+        sources; ``inf`` keeps a source at its upper bound.
+
+    Returns
+    -------
+    family : callable
+        ``family(p)`` -> (n_sources,) full design (m or rad).
+    log_p : tuple of float
+        ``(lo, hi)``: p from every free tolerance at its lower bound to every one at its upper
+        bound; ``(0.0, 0.0)`` if no source moves.
+
+    Raises
+    ------
+    ValidationError
+        If ``shape`` is NaN or not positive on a free source.
+    """
     f = problem.free
     shape = np.asarray(shape, dtype=float)[f]
     if np.any(np.isnan(shape)) or np.any(shape <= 0):
@@ -99,6 +189,21 @@ def scaled_family(problem: ToleranceProblem, shape: np.ndarray) -> tuple[Callabl
 
 def budget_info(problem: ToleranceProblem, t: np.ndarray, budget: float) -> dict:
     """What a budget-mode result reports besides its cost: the budget and the normalised error
-    (max over poses and components of error / bound; <= 1 means the requirement also holds)."""
+    (max over poses and components of error / bound; <= 1 means the requirement also holds).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+    t : numpy.ndarray, (n_sources,)
+        The design (m or rad).
+    budget : float
+        The budget (cost units).
+
+    Returns
+    -------
+    dict
+        ``{"budget": budget, "normalised_error": float}`` (normalised error dimensionless).
+    """
     ev = problem.evaluate(np.asarray(t, dtype=float)[None])
     return {"budget": budget, "normalised_error": float(ev.violation[0] + 1)}

@@ -1,16 +1,21 @@
 """Single-objective genetic algorithm on pymoo with the penalty fitness of Yao et al. 2013 (eq. 15).
 
-Fitness (eq. 15):  f(t) = Σ c_j(t_j)            if the accuracy requirement holds,
-                   f(t) = Σ c_j(t_j) + k        otherwise (k: a large constant, default 10× the
-                                                cost of the tightest design).
+Fitness (eq. 15)::
+
+    f(t) = Σ c_j(t_j)            if the accuracy requirement holds,
+    f(t) = Σ c_j(t_j) + k        otherwise (k: a large constant, default 10× the
+                                 cost of the tightest design).
+
 Two operator sets:
-  * ``operators="pymoo"`` (default): binary tournament, SBX crossover, polynomial mutation,
-    (μ+λ) fitness survival – pymoo's well-tested defaults;
-  * ``operators="paper"``: roulette-wheel selection (probability ∝ 1/f), elitism (the ``n_elite``
-    best parents pass unchanged, the rest of the generation are offspring), crossover
-    g = λ g1 + (1 − λ) g2 with λ ~ U(0, 1) (as printed in Sec. 4, step 5, under the name Wright's
-    heuristic crossover), and uniform mutation (a gene is redrawn uniformly inside its bounds:
-    the printed rule, "a random number in [a, b] is added", would push genes out of bounds).
+
+* ``operators="pymoo"`` (default): binary tournament, SBX crossover, polynomial mutation,
+  (μ+λ) fitness survival – pymoo's well-tested defaults;
+* ``operators="paper"``: roulette-wheel selection (probability ∝ 1/f), elitism (the ``n_elite``
+  best parents pass unchanged, the rest of the generation are offspring), crossover
+  g = λ g1 + (1 − λ) g2 with λ ~ U(0, 1) (as printed in Sec. 4, step 5, under the name Wright's
+  heuristic crossover), and uniform mutation (a gene is redrawn uniformly inside its bounds:
+  the printed rule, "a random number in [a, b] is added", would push genes out of bounds).
+
 ``repair=True`` (default) scales every design onto the boundary of the requirement (the error is
 positively homogeneous in t, so t ← t / (error/bound) is exact when no bound clips), which turns
 the penalty search into a search along the feasible boundary; ``repair=False`` is the paper's GA.
@@ -53,7 +58,13 @@ from evotol.threads import single_threaded_blas
 
 # --- the paper's operators --------------------------------------------------------------------------
 class RouletteSelection(Selection):
-    """Roulette-wheel selection for minimisation: probability ∝ 1/f (f > 0)."""
+    """Roulette-wheel selection for minimisation: probability ∝ 1/f (f > 0).
+
+    Parameters
+    ----------
+    **kwargs
+        Passed to pymoo's ``Selection``.
+    """
 
     def _do(self, problem, pop, n_select, n_parents, random_state=None, **kwargs):
         rng = random_state if random_state is not None else np.random.default_rng()
@@ -63,7 +74,15 @@ class RouletteSelection(Selection):
 
 
 class BlendCrossover(Crossover):
-    """g = λ g1 + (1 − λ) g2 and its mirror, λ ~ U(0, 1) per mating (Yao 2013 Sec. 4 step 5)."""
+    """g = λ g1 + (1 − λ) g2 and its mirror, λ ~ U(0, 1) per mating (Yao 2013 Sec. 4 step 5).
+
+    Parameters
+    ----------
+    prob : float
+        Probability that a mating is crossed over (else the parents are copied).
+    **kwargs
+        Passed to pymoo's ``Crossover``.
+    """
 
     def __init__(self, prob: float = 0.9, **kwargs):
         super().__init__(2, 2, prob=prob, **kwargs)
@@ -75,7 +94,15 @@ class BlendCrossover(Crossover):
 
 
 class UniformMutation(Mutation):
-    """Each gene is redrawn uniformly inside its bounds with probability ``prob_var``."""
+    """Each gene is redrawn uniformly inside its bounds with probability ``prob_var``.
+
+    Parameters
+    ----------
+    prob_var : float or None
+        Per-gene mutation probability; None: 1 / n_var.
+    **kwargs
+        Passed to pymoo's ``Mutation``.
+    """
 
     def __init__(self, prob_var: float | None = None, **kwargs):
         super().__init__(prob=1.0, **kwargs)
@@ -90,7 +117,13 @@ class UniformMutation(Mutation):
 
 
 class EliteSurvival(Survival):
-    """The ``n_elite`` best parents survive unchanged; the offspring fill the rest (generational)."""
+    """The ``n_elite`` best parents survive unchanged; the offspring fill the rest (generational).
+
+    Parameters
+    ----------
+    n_elite : int
+        Number of best parents kept.
+    """
 
     def __init__(self, n_elite: int = 2):
         super().__init__(filter_infeasible=False)
@@ -127,7 +160,27 @@ class _BoundaryRepair(Repair):
 
 
 def boundary_scale(rows: ConstraintRows, T: np.ndarray, iters: int = 20) -> np.ndarray:
-    """t ← clip(t / error) on the free tolerances, a few fixed-point steps (exact without clipping)."""
+    """t ← clip(t / error) on the free tolerances, a few fixed-point steps (exact without clipping).
+
+    Designs still outside afterwards (locked sources, clipping) are shrunk by bisection
+    (:meth:`ConstraintRows.scale_to_boundary`); with :class:`ExactRows`,
+    :meth:`ExactRows.boundary_scale` does the work.
+
+    Parameters
+    ----------
+    rows : ConstraintRows or ExactRows
+        The requirement's rows (the error is judged on them).
+    T : numpy.ndarray, (n, n_sources)
+        Designs (m or rad).
+    iters : int
+        Fixed-point steps at most (ignored with :class:`ExactRows`).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, n_sources) designs (m or rad) scaled onto the boundary of the requirement as the
+        rows judge it (normalised error 1 where no bound clips), clipped to the bounds.
+    """
     if isinstance(rows, ExactRows):     # no rows: a few exact evaluations of the engine
         return rows.boundary_scale(T)
     P = rows.problem
@@ -194,7 +247,27 @@ class _GAProblem(Problem):
 
 def initial_population(tp: ToleranceProblem, pop_size: int, seed: int, seeds=(), log_scale: bool = False) -> np.ndarray:
     """Latin hypercube over the bounds (scipy.stats.qmc), with the given seed designs first.
-    With ``log_scale`` the hypercube and the returned variables are log(t)."""
+    With ``log_scale`` the hypercube and the returned variables are log(t).
+
+    Parameters
+    ----------
+    tp : ToleranceProblem
+        The problem (bounds of the free variables).
+    pop_size : int
+        Number of designs.
+    seed : int
+        Seed of the Latin hypercube.
+    seeds : sequence of mapping or array_like
+        Designs (m or rad; anything ``tp.as_array`` takes) placed first, clipped to the bounds;
+        at most ``pop_size`` are used.
+    log_scale : bool
+        Whether the variables are log(t).
+
+    Returns
+    -------
+    numpy.ndarray
+        (pop_size, n_free) free variables: t (m or rad) or log(t).
+    """
     f = tp.free
     lo, hi = (np.log(tp.lower[f]), np.log(tp.upper[f])) if log_scale else (tp.lower[f], tp.upper[f])
     X = qmc.scale(qmc.LatinHypercube(d=int(f.sum()), seed=seed).random(pop_size), lo, hi)

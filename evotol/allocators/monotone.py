@@ -63,7 +63,36 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
               batch: int = 16, bisections: int = 14, max_vertices: int = 20000, max_seconds: float | None = None) -> dict:
     """Bracket of the minimum cost (see module docstring). Returns {"lower_bound", "upper_bound",
     "t" (best feasible design, SI, or None), "gap", "evaluations", "vertices", "rounds",
-    "converged"}. ``incumbent``: a feasible design (SI) to start the upper bound from."""
+    "converged"}. ``incumbent``: a feasible design (SI) to start the upper bound from.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem, judged by its exact measure (:class:`evotol.constraints.ExactRows`).
+    incumbent : mapping or array_like or None
+        A design (m or rad per source); used as the first upper bound if it holds the
+        requirement.
+    rel_gap : float
+        Stop when ``(upper − lower) <= rel_gap × upper`` (dimensionless).
+    max_evaluations : int
+        Stop after about this many design evaluations (checked once per round).
+    batch : int
+        Cheapest vertices projected per round.
+    bisections : int
+        Bisection steps of each projection onto the boundary of the feasible set.
+    max_vertices : int
+        Stop when the polyblock has more vertices.
+    max_seconds : float or None
+        Stop after this wall time (s); None: no limit.
+
+    Returns
+    -------
+    dict
+        ``lower_bound`` (proven, cost units), ``upper_bound`` (cost of ``t``; inf if none
+        found), ``t`` ((n_sources,) best feasible design, m or rad, or None), ``gap`` (relative,
+        inf without a design), ``evaluations``, ``vertices``, ``rounds`` and ``converged``
+        (``gap <= rel_gap``).
+    """
     t0 = time.perf_counter()
     rows = ExactRows(problem)
     f = problem.free

@@ -34,7 +34,29 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 
 @dataclass
 class NonlinearLimitResult:
-    """The linear optimum and the allocation holding the nonlinear limit, side by side."""
+    """The linear optimum and the allocation holding the nonlinear limit, side by side.
+
+    Parameters
+    ----------
+    linear : object
+        Result of ``allocate`` on the first-order problem (an ``AllocationResult`` or
+        ``ProcessResult``).
+    result : object
+        The cheapest allocation whose proven nonlinear worst case held the limit (if none did:
+        the last one).
+    linear_worst_case : dict
+        Proven nonlinear worst case of ``linear``
+        (:func:`evotol.nonlinear_worst_case.nonlinear_worst_case`).
+    worst_case : dict
+        Proven nonlinear worst case of ``result``.
+    iterations : int
+        Number of re-linearisations done.
+    converged : bool
+        True if some allocation held the nonlinear limit (``result`` is then that one).
+    history : list of dict
+        Per iteration: ``iteration``, ``cost`` (cost units), ``nonlinear_over_limit``
+        (dimensionless).
+    """
 
     linear: object
     result: object
@@ -50,6 +72,16 @@ class NonlinearLimitResult:
         return float(self.result.cost - self.linear.cost)
 
     def to_dict(self) -> dict:
+        """JSON-ready summary of both results, their nonlinear worst cases and the cost difference.
+
+        Returns
+        -------
+        dict
+            ``linear``, ``nonlinear`` (the results' ``to_dict()``), ``linear_nonlinear_worst_case``,
+            ``nonlinear_worst_case``, ``cost_difference`` (cost units),
+            ``cost_difference_over_linear`` (dimensionless), ``iterations``, ``converged``,
+            ``history``.
+        """
         return {"linear": self.linear.to_dict(), "nonlinear": self.result.to_dict(),
                 "linear_nonlinear_worst_case": self.linear_worst_case, "nonlinear_worst_case": self.worst_case,
                 "cost_difference": self.cost_difference, "cost_difference_over_linear": self.cost_difference / self.linear.cost,
@@ -64,7 +96,22 @@ def _tolerances(problem, res) -> np.ndarray:
 
 def secant_sensitivities(asm, k: int, offsets) -> np.ndarray:
     """``∫_0^1 ∇f_k(x0 + τ δ) dτ`` (8-point Gauss–Legendre) for offsets δ (SI): the row whose linear
-    prediction equals the real deviation ``f_k(x0 + δ) − f_k(x0)`` (to quadrature accuracy)."""
+    prediction equals the real deviation ``f_k(x0 + δ) − f_k(x0)`` (to quadrature accuracy).
+
+    Parameters
+    ----------
+    asm : robots.assembly.AssemblyFunction
+        The assembly (``x0`` and ``jacobian``).
+    k : int
+        Index of the response.
+    offsets : array_like, (n_dims,)
+        Offsets δ of the dimensions from nominal (SI: m or rad).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_dims,) secant sensitivities, in the response's unit per SI unit of each dimension.
+    """
     d = np.asarray(offsets, dtype=float)
     tau = 0.5 * (_GL_X + 1.0)
     J = asm.jacobian(asm.x0 + tau[:, None] * d)[:, k, :]          # (8, n)

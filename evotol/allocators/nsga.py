@@ -50,12 +50,35 @@ def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, samplin
     """The one NSGA-II run of evotol: pymoo's ``NSGA2`` (duplicates eliminated) for ``n_gen``
     generations on a pymoo ``problem``; returns the algorithm (``algo.pop``, ``algo.opt``).
 
-    sampling: initial population (array of decision vectors) or None (pymoo's random sampling).
-    callback: a pymoo ``Callback`` called after every generation (progress, lazy constraint
-        checks) -- pymoo's hook, so the loop itself stays pymoo's ``while has_next(): next()``.
-    interruptible: Ctrl-C ends the run early and keeps the population reached so far.
     Used by :func:`allocate_nsga2` (tolerance problems), :func:`evotol.doe.nsga2` (design studies) and
     :func:`evotol.allocators.process.process_front` (process selection).
+
+    Parameters
+    ----------
+    problem : pymoo.core.problem.Problem
+        The pymoo problem (decision vectors and objectives in its own units).
+    pop_size : int
+        Population size.
+    n_gen : int
+        Number of generations.
+    seed : int
+        Seed of the run.
+    sampling : numpy.ndarray or None
+        Initial population (array of decision vectors, (pop_size, n_var)) or None (pymoo's
+        random sampling).
+    callback : pymoo.core.callback.Callback or None
+        Called after every generation (progress, lazy constraint checks) -- pymoo's hook, so the
+        loop itself stays pymoo's ``while has_next(): next()``.
+    verbose : bool
+        pymoo's per-generation printout.
+    interruptible : bool
+        If True, Ctrl-C ends the run early and keeps the population reached so far; otherwise
+        the ``KeyboardInterrupt`` propagates.
+
+    Returns
+    -------
+    pymoo.algorithms.moo.nsga2.NSGA2
+        The algorithm after the run: ``algo.pop`` (last population), ``algo.opt`` (its front).
     """
     kw = {} if sampling is None else {"sampling": sampling}
     algo = NSGA2(pop_size=pop_size, eliminate_duplicates=True, **kw)

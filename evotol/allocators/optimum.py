@@ -1,8 +1,10 @@
 """Exact optimum of the convex allocation problem, with a certificate. The yardstick for the GA.
 
-Minimum cost at a required accuracy:
+Minimum cost at a required accuracy::
+
     min Σ_j c_j(t_j)  s.t.  worst case: a_r·t <= 1 for every (pose, direction) row r,
                             or RSS: b_p·t² <= 1 for every pose p,   lower <= t <= upper.
+
 With convex costs (exponential, power, reciprocal... on the bounds) this is a convex program.
 It is solved by cutting planes: SLSQP on the current working rows (:mod:`evotol.constraints`),
 then an exact evaluation adds the rows it misses, until none is missing.
@@ -10,10 +12,12 @@ then an exact evaluation adds the rows it misses, until none is missing.
 Certificate. Multipliers λ >= 0 of the (nearly) active rows are estimated by NNLS on the
 stationarity condition ∇c(t*) + Σ λ_r ∇g_r(t*) = 0 over the free tolerances strictly inside their
 bounds; the relative residual is the **KKT residual** (with no active row -- a cost with a
-quality-loss term can have its optimum inside the requirement -- it is |∇c|·|t| / c over those
-tolerances, the relative cost change of a unit relative change of t). For any λ >= 0 the Lagrange dual
+quality-loss term can have its optimum inside the requirement -- it is ``|∇c|·|t| / c`` over those
+tolerances, the relative cost change of a unit relative change of t). For any λ >= 0 the Lagrange dual::
+
     q(λ) = Σ_j min_{lo_j <= t <= hi_j} [c_j(t) + w_j t + v_j t²] − Σ λ + (locked terms),
     w = Aᵀλ, v = Bᵀμ,
+
 is a proven **lower bound** on the optimum (rows are true constraints, so dropping the others
 only lowers it); each inner problem is one-dimensional and convex (solved by bisection on its
 derivative). **gap** = (cost(t*) − q(λ)) / cost(t*).
@@ -89,7 +93,24 @@ def _min_1d(problem: ToleranceProblem, w: np.ndarray, v: np.ndarray) -> np.ndarr
 
 
 def dual_bound(problem: ToleranceProblem, rows: ConstraintRows, lam: np.ndarray, mu: np.ndarray) -> float:
-    """Lagrange dual value q(λ, μ) for linear rows A (λ) and quadratic rows B (μ): a lower bound."""
+    """Lagrange dual value q(λ, μ) for linear rows A (λ) and quadratic rows B (μ): a lower bound.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (cost models and bounds).
+    rows : ConstraintRows
+        The working rows (``A``, ``A0``, ``B``).
+    lam : numpy.ndarray, (n_linear_rows,)
+        Multipliers λ >= 0 of the linear rows (cost units).
+    mu : numpy.ndarray, (n_quadratic_rows,)
+        Multipliers μ >= 0 of the quadratic rows (cost units).
+
+    Returns
+    -------
+    float
+        q(λ, μ) (cost units), a proven lower bound on the minimum cost subject to the rows.
+    """
     f = problem.free
     w = rows.A.T @ lam if lam.size else np.zeros(problem.n_sources)
     v = rows.B.T @ mu if mu.size else np.zeros(problem.n_sources)
@@ -104,7 +125,26 @@ def dual_bound(problem: ToleranceProblem, rows: ConstraintRows, lam: np.ndarray,
 
 
 def certificate(problem: ToleranceProblem, rows: ConstraintRows, t: np.ndarray, active_tol: float = 1e-6) -> dict:
-    """KKT residual and duality gap of design t on the working rows (see module docstring)."""
+    """KKT residual and duality gap of design t on the working rows (see module docstring).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+    rows : ConstraintRows
+        The working rows.
+    t : numpy.ndarray, (n_sources,)
+        The design (m or rad).
+    active_tol : float
+        A row counts as active when its value is >= 1 − active_tol (quadratic rows:
+        1 − 2·active_tol) (dimensionless).
+
+    Returns
+    -------
+    dict
+        ``lower_bound`` (the dual bound, cost units), ``gap`` (relative duality gap),
+        ``kkt_residual`` (relative), ``active_rows`` and ``working_rows`` (counts).
+    """
     f = problem.free
     grad = problem.variable_dcost(t)
     ga = rows.A @ t + rows.A0 if rows.A.shape[0] else np.zeros(0)

@@ -3,13 +3,15 @@
 Rule (documented exactly): let s_j = max over poses and constrained components of ‖B_j‖₂ / E_c
 (source j's largest effect per unit tolerance, relative to the bound E_c of that component). Each
 free source receives the same share of the error budget:
-  * worst-case measure:  s_j t_j = (1 − Σ_locked s_k t_k) / m         (linear stack-up);
-  * RSS measure:         s_j t_j = sqrt((1 − Σ_locked (s_k t_k)²) / m)  (root-sum-square stack-up);
+
+* worst-case measure:  s_j t_j = (1 − Σ_locked s_k t_k) / m         (linear stack-up);
+* RSS measure:         s_j t_j = sqrt((1 − Σ_locked (s_k t_k)²) / m)  (root-sum-square stack-up);
+
 m = number of free sources that move the end-effector (sources with no effect get their upper
 bound). Tolerances are then clipped to their bounds. Shared tolerances: a variable's sensitivity
 is the sum (worst case) or root sum square (RSS) of its members'. Asymmetric intervals: s_j is
-taken per unit t of the interval's farthest end, s_j (ρ_j + |κ_j|), and the fixed offsets'
-largest effect max_p |Σ_j B_j offset_j| / E is taken off the budget first. The allocation holds
+taken per unit t of the interval's farthest end, ``s_j (ρ_j + |κ_j|)``, and the fixed offsets'
+largest effect ``max_p |Σ_j B_j offset_j| / E`` is taken off the budget first. The allocation holds
 the requirement by construction (sum/RSS of per-source maxima bounds the true error) but ignores
 cost entirely.
 """
@@ -34,6 +36,25 @@ def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> n
     ``collective_groups``: groups of interval sources whose sensitivity is taken for all members
     moving together, s = max_p ‖Σ_k B_k‖ / E (e.g. the three actuated lengths of a 3-UCR, which
     then act as a platform lift): a variant that reproduces how Yao 2013's Table 2 sized lengths.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (its sensitivities at its poses and the bounds E_c of its components).
+    collective_groups : sequence of str
+        Source groups (names of ``problem.groups()``) whose members are taken as moving
+        together; default none.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) s_j, per unit of t_j (1/m or 1/rad; relative to the bound, so ``s_j t_j``
+        is dimensionless).
+
+    Raises
+    ------
+    ValidationError
+        A collective group that no source has, or one with a source that is not an interval.
     """
     s = np.zeros(problem.n_sources)
     groups = np.array(problem.groups())
@@ -52,6 +73,30 @@ def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> n
 
 
 def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, collective_groups=()) -> np.ndarray:
+    """The equal-effect design of the module docstring (no budget, no repair).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem (tolerances in SI: m or rad).
+    measure : {"worst_case", "rss"} or None
+        Stack-up of the equal shares (default: the requirement's measure; any other measure uses
+        ``"rss"``).
+    collective_groups : sequence of str
+        Source groups taken as one collective source (:func:`aggregated_sensitivity`).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_sources,) the design (m or rad), clipped to the bounds; sources with no effect at
+        their upper bound.
+
+    Raises
+    ------
+    ValidationError
+        A problem with clearance classes, locked tolerances and offsets that leave no error
+        budget for the free sources, or an invalid ``collective_groups`` entry.
+    """
     if problem.clearances is not None:
         raise ValidationError("method", "sensitivity", "a problem without clearance classes (a clearance has no "
                                                       "linear sensitivity: use optimum, ga or nsga2)")

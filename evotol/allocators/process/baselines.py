@@ -25,7 +25,18 @@ from evotol.threads import single_threaded_blas
 
 def check_some_choice_holds(pp: ProcessProblem) -> None:
     """:class:`InfeasibleError` when even every source's finest process at its lower limit misses
-    the requirement (then no process choice can hold it); names the smallest error and its pose."""
+    the requirement (then no process choice can hold it); names the smallest error and its pose.
+
+    Parameters
+    ----------
+    pp : ProcessProblem
+        The problem.
+
+    Raises
+    ------
+    InfeasibleError
+        If no process choice can hold the requirement.
+    """
     try:
         pp.base.check_feasible()
     except InfeasibleError as exc:
@@ -49,6 +60,7 @@ def cheapest_feasible_processes(pp: ProcessProblem, *, model: str = "exact") -> 
     Parameters
     ----------
     pp : ProcessProblem
+        The problem.
     model : {"exact", "rule"}
         ``"exact"``: the problem's measure (:meth:`ProcessProblem.normalised_error`); ``"rule"``: the
         rules' one-stack model with aggregated sensitivities.
@@ -61,9 +73,11 @@ def cheapest_feasible_processes(pp: ProcessProblem, *, model: str = "exact") -> 
     Raises
     ------
     InfeasibleError
-        No process choice holds the requirement (``model="exact"``).
+        No process choice holds the requirement (every source at its finest process's lower
+        limit misses it).
     ValidationError
-        ``model="rule"`` and no choice satisfies the rules' stack.
+        An unknown ``model``, or the greedy search ends with no choice whose tightest
+        tolerances hold (with ``model="rule"``: the rules' stack).
     """
     if model not in ("exact", "rule"):
         raise ValidationError("model", model, "'exact' or 'rule'")
@@ -132,6 +146,8 @@ def allocate_process_baselines(problem: ProcessProblem, *, budget: None = None) 
     ------
     InfeasibleError
         No process choice can hold the requirement.
+    ValidationError
+        A ``budget``, or a ``problem`` that is not a :class:`ProcessProblem`.
     """
     pp = check_no_budget(problem, budget, "allocate_process_baselines")
     out = {}

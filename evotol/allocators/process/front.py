@@ -76,7 +76,8 @@ def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0
     Raises
     ------
     ValidationError
-        An unknown ``objective``.
+        An unknown ``objective``, a ``budget``, or a ``problem`` that is not a
+        :class:`ProcessProblem`.
     """
     import time
 

@@ -48,6 +48,18 @@ class Process:
     fixed_cost: float = 0.0
 
     def total(self, t) -> np.ndarray:
+        """Cost of the process at tolerance t: set-up cost + the cost model.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Tolerance(s) (m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``fixed_cost + cost.cost(t)`` (cost units), shaped like t.
+        """
         return self.fixed_cost + self.cost.cost(t)
 
 
@@ -180,22 +192,64 @@ class ProcessProblem:
         return out
 
     def quality_loss(self, T) -> np.ndarray:
-        """Expected quality loss Σ_j q_j t_j² of designs T (n, n_sources) SI -> (n,) (0 without a loss term)."""
+        """Expected quality loss Σ_j q_j t_j² of designs T (n, n_sources) SI -> (n,) (0 without a loss term).
+
+        Parameters
+        ----------
+        T : array_like, (n, n_sources) or (n_sources,)
+            Designs (m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,) expected loss (cost units).
+        """
         return np.atleast_2d(np.asarray(T, dtype=float)) ** 2 @ self.loss_coefficients
 
     # --- basics -----------------------------------------------------------------------------------
     @property
     def n_sources(self) -> int:
+        """Number of sources."""
         return len(self.names)
 
     @property
     def n_combinations(self) -> int:
+        """Number of process combinations (product of the processes per source)."""
         return int(np.prod(self.n_processes.astype(float)))
 
     def choice_names(self, choice) -> dict[str, str]:
+        """Process names of a choice.
+
+        Parameters
+        ----------
+        choice : sequence of int, (n_sources,)
+            Index of the chosen process of every source.
+
+        Returns
+        -------
+        dict of str to str
+            Source name -> process name.
+        """
         return {n: self.processes[n][int(k)].name for n, k in zip(self.names, choice)}
 
     def choice_index(self, names: Mapping[str, str]) -> np.ndarray:
+        """Process indices of a choice given by names (inverse of :meth:`choice_names`).
+
+        Parameters
+        ----------
+        names : Mapping[str, str]
+            Source name -> process name, for every source.
+
+        Returns
+        -------
+        numpy.ndarray of int
+            (n_sources,) index of the chosen process of every source.
+
+        Raises
+        ------
+        ValidationError
+            A source missing, or a process name that source does not have.
+        """
         out = []
         for n in self.names:
             pn = [p.name for p in self.processes[n]]
@@ -205,7 +259,20 @@ class ProcessProblem:
         return np.array(out)
 
     def subproblem(self, choice) -> ToleranceProblem:
-        """The convex allocation problem of one process choice (shares the cached geometry)."""
+        """The convex allocation problem of one process choice (shares the cached geometry).
+
+        Parameters
+        ----------
+        choice : sequence of int, (n_sources,)
+            Index of the chosen process of every source.
+
+        Returns
+        -------
+        ToleranceProblem
+            The problem with each source's cost model and bounds (m or rad) those of its chosen
+            process; fixed costs are not included (:meth:`fixed_cost`), nor the quality loss
+            unless it is in the process costs.
+        """
         choice = np.asarray(choice, dtype=int)
         sub = copy.copy(self.base)
         sub.tolerances = {n: Tolerance(self.processes[n][k].cost, self.processes[n][k].lower, self.processes[n][k].upper)
@@ -216,10 +283,36 @@ class ProcessProblem:
         return sub
 
     def fixed_cost(self, choice) -> float:
+        """Sum of the set-up costs of a choice.
+
+        Parameters
+        ----------
+        choice : sequence of int, (n_sources,)
+            Index of the chosen process of every source.
+
+        Returns
+        -------
+        float
+            Total fixed cost (cost units).
+        """
         return float(sum(self.processes[n][int(k)].fixed_cost for n, k in zip(self.names, choice)))
 
     def cost(self, choices, T) -> np.ndarray:
-        """Total cost of designs (choices (n, S) int, T (n, S) SI) -> (n,)."""
+        """Total cost of designs (choices (n, S) int, T (n, S) SI) -> (n,).
+
+        Parameters
+        ----------
+        choices : array_like of int, (n, n_sources) or (n_sources,)
+            Process index per source of every design.
+        T : array_like, (n, n_sources) or (n_sources,)
+            Tolerances (m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,) total cost (set-up + process cost models, cost units); ranges are not checked
+            (:meth:`in_ranges`).
+        """
         choices = np.atleast_2d(np.asarray(choices, dtype=int))
         T = np.atleast_2d(np.asarray(T, dtype=float))
         c = np.zeros(T.shape[0])
@@ -231,6 +324,22 @@ class ProcessProblem:
         return c
 
     def in_ranges(self, choices, T, rtol: float = 1e-9) -> np.ndarray:
+        """Whether every tolerance lies in the range of its chosen process.
+
+        Parameters
+        ----------
+        choices : array_like of int, (n, n_sources) or (n_sources,)
+            Process index per source of every design.
+        T : array_like, (n, n_sources) or (n_sources,)
+            Tolerances (m or rad).
+        rtol : float
+            Relative slack on both ends of each range (dimensionless).
+
+        Returns
+        -------
+        numpy.ndarray of bool
+            (n,) True where every source is within ``[lower (1 − rtol), upper (1 + rtol)]``.
+        """
         choices = np.atleast_2d(np.asarray(choices, dtype=int))
         T = np.atleast_2d(T)
         idx = np.arange(self.n_sources)
@@ -238,13 +347,40 @@ class ProcessProblem:
         return np.all((T >= lo * (1 - rtol)) & (T <= hi * (1 + rtol)), axis=1)
 
     def normalised_error(self, T) -> np.ndarray:
-        """Exact max error / bound over poses and components (<= 1: feasible)."""
+        """Exact max error / bound over poses and components (<= 1: feasible).
+
+        Parameters
+        ----------
+        T : array_like, (n, n_sources) or (n_sources,)
+            Designs (m or rad).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,) normalised error (dimensionless).
+        """
         return self.base.evaluate(np.atleast_2d(T), top_only=True).violation + 1
 
     def yield_model(self, distribution="normal"):
         """First-order statistical model of the responses (:class:`evotol.statistical.FirstOrderYield`,
         ``docs/statistical.md``) with every source distributed as ``distribution`` (a kind name or an
-        :class:`evotol.distributions.Distribution`; default normal with t = 3σ)."""
+        :class:`evotol.distributions.Distribution`; default normal with t = 3σ).
+
+        Parameters
+        ----------
+        distribution : str or evotol.distributions.Distribution
+            Distribution of every source inside its tolerance.
+
+        Returns
+        -------
+        evotol.statistical.FirstOrderYield
+            The first-order model on the problem's poses (the responses).
+
+        Raises
+        ------
+        ValidationError
+            If ``distribution`` is neither a kind name nor a Distribution (or is invalid).
+        """
         from evotol.distributions import Distribution
 
         if not isinstance(distribution, (str, Distribution)):
@@ -264,6 +400,18 @@ class ProcessProblem:
         (normal sources; moment-matched normal otherwise, ``model.exact``) -- the 3-D octant rule
         of :func:`evotol.statistical.miss_probability` is built for full-rank covariances and is off
         by up to ~1e-4 of the miss probability on this rank-one case.
+
+        Parameters
+        ----------
+        T : array_like, (n, n_sources) or (n_sources,)
+            Designs (m or rad).
+        model : evotol.statistical.FirstOrderYield or None
+            The statistical model (default: :meth:`yield_model` with normal sources).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,) yield, a probability in [0, 1] (a lower bound with several responses).
         """
         from scipy.stats import norm
 
@@ -277,7 +425,28 @@ class ProcessProblem:
 
     def judge(self, processes: Mapping[str, str], tolerances: Mapping[str, float]) -> dict:
         """Recompute a published design: its cost, its normalised error (max error / bound; > 1
-        means the requirement is violated) and whether each tolerance lies in its process's range."""
+        means the requirement is violated) and whether each tolerance lies in its process's range.
+
+        Parameters
+        ----------
+        processes : Mapping[str, str]
+            Source name -> process name, for every source.
+        tolerances : Mapping[str, float]
+            Source name -> tolerance (m or rad), for every source.
+
+        Returns
+        -------
+        dict
+            ``cost`` (cost units), ``normalised_error`` (dimensionless), ``holds_requirement``
+            (bool, normalised error <= 1 + 1e-9) and ``outside_process_range`` (list of source
+            names).
+
+        Raises
+        ------
+        ValidationError
+            An unknown process, a source without a tolerance, or a tolerance that is not positive
+            and finite.
+        """
         ch = self.choice_index(processes)
         missing = [n for n in self.names if n not in tolerances]
         if missing:
@@ -292,6 +461,14 @@ class ProcessProblem:
                 "outside_process_range": outside}
 
     def describe(self) -> str:
+        """A printable summary: robot, sources, number of combinations, measure and every process.
+
+        Returns
+        -------
+        str
+            One line for the problem, then one per source listing its processes (range in SI,
+            cost model, fixed cost).
+        """
         lines = [f"ProcessProblem: {self.robot.name}, {self.n_sources} sources, {self.n_combinations} process combinations, "
                  f"measure {self.requirement.measure}"]
         for n in self.names:
@@ -343,7 +520,36 @@ def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None
 # --- results -----------------------------------------------------------------------------------------
 @dataclass
 class ProcessResult:
-    """A process choice and tolerances (SI), with its cost and how it was found."""
+    """A process choice and tolerances (SI), with its cost and how it was found.
+
+    Parameters
+    ----------
+    method : str
+        Name of the allocation method.
+    processes : dict of str to str
+        Source name -> chosen process name.
+    tolerances : dict of str to float
+        Source name -> tolerance (m or rad).
+    cost : float
+        Total cost, set-up costs included (cost units).
+    feasible : bool
+        Whether the design holds the requirement and every tolerance is in its process's range.
+    normalised_error : float
+        Exact max error / bound (dimensionless; <= 1 holds).
+    seconds : float
+        Wall time of the allocation (s).
+    n_nodes : int or None
+        Branch-and-bound nodes explored, when applicable.
+    n_convex_solves : int or None
+        Convex subproblems solved, when applicable.
+    n_combinations : int or None
+        Number of process combinations of the problem, when reported.
+    certificate : dict or None
+        Optimality certificate of the exact method (incumbent, smallest pruned lower bound,
+        ``rtol``, the leaf's gap and KKT residual, the proof's wording).
+    history : list or None
+        Per-generation record of the GA (best feasible cost, NaN while none), when kept.
+    """
 
     method: str
     processes: dict[str, str]
@@ -359,11 +565,40 @@ class ProcessResult:
     history: list | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
+        """JSON-ready summary of the result (without ``history``).
+
+        Returns
+        -------
+        dict
+            The fields from ``method`` to ``certificate``, those that are None left out.
+        """
         d = {k: getattr(self, k) for k in ("method", "processes", "tolerances", "cost", "feasible", "normalised_error",
                                             "seconds", "n_nodes", "n_convex_solves", "n_combinations", "certificate")}
         return {k: v for k, v in d.items() if v is not None}
 
     def table(self, problem: ProcessProblem, unit: float = 1e-3, unit_name: str = "mm") -> pd.DataFrame:
+        """One row per source: chosen process, tolerance in a display unit and its cost.
+
+        Parameters
+        ----------
+        problem : ProcessProblem
+            The problem the result belongs to.
+        unit : float
+            Display unit in SI (default 1e-3: tolerances shown in mm).
+        unit_name : str
+            Name of the display unit, used in the column header.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``source``, ``process``, ``tolerance (<unit_name>)`` and ``cost`` (set-up +
+            process cost, cost units).
+
+        Raises
+        ------
+        ValidationError
+            If a process name of the result is unknown to ``problem``.
+        """
         ch = problem.choice_index(self.processes)
         t = np.array([self.tolerances[n] for n in problem.names])
         return pd.DataFrame({"source": problem.names, "process": [self.processes[n] for n in problem.names],
@@ -383,7 +618,27 @@ def _result(pp: ProcessProblem, method: str, choice, t, t0: float, **kw) -> Proc
 def check_no_budget(problem: ProcessProblem, budget, name: str) -> ProcessProblem:
     """The one allocator shape: process allocators take ``budget=None`` and refuse a budget in one line
     (process selection minimises cost at the requirement). Returns the problem, checked to be a
-    :class:`ProcessProblem`."""
+    :class:`ProcessProblem`.
+
+    Parameters
+    ----------
+    problem : ProcessProblem
+        The problem passed to the allocator.
+    budget : object
+        The allocator's ``budget`` argument; must be None.
+    name : str
+        Name of the allocator, for the error message.
+
+    Returns
+    -------
+    ProcessProblem
+        ``problem`` itself.
+
+    Raises
+    ------
+    ValidationError
+        A ``budget`` that is not None, or a ``problem`` that is not a :class:`ProcessProblem`.
+    """
     if budget is not None:
         raise ValidationError("budget", budget, f"None for {name} (process selection minimises cost at the requirement)")
     if not isinstance(problem, ProcessProblem):
