@@ -13,6 +13,7 @@ other page lists it.
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import inspect
 import os
@@ -69,7 +70,8 @@ API_PAGES = [
 ]
 
 
-def public_modules() -> list[str]:
+@functools.lru_cache(maxsize=None)
+def public_modules() -> tuple[str, ...]:
     """Every public module of the three packages (no ``_`` in its dotted name), in import order."""
     import pkgutil
     found = []
@@ -78,7 +80,7 @@ def public_modules() -> list[str]:
         for info in pkgutil.walk_packages(importlib.import_module(pkg).__path__, pkg + "."):
             if not any(part.startswith("_") for part in info.name.split(".")):
                 found.append(info.name)
-    return found
+    return tuple(found)
 
 
 # then every other public module that has its page (docs/api/<module>.rst; tests/test_docstrings.py
@@ -112,9 +114,24 @@ def home(modname: str, name: str) -> tuple[str, str]:
         kind = "autoexception" if issubclass(obj, BaseException) else "autoclass"
     elif inspect.isfunction(obj) or inspect.isbuiltin(obj):
         kind = "autofunction"
-    else:                            # a constant: documented where it is listed
-        return f"{modname}.{name}", "autodata"
+    else:                            # a constant: documented at the module that assigns it
+        return f"{_assigned_in(modname, name, obj)}.{name}", "autodata"
     return f"{obj.__module__}.{obj.__qualname__}", kind
+
+
+def _assigned_in(modname: str, name: str, obj) -> str:
+    """The module that assigns a constant with its ``#:`` comment: ``modname`` itself or, for a
+    module re-exporting it, the public module holding the same object (else ``modname``)."""
+    from sphinx.pycode import ModuleAnalyzer
+
+    for cand in (modname, *public_modules()):
+        try:
+            if getattr(importlib.import_module(cand), name, None) is obj and \
+                    ("", name) in ModuleAnalyzer.for_module(cand).find_attr_docs():
+                return cand
+        except Exception:            # a module that cannot be analysed is simply not the home
+            continue
+    return modname
 
 
 def claims() -> dict[str, str]:

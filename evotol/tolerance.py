@@ -10,6 +10,8 @@ from cost_models.base import CostModel
 from evotol import distributions
 from evotol.errors import ValidationError
 
+#: the width a tolerance's cost model is evaluated on: the half-width (minus + plus)/2 t ("half",
+#: the default) or the whole zone (minus + plus) t ("full"); the values ``Tolerance.cost_width`` accepts
 COST_WIDTHS = ("half", "full")
 
 

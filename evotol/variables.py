@@ -16,6 +16,8 @@ import numpy as np
 from evotol.errors import ValidationError
 from evotol.keywords import did_you_mean
 
+#: how a shared tolerance is costed: every member part pays its own cost model ("part") or only
+#: the group's first member ("variable"); the values ``shared_cost`` accepts
 SHARED_COSTS = ("part", "variable")
 
 

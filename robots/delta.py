@@ -56,7 +56,9 @@ LEG_PARAMETERS = ("d", "La", "Lb", "alpha1", "alpha3", "alpha5", "alpha6",
 LINEAR_LEG = ("d", "La", "Lb")
 #: the 47 error parameters of eq. (12), in the order of Tables A1-A2.
 PARAMETER_NAMES: tuple[str, ...] = ("Ra", "Rb") + tuple(f"{p}_{i}" for i in (1, 2, 3) for p in LEG_PARAMETERS)
+#: the error parameters that are lengths (m): Ra, Rb and every d, La, Lb
 LINEAR: tuple[str, ...] = tuple(n for n in PARAMETER_NAMES if n in ("Ra", "Rb") or n.split("_")[0] in LINEAR_LEG)
+#: the error parameters that are angles (rad): the alphas, joint offsets q and theta
 ANGULAR: tuple[str, ...] = tuple(n for n in PARAMETER_NAMES if n not in LINEAR)
 _INDEX = {n: k for k, n in enumerate(PARAMETER_NAMES)}
 # (n_params,) index arrays: column of parameter p for leg i -> _LEG_COL[p][i]

@@ -23,6 +23,7 @@ from evotol.doe.factors import ERROR, FEASIBLE
 from evotol.errors import EvotolError, ValidationError
 from evotol.executor import ChunkStore, run_chunks, worker_count
 
+#: an entry evaluator: a DataFrame of factor columns in, one row per entry of objective columns out
 Evaluator = Callable[[pd.DataFrame], pd.DataFrame]
 
 

@@ -11,6 +11,7 @@ from evotol.errors import ValidationError
 
 #: bound kinds, in the column order of a bounds array ``(..., n_joints, 4)``
 BOUND_NAMES = ("beta_xy", "beta_z", "b_xy", "b_z")
+#: units of those bound kinds (SI)
 BOUND_UNITS = ("rad", "rad", "m", "m")
 #: screw components each bound constrains (eqs. III.3-III.6): disk, interval, disk, interval
 CONE_COMPONENTS = ((0, 1), (2,), (3, 4), (5,))
@@ -199,5 +200,7 @@ class Block:
     components: tuple[int, ...]  # twist and screw components (same index sets for the blocks used)
 
 
+#: one spatial block: all six twist components solved together
 FULL = (Block("spatial", (0, 1, 2, 3, 4, 5)),)
+#: a planar mechanism's exact split: in-plane (x, y translations, z rotation) and out-of-plane blocks
 PLANAR = (Block("in-plane", (2, 3, 4)), Block("out-of-plane", (0, 1, 5)))

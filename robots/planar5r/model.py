@@ -36,6 +36,8 @@ from robots.base import RobotErrorModel, SourceSpec, Workspace
 from robots.planar5r import kinematics as K
 from robots.planar5r.design import Design5R, get_case
 
+#: the error sources of the 5R model (Lara-Molina 2019 Sec. 2): link lengths (m), actuator angles
+#: (rad) and radial joint clearances (m, two components each)
 SOURCES = (
     SourceSpec("A1B1", 1, "m", "link length", "crank A1B1 length error"),
     SourceSpec("A2B2", 1, "m", "link length", "crank A2B2 length error"),

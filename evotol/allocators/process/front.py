@@ -32,6 +32,8 @@ class _ProcessFrontProblem(Problem):
         out["F"] = np.column_stack([self.pp.cost(k, T), self.second(T)])
 
 
+#: second objective of a process front beside cost: the normalised stack error ("error") or the
+#: assembly yield ("yield")
 FRONT_OBJECTIVES = ("error", "yield")
 
 

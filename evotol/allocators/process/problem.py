@@ -17,6 +17,7 @@ from evotol.errors import ValidationError
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from robots.base import RobotErrorModel
 
+#: relative slack of the process-selection feasibility test (normalised stack error <= 1 + FEAS_TOL)
 FEAS_TOL = 1e-9
 
 
