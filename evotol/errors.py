@@ -29,6 +29,11 @@ class ValidationError(EvotolError, ValueError):
         self.field, self.value, self.expected = field, value, expected
         super().__init__(f"{field} = {value!r}: expected {expected}")
 
+    def __reduce__(self):
+        # rebuilt from the constructor's arguments, so a worker process's error reaches the parent
+        # as itself (the default pickles only the message, which this __init__ cannot take)
+        return type(self), (self.field, self.value, self.expected)
+
 
 class KinematicsError(EvotolError):
     """A pose is out of reach of the mechanism or at a singularity.
@@ -47,6 +52,10 @@ class KinematicsError(EvotolError):
     def __init__(self, message: str, poses=None):
         self.poses = poses
         super().__init__(message)
+
+    def __reduce__(self):
+        # keeps the poses across a process boundary (the default would drop them)
+        return type(self), (self.args[0], self.poses)
 
 
 class ConvergenceError(EvotolError):
@@ -72,9 +81,13 @@ class InfeasibleError(EvotolError):
     """
 
     def __init__(self, requirement: str, smallest_error: float, pose, detail: str = ""):
-        self.requirement, self.smallest_error, self.pose = requirement, smallest_error, pose
+        self.requirement, self.smallest_error, self.pose, self.detail = requirement, smallest_error, pose, detail
         super().__init__(f"infeasible: {requirement} cannot be met; with every free tolerance at its lower bound the "
                          f"error is {smallest_error:.6g} at pose {pose}" + (f" ({detail})" if detail else ""))
+
+    def __reduce__(self):
+        # rebuilt from the constructor's arguments (see ValidationError.__reduce__)
+        return type(self), (self.requirement, self.smallest_error, self.pose, self.detail)
 
 
 class CheckFailed(EvotolError, AssertionError):

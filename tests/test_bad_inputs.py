@@ -295,3 +295,37 @@ def test_the_sentinels_catch_a_computation_that_starts(tmp_path, no_computation)
     replaces a count of the table's own rows, which could not fail)."""
     with pytest.raises(ComputationStarted):
         main(["run", _study(tmp_path), "--out", str(tmp_path)])
+
+
+def _raise_in_worker(kind):
+    from evotol.errors import InfeasibleError, KinematicsError, ValidationError
+
+    raise {"validation": ValidationError("grid", -1, "a positive integer"),
+           "kinematics": KinematicsError("pose out of reach", poses=[[0.1, 0.2]]),
+           "infeasible": InfeasibleError("position <= 1e-06 m", 2e-6, 3, "tight")}[kind]
+
+
+@pytest.mark.parametrize("kind, field, text", [
+    ("validation", "field", "grid = -1: expected a positive integer"),
+    ("kinematics", "poses", "pose out of reach"),
+    ("infeasible", "smallest_error", "infeasible: position <= 1e-06 m cannot be met"),
+])
+def test_errors_cross_a_process_boundary_as_themselves(kind, field, text):
+    """An error raised in a worker process (the executor's pools, a DOE chunk) reaches the parent as
+    the same class with the same fields and message; before, ValidationError and InfeasibleError
+    could not be unpickled and the pool broke (BrokenProcessPool)."""
+    import concurrent.futures as cf
+    import multiprocessing as mp
+    import pickle
+
+    from evotol.errors import EvotolError
+
+    with pytest.raises(EvotolError) as local:
+        _raise_in_worker(kind)
+    again = pickle.loads(pickle.dumps(local.value))
+    assert type(again) is type(local.value) and str(again) == str(local.value)
+    assert getattr(again, field) == getattr(local.value, field)
+    with cf.ProcessPoolExecutor(1, mp_context=mp.get_context("spawn")) as pool:
+        with pytest.raises(type(local.value), match=text.replace("(", r"\(")) as remote:
+            pool.submit(_raise_in_worker, kind).result()
+    assert getattr(remote.value, field) == getattr(local.value, field)
