@@ -146,6 +146,40 @@ def test_failed_entries_are_recorded_not_silent():
     assert df.loc[~bad, "p_max_mm"].notna().all() and df.loc[bad, "p_max_mm"].isna().all()
 
 
+def test_unreachable_entry_is_recorded_whatever_the_chunk_size():
+    """The entry out of reach (p_max 1.001 mm > 0.5) gets its KinematicsError in ``error`` with chunks
+    of 1, 2 (it is then alone in the last chunk) and 3 entries; the reachable ones keep their p_max."""
+    E = pd.DataFrame({"entry": [0, 1, 2], "db_xy_A_mm": [0.01, 0.02, 1.0], "db_z_A_mm": [0.001, 0.001, 0.001]})
+    for chunk_size in (1, 2, 3):
+        df = doe.evaluate(E, SerialChainClearance(fail_above_mm=0.5), workers=1, chunk_size=chunk_size,
+                          progress=False)
+        assert df["feasible"].tolist() == [True, True, False]
+        assert df["error"].tolist()[:2] == ["", ""]
+        assert df["error"][2] == "KinematicsError: pose unreachable with clearances 1 mm"
+        np.testing.assert_allclose(df["p_max_mm"][:2], np.hypot([0.01, 0.02], 0.001), rtol=1e-15)
+        assert np.isnan(df["p_max_mm"][2])
+
+
+@dataclass(frozen=True)
+class OneRowTooMany:
+    """A broken evaluator: one output row more than entries."""
+
+    def __call__(self, X):
+        return pd.DataFrame({"p_max_mm": np.zeros(len(X) + 1)})
+
+
+def test_malformed_evaluator_output_is_raised_not_recorded():
+    """An output with the wrong row count is a programming error: ValidationError naming the rows
+    received and expected, with chunks of 3 entries and of 1 entry alike (never written to ``error``)."""
+    E = doe.full_factorial(thesis_factors(1))     # 8 entries
+    with pytest.raises(ValidationError, match=r"evaluator output = 'DataFrame with 4 rows': expected .* with 3 rows"):
+        doe.evaluate(E, OneRowTooMany(), workers=1, chunk_size=3, progress=False)
+    with pytest.raises(ValidationError, match=r"'DataFrame with 2 rows': expected .* with 1 rows"):
+        doe.evaluate(E, OneRowTooMany(), workers=1, chunk_size=1, progress=False)
+    with pytest.raises(ValidationError, match=r"evaluator output = 'list': expected a DataFrame"):
+        doe.evaluate(E, lambda X: [0.0] * len(X), workers=1, chunk_size=4, progress=False)
+
+
 def test_dask_cluster_gives_the_local_result():
     """Given a scheduler address the chunks run on a Dask cluster, with identical results."""
     import distributed      # a declared test dependency (pyproject [test]): missing = a failure, not a skip

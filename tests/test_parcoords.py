@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 
 from evotol import doe
+from evotol.errors import ValidationError
 from evotol.filtering import DesignStudy, Preset
 from evotol.reporting.headless import HeadlessChromium
 from tests.browser import require_chromium
@@ -79,6 +80,28 @@ def test_figure_draws_log10_axes_and_colours_extra_entries_apart():
     assert np.all(c[src == PARETO] == 0.875) and np.all(c[src == KNEE] == 1.0) and (src == KNEE).sum() == 1
     # knees are drawn last (on top)
     assert src[-1] == KNEE
+
+
+def test_figure_with_only_nsga_lines_takes_the_colour_range_from_them():
+    """No feasible grid entry, only NSGA-II lines: the figure draws them (orange 0.875, the knee 1.0)
+    and its colour-bar range is the NSGA-II lines' log10 p_max range; with no line at all the
+    error is a one-line ValidationError."""
+    st = make_study(2)
+    none = DesignStudy(st.entries.assign(feasible=False), presets=list(st.presets.values()), name="none")
+    extra = pareto_like(st)
+    axes = [Axis(c, c, log=True) for c in st.inputs] + [Axis("p_max_mm", "p_max (mm)", True)]
+    frame = parcoords_frame(none, extra=extra)
+    assert set(frame["source"]) == {PARETO, KNEE}
+    fig = parcoords_figure(frame, axes, "p_max_mm")
+    c = np.asarray(fig.data[0].line.color)
+    assert (c == 0.875).sum() == 11 and (c == 1.0).sum() == 1
+    bar = fig.data[0].line.colorbar
+    lo, hi = np.log10(extra["p_max_mm"].min()), np.log10(extra["p_max_mm"].max())
+    tv, tt = log_ticks(lo, hi)
+    assert list(bar.ticktext) == tt + [PARETO, KNEE]
+    np.testing.assert_allclose(bar.tickvals, [(t - lo) / (hi - lo) * 0.75 for t in tv] + [0.875, 1.0], rtol=1e-12)
+    with pytest.raises(ValidationError, match=r"lines to draw = 0: expected at least one line"):
+        parcoords_figure(parcoords_frame(none), axes, "p_max_mm")
 
 
 def test_report_is_self_contained_and_lists_python_counts(tmp_path):

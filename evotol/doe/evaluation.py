@@ -32,23 +32,22 @@ def _evaluate_chunk(evaluator: Evaluator, inputs: pd.DataFrame) -> pd.DataFrame:
 
     Returns the evaluator's output columns plus ``feasible`` and ``error`` (the message of an
     entry that could not be evaluated, e.g. a pose out of reach; its objectives are NaN and
-    ``feasible`` is False -- the failure is recorded, never silent).
+    ``feasible`` is False -- the failure is recorded, never silent), whatever the chunk size: when
+    the whole chunk raises, each entry is re-run alone. A malformed evaluator output (not a
+    DataFrame or dict of arrays with one row per entry) is a programming error: its
+    ValidationError propagates.
     """
-    try:
-        out = _as_frame(evaluator(inputs), len(inputs))
-        out[ERROR] = ""
-    except EvotolError:
-        if len(inputs) == 1:
-            raise
-        rows = []
-        for i in range(len(inputs)):
-            try:
-                r = _as_frame(evaluator(inputs.iloc[i:i + 1]), 1)
-                r[ERROR] = ""
-            except EvotolError as exc:
-                r = pd.DataFrame({ERROR: [f"{type(exc).__name__}: {exc}"]})
-            rows.append(r)
-        out = pd.concat(rows, ignore_index=True)
+    if len(inputs) == 1:
+        out = _evaluate_entry(evaluator, inputs)
+    else:
+        try:
+            raw = evaluator(inputs)
+        except EvotolError:
+            out = pd.concat([_evaluate_entry(evaluator, inputs.iloc[i:i + 1]) for i in range(len(inputs))],
+                            ignore_index=True)
+        else:
+            out = _as_frame(raw, len(inputs))
+            out[ERROR] = ""
     out.index = inputs.index
     objectives = [c for c in out.columns if c not in (FEASIBLE, ERROR)]
     finite = np.all(np.isfinite(out[objectives].to_numpy(dtype=float)), axis=1) if objectives else np.ones(len(out), bool)
@@ -59,11 +58,23 @@ def _evaluate_chunk(evaluator: Evaluator, inputs: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def _evaluate_entry(evaluator: Evaluator, entry: pd.DataFrame) -> pd.DataFrame:
+    """One entry (a 1-row frame): its output row with ``error`` empty, or only ``error`` when it raised."""
+    try:
+        raw = evaluator(entry)
+    except EvotolError as exc:
+        return pd.DataFrame({ERROR: [f"{type(exc).__name__}: {exc}"]})
+    out = _as_frame(raw, 1)
+    out[ERROR] = ""
+    return out
+
+
 def _as_frame(out, n: int) -> pd.DataFrame:
     if isinstance(out, Mapping):
         out = pd.DataFrame({k: np.asarray(v) for k, v in out.items()})
     if not isinstance(out, pd.DataFrame) or len(out) != n:
-        raise ValidationError("evaluator output", type(out).__name__, f"a DataFrame (or dict of arrays) with {n} rows")
+        got = f"DataFrame with {len(out)} rows" if isinstance(out, pd.DataFrame) else type(out).__name__
+        raise ValidationError("evaluator output", got, f"a DataFrame (or dict of arrays) with {n} rows")
     return out.reset_index(drop=True)
 
 
@@ -158,12 +169,8 @@ def evaluate(entries: pd.DataFrame, evaluator: Evaluator, *, store: str | Path |
     ValidationError
         ``entries`` is not a non-empty DataFrame, ``evaluator`` is not callable, ``chunk_size``
         or ``workers`` is not a positive integer, or the evaluator's columns repeat input column
-        names. (An evaluator output that is not a DataFrame or dict of arrays with one row per
-        entry is a ValidationError too, but like any EvotolError it is recorded in ``error``
-        entry by entry, unless the chunk holds a single entry.)
-    EvotolError
-        The evaluation of a chunk of a single entry fails (the error propagates instead of
-        being recorded).
+        names, or the evaluator's output is not a DataFrame or dict of arrays with one row per
+        entry (a programming error, raised, not recorded in ``error``).
     """
     from tqdm.auto import tqdm
 

@@ -238,8 +238,8 @@ def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, t
     """A plotly Parcoords figure of ``frame`` (see :func:`parcoords_frame`), coloured by ``color``.
 
     The level-grid lines use the Viridis part of the colour scale (scaled to the grid's range of
-    ``color``); NSGA-II lines are orange, knees red, and a ``source`` axis is added first when
-    there are any.
+    ``color``, or to all lines' range when there is no grid line); NSGA-II lines are orange, knees
+    red, and a ``source`` axis is added first when there are any.
 
     Parameters
     ----------
@@ -262,8 +262,8 @@ def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, t
     Raises
     ------
     ValidationError
-        ``color`` is not an axis column, an axis column is missing from ``frame``, or a log
-        axis has a value <= 0.
+        ``color`` is not an axis column, an axis column is missing from ``frame``, ``frame``
+        has no line, ``color`` has no finite value, or a log axis has a value <= 0.
     """
     import plotly.graph_objects as go
 
@@ -273,6 +273,8 @@ def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, t
     missing = [a.column for a in axes if a.column not in frame]
     if missing:
         raise ValidationError("axis columns", missing, f"columns of the entries {list(frame.columns)}")
+    if len(frame) == 0:
+        raise ValidationError("lines to draw", 0, "at least one line (a feasible entry or an extra entry)")
     src = frame[SOURCE].to_numpy() if SOURCE in frame else np.full(len(frame), GRID)
     has_extra = bool(np.any(src != GRID))
     dims = []
@@ -292,8 +294,11 @@ def parcoords_figure(frame: pd.DataFrame, axes: Sequence[Axis], color: str, *, t
 
     ca = by_col[color]
     cv = ca.values(frame[color])
-    g = src == GRID
-    lo, hi = float(np.nanmin(cv[g])), float(np.nanmax(cv[g]))
+    finite = np.isfinite(cv)
+    ref = cv[finite & (src == GRID)] if np.any(finite & (src == GRID)) else cv[finite]   # no grid line: all lines
+    if ref.size == 0:
+        raise ValidationError(f"colour column {color}", "no finite value", "a finite value on at least one line")
+    lo, hi = float(ref.min()), float(ref.max())
     top = _GRID_TOP if has_extra else 1.0
     c = np.clip((cv - lo) / (hi - lo if hi > lo else 1.0), 0, 1) * top
     c[src == PARETO], c[src == KNEE] = 0.875, 1.0
