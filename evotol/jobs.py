@@ -102,6 +102,7 @@ def _tail(path: Path, n: int = 20) -> str:
 
 
 def _written_since(out: Path, name: str, t0: float) -> bool:
+    # t0 is wall-clock time.time() (the clock of st_mtime), not time.perf_counter()
     p = out / f"{name}.json"
     return p.exists() and p.stat().st_mtime >= t0
 
@@ -149,6 +150,7 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
     titles = titles or {}
     res = JobsOutcome()
     running: dict[str, tuple[subprocess.Popen, float, object]] = {}
+    started: dict[str, float] = {}      # wall-clock start (time.time()), compared with the JSON's mtime
     env = dict(os.environ)
     # children must import this evotol (an editable install or the source tree the caller runs)
     root = str(Path(__file__).resolve().parents[1])
@@ -164,6 +166,7 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
                 while queue and len(running) < jobs:
                     name = queue.pop(0)
                     log = open(logs / f"{name}.log", "w", encoding="utf-8")
+                    started[name] = time.time()
                     # own session: a terminal Ctrl-C reaches only this process, which forwards one
                     # SIGINT to each study (a second one would abort a GA's clean stop)
                     proc = subprocess.Popen(_command(name, out, seed=seed, quick=quick, scheduler=scheduler),
@@ -204,7 +207,7 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
             log.close()
             res.seconds[name] = time.perf_counter() - t0
             res.stopped.append(name)
-            if _written_since(out, name, t0):
+            if _written_since(out, name, started[name]):
                 res.written.append(name)
                 res.summaries[name] = json.loads((out / f"{name}.json").read_text(encoding="utf-8"))
         res.not_run = list(queue)

@@ -68,14 +68,15 @@ def source_nominals(robot) -> dict[str, float]:
     ----------
     robot : robots.base.RobotErrorModel
         The problem's robot (an assembly function with ``dimension_names`` and ``x0``, or a model
-        with a ``mechanism`` description).
+        with a ``mechanism`` description), or a :class:`evotol.clearances.WithClearances` around
+        one (its ``base``; the clearance classes have no nominal).
 
     Returns
     -------
     dict of str to float
         Source name -> nominal value, m or rad; empty when the model knows none.
     """
-    inner = getattr(robot, "robot", robot)        # clearances.WithClearances wraps the robot
+    inner = getattr(robot, "base", robot)         # clearances.WithClearances wraps the robot in .base
     if hasattr(inner, "dimension_names") and hasattr(inner, "x0"):
         return {n: float(v) for n, v in zip(inner.dimension_names, np.ravel(inner.x0))}
     mech = getattr(inner, "mechanism", None)

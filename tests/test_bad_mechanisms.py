@@ -190,3 +190,18 @@ def test_describe_takes_shipped_mechanisms_and_description_files(tmp_path, capsy
     code, out, err = _check(["describe", "ur5", "--json"], capsys)
     import json
     assert code == 0 and json.loads(out)["robot"] == "UR5"
+
+
+@pytest.mark.parametrize("table", [{}, {"sources": ["L*"]}])
+def test_robot_table_without_mechanism_or_urdf_names_the_field(table):
+    """A ``[robot]`` table given to ``model_from_table`` with neither ``mechanism`` nor ``urdf``
+    is a one-line ValidationError naming ``robot.mechanism`` (value None) and saying what is
+    expected -- not a bare KeyError."""
+    from evotol.errors import ValidationError
+    from robots.mechanism.model import model_from_table
+
+    with pytest.raises(ValidationError) as exc:
+        model_from_table(table)
+    assert exc.value.field == "robot.mechanism" and exc.value.value is None
+    assert "mechanism = \"file.toml\"" in exc.value.expected and "urdf = \"arm.urdf\"" in exc.value.expected
+    assert len(str(exc.value).splitlines()) == 1

@@ -57,3 +57,30 @@ def test_description_check_has_box_limits_and_rank(capsys):
     r = d["identifiability"]
     assert r["n_sources"] == 42 and r["rank"] == r["pinocchio_rank"] == r["combined_rank"]
     assert d["limits"][3]["upper"] == -0.0698 and d["workspace"][0]["low"] == 0.3
+
+
+def _no_fd_check(**extra):
+    """A check result whose finite-difference agreement was not computed (``fd_rel_error`` None)."""
+    return {"name": "toy", "file": "toy.toml", "planar": True, "n_sources": 0, "sources": [], "actuated": ["q1"],
+            "passive": [], "n_poses": 3, "closure_residual": 0.0, "fd_rel_error": None, "seconds": 0.1,
+            "assembly": {"pose": [{"name": "x", "value": 0.1, "unit": "m"}],
+                         "joints": [{"name": "q1", "declared": 0.0, "solved": 0.0, "unit": "rad"}]},
+            "end_effector": {"frame": "P", "position": [0.1, 0.0, 0.0], "yaw_pitch_roll": [0.0, 0.0, 0.0]}, **extra}
+
+
+def test_fd_not_computed_is_said_not_a_traceback(capsys, monkeypatch):
+    """``fd_rel_error`` None (no nonlinear model to difference): the text output of a description and
+    of a URDF file says "not computed" on the finite-difference line and exits 0 (was a TypeError
+    formatting None, and for a URDF a TypeError comparing None with --rtol)."""
+    import robots.mechanism.checks as checks
+    import robots.mechanism.urdf_check as urdf_check
+
+    monkeypatch.setattr(checks, "check_mechanism", lambda *a, **k: _no_fd_check())
+    monkeypatch.setattr(urdf_check, "check_urdf_file", lambda *a, **k: _no_fd_check(tip="tool0", fk_vs_pinocchio=0.0))
+    for argv, line in ((["check-mechanism", "toy"], "  sensitivity vs central finite differences of the closure: not computed"),
+                       (["check-mechanism", "arm.urdf", "--tip", "tool0"], "  sensitivity vs central finite differences: not computed")):
+        code, out, err = run(argv, capsys)
+        assert code == 0 and "Traceback" not in err, err
+        assert any(s.startswith(line) for s in out.splitlines()), out
+    code, out, _ = run(["check-mechanism", "arm.urdf", "--tip", "tool0", "--json"], capsys)
+    assert code == 0 and json.loads(out)["fd_rel_error"] is None

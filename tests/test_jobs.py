@@ -7,6 +7,7 @@ names them and the ones not started, and exits 130; bad ``--jobs`` is a one-line
 from __future__ import annotations
 
 import importlib.util
+import io
 import json
 import os
 import signal
@@ -14,9 +15,11 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
+from evotol import jobs as jobs_module
 from evotol import studies
 from evotol.cli import main
 from evotol.jobs import longest_first, reproduce_concurrently
@@ -70,6 +73,38 @@ def test_ctrl_c_stops_the_running_studies_and_names_what_was_not_run(tmp_path):
     assert "interrupted (Ctrl-C) during " in err and "not run: " in err
     assert "not run: none" not in err            # 11 studies, two were running
     assert "[evotol] run times" in out
+
+
+@pytest.mark.parametrize("writes", [False, True])
+def test_ctrl_c_reads_back_only_a_json_written_by_this_run(tmp_path, monkeypatch, writes):
+    """After Ctrl-C, a stopped study counts as ``written`` (and its JSON is read back) only when its
+    ``NAME.json`` was written after it started: a stale ``NAME.json`` of an earlier run, one hour
+    old, is neither listed in ``written`` nor returned in ``summaries`` (the start time and the
+    file's mtime are on the same wall clock)."""
+    out = tmp_path / "out"
+    out.mkdir()
+    stale = out / "x.json"
+    stale.write_text(json.dumps({"run": "earlier"}))
+    os.utime(stale, (time.time() - 3600,) * 2)
+    ready = tmp_path / "ready"
+    child = ("import json, pathlib, time\n"
+             + (f"pathlib.Path({str(stale)!r}).write_text(json.dumps({{'run': 'this'}}))\n" if writes else "")
+             + f"pathlib.Path({str(ready)!r}).touch()\ntime.sleep(60)\n")
+    monkeypatch.setattr(jobs_module, "_command", lambda name, out, **kw: [sys.executable, "-c", child])
+
+    def ctrl_c(_seconds):          # Ctrl-C once the study process is under way
+        t0 = time.time()
+        while not ready.exists() and time.time() - t0 < 30:
+            time.sleep(0.05)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(jobs_module, "time", SimpleNamespace(perf_counter=time.perf_counter, time=time.time, sleep=ctrl_c))
+    res = reproduce_concurrently(["x"], out, jobs=1, stream=io.StringIO())
+    assert res.stopped == ["x"] and res.not_run == []
+    if writes:
+        assert res.written == ["x"] and res.summaries == {"x": {"run": "this"}}
+    else:
+        assert res.written == [] and res.summaries == {}
 
 
 @pytest.mark.parametrize("value", ["0", "-1", "two"])

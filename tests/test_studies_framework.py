@@ -66,3 +66,15 @@ def test_every_study_declares_the_protocol():
         assert callable(study.compute) and callable(study.render), name
         assert "seed" in study.config, name
         assert set(study.quick) <= set(study.config), (name, sorted(set(study.quick) - set(study.config)))
+
+
+@pytest.mark.parametrize("name", ["all", "no-such-study"])
+def test_get_unknown_name_offers_only_names_get_accepts(name):
+    """``studies.get`` refuses a name that is not a study, ``'all'`` included (only the CLI's
+    ``reproduce all`` takes it), and its one-line message lists the study names -- without
+    offering ``'all'``, which ``get`` does not accept."""
+    with pytest.raises(ValidationError) as exc:
+        studies.get(name)
+    assert exc.value.field == "study" and exc.value.value == name
+    assert exc.value.expected == f"one of {sorted(studies.available())}"
+    assert "'all'" not in exc.value.expected and "yao2013" in exc.value.expected

@@ -78,3 +78,25 @@ def test_a_process_study_records_its_file_too(tmp_path, capsys):
         assert got == code, err
     assert "clutch_processes.json and clutch_processes.html there were written by the study file" in err
     assert json.loads((tmp_path / "clutch_processes.json").read_text())["study_file"] == str(a.resolve())
+
+
+def test_source_table_keeps_the_nominals_of_a_clearance_wrapped_robot():
+    """With a ``[clearances]`` table the problem's robot is a ``WithClearances`` around the
+    description: the source table still gives the description's nominal lengths (m) of L0..L5
+    (those of the unwrapped model), and none for the clearance classes."""
+    import tomllib
+    from pathlib import Path
+
+    from evotol.clearances import WithClearances
+    from evotol.study_outputs import source_nominals, source_table
+    from evotol.studyfile import load_problem
+
+    path = Path(__file__).resolve().parents[1] / "reports" / "studies" / "fivebar_clearances.toml"
+    pr = load_problem(tomllib.loads(path.read_text()), base_dir=path.parent)
+    assert isinstance(pr.robot, WithClearances)
+    assert source_nominals(pr.robot) == source_nominals(pr.robot.base) == {
+        "L0": 0.1, "L1": 0.05, "L2": 0.05, "L3": 0.05, "L4": 0.05, "L5": 0.0}
+    rows = {r["name"]: r for r in source_table(pr)}
+    assert [rows[f"L{i}"]["nominal"] for i in range(6)] == [0.1, 0.05, 0.05, 0.05, 0.05, 0.0]
+    classes = [c.name for c in pr.robot.clearances.sources]
+    assert classes and all("nominal" not in rows[c] for c in classes)

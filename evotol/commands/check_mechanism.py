@@ -48,6 +48,14 @@ def _shown(value, unit: str) -> str:
     return f"{0.0 if abs(v) < 1e-9 else v:.6g} {u}"        # round-off below 1e-9 mm / deg shows as 0
 
 
+def _fd_text(fd_rel_error, ok: bool, rtol: float) -> str:
+    """``1.2e-09 relative (OK)``; ``not computed (...)`` when the check gave no number (None: the
+    model has no nonlinear ``pose_error`` to difference)."""
+    if fd_rel_error is None:
+        return "not computed (the model has no nonlinear pose error to difference)"
+    return f"{fd_rel_error:.3g} relative ({'OK' if ok else 'FAILED, > %g' % rtol})"
+
+
 def print_understood(out: dict) -> None:
     """The parameters, the assembly (declared and solved joints) and the end-effector pose, in mm
     and deg (:func:`robots.mechanism.checks.understood`).
@@ -86,7 +94,8 @@ def cmd_check_mechanism(args) -> int:
     Returns
     -------
     int
-        Exit status: 0, or 1 when the finite-difference agreement is worse than ``rtol``.
+        Exit status: 0, or 1 when the finite-difference agreement is worse than ``rtol`` (0 when
+        it was not computed: no nonlinear model).
 
     Raises
     ------
@@ -116,8 +125,7 @@ def cmd_check_mechanism(args) -> int:
     for s in out["sources"]:
         print(f"    {s['name']:14s} {s['group']:9s} {s['unit']:4s} {s['description']}")
     print(f"  loop-closure residual over {out['n_poses']} poses: {out['closure_residual']:.3g} (m or rad)")
-    print(f"  sensitivity vs central finite differences of the closure: {out['fd_rel_error']:.3g} relative "
-          f"({'OK' if ok else 'FAILED, > %g' % args.rtol})")
+    print(f"  sensitivity vs central finite differences of the closure: {_fd_text(out['fd_rel_error'], ok, args.rtol)}")
     print_limits_and_rank(out)
     if "clearance_at_assembly" in out:
         c = out["clearance_at_assembly"]
@@ -181,7 +189,8 @@ def cmd_check_urdf(args, srcs) -> int:
     Returns
     -------
     int
-        Exit status: 0, or 1 when the finite-difference agreement is worse than ``args.rtol``.
+        Exit status: 0, or 1 when the finite-difference agreement is worse than ``args.rtol`` (0
+        when it was not computed).
 
     Raises
     ------
@@ -194,7 +203,7 @@ def cmd_check_urdf(args, srcs) -> int:
     if not args.tip:
         raise ValidationError("--tip", None, "the URDF link or frame that is the end-effector, e.g. --tip tool0")
     out = check_urdf_file(args.file, args.tip, args.poses, srcs)
-    ok = out["fd_rel_error"] <= args.rtol
+    ok = out["fd_rel_error"] is None or out["fd_rel_error"] <= args.rtol
     if args.json:
         print(json.dumps(out, indent=2))
         return 0 if ok else 1
@@ -206,7 +215,6 @@ def cmd_check_urdf(args, srcs) -> int:
         print(f"    {s['name']:28s} {s['group']:9s} {nominal:>12s}  {s['description']}")
     print_limits_and_rank(out)
     print(f"  forward kinematics vs Pinocchio: {out['fk_vs_pinocchio']:.3g} m")
-    print(f"  sensitivity vs central finite differences: {out['fd_rel_error']:.3g} relative "
-          f"({'OK' if ok else 'FAILED, > %g' % args.rtol})")
+    print(f"  sensitivity vs central finite differences: {_fd_text(out['fd_rel_error'], ok, args.rtol)}")
     print(f"  {out['seconds']:.2f} s")
     return 0 if ok else 1

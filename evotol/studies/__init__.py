@@ -262,5 +262,5 @@ def get(name: str) -> Study:
     """
     studies = available()
     if name not in studies:
-        raise ValidationError("study", name, f"one of {sorted(studies)} or 'all'")
+        raise ValidationError("study", name, f"one of {sorted(studies)}")
     return studies[name]

@@ -543,13 +543,17 @@ def model_from_table(table: dict, base_dir=None) -> MechanismModel:
     Raises
     ------
     evotol.errors.ValidationError
-        A key other than ``mechanism`` and ``sources`` next to ``mechanism``, a description
-        that is not found or has a mistake (names the field), or no toleranced source.
+        Neither ``mechanism`` nor ``urdf`` in the table, a key other than ``mechanism`` and
+        ``sources`` next to ``mechanism``, a description that is not found or has a mistake
+        (names the field), or no toleranced source.
     """
     if "urdf" in table:
         spec = {k: v for k, v in table.items() if k != "sources"}
         where = str(Path(base_dir) / "study.toml") if base_dir else ""
         return MechanismModel(mechanism_from_dict(spec, path=where), sources=table.get("sources"))
+    if "mechanism" not in table:
+        raise ValidationError("robot.mechanism", None, "a description file or the name of a shipped one "
+                              "(mechanism = \"file.toml\"), or urdf = \"arm.urdf\" with the description inline")
     extra = set(table) - {"mechanism", "sources"}
     if extra:
         k = sorted(extra)[0]
