@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
 
 
@@ -43,7 +44,7 @@ class ConstraintRows:
 
     Raises
     ------
-    ValueError
+    evotol.errors.ValidationError
         If the problem's measure is neither ``worst_case`` nor ``rss``.
     """
 
@@ -51,7 +52,8 @@ class ConstraintRows:
         self.problem = problem
         measure = problem.requirement.measure
         if measure not in ("worst_case", "rss"):
-            raise ValueError("ConstraintRows needs the worst_case or rss measure")
+            raise ValidationError("requirement.measure", measure,
+                                  "'worst_case' or 'rss' (the measures with convex constraint rows)")
         self.measure = measure
         n = problem.n_sources
         self.A = np.zeros((0, n))    # linear rows  a·t + a0 <= 1

@@ -124,17 +124,18 @@ def bound_ratio(problem, ev) -> float:
     Returns
     -------
     float
-        The ratio (dimensionless); for the ``yield`` measure ``violation + 1``.
+        The ratio (dimensionless); for the ``yield`` measure ``violation + 1``. NaN when an error
+        (or the violation) is NaN.
     """
     if problem.requirement.measure == "yield":
         return float(ev.violation[0] + 1)
-    ratio = -np.inf
+    ratios = []
     for comp, lim in problem.components:
         b = getattr(ev, f"{comp}_bound")
         if b is None:
             b = getattr(ev, comp)
-        ratio = max(ratio, float(np.max(b[0])) / lim)
-    return ratio
+        ratios.append(float(np.max(b[0])) / lim)
+    return float(np.max(ratios, initial=-np.inf))      # NaN anywhere stays NaN (never "met")
 
 
 def meets_requirement(problem, ev) -> bool:
@@ -198,14 +199,18 @@ def repair_by_scaling(problem, t: np.ndarray, ev=None, max_steps: int = 40, max_
     (t, ev, info) : tuple
         The repaired design and its proven evaluation, and ``info`` = ``{"scale": s, "ratio_before":
         ..., "ratio_after": ...}`` or ``None`` when no repair was needed. When scaling down to the
-        lower bounds cannot meet the rule, ``t`` is returned unchanged with ``info["failed"] = True``
-        (the result is then reported infeasible).
+        lower bounds cannot meet the rule, or the ratio is not finite (inf or NaN), ``t`` is
+        returned unchanged with ``info["failed"] = True`` (the result is then reported infeasible).
     """
     t = np.asarray(t, dtype=float)
     ev = evaluate_proven(problem, t) if ev is None else ev
     ratio0 = bound_ratio(problem, ev)
-    if ratio0 <= 1 + FEASIBILITY_RTOL or not np.isfinite(ratio0):
+    if ratio0 <= 1 + FEASIBILITY_RTOL:
         return t, ev, None
+    if not np.isfinite(ratio0):     # inf or NaN: no scale can be aimed at, nothing is proven
+        return t, ev, {"scale": 1.0, "ratio_before": ratio0, "ratio_after": ratio0, "failed": True,
+                       "reason": f"the proven error / requirement is {ratio0} (not finite): reported infeasible, "
+                                 f"not repaired"}
     if ratio0 > 1 + max_miss:
         return t, ev, {"scale": 1.0, "ratio_before": ratio0, "ratio_after": ratio0, "failed": True,
                        "reason": f"misses the requirement by {ratio0 - 1:.2e} (relative), more than the "

@@ -354,7 +354,8 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
     A GA that optimises a sampled yield sits on its own sample's constraint, so its design is
     optimistic; this rescales it on fresh samples (geometric bisection; the miss probability
     grows with every tolerance, so the test is monotone in s). Locked and fixed sources keep their
-    values; s stays within the tolerance bounds. Returns {"scale", "tolerances" (SI array),
+    values; s stays within the tolerance bounds. Asymmetric and offset intervals are sampled as
+    the yield measure samples them. Returns {"scale", "tolerances" (SI array),
     "certified" (bool), "n_samples", "confidence"}.
 
     Parameters
@@ -383,7 +384,7 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
     ------
     evotol.errors.ValidationError
         A requirement measure other than ``yield``, ``n_samples`` not an integer >= 10, a bad
-        design, or a robot without a nonlinear model.
+        design (a zero tolerance on a free source included), or a robot without a nonlinear model.
     """
     from scipy.stats import beta
 
@@ -396,10 +397,15 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
         raise ValidationError("n_samples", n_samples, "an integer >= 10")
     t = problem.as_array(tolerances)
     free = np.isnan(problem.locked_values)
+    zero = np.flatnonzero(free & (t == 0))
+    if zero.size:
+        raise ValidationError(f"tolerances[{problem.names[zero[0]]!r}]", t[zero[0]],
+                              "a positive tolerance for a free source (calibrate_scale multiplies it by the factor s)")
     if not problem.robot.has_nonlinear_model:
         raise ValidationError("robot", problem.robot.name, "a robot with pose_error (calibration samples the exact model)")
+    shift = None if problem.shape.plain else (problem.shape.rho, problem.shape.kappa, problem.shape.offset)
     model = statistical.SampledYield(problem.robot, problem.poses, problem.distributions, dict(problem.components),
-                                     int(n_samples), seed)
+                                     int(n_samples), seed, shift=shift)
     p_max = 1.0 - r.required_yield
 
     def ok(s):

@@ -9,7 +9,9 @@ shared, fixed sources included):
   linear worst case measures how far the first-order model is from the real robot where it matters;
 * **Monte Carlo**: errors sampled uniformly in every interval (Latin hypercube,
   ``scipy.stats.qmc``; the same samples at every pose) through the nonlinear model; reports the
-  largest error, the 99.9 % quantile and the rate of exceeding the requirement.
+  largest error, the 99.9 % quantile and the rate of exceeding the requirement. A sample the
+  mechanism cannot assemble (NaN, :func:`evotol.statistical.pose_error_nan`) is a miss, as in
+  :func:`evotol.montecarlo.verify`: it counts as an infinite error.
 
 Plain sampling cannot verify a worst-case requirement (all sources at the right end at once is
 rare); the worst-vertex check is the nonlinear counterpart of the worst case.
@@ -25,6 +27,7 @@ from scipy.stats import qmc
 from evotol import distributions, measures
 from evotol.errors import ValidationError
 from evotol.problem import ToleranceProblem
+from evotol.statistical import pose_error_nan
 from evotol.threads import single_threaded_blas
 
 ROWS = {"position": slice(0, 3), "orientation": slice(3, 6)}
@@ -123,11 +126,14 @@ class NonlinearCheck:
     linear_worst_case : dict of str to ndarray, shape (n_poses,)
         The linear (first-order) worst case.
     mc_max : dict of str to float
-        Largest nonlinear error norm over every Monte Carlo sample and pose.
+        Largest nonlinear error norm over every Monte Carlo sample and pose; ``inf`` when some
+        sample cannot be assembled (a miss counts as an infinite error).
     mc_q999 : dict of str to float
-        99.9 % quantile of the nonlinear error norm over every sample and pose.
+        99.9 % quantile of the nonlinear error norm over every sample and pose, misses counted as
+        infinite errors (``inf`` when the quantile reaches them).
     mc_exceed_rate : dict of str to float
-        Fraction of (pose, sample) pairs whose error exceeds the requirement (dimensionless).
+        Fraction of (pose, sample) pairs whose error exceeds the requirement or that cannot be
+        assembled (dimensionless).
     n_samples : int
         Monte Carlo samples (shared by every pose).
     n_poses : int
@@ -182,6 +188,17 @@ class NonlinearCheck:
         return d
 
 
+def _quantile_misses(e: np.ndarray, q: float) -> float:
+    """``np.quantile(e, q)`` (linear interpolation) where ``+inf`` entries (misses) count as larger
+    than any error: ``inf`` as soon as the interpolation puts weight on a miss."""
+    miss = np.isinf(e)
+    if not miss.any():
+        return float(np.quantile(e, q))
+    if np.quantile(miss.astype(float), q) > 0:      # same order statistics as e: a miss takes part
+        return np.inf
+    return float(np.quantile(np.where(miss, np.max(e[~miss]), e), q))   # the misses' order unchanged
+
+
 @single_threaded_blas
 def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: int = 0,
                      chunk_poses: int = 64) -> NonlinearCheck:
@@ -203,7 +220,8 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
     Returns
     -------
     NonlinearCheck
-        Worst-vertex errors, linear worst case and Monte Carlo statistics.
+        Worst-vertex errors, linear worst case and Monte Carlo statistics (a sample that cannot
+        be assembled is a miss: an infinite error in ``mc_max`` and ``mc_q999``).
 
     Raises
     ------
@@ -224,14 +242,15 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
     errs = {c: [] for c, _ in problem.components}
     for start in range(0, problem.n_poses, chunk_poses):
         P = problem.poses[start:start + chunk_poses]
-        nl = problem.robot.pose_error(P, np.broadcast_to(E, (len(P),) + E.shape))
+        nl = pose_error_nan(problem.robot, P, np.broadcast_to(E, (len(P),) + E.shape))
         for c, lim in problem.components:
             e = np.linalg.norm(nl[..., ROWS[c]], axis=-1)
+            e[np.isnan(e)] = np.inf                     # not assembled: a miss, larger than any bound
             mx[c] = max(mx[c], float(e.max()))
             exceed[c] += int(np.sum(e > lim))
             errs[c].append(e.ravel())
     total = problem.n_poses * int(n_samples)
-    res = NonlinearCheck(vertex, lin, mx, {c: float(np.quantile(np.concatenate(v), 0.999)) for c, v in errs.items()},
+    res = NonlinearCheck(vertex, lin, mx, {c: _quantile_misses(np.concatenate(v), 0.999) for c, v in errs.items()},
                          {c: exceed[c] / total for c in exceed}, int(n_samples), problem.n_poses, int(seed),
                          requirement=dict(problem.components))
     res.seconds = time.perf_counter() - t0

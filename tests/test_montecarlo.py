@@ -55,3 +55,109 @@ def test_3ucr_paper_table1_exceed_rate_and_linearisation():
     mcv = verify(V, PAPER_TABLE1, 300, seed=0, nonlinear=True)
     assert mcv.linearisation_error < 1e-3
     np.testing.assert_allclose(mcv.nonlinear_exceed_rate["position"], mcv.exceed_rate["position"], atol=0.02)
+
+
+class _UnassembledToy(ToyRobot):
+    """Linear toy with a nonlinear model that cannot assemble a sample whose source s0 error is
+    positive: raises by default, a NaN row with ``failures="nan"`` (as robots.planar5r)."""
+
+    def pose_error(self, poses, errors, failures="raise"):
+        out = np.einsum("pij,psj->psi", self.sensitivity(poses), errors)
+        bad = errors[..., 0] > 0
+        if failures == "raise" and bad.any():
+            raise RuntimeError("cannot be assembled")
+        out[bad] = np.nan
+        return out
+
+
+def test_verify_nonlinear_counts_an_unassembled_sample_as_a_miss():
+    """verify_nonlinear (verify(model="nonlinear")) samples through pose_error_nan: a sample that
+    cannot be assembled is a miss, as in verify(): the exceed rate is the fraction of samples with
+    e0 > 0 (every assembled sample is far inside the 1 mm bound), the same as verify()'s nonlinear
+    exceed rate on the same law; mc_max and mc_q999 are inf (misses are infinite errors), not NaN."""
+    from evotol.nonlinear import uniform_interval_samples, verify_nonlinear
+
+    r = _UnassembledToy(dims=(1, 1))
+    tol = {s.name: Tolerance(cm.ExponentialCost(1, 1, scale=1e-3), 1e-6, 1e-3) for s in r.sources}
+    P = ToleranceProblem(r, tol, Requirement(position=1e-3), [[0.0], [0.5]])
+    t = np.full(2, 1e-5)
+    chk = verify(P, t, 200, seed=3, model="nonlinear")
+    miss = np.mean(uniform_interval_samples(P, t, 200, 3)[:, 0] > 0)
+    assert 0.4 < miss < 0.6
+    assert chk.mc_exceed_rate["position"] == pytest.approx(miss, abs=1e-12)
+    assert chk.mc_max["position"] == np.inf and chk.mc_q999["position"] == np.inf
+    lin = verify(P, t, 2000, seed=3)
+    np.testing.assert_allclose(lin.nonlinear_exceed_rate["position"], 0.5, atol=0.03)
+    # a robot returning NaN by itself (no failures keyword) is read the same way
+    class _NoKeyword(_UnassembledToy):
+        def pose_error(self, poses, errors):
+            return super().pose_error(poses, errors, failures="nan")
+
+    P2 = ToleranceProblem(_NoKeyword(dims=(1, 1)), tol, Requirement(position=1e-3), [[0.0], [0.5]])
+    chk2 = verify_nonlinear(P2, t, n_samples=200, seed=3)
+    assert chk2.mc_exceed_rate == chk.mc_exceed_rate and chk2.mc_q999["position"] == np.inf
+
+
+def test_verify_nonlinear_quantile_puts_a_few_misses_above_every_error():
+    """With fewer misses than the 0.1 % tail, mc_q999 is the quantile with the misses placed above
+    every assembled error (finite), and mc_max is inf."""
+    from evotol.nonlinear import _quantile_misses
+
+    e = np.random.default_rng(0).random(2001)
+    top = np.argsort(e)[-2:]
+    e_miss = e.copy()
+    e_miss[top] = np.inf
+    assert _quantile_misses(e_miss, 0.999) == np.quantile(e, 0.999)   # 2 misses: below the interpolation
+    e_miss[np.argsort(e)[-3]] = np.inf
+    assert _quantile_misses(e_miss, 0.999) == np.inf                  # 3 misses: the quantile reaches them
+    assert _quantile_misses(e, 0.999) == np.quantile(e, 0.999)
+
+
+class _LinearToy(ToyRobot):
+    """ToyRobot whose nonlinear model is its linear one."""
+
+    def pose_error(self, poses, errors):
+        return np.einsum("pij,psj->psi", self.sensitivity(poses), errors)
+
+
+def _asymmetric_yield_problem():
+    r = _LinearToy(dims=(1, 1, 1), planar=True)
+    c = cm.ExponentialCost(1, 1, scale=1e-3)
+    tol = {"s0": Tolerance(cost=c, lower=1e-6, upper=1e-2, distribution="normal", offset=1e-4, minus=0.5, plus=1.5),
+           "s1": Tolerance(cost=c, lower=1e-6, upper=1e-2, distribution="normal"),
+           "s2": Tolerance(cost=c, lower=1e-6, upper=1e-2, distribution="normal")}
+    return ToleranceProblem(r, tol, Requirement(position=6e-4, measure="yield", probability=0.99, model="nonlinear"),
+                            [[0.0], [0.6]])
+
+
+def test_calibrate_scale_samples_asymmetric_intervals_as_the_yield_measure():
+    """calibrate_scale on an offset/asymmetric interval (offset 0.1 mm, minus 0.5, plus 1.5): at the
+    returned factor the one-sided 95 % Clopper-Pearson upper bound of the miss probability on the
+    same samples *with the interval shift* is within 1 − p = 1 %, and 3 % more is not (sampled as
+    centred ±t the factor was 2.26 and its bound 12 %)."""
+    from scipy.stats import beta
+
+    from evotol.montecarlo import calibrate_scale
+    from evotol.statistical import SampledYield
+
+    P = _asymmetric_yield_problem()
+    cal = calibrate_scale(P, np.full(3, 2e-4), 2000, seed=11)
+    assert cal["certified"]
+    model = SampledYield(P.robot, P.poses, P.distributions, dict(P.components), 2000, 11,
+                         shift=(P.shape.rho, P.shape.kappa, P.shape.offset))
+
+    def upper(T):
+        k = np.rint((1 - model.evaluate(T[None], 0.99).probability[0]) * 2000)
+        return np.max(beta.ppf(0.95, k + 1, 2000 - k))
+
+    assert upper(cal["tolerances"]) <= 0.01 < upper(cal["tolerances"] * 1.03)
+    assert cal["scale"] == pytest.approx(1.436, abs=0.01)
+
+
+def test_calibrate_scale_refuses_a_zero_free_tolerance():
+    """A zero tolerance on a free source cannot be scaled into its bounds: a ValidationError naming
+    the source, not a scale of inf and NaN tolerances."""
+    from evotol.montecarlo import calibrate_scale
+
+    with pytest.raises(ValidationError, match=r"tolerances\['s0'\] = 0\.0: expected a positive tolerance"):
+        calibrate_scale(_asymmetric_yield_problem(), [0.0, 2e-4, 2e-4], 100)

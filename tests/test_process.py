@@ -321,3 +321,16 @@ def test_process_allocators_have_the_one_shape_and_refuse_a_budget(clutch_wc):
             fn(pp, budget=10.0)
         with pytest.raises(ValidationError, match="ProcessProblem"):
             fn(pp.base)
+
+
+@pytest.mark.parametrize("measure", ["yield", "mc_quantile"])
+def test_process_optimum_and_ga_name_a_measure_without_constraint_rows(measure):
+    """allocate_process_optimum / allocate_process_ga on a statistical measure: a one-line
+    ValidationError naming requirement.measure, its value and the measures expected (worst_case,
+    rss), from evotol.constraints.ConstraintRows -- not a plain ValueError."""
+    pp = stack_problem(measure)
+    for fn in (allocate_process_optimum, allocate_process_ga):
+        with pytest.raises(ValidationError) as err:
+            fn(pp)
+        assert err.value.field == "requirement.measure" and err.value.value == measure
+        assert "'worst_case' or 'rss'" in err.value.expected

@@ -110,10 +110,8 @@ def allocate_process_optimum(problem: ProcessProblem, *, budget: None = None, me
     ------
     evotol.errors.ValidationError
         An unknown ``method``, a ``budget``, a ``problem`` that is not a :class:`ProcessProblem`,
-        or no process choice whose convex optimum the solver finds.
-    ValueError
-        A requirement measure other than ``worst_case`` or ``rss`` (from
-        :class:`evotol.constraints.ConstraintRows`).
+        no process choice whose convex optimum the solver finds, or a requirement measure other
+        than ``worst_case`` or ``rss`` (from :class:`evotol.constraints.ConstraintRows`).
     evotol.errors.InfeasibleError
         No process choice can hold the requirement (every source at its finest process's lower limit misses it).
     """

@@ -108,11 +108,9 @@ def allocate_process_ga(problem: ProcessProblem, *, budget: None = None, seed: i
     Raises
     ------
     evotol.errors.ValidationError
-        The GA found no feasible design (raise ``n_gen`` / ``pop_size``), a ``budget``, or a
-        ``problem`` that is not a :class:`ProcessProblem`.
-    ValueError
-        A requirement measure other than ``worst_case`` or ``rss`` (from
-        :class:`evotol.constraints.ConstraintRows`).
+        The GA found no feasible design (raise ``n_gen`` / ``pop_size``), a ``budget``, a
+        ``problem`` that is not a :class:`ProcessProblem`, or a requirement measure other than
+        ``worst_case`` or ``rss`` (from :class:`evotol.constraints.ConstraintRows`).
     """
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.optimize import minimize
