@@ -264,3 +264,41 @@ def test_nsga2_on_local_processes_equals_in_process():
     a = doe.nsga2(f, CostAndError(), objs, pop_size=12, n_gen=3, seed=2)
     b = doe.nsga2(f, CostAndError(), objs, pop_size=12, n_gen=3, seed=2, workers=2)
     pd.testing.assert_frame_equal(a.table, b.table)
+
+
+class _FailsAboveTenMicrons:
+    """CostAndError, but no entry with t0 > 0.01 mm assembles (a KinematicsError for the batch)."""
+
+    def __call__(self, X):
+        from evotol.errors import KinematicsError
+
+        if (X["t0_mm"] > 0.01).any():
+            raise KinematicsError("t0 too loose to assemble")
+        return CostAndError()(X)
+
+
+class _NeverAssembles:
+    def __call__(self, X):
+        from evotol.errors import KinematicsError
+
+        raise KinematicsError("never assembles")
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_nsga2_ranks_entries_that_fail_as_infeasible(workers):
+    """Entries the evaluator cannot evaluate are infeasible, never on the front, and a batch in which
+    every entry fails (it brings no objective column back) does not stop the search; when no
+    entry at all can be evaluated the search says so in one line."""
+    from evotol.errors import EvotolError
+
+    f = [Factor(f"t{j}_mm", low=1e-4, high=1e-1, log=True) for j in range(3)]
+    objs = [Objective("cost", 1, log=True), Objective("p_max_mm", 1, log=True)]
+    pf = doe.nsga2(f, _FailsAboveTenMicrons(), objs, pop_size=8, n_gen=2, seed=0, workers=workers)
+    front = pf.table
+    assert len(front) >= 1 and (front["t0_mm"] <= 0.01).all() and front["feasible"].all()
+    # the front's numbers are the evaluator's: cost = sum 1/t (t in µm), error = sum t (mm)
+    t = front[["t0_mm", "t1_mm", "t2_mm"]].to_numpy()
+    np.testing.assert_allclose(front["cost"], (1.0 / (t * 1e3)).sum(1), rtol=1e-12)
+    np.testing.assert_allclose(front["p_max_mm"], t.sum(1), rtol=1e-12)
+    with pytest.raises(EvotolError, match="no feasible entry"):
+        doe.nsga2(f, _NeverAssembles(), objs, pop_size=8, n_gen=2, seed=0, workers=workers)

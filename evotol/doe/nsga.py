@@ -105,13 +105,17 @@ class DesignProblem(Problem):
             Y = Y.drop(columns=list(X.columns))
         else:
             Y = _evaluate_chunk(self.evaluator, X)
+        # a batch whose every entry failed brings no objective column back: its entries are
+        # infeasible (ranked by G below), their objectives NaN
+        wanted = [o.column for o in self.objectives] + ([self.constraint] if self.constraint is not None else [])
+        Y = Y.assign(**{c: np.nan for c in wanted if c not in Y.columns})
         self.seen.append(pd.concat([X, Y], axis=1))
         F = np.column_stack([o.sense * Y[o.column].to_numpy(dtype=float) for o in self.objectives])
         bad = ~Y[FEASIBLE].to_numpy(bool)
         F[bad] = 0.0     # ranked by the constraint violation below, never by F
         G = np.where(bad, 1.0, -1.0)
-        if self.constraint is not None:
-            G = np.maximum(G, Y[self.constraint].to_numpy(dtype=float))
+        if self.constraint is not None:     # a failed entry keeps G = 1 (its constraint value is NaN)
+            G = np.where(bad, 1.0, np.maximum(G, Y[self.constraint].to_numpy(dtype=float)))
         out["F"], out["G"] = F, G[:, None]
 
 
