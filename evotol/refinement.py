@@ -351,7 +351,9 @@ def hold_on_workspace(problem: ToleranceProblem, t, *, candidates=None, grid=Non
         (n_sources,) the scaled design (m or rad).
     info : dict
         ``rounds``, ``scaled`` (bool), ``worst_pose`` (list, m or rad),
-        ``worst_normalised_error`` and ``n_dense_poses``.
+        ``worst_normalised_error`` and ``holds`` of the design returned (``holds``: its worst
+        normalised error is within ``tol`` of 1, False when ``max_rounds`` ran out first), and
+        ``n_dense_poses``.
 
     Raises
     ------
@@ -364,7 +366,8 @@ def hold_on_workspace(problem: ToleranceProblem, t, *, candidates=None, grid=Non
         t2 = scale_into_requirement(dense, t)
         wp = worst_pose(problem, t2, dense, local=False)
         return t2, {"rounds": 1, "scaled": bool(not np.allclose(t2, t)), "worst_pose": wp.pose.tolist(),
-                    "worst_normalised_error": wp.normalised_error, "n_dense_poses": int(dense.n_poses)}
+                    "worst_normalised_error": wp.normalised_error, "holds": bool(wp.normalised_error - 1 <= tol),
+                    "n_dense_poses": int(dense.n_poses)}
     found = problem
     t0 = t
     for rnd in range(1, max_rounds + 1):
@@ -375,5 +378,9 @@ def hold_on_workspace(problem: ToleranceProblem, t, *, candidates=None, grid=Non
             break
         found = found.with_added_poses(np.vstack([dense.poses[np.argsort(-wp.grid_errors)[:8]], wp.pose[None]]))
         t = scale_into_requirement(found, t)
+    else:
+        # the rounds ran out after a scaling: check the design returned, so the report describes it
+        wp = worst_pose(problem, t, dense, local=True, n_local=n_final)
     return t, {"rounds": rnd, "scaled": bool(not np.allclose(t, t0)), "worst_pose": wp.pose.tolist(),
-               "worst_normalised_error": wp.normalised_error, "n_dense_poses": int(dense.n_poses)}
+               "worst_normalised_error": wp.normalised_error, "holds": bool(wp.normalised_error - 1 <= tol),
+               "n_dense_poses": int(dense.n_poses)}

@@ -354,3 +354,21 @@ def test_budget_mode_and_nsga2_on_shared_asymmetric_problem():
     assert np.all(tab["s0"] == tab["s2"])
     ok = tab[tab["normalised_error"] <= 1]
     assert np.all(ok["cost"] >= opt.certificate["lower_bound"] * (1 - 1e-9))
+
+
+def test_hold_on_workspace_reports_the_design_it_returns_when_rounds_run_out():
+    """With one round, hold_on_workspace scales the centre-pose optimum once; its report (worst
+    normalised error, holds) is that of the scaled design it returns -- equal to an independent
+    worst-pose search on it -- not of the design before the scaling (which misses: > 1.01)."""
+    from evotol.refinement import dense_problem, hold_on_workspace, worst_pose
+
+    P = _ucr3_problem()
+    t = allocate_optimum(P).t
+    dense = dense_problem(P, None, 3)
+    assert worst_pose(P, t, dense, local=True).normalised_error > 1.01
+    t1, info = hold_on_workspace(P, t, grid=3, max_rounds=1)
+    again = worst_pose(P, t1, dense, local=True, n_local=12)
+    assert info["rounds"] == 1 and info["scaled"]
+    assert info["worst_normalised_error"] == pytest.approx(again.normalised_error, rel=1e-12)
+    assert info["holds"] == (again.normalised_error - 1 <= 1e-9)
+    assert info["worst_normalised_error"] <= 1 + 1e-9
