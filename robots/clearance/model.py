@@ -495,8 +495,9 @@ class ClearanceMechanism:
             ed = Ed[:, rows][:, :, bcols]
             U, S, Vt = np.linalg.svd(ed, full_matrices=True)
             nbc = ed.shape[2]
-            if np.any(S[:, -1] < 1e-9 * np.maximum(S[:, 0], 1e-300)):
-                bad = np.nonzero(S[:, -1] < 1e-9 * S[:, 0])[0]
+            singular = S[:, -1] < 1e-9 * np.maximum(S[:, 0], 1e-300)   # an all-zero block is singular too
+            if np.any(singular):
+                bad = np.nonzero(singular)[0]
                 raise KinematicsError(f"{self.name}: the chains do not determine every body's error twist at pose "
                                       f"{poses[bad[0]].tolist()}", poses=poses[bad])
             # C = -(Ed^+ Es) restricted to the end-effector (body 0) components
