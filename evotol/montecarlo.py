@@ -383,8 +383,9 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
     Raises
     ------
     evotol.errors.ValidationError
-        A requirement measure other than ``yield``, ``n_samples`` not an integer >= 10, a bad
-        design (a zero tolerance on a free source included), or a robot without a nonlinear model.
+        A requirement measure other than ``yield``, ``n_samples`` not an integer >= 10, no free
+        source (every source locked or fixed), a bad design (a zero tolerance on a free source
+        included), or a robot without a nonlinear model.
     """
     from scipy.stats import beta
 
@@ -397,6 +398,8 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
         raise ValidationError("n_samples", n_samples, "an integer >= 10")
     t = problem.as_array(tolerances)
     free = np.isnan(problem.locked_values)
+    if not free.any():      # ToleranceProblem refuses this; guards a problem whose sources were locked after
+        raise ValidationError("tolerances", "all locked", "at least one free source for calibrate_scale to scale")
     zero = np.flatnonzero(free & (t == 0))
     if zero.size:
         raise ValidationError(f"tolerances[{problem.names[zero[0]]!r}]", t[zero[0]],

@@ -74,7 +74,8 @@ def nonlinear_worst_case(asm, t, *, rtol: float = 1e-6, max_boxes: int = 200_000
     rtol : float
         Branch and bound stops when the bound is within ``rtol`` × limit of the attained value.
     max_boxes : int
-        Budget of boxes for branch and bound (the bound reported is valid whenever it stops).
+        Budget of boxes for branch and bound, a positive integer (the bound reported is valid
+        whenever it stops).
 
     Returns
     -------
@@ -88,9 +89,11 @@ def nonlinear_worst_case(asm, t, *, rtol: float = 1e-6, max_boxes: int = 200_000
     Raises
     ------
     evotol.errors.ValidationError
-        Not an assembly function, or bad tolerances.
+        Not an assembly function, bad tolerances, or ``max_boxes`` not a positive integer.
     """
     t = _check(asm, t)
+    if isinstance(max_boxes, bool) or not isinstance(max_boxes, (int, np.integer)) or max_boxes < 1:
+        raise ValidationError("max_boxes", max_boxes, "a positive integer")
     if isinstance(asm, LinearStack):         # linear: the arithmetic stack is the exact worst case
         out = []
         for k, name in enumerate(asm.response_names):

@@ -74,8 +74,8 @@ class Requirement:
         ------
         evotol.errors.ValidationError
             No bound, a non-positive bound, an unknown ``measure`` or ``model``, a ``quantile``,
-            ``probability`` or ``ppm`` out of range, both ``probability`` and ``ppm``, fewer
-            than 10 ``mc_samples``.
+            ``probability`` or ``ppm`` out of range, both ``probability`` and ``ppm``, or
+            ``mc_samples`` not an integer >= 10.
         """
         if self.position is None and self.orientation is None:
             raise ValidationError("requirement", self, "a position and/or orientation bound")
@@ -96,6 +96,7 @@ class Requirement:
             statistical.required_probability(self.probability)
         if self.ppm is not None and not (isinstance(self.ppm, (int, float, np.floating)) and 0 < self.ppm < 1e6):
             raise ValidationError("requirement.ppm", self.ppm, "defects per million in (0, 1e6)")
-        if int(self.mc_samples) < 10:
-            raise ValidationError("requirement.mc_samples", self.mc_samples, "at least 10 samples")
+        n = self.mc_samples
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 10:
+            raise ValidationError("requirement.mc_samples", n, "an integer >= 10 (samples)")
 

@@ -161,3 +161,20 @@ def test_calibrate_scale_refuses_a_zero_free_tolerance():
 
     with pytest.raises(ValidationError, match=r"tolerances\['s0'\] = 0\.0: expected a positive tolerance"):
         calibrate_scale(_asymmetric_yield_problem(), [0.0, 2e-4, 2e-4], 100)
+
+
+def test_calibrate_scale_refuses_a_problem_without_a_free_source():
+    """With every source locked there is no tolerance to scale: a one-line ValidationError naming
+    ``tolerances`` ("all locked"), not numpy's "zero-size array to reduction operation maximum"
+    ValueError. ToleranceProblem itself refuses all-locked sources, so the problem's locked values
+    are set after construction (a shallow copy, as the with_* methods make)."""
+    import copy
+
+    from evotol.montecarlo import calibrate_scale
+
+    P = copy.copy(_asymmetric_yield_problem())
+    P.locked_values = np.full(3, 2e-4)
+    with pytest.raises(ValidationError) as exc:
+        calibrate_scale(P, np.full(3, 2e-4), 100)
+    assert exc.value.field == "tolerances" and exc.value.value == "all locked"
+    assert str(exc.value) == "tolerances = 'all locked': expected at least one free source for calibrate_scale to scale"

@@ -179,3 +179,19 @@ def test_nonlinear_limit_on_a_tolerance_problem_and_bad_input():
         allocate_nonlinear_limit(assembly_problem(pp.robot, tol, "rss"), allocate_optimum)
     with pytest.raises(ValidationError, match="tolerances"):
         nonlinear_worst_case(pp.robot, [1e-5, -1e-5, 1e-5])
+
+
+@pytest.mark.parametrize("max_boxes", [0, -5, 2.5, "many", True, None])
+def test_nonlinear_worst_case_refuses_a_max_boxes_that_is_not_a_positive_integer(max_boxes):
+    """``max_boxes`` <= 0 (which used to stop branch and bound before any point was evaluated and
+    fail with KeyError: 'point'), a non-integer float, text, a bool or None: a one-line
+    ValidationError naming ``max_boxes`` and the value. One box is enough to get the proven bound
+    (>= the closed form 1 - 0.99 cos 0.2, over L = 0.01) with 2 boxes explored."""
+    asm = AssemblyFunction(lambda a, b: np.cos(a) * b, {"a": 0.0, "b": 1.0}, {"y": 0.01})
+    with pytest.raises(ValidationError) as exc:
+        nonlinear_worst_case(asm, [0.2, 0.01], max_boxes=max_boxes)
+    assert exc.value.field == "max_boxes" and exc.value.value == max_boxes
+    assert str(exc.value) == f"max_boxes = {max_boxes!r}: expected a positive integer"
+    r = nonlinear_worst_case(asm, [0.2, 0.01], max_boxes=1)["responses"][0]
+    assert r["n_boxes"] == 2
+    assert r["proven_bound_over_limit"] >= (1 - 0.99 * np.cos(0.2)) / 0.01 * (1 - 1e-12)

@@ -372,3 +372,20 @@ def test_hold_on_workspace_reports_the_design_it_returns_when_rounds_run_out():
     assert info["worst_normalised_error"] == pytest.approx(again.normalised_error, rel=1e-12)
     assert info["holds"] == (again.normalised_error - 1 <= 1e-9)
     assert info["worst_normalised_error"] <= 1 + 1e-9
+
+
+@pytest.mark.parametrize("mc_samples", ["lots", None, 1000.5, True, "2000", 9])
+def test_requirement_mc_samples_not_an_integer_of_at_least_10_is_a_validation_error(mc_samples):
+    """``Requirement.mc_samples`` that is not an integer >= 10 (text, None, a non-integer float, a
+    bool, an integer-looking string, too few) is refused by ToleranceProblem with a one-line
+    ValidationError naming ``requirement.mc_samples`` and the value -- not a bare ValueError or
+    TypeError from ``int()``, and not silently truncated (1000.5) or parsed ("2000")."""
+    robot = ToyRobot(dims=(1, 1))
+    tol = {s.name: Tolerance(cost=ReciprocalCost(1, 1, scale=1e-5), lower=1e-6, upper=1e-4) for s in robot.sources}
+    with pytest.raises(ValidationError) as exc:
+        ToleranceProblem(robot, tol, Requirement(position=1e-4, mc_samples=mc_samples), robot.workspace.grid(2))
+    assert exc.value.field == "requirement.mc_samples"
+    assert exc.value.value is mc_samples or exc.value.value == mc_samples
+    assert str(exc.value) == f"requirement.mc_samples = {mc_samples!r}: expected an integer >= 10 (samples)"
+    assert "\n" not in str(exc.value)
+    Requirement(position=1e-4, mc_samples=np.int64(10)).validate()   # a numpy integer is an integer
