@@ -399,7 +399,8 @@ class DesignStudy:
         Raises
         ------
         ValidationError
-            ``objective`` is not a column.
+            ``objective`` or an input is not a column (of ``among``, if given), or the study
+            has no inputs.
         """
         return main_effects(self.entries if among is None else among, self.inputs, objective, log=log)
 
@@ -412,7 +413,9 @@ def main_effects(df: pd.DataFrame, inputs: Sequence[str], objective: str, log: b
     largest level) and ``levels``. On a full factorial this is the classical main effect (every
     level is averaged over all combinations of the other inputs); on samples it is an estimate.
     Continuous inputs (more than 12 distinct values) are binned into quartiles, each level
-    then the bin's median. With ``log``, entries whose objective is not positive are left out.
+    then the bin's median; a bin left empty by tied values (quantile edges that coincide) is
+    dropped, so such an input has fewer than four levels. With ``log``, entries whose objective
+    is not positive are left out.
 
     Parameters
     ----------
@@ -436,10 +439,13 @@ def main_effects(df: pd.DataFrame, inputs: Sequence[str], objective: str, log: b
     Raises
     ------
     ValidationError
-        ``objective`` is not a column of ``df``.
+        ``objective`` is not a column of ``df``, or ``inputs`` is empty or names a column
+        that is not in ``df``.
     """
     if objective not in df:
         raise ValidationError("objective", objective, f"a column of {list(df.columns)}")
+    if len(inputs) == 0 or any(c not in df for c in inputs):
+        raise ValidationError("inputs", list(inputs), f"one or more columns of {list(df.columns)}")
     y = df[objective].to_numpy(float)
     ok = np.isfinite(y) & ((y > 0) if log else True)
     y = np.log10(y[ok]) if log else y[ok]
@@ -450,7 +456,9 @@ def main_effects(df: pd.DataFrame, inputs: Sequence[str], objective: str, log: b
         if len(levels) > 12:
             q = np.quantile(x, [0, .25, .5, .75, 1])
             keys = np.clip(np.searchsorted(q, x, side="right") - 1, 0, 3)
-            levels = np.array([np.median(x[keys == k]) for k in range(4)])
+            present = np.unique(keys)  # heavy ties can leave a quartile bin empty: it has no level
+            keys = np.searchsorted(present, keys)
+            levels = np.array([np.median(x[keys == k]) for k in range(len(present))])
         else:
             keys = np.searchsorted(levels, x)
         means = np.array([y[keys == k].mean() for k in range(len(levels))])

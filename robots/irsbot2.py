@@ -301,9 +301,9 @@ class IRSBot2:
         ----------
         poses : array_like, shape (n, 2) or (2,)
             Platform points ``(x, z)``, m.
-        variant : str
-            ``"thesis"``: the universal-joint angles of eqs. II.18-II.35; anything else (default
-            ``"corrected"``): solved on the corrected DH tree.
+        variant : {"corrected", "thesis"}
+            ``"corrected"`` (default): solved on the corrected DH tree; ``"thesis"``: the
+            universal-joint angles of eqs. II.18-II.35.
 
         Returns
         -------
@@ -313,13 +313,16 @@ class IRSBot2:
         Raises
         ------
         ValidationError
-            If ``poses`` is not an (n, 2) array.
+            If ``poses`` is not an (n, 2) array, or ``variant`` is neither ``"corrected"`` nor
+            ``"thesis"``.
         KinematicsError
             If a pose is out of reach, or a distal link of the DH tree does not have length ``l2``
             (``l2eq`` inconsistent with the tree, e.g. ``l2eq_variant="printed"``).
         """
         from robots.clearance.kinematics import rot_x, rot_z, trans
 
+        if variant not in ("corrected", "thesis"):
+            raise ValidationError("dh_values variant", variant, "'corrected' or 'thesis'")
         g = self.inverse_geometry(poses)
         q1, q2 = g["q1"], g["q2"]
         v = {"t1": -(PI - q1), "t2": -q1, "g3": PI - q1, "t3": -(PI - q1), "t4": -q1,
@@ -446,7 +449,9 @@ class IRSBot2:
 
         Raises
         ------
-        ValidationError, KinematicsError
+        ValidationError
+            As :meth:`inverse_geometry`, or if ``variant`` is unknown (as :meth:`dh_tree`).
+        KinematicsError
             As :meth:`inverse_geometry`.
         """
         from robots.clearance.kinematics import rotation_vector

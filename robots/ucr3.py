@@ -278,13 +278,14 @@ class UCR3(RobotErrorModel):
             If a pose is outside the workspace, eq. 5 is inconsistent, or ``J_x`` is singular
             (condition number above 1e10).
         """
-        R, p = self.platform_pose(poses)
+        P = self.check_poses(poses)
+        R, p = self.platform_pose(P)
         s, u, l, n = self.legs(R, p)
         Jx = self._jx(s, u, l, n, self.variant)
         cond = np.linalg.cond(Jx)
         if np.any(~np.isfinite(cond) | (cond > 1e10)):
             bad = int(np.argmax(np.where(np.isfinite(cond), cond, np.inf)))
-            raise KinematicsError(f"3-UCR: singular J_x (cond {cond[bad]:.3g}) at pose {np.asarray(poses)[bad].tolist()}")
+            raise KinematicsError(f"3-UCR: singular J_x (cond {cond[bad]:.3g}) at pose {P[bad].tolist()}", poses=P[[bad]])
         Ua, Ub, Rb = self.clearance_bases(R, n)
         N = len(R)
         rhs = np.zeros((N, 6, self.n_columns))

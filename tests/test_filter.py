@@ -134,3 +134,34 @@ def test_cli_filter_keeping_nothing_says_so_and_writes_no_report(tmp_path, study
     text = capsys.readouterr().out
     assert "0 of 512 entries kept (no entry satisfies the query" in text
     assert "no report written" in text and not out.exists()
+
+
+def test_main_effects_without_inputs_is_a_validation_error():
+    """main_effects with no input column (or one not in the entries) is a one-line ValidationError
+    naming ``inputs``, not a KeyError from sorting an empty table."""
+    E = pd.DataFrame({"a": [1.0, 2.0], "y": [1.0, 10.0]})
+    with pytest.raises(ValidationError) as ei:
+        main_effects(E, [], "y")
+    assert str(ei.value) == "inputs = []: expected one or more columns of ['a', 'y']"
+    with pytest.raises(ValidationError, match=r"inputs = \['b'\]"):
+        main_effects(E, ["b"], "y")
+
+
+def test_main_effects_quartiles_drop_bins_left_empty_by_ties():
+    """Continuous inputs, quartile bins: 30 ties at 0 make the first two quantile edges coincide;
+    the two empty bins are dropped (levels 0 and 8, means 3/32 and 8, no NaN, no numpy warning).
+    Without ties the four bins are unchanged: x = y = 0..19 gives medians and means 2, 7, 12, 17."""
+    import warnings
+
+    x = np.r_[np.zeros(30), np.arange(1.0, 14.0)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        me = main_effects(pd.DataFrame({"x": x, "y": x}), ["x"], "y", log=False).iloc[0]
+    assert me["levels"] == [0.0, 8.0]
+    np.testing.assert_allclose(me["level_means"], [3 / 32, 8.0], rtol=1e-15)
+    np.testing.assert_allclose(me["effect"], 8.0 - 3 / 32, rtol=1e-15)
+
+    x = np.arange(20.0)
+    me = main_effects(pd.DataFrame({"x": x, "y": x}), ["x"], "y", log=False).iloc[0]
+    assert me["levels"] == [2.0, 7.0, 12.0, 17.0] and me["level_means"] == [2.0, 7.0, 12.0, 17.0]
+    assert me["effect"] == 15.0

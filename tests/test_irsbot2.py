@@ -138,3 +138,18 @@ def test_maps_are_symmetric_about_the_z_axis(robot):
     r = max_pose_error(robot.clearance_mechanism(parallelograms=True), P)
     assert abs(r.p_max[0] - r.p_max[1]) <= 1e-3 * r.p_max[0]
     assert abs(r.r_max[0] - r.r_max[1]) <= 1e-3 * r.r_max[0]
+
+
+@pytest.mark.parametrize("variant", ["printed", "thesys", "Corrected"])
+def test_dh_values_refuses_an_unknown_variant(robot, variant):
+    """dh_values accepts only "corrected" and "thesis": any other value (a typo, or "printed",
+    which only dh_tree knows) is a ValidationError naming the field, the value and the accepted
+    ones, not a silent fall-back to the corrected solve."""
+    from evotol.errors import ValidationError
+
+    with pytest.raises(ValidationError) as ei:
+        robot.dh_values(POSES, variant)
+    assert str(ei.value) == f"dh_values variant = {variant!r}: expected 'corrected' or 'thesis'"
+    # the accepted values still give the same numbers as before
+    a, b = robot.dh_values(POSES, "corrected"), robot.dh_values(POSES)
+    assert all(np.array_equal(a[k], b[k]) for k in b)

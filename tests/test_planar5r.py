@@ -248,3 +248,30 @@ def test_lci_values_against_paper_cases_b_and_d():
     assert uw_d.lci_max == pytest.approx(0.55, abs=0.035)
     # the maximum is 1/sqrt(3) on the symmetry axis
     assert uw_d.lci_max == pytest.approx(1 / np.sqrt(3), abs=2e-3)
+
+
+def test_inverse_kinematics_error_with_array_lengths_names_the_pose_and_its_lengths():
+    """Lengths given per pose (arrays broadcast with the poses): an unreachable pose is the
+    KinematicsError naming that pose and the lengths at it, not a TypeError from formatting an
+    array with ``:g``; scalar lengths keep the message they had."""
+    P = [[0.0, 0.5], [0.0, 5.0]]
+    with pytest.raises(KinematicsError) as ei:
+        K.inverse_kinematics(P, np.array([1.0, 1.2]), 1.0, np.array([0.5, 0.25]))
+    assert str(ei.value) == ("5R: pose [0.0, 5.0] (x, y) is outside the theoretical workspace "
+                             "(eqs. 16-19) of r1=1.2, r2=1, r3=0.25")
+    assert np.array_equal(ei.value.poses, [[0.0, 5.0]])
+    with pytest.raises(KinematicsError) as ei:
+        K.inverse_kinematics(P, 1.0, 1.0, 0.5)
+    assert str(ei.value).endswith("of r1=1, r2=1, r3=0.5")
+
+
+def test_mic_closed_form_refuses_array_lengths():
+    """Eqs. 21-22 are for one design: lengths given as arrays (one or several elements) are a
+    ValidationError naming the length, not a TypeError from the ``:g`` formatting of eq. 22's
+    KinematicsError (nor an ambiguous-truth ValueError); scalars still reach that error."""
+    for r1 in (np.array([0.1]), np.array([0.1, 0.2])):
+        with pytest.raises(ValidationError) as ei:
+            K.mic_closed_form(r1, 0.5, 1.0)
+        assert str(ei.value) == f"r1 = {r1.tolist()!r}: expected a scalar length"
+    with pytest.raises(KinematicsError, match=r"eq. 22 needs r1 >= \|r2 - r3\| \(r1=0.1, r2=0.5, r3=1\)"):
+        K.mic_closed_form(np.float64(0.1), np.asarray(0.5), 1.0)

@@ -69,3 +69,14 @@ def test_pose_outside_workspace_is_reported():
         UCR3(variant="printed")
     with pytest.raises(ValidationError, match="r_p"):
         UCR3(r_p=-1)
+
+
+def test_singular_jx_error_names_the_whole_pose():
+    """Z_c = 0 puts the platform in the base plane, where J_x is singular: the KinematicsError names
+    the whole offending pose (alpha, beta, Z_c), also for a single pose given as shape (3,) --
+    not one number of it -- and keeps it in ``poses``."""
+    r = UCR3(zc_range=(0.0, 0.305))
+    for poses in ([0.05, 0.0, 0.0], [[0.0, 0.0, 0.3], [0.05, 0.0, 0.0]]):
+        with pytest.raises(KinematicsError, match=r"^3-UCR: singular J_x \(cond [^)]+\) at pose \[0\.05, 0\.0, 0\.0\]$") as ei:
+            r.sensitivity(poses)
+        np.testing.assert_array_equal(ei.value.poses, [[0.05, 0.0, 0.0]])

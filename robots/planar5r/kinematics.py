@@ -170,9 +170,10 @@ def inverse_kinematics(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -> np.n
     ----------
     p : array_like, shape (..., 2)
         End-effector positions ``(x, y)``, length unit.
-    r1, r2, r3 : float
+    r1, r2, r3 : float or array_like
         Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`); arrays
+        broadcast with ``p[..., 0]`` (one set of lengths per pose).
     working_mode : str or tuple of int
         ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
 
@@ -192,8 +193,10 @@ def inverse_kinematics(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -> np.n
     t1, t2, ok = inverse_kinematics_raw(p[..., 0], p[..., 1], r1, r2, r3, working_mode)
     if not np.all(ok):
         bad = p[~ok]
+        # the lengths at that pose (they may be arrays broadcast with the poses)
+        l1, l2, l3 = (np.broadcast_to(np.asarray(r), ok.shape)[~ok][0] for r in (r1, r2, r3))
         raise KinematicsError(f"5R: pose {bad[0].tolist()} (x, y) is outside the theoretical workspace "
-                              f"(eqs. 16-19) of r1={r1:g}, r2={r2:g}, r3={r3:g}", poses=bad)
+                              f"(eqs. 16-19) of r1={l1:g}, r2={l2:g}, r3={l3:g}", poses=bad)
     return np.stack([t1, t2], axis=-1)
 
 
@@ -631,9 +634,14 @@ def mic_closed_form(r1, r2, r3) -> dict:
 
     Raises
     ------
+    ValidationError
+        If ``r1``, ``r2`` or ``r3`` is not a scalar (eqs. 21-22 are for one design).
     KinematicsError
         If eq. 22 applies and ``r1 < abs(r2 - r3)``.
     """
+    for name, r in (("r1", r1), ("r2", r2), ("r3", r3)):
+        if np.ndim(r) != 0:
+            raise ValidationError(name, np.asarray(r).tolist(), "a scalar length")
     if r1 + r3 < r2:
         return dict(radius=(r1 + r2 - abs(r1 - r2)) / 2,
                     center_y=float(np.sqrt((r1 + r2 + abs(r1 - r2)) ** 2 / 4 - r3 * r3)), equation="eq21")
