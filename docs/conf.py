@@ -134,8 +134,11 @@ def _assigned_in(modname: str, name: str, obj) -> str:
     return modname
 
 
+@functools.lru_cache(maxsize=None)
 def claims() -> dict[str, str]:
-    """Defining path -> the API page (module name) that documents it: the first page listing it."""
+    """Defining path -> the API page (module name) that documents it: the first page listing it.
+
+    Computed once per build (every page's directive reads it; it walks every page's names)."""
     owner: dict[str, str] = {}
     for page in API_PAGES:
         for name in public_names(page):
