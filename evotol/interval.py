@@ -30,6 +30,14 @@ def _up(x):
     return np.nextafter(x, _INF)
 
 
+def _exponent(k, who: str) -> float:
+    """The constant exponent of ``who ** k`` as a float; a TypeError naming it otherwise."""
+    try:
+        return float(k)
+    except (TypeError, ValueError):
+        raise TypeError(f"{who} ** k needs a real constant k, got {k!r}") from None
+
+
 class Interval:
     """Arrays ``lo <= hi``; see the module docstring.
 
@@ -151,10 +159,7 @@ class Interval:
         TypeError
             ``k`` is not a real scalar (an interval exponent is not supported).
         """
-        try:
-            k = float(k)
-        except (TypeError, ValueError):
-            raise TypeError(f"Interval ** k needs a real constant k, got {k!r}") from None
+        k = _exponent(k, "Interval")
         if k.is_integer():
             n = int(k)
             if n == 0:
@@ -333,10 +338,7 @@ class Dual:
         TypeError
             ``k`` is not a real scalar (a variable exponent is not supported).
         """
-        try:
-            k = float(k)
-        except (TypeError, ValueError):
-            raise TypeError(f"Dual ** k needs a real constant k, got {k!r}") from None
+        k = _exponent(k, "Dual")
         return Dual(self.val ** k, self._g(k * self.val ** (k - 1))) if k else Dual.of(1.0, self)
 
     def __array_ufunc__(self, ufunc, method, *inputs, **kw):
