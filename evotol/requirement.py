@@ -34,7 +34,7 @@ class Requirement:
         Latin-hypercube samples of the ``mc_quantile`` measure and of the nonlinear ``yield``
         (at least 10).
     seed : int
-        Seed of those samples.
+        Seed of those samples (a non-negative integer).
     probability : float or None
         Required yield of the ``yield`` measure in (0, 1) (default 0.9973 = 3σ), or
     ppm : float or None
@@ -75,7 +75,7 @@ class Requirement:
         evotol.errors.ValidationError
             No bound, a non-positive bound, an unknown ``measure`` or ``model``, a ``quantile``,
             ``probability`` or ``ppm`` out of range, both ``probability`` and ``ppm``, or
-            ``mc_samples`` not an integer >= 10.
+            ``mc_samples`` not an integer >= 10, or a ``seed`` that is not a non-negative integer.
         """
         if self.position is None and self.orientation is None:
             raise ValidationError("requirement", self, "a position and/or orientation bound")
@@ -84,7 +84,8 @@ class Requirement:
             if v is not None and not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
                 raise ValidationError(f"requirement.{f}", v, "a positive bound (m for position, rad for orientation) or None")
         measure_registry.get(self.measure, field="requirement.measure")
-        if not 0 < self.quantile < 1:
+        q = self.quantile
+        if isinstance(q, bool) or not isinstance(q, (int, float, np.floating)) or not 0 < q < 1:
             raise ValidationError("requirement.quantile", self.quantile, "a probability in (0, 1)")
         if self.model not in ("linear", "nonlinear"):
             raise ValidationError("requirement.model", self.model, "'linear' or 'nonlinear'")
@@ -99,4 +100,6 @@ class Requirement:
         n = self.mc_samples
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 10:
             raise ValidationError("requirement.mc_samples", n, "an integer >= 10 (samples)")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValidationError("requirement.seed", self.seed, "a non-negative integer (random seed)")
 

@@ -389,3 +389,22 @@ def test_requirement_mc_samples_not_an_integer_of_at_least_10_is_a_validation_er
     assert str(exc.value) == f"requirement.mc_samples = {mc_samples!r}: expected an integer >= 10 (samples)"
     assert "\n" not in str(exc.value)
     Requirement(position=1e-4, mc_samples=np.int64(10)).validate()   # a numpy integer is an integer
+
+
+@pytest.mark.parametrize("field, value, expected", [
+    ("quantile", "0.9", "a probability in (0, 1)"),
+    ("quantile", True, "a probability in (0, 1)"),
+    ("seed", -1, "a non-negative integer (random seed)"),
+    ("seed", 1.5, "a non-negative integer (random seed)"),
+    ("seed", "a", "a non-negative integer (random seed)"),
+    ("seed", None, "a non-negative integer (random seed)"),
+])
+def test_requirement_quantile_and_seed_are_checked_in_one_line(field, value, expected):
+    """A ``quantile`` given as text (was a TypeError comparing str and int) or as a bool, and a
+    ``seed`` that numpy would refuse later (-1, 'a') or that would silently change the samples
+    (1.5; None draws fresh entropy, so the measure would not repeat) are refused before any work by
+    a one-line ValidationError naming the field and the value."""
+    with pytest.raises(ValidationError) as exc:
+        Requirement(position=1e-4, **{field: value}).validate()
+    assert str(exc.value) == f"requirement.{field} = {value!r}: expected {expected}"
+    Requirement(position=1e-4, quantile=np.float64(0.9), seed=np.int64(3)).validate()   # numpy scalars are fine
