@@ -106,7 +106,8 @@ def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
         ``model`` is an unknown name; ``costs`` and ``tolerances`` differ in size; fewer than
         (number of coefficients + 1) data points; tolerances not positive and finite; costs
         negative or not finite; or the fitted coefficients are invalid for the model or make
-        the cost negative or increasing between the smallest and largest tolerance.
+        the cost negative or increasing between the smallest and largest tolerance; a ``p0``
+        that is not one finite value per coefficient.
     """
     from cost_models.registry import get
 
@@ -123,15 +124,23 @@ def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
     if not (np.all(np.isfinite(c)) and np.all(c >= 0)):
         raise ValidationError("costs", c.tolist(), "non-negative finite values")
     x = t / scale
-    guess = np.asarray(p0, float) if p0 is not None else _initial_guess(cls.name, x, c, n)
+    if p0 is None:
+        guess = _initial_guess(cls.name, x, c, n)
+    else:
+        try:
+            guess = np.asarray(p0, float).ravel()
+        except (TypeError, ValueError):
+            guess = np.full(0, np.nan)
+        if guess.size != n or not np.all(np.isfinite(guess)):
+            raise ValidationError("p0", p0, f"{n} finite initial coefficients {tuple(cls.param_names)}")
 
     def model_values(p):
         m = object.__new__(cls)
         m.p, m.scale = np.asarray(p, float), 1.0
         return m._f(x)
 
-    res = least_squares(lambda p: model_values(p) - c, guess, method="lm" if t.size >= n else "trf",
-                        x_scale="jac", max_nfev=20000)
+    # Levenberg-Marquardt: unbounded, and the data outnumber the coefficients (checked above)
+    res = least_squares(lambda p: model_values(p) - c, guess, method="lm", x_scale="jac", max_nfev=20000)
     fitted = cls(*res.x, scale=scale, t_min=float(t.min()), t_max=float(t.max()))
     r = fitted.cost(t) - c
     ss_tot = float(np.sum((c - c.mean()) ** 2))

@@ -106,3 +106,15 @@ def test_user_models_callable_registry_and_dict():
         cm.get("no-such-model")
     with pytest.raises(ValidationError, match="a callable"):
         cm.CallableCost(3.0)
+
+
+@pytest.mark.parametrize("p0", [[1.0], [1, 2, 3], [float("nan"), 1.0], ["a", "b"]])
+def test_fit_refuses_an_initial_guess_of_the_wrong_size_or_not_finite(p0):
+    """``fit(p0=...)`` with one coefficient short (was an IndexError inside the model), too many
+    (was an error about the model's *parameters*), a NaN (was scipy's 'outside of provided bounds')
+    or text is refused in one line naming ``p0`` and the coefficients expected."""
+    t = np.array([1, 2, 4, 8, 16]) * 1e-5
+    with pytest.raises(ValidationError) as exc:
+        cm.fit("reciprocal", t, 10 + 5e-4 / t, p0=p0)
+    assert str(exc.value) == f"p0 = {p0!r}: expected 2 finite initial coefficients ('a0', 'a1')"
+    assert cm.fit("reciprocal", t, 10 + 5e-4 / t, p0=[1, 1]).model.p == pytest.approx([10, 5e-4], rel=1e-9)
