@@ -152,3 +152,18 @@ n_samples = 10
     data = json.loads(Path(summary["json"]).read_text())
     assert data["notes"] == [r["text"]] and "nearest to the assembly posture" in r["text"]
     assert "nearest to the assembly posture" in Path(summary["html"]).read_text()
+
+
+def test_random_joint_values_keep_each_joint_in_its_own_units():
+    """The configurations of the URDF check: a revolute joint without limits is drawn from
+    [-pi, pi] rad, one with limits from its limits within [-pi, pi]; a prismatic joint without
+    limits from [-0.1, 0.1] m (it was drawn from [-pi, pi] *metres*), one with limits from them."""
+    from robots.mechanism.urdf_check import UNLIMITED_PRISMATIC, random_joints
+
+    limits = {"r_lim": (-0.5, 4.0), "p_lim": (0.0, 0.5)}
+    units = {"p_free": "m", "p_lim": "m"}
+    q = random_joints(["r_free", "r_lim", "p_free", "p_lim"], limits, 4000, seed=1, units=units)
+    span = {k: (v.min(), v.max()) for k, v in q.items()}
+    for name, (lo, hi) in {"r_free": (-np.pi, np.pi), "r_lim": (-0.5, np.pi),
+                           "p_free": (-UNLIMITED_PRISMATIC, UNLIMITED_PRISMATIC), "p_lim": (0.0, 0.5)}.items():
+        assert lo <= span[name][0] < lo + 0.01 * (hi - lo) and hi - 0.01 * (hi - lo) < span[name][1] <= hi, (name, span[name])

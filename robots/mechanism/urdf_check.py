@@ -22,8 +22,11 @@ from robots.mechanism.identifiability import stacked_rank
 from robots.mechanism.placement import PLACEMENT_FIELDS
 from robots.mechanism.urdf import _pin, chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
 
+#: half range (m) of the random values of a prismatic joint without limits
+UNLIMITED_PRISMATIC = 0.1
 
-def random_joints(variables, limits, n: int, seed: int = 0) -> dict:
+
+def random_joints(variables, limits, n: int, seed: int = 0, units=None) -> dict:
     """Uniform joint values inside the limits (a joint without limits: [-pi, pi] or [-0.1, 0.1] m).
 
     Parameters
@@ -36,24 +39,27 @@ def random_joints(variables, limits, n: int, seed: int = 0) -> dict:
         Number of configurations.
     seed : int, optional
         Seed of the random generator (reproducible draws).
+    units : mapping of str to str, optional
+        Joint variable -> ``"rad"`` or ``"m"`` (``Kinematics.joint_unit``); a variable not in it
+        is revolute.
 
     Returns
     -------
     dict of str to (n,) ndarray
-        Joint variable -> ``n`` values drawn uniformly from its limits intersected with
-        ``[-pi, pi]`` (rad or m); a variable without limits is drawn from ``[-pi, pi]``, a
-        range of zero width gives its lower value.
-
-    Notes
-    -----
-    As written, the code treats every joint alike: an unlimited prismatic joint is drawn from
-    ``[-pi, pi]`` m, not ``[-0.1, 0.1]`` m.
+        Joint variable -> ``n`` values drawn uniformly: a revolute joint from its limits
+        intersected with ``[-pi, pi]`` rad (all of it without limits), a prismatic joint from
+        its limits (m), or ``[-0.1, 0.1]`` m without limits; a range of zero width gives its
+        lower value.
     """
     rng = np.random.default_rng(seed)
+    units = units or {}
     out = {}
     for v in variables:
-        lo, hi = limits.get(v, (-np.pi, np.pi))
-        lo, hi = max(lo, -np.pi), min(hi, np.pi)
+        if units.get(v, "rad") == "m":
+            lo, hi = limits.get(v, (-UNLIMITED_PRISMATIC, UNLIMITED_PRISMATIC))
+        else:
+            lo, hi = limits.get(v, (-np.pi, np.pi))
+            lo, hi = max(lo, -np.pi), min(hi, np.pi)
         out[v] = rng.uniform(lo, hi, n) if hi > lo else np.full(n, lo)
     return out
 
@@ -85,7 +91,7 @@ def check_urdf_chain(robot, n: int = 8, seed: int = 0, step: float = 1e-6) -> di
     info = urdf_frames(path, tip)[3]
     model, fid = info["model"], info["tip_frame_id"]
     kin = robot.kin
-    q = random_joints(kin.variables, robot.mechanism.limits, n, seed)
+    q = random_joints(kin.variables, robot.mechanism.limits, n, seed, units=kin.joint_unit)
     T = kin.state(q, n, twists=False).world[robot.mechanism.end_effector]
     Qp = pinocchio_configuration(model, {v: q[v] for v in kin.variables}, info["mimic"])
     data = model.createData()
@@ -154,7 +160,7 @@ def check_urdf_file(path, tip: str, n_poses: int = 20, sources=None) -> dict:
     model = MechanismModel(mech, sources=sources)
     kin = model.kin
     n = max(int(n_poses), 20)
-    q = random_joints(kin.variables, mech.limits, n, seed=0)
+    q = random_joints(kin.variables, mech.limits, n, seed=0, units=kin.joint_unit)
     q0 = {v: float(np.clip(0.0, *mech.limits.get(v, (-np.inf, np.inf)))) for v in kin.variables}
     T = kin.state(q, n, twists=False).world[mech.end_effector][:, :3, 3]
     chk = check_urdf_chain(model, n=min(n, 8))
