@@ -383,7 +383,8 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
     Raises
     ------
     evotol.errors.ValidationError
-        A requirement measure other than ``yield``, ``n_samples`` not an integer >= 10, no free
+        A requirement measure other than ``yield``, ``n_samples`` not an integer >= 10, a
+        ``confidence`` outside (0, 1), ``iters`` not a positive integer, no free
         source (every source locked or fixed), a bad design (a zero tolerance on a free source
         included), or a robot without a nonlinear model.
     """
@@ -394,8 +395,12 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
     r = problem.requirement
     if r.measure != "yield":
         raise ValidationError("requirement.measure", r.measure, "'yield' for calibrate_scale")
-    if not isinstance(n_samples, (int, np.integer)) or n_samples < 10:
+    if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) or n_samples < 10:
         raise ValidationError("n_samples", n_samples, "an integer >= 10")
+    if isinstance(confidence, bool) or not isinstance(confidence, (int, float, np.floating)) or not 0 < confidence < 1:
+        raise ValidationError("confidence", confidence, "a probability in (0, 1)")
+    if isinstance(iters, bool) or not isinstance(iters, (int, np.integer)) or iters < 1:
+        raise ValidationError("iters", iters, "a positive integer (bisection steps)")
     t = problem.as_array(tolerances)
     free = np.isnan(problem.locked_values)
     if not free.any():      # ToleranceProblem refuses this; guards a problem whose sources were locked after

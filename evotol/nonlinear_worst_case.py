@@ -89,11 +89,14 @@ def nonlinear_worst_case(asm, t, *, rtol: float = 1e-6, max_boxes: int = 200_000
     Raises
     ------
     evotol.errors.ValidationError
-        Not an assembly function, bad tolerances, or ``max_boxes`` not a positive integer.
+        Not an assembly function, bad tolerances, ``max_boxes`` not a positive integer, or an
+        ``rtol`` that is not a finite non-negative number.
     """
     t = _check(asm, t)
     if isinstance(max_boxes, bool) or not isinstance(max_boxes, (int, np.integer)) or max_boxes < 1:
         raise ValidationError("max_boxes", max_boxes, "a positive integer")
+    if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.floating)) or not 0 <= rtol < np.inf:
+        raise ValidationError("rtol", rtol, "a finite non-negative tolerance relative to the limit")
     if isinstance(asm, LinearStack):         # linear: the arithmetic stack is the exact worst case
         out = []
         for k, name in enumerate(asm.response_names):

@@ -178,3 +178,23 @@ def test_calibrate_scale_refuses_a_problem_without_a_free_source():
         calibrate_scale(P, np.full(3, 2e-4), 100)
     assert exc.value.field == "tolerances" and exc.value.value == "all locked"
     assert str(exc.value) == "tolerances = 'all locked': expected at least one free source for calibrate_scale to scale"
+
+
+@pytest.mark.parametrize("field, value, expected", [
+    ("confidence", 1.5, "a probability in (0, 1)"),
+    ("confidence", "95%", "a probability in (0, 1)"),
+    ("iters", 0, "a positive integer (bisection steps)"),
+    ("iters", 2.5, "a positive integer (bisection steps)"),
+    ("n_samples", True, "an integer >= 10"),
+])
+def test_calibrate_scale_checks_confidence_iters_and_samples_first(field, value, expected):
+    """``confidence`` 1.5 made scipy's beta quantile NaN, so no scale was ever certified; text
+    failed inside the first sampled check; ``iters`` 0 returned the lower-bound scale without a
+    search and 2.5 raised a TypeError from ``range``. Each is refused before any sampling in one
+    line naming the argument (``n_samples=True``, a bool, is refused as before)."""
+    from evotol.montecarlo import calibrate_scale
+
+    kw = {"n_samples": 100, field: value}
+    with pytest.raises(ValidationError) as exc:
+        calibrate_scale(_asymmetric_yield_problem(), np.full(3, 2e-4), **kw)
+    assert str(exc.value) == f"{field} = {value!r}: expected {expected}"

@@ -195,3 +195,16 @@ def test_nonlinear_worst_case_refuses_a_max_boxes_that_is_not_a_positive_integer
     r = nonlinear_worst_case(asm, [0.2, 0.01], max_boxes=1)["responses"][0]
     assert r["n_boxes"] == 2
     assert r["proven_bound_over_limit"] >= (1 - 0.99 * np.cos(0.2)) / 0.01 * (1 - 1e-12)
+
+
+@pytest.mark.parametrize("rtol", [-1e-3, float("nan"), float("inf"), "tight", True, None])
+def test_nonlinear_worst_case_refuses_an_rtol_that_is_not_a_finite_non_negative_number(rtol):
+    """A negative or NaN ``rtol`` never satisfies the stopping test, so branch and bound ran its
+    whole box budget (200 000 boxes) before answering; text or None failed inside the loop. Each is
+    refused first in one line naming ``rtol``; rtol = 0 is allowed (stop at the budget or exactly)."""
+    asm = AssemblyFunction(lambda a, b: np.cos(a) * b, {"a": 0.0, "b": 1.0}, {"y": 0.01})
+    with pytest.raises(ValidationError) as exc:
+        nonlinear_worst_case(asm, [0.2, 0.01], rtol=rtol)
+    assert str(exc.value) == f"rtol = {rtol!r}: expected a finite non-negative tolerance relative to the limit"
+    r = nonlinear_worst_case(asm, [0.2, 0.01], rtol=0, max_boxes=50)["responses"][0]
+    assert r["proven_bound_over_limit"] >= (1 - 0.99 * np.cos(0.2)) / 0.01 * (1 - 1e-12)
