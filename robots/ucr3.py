@@ -209,10 +209,15 @@ class UCR3(RobotErrorModel):
 
         Raises
         ------
-        ValidationError, KinematicsError
+        ValidationError
+            An unknown ``variant`` (a typo would silently give the paper's printed model), or
+            as :meth:`platform_pose`.
+        KinematicsError
             As :meth:`platform_pose`.
         """
-        variant = variant or self.variant
+        variant = self.variant if variant is None else variant
+        if variant not in VARIANTS:
+            raise ValidationError("variant", variant, f"one of {VARIANTS} or None (the robot's)")
         R, p = self.platform_pose(poses)
         s, u, l, n = self.legs(R, p)
         return self._jx(s, u, l, n, variant)

@@ -80,3 +80,17 @@ def test_singular_jx_error_names_the_whole_pose():
         with pytest.raises(KinematicsError, match=r"^3-UCR: singular J_x \(cond [^)]+\) at pose \[0\.05, 0\.0, 0\.0\]$") as ei:
             r.sensitivity(poses)
         np.testing.assert_array_equal(ei.value.poses, [[0.05, 0.0, 0.0]])
+
+
+@pytest.mark.parametrize("variant", ["Paper", "verifed", ""])
+def test_jacobian_x_refuses_an_unknown_variant(variant):
+    """A mistyped ``variant`` of ``jacobian_x`` silently gave the paper's printed eq. 11 (anything
+    but 'verified' did; '' gave the robot's own): a one-line ValidationError now. None still means
+    the robot's variant, and the two known ones differ at a general pose."""
+    r = UCR3()
+    P = r.workspace.latin_hypercube(5, seed=1)
+    with pytest.raises(ValidationError) as exc:
+        r.jacobian_x(P, variant)
+    assert str(exc.value) == f"variant = {variant!r}: expected one of ('verified', 'paper') or None (the robot's)"
+    np.testing.assert_array_equal(r.jacobian_x(P, None), r.jacobian_x(P, "verified"))
+    assert np.abs(r.jacobian_x(P, "paper") - r.jacobian_x(P, "verified")).max() > 1e-3
