@@ -59,6 +59,19 @@ def test_html_is_offline_and_indexed(study):
     assert "yao2013.html" in (out / "index.html").read_text()
 
 
+def test_html_states_errors_in_micrometres(study):
+    """The "what holds" table and its note give the errors in µm, as a drawing of a 50 µm
+    requirement would (they printed 5.0720e-05 m): the JSON's SI value / 1e-6, to 4 digits."""
+    out, d = study
+    html = (out / "yao2013.html").read_text()
+    assert "max RSS error (µm)" in html and "holds 50 µm (RSS)" in html and "(m)" not in html
+    for variant in ("paper", "verified"):
+        c = d["variants"][variant]["paper_table1"]
+        assert f"{c['rss_error'] / 1e-6:.4g}" in html and f"{c['worst_case_error'] / 1e-6:.4g}" in html
+    p1 = d["variants"]["paper"]["paper_table1"]["rss_error"]
+    assert f"Table 1 has max RSS error {p1 / 1e-6:.2f} µm" in html
+
+
 def test_report_is_drawn_from_the_json_alone(study):
     """render() reads only the written JSON: redrawing from it gives the same page, byte for byte."""
     from evotol.studies import StudyResult, get

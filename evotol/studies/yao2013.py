@@ -23,6 +23,7 @@ from robots.ucr3 import UCR3
 
 UNIT = 1e-5  # the paper's tolerance unit (m)
 E_POS = 5e-5  # allowed position error (m), Sec. 5
+UM = 1e-6  # the report shows errors in µm (m per µm)
 #: Paper Table 1 (GA) and Table 2 (sensitivity), units of 1e-5 m, in our source order
 #: l1..l3, U1a..U3a, U1b..U3b, R1..R3. The paper's first "U joints" row is the pair whose
 #: sensitivity-based tolerance is tighter (≈2.2); under the paper's model that is R_i2 (U_ib),
@@ -188,7 +189,7 @@ def render(result: StudyResult) -> Report:
     summary = result.summary
 
     rep = Report("Yao et al. 2013 — accuracy synthesis of a 3-UCR parallel robot",
-                 "Seed 002: 3-UCR telescope secondary-mirror support; exponential cost model; |δp| ≤ 5e-5 m over "
+                 "Seed 002: 3-UCR telescope secondary-mirror support; exponential cost model; |δp| ≤ 50 µm over "
                  "α, β ∈ [−5°, 5°], Z_c ∈ [0.255, 0.305] m. Reproduced by evotol.")
     v_p, v_v = summary["variants"]["paper"], summary["variants"]["verified"]
     rep.heading("What holds")
@@ -196,19 +197,19 @@ def render(result: StudyResult) -> Report:
     for variant, v in summary["variants"].items():
         for key, label in (("paper_table1", "Table 1 (GA)"), ("paper_table2", "Table 2 (sensitivity)")):
             c = v[key]
-            holds.append([variant, label, c["cost"], c["rss_error"], c["rss_error"] <= E_POS * (1 + 1e-9),
-                          c["worst_case_error"], c["worst_case_error"] <= E_POS * (1 + 1e-9), c["mc_max_exceed_rate"],
+            holds.append([variant, label, c["cost"], c["rss_error"] / UM, c["rss_error"] <= E_POS * (1 + 1e-9),
+                          c["worst_case_error"] / UM, c["worst_case_error"] <= E_POS * (1 + 1e-9), c["mc_max_exceed_rate"],
                           c["mc_max_exceed_rate_nonlinear_at_top_plane"]])
-    rep.table(holds, ["error model", "paper allocation", "cost", "max RSS error (m)", "holds 5e-5 m (RSS)",
-                      "max worst-case error (m)", "holds 5e-5 m (worst case)", "MC max exceed rate (linear)",
+    rep.table(holds, ["error model", "paper allocation", "cost", "max RSS error (µm)", "holds 50 µm (RSS)",
+                      "max worst-case error (µm)", "holds 50 µm (worst case)", "MC max exceed rate (linear)",
                       "MC max exceed rate (nonlinear, Z_c = top)"], table_id="holds")
     rep.text(
         f"Under the paper's own model (eqs. 10–11 as printed) and the RSS measure, Table 1 has max RSS error "
-        f"{v_p['paper_table1']['rss_error']:.4g} m ({100 * (v_p['paper_table1']['rss_error'] / E_POS - 1):+.1f} % of the bound) "
+        f"{v_p['paper_table1']['rss_error'] / UM:.2f} µm ({100 * (v_p['paper_table1']['rss_error'] / E_POS - 1):+.1f} % of the bound) "
         f"and a Monte Carlo exceed rate of at most {100 * v_p['paper_table1']['mc_max_exceed_rate']:.1f} % (the paper: under 10 %). "
-        f"Under the verified model Table 1 has RSS error {v_v['paper_table1']['rss_error']:.4g} m and exceed rate "
+        f"Under the verified model Table 1 has RSS error {v_v['paper_table1']['rss_error'] / UM:.2f} µm and exceed rate "
         f"{100 * v_v['paper_table1']['mc_max_exceed_rate']:.0f} %: the paper's allocation does not hold the requirement on the real kinematics. "
-        f"No paper allocation holds 5e-5 m in the worst case under either model.", note=True)
+        "No paper allocation holds 50 µm in the worst case under either model.", note=True)
     rep.heading("Cost comparison (RSS measure, as the paper)")
     rows = []
     for variant, v in summary["variants"].items():
@@ -228,7 +229,7 @@ def render(result: StudyResult) -> Report:
         f"{v_p['sensitivity_collective_lengths_cost']:.4f} (paper 4.2391) and the paper's comparison holds: "
         f"{v_p['sensitivity_collective_over_ga']:.2f}× the GA cost (paper 1.94×; Table 2 / our GA = {v_p['paper_table2_over_ga']:.2f}). "
         f"With each source's own sensitivity (our documented default rule) the joints keep Table 2's values within 2 % but the "
-        f"lengths loosen to ≈4.3e-5 m, and the sensitivity allocation costs only {v_p['sensitivity_over_ga']:.2f}× the GA. "
+        f"lengths loosen to ≈43 µm, and the sensitivity allocation costs only {v_p['sensitivity_over_ga']:.2f}× the GA. "
         f"Under the verified model every tolerance must be far tighter (optimum {v_v['optimum_cost']:.3f}); there the "
         f"sensitivity rule costs {v_v['sensitivity_over_ga']:.2f}× the GA, because the verified model couples all sources "
         f"through the platform's parasitic motion and leaves little to trade between them.")
@@ -280,15 +281,15 @@ def render(result: StudyResult) -> Report:
         rep.figure(fig)
         fig = go.Figure()
         front = v["pareto_front"]
-        fig.add_scatter(x=np.asarray(front["normalised_error"], float) * E_POS, y=front["cost"], mode="markers",
+        fig.add_scatter(x=np.asarray(front["normalised_error"], float) * E_POS / UM, y=front["cost"], mode="markers",
                         name="NSGA-II front")
         for key, label in (("paper_table1", "paper Table 1"), ("paper_table2", "paper Table 2")):
-            fig.add_scatter(x=[v[key]["rss_error"]], y=[v[key]["cost"]], mode="markers+text", text=[label],
+            fig.add_scatter(x=[v[key]["rss_error"] / UM], y=[v[key]["cost"]], mode="markers+text", text=[label],
                             textposition="top center", marker=dict(size=12, symbol="diamond"), name=label)
-        fig.add_scatter(x=[figs["ga_max_rss_error"]], y=[v["ga_cost"]], mode="markers", marker=dict(size=10, symbol="x"),
+        fig.add_scatter(x=[figs["ga_max_rss_error"] / UM], y=[v["ga_cost"]], mode="markers", marker=dict(size=10, symbol="x"),
                         name="our GA")
-        fig.add_vline(x=E_POS, line_dash="dash", annotation_text="requirement")
-        fig.update_layout(title=f"Cost vs. max RSS position error (NSGA-II), {variant} model", xaxis_title="max RSS error (m)",
+        fig.add_vline(x=E_POS / UM, line_dash="dash", annotation_text="requirement 50 µm")
+        fig.update_layout(title=f"Cost vs. max RSS position error (NSGA-II), {variant} model", xaxis_title="max RSS error (µm)",
                           yaxis_title="cost", xaxis_type="log", yaxis_type="log", height=450)
         rep.figure(fig)
     checks = {variant: {k: summary["variants"][variant][k] for k in _DESIGNS} for variant in ("paper", "verified")}
