@@ -159,3 +159,23 @@ def test_worst_case_variant_and_json_layout(result):
         assert w["worst_case_rad"] <= T_LIM * (1 + 1e-9)
         assert case["worst_case"]["enumeration_total_cost"] == pytest.approx(w["total_cost"], rel=1e-9)
         assert w["total_cost"] >= case["optimum"]["total_cost"]
+
+
+def test_report_states_the_pruned_bound_against_the_incumbent(result):
+    """The certificate note gives the smallest pruned bound to 6 digits beside the incumbent and
+    their relative difference (it printed the raw float, 24.462425580019996), computed from the
+    JSON's certificate; a bound below the incumbent by more than rtol would not be a proof."""
+    import re
+
+    from evotol.studies import StudyResult
+
+    html = studies.get("choi2000-clutch").render(StudyResult(result)).render()
+    for case in result["cases"]:
+        cert = case["optimum"]["certificate"]
+        b, inc = cert["smallest_pruned_bound"], cert["incumbent"]
+        if b is None:
+            assert "none (no node was pruned)" in html
+            continue
+        assert b >= inc * (1 - cert["rtol"])
+        assert f"{b:.6g} (incumbent {inc:.6g}; bound / incumbent − 1 = {b / inc - 1:+.1e})" in html
+    assert not re.search(r"pruned bound \d+\.\d{7,}", html)

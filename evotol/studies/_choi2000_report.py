@@ -43,7 +43,7 @@ def render_report(s: dict):
         txt = (f"Branch and bound: {cert['n_nodes']} nodes, {cert['n_convex_solves']} convex solves of "
                f"{cert['n_combinations']} combinations (enumeration: {c['enumeration']['n_convex_solves']} solves, same "
                f"optimum: {c['enumeration']['same_optimum']}); leaf duality gap {cert['leaf_gap']:.1e}, smallest pruned "
-               f"bound {cert['smallest_pruned_bound']}. GA / optimum − 1 = {c['ga_over_optimum']:.2e}; NSGA-II cheapest "
+               f"bound {_pruned(cert)}. GA / optimum − 1 = {c['ga_over_optimum']:.2e}; NSGA-II cheapest "
                f"feasible front point / optimum − 1 = {c['nsga2']['cheapest_feasible_over_optimum']:.2e} "
                f"({c['nsga2']['front_size']} points). Nonlinear Monte Carlo at the optimum ({mc['n_samples']} assemblies, "
                f"{mc['sampling']}): {mc['fraction_outside']:.4%} outside ±T (linear model: 0.27 %), largest "
@@ -60,3 +60,11 @@ def render_report(s: dict):
         if "difference" in c:
             rep.text(c["difference"]["text"], note=True)
     return rep
+
+
+def _pruned(cert: dict) -> str:
+    """The smallest pruned lower bound against the incumbent (cost units), or that none was pruned."""
+    b, inc = cert["smallest_pruned_bound"], cert["incumbent"]
+    if b is None:
+        return "none (no node was pruned)"
+    return f"{b:.6g} (incumbent {inc:.6g}; bound / incumbent − 1 = {b / inc - 1:+.1e})"
