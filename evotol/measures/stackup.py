@@ -21,101 +21,18 @@ RSS (statistical). ``rss = sqrt(Σ_j (t_j ‖B_j‖₂)²)``: the root sum squar
 worst-case contribution (‖B_j‖₂ = largest singular value). It is the usual statistical stack-up
 with each tolerance taken as the same multiple of its standard deviation.
 
-Asymmetric intervals (``docs/tolerances.md``). An interval source j may sit in
-[offset_j − minus_j t_j, offset_j + plus_j t_j]: its centre is c_j = offset_j + κ_j t_j
-(κ = (plus − minus)/2) and its half-width ρ_j t_j (ρ = (plus + minus)/2). The error set is then
-s(t) + K with the mean shift s(t) = Σ_j B_j c_j and K the centred set of half-widths ρ_j t_j; it
-is no longer centrally symmetric, so the support function
-
-    h(u) = u·s(t) + Σ_j ρ_j t_j ‖B_jᵀu‖
-
-is maximised over the **full** sphere (both halves of the direction grid). h is still convex and
-positively homogeneous in u, so the same ascent, attained value and proven bound hold (the
-covering angle of the full grid equals that of ±hemisphere). For fixed u, h is affine in t:
-the rows of :mod:`evotol.constraints` gain a constant term u·Σ_j B_j offset_j. RSS with a shift:
-``|s(t)| + sqrt(Σ_j (ρ_j t_j ‖B_j‖₂)²)`` (mean shift added linearly to the RSS of the variation,
-the CETOL/3DCS convention for a mean shift).
+Asymmetric intervals (``docs/tolerances.md``; the support function with a mean shift and the RSS
+with a shift ``|s(t)| + sqrt(Σ_j (ρ_j t_j ‖B_j‖₂)²)``): :mod:`evotol.measures.support`. The
+direction grids and their covering angle δ: :mod:`evotol.measures.directions`.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
-
-@lru_cache(maxsize=16)
-def hemisphere(n: int = 600) -> tuple[np.ndarray, float]:
-    """Fibonacci directions on the upper unit hemisphere (z >= 0), shape (n, 3), and the covering
-    angle δ (rad) of the full sphere by ±these directions (measured by dense random probing and
-    inflated by 10 %, so 1/cos δ is a safe bound factor)."""
-    i = np.arange(n) + 0.5
-    z = i / n                       # uniform in (0, 1): equal-area on the hemisphere
-    phi = np.pi * (1 + 5 ** 0.5) * i
-    r = np.sqrt(1 - z ** 2)
-    D = np.stack([r * np.cos(phi), r * np.sin(phi), z], 1)
-    # Exact covering angle of the sphere by ±D: the largest angle between a vertex of the
-    # spherical Voronoi diagram of ±D and its generator (the points farthest from the set).
-    from scipy.spatial import SphericalVoronoi
-
-    pts = np.concatenate([D, -D])
-    sv = SphericalVoronoi(pts, radius=1.0, threshold=1e-9)
-    best = np.max(sv.vertices @ pts.T, axis=1)   # cos of the angle to the nearest point
-    delta = float(np.arccos(np.clip(best.min(), -1, 1))) * (1 + 1e-9)
-    return D, delta
-
-
-def circle(n: int = 360) -> tuple[np.ndarray, float]:
-    """Half circle of directions in the xy plane, (n, 3), covering angle δ = π/(2n).
-
-    Parameters
-    ----------
-    n : int
-        Number of directions.
-
-    Returns
-    -------
-    D : ndarray, shape (n, 3)
-        Unit directions at angles (i + 1/2)·π/n, i = 0 ... n − 1.
-    delta : float
-        Covering angle of the full circle by ±D (rad).
-    """
-    a = (np.arange(n) + 0.5) * np.pi / n
-    return np.stack([np.cos(a), np.sin(a), np.zeros(n)], 1), np.pi / (2 * n)
-
-
-def directions_for(blocks: np.ndarray, n: int = 600, full_sphere: bool = False) -> tuple[np.ndarray, float]:
-    """Pick sphere or circle directions for position/orientation blocks (..., 3, k).
-
-    ``full_sphere``: both halves (±D), for error sets that are not centrally symmetric.
-
-    Parameters
-    ----------
-    blocks : ndarray, shape (..., 3, k)
-        Sensitivity columns (rows x, y, z of the component); only which rows are non-zero matters.
-    n : int
-        Number of hemisphere directions (a circle gets ``max(n // 2, 90)``).
-    full_sphere : bool
-        Return ±D (both halves) instead of one half.
-
-    Returns
-    -------
-    D : ndarray, shape (n_dir, 3)
-        Unit directions: a half circle in the xy plane when the z row is zero, the single
-        direction z when only the z row is non-zero, else a Fibonacci hemisphere.
-    delta : float
-        Covering angle (rad) of the sphere (or circle) by ±D; 0 for the single direction.
-    """
-    active = np.any(np.abs(blocks) > 0, axis=tuple(i for i in range(blocks.ndim) if i != blocks.ndim - 2))
-    if not active[2] and active[:2].any():
-        D, delta = circle(max(n // 2, 90))
-    elif not active[0] and not active[1] and active[2]:
-        D, delta = np.array([[0.0, 0.0, 1.0]]), 0.0
-    else:
-        D, delta = hemisphere(n)
-    if full_sphere:
-        D = np.concatenate([D, -D])
-    return D, delta
+from evotol.measures.directions import directions_for
+from evotol.measures.support import IntervalShape, mean_shift, support_coefficients, support_constant
 
 
 @dataclass(frozen=True)
@@ -140,137 +57,6 @@ class WorstCase:
     bound: np.ndarray       # (..., n_poses) proven upper bound
     direction: np.ndarray   # (..., n_poses, 3) worst direction u*
     contributions: np.ndarray  # (..., n_poses, n_sources) share of h(u*), mean shift included
-
-
-@dataclass(frozen=True)
-class IntervalShape:
-    """Where each source's interval sits (see module docstring): error of interval source j in
-    [offset_j + (κ_j − ρ_j) t_j, offset_j + (κ_j + ρ_j) t_j]; disks/balls have ρ = 1, κ = offset = 0.
-
-    Parameters
-    ----------
-    rho : ndarray, shape (n_src,)
-        Half-width factor ρ_j = (plus + minus)/2 (dimensionless).
-    kappa : ndarray, shape (n_src,)
-        Centre factor κ_j = (plus − minus)/2 (dimensionless).
-    offset : ndarray, shape (n_src,)
-        Offset of the interval's nominal (SI: m or rad).
-    """
-
-    rho: np.ndarray
-    kappa: np.ndarray
-    offset: np.ndarray
-
-    @classmethod
-    def symmetric_unit(cls, n: int) -> "IntervalShape":
-        """The plain shape ±t of ``n`` sources: ρ = 1, κ = 0, offset = 0.
-
-        Parameters
-        ----------
-        n : int
-            Number of sources.
-
-        Returns
-        -------
-        IntervalShape
-            The plain shape.
-        """
-        return cls(np.ones(n), np.zeros(n), np.zeros(n))
-
-    @property
-    def centred(self) -> bool:
-        """True when every interval is centred on zero (the error set is centrally symmetric)."""
-        return not (np.any(self.kappa != 0) or np.any(self.offset != 0))
-
-    @property
-    def plain(self) -> bool:
-        """Centred with ρ = 1: the classical symmetric tolerance ±t."""
-        return self.centred and bool(np.all(self.rho == 1))
-
-
-def _interval_columns(blocks: list[np.ndarray]) -> list[int]:
-    return [j for j, B in enumerate(blocks) if B.shape[2] == 1]
-
-
-def mean_shift(blocks: list[np.ndarray], shape: IntervalShape, T: np.ndarray) -> np.ndarray:
-    """s(t) = Σ_j B_j (offset_j + κ_j t_j) over interval sources, shape (n_designs, n_poses, 3).
-
-    Parameters
-    ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component (m or rad per unit of source error).
-    shape : IntervalShape
-        Where each interval sits.
-    T : array_like, shape (n_designs, n_src) or (n_src,)
-        Tolerances (SI: m or rad).
-
-    Returns
-    -------
-    ndarray, shape (n_designs, n_poses, 3)
-        Mean shift of the end-effector error (m or rad); disk/ball sources add nothing.
-    """
-    T = np.atleast_2d(T)
-    out = np.zeros((T.shape[0], blocks[0].shape[0], 3))
-    for j in _interval_columns(blocks):
-        if shape.offset[j] != 0 or shape.kappa[j] != 0:
-            c = shape.offset[j] + shape.kappa[j] * T[:, j]                 # (n,)
-            out += c[:, None, None] * blocks[j][None, :, :, 0]
-    return out
-
-
-def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalShape | None = None) -> np.ndarray:
-    """c[p, d, j] = ρ_j ‖B_jᵀ u_d‖ + κ_j u_d·b_j for blocks B_j (n_poses, 3, dim_j); shape
-    (n_poses, n_dir, n_src). With the default shape (ρ = 1, κ = 0): ‖B_jᵀ u_d‖.
-
-    Parameters
-    ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component (m or rad per unit of source error).
-    D : ndarray, shape (n_dir, 3)
-        Unit directions u_d.
-    shape : IntervalShape or None
-        Interval shape; None: plain ±t.
-
-    Returns
-    -------
-    ndarray, shape (n_poses, n_dir, n_src)
-        Support coefficients c[p, d, j] (m or rad per unit of tolerance).
-    """
-    out = np.empty((blocks[0].shape[0], D.shape[0], len(blocks)))
-    for j, B in enumerate(blocks):
-        proj = np.matmul(np.swapaxes(B, 1, 2), D.T)          # (p, k, d)
-        out[:, :, j] = np.sqrt(np.sum(proj * proj, axis=1))
-        if shape is not None:
-            if shape.rho[j] != 1:
-                out[:, :, j] *= shape.rho[j]
-            if B.shape[2] == 1 and shape.kappa[j] != 0:
-                out[:, :, j] += shape.kappa[j] * proj[:, 0, :]
-    return out
-
-
-def support_constant(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalShape | None) -> np.ndarray:
-    """u_d·Σ_j B_j offset_j, shape (n_poses, n_dir): the part of h that does not scale with t.
-
-    Parameters
-    ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component.
-    D : ndarray, shape (n_dir, 3)
-        Unit directions u_d.
-    shape : IntervalShape or None
-        Interval shape; None: no offsets (zeros).
-
-    Returns
-    -------
-    ndarray, shape (n_poses, n_dir)
-        The offsets' part of the support function (m or rad).
-    """
-    s0 = np.zeros((blocks[0].shape[0], 3))
-    if shape is not None:
-        for j in _interval_columns(blocks):
-            if shape.offset[j] != 0:
-                s0 += shape.offset[j] * blocks[j][:, :, 0]
-    return s0 @ D.T
 
 
 def _stack(blocks: list[np.ndarray]):

@@ -11,11 +11,14 @@ Tolerance variables (:mod:`evotol.variables`, ``docs/tolerances.md``). The optim
 *free variables* X (n_designs, n_variables): one per free source, a ``shared`` group being one
 variable for all its members. :meth:`ToleranceProblem.full` maps X to source tolerances T,
 inserting locked and fixed sources; ``problem.free`` marks the sources that carry a variable.
+
+This module holds the problem's construction and validation, its basic properties, the
+worst-case support coefficients and the evaluation under a measure; the class takes its derived
+copies (:mod:`evotol.problem.derived`), variable mapping (:mod:`evotol.problem.variable_mapping`)
+and costs (:mod:`evotol.problem.costs`) from the mixins defined there.
 """
 from __future__ import annotations
 
-import copy
-import dataclasses
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -26,15 +29,18 @@ from evotol.accuracy.base import Evaluation
 from evotol.accuracy.statistical_yield import first_order_yield
 from evotol.errors import InfeasibleError, ValidationError
 from evotol.keywords import did_you_mean
+from evotol.problem.costs import ProblemCosts
+from evotol.problem.derived import DerivedProblems
+from evotol.problem.variable_mapping import VariableMapping
 from evotol.requirement import Requirement
-from evotol.tolerance import COST_WIDTHS, Tolerance
-from evotol.variables import SHARED_COSTS, tolerance_variables
+from evotol.tolerance import Tolerance
+from evotol.variables import tolerance_variables
 from robots.base import RobotErrorModel
 
-__all__ = ["ToleranceProblem", "Tolerance", "Requirement", "Evaluation", "COST_WIDTHS", "SHARED_COSTS"]
+__all__ = ["ToleranceProblem"]
 
 
-class ToleranceProblem:
+class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     """Tolerance allocation over a robot's workspace (see module docstring).
 
     Parameters
@@ -66,6 +72,15 @@ class ToleranceProblem:
         ``clearances`` that is not what is expected (the message names the field and the value).
     evotol.errors.KinematicsError
         A pose out of reach or at a singularity of the robot.
+
+    See Also
+    --------
+    evotol.problem.derived.DerivedProblems : ``with_requirement``, ``with_poses``, ``at_poses``,
+        ``with_tolerances``, ``with_added_poses``.
+    evotol.problem.variable_mapping.VariableMapping : ``full``, ``to_variables``, ``locked_part``,
+        ``as_array``, ``intervals``, ``source_errors``.
+    evotol.problem.costs.ProblemCosts : ``cost``, ``free_cost``, ``source_costs``, ``dcost``,
+        ``variable_dcost``.
     """
 
     def __init__(self, robot: RobotErrorModel, tolerances: Mapping[str, Tolerance], requirement: Requirement,
@@ -235,411 +250,6 @@ class ToleranceProblem:
             One unit per source (``"m"`` or ``"rad"``, ``robot.sources[j].unit``).
         """
         return [s.unit for s in self.robot.sources]
-
-    def with_requirement(self, **changes) -> "ToleranceProblem":
-        """A copy with some requirement fields changed (shares the cached sensitivities).
-
-        Parameters
-        ----------
-        **changes
-            :class:`Requirement` fields and their new values (``position`` in m, ``orientation``
-            in rad, ``measure`` ...), as for :func:`dataclasses.replace`.
-
-        Returns
-        -------
-        ToleranceProblem
-            The copy; measure caches start empty.
-
-        Raises
-        ------
-        evotol.errors.ValidationError
-            The changed requirement is invalid, or its measure cannot judge the problem's
-            clearance sources.
-        TypeError
-            A name that is not a :class:`Requirement` field.
-        """
-        new = copy.copy(self)
-        new.requirement = dataclasses.replace(self.requirement, **changes)
-        new.requirement.validate()
-        if self.clearances is not None:
-            self._check_clearance_measure(new.requirement)
-        return new
-
-    def with_poses(self, idx) -> "ToleranceProblem":
-        """A copy on the subset ``idx`` of the poses (indices or boolean mask), reusing the
-        sensitivities already computed (no call to the robot).
-
-        Parameters
-        ----------
-        idx : array_like of int, or bool ndarray, shape (n_poses,)
-            Pose indices (negative ones count from the end) or a boolean mask over the poses.
-
-        Returns
-        -------
-        ToleranceProblem
-            The copy on the selected poses.
-
-        Raises
-        ------
-        evotol.errors.ValidationError
-            A mask of the wrong shape, an empty selection, or indices that are not integers in
-            ``[-n_poses, n_poses)``.
-        """
-        idx = np.asarray(idx)
-        if idx.dtype == bool:
-            if idx.shape != (self.n_poses,):
-                raise ValidationError("idx", idx.shape, f"a boolean mask of shape ({self.n_poses},)")
-            idx = np.flatnonzero(idx)
-        if idx.size == 0:
-            raise ValidationError("poses", [], "at least one workspace pose")
-        if not np.issubdtype(idx.dtype, np.integer) or idx.min() < -self.n_poses or idx.max() >= self.n_poses:
-            raise ValidationError("idx", idx.tolist()[:5], f"pose indices in [0, {self.n_poses})")
-        new = copy.copy(self)
-        new.poses = self.poses[idx]
-        new._set_jacobian(self.jacobian[idx])
-        new._coeff_cache = {k: (v[0][idx],) + tuple(v[1:3]) + ((v[3][idx],) if len(v) > 3 else ())
-                            for k, v in self._coeff_cache.items()}
-        return new
-
-    def at_poses(self, poses) -> "ToleranceProblem":
-        """A copy on other poses (same tolerances and requirement; sensitivities computed for them).
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, workspace.dim)
-            The new workspace poses (SI: m, rad), at least one.
-
-        Returns
-        -------
-        ToleranceProblem
-            The copy on ``poses``.
-
-        Raises
-        ------
-        evotol.errors.ValidationError
-            No pose, a malformed pose array, or sensitivities that are not finite there.
-        evotol.errors.KinematicsError
-            A pose outside the robot's workspace.
-        """
-        P = self._check_pose_set(poses)
-        J = np.asarray(self.robot.sensitivity(P), dtype=float)
-        if J.shape != (len(P), 6, self.robot.n_columns) or not np.all(np.isfinite(J)):
-            raise ValidationError(f"{self.robot.name}.sensitivity", P.tolist()[:3], "finite sensitivities at the poses")
-        new = copy.copy(self)
-        new.poses = P
-        new._set_jacobian(J)
-        new._coeff_cache = {}
-        return new
-
-    def with_tolerances(self, **fields) -> "ToleranceProblem":
-        """A copy with some :class:`Tolerance` fields changed for every source (a scalar, or an
-        array/sequence in source order), e.g. ``with_tolerances(offset=c)`` to evaluate interval
-        designs [c − t, c + t]; reuses the sensitivities, re-validates every tolerance.
-
-        Parameters
-        ----------
-        **fields
-            Any of ``offset`` (SI: m or rad), ``minus``, ``plus`` (dimensionless factors),
-            ``cost_width`` and ``contains_nominal``; each a scalar for every source or one value
-            per source, shape (n_sources,).
-
-        Returns
-        -------
-        ToleranceProblem
-            The copy with the changed tolerances.
-
-        Raises
-        ------
-        evotol.errors.ValidationError
-            A field not in the list above, a value of the wrong shape, or a tolerance made invalid.
-        """
-        allowed = ("offset", "minus", "plus", "cost_width", "contains_nominal")
-        for k in fields:
-            if k not in allowed:
-                raise ValidationError(f"with_tolerances.{k}", k, f"one of {allowed}" + did_you_mean(k, allowed))
-        n = self.n_sources
-        tols = {}
-        for j, nm in enumerate(self.names):
-            ch = {}
-            for k, v in fields.items():
-                arr = np.asarray(v, dtype=object if isinstance(v, str) else float)
-                ch[k] = (arr.item() if arr.ndim == 0 else (float(arr[j]) if arr.shape == (n,) else None))
-                if ch[k] is None:
-                    raise ValidationError(k, np.shape(v), f"a scalar or one value per source ({n})")
-            tols[nm] = dataclasses.replace(self.tolerances[nm], **ch)
-        for nm, src in zip(self.names, self.robot.sources):
-            tols[nm].validate(nm, src.dim)
-        new = copy.copy(self)
-        new.tolerances = tols
-        new.shape = measures.IntervalShape(np.array([t.rho for t in tols.values()]),
-                                           np.array([t.kappa for t in tols.values()]),
-                                           np.array([float(t.offset) for t in tols.values()]))
-        new._coeff_cache = {}
-        return new
-
-    def with_added_poses(self, poses) -> "ToleranceProblem":
-        """A copy with more poses appended (sensitivities computed only for the new ones).
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, workspace.dim)
-            Poses to append (SI: m, rad).
-
-        Returns
-        -------
-        ToleranceProblem
-            The copy on the old poses followed by ``poses``.
-
-        Raises
-        ------
-        evotol.errors.ValidationError
-            A malformed pose array, or sensitivities that are not finite at the new poses.
-        evotol.errors.KinematicsError
-            A pose outside the robot's workspace.
-        """
-        P = self.robot.check_poses(poses)
-        J = np.asarray(self.robot.sensitivity(P), dtype=float)
-        if not np.all(np.isfinite(J)):
-            raise ValidationError(f"{self.robot.name}.sensitivity", P.tolist()[:3], "finite sensitivities at the added poses")
-        new = copy.copy(self)
-        new.poses = np.vstack([self.poses, P])
-        new._set_jacobian(np.concatenate([self.jacobian, J], axis=0))
-        new._coeff_cache = {}
-        return new
-
-    def full(self, X_free: np.ndarray) -> np.ndarray:
-        """Tolerances of every source from the free variables: (n, n_variables) -> (n, n_sources);
-        inserts locked/fixed values and copies each shared variable to all its members.
-
-        Parameters
-        ----------
-        X_free : array_like, shape (n, n_variables) or (n_variables,)
-            Values of the free variables (SI: m or rad).
-
-        Returns
-        -------
-        ndarray, shape (n, n_sources)
-            Tolerance of every source (SI: m or rad).
-        """
-        X_free = np.atleast_2d(X_free)
-        T = np.empty((X_free.shape[0], self.n_sources))
-        T[:, self.free] = X_free
-        T[:, self.locked] = self.locked_values[self.locked]
-        if self.follower.any():
-            T[:, self.follower] = T[:, self.leader[self.follower]]
-        return T
-
-    def to_variables(self, A: np.ndarray) -> np.ndarray:
-        """Row coefficients per source (..., n_sources) -> per free variable (..., n_variables)
-        (a shared variable collects its members' coefficients).
-
-        Parameters
-        ----------
-        A : ndarray, shape (..., n_sources)
-            Coefficients per source (units of the row per unit of tolerance).
-
-        Returns
-        -------
-        ndarray, shape (..., n_variables)
-            ``A @ variable_matrix``: the coefficients per free variable.
-        """
-        return A @ self.variable_matrix
-
-    def locked_part(self, A: np.ndarray, power: int = 1) -> np.ndarray:
-        """Row values of the locked/fixed sources: ``A[:, locked] @ t_locked**power`` (zeros if none).
-
-        Parameters
-        ----------
-        A : ndarray, shape (n_rows, n_sources)
-            Row coefficients per source.
-        power : int
-            Power of the locked tolerances (1: linear rows, 2: squared rows as in RSS).
-
-        Returns
-        -------
-        ndarray, shape (n_rows,)
-            The constant part of each row due to the locked sources.
-        """
-        lk = self.locked
-        if not lk.any():
-            return np.zeros(A.shape[0])
-        return A[:, lk] @ self.locked_values[lk] ** power
-
-    def as_array(self, tolerances: Mapping[str, float] | np.ndarray) -> np.ndarray:
-        """A design as an array in source order; accepts a name -> value mapping (SI).
-
-        Parameters
-        ----------
-        tolerances : Mapping[str, float] or array_like, shape (..., n_sources)
-            Tolerances (SI: m or rad), by source name or in source order.
-
-        Returns
-        -------
-        ndarray, shape (n_sources,) or (..., n_sources)
-            The tolerances as floats in source order.
-
-        Raises
-        ------
-        evotol.errors.ValidationError
-            A mapping without a value for every source, an array whose last axis is not
-            n_sources, or a value that is negative or not finite.
-        """
-        if isinstance(tolerances, Mapping):
-            missing = [n for n in self.names if n not in tolerances]
-            if missing:
-                raise ValidationError("tolerances", sorted(tolerances), f"a value for every source; missing {missing}")
-            t = np.array([float(tolerances[n]) for n in self.names])
-        else:
-            t = np.asarray(tolerances, dtype=float)
-            if t.shape[-1] != self.n_sources:
-                raise ValidationError("tolerances shape", t.shape, f"(..., {self.n_sources})")
-        if not np.all(np.isfinite(t)) or np.any(t < 0):
-            raise ValidationError("tolerances", t.tolist(), "non-negative finite values (SI)")
-        return t
-
-    def intervals(self, t) -> np.ndarray:
-        """(n_sources, 2) interval ends [offset − minus·t, offset + plus·t] of design t (SI); for
-        disk/ball sources [−t, t] (the bound on the norm).
-
-        Parameters
-        ----------
-        t : Mapping[str, float] or array_like, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        ndarray, shape (n_sources, 2)
-            Lower and upper end of each source's interval (SI: m or rad).
-
-        Raises
-        ------
-        evotol.errors.ValidationError
-            A bad design (see :meth:`as_array`).
-        """
-        t = self.as_array(t)
-        return np.array([self.tolerances[n].interval(t[j]) for j, n in enumerate(self.names)])
-
-    def source_errors(self, Z: list[np.ndarray], t: np.ndarray) -> list[np.ndarray]:
-        """Map unit samples Z_j (n, dim_j; ``|z| <= 1``, centred) to errors inside the intervals of
-        design t (SI): e_j = offset_j + κ_j t_j + ρ_j t_j z_j (centred sources: t_j z_j).
-
-        Parameters
-        ----------
-        Z : list of ndarray, each shape (n, dim_j)
-            Unit samples per source (dimensionless).
-        t : ndarray, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        list of ndarray, each shape (n, dim_j)
-            Source errors (SI: m or rad).
-        """
-        sh = self.shape
-        out = []
-        for j, z in enumerate(Z):
-            if sh.rho[j] == 1 and sh.kappa[j] == 0 and sh.offset[j] == 0:
-                out.append(z * t[j])
-            else:
-                out.append(sh.offset[j] + sh.kappa[j] * t[j] + sh.rho[j] * t[j] * z)
-        return out
-
-    # --- cost -----------------------------------------------------------------------------------
-    def cost(self, T, include_locked: bool = True) -> np.ndarray:
-        """Total cost of designs T (n, n_sources) -> (n,); a single design gives a scalar.
-        Fixed sources cost nothing; with ``shared_cost="variable"`` a shared group pays once.
-        ``include_locked=False``: only the sources driven by a variable (what an optimiser moves).
-
-        Parameters
-        ----------
-        T : array_like, shape (n, n_sources) or (n_sources,)
-            Designs (SI: m or rad).
-        include_locked : bool
-            Count the locked sources too (default); False: only the free ones.
-
-        Returns
-        -------
-        ndarray, shape (n,), or float
-            Total cost per design (cost units); a float for a single design.
-        """
-        T = np.asarray(T, dtype=float)
-        single = T.ndim == 1
-        T2 = np.atleast_2d(T)
-        c = np.zeros(T2.shape[0])
-        for j, n in enumerate(self.names):
-            if self.cost_weight[j] and (include_locked or not self.locked[j]):
-                c += self.tolerances[n].cost_of(T2[:, j])
-        return float(c[0]) if single else c
-
-    def free_cost(self, t: np.ndarray) -> float:
-        """Cost of the sources driven by a variable at one design t (n_sources,), summed one scalar
-        at a time (what the optimum's objective uses; the locked part is a constant).
-
-        Parameters
-        ----------
-        t : ndarray, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        float
-            Cost of the free sources (cost units).
-        """
-        return sum(float(self.tolerances[n].cost_of(t[j])) for j, n in enumerate(self.names)
-                   if self.cost_weight[j] and not self.locked[j])
-
-    def source_costs(self, t) -> np.ndarray:
-        """Cost of each source at one design (0 where no cost is counted: fixed sources, and
-        the members after the first of a group with ``shared_cost="variable"``).
-
-        Parameters
-        ----------
-        t : Mapping[str, float] or array_like, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        ndarray, shape (n_sources,)
-            Cost per source (cost units).
-
-        Raises
-        ------
-        evotol.errors.ValidationError
-            A bad design (see :meth:`as_array`).
-        """
-        t = self.as_array(t)
-        return np.array([float(self.tolerances[n].cost_of(t[j])) * self.cost_weight[j] for j, n in enumerate(self.names)])
-
-    def dcost(self, t: np.ndarray) -> np.ndarray:
-        """∂cost/∂t_j per source (n_sources,).
-
-        Parameters
-        ----------
-        t : ndarray, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        ndarray, shape (n_sources,)
-            Cost derivative per source (cost units per m or rad; 0 where no cost is counted).
-        """
-        return np.array([float(self.tolerances[n].dcost_of(t[j])) * self.cost_weight[j] if self.cost_weight[j] else 0.0
-                         for j, n in enumerate(self.names)])
-
-    def variable_dcost(self, t: np.ndarray) -> np.ndarray:
-        """∂cost/∂x_v per free variable (n_variables,) at source tolerances t.
-
-        Parameters
-        ----------
-        t : ndarray, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        ndarray, shape (n_variables,)
-            Cost derivative per free variable (cost units per m or rad).
-        """
-        return self.dcost(t) @ self.variable_matrix
 
     # --- accuracy -------------------------------------------------------------------------------
     def coefficients(self, component: str):
