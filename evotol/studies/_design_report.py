@@ -4,8 +4,8 @@ JSON states them)."""
 from __future__ import annotations
 
 from evotol.filtering import DesignStudy
-from evotol.reporting.parcoords import (DEFAULT_MAX_DRAWN, add_parcoords, drawn_lines, parcoords_frame,
-                                        preset_table_rows)
+from evotol.reporting.parcoords import add_parcoords, preset_table_rows
+from evotol.reporting.parcoords_lines import DEFAULT_MAX_DRAWN, drawn_lines, parcoords_frame
 
 PRESET_HEADER = ["preset", "thesis", "query", "kept", "kept levels (mm)"]
 

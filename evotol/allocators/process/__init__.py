@@ -41,9 +41,11 @@ which :func:`evotol.allocators.optimum.allocate_optimum` solves with a certifica
 * :func:`allocate_process_baselines` — the textbook route: cheapest feasible process per source
   (:func:`cheapest_feasible_processes`), then the sensitivity rule or the Lagrange closed form.
 
-Modules: :mod:`~evotol.allocators.process.problem` (Process, ProcessProblem, ProcessResult),
-:mod:`~evotol.allocators.process.branch_and_bound`, :mod:`~evotol.allocators.process.baselines`,
-:mod:`~evotol.allocators.process.ga`, :mod:`~evotol.allocators.process.front`.
+Modules: :mod:`~evotol.allocators.process.candidates` (Process),
+:mod:`~evotol.allocators.process.problem` (ProcessProblem, assembly_problem),
+:mod:`~evotol.allocators.process.result` (ProcessResult), :mod:`~evotol.allocators.process.branch_and_bound`,
+:mod:`~evotol.allocators.process.baselines`, :mod:`~evotol.allocators.process.ga`,
+:mod:`~evotol.allocators.process.front`.
 """
 from __future__ import annotations
 
@@ -51,7 +53,9 @@ from evotol.allocators.process.baselines import allocate_process_baselines, chea
 from evotol.allocators.process.branch_and_bound import allocate_process_optimum
 from evotol.allocators.process.front import FRONT_OBJECTIVES, process_front
 from evotol.allocators.process.ga import allocate_process_ga
-from evotol.allocators.process.problem import FEAS_TOL, Process, ProcessProblem, ProcessResult, assembly_problem
+from evotol.allocators.process.candidates import Process
+from evotol.allocators.process.problem import FEAS_TOL, ProcessProblem, assembly_problem
+from evotol.allocators.process.result import ProcessResult
 
 __all__ = ["Process", "ProcessProblem", "ProcessResult", "assembly_problem", "allocate_process_optimum",
            "allocate_process_ga", "allocate_process_baselines", "cheapest_feasible_processes", "process_front",

@@ -9,7 +9,8 @@ from pymoo.core.callback import Callback
 from pymoo.core.problem import Problem
 from pymoo.core.repair import Repair
 
-from evotol.allocators.process.problem import check_no_budget, ProcessProblem, ProcessResult, _result
+from evotol.allocators.process.problem import check_no_budget, ProcessProblem
+from evotol.allocators.process.result import ProcessResult, _result
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol.threads import single_threaded_blas

@@ -1,75 +1,25 @@
-"""The process-selection problem: candidate processes per source, the problem that chooses among
-them, and the result of an allocation (conventions: :mod:`evotol.allocators.process`)."""
+"""The process-selection problem: choose a process and a tolerance for every source (conventions:
+:mod:`evotol.allocators.process`), and the problem check every process allocator starts with.
+
+Its parts: the candidate processes (:mod:`~evotol.allocators.process.candidates`), the result of an
+allocation (:mod:`~evotol.allocators.process.result`)."""
 from __future__ import annotations
 
 import copy
-import itertools
-import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 
-from cost_models.base import CostModel
 from cost_models.power import PowerCost
+from evotol.allocators.process.candidates import Process, checked_processes
+from evotol.allocators.process.result import ProcessResult  # noqa: F401  (re-exported)
 from evotol.errors import ValidationError
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from robots.base import RobotErrorModel
 
 #: relative slack of the process-selection feasibility test (normalised stack error <= 1 + FEAS_TOL)
 FEAS_TOL = 1e-9
-
-
-@dataclass(frozen=True)
-class Process:
-    """One candidate manufacturing process of a source.
-
-    Parameters
-    ----------
-    name : str
-        E.g. ``"turn"``, ``"grind"``.
-    cost : cost_models.CostModel
-        Cost model of the tolerance (SI t), valid (positive, non-increasing) on the range.
-    lower, upper : float
-        Tolerances this process holds (SI: m or rad), 0 < lower <= upper.
-    fixed_cost : float
-        Set-up cost added when the process is chosen (cost units, >= 0).
-
-    Notes
-    -----
-    A plain value: :class:`ProcessProblem` checks it and raises
-    :class:`evotol.errors.ValidationError` naming the source and the process.
-    """
-
-    name: str
-    cost: CostModel
-    lower: float
-    upper: float
-    fixed_cost: float = 0.0
-
-    def total(self, t) -> np.ndarray:
-        """Cost of the process at tolerance t: set-up cost + the cost model.
-
-        Parameters
-        ----------
-        t : float or array_like
-            Tolerance(s) (m or rad).
-
-        Returns
-        -------
-        numpy.ndarray
-            ``fixed_cost + cost.cost(t)`` (cost units), shaped like t.
-        """
-        return self.fixed_cost + self.cost.cost(t)
-
-
-def _dominated(a: Process, b: Process, n: int = 33) -> bool:
-    """True when b covers a's range and is cheaper everywhere on it (a can never be chosen)."""
-    if not (b.lower <= a.lower and b.upper >= a.upper):
-        return False
-    t = np.geomspace(a.lower, a.upper, n)
-    return bool(np.all(b.total(t) < a.total(t)))
 
 
 class ProcessProblem:
@@ -103,45 +53,8 @@ class ProcessProblem:
                  poses, *, n_directions: int = 600, check_dominance: bool = True):
         if not isinstance(robot, RobotErrorModel):
             raise ValidationError("robot", robot, "a robots.base.RobotErrorModel")
-        if not isinstance(processes, Mapping):
-            raise ValidationError("processes", processes, "a mapping source name -> list of Process")
-        names = robot.source_names
-        missing = [n for n in names if n not in processes]
-        if missing:
-            raise ValidationError("processes", sorted(processes), f"a process list for every source of {robot.name}; missing {missing}")
-        extra = [n for n in processes if n not in names]
-        if extra:
-            raise ValidationError(f"processes[{extra[0]!r}]", extra[0], f"a source of {robot.name}: {list(names)}")
-        self.processes: dict[str, tuple[Process, ...]] = {}
-        for n in names:
-            plist = processes[n]
-            if isinstance(plist, Process) or not isinstance(plist, Sequence) or len(plist) == 0:
-                raise ValidationError(f"processes[{n!r}]", plist, "a non-empty list of Process (at least one way to make it)")
-            seen = set()
-            for p in plist:
-                if not isinstance(p, Process):
-                    raise ValidationError(f"processes[{n!r}] entry", p, "an evotol.allocators.process.Process")
-                field_ = f"processes[{n!r}][{p.name!r}]"
-                if p.name in seen:
-                    raise ValidationError(f"processes[{n!r}] name", p.name, "unique process names per source")
-                seen.add(p.name)
-                if not isinstance(p.fixed_cost, (int, float, np.floating)) or not np.isfinite(p.fixed_cost) or p.fixed_cost < 0:
-                    raise ValidationError(f"{field_}.fixed_cost", p.fixed_cost, "a finite cost >= 0")
-                try:
-                    Tolerance(p.cost, p.lower, p.upper).validate(n)
-                except ValidationError as exc:
-                    raise ValidationError(f"{field_}: {exc.field}", exc.value, exc.expected) from None
-            if check_dominance:
-                for a, b in itertools.permutations(plist, 2):
-                    if _dominated(a, b):
-                        t = np.sqrt(a.lower * a.upper)
-                        raise ValidationError(
-                            f"processes[{n!r}][{a.name!r}]", f"cost {float(a.total(t)):.4g} at t = {t:.3g}",
-                            f"a process that can be the cheapest somewhere: {b.name!r} covers its range "
-                            f"[{a.lower:.3g}, {a.upper:.3g}] and costs less everywhere on it (here {float(b.total(t)):.4g}); "
-                            "check the units of the cost curves, or pass check_dominance=False")
-            self.processes[n] = tuple(plist)
-        self.names = names
+        self.processes: dict[str, tuple[Process, ...]] = checked_processes(robot, processes, check_dominance=check_dominance)
+        names = self.names = robot.source_names
         self.n_processes = np.array([len(self.processes[n]) for n in names])
         lo = {n: min(p.lower for p in self.processes[n]) for n in names}
         hi = {n: max(p.upper for p in self.processes[n]) for n in names}
@@ -516,105 +429,6 @@ def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None
     if processes is not None:
         return ProcessProblem(assembly, processes, req, assembly.response_poses)
     return ToleranceProblem(assembly, tolerances, req, assembly.response_poses)
-
-
-# --- results -----------------------------------------------------------------------------------------
-@dataclass
-class ProcessResult:
-    """A process choice and tolerances (SI), with its cost and how it was found.
-
-    Parameters
-    ----------
-    method : str
-        Name of the allocation method.
-    processes : dict of str to str
-        Source name -> chosen process name.
-    tolerances : dict of str to float
-        Source name -> tolerance (m or rad).
-    cost : float
-        Total cost, set-up costs included (cost units).
-    feasible : bool
-        Whether the design holds the requirement and every tolerance is in its process's range.
-    normalised_error : float
-        Exact max error / bound (dimensionless; <= 1 holds).
-    seconds : float
-        Wall time of the allocation (s).
-    n_nodes : int or None
-        Branch-and-bound nodes explored, when applicable.
-    n_convex_solves : int or None
-        Convex subproblems solved, when applicable.
-    n_combinations : int or None
-        Number of process combinations of the problem, when reported.
-    certificate : dict or None
-        Optimality certificate of the exact method (incumbent, smallest pruned lower bound,
-        ``rtol``, the leaf's gap and KKT residual, the proof's wording).
-    history : list or None
-        Per-generation record of the GA (best feasible cost, NaN while none), when kept.
-    """
-
-    method: str
-    processes: dict[str, str]
-    tolerances: dict[str, float]
-    cost: float
-    feasible: bool
-    normalised_error: float
-    seconds: float = 0.0
-    n_nodes: int | None = None
-    n_convex_solves: int | None = None
-    n_combinations: int | None = None
-    certificate: dict | None = None
-    history: list | None = field(default=None, repr=False)
-
-    def to_dict(self) -> dict:
-        """JSON-ready summary of the result (without ``history``).
-
-        Returns
-        -------
-        dict
-            The fields from ``method`` to ``certificate``, those that are None left out.
-        """
-        d = {k: getattr(self, k) for k in ("method", "processes", "tolerances", "cost", "feasible", "normalised_error",
-                                            "seconds", "n_nodes", "n_convex_solves", "n_combinations", "certificate")}
-        return {k: v for k, v in d.items() if v is not None}
-
-    def table(self, problem: ProcessProblem, unit: float = 1e-3, unit_name: str = "mm") -> pd.DataFrame:
-        """One row per source: chosen process, tolerance in a display unit and its cost.
-
-        Parameters
-        ----------
-        problem : ProcessProblem
-            The problem the result belongs to.
-        unit : float
-            Display unit in SI (default 1e-3: tolerances shown in mm).
-        unit_name : str
-            Name of the display unit, used in the column header.
-
-        Returns
-        -------
-        pandas.DataFrame
-            Columns ``source``, ``process``, ``tolerance (<unit_name>)`` and ``cost`` (set-up +
-            process cost, cost units).
-
-        Raises
-        ------
-        ValidationError
-            If a process name of the result is unknown to ``problem``.
-        """
-        ch = problem.choice_index(self.processes)
-        t = np.array([self.tolerances[n] for n in problem.names])
-        return pd.DataFrame({"source": problem.names, "process": [self.processes[n] for n in problem.names],
-                             f"tolerance ({unit_name})": t / unit,
-                             "cost": [float(problem.processes[n][k].total(t[j])) for j, (n, k) in enumerate(zip(problem.names, ch))]})
-
-
-def _result(pp: ProcessProblem, method: str, choice, t, t0: float, **kw) -> ProcessResult:
-    t = np.asarray(t, dtype=float)
-    ne = float(pp.normalised_error(t)[0])
-    ok = bool(ne <= 1 + 1e-7 and pp.in_ranges(choice, t)[0])
-    return ProcessResult(method, pp.choice_names(choice), dict(zip(pp.names, t.tolist())), float(pp.cost(choice, t)[0]),
-                         ok, ne, seconds=time.perf_counter() - t0, **kw)
-
-
 
 def check_no_budget(problem: ProcessProblem, budget, name: str) -> ProcessProblem:
     """The one allocator shape: process allocators take ``budget=None`` and refuse a budget in one line
