@@ -6,7 +6,8 @@
 >>> robot.clearance_mechanism()                                 # for robots.clearance.max_pose_error
 
 Modules: :mod:`.expressions` (safe entry expressions, complex-step derivatives),
-:mod:`.description` (dataclasses and the TOML loader), :mod:`.kinematics` (forward kinematics,
+:mod:`.parts` (frames, loops, points, coordinates, clearances), :mod:`.mechanism` (the whole
+description, its sources), :mod:`.description` (the TOML loader), :mod:`.kinematics` (forward kinematics,
 exact first-order maps, continued Newton inverse geometry), :mod:`.model` (the error model and the
 clearance mechanism). Serial arms from URDF (issue 23): :mod:`.urdf` (reading a URDF with
 Pinocchio), :mod:`.placement` (placement errors as local twists), :mod:`.limits` (joint limits),
@@ -15,10 +16,11 @@ Pinocchio), :mod:`.placement` (placement errors as local twists), :mod:`.limits`
 with Pinocchio and finite differences), :mod:`.inspection` (what ``evotol check-mechanism`` shows).
 ``docs/mechanisms.md`` documents the file format.
 """
-from robots.mechanism.description import (ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Mechanism, Point,
-                                          load_mechanism, mechanism_from_dict)
+from robots.mechanism.description import load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import Kinematics
+from robots.mechanism.mechanism import Mechanism
 from robots.mechanism.model import MechanismModel
+from robots.mechanism.parts import ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point
 
 __all__ = ["ClearanceChain", "ClearanceSpec", "Coordinate", "Frame", "Kinematics", "Loop", "Mechanism", "MechanismModel",
            "Point", "load_mechanism", "mechanism_from_dict"]

@@ -1,4 +1,4 @@
-"""Kinematics computed from a :class:`~robots.mechanism.description.Mechanism`.
+"""Kinematics computed from a :class:`~robots.mechanism.mechanism.Mechanism`.
 
 * **Forward kinematics** of the frame tree: ``^0T_j = ^0T_{a(j)} Rot(z,gamma) Trans(z,b) Rot(x,alpha)
   Trans(x,d) Rot(z,theta) Trans(z,r)`` (Khalil & Kleinfinger 1986), vectorised over poses.
@@ -27,7 +27,8 @@ import numpy as np
 from evotol.errors import KinematicsError, ValidationError
 from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, inv_transform, rotation_vector
 from robots.mechanism import working_mode
-from robots.mechanism.description import AXES, ANGLE_FIELDS, Mechanism, joint_units
+from robots.mechanism.mechanism import Mechanism
+from robots.mechanism.parts import AXES, joint_units
 from robots.mechanism.expressions import Expression
 from robots.mechanism.limits import check_joint_limits, check_limit_names
 from robots.mechanism.placement import PLACEMENT_FIELDS, placement_error, placement_twists
@@ -66,7 +67,7 @@ class Kinematics:
 
     Parameters
     ----------
-    mech : robots.mechanism.description.Mechanism
+    mech : robots.mechanism.mechanism.Mechanism
         The description; its DH entries are parsed here and its joint variables (names in the
         entries that are not design parameters) found.
 
@@ -87,7 +88,7 @@ class Kinematics:
         self.order = self.tree.order
         self.paths = {k: set(self.tree.path(k)) for k in self.tree.frames}
         self.paths["0"] = set()
-        # points: mean of frame origins, oriented like their first frame (description.Point)
+        # points: mean of frame origins, oriented like their first frame (parts.Point)
         self.points = {p.name: p.frames for p in mech.points}
         for p, frs in self.points.items():
             self.paths[p] = set().union(*(self.paths[f] for f in frs))
@@ -363,7 +364,7 @@ class Kinematics:
 
         Parameters
         ----------
-        lp : robots.mechanism.description.Loop
+        lp : robots.mechanism.parts.Loop
             The loop.
 
         Returns

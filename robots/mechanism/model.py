@@ -25,7 +25,9 @@ from evotol.errors import KinematicsError, ValidationError
 from robots.base import RobotErrorModel, SourceSpec, Workspace
 from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, rotation_vector
 from robots.clearance.model import ClearanceMechanism, Joint
-from robots.mechanism.description import LENGTH_FIELDS, UNIT_SCALE, Mechanism, load_mechanism, mechanism_from_dict
+from robots.mechanism.description import load_mechanism, mechanism_from_dict
+from robots.mechanism.mechanism import Mechanism
+from robots.mechanism.parts import LENGTH_FIELDS, UNIT_SCALE
 from robots.mechanism.kinematics import IN_PLANE, Kinematics
 from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
 from robots.mechanism.serial import SERIAL_COMPILED, SerialChain, serial_inverse_geometry
