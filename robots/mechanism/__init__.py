@@ -8,7 +8,7 @@
 Modules: :mod:`.expressions` (safe entry expressions, complex-step derivatives),
 :mod:`.parts` (frames, loops, points, coordinates, clearances), :mod:`.mechanism` (the whole
 description, its sources), :mod:`.description` (the TOML loader), :mod:`.kinematics` (forward kinematics,
-exact first-order maps, continued Newton inverse geometry), :mod:`.model` (the error model and the
+exact first-order maps), :mod:`.inverse_geometry` (continued Newton inverse geometry), :mod:`.model` (the error model and the
 clearance mechanism). Serial arms from URDF (issue 23): :mod:`.urdf` (reading a URDF with
 Pinocchio), :mod:`.placement` (placement errors as local twists), :mod:`.limits` (joint limits),
 :mod:`.serial` and :mod:`.serial_kernels` (the compiled path of a serial chain),

@@ -130,7 +130,7 @@ class MechanismModel(RobotErrorModel):
         evotol.errors.KinematicsError
             A pose out of reach or singular, or a joint outside its limits
             (:meth:`Kinematics.inverse_geometry
-            <robots.mechanism.kinematics.Kinematics.inverse_geometry>`).
+            <robots.mechanism.inverse_geometry.InverseGeometry.inverse_geometry>`).
         """
         return self._inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
 
@@ -138,7 +138,8 @@ class MechanismModel(RobotErrorModel):
     def redundancy(self) -> dict | None:
         """For a redundant mechanism (more joint variables than loop and task equations, e.g. the
         7-joint Panda on a 6-D task): the counts and how the inverse geometry resolves the
-        self-motion (:meth:`Kinematics._newton`, ``docs/mechanisms.md`` "Redundant arms"); else None."""
+        self-motion (:meth:`InverseGeometry._newton
+        <robots.mechanism.inverse_geometry.InverseGeometry._newton>`, ``docs/mechanisms.md`` "Redundant arms"); else None."""
         kin = self.kin
         n_eq = sum(len(kin.loop_rows(lp)) for lp in self.mechanism.loops) + len(kin.coord_axes) + (3 if kin.orientation else 0)
         n_var = len(kin.variables)
