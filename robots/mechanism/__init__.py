@@ -5,20 +5,24 @@
 >>> robot.sensitivity(robot.workspace.grid(5)).shape            # (25, 6, n_sources)
 >>> robot.clearance_mechanism()                                 # for robots.clearance.max_pose_error
 
-Modules: :mod:`.expressions` (safe entry expressions, complex-step derivatives),
-:mod:`.description` (dataclasses and the TOML loader), :mod:`.kinematics` (forward kinematics,
-exact first-order maps, continued Newton inverse geometry), :mod:`.model` (the error model and the
-clearance mechanism). Serial arms from URDF (issue 23): :mod:`.urdf` (reading a URDF with
-Pinocchio), :mod:`.placement` (placement errors as local twists), :mod:`.limits` (joint limits),
-:mod:`.serial` and :mod:`.serial_kernels` (the compiled path of a serial chain),
-:mod:`.identifiability` (rank, blind and duplicated directions), :mod:`.urdf_check` (agreement
-with Pinocchio and finite differences), :mod:`.inspection` (what ``evotol check-mechanism`` shows).
+Modules: :mod:`.expressions` (safe entry expressions, complex-step derivatives), :mod:`.parts`
+(frames, loops, points, coordinates, clearances), :mod:`.mechanism` (the whole description, its
+source names), :mod:`.description` (the TOML loader), :mod:`.shipped` (finding a description by
+path or shipped name), :mod:`.kinematics` (forward kinematics, exact first-order maps),
+:mod:`.inverse_geometry` (continued Newton inverse geometry), :mod:`.model` (the error model),
+:mod:`.sources` (its error sources), :mod:`.clearance_model` (the clearance mechanism). Serial arms
+from URDF (issue 23): :mod:`.urdf` (reading a URDF with Pinocchio), :mod:`.placement` (placement
+errors as local twists), :mod:`.limits` (joint limits), :mod:`.serial` and :mod:`.serial_kernels`
+(the compiled path of a serial chain), :mod:`.identifiability` (rank, blind and duplicated
+directions), :mod:`.urdf_check` (agreement with Pinocchio and finite differences),
+:mod:`.inspection` (what ``evotol check-mechanism`` shows).
 ``docs/mechanisms.md`` documents the file format.
 """
-from robots.mechanism.description import (ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Mechanism, Point,
-                                          load_mechanism, mechanism_from_dict)
+from robots.mechanism.description import load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import Kinematics
+from robots.mechanism.mechanism import Mechanism
 from robots.mechanism.model import MechanismModel
+from robots.mechanism.parts import ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point
 
 __all__ = ["ClearanceChain", "ClearanceSpec", "Coordinate", "Frame", "Kinematics", "Loop", "Mechanism", "MechanismModel",
            "Point", "load_mechanism", "mechanism_from_dict"]

@@ -64,7 +64,7 @@ def understood(model) -> dict:
     evotol.errors.KinematicsError
         The loops do not close at the assembly pose, the solved joints are far from the
         declared ones (other working mode), or a joint is outside its limits
-        (:meth:`robots.mechanism.kinematics.Kinematics.assembly`).
+        (:meth:`robots.mechanism.inverse_geometry.InverseGeometry.assembly`).
     evotol.errors.ValidationError
         An ``[assembly] joints`` key that is not a joint variable.
     """

@@ -1,10 +1,8 @@
 """The error model of a described mechanism: a :class:`robots.base.RobotErrorModel` built from data.
 
 Sources (intervals) are generated from the description by name or pattern
-(:meth:`Mechanism.select_sources`): a **design parameter** of ``[lengths]``/``[angles]`` (its error
-enters every DH entry that uses it -- one shared tolerance, e.g. ``L0`` moves both base joints of
-the 5-bar), or a **DH entry** ``"<frame>.<gamma|b|alpha|d|theta|r>"`` (``"A.theta"`` of an actuated
-frame is the actuator offset / encoder error).
+(:mod:`robots.mechanism.sources`): design parameters, actuator offsets, DH entries and placement
+errors.
 
 Sensitivity (first order, loop constraints eliminated): with the actuated joints held, the loop
 equations ``h(q_p, e) = 0`` give ``dq_p = -H_p^+ H_e de`` and the end-effector moves by
@@ -22,15 +20,19 @@ from pathlib import Path
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, rotation_vector
-from robots.clearance.model import ClearanceMechanism, Joint
-from robots.mechanism.description import LENGTH_FIELDS, UNIT_SCALE, Mechanism, load_mechanism, mechanism_from_dict
+from robots.base import RobotErrorModel, Workspace
+from robots.clearance.kinematics import rotation_vector
+from robots.clearance.model import ClearanceMechanism
+from robots.mechanism.clearance_model import clearance_mechanism
+from robots.mechanism.description import load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import IN_PLANE, Kinematics
-from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
+from robots.mechanism.mechanism import Mechanism
+from robots.mechanism.parts import UNIT_SCALE
+from robots.mechanism.placement import PLACEMENT_FIELDS
 from robots.mechanism.serial import SERIAL_COMPILED, SerialChain, serial_inverse_geometry
-
-OUT_OF_PLANE_FIELDS = ("b", "alpha", "r")
+from robots.mechanism.shipped import resolve_description
+from robots.mechanism.shipped import SHIPPED  # noqa: F401  (re-exported: robots.mechanism.model.SHIPPED)
+from robots.mechanism.sources import OUT_OF_PLANE_FIELDS, source_columns  # noqa: F401  (OUT_OF_PLANE_FIELDS re-exported)
 
 
 class MechanismModel(RobotErrorModel):
@@ -62,49 +64,7 @@ class MechanismModel(RobotErrorModel):
             names=tuple(c.name for c in cs), low=tuple(c.low for c in cs), high=tuple(c.high for c in cs),
             units=tuple(c.unit for c in cs), display_units=tuple(c.display or c.unit for c in cs),
             display_scale=tuple(1.0 / UNIT_SCALE[c.display or c.unit] for c in cs))
-        act = self.kin.actuated
-        if sources is None and not mech.sources:
-            names = list(mech.parameters) + act
-        else:
-            names = mech.select_sources(sources, act)
-        if not names:
-            raise ValidationError(f"{mech.name} sources", names, "at least one toleranced parameter or DH entry")
-        self.columns, specs = [], []
-        frames = mech.frame
-        for nm in names:
-            if nm in act:
-                unit = "m" if any(frames[fr].joint == "prismatic" for fr, k in self.kin.uses[nm]) else "rad"
-                self.columns.append(nm)
-                specs.append(SourceSpec(nm, 1, unit, "actuator", f"actuator offset / encoder error of joint variable {nm}"))
-            elif nm in mech.parameters:
-                unit = "m" if nm in mech.lengths else "rad"
-                fields = {k for fr, k in self.kin.uses.get(nm, ())}
-                if not fields:
-                    raise ValidationError(f"{mech.name} source", nm, "a parameter used by at least one DH entry")
-                if mech.planar and fields & set(OUT_OF_PLANE_FIELDS):
-                    raise ValidationError(f"{mech.name} source", nm, "a parameter of in-plane entries only (gamma, d, theta) "
-                                                                     "in a planar mechanism")
-                self.columns.append(nm)
-                specs.append(SourceSpec(nm, 1, unit, "length" if unit == "m" else "angle", f"design parameter {nm}"))
-            elif nm.split(".")[1] in PLACEMENT_FIELDS:
-                fr, k = nm.split(".")
-                if mech.planar:
-                    raise ValidationError(f"{mech.name} source", nm, "a parameter or DH entry (placement errors are 3-D; "
-                                                                     "in a planar mechanism use the in-plane entries gamma, d, theta)")
-                unit = "m" if k in SHIFT_FIELDS else "rad"
-                self.columns.append((fr, k))
-                specs.append(SourceSpec(nm, 1, unit, "length" if unit == "m" else "angle",
-                                        f"placement error of frame {fr}: {'translation along' if unit == 'm' else 'rotation about'} its {k[-1]} axis"))
-            else:
-                fr, k = nm.split(".")
-                if mech.planar and k in OUT_OF_PLANE_FIELDS:
-                    raise ValidationError(f"{mech.name} source", nm, "an in-plane entry (gamma, d, theta) in a planar "
-                                                                     "mechanism: out-of-plane errors open its over-constrained loops")
-                unit = "m" if k in LENGTH_FIELDS else "rad"
-                f = frames[fr]
-                group = "actuator" if f.actuated and k == f.joint_field else ("length" if unit == "m" else "angle")
-                self.columns.append((fr, k))
-                specs.append(SourceSpec(nm, 1, unit, group, f"{'actuator offset of' if group == 'actuator' else k + ' of'} frame {fr}"))
+        self.columns, specs = source_columns(mech, self.kin, sources)
         self.sources = tuple(specs)
         self._placement_frames = frozenset(c[0] for c in self.columns if isinstance(c, tuple) and c[1] in PLACEMENT_FIELDS)
         self._serial = SerialChain.build(self.kin, self.columns) if SERIAL_COMPILED else None   # robots/mechanism/serial.py
@@ -128,7 +88,7 @@ class MechanismModel(RobotErrorModel):
         evotol.errors.KinematicsError
             A pose out of reach or singular, or a joint outside its limits
             (:meth:`Kinematics.inverse_geometry
-            <robots.mechanism.kinematics.Kinematics.inverse_geometry>`).
+            <robots.mechanism.inverse_geometry.InverseGeometry.inverse_geometry>`).
         """
         return self._inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
 
@@ -136,7 +96,8 @@ class MechanismModel(RobotErrorModel):
     def redundancy(self) -> dict | None:
         """For a redundant mechanism (more joint variables than loop and task equations, e.g. the
         7-joint Panda on a 6-D task): the counts and how the inverse geometry resolves the
-        self-motion (:meth:`Kinematics._newton`, ``docs/mechanisms.md`` "Redundant arms"); else None."""
+        self-motion (:meth:`InverseGeometry._newton
+        <robots.mechanism.inverse_geometry.InverseGeometry._newton>`, ``docs/mechanisms.md`` "Redundant arms"); else None."""
         kin = self.kin
         n_eq = sum(len(kin.loop_rows(lp)) for lp in self.mechanism.loops) + len(kin.coord_axes) + (3 if kin.orientation else 0)
         n_var = len(kin.variables)
@@ -443,82 +404,7 @@ class MechanismModel(RobotErrorModel):
             No ``[clearance]`` table, a chain joint that is not a revolute or prismatic frame, or
             a joint without bounds.
         """
-        spec = self.mechanism.clearance
-        if spec is None:
-            raise ValidationError(f"{self.name} clearance", None, "a [clearance] table in the description")
-        kin = self.kin
-        rows = []
-        variable_entries = []
-        for f in self.mechanism.frames:
-            kw = {}
-            for k in DH_FIELDS:
-                e = kin.expr[(f.name, k)]
-                if e.is_constant or not (e.names & set(kin.variables)):
-                    kw[k] = float(np.real(e(self.mechanism.parameters)))
-                else:
-                    kw[k] = f"{f.name}.{k}"
-                    variable_entries.append((f.name, k))
-            rows.append(DHFrame(f.name, f.antecedent, sigma=f.sigma, mu=int(f.actuated), **kw))
-        tree = DHTree(rows)
-
-        def joint_values(poses):
-            poses = np.atleast_2d(np.asarray(poses, float))
-            q = kin.inverse_geometry(poses)
-            env = kin.env(q, len(poses))
-            return {f"{fr}.{k}": np.broadcast_to(np.real(kin.expr[(fr, k)](env)), (len(poses),)) for fr, k in variable_entries}
-
-        frames = self.mechanism.frame
-        names = []
-        for ch in spec.chains:
-            for j in ch.joints:
-                if j not in frames or frames[j].joint == "fixed":
-                    raise ValidationError(f"clearance chain {ch.name!r} joint", j, "a revolute or prismatic frame")
-                if j not in names:
-                    names.append(j)
-        joints = []
-        for j in names:
-            f = frames[j]
-            b = spec.bounds.get(j) or spec.bounds.get("actuated" if f.actuated else "passive") or spec.bounds.get("default")
-            if b is None:
-                raise ValidationError(f"clearance.bounds.{j}", None, "bounds for the joint (or 'actuated'/'passive'/'default')")
-            joints.append(Joint(j, j, f.actuated, b))
-        chains = list(spec.chains)
-        return ClearanceMechanism(name=self.name, tree=tree, joints=joints, bodies=dict(spec.bodies), chains=chains,
-                                  end_effector=spec.end_effector, joint_values=joint_values, planar=self.mechanism.planar,
-                                  pose_names=self.workspace.names)
-
-
-SHIPPED = Path(__file__).resolve().parents[1] / "mechanisms"
-
-
-def resolve_description(name, base_dir=None) -> Path:
-    """A description file by path (relative to ``base_dir``, then to the working directory) or by
-    the name of a shipped one (``"fivebar"`` -> ``robots/mechanisms/fivebar.toml``).
-
-    Parameters
-    ----------
-    name : str or Path
-        A file path, or the name of a shipped description (with or without ``.toml``).
-    base_dir : str or Path or None, optional
-        Directory a relative path is tried against first (e.g. the study file's directory).
-
-    Returns
-    -------
-    Path
-        The first existing file among ``base_dir / name``, ``name``, the shipped ``name`` and
-        ``name.toml``.
-
-    Raises
-    ------
-    evotol.errors.ValidationError
-        No such file; the message lists the shipped descriptions.
-    """
-    p = Path(str(name))
-    for cand in ([Path(base_dir) / p] if base_dir and not p.is_absolute() else []) + [p, SHIPPED / p, SHIPPED / f"{p}.toml"]:
-        if cand.is_file():
-            return cand
-    shipped = sorted(f.stem for f in SHIPPED.glob("*.toml"))
-    raise ValidationError("robot.mechanism", str(name), f"a description file (TOML) or a shipped one: {shipped}")
+        return clearance_mechanism(self.mechanism, self.kin, self.name, self.workspace.names)
 
 
 def model_from_table(table: dict, base_dir=None) -> MechanismModel:

@@ -361,7 +361,7 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
     evotol.errors.KinematicsError
         A pose out of reach or singular (scaled residual not below 1e-9), or a joint outside its
         limits, naming the first such pose; or a failed assembly
-        (:meth:`Kinematics.assembly <robots.mechanism.kinematics.Kinematics.assembly>`).
+        (:meth:`Kinematics.assembly <robots.mechanism.inverse_geometry.InverseGeometry.assembly>`).
     evotol.errors.ValidationError
         From the assembly (an ``[assembly] joints`` key that is not a joint variable).
     """
