@@ -2,7 +2,8 @@
 method part: problem (12)-(13) per posture and imposed displacement, solved with scipy's
 ``trust-constr`` (interior point, as the paper's fmincon "interior-point"; :func:`solve_displacement`),
 the tolerance-interval rule of Fig. 4 (:func:`fig4_intervals`) and the verification of Sec. 4.1
-(:func:`verification_errors`). The kinematics are :class:`robots.delta.DeltaRobot`'s; the paper's
+(:func:`verification_errors`); step 2 for every posture and imposed displacement of Tables A1-A2
+is :func:`synthesis_runs`. The kinematics are :class:`robots.delta.DeltaRobot`'s; the paper's
 tables and the study around them are :mod:`evotol.studies.brahmia2023_delta`.
 
 Two objectives F are available: ``"closed"`` (the platform position from the loop-closure
@@ -19,6 +20,11 @@ from robots.delta import LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot
 
 BOUND_LINEAR_MM = 0.015           # eq. (13)
 BOUND_ANGULAR_DEG = 0.015         # eq. (13)
+REQUIRED_MM = 0.2                 # imposed accuracy (Sec. 3.1)
+SYNTHESIS_POSTURES = ("P1", "P3", "P6", "P9")
+#: imposed displacements of Tables A1-A2, unit vectors in the order of the tests 1..6
+TEST_DIRECTIONS = {"+x": (1, 0, 0), "+y": (0, 1, 0), "-x": (-1, 0, 0), "-y": (0, -1, 0),
+                   "+z": (0, 0, 1), "-z": (0, 0, -1)}
 IS_LINEAR = np.isin(PARAMETER_NAMES, LINEAR)
 
 
@@ -254,3 +260,55 @@ def verification_errors(robot: DeltaRobot, lo, hi, postures=None) -> dict[str, d
     S = robot.sensitivity(P)[:, :3]
     lin = np.linalg.norm(np.einsum("nij,cj->nci", S, E), axis=-1) * 1e3
     return {case: {"closed": closed[:, k], "open": open_[:, k], "linear": lin[:, k]} for k, case in enumerate(cases)}
+
+
+# --- step 2 for every posture and imposed displacement (Tables A1-A2) --------------------------------
+def synthesis_runs(robot: DeltaRobot, postures=SYNTHESIS_POSTURES, tests=tuple(TEST_DIRECTIONS), *,
+                   objective: str = "closed", min_magnitude=None, maxiter: int = 150,
+                   required_mm: float = REQUIRED_MM) -> list[dict]:
+    """Step 2 for every (posture, test) of Tables A1-A2; one dict per run (see solve_displacement).
+
+    Parameters
+    ----------
+    robot : robots.delta.DeltaRobot
+        The Delta robot model.
+    postures : sequence of str, optional
+        Posture names (keys of :data:`robots.delta.POSTURES_MM`); default P1, P3, P6, P9.
+    tests : sequence of str, optional
+        Imposed-displacement directions, keys of :data:`TEST_DIRECTIONS` (``"+x"`` ... ``"-z"``);
+        default all six, in the order of tests 1..6.
+    objective : {"closed", "open"}, optional
+        F of eq. (10): loop-closure forward kinematics (``"closed"``) or every serial sub-chain at
+        Q_k (``"open"``, the paper read literally).
+    min_magnitude : (47,) array_like or float, optional
+        Lower limits of ``|Δ|`` of eq. (12), SI (m or rad); ``None`` solves with the bounds of
+        eq. (13) only (see :func:`inferred_min_magnitude`).
+    maxiter : int, optional
+        Iteration limit of scipy's ``trust-constr`` per run.
+    required_mm : float, optional
+        Magnitude of the imposed displacement ΔP, mm (default 0.2 mm, Sec. 3.1).
+
+    Returns
+    -------
+    list of dict
+        One dict per (posture, test), postures outer: the output of
+        :func:`robots.delta_synthesis.solve_displacement` (``errors`` (47,) SI, ``F``,
+        ``achieved`` (3,) m, ``nit``, ``status``, ``residual_mm`` in mm) plus ``posture`` and
+        ``test``.
+
+    Raises
+    ------
+    ValidationError
+        If ``objective`` is not ``"closed"`` or ``"open"``, or ``min_magnitude`` is not within
+        [0, bound) for every parameter (from ``solve_displacement``).
+    """
+    runs = []
+    for p in postures:
+        pose = postures_m([p])[0]
+        for t in tests:
+            dP = np.asarray(TEST_DIRECTIONS[t], float) * required_mm * 1e-3
+            out = solve_displacement(robot, pose, dP, objective=objective, min_magnitude=min_magnitude,
+                                     maxiter=maxiter)
+            out.update(posture=p, test=t)
+            runs.append(out)
+    return runs

@@ -1,4 +1,4 @@
-"""Assembly-function error models (robots/assembly.py): derivatives against closed forms and
+"""Assembly-function error models (robots/assembly/): derivatives against closed forms and
 central differences, the normalised-response convention, bad input."""
 import warnings
 

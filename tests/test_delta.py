@@ -1,4 +1,4 @@
-"""Delta robot model of Brahmia et al. 2023 (robots/delta.py): kinematics, closure, Jacobians."""
+"""Delta robot model of Brahmia et al. 2023 (robots/delta/): kinematics, closure, Jacobians."""
 import numpy as np
 import pytest
 

@@ -1,0 +1,72 @@
+"""A linear tolerance stack ``y_k = Σ_j a_kj x_j`` as an assembly function whose sensitivities are
+given (Chase, *Dimensioning and Tolerancing Handbook* ch. 14: the arithmetic / statistical stack).
+
+Units: sensitivities in response unit per dimension unit (e.g. m/m); dimensions SI (m or rad).
+"""
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from evotol.errors import ValidationError
+from robots.assembly.function import AssemblyFunction
+
+
+class _LinearResponses:
+    """``y_k = Σ_j a_kj x_j`` as a picklable callable (robots go to worker processes and Dask)."""
+
+    def __init__(self, dims: tuple[str, ...], matrix: np.ndarray):
+        self.dims, self.matrix = dims, matrix
+
+    def __call__(self, **x):
+        X = np.stack([x[d] for d in self.dims], axis=-1)
+        return tuple(X @ self.matrix[i] for i in range(self.matrix.shape[0]))
+
+
+class LinearStack(AssemblyFunction):
+    """A linear tolerance stack ``y_k = Σ_j a_kj x_j``: sensitivities given, nothing to derive.
+
+    Parameters
+    ----------
+    sensitivities : Mapping
+        Dimension name -> a_j (one response) or response name -> {dimension -> a_kj} (response
+        unit per dimension unit, e.g. m/m).
+    limits : Mapping[str, float]
+        Response name -> allowed deviation (the response's unit), one entry per response.
+    nominal : Mapping[str, float] or None
+        Dimension -> nominal value (SI: m or rad); only Monte Carlo reports use it.
+    name : str
+        Name of the stack (reports, messages).
+    **kw
+        Further options of :class:`AssemblyFunction` (``units``, ``groups``).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Empty or non-finite sensitivities, or a response that has no limit.
+    """
+
+    def __init__(self, sensitivities: Mapping, limits: Mapping[str, float], *, nominal: Mapping[str, float] | None = None,
+                 name: str = "linear stack", **kw):
+        if not isinstance(sensitivities, Mapping) or not sensitivities:
+            raise ValidationError("stack sensitivities", sensitivities, "a mapping dimension -> a_j (or response -> {dimension -> a_kj})")
+        first = next(iter(sensitivities.values()))
+        rows = dict(sensitivities) if isinstance(first, Mapping) else {next(iter(limits)): dict(sensitivities)}
+        dims: list[str] = []
+        for r in rows.values():
+            dims += [d for d in r if d not in dims]
+        extra = [r for r in rows if r not in limits]
+        if extra:
+            raise ValidationError("stack sensitivities response", extra[0], f"one of the limits {list(limits)}")
+        A = np.zeros((len(limits), len(dims)))
+        for i, r in enumerate(limits):
+            for j, d in enumerate(dims):
+                v = rows.get(r, {}).get(d, 0.0)
+                if not isinstance(v, (int, float, np.floating, np.integer)) or not np.isfinite(v):
+                    raise ValidationError(f"stack sensitivities[{r!r}][{d!r}]", v, "a finite number")
+                A[i, j] = float(v)
+        self.matrix = A
+        nominal = dict(nominal or {d: 0.0 for d in dims})
+
+        super().__init__(_LinearResponses(tuple(dims), A), {d: nominal.get(d, 0.0) for d in dims}, limits, name=name, **kw)
