@@ -47,9 +47,12 @@ extra=(J, t))`` (clearances plus other interval sources, e.g. ``robots.fivebar.c
 
 Modules: :mod:`.kinematics` (modified DH / Khalil-Kleinfinger frames, adjoints),
 :mod:`.model` (the mechanism: bodies, error mapping matrices, loop equations; its plain values
-in :mod:`.parts`, its per-pose maps in :mod:`.pose_maps`), :mod:`.support` (per-direction convex problem with a duality certificate),
+in :mod:`.parts`, its per-pose maps in :mod:`.pose_maps`, built by :mod:`.loops` (the sparse loop
+basis); the nonlinear chain model that checks them in :mod:`.nonlinear`), :mod:`.support`
+(per-direction convex problem with a duality certificate; its bounds in :mod:`.certificate`),
 :mod:`.newton_kernel` (its Newton iteration and centring steps compiled with numba; the NumPy
-iteration in :mod:`.support` is the reference and the fallback),
+iteration in :mod:`.newton_numpy` is the reference and the fallback; the kernel bodies in
+:mod:`.newton_kernel_bodies`),
 :mod:`.maxerror` (:func:`max_pose_error`, :class:`ClearanceEvaluator`), :mod:`.branch_bound` (the
 branch and bound over directions) and :mod:`.patches` (its patches and bounds), :mod:`.options`
 (the engine's settings, one frozen :class:`EngineOptions` passed down; ``LEGACY``: before issue
@@ -61,9 +64,9 @@ from robots.clearance.kinematics import DHFrame, DHTree, adjoint, kk_transform
 from robots.clearance.maxerror import ClearanceEvaluator, MaxPoseError, evaluate_cases, max_pose_error
 from robots.clearance.options import EngineOptions
 from robots.clearance.sampling import sample_max_errors
-from robots.clearance.model import (BOUND_NAMES, Chain, ClearanceBounds, ClearanceMechanism, Joint, PoseMaps,
-                                    twist_between)
+from robots.clearance.model import BOUND_NAMES, Chain, ClearanceBounds, ClearanceMechanism, Joint, PoseMaps
 from robots.clearance.multistart import MultistartResult, multistart_max_pose_error
+from robots.clearance.nonlinear import twist_between
 
 __all__ = ["BOUND_NAMES", "Chain", "ClearanceBounds", "ClearanceEvaluator", "ClearanceMechanism", "DHFrame", "DHTree",
            "EngineOptions",

@@ -10,9 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robots.clearance.certificate import true_dual
 from robots.clearance.options import DEFAULT, EngineOptions
 from robots.clearance.patches import children, initial_patches, interpolated_bound, normalise, patch_bound
-from robots.clearance.support import solve_support, true_dual
+from robots.clearance.support import solve_support
 
 
 @dataclass

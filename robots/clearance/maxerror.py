@@ -38,10 +38,11 @@ from evotol.errors import ValidationError
 from evotol.executor import parallel_map
 from evotol.threads import one_blas_thread
 from robots.clearance.branch_bound import maximise_norm
+from robots.clearance.certificate import _gram_pinv
 from robots.clearance.model import ClearanceMechanism, PoseMaps
 from robots.clearance.options import DEFAULT, EngineOptions
 from robots.clearance.result import MaxPoseError
-from robots.clearance.support import _gram_pinv, warm_up
+from robots.clearance.support import warm_up
 
 __all__ = ["ClearanceEvaluator", "MaxPoseError", "as_bounds", "evaluate_cases", "max_pose_error"]
 

@@ -34,7 +34,10 @@ in-plane block (``dr_z, dt_x, dt_y`` -> ``dtheta_z, dp_x, dp_y``) and an out-of-
 blocks, so each maximum is computed per block and combined exactly (``p_max^2 = p_in^2 + p_out^2``).
 
 The plain values (bounds, joints, chains, blocks) live in :mod:`robots.clearance.parts`, the
-per-pose maps in :mod:`robots.clearance.pose_maps`; both are importable from here too.
+per-pose maps in :mod:`robots.clearance.pose_maps`; both are importable from here too. The
+reduction of the chain equations to those maps (the sparse loop basis) is
+:mod:`robots.clearance.loops`; the nonlinear chain model that checks the error mapping
+(:func:`twist_between`, also importable from here) is :mod:`robots.clearance.nonlinear`.
 """
 from __future__ import annotations
 
@@ -43,9 +46,11 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from evotol.errors import KinematicsError, ValidationError
-from robots.clearance.kinematics import DHTree, exp_screw, inv_transform, rotation_vector, skew
-from robots.clearance.parts import (BOUND_NAMES, BOUND_UNITS, CONE_COMPONENTS, FULL, PLANAR, POS, ROT, Block, Chain,
+from evotol.errors import ValidationError
+from robots.clearance import loops, nonlinear
+from robots.clearance.kinematics import DHTree, skew
+from robots.clearance.nonlinear import twist_between  # noqa: F401
+from robots.clearance.parts import (BOUND_NAMES, BOUND_UNITS, CONE_COMPONENTS, FULL, PLANAR, Block, Chain,
                                     ClearanceBounds, Joint)
 from robots.clearance.pose_maps import PoseMaps
 
@@ -332,14 +337,6 @@ class ClearanceMechanism:
     def _chain(self, chain: str | Chain) -> Chain:
         return chain if isinstance(chain, Chain) else {c.name: c for c in self.chains}[chain]
 
-    def _chain_transforms(self, poses: np.ndarray, chain: str | Chain):
-        """(chain, n_poses, local transforms, world transforms) at the nominal joint values."""
-        poses = np.atleast_2d(np.asarray(poses, float))
-        n = len(poses)
-        values = self.joint_values(poses)
-        return (self._chain(chain), n, self.tree.local_transforms(values, n),
-                self.tree.world_transforms(values, n))
-
     def error_mapping_thesis(self, poses: np.ndarray, chain: str | Chain) -> np.ndarray:
         """The thesis's literal eq. III.24 for a chain starting at the base:
         ``M_j = (prod_l N_l) prod_{k=n_f}^{j+1} adj(S_k)^-1`` (products of adjoints of the DH
@@ -358,24 +355,7 @@ class ClearanceMechanism:
         (n, 6, 6 * n_chain_joints) ndarray
             ``[M_j ...]`` for the chain's joints in order, as :meth:`error_mapping` ``M``.
         """
-        from robots.clearance.kinematics import adjoint
-        c, n, local, W = self._chain_transforms(poses, chain)
-        end_frame = c.path_end or self.bodies[c.end]
-        path = self.tree.path(end_frame)
-        # the path's transforms after each frame, plus the constant cut offset to the end body
-        S = [local[f] for f in path] + [inv_transform(W[end_frame]) @ W[self.bodies[c.end]]]
-        R_end = W[self.bodies[c.end]][:, :3, :3]
-        N = np.zeros((n, 6, 6))
-        N[:, :3, :3] = R_end
-        N[:, 3:, 3:] = R_end
-        blocks = []
-        for jn in c.joints:
-            k0 = path.index(self.joints[self.joint_index[jn]].frame)
-            P = np.broadcast_to(np.eye(6), (n, 6, 6)).copy()
-            for T in S[k0 + 1:]:                       # adj(S_{j+1})^-1 ... adj(S_nf)^-1 (III.15)
-                P = np.linalg.inv(adjoint(T)) @ P
-            blocks.append(N @ P)
-        return np.concatenate(blocks, axis=2)
+        return nonlinear.error_mapping_thesis(self, poses, chain)
 
     def _chain_maps(self, W, c: Chain):
         pB = W[self.bodies[c.end]][:, :3, 3]
@@ -462,152 +442,7 @@ class ClearanceMechanism:
             A block that splits a clearance cone, or a planar block that does not decouple
             (joint axes not all parallel to ``z``).
         """
-        poses = np.atleast_2d(np.asarray(poses, float))
-        Es, Ed = self.linear_system(poses)
-        nb = Ed.shape[2] // 6
-        out = []
-        blocks = self.blocks if split else FULL
-        for blk in blocks:
-            comps = list(blk.components)
-            rows = [6 * c + k for c in range(len(self.chains)) for k in comps]
-            bcols = [6 * b + k for b in range(nb) for k in comps]
-            # cone layout: disks first, then intervals (cones split by the block are an error)
-            disk, inter = [], []
-            for j in range(self.n_joints):
-                for kind, cc in enumerate(CONE_COMPONENTS):
-                    inside = [k in comps for k in cc]
-                    if all(inside):
-                        (disk if len(cc) == 2 else inter).append((j, kind, [6 * j + k for k in cc]))
-                    elif any(inside):
-                        raise ValidationError(f"block {blk.name}", cc, "cones entirely inside one block")
-            cones = disk + inter
-            cols = np.array([c for _, _, cc in cones for c in cc], dtype=int)
-            if len(blocks) > 1:  # check that the block really decouples
-                other_cols = np.setdiff1d(np.arange(Es.shape[2]), cols)
-                other_b = np.setdiff1d(np.arange(Ed.shape[2]), bcols)
-                leak = max(np.abs(Es[:, rows][:, :, other_cols]).max(initial=0.0),
-                           np.abs(Ed[:, rows][:, :, other_b]).max(initial=0.0))
-                scale = max(np.abs(Es).max(), 1.0)
-                if leak > 1e-9 * scale:
-                    raise ValidationError(f"{self.name}: planar block {blk.name}", float(leak),
-                                          "zero coupling with the other block (are all joint axes parallel to z?)")
-            es = Es[:, rows][:, :, cols]
-            ed = Ed[:, rows][:, :, bcols]
-            U, S, Vt = np.linalg.svd(ed, full_matrices=True)
-            nbc = ed.shape[2]
-            singular = S[:, -1] < 1e-9 * np.maximum(S[:, 0], 1e-300)   # an all-zero block is singular too
-            if np.any(singular):
-                bad = np.nonzero(singular)[0]
-                raise KinematicsError(f"{self.name}: the chains do not determine every body's error twist at pose "
-                                      f"{poses[bad[0]].tolist()}", poses=poses[bad])
-            # C = -(Ed^+ Es) restricted to the end-effector (body 0) components
-            pinv = np.einsum("nji,nj,nkj->nik", Vt, 1.0 / S, U[:, :, :nbc])
-            C = -(pinv @ es)[:, :len(comps), :]
-            N, loops = self._loop_basis(ed, len(comps))
-            if N is None:
-                N = U[:, :, nbc:]
-                loops = [list(range(len(self.chains)))] * (N.shape[2] // max(len(comps), 1))
-            B = np.swapaxes(es, 1, 2) @ N
-            groups = self._groups(cones, loops, len(comps), len(disk))
-            pos = tuple(i for i, k in enumerate(comps) if k in POS)
-            rot = tuple(i for i, k in enumerate(comps) if k in ROT)
-            out.append(PoseMaps(block=blk, cols=cols, cone_joint=np.array([c[0] for c in cones], int),
-                                cone_kind=np.array([c[1] for c in cones], int), n_disk=len(disk),
-                                pos_comps=tuple(comps[i] for i in pos), rot_comps=tuple(comps[i] for i in rot),
-                                C_pos=C[:, list(pos), :], C_rot=C[:, list(rot), :], B=B, groups=groups))
-        return out
-
-    def _loop_basis(self, ed: np.ndarray, nc: int):
-        """A sparse basis of the loop equations, ``N`` with ``E_d^T N = 0``: one ``nc``-column block
-        per independent loop. Chains between the same two bodies pair up (2-chain loops: the
-        parallelograms' and the distal modules' loops, the two legs of the 5-bar); groups of
-        chains reaching a body from different bodies are closed through the tree of first
-        chains back to the base (the IRSBot-2's leg-to-leg loop, 4 chains). Each loop touches
-        few chains, so ``B = E_s^T N`` is block sparse -- the Newton systems are assembled per
-        group of rows (several times cheaper than with a dense null-space basis). Returns
-        (None, None) if the construction does not give a basis (then an SVD basis is used)."""
-        n = ed.shape[0]
-        chains = self.chains
-        bodies = [self.end_effector] + [b for b in self.body_names if b != self.end_effector]
-        bidx = {b: i for i, b in enumerate(bodies)}
-        start = [bidx.get(c.start, -1) if c.start != "base" else -1 for c in chains]
-        end = [bidx[c.end] for c in chains]
-        # tree: first chain into each body, reached from the base outwards
-        tree_in, reached, order = {}, {-1}, []
-        changed = True
-        while changed:
-            changed = False
-            for ci, c in enumerate(chains):
-                if start[ci] in reached and end[ci] not in reached:
-                    tree_in[end[ci]] = ci
-                    reached.add(end[ci])
-                    changed = True
-        if len(reached) != len(bodies) + 1:
-            return None, None
-
-        def Me(ci):                     # M^e of chain ci restricted to the block, (n, nc, nc)
-            r = slice(nc * ci, nc * ci + nc)
-            sb = start[ci]
-            return -ed[:, r, nc * sb:nc * sb + nc]
-
-        def pair(c1, c2):
-            lam = {c1: np.broadcast_to(np.eye(nc), (n, nc, nc)).copy(), c2: -np.broadcast_to(np.eye(nc), (n, nc, nc))}
-            if start[c1] != start[c2]:
-                for c, sign in ((c1, 1.0), (c2, -1.0)):
-                    W = sign * np.swapaxes(Me(c), 1, 2)        # wrench balance at the start body
-                    b = start[c]
-                    while b != -1:
-                        t = tree_in[b]
-                        lam[t] = lam.get(t, 0) + W
-                        W = np.swapaxes(Me(t), 1, 2) @ W if start[t] != -1 else None
-                        b = start[t]
-            return lam
-
-        loops = []
-        for b in range(len(bodies)):
-            ins = [ci for ci in range(len(chains)) if end[ci] == b]
-            by_start = {}
-            for ci in ins:
-                by_start.setdefault(start[ci], []).append(ci)
-            refs = []
-            for grp in by_start.values():
-                refs.append(grp[0])
-                for ci in grp[1:]:
-                    loops.append(pair(ci, grp[0]))
-            for r in refs[1:]:
-                loops.append(pair(r, refs[0]))
-        if not loops:
-            return np.zeros((n, ed.shape[1], 0)), []
-        N = np.zeros((n, ed.shape[1], nc * len(loops)))
-        touched = []
-        for li, lam in enumerate(loops):
-            for ci, L in lam.items():
-                N[:, nc * ci:nc * ci + nc, nc * li:nc * li + nc] = L
-            touched.append(sorted(ci for ci, L in lam.items() if np.abs(L).max() > 0))
-        scale = max(np.abs(ed).max(), 1.0)
-        if np.abs(np.swapaxes(ed, 1, 2) @ N).max() > 1e-10 * scale * max(np.abs(N).max(), 1.0):
-            return None, None
-        sv = np.linalg.svd(N, compute_uv=False)
-        if np.any(sv[:, -1] < 1e-8 * sv[:, 0]) or N.shape[2] != ed.shape[1] - ed.shape[2]:
-            return None, None
-        return N, touched
-
-    def _groups(self, cones, loops, nc: int, n_disk: int) -> tuple:
-        """Row groups of B with their loop columns (see PoseMaps.groups)."""
-        support = {}
-        for j in range(self.n_joints):
-            jn = self.joints[j].name
-            cs = {ci for ci, c in enumerate(self.chains) if jn in c.joints}
-            support[j] = tuple(sorted(k for li, ch in enumerate(loops) if cs & set(ch) for k in range(nc * li, nc * li + nc)))
-        groups = {}
-        row = 0
-        for ci_, (j, kind, cc) in enumerate(cones):
-            g = groups.setdefault(support[j], ([], []))
-            if ci_ < n_disk:
-                g[0].append(ci_)
-            else:
-                g[1].append(2 * n_disk + (ci_ - n_disk))
-        return tuple((np.array(d, int), np.array(i, int), np.array(cols, int)) for cols, (d, i) in groups.items() if len(cols))
+        return loops.block_maps(self, poses, split)
 
     # ------------------------------------------------------------------ nonlinear checks
     def chain_end_pose(self, poses: np.ndarray, chain: str | Chain, screws: Mapping[str, np.ndarray] | None = None,
@@ -635,41 +470,4 @@ class ClearanceMechanism:
         (n, 4, 4) ndarray
             World transform of the chain's end body (translation in m).
         """
-        c, n, local, W = self._chain_transforms(poses, chain)
-        start_frame = self.bodies[c.start]
-        end_frame = c.path_end or self.bodies[c.end]
-        path = self.tree.path(end_frame)
-        k0 = path.index(start_frame) + 1 if start_frame != self.tree.base else 0
-        T = W[start_frame].copy()
-        if start_twist is not None:
-            st = np.broadcast_to(start_twist, (n, 6))
-            # world twist at the start point -> displacement T_A' = D T_A with D about p_A
-            pA = T[:, :3, 3]
-            D = exp_screw(np.concatenate([st[:, :3], st[:, 3:] - np.cross(st[:, :3], pA)], axis=1))
-            T = D @ T
-        frame_of = {self.joints[self.joint_index[jn]].frame: jn for jn in c.joints}
-        for f in path[k0:]:
-            T = T @ local[f]
-            if screws is not None and f in frame_of and frame_of[f] in screws:
-                T = T @ exp_screw(np.broadcast_to(screws[frame_of[f]], (n, 6)))
-        offset = inv_transform(W[end_frame]) @ W[self.bodies[c.end]]
-        return T @ offset
-
-
-def twist_between(T0: np.ndarray, T1: np.ndarray) -> np.ndarray:
-    """Finite displacement ``[rotation vector; dp]`` (base axes) from pose T0 to T1, (..., 6).
-
-    Parameters
-    ----------
-    T0 : (..., 4, 4) ndarray
-        Homogeneous transforms of the reference poses (m).
-    T1 : (..., 4, 4) ndarray
-        Homogeneous transforms of the displaced poses (m).
-
-    Returns
-    -------
-    (..., 6) ndarray
-        Rotation vector of ``R1 R0^T`` (rad) followed by ``p1 - p0`` (m).
-    """
-    return np.concatenate([rotation_vector(T1[..., :3, :3] @ np.swapaxes(T0[..., :3, :3], -1, -2)),
-                           T1[..., :3, 3] - T0[..., :3, 3]], axis=-1)
+        return nonlinear.chain_end_pose(self, poses, chain, screws, start_twist)

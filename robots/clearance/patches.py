@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from robots.clearance.certificate import true_dual
 from robots.clearance.options import DEFAULT, EngineOptions
-from robots.clearance.support import true_dual
 
 
 def octa_hemisphere(levels: int = 2):

@@ -20,6 +20,10 @@ lower bound is computed. Everything is batched over problems (poses x directions
 
 With no loop equation (``m = 0``, an open serial chain) the support function is closed form:
 ``h(w) = sum_c ||a_c||`` (Minkowski sum of the joints' sets).
+
+This module drives the path following (:func:`solve_support`); the certificate's bounds
+(dual value, feasible screws) are :mod:`robots.clearance.certificate`, one Newton iteration is
+:mod:`robots.clearance.newton_kernel` (compiled) or :mod:`robots.clearance.newton_numpy`.
 """
 from __future__ import annotations
 
@@ -29,12 +33,12 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from robots.clearance import newton_kernel
+from robots.clearance.certificate import _gram_pinv, _project, _project_free, recover_primal, true_dual
+from robots.clearance.newton_numpy import _barrier_terms, _numpy_iteration, _numpy_predictor
 from robots.clearance.options import DEFAULT, EngineOptions
 
 #: predictor scales tried by ``EngineOptions(predictor="legacy")``
 _PRED_LEGACY = np.array([1.0, 0.75, 0.5, 0.25, 0.0])
-#: steps of the backtracking line search
-_LS = np.array([1.0, 0.5, 0.25, 0.12])
 
 
 @dataclass
@@ -68,117 +72,6 @@ class SupportResult:
     newton: int = 0     # Newton iterations summed over the problems (the work done)
 
 
-def _cone_norms(Y: np.ndarray, nd: int) -> tuple[np.ndarray, np.ndarray]:
-    K = Y.shape[:-1]
-    Yd = Y[..., :2 * nd].reshape(K + (nd, 2))
-    return np.sqrt((Yd ** 2).sum(-1)), np.abs(Y[..., 2 * nd:])
-
-
-def true_dual(Y: np.ndarray, nd: int) -> np.ndarray:
-    """Dual objective ``f = sum_c ||y_c||`` of the cone-wise vectors ``y``.
-
-    Parameters
-    ----------
-    Y : (..., R) ndarray
-        Vectors ``y = a + B mu``: ``nd`` disk pairs first, then interval rows.
-    nd : int
-        Number of disk cones.
-
-    Returns
-    -------
-    (...,) ndarray
-        Sum of the disks' Euclidean norms and the intervals' absolute values (a certified upper
-        bound of the support value by weak duality).
-    """
-    nd_, ni_ = _cone_norms(Y, nd)
-    return nd_.sum(-1) + ni_.sum(-1)
-
-
-def _smooth(Y: np.ndarray, nd: int, eps: np.ndarray) -> np.ndarray:
-    K = Y.shape[:-1]
-    Yd = Y[..., :2 * nd].reshape(K + (nd, 2))
-    e2 = (eps ** 2)[..., None]
-    return np.sqrt((Yd ** 2).sum(-1) + e2).sum(-1) + np.sqrt(Y[..., 2 * nd:] ** 2 + e2).sum(-1)
-
-
-def recover_primal(Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, eps: np.ndarray,
-                   gram_inv: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Feasible scaled screws from the smoothed optimality condition; returns (sigma, a^T sigma).
-
-    ``sigma_c = y_c / sqrt(||y_c||^2 + eps^2)``, then the loop residual is projected out and
-    ``sigma`` scaled back into the unit cones.
-
-    Parameters
-    ----------
-    Y : (K, R) ndarray
-        Dual vectors ``y = a + B mu``.
-    a : (K, R) ndarray
-        Scaled linear terms.
-    B : (K, R, m) ndarray
-        Scaled loop maps.
-    nd : int
-        Number of disk cones (rows in pairs first; intervals after).
-    eps : (K,) ndarray
-        Smoothing parameters (0: ``sigma_c = y_c / ||y_c||``).
-    gram_inv : (K, m, m) ndarray or None, optional
-        Precomputed ``pinv(B^T B)`` (None: computed here).
-
-    Returns
-    -------
-    sigma : (K, R) ndarray
-        Feasible scaled screws.
-    lower : (K,) ndarray
-        ``a^T sigma``: lower bounds of the support values.
-    """
-    K = Y.shape[0]
-    Yd = Y[:, :2 * nd].reshape(K, nd, 2)
-    rd = np.sqrt((Yd ** 2).sum(-1) + eps[:, None] ** 2)
-    ri = np.sqrt(Y[:, 2 * nd:] ** 2 + eps[:, None] ** 2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sd = np.where(rd[..., None] > 0, Yd / rd[..., None], 0.0)
-        si = np.where(ri > 0, Y[:, 2 * nd:] / ri, 0.0)
-    sigma = np.concatenate([sd.reshape(K, 2 * nd), si], axis=1)
-    if not B.shape[-1]:           # no loop equation: nothing to project out
-        gram_inv = np.zeros((K, 0, 0))
-    elif gram_inv is None:
-        gram_inv = _gram_pinv(B)
-    return _project(sigma, a, B, nd, gram_inv)
-
-
-def _gram_pinv(B: np.ndarray) -> np.ndarray:
-    G = np.swapaxes(B, 1, 2) @ B
-    return np.linalg.pinv(G, rcond=1e-12, hermitian=True)
-
-
-def _barrier_terms(Y: np.ndarray, nd: int, tau: np.ndarray):
-    """Cone-wise pieces of the reduced log barrier at y (see solve_support)."""
-    K = Y.shape[0]
-    Yd = Y[:, :2 * nd].reshape(K, nd, 2)
-    Yi = Y[:, 2 * nd:]
-    rd = np.sqrt((Yd ** 2).sum(-1))
-    tc = tau[:, None]
-    qd = np.sqrt(1.0 + (tc * rd) ** 2)           # = tau t - 1
-    qi = np.sqrt(1.0 + (tc * Yi) ** 2)
-    td = (1.0 + qd) / tc
-    ti = (1.0 + qi) / tc
-    return Yd, Yi, td, ti, qd, qi
-
-
-def _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k):
-    """Gradient part ``B_g^T sigma`` and Hessian ``B_g^T W B_g - G^T G`` of one column group
-    (see :func:`solve_support`); the disk terms ``G_c = c_c y_c^T B_c`` are formed elementwise
-    (a (1 x 2) @ (2 x s) product per disk would be one BLAS call each)."""
-    gg = (sig[:, None, dr] @ Bgd)[:, 0, :] + (sig[:, None, ir] @ Bgi)[:, 0, :]
-    Hg = np.swapaxes(Bgd * wrow[:, dr, None], 1, 2) @ Bgd + np.swapaxes(Bgi * wrow[:, ir, None], 1, 2) @ Bgi
-    ndg = dcone.stop - dcone.start
-    if ndg:
-        B4 = Bgd.reshape(k, ndg, 2, -1)
-        Y = Yd[:, dcone]
-        Gd = (Y[:, :, 0, None] * B4[:, :, 0] + Y[:, :, 1, None] * B4[:, :, 1]) * cd[:, dcone, None]
-        Hg -= np.swapaxes(Gd, 1, 2) @ Gd
-    return gg, Hg
-
-
 def _merge_groups(groups):
     """Merge row groups whose columns are a subset of another group's (fewer, larger blocks)."""
     groups = [(np.asarray(d, int), np.asarray(i, int), np.asarray(c, int)) for d, i, c in groups]
@@ -197,15 +90,6 @@ def _merge_groups(groups):
             if merged:
                 break
     return tuple(groups)
-
-
-def _barrier_value(Y: np.ndarray, nd: int, tau: np.ndarray) -> np.ndarray:
-    """Reduced barrier sum_c q_c - log(1 + q_c), q_c = sqrt(1 + tau^2 |y_c|^2); Y (k, T, R), tau (k,)."""
-    k, T = Y.shape[:2]
-    t2 = (tau ** 2)[:, None, None]
-    qd = np.sqrt(1.0 + t2 * (Y[..., :2 * nd].reshape(k, T, nd, 2) ** 2).sum(-1))
-    qi = np.sqrt(1.0 + t2 * Y[..., 2 * nd:] ** 2)
-    return (qd - np.log1p(qd)).sum(-1) + (qi - np.log1p(qi)).sum(-1)
 
 
 def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | float, mu0: np.ndarray | None = None,
@@ -428,91 +312,6 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     return SupportResult(upper, lower, sigma[:, inv], best_mu, it, n_newton)
 
 
-def _numpy_iteration(wY, wmu, wtau, nd, R, m, grows, gB, dense, want_dual):
-    """One barrier-Newton iteration with batched NumPy operations (the reference for
-    :mod:`robots.clearance.newton_kernel`, used when numba is unavailable); returns
-    ``(H, lam2, mu, Y, dual)``."""
-    k = len(wY)
-    diag = np.arange(m)
-    Yd, Yi, td, ti, qd, qi = _barrier_terms(wY, nd, wtau)
-    tc = wtau[:, None]
-    sig = np.concatenate([(Yd / td[..., None]).reshape(k, 2 * nd), Yi / ti], axis=1)
-    wd = tc / td
-    wi = (tc / ti) * (1.0 - tc * Yi ** 2 / (ti * qi))
-    wrow = np.concatenate([np.repeat(wd, 2, axis=1), wi], axis=1)
-    cd = np.sqrt(tc ** 2 / (td ** 2 * qd)) if nd else None
-    if dense:                      # one group over every column: no scatter (the IRSBot-2 distal module)
-        (dr, ir, cols, dcone), (Bgd, Bgi) = grows[0], gB[0]
-        g, H = _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k)
-    else:
-        g = np.zeros((k, m))
-        H = np.zeros((k, m, m))
-        for (dr, ir, cols, dcone), (Bgd, Bgi) in zip(grows, gB):
-            gg, Hg = _group_newton(sig, wrow, Yd, cd, dr, ir, dcone, Bgd, Bgi, k)
-            g[:, cols] += gg
-            H[:, cols[:, None], cols[None, :]] += Hg
-    g *= tc
-    H[:, diag, diag] += ((np.trace(H, axis1=1, axis2=2) / m + 1e-300) * 1e-14)[:, None]
-    try:
-        d = -np.linalg.solve(H, g[..., None])[..., 0]
-    except np.linalg.LinAlgError:
-        d = -(np.linalg.pinv(H, hermitian=True) @ g[..., None])[..., 0]
-    lam2 = np.maximum(-(g * d).sum(-1), 0.0)
-    lam = np.sqrt(lam2)
-    BD = np.zeros((k, R))
-    for (dr, ir, cols, _), (Bgd, Bgi) in zip(grows, gB):
-        dc = d[:, cols, None]
-        BD[:, dr] = (Bgd @ dc)[..., 0]
-        BD[:, ir] = (Bgi @ dc)[..., 0]
-    # backtracking line search on the reduced barrier F = sum_c q_c - log(1 + q_c),
-    # q_c = sqrt(1 + tau^2 |y_c|^2); never shorter than the damped step 1/(1+lambda), which
-    # self-concordance guarantees to decrease F
-    damped = np.where(lam > 0.25, 1.0 / (1.0 + lam), 1.0)
-    step = damped.copy()
-    bi = np.nonzero(lam > 0.25)[0]
-    if bi.size:
-        # F at the current point from the Newton pieces already computed (no second evaluation)
-        F0 = (qd[bi] - np.log1p(qd[bi])).sum(-1) + (qi[bi] - np.log1p(qi[bi])).sum(-1)
-        pending = np.ones(bi.size, bool)
-        for t in _LS:              # progressive backtracking: most problems accept t = 1
-            if t <= 0 or not pending.any():
-                break
-            pi = bi[pending]
-            Ft = _barrier_value((wY[pi] + t * BD[pi])[:, None, :], nd, wtau[pi])[:, 0]
-            ok = Ft <= F0[pending] - 0.1 * t * lam2[pi]
-            acc = np.nonzero(pending)[0][ok]
-            step[bi[acc]] = np.maximum(t, damped[bi[acc]])
-            pending[acc] = False
-    wmu = wmu + step[:, None] * d
-    wY = wY + step[:, None] * BD
-    # every iterate is dual feasible: its value is a certified upper bound (weak duality)
-    up_it = true_dual(wY, nd) if want_dual else None
-    return H, lam2, wmu, wY, up_it
-
-
-def _numpy_predictor(Yc, Ydc, Yic, Bc, Hc, tcen, tnew, cand, nd, wmu, wY, centred):
-    """The path predictor with batched NumPy (reference of ``newton_kernel.predict_centred``):
-    in place on ``wmu``, ``wY`` at the rows ``centred``."""
-    tc2 = tcen[:, None]
-    rdc = np.sqrt((Ydc ** 2).sum(-1))
-    qdc, qic = np.sqrt(1 + (tc2 * rdc) ** 2), np.sqrt(1 + (tc2 * Yic) ** 2)
-    cfd = (2 * tc2 * (1 + qdc) - tc2 ** 3 * rdc ** 2 / qdc) / (1 + qdc) ** 2
-    cfi = (2 * tc2 * (1 + qic) - tc2 ** 3 * Yic ** 2 / qic) / (1 + qic) ** 2
-    dY = np.concatenate([(Ydc * cfd[..., None]).reshape(len(tcen), 2 * nd), Yic * cfi], axis=1)
-    dg = (dY[:, None, :] @ Bc)[:, 0, :]
-    try:
-        dmu = -np.linalg.solve(Hc, dg[..., None])[..., 0] * (tnew - tcen)[:, None]
-    except np.linalg.LinAlgError:
-        return
-    dYp = (Bc @ dmu[..., None])[..., 0]
-    trial = Yc[:, None, :] + cand[:, :, None] * dYp[:, None, :]
-    Fp = _barrier_value(trial, nd, tnew)
-    best = np.argmin(Fp, axis=1)
-    sc = cand[np.arange(len(best)), best]
-    wmu[centred] = wmu[centred] + sc[:, None] * dmu
-    wY[centred] = Yc + sc[:, None] * dYp
-
-
 def warm_up() -> bool:
     """Compile (or load from numba's cache) all the kernels of :mod:`.newton_kernel` in this process
     by solving one tiny support problem. Called before a pool of worker processes starts: the
@@ -530,35 +329,3 @@ def warm_up() -> bool:
     rng = np.random.default_rng(0)
     solve_support(rng.standard_normal((2, 6)), rng.standard_normal((2, 6, 2)), 2, tol=1e-9, kernel=True)
     return True
-
-
-def _project_free(sigma: np.ndarray, Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, gram_inv: np.ndarray,
-                  cut: float = 1e-3):
-    """Primal repair: cones whose barrier point is on the boundary (``||sigma_c|| > 1 - cut``) are
-    fixed to ``y_c / ||y_c||`` (complementary slackness); the loop residual is removed by moving
-    only the other (interior) cones, then everything is scaled back into the cones if needed."""
-    K, R = sigma.shape
-    nrm_d, nrm_i = _cone_norms(sigma, nd)
-    act = np.concatenate([np.repeat(nrm_d > 1 - cut, 2, axis=1), nrm_i > 1 - cut], axis=1)
-    yd, yi = _cone_norms(Y, nd)
-    ynorm = np.concatenate([np.repeat(yd, 2, axis=1), yi], axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = np.where(ynorm > 0, Y / ynorm, 0.0)
-    s = np.where(act, unit, sigma)
-    Bf = B * (~act)[..., None]
-    r = np.einsum("kr,krm->km", s, B)
-    G = np.swapaxes(Bf, 1, 2) @ Bf
-    m = G.shape[-1]
-    G += (1e-10 * np.trace(G, axis1=1, axis2=2) / max(m, 1) + 1e-300)[:, None, None] * np.eye(m)
-    s = s - (Bf @ np.linalg.solve(G, r[..., None]))[..., 0]   # the small remainder is removed below
-    return _project(s, a, B, nd, gram_inv)
-
-
-def _project(sigma: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, gram_inv: np.ndarray):
-    """Remove the loop residual ``B^T sigma`` and scale back into the unit cones."""
-    r = np.einsum("kr,krm->km", sigma, B)
-    sigma = sigma - np.einsum("krm,km->kr", B, np.einsum("kmn,kn->km", gram_inv, r))
-    nd_, ni_ = _cone_norms(sigma, nd)
-    worst = np.maximum(nd_.max(-1, initial=0.0), ni_.max(-1, initial=0.0))
-    sigma = sigma / np.maximum(worst, 1.0)[:, None]
-    return sigma, np.einsum("kr,kr->k", a, sigma)
