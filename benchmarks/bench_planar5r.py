@@ -52,7 +52,7 @@ def main():
     t = best_of(lambda: robot.sensitivity(P))
     print(f"  sensitivity map: {len(P) / t:.3e} poses/s ({len(P)} poses, {t * 1e3:.1f} ms)")
 
-    from evotol.studies.laramolina2019_5r import _from_variables, allocation_problem
+    from evotol.studies._laramolina2019_5r_allocation import _from_variables, allocation_problem
 
     AP = allocation_problem("b", 1024, 0)
     T = _from_variables(AP, np.tile([[20e-6, 20e-6, 3e-4]], (64, 1)))

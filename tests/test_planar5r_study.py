@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from evotol import studies
+from evotol.studies import _laramolina2019_5r_allocation as A
 from evotol.studies import laramolina2019_5r as L
 from robots.planar5r import Planar5R
 from robots.planar5r import uncertainty as U
@@ -58,7 +59,7 @@ def test_core_nonlinear_yield_agrees_with_the_direct_sampler():
     independent code and samples): within 4 standard errors of the difference at every pose."""
     P = L.allocation_problem("d", 2048, 3, radius=0.1e-3)
     rc, sd = 20e-6, np.deg2rad(0.02)
-    T = L._from_variables(P, [[rc, rc, sd]])
+    T = A._from_variables(P, [[rc, rc, sd]])
     q = 1 - P.evaluate(T).probability[0]
     robot = P.robot
     m = U.UncertaintyModel(theta_std=sd, clearance=rc, shared_lengths=False, renormalise=False)
@@ -73,12 +74,12 @@ def test_core_nonlinear_yield_agrees_with_the_direct_sampler():
 def test_exceedance_grows_with_every_tolerance():
     P = L.allocation_problem("b", 512, 0, radius=0.1e-3)
     base = np.array([20e-6, 20e-6, 2e-4])
-    p0 = 1 - P.evaluate(L._from_variables(P, [base])).probability.min()
+    p0 = 1 - P.evaluate(A._from_variables(P, [base])).probability.min()
     for j in range(3):
         t = base.copy()
         t[j] *= 2
-        assert 1 - P.evaluate(L._from_variables(P, [t])).probability.min() >= p0
-    assert 1 - P.evaluate(L._from_variables(P, [3 * base])).probability.min() > p0
+        assert 1 - P.evaluate(A._from_variables(P, [t])).probability.min() >= p0
+    assert 1 - P.evaluate(A._from_variables(P, [3 * base])).probability.min() > p0
 
 
 def test_allocation_is_feasible_and_verified():

@@ -73,7 +73,7 @@ class Planar5R(RobotErrorModel):
     D : float
         Scale, m: physical lengths are the design's times ``D``.
     working_mode : str or tuple of int
-        Elbow signs (see :func:`robots.planar5r.kinematics.working_mode_signs`).
+        Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
     assembly : {1, -1}
         Assembly mode sigma of eq. 15.
     lci_min : float

@@ -112,7 +112,7 @@ class UncertaintyModel:
 
     def errors_from_unit(self, u: np.ndarray, r1: float, r2: float, r3: float) -> dict:
         """Map unit-hypercube rows ``u`` (n, n_dims) to the error parameters of
-        :func:`robots.planar5r.kinematics.perturbed_position` (arrays of shape (n,)).
+        :func:`robots.planar5r.kinematics.perturbed.perturbed_position` (arrays of shape (n,)).
 
         Parameters
         ----------
@@ -223,7 +223,7 @@ def position_deviations(poses, r1, r2, r3, model: UncertaintyModel, unit: np.nda
     unit : ndarray, shape (n_samples, n_dims)
         Unit-hypercube rows (see :func:`unit_samples`).
     working_mode : str or tuple of int
-        Elbow signs (see :func:`robots.planar5r.kinematics.working_mode_signs`).
+        Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
     assembly : {1, -1}
         Assembly mode sigma of eq. 15.
     failures : {"raise", "mask"}
@@ -287,7 +287,7 @@ def sample_deviations(poses, r1, r2, r3, model: UncertaintyModel | None = None, 
     seed : int, numpy.random.Generator or None
         Seed of the unit samples.
     working_mode : str or tuple of int
-        Elbow signs (see :func:`robots.planar5r.kinematics.working_mode_signs`).
+        Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
     assembly : {1, -1}
         Assembly mode sigma of eq. 15.
     failures : {"raise", "mask"}
@@ -390,7 +390,7 @@ def convergence_study(poses, r1, r2, r3, model: UncertaintyModel | None = None,
     seed : int
         Seed of the replications (the reference uses ``seed + 10000``).
     working_mode : str or tuple of int
-        Elbow signs (see :func:`robots.planar5r.kinematics.working_mode_signs`).
+        Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
     assembly : {1, -1}
         Assembly mode sigma of eq. 15.
 
