@@ -26,6 +26,8 @@ still caught. Give it an explicit layer when it belongs lower than that.
 from __future__ import annotations
 
 import ast
+import shutil
+import subprocess
 from functools import lru_cache
 from pathlib import Path
 
@@ -198,3 +200,25 @@ def test_the_checker_sees_upward_imports(src, upward):
     """The checker itself: an upward import in a robot module (also one hidden in a function) is found."""
     got = imports_in(src, "robots.probe")
     assert got and any(layer_of(t) > layer_of("robots.probe") for t in got) is upward, got
+
+
+#: the most lines a module of the house may have (issue 26 item 3), counted as ``wc -l`` counts
+#: them: docstrings and comments included, since a reader reads them too
+MAX_LINES = 500
+
+
+def test_no_module_over_max_lines():
+    """Every module of ``evotol``, ``robots`` and ``cost_models`` has at most MAX_LINES lines."""
+    long = {m: n for m, p in modules().items() if (n := len(p.read_text().splitlines())) > MAX_LINES}
+    assert not long, f"modules over {MAX_LINES} lines (split them by job): " + ", ".join(
+        f"{m} {n}" for m, n in sorted(long.items(), key=lambda kv: -kv[1]))
+
+
+def test_the_line_count_is_wc_l():
+    """The count above is the one ``wc -l`` prints for the same files (the tool the issue names)."""
+    if shutil.which("wc") is None:
+        pytest.skip("no wc on this machine")
+    paths = sorted(modules().values(), key=lambda p: -p.stat().st_size)[:10]
+    out = subprocess.run(["wc", "-l", *map(str, paths)], capture_output=True, text=True, check=True).stdout
+    wc = {Path(line.split()[1]): int(line.split()[0]) for line in out.splitlines()[:-1]}
+    assert wc == {p: len(p.read_text().splitlines()) for p in paths}
