@@ -7,7 +7,7 @@
    geometry (continued from the assembly pose) and with it cached, against central finite
    differences of the nonlinear closure (``pose_error`` at +-h for every source), with the
    largest relative difference between the two.
-2. The 5-bar's certified clearance map from the description vs from ``robots/fivebar.py`` (same
+2. The 5-bar's certified clearance map from the description vs from ``robots/fivebar/`` (same
    engine; the joint values come from Newton vs the closed form).
 """
 import os

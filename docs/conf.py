@@ -146,6 +146,25 @@ def claims() -> dict[str, str]:
     return owner
 
 
+def _inherited_option(path: str) -> list[str]:
+    """``:inherited-members:`` for a class assembled from mixins (``ToleranceProblem`` from
+    ``evotol.problem.costs.ProblemCosts`` ...): its page lists the mixins' methods as its own, as a
+    user calls them. A mixin here: a direct base from another module of the class's own subpackage,
+    with no base but ``object``, no ``__init__`` and no other subclass (a shared base such as
+    ``Measure`` is not one). Members of other bases (``RobotErrorModel``,
+    ``object``) stay on their own pages."""
+    modname, _, qualname = path.rpartition(".")
+    cls = getattr(importlib.import_module(modname), qualname)
+    package = cls.__module__.rpartition(".")[0]
+    mixins = [b for b in cls.__bases__ if "." in package and b.__module__ != cls.__module__
+              and b.__module__.rpartition(".")[0] == package and b.__bases__ == (object,) and "__init__" not in vars(b)
+              and b.__subclasses__() == [cls]]
+    if not mixins:
+        return []
+    others = [b.__name__ for b in cls.__mro__[1:] if b not in mixins]
+    return [f"   :inherited-members: {', '.join(others)}"]
+
+
 class EvotolAPI(SphinxDirective):
     """``.. evotol-api:: MODULE``: summary table + autodoc of the objects this page owns."""
 
@@ -167,7 +186,7 @@ class EvotolAPI(SphinxDirective):
         for path, kind in entries:
             lines += [f".. {kind}:: {path}"]
             if kind in ("autoclass", "autoexception"):
-                lines += ["   :members:"]
+                lines += ["   :members:"] + _inherited_option(path)
             lines.append("")
         node = nodes.container()
         self.state.nested_parse(StringList(lines, source=f"<evotol-api {modname}>"), self.content_offset, node)

@@ -240,7 +240,7 @@ def render(result: StudyResult) -> Report:
                   ["", "attained", "certified bound"], digits=6)
         c = e["clearance_map"]
         rep.text(f"Certified clearance map on {c['poses']} poses: {c['seconds_description']:.2f} s from the description, "
-                 f"{c['seconds_hand_written']:.2f} s from robots/fivebar.py (ratio {c['ratio']:.2f}).")
+                 f"{c['seconds_hand_written']:.2f} s from robots/fivebar/ (ratio {c['ratio']:.2f}).")
     for name, e in m.items():
         if "builtin" in e:
             rep.heading(f"{name}: compared with the hand-written model")
