@@ -130,8 +130,10 @@ def _vertex_constrained_optimum(pp):
         P = [pp.processes[n][k] for n, k in zip(pp.names, ch)]
         lo, hi = np.array([p.lower for p in P]) / MM, np.array([p.upper for p in P]) / MM
 
-        def g(u):
-            return np.nan_to_num(1 - np.abs(clutch_angle(*(asm.x0 + V * u * MM).T) - asm.y0[0]) / asm.limits[0], nan=-1.0)
+        def g(u):       # outside arccos's domain (NaN) the vertex is infeasible: -1
+            with np.errstate(invalid="ignore"):
+                return np.nan_to_num(1 - np.abs(clutch_angle(*(asm.x0 + V * u * MM).T) - asm.y0[0]) / asm.limits[0],
+                                     nan=-1.0)
 
         def f(u):
             return sum(float(p.total(x * MM)) for p, x in zip(P, u))

@@ -69,7 +69,7 @@ def parcoords_frame(study: DesignStudy, among: pd.DataFrame | None = None,
 
 
 def drawn_lines(frame: pd.DataFrame, axes: Sequence[Axis], presets: Sequence[Preset], study: DesignStudy,
-                max_drawn: int, seed: int = 0, kept: Mapping[str, pd.Index] | None = None) -> np.ndarray:
+                max_drawn: int | None, seed: int = 0, kept: Mapping[str, pd.Index] | None = None) -> np.ndarray:
     """Positions (into ``frame``) of the lines to draw when there are more than ``max_drawn``.
 
     In this order, until ``max_drawn`` are chosen: every NSGA-II / knee line; for each preset, up to

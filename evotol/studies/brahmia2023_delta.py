@@ -124,7 +124,6 @@ def compute(config: dict) -> StudyResult:
     t3_lo, t3_hi = table3_si()
     ver_t3 = verification_errors(robot, t3_lo, t3_hi)
     ta_lo, ta_hi = fig4_intervals(table_a_si())
-    ver_ta = verification_errors(robot, ta_lo, ta_hi)
 
     # --- beyond the paper: cost-aware allocation over the workspace -------------------------------------
     t0 = time.perf_counter()

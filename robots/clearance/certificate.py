@@ -41,13 +41,6 @@ def true_dual(Y: np.ndarray, nd: int) -> np.ndarray:
     return nd_.sum(-1) + ni_.sum(-1)
 
 
-def _smooth(Y: np.ndarray, nd: int, eps: np.ndarray) -> np.ndarray:
-    K = Y.shape[:-1]
-    Yd = Y[..., :2 * nd].reshape(K + (nd, 2))
-    e2 = (eps ** 2)[..., None]
-    return np.sqrt((Yd ** 2).sum(-1) + e2).sum(-1) + np.sqrt(Y[..., 2 * nd:] ** 2 + e2).sum(-1)
-
-
 def recover_primal(Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, eps: np.ndarray,
                    gram_inv: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Feasible scaled screws from the smoothed optimality condition; returns (sigma, a^T sigma).

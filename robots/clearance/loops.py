@@ -125,7 +125,7 @@ def _loop_basis(mech, ed: np.ndarray, nc: int):
     start = [bidx.get(c.start, -1) if c.start != "base" else -1 for c in chains]
     end = [bidx[c.end] for c in chains]
     # tree: first chain into each body, reached from the base outwards
-    tree_in, reached, order = {}, {-1}, []
+    tree_in, reached = {}, {-1}
     changed = True
     while changed:
         changed = False
@@ -193,7 +193,6 @@ def _groups(mech, cones, loops, nc: int, n_disk: int) -> tuple:
         cs = {ci for ci, c in enumerate(mech.chains) if jn in c.joints}
         support[j] = tuple(sorted(k for li, ch in enumerate(loops) if cs & set(ch) for k in range(nc * li, nc * li + nc)))
     groups = {}
-    row = 0
     for ci_, (j, kind, cc) in enumerate(cones):
         g = groups.setdefault(support[j], ([], []))
         if ci_ < n_disk:

@@ -55,7 +55,7 @@ from robots.clearance.newton_kernel_bodies import (_chol_factor, _chol_solve, _n
 AVAILABLE = (os.environ.get("EVOTOL_NO_NUMBA", "").lower() not in ("1", "true", "yes")
              and importlib.util.find_spec("numba") is not None)
 
-#: steps of the backtracking line search (newton_numpy._LS)
+#: steps of the backtracking line search (the compiled kernels and newton_numpy)
 LINE_SEARCH = np.array([1.0, 0.5, 0.25, 0.12])
 
 

@@ -14,9 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from robots.clearance.certificate import true_dual
-
-#: steps of the backtracking line search
-_LS = np.array([1.0, 0.5, 0.25, 0.12])
+from robots.clearance.newton_kernel import LINE_SEARCH
 
 
 def _barrier_terms(Y: np.ndarray, nd: int, tau: np.ndarray):
@@ -103,7 +101,7 @@ def _numpy_iteration(wY, wmu, wtau, nd, R, m, grows, gB, dense, want_dual):
         # F at the current point from the Newton pieces already computed (no second evaluation)
         F0 = (qd[bi] - np.log1p(qd[bi])).sum(-1) + (qi[bi] - np.log1p(qi[bi])).sum(-1)
         pending = np.ones(bi.size, bool)
-        for t in _LS:              # progressive backtracking: most problems accept t = 1
+        for t in LINE_SEARCH:              # progressive backtracking: most problems accept t = 1
             if t <= 0 or not pending.any():
                 break
             pi = bi[pending]

@@ -24,7 +24,7 @@ GEOMETRIC_SOURCES = (
     SourceSpec("theta1", 1, "rad", "actuator", "actuated joint A (offset / encoder error)"),
     SourceSpec("theta3", 1, "rad", "actuator", "actuated joint B (offset / encoder error)"),
 )
-#: default workspace of the geometric model: the thesis's x range above the singular circle |OP| = 50 mm
+#: default workspace of the geometric model: the thesis's x range above the singular circle ``|OP| = 50 mm``
 GEOMETRIC_WORKSPACE = Workspace(names=("x", "y"), low=(-20 * MM, 55 * MM), high=(20 * MM, 70 * MM),
                                 units=("m", "m"), display_units=("mm", "mm"), display_scale=(1e3, 1e3))
 

@@ -7,8 +7,6 @@ arm.urdf --tip tool0``) with these parts.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from robots.mechanism.identifiability import analyse
 from robots.mechanism.placement import PLACEMENT_FIELDS
 
