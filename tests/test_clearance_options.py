@@ -53,3 +53,23 @@ def test_work_is_returned_and_summed_over_chunks():
     whole = MaxPoseError.concat(parts)
     assert whole.n_newton == sum(p.n_newton for p in parts) and all(p.n_newton > 0 for p in parts)
     np.testing.assert_array_equal(whole.p_max, np.concatenate([p.p_max for p in parts]))
+
+
+def test_concat_keeps_the_values_of_extra_sources():
+    """Chunks of the 5-bar's combined clearance + geometric worst case (``extra`` sources) keep the
+    extra sources' values at the maximisers when concatenated (they were dropped: None), equal to
+    the same poses solved at once; mixing a part with extras and one without is refused."""
+    from robots.fivebar import FiveBar, combined_max_pose_error
+
+    poses = [[0.0, 0.07], [0.01, 0.06], [-0.01, 0.05]]
+    geo = {"L1": 2e-5, "L2": 1e-5}
+    parts = [combined_max_pose_error(FiveBar(), [p], geometric=geo) for p in poses]
+    whole = MaxPoseError.concat(parts)
+    at_once = combined_max_pose_error(FiveBar(), poses, geometric=geo)
+    assert whole.p_extra.shape == at_once.p_extra.shape == (3, at_once.p_extra.shape[1])
+    np.testing.assert_allclose(whole.p_extra, at_once.p_extra, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(whole.r_extra, at_once.r_extra, rtol=1e-9, atol=1e-15)
+    assert np.abs(whole.p_extra).max() > 0
+    mech = FiveBar().clearance_mechanism()
+    with pytest.raises(ValidationError, match=r"parts\[1\]\.p_extra = 'None'"):
+        MaxPoseError.concat([parts[0], max_pose_error(mech, [poses[1]])])

@@ -6,6 +6,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from evotol.errors import ValidationError
+
 
 @dataclass
 class MaxPoseError:
@@ -80,10 +82,21 @@ class MaxPoseError:
         -------
         MaxPoseError
             All cases of ``parts`` concatenated (``joint_names`` from the first part; ``p_extra``
-            and ``r_extra`` are not carried over: None).
+            and ``r_extra`` concatenated too when every part has them, None when none has).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Some parts carry the values of extra sources and others do not.
         """
         cat = {f: np.concatenate([getattr(p, f) for p in parts]) for f in
                ("p_max", "p_upper", "r_max", "r_upper", "p_screws", "r_screws", "p_twist", "r_twist")}
+        for f in ("p_extra", "r_extra"):
+            have = [getattr(p, f) is not None for p in parts]
+            if any(have) and not all(have):
+                raise ValidationError(f"parts[{have.index(not have[0])}].{f}", "None" if have[0] else "present",
+                                      f"{f} on every part or on none (results of one evaluation)")
+            cat[f] = np.concatenate([getattr(p, f) for p in parts]) if all(have) else None
         return cls(**cat, joint_names=parts[0].joint_names, n_solves=sum(p.n_solves for p in parts),
                    seconds=sum(p.seconds for p in parts), n_newton=sum(p.n_newton for p in parts))
 
