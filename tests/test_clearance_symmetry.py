@@ -64,3 +64,9 @@ def test_mirrored_grid_solves_half_and_matches_the_full_grid(irsbot):
     assert summary["n_solved"] == 4 and summary["n_reused"] == 2
     assert np.all(res.p_max <= full.p_upper * (1 + 1e-12)) and np.all(full.p_max <= res.p_upper * (1 + 1e-12))
     assert np.all(res.r_max <= full.r_upper * (1 + 1e-12)) and np.all(full.r_max <= res.r_upper * (1 + 1e-12))
+    # the work reported is the solved half's: the mirrored half did none (its n_newton was the
+    # solved half's again, so the total counted the solved poses' Newton steps twice)
+    assert 0 < res.n_newton < full.n_newton and res.n_solves < full.n_solves
+    proof = prove_mirror(mech, poses[:1], poses[:1] * [-1.0, 1.0], mirror_joint_map(mech), X_MIRROR)
+    mirrored = mirror_maxima(max_pose_error(mech, poses[:1]), proof)
+    assert mirrored.n_newton == 0 and mirrored.n_solves == 0

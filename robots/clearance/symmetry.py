@@ -132,8 +132,8 @@ def mirror_maxima(result, proof: dict):
     Returns
     -------
     MaxPoseError
-        The result at the mirrored poses (``n_solves = 0``, ``seconds = 0``; ``n_newton``,
-        ``p_extra`` and ``r_extra`` copied unchanged).
+        The result at the mirrored poses (no work of its own: ``n_solves = 0``, ``n_newton = 0``,
+        ``seconds = 0``; ``p_extra`` and ``r_extra`` copied unchanged).
     """
     jm, cols, signs, S = proof["joint_map"], proof["cols"], proof["signs"], proof["reflection"]
     det = np.linalg.det(S)
@@ -150,7 +150,8 @@ def mirror_maxima(result, proof: dict):
 
     return replace(result, p_max=result.p_max.copy(), p_upper=result.p_upper.copy(), r_max=result.r_max.copy(),
                    r_upper=result.r_upper.copy(), p_screws=screws(result.p_screws), r_screws=screws(result.r_screws),
-                   p_twist=twists(result.p_twist), r_twist=twists(result.r_twist), n_solves=0, seconds=0.0)
+                   p_twist=twists(result.p_twist), r_twist=twists(result.r_twist), n_solves=0, n_newton=0,
+                   seconds=0.0)
 
 
 def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflection, **grid_kw):
