@@ -5,7 +5,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from evotol.errors import KinematicsError
+from evotol.errors import KinematicsError, ValidationError
 from robots.clearance import max_pose_error
 from robots.clearance.grid import grid_max_pose_error
 from robots.clearance.symmetry import grid_max_pose_error_mirrored, mirror_maxima, prove_mirror
@@ -70,3 +70,15 @@ def test_mirrored_grid_solves_half_and_matches_the_full_grid(irsbot):
     proof = prove_mirror(mech, poses[:1], poses[:1] * [-1.0, 1.0], mirror_joint_map(mech), X_MIRROR)
     mirrored = mirror_maxima(max_pose_error(mech, poses[:1]), proof)
     assert mirrored.n_newton == 0 and mirrored.n_solves == 0
+
+
+def test_mirrored_grid_refuses_bounds_it_cannot_prove(irsbot):
+    """The mirror proof holds for the joints' own bounds; bounds passed through to the grid (which
+    the docstring asked not to give, but which were used silently: the reused half then carried the
+    maxima of other bounds than those proven) are a one-line ValidationError before any solve."""
+    mech = irsbot.clearance_mechanism()
+    poses = np.array([[-0.01, -0.05], [0.01, -0.05]])
+    b = mech.thesis_bounds(b_xy=np.full(len(mech.joints), 2e-5), b_z=np.full(len(mech.joints), 2e-5))
+    with pytest.raises(ValidationError) as exc:
+        grid_max_pose_error_mirrored(mech, poses, mirror_joint_map(mech), X_MIRROR, np.array([-1.0, 1.0]), bounds=b)
+    assert str(exc.value).startswith("bounds = 'given': expected no bounds: the mirror proof holds for the joints' own")

@@ -26,7 +26,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from evotol.errors import KinematicsError
+from evotol.errors import KinematicsError, ValidationError
 
 
 def _row_permutation(cols: np.ndarray, joint_map) -> np.ndarray:
@@ -178,7 +178,7 @@ def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflec
         Passed to :func:`~robots.clearance.grid.grid_max_pose_error` (``tol``, ``workers``,
         ``scheduler``, ``options``, ...); without ``chunk_size`` and ``scheduler`` the chunk size
         is chosen to give equal chunks on the local processes. The proof uses the joints' own
-        bounds, so ``bounds`` should not be given here.
+        bounds, so ``bounds`` is refused here.
 
     Returns
     -------
@@ -193,12 +193,18 @@ def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflec
     ------
     KinematicsError
         The mirror symmetry cannot be proven for a reused pair (:func:`prove_mirror`).
+    ValidationError
+        ``bounds`` given in ``grid_kw`` (the reused maxima would be those of the joints' own
+        bounds, not of the given ones).
     """
     import time
 
     from robots.clearance.grid import grid_max_pose_error
     from robots.clearance.maxerror import MaxPoseError
 
+    if grid_kw.get("bounds") is not None:
+        raise ValidationError("bounds", "given", "no bounds: the mirror proof holds for the joints' own bounds only "
+                              "(use grid_max_pose_error for other bounds)")
     t0 = time.perf_counter()
     poses = np.atleast_2d(np.asarray(poses, float))
     key = {tuple(np.round(p, 12)): i for i, p in enumerate(poses)}
