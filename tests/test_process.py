@@ -334,3 +334,20 @@ def test_process_optimum_and_ga_name_a_measure_without_constraint_rows(measure):
             fn(pp)
         assert err.value.field == "requirement.measure" and err.value.value == measure
         assert "'worst_case' or 'rss'" in err.value.expected
+
+
+def test_feasible_means_within_feas_tol_of_the_limit(clutch_wc):
+    """A process result is called feasible when its normalised stack error is <= 1 + FEAS_TOL
+    (1e-9), the slack branch and bound and the baselines use -- not 1 + 1e-7 as before, which
+    called a design 5e-8 over the limit feasible. The certified optimum itself is inside it."""
+    from evotol.allocators.process import FEAS_TOL
+    from evotol.allocators.process.result import _result
+
+    pp, opt = clutch_wc
+    assert FEAS_TOL == 1e-9 and opt.feasible and opt.normalised_error <= 1 + FEAS_TOL
+    choice = pp.choice_index(opt.processes)
+    t = np.array([opt.tolerances[n] for n in pp.names])
+    over = _result(pp, "probe", choice, t * (1 + 5e-8) / opt.normalised_error, 0.0)
+    assert over.normalised_error == pytest.approx(1 + 5e-8, abs=1e-12) and not over.feasible
+    at = _result(pp, "probe", choice, t * (1 + 0.5e-9) / opt.normalised_error, 0.0)
+    assert at.feasible

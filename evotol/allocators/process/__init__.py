@@ -54,8 +54,8 @@ from evotol.allocators.process.branch_and_bound import allocate_process_optimum
 from evotol.allocators.process.front import FRONT_OBJECTIVES, process_front
 from evotol.allocators.process.ga import allocate_process_ga
 from evotol.allocators.process.candidates import Process
-from evotol.allocators.process.problem import FEAS_TOL, ProcessProblem, assembly_problem
-from evotol.allocators.process.result import ProcessResult
+from evotol.allocators.process.problem import ProcessProblem, assembly_problem
+from evotol.allocators.process.result import FEAS_TOL, ProcessResult
 
 __all__ = ["Process", "ProcessProblem", "ProcessResult", "assembly_problem", "allocate_process_optimum",
            "allocate_process_ga", "allocate_process_baselines", "cheapest_feasible_processes", "process_front",

@@ -17,7 +17,8 @@ import time
 import numpy as np
 
 from evotol.allocators.baselines import allocate_lagrange
-from evotol.allocators.process.problem import FEAS_TOL, check_no_budget, ProcessProblem
+from evotol.allocators.process.problem import ProcessProblem, check_no_budget
+from evotol.allocators.process.result import FEAS_TOL
 from evotol.allocators.process.result import ProcessResult, _result
 from evotol.allocators.sensitivity import aggregated_sensitivity, allocate_sensitivity
 from evotol.errors import InfeasibleError, ValidationError

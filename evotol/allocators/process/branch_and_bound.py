@@ -11,7 +11,8 @@ from scipy.optimize import nnls
 
 from evotol.allocators.optimum import allocate_optimum
 from evotol.allocators.process.baselines import check_some_choice_holds, cheapest_feasible_processes
-from evotol.allocators.process.problem import FEAS_TOL, check_no_budget, ProcessProblem
+from evotol.allocators.process.problem import ProcessProblem, check_no_budget
+from evotol.allocators.process.result import FEAS_TOL
 from evotol.allocators.process.result import ProcessResult, _result
 from evotol.constraints import ConstraintRows
 from evotol.errors import ValidationError

@@ -13,13 +13,11 @@ import numpy as np
 
 from cost_models.power import PowerCost
 from evotol.allocators.process.candidates import Process, checked_processes
-from evotol.allocators.process.result import ProcessResult  # noqa: F401  (re-exported)
+from evotol.allocators.process.result import FEAS_TOL, ProcessResult  # noqa: F401  (re-exported)
 from evotol.errors import ValidationError
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from robots.base import RobotErrorModel
 
-#: relative slack of the process-selection feasibility test (normalised stack error <= 1 + FEAS_TOL)
-FEAS_TOL = 1e-9
 
 
 class ProcessProblem:

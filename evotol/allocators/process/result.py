@@ -8,6 +8,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+#: relative slack of the process-selection feasibility test (normalised stack error <= 1 + FEAS_TOL):
+#: what a result calls feasible, what branch and bound prunes with and what the baselines accept
+FEAS_TOL = 1e-9
+
 
 @dataclass
 class ProcessResult:
@@ -24,7 +28,8 @@ class ProcessResult:
     cost : float
         Total cost, set-up costs included (cost units).
     feasible : bool
-        Whether the design holds the requirement and every tolerance is in its process's range.
+        Whether the design holds the requirement (normalised error <= 1 + ``FEAS_TOL``) and every
+        tolerance is in its process's range.
     normalised_error : float
         Exact max error / bound (dimensionless; <= 1 holds).
     seconds : float
@@ -100,6 +105,6 @@ class ProcessResult:
 def _result(pp, method: str, choice, t, t0: float, **kw) -> ProcessResult:
     t = np.asarray(t, dtype=float)
     ne = float(pp.normalised_error(t)[0])
-    ok = bool(ne <= 1 + 1e-7 and pp.in_ranges(choice, t)[0])
+    ok = bool(ne <= 1 + FEAS_TOL and pp.in_ranges(choice, t)[0])
     return ProcessResult(method, pp.choice_names(choice), dict(zip(pp.names, t.tolist())), float(pp.cost(choice, t)[0]),
                          ok, ne, seconds=time.perf_counter() - t0, **kw)
