@@ -9,8 +9,9 @@ registered measure (:mod:`evotol.accuracy`).
 
 Tolerance variables (:mod:`evotol.variables`, ``docs/tolerances.md``). The optimisers search the
 *free variables* X (n_designs, n_variables): one per free source, a ``shared`` group being one
-variable for all its members. :meth:`ToleranceProblem.full` maps X to source tolerances T,
-inserting locked and fixed sources; ``problem.free`` marks the sources that carry a variable.
+variable for all its members. :meth:`~evotol.problem.tolerance_problem.ToleranceProblem.full`
+maps X to source tolerances T, inserting locked and fixed sources; ``problem.free`` marks the
+sources that carry a variable.
 
 This module holds the problem's construction and validation, its basic properties, the
 worst-case support coefficients and the evaluation under a measure; the class takes its derived

@@ -41,16 +41,16 @@ class YieldResult:
     miss : dict of str to ndarray, shape (n_designs, n_poses)
         Component -> ``P(|error| > bound)`` (dimensionless).
     probability : ndarray, shape (n_designs, n_poses)
-        Lower bound of the joint yield ``1 − Σ miss`` (Bonferroni); for :class:`SampledYield`
+        Lower bound of the joint yield ``1 − Σ miss`` (Bonferroni); for :class:`~evotol.statistical.sampled.SampledYield`
         the joint yield counted directly.
     equivalent : dict of str to ndarray, shape (n_designs, n_poses)
         Component -> k-sigma equivalent error ``bound·k_req/k(miss)`` (m or rad); for
-        :class:`SampledYield` the sampled quantile of the error norm.
+        :class:`~evotol.statistical.sampled.SampledYield` the sampled quantile of the error norm.
     violation : ndarray, shape (n_designs,)
         Max over poses of ``k_req/k(Σ miss) − 1`` (dimensionless; <= 0 meets the requirement).
     contributions : dict of str to ndarray, shape (n_designs, n_poses, n_sources)
         Component -> each source's variance share (dimensionless fraction); empty for
-        :class:`SampledYield`.
+        :class:`~evotol.statistical.sampled.SampledYield`.
     exact : bool
         Every contributing source is normal (otherwise moment-matched normal, CLT).
     """
