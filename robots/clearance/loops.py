@@ -21,38 +21,8 @@ from robots.clearance.parts import CONE_COMPONENTS, FULL, POS, ROT
 from robots.clearance.pose_maps import PoseMaps
 
 
-def block_maps(mech, poses: np.ndarray, split: bool = True) -> list[PoseMaps]:
-    """The per-pose linear maps of a mechanism (one :class:`PoseMaps` per decoupled block), computed
-    once; :meth:`robots.clearance.model.ClearanceMechanism.pose_maps` of ``mech``.
-    ``split=False`` keeps one 6-D block even for a planar mechanism (the thesis's form).
-
-    Raises KinematicsError if the chains do not determine the bodies' twists (a body left
-    free) -- never returns NaN.
-
-    Parameters
-    ----------
-    mech : ClearanceMechanism
-        The mechanism (its chains, joints, bodies and inverse geometric model).
-    poses : (n, d) or (d,) array_like
-        Poses in the mechanism's pose coordinates (m).
-    split : bool, optional
-        True (default): one map per decoupled block (two for a planar mechanism); False: one
-        6-D block.
-
-    Returns
-    -------
-    list of PoseMaps
-        One per block, each holding the maps at all ``n`` poses.
-
-    Raises
-    ------
-    KinematicsError
-        The chains do not determine every body's error twist at some pose (``poses`` of the
-        exception: the offending ones).
-    ValidationError
-        A block that splits a clearance cone, or a planar block that does not decouple
-        (joint axes not all parallel to ``z``).
-    """
+def _block_maps(mech, poses: np.ndarray, split: bool = True) -> list[PoseMaps]:
+    """The work of :meth:`robots.clearance.model.ClearanceMechanism.pose_maps` (see it)."""
     poses = np.atleast_2d(np.asarray(poses, float))
     Es, Ed = mech.linear_system(poses)
     nb = Ed.shape[2] // 6

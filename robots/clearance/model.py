@@ -355,7 +355,7 @@ class ClearanceMechanism:
         (n, 6, 6 * n_chain_joints) ndarray
             ``[M_j ...]`` for the chain's joints in order, as :meth:`error_mapping` ``M``.
         """
-        return nonlinear.error_mapping_thesis(self, poses, chain)
+        return nonlinear._error_mapping_thesis(self, poses, chain)
 
     def _chain_maps(self, W, c: Chain):
         pB = W[self.bodies[c.end]][:, :3, 3]
@@ -442,7 +442,7 @@ class ClearanceMechanism:
             A block that splits a clearance cone, or a planar block that does not decouple
             (joint axes not all parallel to ``z``).
         """
-        return loops.block_maps(self, poses, split)
+        return loops._block_maps(self, poses, split)
 
     # ------------------------------------------------------------------ nonlinear checks
     def chain_end_pose(self, poses: np.ndarray, chain: str | Chain, screws: Mapping[str, np.ndarray] | None = None,
@@ -470,4 +470,4 @@ class ClearanceMechanism:
         (n, 4, 4) ndarray
             World transform of the chain's end body (translation in m).
         """
-        return nonlinear.chain_end_pose(self, poses, chain, screws, start_twist)
+        return nonlinear._chain_end_pose(self, poses, chain, screws, start_twist)

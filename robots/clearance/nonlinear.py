@@ -3,11 +3,13 @@
 
 A joint's error screw is applied as ``T_j -> T_j exp([s_j])`` (``s_j`` in frame ``j``) and the
 chain's end pose compared with the nominal one by :func:`twist_between`: central finite
-differences of :func:`chain_end_pose` must equal the mapping matrices of
+differences of the chain's end pose
+(:meth:`~robots.clearance.model.ClearanceMechanism.chain_end_pose`) must equal the mapping matrices of
 :meth:`~robots.clearance.model.ClearanceMechanism.error_mapping` (tested to 1e-11). The thesis's
-literal eq. III.24 (products of inverse adjoints of the DH transforms, :func:`error_mapping_thesis`)
-is kept to check the same matrices against the thesis (1e-15). The mechanism's methods
-``chain_end_pose`` and ``error_mapping_thesis`` call these functions.
+literal eq. III.24 (products of inverse adjoints of the DH transforms,
+:meth:`~robots.clearance.model.ClearanceMechanism.error_mapping_thesis`) is kept to check the same
+matrices against the thesis (1e-15). Those two methods are documented on the mechanism and do
+their work here.
 """
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ import numpy as np
 from robots.clearance.kinematics import adjoint, exp_screw, inv_transform, rotation_vector
 from robots.clearance.parts import Chain
 
-__all__ = ["chain_end_pose", "error_mapping_thesis", "twist_between"]
+__all__ = ["twist_between"]
 
 
 def _chain_transforms(mech, poses: np.ndarray, chain: str | Chain):
@@ -30,28 +32,8 @@ def _chain_transforms(mech, poses: np.ndarray, chain: str | Chain):
             mech.tree.world_transforms(values, n))
 
 
-def error_mapping_thesis(mech, poses: np.ndarray, chain: str | Chain) -> np.ndarray:
-    """The thesis's literal eq. III.24 for a chain starting at the base:
-    ``M_j = (prod_l N_l) prod_{k=n_f}^{j+1} adj(S_k)^-1`` (products of adjoints of the DH
-    transforms along the chain's path, then ``N`` = the end frame's orientation in the base).
-    Kept to check :meth:`~robots.clearance.model.ClearanceMechanism.error_mapping` (which uses
-    world poses) against the thesis.
-
-    Parameters
-    ----------
-    mech : ClearanceMechanism
-        The mechanism.
-    poses : (n, d) or (d,) array_like
-        Poses in the mechanism's pose coordinates (m).
-    chain : str or Chain
-        The chain, or its name (one that starts at the base).
-
-    Returns
-    -------
-    (n, 6, 6 * n_chain_joints) ndarray
-        ``[M_j ...]`` for the chain's joints in order, as
-        :meth:`~robots.clearance.model.ClearanceMechanism.error_mapping` ``M``.
-    """
+def _error_mapping_thesis(mech, poses: np.ndarray, chain: str | Chain) -> np.ndarray:
+    """The work of :meth:`robots.clearance.model.ClearanceMechanism.error_mapping_thesis` (eq. III.24; see it)."""
     c, n, local, W = _chain_transforms(mech, poses, chain)
     end_frame = c.path_end or mech.bodies[c.end]
     path = mech.tree.path(end_frame)
@@ -71,33 +53,9 @@ def error_mapping_thesis(mech, poses: np.ndarray, chain: str | Chain) -> np.ndar
     return np.concatenate(blocks, axis=2)
 
 
-def chain_end_pose(mech, poses: np.ndarray, chain: str | Chain, screws: Mapping[str, np.ndarray] | None = None,
-                   start_twist: np.ndarray | None = None) -> np.ndarray:
-    """Nonlinear pose (n, 4, 4) of a chain's end body with joint error screws applied
-    (``T_j -> T_j exp([s_j])``, s_j in frame j) and an optional start-body twist
-    ``[dtheta; dp]`` (base axes, at the start body's point). Used to check the error
-    mapping matrices against finite differences.
-
-    Parameters
-    ----------
-    mech : ClearanceMechanism
-        The mechanism.
-    poses : (n, d) or (d,) array_like
-        Poses in the mechanism's pose coordinates (m).
-    chain : str or Chain
-        The chain, or its name.
-    screws : mapping of str to array_like or None, optional
-        Error screw ``[dr; dt]`` (rad, m; ``(6,)`` or ``(n, 6)``) by joint name; joints not
-        named have none. None (default): no joint error.
-    start_twist : array_like or None, optional
-        Twist ``[dtheta; dp]`` (rad, m) of the start body, ``(6,)`` or ``(n, 6)``; None
-        (default): none.
-
-    Returns
-    -------
-    (n, 4, 4) ndarray
-        World transform of the chain's end body (translation in m).
-    """
+def _chain_end_pose(mech, poses: np.ndarray, chain: str | Chain, screws: Mapping[str, np.ndarray] | None = None,
+                    start_twist: np.ndarray | None = None) -> np.ndarray:
+    """The work of :meth:`robots.clearance.model.ClearanceMechanism.chain_end_pose` (see it)."""
     c, n, local, W = _chain_transforms(mech, poses, chain)
     start_frame = mech.bodies[c.start]
     end_frame = c.path_end or mech.bodies[c.end]
