@@ -1,5 +1,8 @@
-"""The one small error hierarchy of evotol (see STYLE.md, "Errors")."""
+"""The one small error hierarchy of evotol (see STYLE.md, "Errors"), and the two type tests its
+callers share before raising :class:`ValidationError`."""
 from __future__ import annotations
+
+import numpy as np
 
 
 class EvotolError(Exception):
@@ -94,3 +97,38 @@ class CheckFailed(EvotolError, AssertionError):
     """A conformance check failed (a robot, cost model or measure breaks its contract): names the
     plugin, the check and what was measured. Raised, not asserted, so it holds under ``python -O``;
     an ``AssertionError`` too, so pytest reports it as a failed assertion."""
+
+
+def is_integer(value, minimum: int) -> bool:
+    """Whether ``value`` is an integer (Python or NumPy, not a bool) of at least ``minimum``.
+
+    Parameters
+    ----------
+    value : object
+        The value to test (a float such as 3.0 or a string such as "3" is not an integer).
+    minimum : int
+        The smallest value allowed.
+
+    Returns
+    -------
+    bool
+        True for an integer ``>= minimum``.
+    """
+    return not isinstance(value, bool) and isinstance(value, (int, np.integer)) and value >= minimum
+
+
+def is_real(value) -> bool:
+    """Whether ``value`` is a real number: a Python int or float or a NumPy float, not a bool
+    (text such as "0.9" is not; range and finiteness are the caller's test).
+
+    Parameters
+    ----------
+    value : object
+        The value to test.
+
+    Returns
+    -------
+    bool
+        True for an int, float or NumPy floating value that is not a bool.
+    """
+    return not isinstance(value, bool) and isinstance(value, (int, float, np.floating))

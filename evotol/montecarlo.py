@@ -28,7 +28,7 @@ import numpy as np
 
 from evotol import clearances, distributions
 from evotol.distributions import METHODS
-from evotol.errors import ValidationError
+from evotol.errors import ValidationError, is_integer, is_real
 from evotol.nonlinear import verify_nonlinear
 from evotol.problem import ToleranceProblem
 from evotol.progress import progress_bar
@@ -395,11 +395,11 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
     r = problem.requirement
     if r.measure != "yield":
         raise ValidationError("requirement.measure", r.measure, "'yield' for calibrate_scale")
-    if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) or n_samples < 10:
+    if not is_integer(n_samples, 10):
         raise ValidationError("n_samples", n_samples, "an integer >= 10")
-    if isinstance(confidence, bool) or not isinstance(confidence, (int, float, np.floating)) or not 0 < confidence < 1:
+    if not (is_real(confidence) and 0 < confidence < 1):
         raise ValidationError("confidence", confidence, "a probability in (0, 1)")
-    if isinstance(iters, bool) or not isinstance(iters, (int, np.integer)) or iters < 1:
+    if not is_integer(iters, 1):
         raise ValidationError("iters", iters, "a positive integer (bisection steps)")
     t = problem.as_array(tolerances)
     free = np.isnan(problem.locked_values)

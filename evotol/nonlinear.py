@@ -25,7 +25,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from evotol import distributions, measures
-from evotol.errors import ValidationError
+from evotol.errors import ValidationError, is_integer
 from evotol.problem import ToleranceProblem
 from evotol.statistical import pose_error_nan
 from evotol.threads import single_threaded_blas
@@ -36,7 +36,7 @@ ROWS = {"position": slice(0, 3), "orientation": slice(3, 6)}
 def _check(problem: ToleranceProblem, seed=0) -> None:
     if not problem.robot.has_nonlinear_model:
         raise ValidationError("model", "nonlinear", f"a robot with pose_error ({problem.robot.name} has none)")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+    if not is_integer(seed, 0):
         raise ValidationError("seed", seed, "a non-negative integer")
 
 
@@ -230,7 +230,7 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
     """
     t0 = time.perf_counter()
     _check(problem, seed)
-    if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) or n_samples < 1:
+    if not is_integer(n_samples, 1):
         raise ValidationError("n_samples", n_samples, "a positive integer")
     t = problem.as_array(t)
     vertex = worst_vertex_errors(problem, t)

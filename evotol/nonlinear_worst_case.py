@@ -23,7 +23,7 @@ import itertools
 
 import numpy as np
 
-from evotol.errors import ValidationError
+from evotol.errors import ValidationError, is_integer, is_real
 from evotol.interval import Dual, Interval
 from robots.assembly import LinearStack
 
@@ -93,9 +93,9 @@ def nonlinear_worst_case(asm, t, *, rtol: float = 1e-6, max_boxes: int = 200_000
         ``rtol`` that is not a finite non-negative number.
     """
     t = _check(asm, t)
-    if isinstance(max_boxes, bool) or not isinstance(max_boxes, (int, np.integer)) or max_boxes < 1:
+    if not is_integer(max_boxes, 1):
         raise ValidationError("max_boxes", max_boxes, "a positive integer")
-    if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.floating)) or not 0 <= rtol < np.inf:
+    if not (is_real(rtol) and 0 <= rtol < np.inf):
         raise ValidationError("rtol", rtol, "a finite non-negative tolerance relative to the limit")
     if isinstance(asm, LinearStack):         # linear: the arithmetic stack is the exact worst case
         out = []

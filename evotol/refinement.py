@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol import measures
-from evotol.errors import EvotolError, ValidationError
+from evotol.errors import EvotolError, ValidationError, is_integer
 from evotol.problem import ToleranceProblem
 
 
@@ -225,7 +225,7 @@ def refine_poses(problem: ToleranceProblem, allocate, *, candidates=None, grid=N
     """
     if not callable(allocate):
         raise ValidationError("allocate", allocate, "a function problem -> AllocationResult")
-    if isinstance(max_rounds, bool) or not isinstance(max_rounds, (int, np.integer)) or max_rounds < 1:
+    if not is_integer(max_rounds, 1):
         raise ValidationError("max_rounds", max_rounds, "a positive integer")
     dense = dense if dense is not None else dense_problem(problem, candidates, grid)
     if start is not None:

@@ -8,7 +8,7 @@ import numpy as np
 
 from evotol import statistical
 from evotol.accuracy import registry as measure_registry
-from evotol.errors import ValidationError
+from evotol.errors import ValidationError, is_integer, is_real
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,7 @@ class Requirement:
                 raise ValidationError(f"requirement.{f}", v, "a positive bound (m for position, rad for orientation) or None")
         measure_registry.get(self.measure, field="requirement.measure")
         q = self.quantile
-        if isinstance(q, bool) or not isinstance(q, (int, float, np.floating)) or not 0 < q < 1:
+        if not (is_real(q) and 0 < q < 1):
             raise ValidationError("requirement.quantile", self.quantile, "a probability in (0, 1)")
         if self.model not in ("linear", "nonlinear"):
             raise ValidationError("requirement.model", self.model, "'linear' or 'nonlinear'")
@@ -98,8 +98,8 @@ class Requirement:
         if self.ppm is not None and not (isinstance(self.ppm, (int, float, np.floating)) and 0 < self.ppm < 1e6):
             raise ValidationError("requirement.ppm", self.ppm, "defects per million in (0, 1e6)")
         n = self.mc_samples
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 10:
+        if not is_integer(n, 10):
             raise ValidationError("requirement.mc_samples", n, "an integer >= 10 (samples)")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+        if not is_integer(self.seed, 0):
             raise ValidationError("requirement.seed", self.seed, "a non-negative integer (random seed)")
 

@@ -26,7 +26,7 @@ from typing import Sequence
 
 import numpy as np
 
-from evotol.errors import KinematicsError, ValidationError
+from evotol.errors import KinematicsError, ValidationError, is_integer
 from robots.checks import check_robot, robot_checks  # noqa: F401  (the one-call conformance API)
 from robots.units import UNITS
 
@@ -182,7 +182,7 @@ class Workspace:
         """
         from scipy.stats import qmc
 
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:   # 3.5 was truncated to 3
+        if not is_integer(n, 1):   # 3.5 was truncated to 3
             raise ValidationError("latin_hypercube n", n, "a positive integer")
         u = qmc.LatinHypercube(d=self.dim, seed=seed).random(int(n))
         # affine map rather than qmc.scale, which rejects a fixed coordinate (low == high)
