@@ -15,6 +15,7 @@ import numpy as np
 from cost_models import ExponentialCost
 from evotol.allocators import (allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
+from evotol.display import LENGTHS
 from evotol.montecarlo import verify
 from evotol.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report
@@ -23,7 +24,7 @@ from robots.ucr3 import UCR3
 
 UNIT = 1e-5  # the paper's tolerance unit (m)
 E_POS = 5e-5  # allowed position error (m), Sec. 5
-UM = 1e-6  # the report shows errors in µm (m per µm)
+UM = LENGTHS["µm"]  # the report shows errors in µm (m per µm, the display units' table)
 #: Paper Table 1 (GA) and Table 2 (sensitivity), units of 1e-5 m, in our source order
 #: l1..l3, U1a..U3a, U1b..U3b, R1..R3. The paper's first "U joints" row is the pair whose
 #: sensitivity-based tolerance is tighter (≈2.2); under the paper's model that is R_i2 (U_ib),
