@@ -2,7 +2,7 @@
 callers share before raising :class:`ValidationError`."""
 from __future__ import annotations
 
-import numpy as np
+import sys
 
 
 class EvotolError(Exception):
@@ -99,6 +99,14 @@ class CheckFailed(EvotolError, AssertionError):
     an ``AssertionError`` too, so pytest reports it as a failed assertion."""
 
 
+def _numpy(kind: str) -> tuple:
+    """NumPy's abstract scalar type ``kind`` if NumPy is loaded, else none: a value cannot be a
+    NumPy scalar before NumPy is imported, and importing it here would load it for
+    ``evotol --help``, which stays light."""
+    np = sys.modules.get("numpy")
+    return (getattr(np, kind),) if np is not None else ()
+
+
 def is_integer(value, minimum: int) -> bool:
     """Whether ``value`` is an integer (Python or NumPy, not a bool) of at least ``minimum``.
 
@@ -114,7 +122,7 @@ def is_integer(value, minimum: int) -> bool:
     bool
         True for an integer ``>= minimum``.
     """
-    return not isinstance(value, bool) and isinstance(value, (int, np.integer)) and value >= minimum
+    return not isinstance(value, bool) and isinstance(value, (int, *_numpy("integer"))) and value >= minimum
 
 
 def is_real(value) -> bool:
@@ -131,4 +139,4 @@ def is_real(value) -> bool:
     bool
         True for an int, float or NumPy floating value that is not a bool.
     """
-    return not isinstance(value, bool) and isinstance(value, (int, float, np.floating))
+    return not isinstance(value, bool) and isinstance(value, (int, float, *_numpy("floating")))
