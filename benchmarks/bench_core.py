@@ -12,7 +12,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from evotol.allocators import allocate_ga, allocate_optimum  # noqa: E402
-from evotol.constraints import ConstraintRows  # noqa: E402
+from evotol.measures.constraints import ConstraintRows  # noqa: E402
 from evotol.studies.yao2013 import yao2013_problem  # noqa: E402
 
 

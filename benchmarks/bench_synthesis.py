@@ -32,7 +32,7 @@ def machine() -> str:
 
 
 def bench_fivebar(workers: int | None, out: Path) -> pd.DataFrame:
-    from evotol import doe
+    from evotol import design as doe
     from evotol.studies import deng2012_tolsynth as ts
 
     E = doe.full_factorial(ts.factors())
@@ -129,7 +129,7 @@ def measure_page(path: Path, preset: str, draw_all: bool, renderer: str) -> dict
 
 def bench_browser(entries: pd.DataFrame | None, out: Path, renderers=("swiftshader", "llvmpipe"),
                   report: Path | None = None) -> None:
-    from evotol.filtering import DesignStudy, Preset
+    from evotol.design.filtering import DesignStudy, Preset
     from evotol.reporting.headless import find_chromium
     from evotol.reporting.html import Report
     from evotol.reporting.parcoords import DEFAULT_MAX_DRAWN, Axis, add_parcoords
@@ -210,7 +210,7 @@ def main(argv=None) -> int:
             if args.entries is not None:
                 entries = pd.read_parquet(args.entries)
             if entries is None:
-                from evotol import doe
+                from evotol import design as doe
                 from evotol.studies import deng2012_tolsynth as ts
 
                 entries = doe.evaluate(doe.random_subset(ts.factors(), 8192, seed=0), ts.FiveBarToleranceEvaluator(),

@@ -13,7 +13,7 @@ Each sensitivity timing is the fastest of three calls, for evotol and for Pinocc
    empty cache (continued Newton from the assembly, then the sensitivities) against a per-pose
    damped-Newton IK in Pinocchio (from the assembly configuration, ``log6`` error in the tip frame,
    damped least squares ``J^T (J J^T + 1e-12 I)^-1``, to 1e-12, then the regressor);
-3. **nonlinear Monte Carlo**: ``evotol.nonlinear.verify_nonlinear`` of the UR5 study's optimum
+3. **nonlinear Monte Carlo**: ``evotol.verification.nonlinear.verify_nonlinear`` of the UR5 study's optimum
    (the study's own verification) and ``pose_error`` alone, in pose-samples per second.
 
 ``python benchmarks/bench_urdf.py [--quick]``. The first call compiles the kernels (numba, cached
@@ -102,7 +102,7 @@ def pin_ik_loop(robot, poses, q_asm, Rt):
 
 
 def main(quick: bool = False) -> None:
-    from evotol.nonlinear import verify_nonlinear
+    from evotol.verification.nonlinear import verify_nonlinear
     from evotol.allocators import allocate_optimum
     from evotol.studyfile import load_problem
     from robots.mechanism import MechanismModel

@@ -25,7 +25,7 @@ import numpy as np
 from cost_models.base import CostModel
 from cost_models.compound import SumCost
 from cost_models.registry import ALIASES, available, from_dict
-from evotol.conformance import require, run_checks
+from evotol._runtime.check_suite import require, run_checks
 
 
 def _grid(t_min: float, t_max: float, n: int = 50) -> np.ndarray:

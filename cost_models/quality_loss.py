@@ -1,7 +1,7 @@
 """Machining cost plus a quadratic (Taguchi) quality-loss term of the same tolerance.
 
 ``c(t) = c_m(t) + q·t²``: ``c_m`` is any cost model (the machining cost, non-increasing in t) and
-``q·t² >= 0`` the expected quality loss the tolerance causes (``evotol.quality_loss`` computes
+``q·t² >= 0`` the expected quality loss the tolerance causes (``evotol.core.quality_loss`` computes
 ``q`` from the loss coefficients and the sensitivities; docs/process_selection.md, "Quality
 loss"). The sum is convex when ``c_m`` is, but it is **not** monotone: a loose tolerance is cheap
 to machine and dear in loss, so the optimum may lie inside the requirement. The range check

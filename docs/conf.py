@@ -64,8 +64,8 @@ html_title = f"evotol {release}"
 
 #: the API pages, in the order they claim the objects they document (docs/api/<module>.rst)
 API_PAGES = [
-    "evotol.problem", "evotol.accuracy", "evotol.allocators", "evotol.result", "evotol.montecarlo", "evotol.feasibility",
-    "evotol.distributions", "evotol.clearances", "evotol.errors", "robots", "robots.base", "robots.checks",
+    "evotol.core.problem", "evotol.measures", "evotol.allocators", "evotol.core.result", "evotol.verification.montecarlo", "evotol.measures.feasibility",
+    "evotol.core.distributions", "evotol.measures.clearances", "evotol.errors", "robots", "robots.base", "robots.checks",
     "robots.mechanism", "robots.assembly", "cost_models",
 ]
 
@@ -103,7 +103,7 @@ def public_names(modname: str) -> list[str]:
                  if not n.startswith("_") and (inspect.isfunction(obj) or inspect.isclass(obj))
                  and getattr(obj, "__module__", None) == modname]
         names += [n for n, where in _front_door().items() if where == modname and n not in names]
-    # a module listed in __all__ (``evotol.feasibility.measures``) is not an API object
+    # a module listed in __all__ (``evotol.measures.feasibility.measures``) is not an API object
     return [n for n in names if not inspect.ismodule(getattr(module, n))]
 
 
@@ -148,7 +148,7 @@ def claims() -> dict[str, str]:
 
 def _inherited_option(path: str) -> list[str]:
     """``:inherited-members:`` for a class assembled from mixins (``ToleranceProblem`` from
-    ``evotol.problem.costs.ProblemCosts`` ...): its page lists the mixins' methods as its own, as a
+    ``evotol.core.problem.costs.ProblemCosts`` ...): its page lists the mixins' methods as its own, as a
     user calls them. A mixin here: a direct base from another module of the class's own subpackage,
     with no base but ``object``, no ``__init__`` and no other subclass (a shared base such as
     ``Measure`` is not one). Members of other bases (``RobotErrorModel``,

@@ -17,10 +17,10 @@ __version__ = "0.1.0"
 #: public name -> module that defines (or re-exports) it
 _WHERE = {
     # the problem
-    "Tolerance": "evotol.problem",
-    "Requirement": "evotol.problem",
-    "ToleranceProblem": "evotol.problem",
-    "Evaluation": "evotol.problem",
+    "Tolerance": "evotol.core.problem",
+    "Requirement": "evotol.core.problem",
+    "ToleranceProblem": "evotol.core.problem",
+    "Evaluation": "evotol.core.problem",
     # allocators
     "allocate_sensitivity": "evotol.allocators",
     "allocate_optimum": "evotol.allocators",
@@ -40,14 +40,14 @@ _WHERE = {
     "process_front": "evotol.allocators",
     "assembly_problem": "evotol.allocators.process",
     # sources beyond intervals
-    "Distribution": "evotol.distributions",
-    "ClearanceClass": "evotol.clearances",
-    "ClearanceSources": "evotol.clearances",
+    "Distribution": "evotol.core.distributions",
+    "ClearanceClass": "evotol.measures.clearances",
+    "ClearanceSources": "evotol.measures.clearances",
     # results and verification
-    "AllocationResult": "evotol.result",
+    "AllocationResult": "evotol.core.result",
     "ParetoFront": "evotol.allocators",
-    "verify": "evotol.montecarlo",
-    "MonteCarloResult": "evotol.montecarlo",
+    "verify": "evotol.verification.montecarlo",
+    "MonteCarloResult": "evotol.verification.montecarlo",
     # errors
     "EvotolError": "evotol.errors",
     "ValidationError": "evotol.errors",

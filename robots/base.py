@@ -28,7 +28,7 @@ import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError, is_integer
 from robots.checks import check_robot, robot_checks  # noqa: F401  (the one-call conformance API)
-from robots.units import UNITS
+from evotol.units import UNITS
 
 SHAPES = {1: "interval", 2: "disk", 3: "ball"}
 

@@ -20,9 +20,9 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from evotol.conformance import require, run_checks
+from evotol._runtime.check_suite import require, run_checks
 from evotol.errors import CheckFailed, KinematicsError
-from robots.units import UNITS
+from evotol.units import UNITS
 
 #: any object following :class:`robots.base.RobotErrorModel`'s contract (robots.base imports this
 #: module -- ``check_robot`` is part of the protocol's API -- so the class is not imported here)

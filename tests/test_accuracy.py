@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evotol.accuracy import Evaluation, available, get, names
-from evotol.accuracy.base import ComponentErrors, evaluation_of, violation
-from evotol.accuracy_checks import CHECKS, check_measure, measure_checks, small_problem
-from evotol.accuracy.worst_case import WorstCaseMeasure
+from evotol.measures import Evaluation, available, get, names
+from evotol.measures.protocol import ComponentErrors, evaluation_of, violation
+from evotol.measures.checks import CHECKS, check_measure, measure_checks, small_problem
+from evotol.measures.builtin.worst_case import WorstCaseMeasure
 from evotol.errors import CheckFailed, ValidationError
-from evotol.problem import Requirement
+from evotol.core.problem import Requirement
 
 ROOT = Path(__file__).resolve().parents[1]
 MEASURES = sorted(available())
@@ -96,7 +96,7 @@ PLUGIN = '''
 """A measure from outside evotol: the triangle-inequality bound Σ_j t_j ‖B_j‖₂ per pose."""
 import numpy as np
 
-from evotol.accuracy.base import COMPONENTS, ComponentErrors, Measure, evaluation_of, violation
+from evotol.measures.protocol import COMPONENTS, ComponentErrors, Measure, evaluation_of, violation
 
 
 class Triangle(Measure):
@@ -120,9 +120,9 @@ TRIANGLE = Triangle()
 
 SCRIPT = '''
 import numpy as np
-from evotol.accuracy import names
-from evotol.accuracy_checks import check_measure, small_problem
-from evotol.accuracy.registry import get
+from evotol.measures import names
+from evotol.measures.checks import check_measure, small_problem
+from evotol.measures.registry import get
 
 P = small_problem().with_requirement(measure="triangle")
 t = np.array([3e-5, 5e-5, 7e-5, 9e-5])

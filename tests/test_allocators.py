@@ -6,7 +6,7 @@ import cost_models as cm
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_proportional, allocate_sensitivity)
 from evotol.errors import ValidationError
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studies.yao2013 import yao2013_problem
 from tests.toy_robot import ToyRobot
 

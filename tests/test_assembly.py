@@ -8,7 +8,7 @@ import pytest
 from cost_models import PowerCost
 from evotol.allocators.process import assembly_problem
 from evotol.errors import ValidationError
-from evotol.problem import Tolerance
+from evotol.core.problem import Tolerance
 from evotol.studies._process_benchmarks import CLUTCH_LIMIT_RAD, CLUTCH_NOMINAL, clutch_angle, clutch_assembly
 from robots.assembly import AssemblyFunction, LinearStack, resolve
 from robots.base import check_robot

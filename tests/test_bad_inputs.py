@@ -183,8 +183,7 @@ def test_study_file_bad_input(case, tmp_path, capsys, no_computation):
 
 def test_argparse_type_errors_are_argument_type_errors():
     """The --seed/--scheduler types raise argparse's own error class, so argparse prints usage + one line."""
-    from evotol import arguments
-
+    from evotol.cli import argument_types as arguments
     with pytest.raises(argparse.ArgumentTypeError, match="'-1'"):
         arguments.seed("-1")
     with pytest.raises(argparse.ArgumentTypeError, match="notaurl"):
@@ -198,7 +197,7 @@ def _api_problem(locked=None, measure="worst_case", position=1e-3):
     import numpy as np
 
     import cost_models as cm
-    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
     from tests.toy_robot import ToyRobot
 
     r = ToyRobot(dims=(1, 1, 2))
@@ -213,8 +212,8 @@ def _api(name):
 
     import cost_models as cm
     from evotol import allocators as al
-    from evotol.montecarlo import verify
-    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from evotol.verification.montecarlo import verify
+    from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
     from robots import registry
     from robots.ucr3 import UCR3
     from tests.toy_robot import ToyRobot

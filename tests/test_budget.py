@@ -16,7 +16,7 @@ import cost_models as cm
 from evotol.allocators import (aggregated_sensitivity, allocate_equal, allocate_ga, allocate_lagrange,
                                allocate_optimum, allocate_proportional, allocate_sensitivity)
 from evotol.errors import ValidationError
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from tests.toy_robot import ToyRobot
 
 

@@ -12,10 +12,10 @@ import pytest
 from cost_models import ReciprocalCost
 from evotol.allocators import allocate_nsga2, allocate_optimum
 from evotol.allocators.monotone import polyblock
-from evotol.clearances import ClearanceClass, ClearanceSources, sample_twists, thesis_classes
+from evotol.measures.clearances import ClearanceClass, ClearanceSources, sample_twists, thesis_classes
 from evotol.errors import ValidationError
-from evotol.montecarlo import verify
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.verification.montecarlo import verify
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from robots.clearance import ClearanceEvaluator
 from robots.mechanism.model import MechanismModel, resolve_description
 

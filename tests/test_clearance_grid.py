@@ -1,7 +1,7 @@
 """Grid studies on local cores and on a Dask cluster give identical arrays (issue item 8)."""
 import numpy as np
 
-from evotol.executor import parallel_map
+from evotol._runtime.executor import parallel_map
 from robots.clearance.grid import grid_max_pose_error
 from robots.fivebar import FiveBar
 

@@ -65,8 +65,8 @@ def test_optimum_meets_requirement_on_dense_poses_and_beats_table3(quick):
 def test_table3_intervals_through_the_core_bound_sampled_vertices_and_match_nonlinear_vertex():
     """Table 3's printed asymmetric intervals as core tolerances (offset + half-width): the core
     worst case is never below 4000 random vertices of the interval box, and the nonlinear model at
-    the attaining vertex (evotol.nonlinear) reproduces it to first order."""
-    from evotol.nonlinear import worst_vertex_errors
+    the attaining vertex (evotol.verification.nonlinear) reproduces it to first order."""
+    from evotol.verification.nonlinear import worst_vertex_errors
 
     robot = DeltaRobot()
     poses = cylinder_poses(20, seed=5)

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from evotol import doe  # noqa: E402
+from evotol import design as doe  # noqa: E402
 from evotol.studies import deng2012_tolsynth as ts  # noqa: E402
 from evotol.units import numbers_without_unit  # noqa: E402
 

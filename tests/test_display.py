@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from evotol.allocators import allocate_equal, allocate_optimum
-from evotol.display import DisplayUnits, default_units, number, parse_units, pose_text
+from evotol.units.display import DisplayUnits, default_units, number, parse_units, pose_text
 from evotol.errors import ValidationError
-from evotol.montecarlo import MonteCarloResult
+from evotol.verification.montecarlo import MonteCarloResult
 from evotol.studyfile import check_study_keys, load_problem, report_units
 
 STUDIES = Path(__file__).resolve().parents[1] / "reports" / "studies"

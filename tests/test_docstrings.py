@@ -16,7 +16,7 @@ built from them is checked by CI with ``sphinx -W``.
 
 Run as a script to list what a module (or package, with its submodules) lacks::
 
-    python tests/test_docstrings.py robots.delta evotol.accuracy
+    python tests/test_docstrings.py robots.delta evotol.measures
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Design-of-experiments entries and their evaluation (evotol.doe; Deng 2012 Sec. VII.1).
+"""Design-of-experiments entries and their evaluation (evotol.design; Deng 2012 Sec. VII.1).
 
 The evaluator used here is a closed-form serial chain: planar, parallel joint axes, clearances
 locked in rotation. Its clearance disks (radius Δb_xy, in the plane) and segments (half-length
@@ -14,8 +14,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from evotol import doe
-from evotol.doe import Factor, Objective
+from evotol import design as doe
+from evotol.design import Factor, Objective
 from evotol.errors import KinematicsError, ValidationError
 
 LEVELS_XY = (1e-4, 1e-3, 1e-2, 1e-1)
@@ -251,7 +251,7 @@ def test_knee_of_a_convex_front():
     x = np.geomspace(0.1, 10, 41)
     F = np.column_stack([x, 1 / x])
     knees = doe.knee_points(F, log=[True, True])
-    from evotol.pareto import ideal_point_knee
+    from evotol.core.pareto import ideal_point_knee
 
     assert ideal_point_knee(F, log=[True, True]) == 20 and x[20] == pytest.approx(1.0)
     assert 20 in knees

@@ -1,14 +1,14 @@
-"""The one executor (evotol.executor): order, shared arguments, backends, the resumable chunk store."""
+"""The one executor (evotol._runtime.executor): order, shared arguments, backends, the resumable chunk store."""
 import pickle
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from evotol.doe import Factor, Objective
-from evotol.doe.nsga import DesignProblem
+from evotol.design import Factor, Objective
+from evotol.design.nsga import DesignProblem
 from evotol.errors import ValidationError
-from evotol.executor import ChunkStore, parallel_map, run_chunks, worker_count
+from evotol._runtime.executor import ChunkStore, parallel_map, run_chunks, worker_count
 
 
 def _scaled(k, x):
@@ -53,7 +53,7 @@ class _Sum:
 
 
 def test_design_problem_pickles_to_workers():
-    """The pymoo problem of evotol.doe.nsga2 is a module-level class: it survives pickling and
+    """The pymoo problem of evotol.design.nsga2 is a module-level class: it survives pickling and
     evaluates the same objectives afterwards (cost = 1/Σx, size = Σx here)."""
     f = [Factor("a", low=1.0, high=2.0), Factor("b", low=0.0, high=4.0)]
     p = DesignProblem(f, _Sum(), [Objective("cost"), Objective("size", -1)])

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from cost_models import CallableCost
-from evotol.explorer_data import explorer_data, sampled_worst_case
-from evotol.problem import ToleranceProblem
+from evotol.summaries.explorer_data import explorer_data, sampled_worst_case
+from evotol.core.problem import ToleranceProblem
 from evotol.reporting.headless import HeadlessChromium
 from evotol.studyfile import load_problem, run_study_file
 from tests.browser import require_chromium
@@ -76,12 +76,14 @@ def test_explorer_in_headless_chromium_equals_python(tmp_path, name):
                 report[(k, comp)] = float(np.max(1 - wc_page / wc_exact))
                 p = c["worst_pose_wc"]
                 assert wc_exact[p] >= wc_exact.max() * (1 - stated) and p == int(np.argmax(wc_page))
-                assert c["worst_pose_rss"] == int(np.argmax(getattr(rss, comp)[0]))
+                # symmetric poses tie to the last bit; the browser's float sums may pick either
+                rss_py = getattr(rss, comp)[0]
+                assert rss_py[c["worst_pose_rss"]] == pytest.approx(rss_py.max(), rel=1e-12)
                 share = np.asarray(c["contributions"])
                 if problem.requirement.measure == "rss":   # the contributor report of Python, to 1e-9
                     pr = int(c["worst_pose"])
                     assert share == pytest.approx(getattr(rss, f"{comp}_contrib")[0, pr], rel=1e-9, abs=1e-12)
-                else:   # evotol.measures.worst_case's shares of h, at the page's worst direction u
+                else:   # evotol.measures.linear.worst_case's shares of h, at the page's worst direction u
                     pw, u = int(c["worst_pose"]), np.asarray(c["direction"])
                     sh, t = problem.shape, T[0]
                     ref = []

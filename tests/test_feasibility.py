@@ -1,6 +1,6 @@
-"""One feasibility rule for every allocator (issue 22 item 5, evotol/feasibility.py).
+"""One feasibility rule for every allocator (issue 22 item 5, evotol/measures/feasibility.py).
 
-* the tightened worst-case bound (evotol/support_bound.py) is a true upper bound (checked against
+* the tightened worst-case bound (evotol/measures/linear/proven_bound.py) is a true upper bound (checked against
   400 000 random directions) and within 1e-8 of the attained value;
 * a design a hair outside is repaired by scaling, by the factor the linear measure predicts;
 * every allocator's final design on every shipped example study meets the rule.
@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evotol import measures
-from evotol.feasibility import FEASIBILITY_RTOL, bound_ratio, evaluate_proven, repair_by_scaling
+from evotol.measures import linear as measures
+from evotol.measures.feasibility import FEASIBILITY_RTOL, bound_ratio, evaluate_proven, repair_by_scaling
 from evotol.studyfile import METHODS, load_problem
-from evotol.support_bound import certified_max
+from evotol.measures.linear.proven_bound import certified_max
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted((ROOT / "reports" / "studies").glob("*.toml"))
@@ -105,7 +105,7 @@ SMALL = {"ga": {"pop_size": 20, "n_gen": 8}}
 def test_every_allocator_meets_the_rule_on_every_shipped_example(path):
     spec = tomllib.loads(path.read_text())
     if "processes" in spec:            # process selection: the same rule on the exact response stack
-        from evotol.process_studyfile import METHODS as PROCESS_METHODS, load_process_problem
+        from evotol.studyfile.processes import METHODS as PROCESS_METHODS, load_process_problem
         pp = load_process_problem(spec, load_problem, base_dir=path.parent)
         for m in ("optimum", "ga"):
             res = PROCESS_METHODS[m](pp, **({"pop_size": 20, "n_gen": 8} if m == "ga" else {}))
@@ -153,7 +153,7 @@ def test_repair_marks_a_non_finite_ratio_failed_not_met(bad):
     "no repair needed": bound_ratio is NaN / inf and repair_by_scaling returns it unchanged with
     info["failed"] and a reason naming the ratio."""
     import cost_models as cm
-    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
     from tests.toy_robot import ToyRobot
 
     r = ToyRobot()

@@ -1,4 +1,4 @@
-"""Filtering evaluated entries (evotol.filtering, ``evotol filter``; Deng 2012 Figs. VII.3-VII.8).
+"""Filtering evaluated entries (evotol.design.filtering, ``evotol filter``; Deng 2012 Figs. VII.3-VII.8).
 
 Counts are checked against numpy masks of the same data; kept level sets against the closed
 form of a serial chain (see tests/test_doe.py): with p = sqrt((Σ Δb_xy)² + (Σ Δb_z)²) a filter
@@ -12,10 +12,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from evotol import doe
+from evotol import design as doe
 from evotol.cli import main
 from evotol.errors import ValidationError
-from evotol.filtering import DesignStudy, Preset, main_effects, resolve_query
+from evotol.design.filtering import DesignStudy, Preset, main_effects, resolve_query
 
 
 def thesis_factors(n_joints: int):

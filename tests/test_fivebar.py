@@ -134,7 +134,7 @@ def test_core_allocates_geometric_tolerances_by_cost_and_engine_confirms(fb):
     extra intervals) confirms the worst-case position error meets the requirement."""
     from cost_models import ExponentialCost
     from evotol.allocators import allocate_optimum
-    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 
     geo = FiveBarGeometric(fb)
     poses = geo.workspace.grid(4)

@@ -19,11 +19,11 @@ from types import SimpleNamespace
 
 import pytest
 
-from evotol import jobs as jobs_module
+from evotol.cli import parallel_studies as jobs_module
 from evotol import studies
 from evotol.cli import main
-from evotol.jobs import longest_first, reproduce_concurrently
-from evotol.progress import EXPECTED_SECONDS
+from evotol.cli.parallel_studies import longest_first, reproduce_concurrently
+from evotol._runtime.progress import EXPECTED_SECONDS
 
 ROOT = Path(__file__).resolve().parents[1]
 

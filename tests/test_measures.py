@@ -2,9 +2,7 @@
 import numpy as np
 import pytest
 
-from evotol import measures
-
-
+from evotol.measures import linear as measures
 def _blocks(rng, n_poses, dims):
     return [rng.normal(size=(n_poses, 3, d)) for d in dims]
 

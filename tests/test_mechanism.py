@@ -194,8 +194,8 @@ def test_description_model_works_with_allocators_and_monte_carlo(fivebar):
     nonlinear Monte Carlo runs through the description's pose_error."""
     from cost_models import ExponentialCost
     from evotol.allocators import allocate_optimum
-    from evotol.montecarlo import verify
-    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from evotol.verification.montecarlo import verify
+    from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 
     poses = fivebar.workspace.grid(3)
     tol = {s.name: Tolerance(ExponentialCost(1.0, 0.5, scale=1e-5), lower=1e-7, upper=1e-3) for s in fivebar.sources}

@@ -5,9 +5,9 @@ import pytest
 import cost_models as cm
 from evotol.allocators import allocate_optimum
 from evotol.errors import ValidationError
-from evotol.distributions import draw as _draw, uniforms as _uniforms
-from evotol.montecarlo import verify
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.core.distributions import draw as _draw, uniforms as _uniforms
+from evotol.verification.montecarlo import verify
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studies.yao2013 import yao2013_problem
 from tests.toy_robot import ToyRobot
 
@@ -75,7 +75,7 @@ def test_verify_nonlinear_counts_an_unassembled_sample_as_a_miss():
     cannot be assembled is a miss, as in verify(): the exceed rate is the fraction of samples with
     e0 > 0 (every assembled sample is far inside the 1 mm bound), the same as verify()'s nonlinear
     exceed rate on the same law; mc_max and mc_q999 are inf (misses are infinite errors), not NaN."""
-    from evotol.nonlinear import uniform_interval_samples, verify_nonlinear
+    from evotol.verification.nonlinear import uniform_interval_samples, verify_nonlinear
 
     r = _UnassembledToy(dims=(1, 1))
     tol = {s.name: Tolerance(cm.ExponentialCost(1, 1, scale=1e-3), 1e-6, 1e-3) for s in r.sources}
@@ -101,7 +101,7 @@ def test_verify_nonlinear_counts_an_unassembled_sample_as_a_miss():
 def test_verify_nonlinear_quantile_puts_a_few_misses_above_every_error():
     """With fewer misses than the 0.1 % tail, mc_q999 is the quantile with the misses placed above
     every assembled error (finite), and mc_max is inf."""
-    from evotol.nonlinear import _quantile_misses
+    from evotol.verification.nonlinear import _quantile_misses
 
     e = np.random.default_rng(0).random(2001)
     top = np.argsort(e)[-2:]
@@ -137,8 +137,8 @@ def test_calibrate_scale_samples_asymmetric_intervals_as_the_yield_measure():
     centred ±t the factor was 2.26 and its bound 12 %)."""
     from scipy.stats import beta
 
-    from evotol.montecarlo import calibrate_scale
-    from evotol.statistical import SampledYield
+    from evotol.verification.montecarlo import calibrate_scale
+    from evotol.measures.statistical import SampledYield
 
     P = _asymmetric_yield_problem()
     cal = calibrate_scale(P, np.full(3, 2e-4), 2000, seed=11)
@@ -157,7 +157,7 @@ def test_calibrate_scale_samples_asymmetric_intervals_as_the_yield_measure():
 def test_calibrate_scale_refuses_a_zero_free_tolerance():
     """A zero tolerance on a free source cannot be scaled into its bounds: a ValidationError naming
     the source, not a scale of inf and NaN tolerances."""
-    from evotol.montecarlo import calibrate_scale
+    from evotol.verification.montecarlo import calibrate_scale
 
     with pytest.raises(ValidationError, match=r"tolerances\['s0'\] = 0\.0: expected a positive tolerance"):
         calibrate_scale(_asymmetric_yield_problem(), [0.0, 2e-4, 2e-4], 100)
@@ -170,7 +170,7 @@ def test_calibrate_scale_refuses_a_problem_without_a_free_source():
     are set after construction (a shallow copy, as the with_* methods make)."""
     import copy
 
-    from evotol.montecarlo import calibrate_scale
+    from evotol.verification.montecarlo import calibrate_scale
 
     P = copy.copy(_asymmetric_yield_problem())
     P.locked_values = np.full(3, 2e-4)
@@ -192,7 +192,7 @@ def test_calibrate_scale_checks_confidence_iters_and_samples_first(field, value,
     failed inside the first sampled check; ``iters`` 0 returned the lower-bound scale without a
     search and 2.5 raised a TypeError from ``range``. Each is refused before any sampling in one
     line naming the argument (``n_samples=True``, a bool, is refused as before)."""
-    from evotol.montecarlo import calibrate_scale
+    from evotol.verification.montecarlo import calibrate_scale
 
     kw = {"n_samples": 100, field: value}
     with pytest.raises(ValidationError) as exc:

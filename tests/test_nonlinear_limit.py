@@ -1,5 +1,5 @@
-"""Nonlinear worst case of assembly functions over the tolerance box (evotol/interval.py,
-evotol/nonlinear_worst_case.py) and the allocation holding the nonlinear limit
+"""Nonlinear worst case of assembly functions over the tolerance box (evotol/measures/nonlinear/interval.py,
+evotol/measures/nonlinear/worst_case.py) and the allocation holding the nonlinear limit
 (evotol/allocators/nonlinear_limit.py): enclosures against sampling and finite differences, the
 proven bound against closed forms, the allocation against an independent vertex-constrained solve."""
 import itertools
@@ -12,8 +12,8 @@ from evotol.allocators import allocate_optimum
 from evotol.allocators.nonlinear_limit import allocate_nonlinear_limit
 from evotol.allocators.process import allocate_process_optimum
 from evotol.errors import ValidationError
-from evotol.interval import Dual, Interval
-from evotol.nonlinear_worst_case import nonlinear_worst_case
+from evotol.measures.nonlinear.interval import Dual, Interval
+from evotol.measures.nonlinear.worst_case import nonlinear_worst_case
 from evotol.studies._process_benchmarks import _mc_nonlinear, clutch_angle, clutch_problem
 from robots.assembly import AssemblyFunction
 
@@ -168,7 +168,7 @@ def test_allocation_holding_the_nonlinear_limit_matches_an_independent_solve():
 def test_nonlinear_limit_on_a_tolerance_problem_and_bad_input():
     """Without process choice (allocate_optimum) the same holds; an RSS problem is refused."""
     from evotol.allocators.process import assembly_problem
-    from evotol.problem import Tolerance
+    from evotol.core.problem import Tolerance
     from cost_models import ReciprocalCost
 
     pp = clutch_problem("worst_case")

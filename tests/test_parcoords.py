@@ -13,9 +13,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from evotol import doe
+from evotol import design as doe
 from evotol.errors import ValidationError
-from evotol.filtering import DesignStudy, Preset
+from evotol.design.filtering import DesignStudy, Preset
 from evotol.reporting.headless import HeadlessChromium
 from tests.browser import require_chromium
 from evotol.reporting.html import Report

@@ -1,11 +1,11 @@
-"""The one knee definition (evotol.pareto): closed-form fronts."""
+"""The one knee definition (evotol.core.pareto): closed-form fronts."""
 import numpy as np
 import pandas as pd
 import pytest
 
 from evotol.allocators import ParetoFront
 from evotol.errors import ValidationError
-from evotol.pareto import ideal_point_knee, knee_points, non_dominated
+from evotol.core.pareto import ideal_point_knee, knee_points, non_dominated
 
 
 def test_ideal_point_knee_of_y_equals_one_over_x():

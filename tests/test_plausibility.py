@@ -19,8 +19,8 @@ import pytest
 import cost_models as cm
 from evotol.allocators import allocate_sensitivity
 from evotol.cli import main
-from evotol.plausibility import PlausibilityWarning, problem_warnings, result_warnings
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.core.plausibility import PlausibilityWarning, problem_warnings, result_warnings
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from tests.fast_study import fast_study
 from tests.toy_robot import ToyRobot
 
@@ -72,7 +72,7 @@ def test_python_api_warns_at_the_problem_and_at_the_allocator():
     assert r.info["warnings"] and "inactive" in r.info["warnings"][0]
 
 
-@pytest.mark.filterwarnings("ignore::evotol.plausibility.PlausibilityWarning")
+@pytest.mark.filterwarnings("ignore::evotol.core.plausibility.PlausibilityWarning")
 def test_inactive_requirement_names_the_factor_of_the_closed_form():
     p = _problem(position=0.05, upper=1e-3)
     r = allocate_sensitivity(p)
@@ -83,7 +83,7 @@ def test_inactive_requirement_names_the_factor_of_the_closed_form():
     assert f"{rss:.6g} m" in line and f"{0.05 / rss:.3g}x below it" in line and "every free tolerance sits at its upper bound" in line
 
 
-@pytest.mark.filterwarnings("ignore::evotol.plausibility.PlausibilityWarning")
+@pytest.mark.filterwarnings("ignore::evotol.core.plausibility.PlausibilityWarning")
 def test_an_active_requirement_is_not_flagged():
     """The same problem with a requirement that binds (half the error at the upper bounds)."""
     p = _problem(position=0.05, upper=1e-3)

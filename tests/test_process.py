@@ -11,7 +11,7 @@ from evotol.allocators.process import (Process, ProcessProblem, allocate_process
                                        allocate_process_optimum, assembly_problem, cheapest_feasible_processes,
                                        process_front)
 from evotol.errors import InfeasibleError, ValidationError
-from evotol.problem import Requirement
+from evotol.core.problem import Requirement
 from evotol.studies._process_benchmarks import MM, clutch_problem, process, stack_problem
 from robots.assembly import LinearStack
 
@@ -191,7 +191,7 @@ def test_assembly_yield_is_the_normal_closed_form():
     # uniform sources in ±t: variance t²/3 instead of t²/9, σ √3 times larger:
     # moment-matched yield 2Φ(√3) − 1 at the same t
     assert pp.assembly_yield(t, pp.yield_model("uniform"))[0] == pytest.approx(2 * norm.cdf(np.sqrt(3)) - 1, rel=1e-9)
-    # the 3-D quadrature of evotol.statistical agrees to its accuracy on this rank-one covariance
+    # the 3-D quadrature of evotol.measures.statistical agrees to its accuracy on this rank-one covariance
     q = pp.yield_model().evaluate(T, 0.9973).miss["position"][:, 0]
     assert 1 - q == pytest.approx(pp.assembly_yield(T), abs=1e-4)
 
@@ -327,7 +327,7 @@ def test_process_allocators_have_the_one_shape_and_refuse_a_budget(clutch_wc):
 def test_process_optimum_and_ga_name_a_measure_without_constraint_rows(measure):
     """allocate_process_optimum / allocate_process_ga on a statistical measure: a one-line
     ValidationError naming requirement.measure, its value and the measures expected (worst_case,
-    rss), from evotol.constraints.ConstraintRows -- not a plain ValueError."""
+    rss), from evotol.measures.constraints.ConstraintRows -- not a plain ValueError."""
     pp = stack_problem(measure)
     for fn in (allocate_process_optimum, allocate_process_ga):
         with pytest.raises(ValidationError) as err:

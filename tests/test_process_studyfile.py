@@ -1,4 +1,4 @@
-"""Process selection from a study file ([processes.<dimension>], evotol/process_studyfile.py): the
+"""Process selection from a study file ([processes.<dimension>], evotol/studyfile/processes.py): the
 shipped clutch file against the Python API, both TOML spellings, quality loss in an ordinary study,
 bad input named."""
 import json
@@ -11,8 +11,8 @@ import pytest
 from evotol.allocators import allocate_optimum
 from evotol.allocators.process import allocate_process_optimum
 from evotol.errors import ValidationError
-from evotol.process_studyfile import load_process_problem, run_process_study
-from evotol.quality_loss import with_quality_loss
+from evotol.studyfile.processes import load_process_problem, run_process_study
+from evotol.core.quality_loss import with_quality_loss
 from evotol.studies import _choi2000 as choi
 from evotol.studyfile import load_problem, run_study_file
 

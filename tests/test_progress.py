@@ -6,7 +6,7 @@ import time
 
 from evotol import studies
 from evotol.cli import main
-from evotol.progress import EXPECTED_SECONDS, Heartbeat
+from evotol._runtime.progress import EXPECTED_SECONDS, Heartbeat
 
 
 class _Terminal(io.StringIO):
@@ -36,7 +36,7 @@ def test_list_prints_expected_time_of_every_study(capsys):
 
 # --- issue 27 item 5: the long methods' progress, a bar on a terminal and lines in a log ---------
 def test_progress_bar_prints_size_estimate_and_lines_to_a_log():
-    from evotol.progress import progress_bar
+    from evotol._runtime.progress import progress_bar
 
     log = io.StringIO()
     with progress_bar(5, "GA", "gen", True, size="5 generations × 8 designs × 3 poses", stream=log, every=0.0, delay=0.0) as bar:
@@ -60,7 +60,7 @@ def test_progress_bar_prints_size_estimate_and_lines_to_a_log():
 
 
 def test_progress_bar_default_is_a_bar_on_a_terminal_and_silent_in_a_log():
-    from evotol.progress import progress_bar
+    from evotol._runtime.progress import progress_bar
 
     log, tty = io.StringIO(), _Terminal()
     for stream, progress in ((log, None), (tty, False), (log, False)):
@@ -79,8 +79,8 @@ def test_run_shows_the_size_and_progress_of_every_long_method_in_a_log(tmp_path,
 
     import evotol.allocators.ga as ga
     import evotol.allocators.nsga as nsga
-    import evotol.montecarlo as mc
-    from evotol.progress import progress_bar
+    import evotol.verification.montecarlo as mc
+    from evotol._runtime.progress import progress_bar
     from tests.fast_study import fast_study
 
     for module in (ga, nsga, mc):
@@ -101,7 +101,7 @@ def test_run_prints_lines_for_a_method_without_a_bar(tmp_path, capsys, monkeypat
     import functools
 
     import evotol.studyfile as sf
-    from evotol.progress import Heartbeat
+    from evotol._runtime.progress import Heartbeat
     from tests.fast_study import fast_study
 
     monkeypatch.setattr(sf, "Heartbeat", functools.partial(Heartbeat, every=0.01))

@@ -1,4 +1,4 @@
-"""Taguchi quality loss as a cost term (evotol/quality_loss.py, cost_models/quality_loss.py):
+"""Taguchi quality loss as a cost term (evotol/core/quality_loss.py, cost_models/quality_loss.py):
 the first-order expected loss against Monte Carlo, and allocators minimising machining + loss
 against brute force."""
 import numpy as np
@@ -9,8 +9,8 @@ from cost_models.quality_loss import QualityLossCost
 from evotol.allocators import allocate_ga, allocate_optimum
 from evotol.allocators.process import assembly_problem
 from evotol.errors import ValidationError
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
-from evotol.quality_loss import expected_loss, loss_coefficients, with_quality_loss
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.core.quality_loss import expected_loss, loss_coefficients, with_quality_loss
 from robots.assembly import LinearStack
 from tests.toy_robot import ToyRobot
 

@@ -1,14 +1,14 @@
-"""The ``yield`` measure (evotol.statistical): closed forms, 10^6-sample Monte Carlo of the same
+"""The ``yield`` measure (evotol.measures.statistical): closed forms, 10^6-sample Monte Carlo of the same
 linear model, Bonferroni, the k-sigma violation and bad input."""
 import numpy as np
 import pytest
 from scipy import stats
 
 import cost_models as cm
-from evotol.distributions import Distribution, draw, uniforms, unit_moments
+from evotol.core.distributions import Distribution, draw, uniforms, unit_moments
 from evotol.errors import ValidationError
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
-from evotol.statistical import k_equivalent, miss_probability, sym3_eigenvalues
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.measures.statistical import k_equivalent, miss_probability, sym3_eigenvalues
 from tests.toy_robot import ToyRobot
 
 
@@ -149,7 +149,7 @@ def test_mean_shift_or_contact_must_suit_the_source_shape():
 
 
 def test_clopper_pearson_interval_matches_scipy_binomtest():
-    from evotol.montecarlo import yield_check
+    from evotol.verification.montecarlo import yield_check
 
     inside = np.array([0.995, 0.98, 1.0])
     out = yield_check(inside, 2000, 0.99)
@@ -191,7 +191,7 @@ def test_nonlinear_yield_of_the_planar_5r_agrees_with_an_independent_verificatio
     plain-MC samples estimate the same probability: within 4 standard errors of the difference of
     two binomial estimates (2048 and 8000 samples).
     A design far too loose is flagged as missing the requirement."""
-    from evotol.montecarlo import verify
+    from evotol.verification.montecarlo import verify
 
     P = _planar5r_problem("nonlinear")
     t = np.array([3e-5] * 6 + [1.6e-3] * 2 + [4e-5] * 4)
@@ -235,8 +235,8 @@ def test_calibrate_scale_gives_the_largest_certified_factor():
     bound of the miss probability (fresh samples, nonlinear model) is within 1 − p; 3 % more is not."""
     from scipy.stats import beta
 
-    from evotol.montecarlo import calibrate_scale
-    from evotol.statistical import SampledYield
+    from evotol.verification.montecarlo import calibrate_scale
+    from evotol.measures.statistical import SampledYield
 
     P = _planar5r_problem("nonlinear", 512)
     t = np.array([3e-5] * 6 + [1.6e-3] * 2 + [4e-5] * 4)

@@ -60,7 +60,7 @@ def test_files_without_a_recorded_study_file_are_not_overwritten(tmp_path, capsy
 
 
 def test_a_process_study_records_its_file_too(tmp_path, capsys):
-    """Process-selection study files (evotol/process_studyfile.py) run again into their folder;
+    """Process-selection study files (evotol/studyfile/processes.py) run again into their folder;
     a copy under another path with the same name is refused."""
     from pathlib import Path
 
@@ -87,8 +87,8 @@ def test_source_table_keeps_the_nominals_of_a_clearance_wrapped_robot():
     import tomllib
     from pathlib import Path
 
-    from evotol.clearances import WithClearances
-    from evotol.study_outputs import source_nominals, source_table
+    from evotol.measures.clearances import WithClearances
+    from evotol.summaries.user_study import source_nominals, source_table
     from evotol.studyfile import load_problem
 
     path = Path(__file__).resolve().parents[1] / "reports" / "studies" / "fivebar_clearances.toml"

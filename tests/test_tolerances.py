@@ -9,10 +9,10 @@ import pytest
 from scipy.optimize import minimize
 
 from cost_models import ExponentialCost, ReciprocalCost
-from evotol import measures
+from evotol.measures import linear as measures
 from evotol.allocators import allocate_ga, allocate_optimum, allocate_sensitivity
 from evotol.errors import InfeasibleError, ValidationError
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from tests.toy_robot import ToyRobot
 
 N = 5  # interval sources of the small problems
@@ -316,7 +316,7 @@ def test_verify_nonlinear_on_the_delta_with_table3_offsets():
     forward kinematics with errors. Every Monte Carlo sample stays inside the box (never above the
     worst vertex by more than the linearisation error), the worst vertex matches the linear worst
     case to 1 %, and a requirement below the nonlinear worst vertex is flagged."""
-    from evotol.montecarlo import verify
+    from evotol.verification.montecarlo import verify
     from evotol.studies import brahmia2023_delta as study
     from robots.delta import DeltaRobot, cylinder_poses
 
@@ -360,7 +360,7 @@ def test_hold_on_workspace_reports_the_design_it_returns_when_rounds_run_out():
     """With one round, hold_on_workspace scales the centre-pose optimum once; its report (worst
     normalised error, holds) is that of the scaled design it returns -- equal to an independent
     worst-pose search on it -- not of the design before the scaling (which misses: > 1.01)."""
-    from evotol.refinement import dense_problem, hold_on_workspace, worst_pose
+    from evotol.allocators.workspace_refinement import dense_problem, hold_on_workspace, worst_pose
 
     P = _ucr3_problem()
     t = allocate_optimum(P).t

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evotol.display import number
+from evotol.units.display import number
 from evotol.reporting.user_study import render_user_study, top_table_rows
 from evotol.studyfile import load_problem, run_study_file
 

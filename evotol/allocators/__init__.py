@@ -1,6 +1,6 @@
 """Allocation methods and what each returns.
 
-On a :class:`evotol.problem.ToleranceProblem` (an :class:`evotol.result.AllocationResult`, unless said):
+On a :class:`evotol.core.problem.ToleranceProblem` (an :class:`evotol.core.result.AllocationResult`, unless said):
 
 * :func:`allocate_sensitivity` – the equal-effect rule the literature compares against;
 * :func:`allocate_optimum` – exact optimum of the convex problem, with a certificate;
@@ -22,7 +22,7 @@ Every allocator has one shape: ``allocate_x(problem, *, budget=None, seed=..., *
 problem first, everything else by keyword (``seed`` where the method is random; ``budget`` selects
 *best accuracy at a budget*, and is refused with a one-line error by the methods that have no such
 mode: NSGA-II, whose front spans every budget, and the polyblock bracket). What *feasible* means in
-every result is one rule, :mod:`evotol.feasibility`.
+every result is one rule, :mod:`evotol.measures.feasibility`.
 """
 from evotol.allocators.baselines import allocate_equal, allocate_lagrange, allocate_proportional
 from evotol.allocators.ga import allocate_ga

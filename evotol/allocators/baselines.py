@@ -33,11 +33,11 @@ from cost_models.exponential import ExponentialCost
 from cost_models.power import PowerCost
 from evotol.allocators.budget import budget_info, check_budget, scaled_family, spend_budget
 from evotol.allocators.sensitivity import aggregated_sensitivity
-from evotol.constraints import ConstraintRows
+from evotol.measures.constraints import ConstraintRows
 from evotol.errors import ValidationError
-from evotol.problem import ToleranceProblem
-from evotol.result import make_result
-from evotol.threads import single_threaded_blas
+from evotol.core.problem import ToleranceProblem
+from evotol.core.result import make_result
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 def _scale_exact(problem: ToleranceProblem, t: np.ndarray, rows: ConstraintRows | None = None) -> np.ndarray:
@@ -215,16 +215,16 @@ def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None):
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The problem (tolerances in SI: m or rad).
     budget : float or None
         If given (cost models' unit), the smallest common tolerance whose cost fits the budget.
 
     Returns
     -------
-    evotol.result.AllocationResult
+    evotol.core.result.AllocationResult
         The design (tolerances in SI: m or rad), its cost (cost models' unit), its errors at every
-        pose (m, rad) and the feasibility repair applied (:mod:`evotol.feasibility`).
+        pose (m, rad) and the feasibility repair applied (:mod:`evotol.measures.feasibility`).
 
     Raises
     ------
@@ -244,7 +244,7 @@ def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = N
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The problem (tolerances in SI: m or rad).
     budget : float or None
         If given (cost models' unit), the design scaled down until its cost fits the budget.
@@ -253,9 +253,9 @@ def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = N
 
     Returns
     -------
-    evotol.result.AllocationResult
+    evotol.core.result.AllocationResult
         The design (tolerances in SI: m or rad), its cost (cost models' unit), its errors at every
-        pose (m, rad) and the feasibility repair applied (:mod:`evotol.feasibility`).
+        pose (m, rad) and the feasibility repair applied (:mod:`evotol.measures.feasibility`).
 
     Raises
     ------
@@ -279,7 +279,7 @@ def allocate_lagrange(problem: ToleranceProblem, *, budget: float | None = None,
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The problem (tolerances in SI: m or rad).
     budget : float or None
         If given (cost models' unit), the multiplier λ chosen so the cost is the budget (the same
@@ -289,9 +289,9 @@ def allocate_lagrange(problem: ToleranceProblem, *, budget: float | None = None,
 
     Returns
     -------
-    evotol.result.AllocationResult
+    evotol.core.result.AllocationResult
         The design (tolerances in SI: m or rad), its cost (cost models' unit), its errors at every
-        pose (m, rad) and the feasibility repair applied (:mod:`evotol.feasibility`).
+        pose (m, rad) and the feasibility repair applied (:mod:`evotol.measures.feasibility`).
 
     Raises
     ------

@@ -23,8 +23,8 @@ from typing import Callable
 import numpy as np
 
 from evotol.errors import ValidationError
-from evotol.problem import ToleranceProblem
-from evotol.quality_loss import has_quality_loss
+from evotol.core.problem import ToleranceProblem
+from evotol.core.quality_loss import has_quality_loss
 
 
 def cheapest_design(problem: ToleranceProblem) -> np.ndarray:

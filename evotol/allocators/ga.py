@@ -21,7 +21,7 @@ positively homogeneous in t, so t ← t / (error/bound) is exact when no bound c
 the penalty search into a search along the feasible boundary; ``repair=False`` is the paper's GA.
 
 The whole population is evaluated in one vectorised call. Worst-case rows are generated lazily
-(:mod:`evotol.constraints`): each generation the best designs are checked exactly and any missed
+(:mod:`evotol.measures.constraints`): each generation the best designs are checked exactly and any missed
 row is added; the returned design is judged by the exact evaluation.
 Runs are reproducible from ``seed``; Ctrl-C stops the run and returns the best design so far.
 """
@@ -47,13 +47,13 @@ from pymoo.termination import get_termination
 from scipy.stats import qmc
 
 from evotol.allocators.budget import check_budget, cheapest_design
-from evotol.constraints import ConstraintRows, ExactRows, constraint_rows
+from evotol.measures.constraints import ConstraintRows, ExactRows, constraint_rows
 from evotol.errors import ValidationError
-from evotol.problem import ToleranceProblem
-from evotol.progress import progress_bar
-from evotol.quality_loss import has_quality_loss
-from evotol.result import make_result
-from evotol.threads import single_threaded_blas
+from evotol.core.problem import ToleranceProblem
+from evotol._runtime.progress import progress_bar
+from evotol.core.quality_loss import has_quality_loss
+from evotol.core.result import make_result
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 # --- the paper's operators --------------------------------------------------------------------------
@@ -288,7 +288,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The problem (tolerances in SI: m or rad).
     pop_size, n_gen : int
         Population size (>= 4) and number of generations (>= 1).
@@ -323,15 +323,15 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
         Generations between checkpoints.
     refine : bool or dict
         Final check over the whole workspace (``True`` or options of
-        :func:`evotol.refinement.hold_on_workspace`): the best design is scaled until it holds at
+        :func:`evotol.allocators.workspace_refinement.hold_on_workspace`): the best design is scaled until it holds at
         the worst poses found between and beyond the problem's poses; reported in
         ``result.info["refinement"]``.
 
     Returns
     -------
-    evotol.result.AllocationResult
+    evotol.core.result.AllocationResult
         The best design (tolerances in SI), its cost (cost models' unit), its errors (m, rad),
-        the per-generation history and the feasibility repair applied (:mod:`evotol.feasibility`).
+        the per-generation history and the feasibility repair applied (:mod:`evotol.measures.feasibility`).
 
     Raises
     ------
@@ -411,7 +411,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     history = pd.DataFrame(hist)
     refinement = None
     if refine and budget is None:
-        from evotol.refinement import hold_on_workspace
+        from evotol.allocators.workspace_refinement import hold_on_workspace
 
         best, refinement = hold_on_workspace(problem, best, **({} if refine is True else dict(refine)))
     name = "GA" if budget is None else "GA (best accuracy at budget)"

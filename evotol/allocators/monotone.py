@@ -1,6 +1,6 @@
 """Global optimum bracket of a monotone allocation problem: polyblock outer approximation.
 
-With joint clearances the worst case W(t) (:mod:`evotol.clearances`) is not convex, so the
+With joint clearances the worst case W(t) (:mod:`evotol.measures.clearances`) is not convex, so the
 certified optimum's cutting planes do not apply. What always holds is **monotonicity**: every
 cost model decreases with its tolerance and W never decreases when a tolerance grows. Minimising
 a decreasing cost over the normal set G = {t : W(t) <= E} (t in G and t' <= t imply t' in G) is a
@@ -31,10 +31,10 @@ import time
 
 import numpy as np
 
-from evotol.constraints import ExactRows
+from evotol.measures.constraints import ExactRows
 from evotol.errors import ValidationError
-from evotol.problem import ToleranceProblem
-from evotol.result import make_result
+from evotol.core.problem import ToleranceProblem
+from evotol.core.result import make_result
 
 
 def _cut(V: np.ndarray, z: np.ndarray, chunk: int = 256) -> np.ndarray:
@@ -68,7 +68,7 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
     Parameters
     ----------
     problem : ToleranceProblem
-        The problem, judged by its exact measure (:class:`evotol.constraints.ExactRows`).
+        The problem, judged by its exact measure (:class:`evotol.measures.constraints.ExactRows`).
     incumbent : mapping or array_like or None
         A design (m or rad per source); used as the first upper bound if it holds the
         requirement.
@@ -191,7 +191,7 @@ def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None,
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The problem (tolerances in SI: m or rad).
     budget : None
         Accepted for the shape every allocator shares and must be None (the bracket is of the
@@ -208,7 +208,7 @@ def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None,
 
     Returns
     -------
-    evotol.result.AllocationResult
+    evotol.core.result.AllocationResult
         The best design (SI) and its cost (cost models' unit); the certificate carries
         ``lower_bound``, ``gap`` (relative to the design's cost) and the polyblock's counts;
         ``result.verdict`` reads it (a gap above 1e-6 is reported as "not certified").

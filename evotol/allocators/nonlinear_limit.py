@@ -6,7 +6,7 @@ worst case of the linear optimum 1.21 × the limit). This option repeats:
 
 1. allocate on the current linear rows (any allocator: ``allocate_optimum``,
    ``allocate_process_optimum``...);
-2. compute the proven nonlinear worst case of the design (:func:`evotol.nonlinear_worst_case.nonlinear_worst_case`);
+2. compute the proven nonlinear worst case of the design (:func:`evotol.measures.nonlinear.worst_case.nonlinear_worst_case`);
 3. **re-linearise every response at its worst point** ``x0 + δ*``: its row becomes the secant
    sensitivities ``s̄_j = ∫_0^1 ∂f_k/∂x_j(x0 + τ δ*) dτ`` (8-point Gauss–Legendre), for which
    ``Σ_j s̄_j δ*_j = f_k(x0 + δ*) − f_k(x0)``: the row predicts the real deviation at that point;
@@ -25,8 +25,8 @@ import numpy as np
 
 from evotol.allocators.process.problem import ProcessProblem
 from evotol.errors import ValidationError
-from evotol.nonlinear_worst_case import nonlinear_worst_case
-from evotol.problem import ToleranceProblem
+from evotol.measures.nonlinear.worst_case import nonlinear_worst_case
+from evotol.core.problem import ToleranceProblem
 from robots.assembly import LinearStack
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
@@ -46,7 +46,7 @@ class NonlinearLimitResult:
         the last one).
     linear_worst_case : dict
         Proven nonlinear worst case of ``linear``
-        (:func:`evotol.nonlinear_worst_case.nonlinear_worst_case`).
+        (:func:`evotol.measures.nonlinear.worst_case.nonlinear_worst_case`).
     worst_case : dict
         Proven nonlinear worst case of ``result``.
     iterations : int

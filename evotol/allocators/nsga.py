@@ -18,13 +18,13 @@ from pymoo.core.problem import Problem
 from pymoo.termination import get_termination
 
 from evotol.allocators.ga import initial_population
-from evotol.constraints import ConstraintRows, constraint_rows
-from evotol import feasibility
+from evotol.measures.constraints import ConstraintRows, constraint_rows
+from evotol.measures import feasibility
 from evotol.errors import ValidationError
-from evotol.pareto import ParetoFront, non_dominated
-from evotol.problem import ToleranceProblem
-from evotol.progress import progress_bar
-from evotol.threads import single_threaded_blas
+from evotol.core.pareto import ParetoFront, non_dominated
+from evotol.core.problem import ToleranceProblem
+from evotol._runtime.progress import progress_bar
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 class _FrontProblem(Problem):
@@ -50,7 +50,7 @@ def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, samplin
     """The one NSGA-II run of evotol: pymoo's ``NSGA2`` (duplicates eliminated) for ``n_gen``
     generations on a pymoo ``problem``; returns the algorithm (``algo.pop``, ``algo.opt``).
 
-    Used by :func:`allocate_nsga2` (tolerance problems), :func:`evotol.doe.nsga2` (design studies) and
+    Used by :func:`allocate_nsga2` (tolerance problems), :func:`evotol.design.nsga2` (design studies) and
     :func:`evotol.allocators.process.process_front` (process selection).
 
     Parameters
@@ -126,7 +126,7 @@ def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, po
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The problem (tolerances in SI: m or rad).
     budget : None
         Accepted for the shape every allocator shares and must be None: the front spans every
@@ -182,7 +182,7 @@ def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, po
     T, err = T[nd].copy(), err[nd].copy()
     comp_err = {comp: np.max(getattr(ev, comp)[nd], axis=1) for comp, _ in problem.components}
     # members that meet the requirement by their attained error are held to the one rule of
-    # evotol.feasibility (proven bound <= requirement x (1 + 1e-6)); one a hair outside is scaled in
+    # evotol.measures.feasibility (proven bound <= requirement x (1 + 1e-6)); one a hair outside is scaled in
     proven = np.full(len(nd), np.nan)
     repaired = np.zeros(len(nd), dtype=bool)
     for i in np.flatnonzero(err <= 1 + feasibility.FEASIBILITY_RTOL):

@@ -6,7 +6,7 @@ Minimum cost at a required accuracy::
                             or RSS: b_p·t² <= 1 for every pose p,   lower <= t <= upper.
 
 With convex costs (exponential, power, reciprocal... on the bounds) this is a convex program.
-It is solved by cutting planes: SLSQP on the current working rows (:mod:`evotol.constraints`),
+It is solved by cutting planes: SLSQP on the current working rows (:mod:`evotol.measures.constraints`),
 then an exact evaluation adds the rows it misses, until none is missing.
 
 Certificate. Multipliers λ >= 0 of the (nearly) active rows are estimated by NNLS on the
@@ -40,12 +40,12 @@ from scipy.optimize import minimize, nnls
 from evotol.allocators.sensitivity import sensitivity_design
 from evotol.allocators.budget import check_budget
 from evotol.allocators.monotone import allocate_monotone
-from evotol.constraints import ConstraintRows
-from evotol import feasibility
+from evotol.measures.constraints import ConstraintRows
+from evotol.measures import feasibility
 from evotol.errors import ConvergenceError, ValidationError
-from evotol.problem import ToleranceProblem
-from evotol.result import make_result
-from evotol.threads import single_threaded_blas
+from evotol.core.problem import ToleranceProblem
+from evotol.core.result import make_result
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 def _check_convex(problem: ToleranceProblem) -> None:
@@ -223,11 +223,11 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
     """Certified optimum (min cost at the requirement, or best accuracy at ``budget``).
 
     SLSQP on the convex problem with cutting planes (the worst-case rows of
-    :mod:`evotol.constraints`), certified by its KKT residual and duality gap.
+    :mod:`evotol.measures.constraints`), certified by its KKT residual and duality gap.
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The problem (tolerances in SI: m or rad).
     budget : float or None
         If given (cost models' unit), best accuracy at this cost instead of least cost at the
@@ -240,8 +240,8 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
     max_rows : int
         Largest working set of constraint rows.
     refine : bool or dict
-        The whole workspace (:mod:`evotol.refinement`): ``True`` or a dict of
-        :func:`evotol.refinement.refine_poses` options (``grid``, ``candidates``, ``local``,
+        The whole workspace (:mod:`evotol.allocators.workspace_refinement`): ``True`` or a dict of
+        :func:`evotol.allocators.workspace_refinement.refine_poses` options (``grid``, ``candidates``, ``local``,
         ``add``, ``max_rounds``): after each solve, the workspace is searched for the pose of
         largest normalised error, which is added before solving again, until the requirement
         holds there. ``result.info["refinement"]`` reports the worst pose, its error and the
@@ -249,7 +249,7 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
 
     Returns
     -------
-    evotol.result.AllocationResult
+    evotol.core.result.AllocationResult
         The optimal design (tolerances in SI: m or rad), its cost (cost models' unit), its
         errors (m, rad) and ``certificate`` (lower bound, relative gap, KKT residual, rows). With clearance
         sources (``problem.clearances``) the worst case is not convex: the result is
@@ -268,7 +268,7 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
         The cutting planes did not converge in ``max_rounds``.
     """
     if refine:
-        from evotol.refinement import refine_poses
+        from evotol.allocators.workspace_refinement import refine_poses
 
         opts = {} if refine is True else dict(refine)
         res, info = refine_poses(problem, lambda p: allocate_optimum(p, budget=budget, tol=tol, max_rounds=max_rounds,
@@ -320,7 +320,7 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
     result = make_result(problem, "optimum", t, certificate=cert, seconds=time.perf_counter() - t0, repair=np.inf,
                          info={"solver_message": str(getattr(res, "message", ""))})
     if problem.requirement.measure == "worst_case":
-        # the proven bound of the design (tightened: evotol.feasibility), over the requirement, as
+        # the proven bound of the design (tightened: evotol.measures.feasibility), over the requirement, as
         # make_result's one proven evaluation found it
         cert["proven_bound_over_requirement"] = result.info["bound_ratio"]
     return result

@@ -21,13 +21,13 @@ import time
 
 import numpy as np
 
-from evotol import measures
+from evotol.measures import linear as measures
 from evotol.errors import ValidationError
 from evotol.allocators.budget import budget_info, check_budget, spend_budget
 from evotol.allocators.budget import scaled_family as _scaled
-from evotol.problem import ToleranceProblem
-from evotol.result import make_result
-from evotol.threads import single_threaded_blas
+from evotol.core.problem import ToleranceProblem
+from evotol.core.result import make_result
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> np.ndarray:
@@ -147,7 +147,7 @@ def allocate_sensitivity(problem: ToleranceProblem, *, budget: float | None = No
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The problem (tolerances in SI: m or rad).
     budget : float or None
         If given (cost models' unit), best accuracy at this cost instead: the equal-effect design
@@ -159,9 +159,9 @@ def allocate_sensitivity(problem: ToleranceProblem, *, budget: float | None = No
 
     Returns
     -------
-    evotol.result.AllocationResult
+    evotol.core.result.AllocationResult
         The design (tolerances in SI: m or rad), its cost (cost models' unit), its errors at every
-        pose (m, rad) and the feasibility repair applied (:mod:`evotol.feasibility`).
+        pose (m, rad) and the feasibility repair applied (:mod:`evotol.measures.feasibility`).
 
     Raises
     ------

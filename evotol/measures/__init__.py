@@ -1,14 +1,19 @@
-"""Accuracy measures of a linear error model: worst case (exact) and RSS.
+"""The size of an error, in one room: accuracy measures as plugins -- one protocol
+(:class:`Measure`: ``evaluate(problem, T, top_only) -> Evaluation``, :mod:`.protocol`), one registry
+(:mod:`.registry`: built-ins plus the entry-point group ``evotol.measures``) and a conformance suite
+(:mod:`.checks`) -- and the numerics they share.
 
-This package only hands names on: the worst-case and RSS stack-ups are in
-:mod:`evotol.measures.stackup`, the support function with asymmetric intervals (interval shape,
-mean shift, support coefficients) in :mod:`evotol.measures.support`, and the direction grids with
-their covering angle in :mod:`evotol.measures.directions`.
+* Built in (:mod:`.builtin`): ``worst_case`` (:mod:`.builtin.worst_case`), ``rss``
+  (:mod:`.builtin.rss`), ``mc_quantile`` (:mod:`.builtin.mc_quantile`) and ``yield``
+  (:mod:`.builtin.statistical_yield`).
+* The linear model (:mod:`.linear`): direction grids, asymmetric intervals, worst case and RSS, the
+  proven support-function bound.
+* The requirement as constraint rows for optimisers (:mod:`.constraints`) and the one rule of
+  *feasible* (:mod:`.feasibility`).
+* Yield (:mod:`.statistical`), joint clearances with their certified worst case
+  (:mod:`.clearances`), the nonlinear worst case with interval arithmetic (:mod:`.nonlinear`).
 """
-from evotol.measures.directions import circle, directions_for
-from evotol.measures.directions import hemisphere  # noqa: F401  (a cached grid, not listed)
-from evotol.measures.stackup import WorstCase, refine_direction, rss, spectral_norms, worst_case, worst_case_errors
-from evotol.measures.support import IntervalShape, mean_shift, support_coefficients, support_constant
+from evotol.measures.protocol import ComponentErrors, Evaluation, Measure
+from evotol.measures.registry import available, get, names
 
-__all__ = ["circle", "directions_for", "WorstCase", "IntervalShape", "mean_shift", "support_coefficients",
-           "support_constant", "refine_direction", "worst_case", "worst_case_errors", "spectral_norms", "rss"]
+__all__ = ["ComponentErrors", "Evaluation", "Measure", "available", "get", "names"]

@@ -4,7 +4,7 @@ One log-scale slider and one input (display units) per tolerance variable, withi
 buttons that reset every tolerance to a method's allocation. On every change the page recomputes,
 offline and with no server, the cost, the worst-case and RSS errors at every allocation pose, the
 worst pose and the contributions there (``explorer.js``, inlined into the page with its data from
-:func:`evotol.explorer_data.explorer_data`). The page's worst case is the maximum over a fixed
+:func:`evotol.summaries.explorer_data.explorer_data`). The page's worst case is the maximum over a fixed
 sample of directions; the section states how tight that is against the certified value (the
 measured shortfall and the guaranteed bound 1 − cos δ).
 """
@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from evotol.display import DisplayUnits, number
+from evotol.units.display import DisplayUnits, number
 
 ASSET = Path(__file__).with_name("explorer.js")
 
@@ -24,14 +24,14 @@ def page_config(summary: dict) -> dict:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (:mod:`evotol.study_outputs`), read through its
+        A user study's JSON summary (:mod:`evotol.summaries.user_study`), read through its
         ``display_units``, ``sources``, ``error_units``, ``explorer``, ``workspace`` and
         ``poses`` entries.
 
     Returns
     -------
     dict
-        JSON-ready: ``explorer`` (:func:`evotol.explorer_data.explorer_data`), ``error_units``,
+        JSON-ready: ``explorer`` (:func:`evotol.summaries.explorer_data.explorer_data`), ``error_units``,
         ``factors`` (SI-to-display factor per unit name), ``labels`` (display label per unit
         name, empty for ``"1"``), ``workspace`` and ``poses``.
     """
@@ -48,7 +48,7 @@ def tightness_text(tightness: dict) -> str:
     Parameters
     ----------
     tightness : dict
-        Per error component, the dict of :func:`evotol.explorer_data.sample_tightness`
+        Per error component, the dict of :func:`evotol.summaries.explorer_data.sample_tightness`
         (``n_directions``, ``covering_angle`` in rad, ``guaranteed``, ``measured``,
         ``measured_any_pose`` as fractions, ``n_designs``).
 
@@ -80,7 +80,7 @@ def explorer_section(rep, summary: dict) -> None:
     rep : Report
         The page being built (:class:`evotol.reporting.html.Report`), appended to in place.
     summary : dict
-        A user study's JSON summary (:mod:`evotol.study_outputs`) with its ``explorer`` entry
+        A user study's JSON summary (:mod:`evotol.summaries.user_study`) with its ``explorer`` entry
         (or ``{"omitted": reason}``).
     """
     data = summary.get("explorer")

@@ -4,7 +4,7 @@ Per source: name, group, nominal (where the model knows it), the tolerance ± in
 (and the limit deviations for an asymmetric interval [offset − minus·t, offset + plus·t]),
 the process (where the study selected one), the source's share of the cost and its contribution
 to the error at the worst pose. Read from a user study's JSON summary
-(:mod:`evotol.study_outputs`) alone, so ``evotol export NAME.json`` writes the same table as
+(:mod:`evotol.summaries.user_study`) alone, so ``evotol export NAME.json`` writes the same table as
 ``evotol run``. The workbook is written by pandas through openpyxl: one sheet per method and an
 ``about`` sheet (study, units, requirement, status of each method).
 """
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from evotol.display import DisplayUnits
+from evotol.units.display import DisplayUnits
 from evotol.errors import ValidationError
 
 FORMATS = ("csv", "xlsx")
@@ -29,7 +29,7 @@ def chosen_method(summary: dict) -> str:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (:mod:`evotol.study_outputs`) with its ``results`` by method.
+        A user study's JSON summary (:mod:`evotol.summaries.user_study`) with its ``results`` by method.
 
     Returns
     -------
@@ -106,7 +106,7 @@ def about_table(summary: dict) -> pd.DataFrame:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (:mod:`evotol.study_outputs`).
+        A user study's JSON summary (:mod:`evotol.summaries.user_study`).
 
     Returns
     -------

@@ -5,11 +5,11 @@ The section :func:`add_parcoords` adds to a report page: the parallel-coordinate
 and the drawn sample :mod:`~evotol.reporting.parcoords_lines`) and the filtering that runs in
 the page (``parcoords.js``, inlined with its data).
 
-Named presets (:class:`evotol.filtering.Preset`, the filters of the thesis's figures) become
+Named presets (:class:`evotol.design.filtering.Preset`, the filters of the thesis's figures) become
 buttons that set the axes' constraint ranges; the page then shows how many entries are kept,
 the range each axis keeps and a table of the kept entries. Brushing an axis by hand updates the
 same read-outs. A static table beside it lists every preset's count computed in Python by
-:meth:`evotol.filtering.DesignStudy.filter` (the numbers the page must reproduce;
+:meth:`evotol.design.filtering.DesignStudy.filter` (the numbers the page must reproduce;
 :func:`preset_table_rows`).
 
 The report reads results; it computes no physics (STYLE.md).
@@ -25,9 +25,9 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from evotol.doe import ENTRY, SOURCE
+from evotol.design import ENTRY, SOURCE
 from evotol.errors import ValidationError
-from evotol.filtering import DesignStudy, Preset
+from evotol.design.filtering import DesignStudy, Preset
 from evotol.reporting.parcoords_axes import Axis, default_axes, format_tick
 from evotol.reporting.parcoords_axes import log_ticks  # noqa: F401  (re-exported)
 from evotol.reporting.parcoords_lines import DEFAULT_MAX_DRAWN, GPU_MAX_DRAWN, GRID, drawn_lines, parcoords_frame
@@ -178,7 +178,7 @@ def preset_table_rows(study: DesignStudy, presets: Sequence[Preset] | None = Non
     Parameters
     ----------
     study : DesignStudy
-        The evaluated entries, filtered by :meth:`evotol.filtering.DesignStudy.filter`.
+        The evaluated entries, filtered by :meth:`evotol.design.filtering.DesignStudy.filter`.
     presets : sequence of Preset, optional
         The presets; default the study's.
     among : pandas.DataFrame, optional

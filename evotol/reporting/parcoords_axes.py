@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 from evotol.errors import ValidationError
-from evotol.filtering import DesignStudy
+from evotol.design.filtering import DesignStudy
 
 _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 

@@ -20,9 +20,9 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from evotol.doe import ENTRY, SOURCE
+from evotol.design import ENTRY, SOURCE
 from evotol.errors import ValidationError
-from evotol.filtering import DesignStudy, Preset
+from evotol.design.filtering import DesignStudy, Preset
 from evotol.reporting.parcoords_axes import Axis
 
 GRID, PARETO, KNEE = "level grid", "NSGA-II", "knee"

@@ -13,7 +13,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-from evotol.doe import SOURCE
+from evotol.design import SOURCE
 from evotol.errors import ValidationError
 from evotol.reporting.parcoords_axes import Axis, format_tick, log_ticks
 from evotol.reporting.parcoords_lines import GRID, KNEE, PARETO

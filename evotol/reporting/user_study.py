@@ -6,7 +6,7 @@ when the measure is yield), the tolerances in display units, an error map over s
 continuous workspace, the contributions at the worst pose, the linearisation check with a verdict;
 the NSGA-II front with the certified optimum, the GA and the sensitivity design marked; the
 what-if explorer (:mod:`evotol.reporting.explorer`). Lengths are shown in µm or mm and angles in
-arcsec, mrad or deg (the study's ``display_units``, :mod:`evotol.display`); the JSON stays SI.
+arcsec, mrad or deg (the study's ``display_units``, :mod:`evotol.units.display`); the JSON stays SI.
 """
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import numpy as np
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
-from evotol.display import DisplayUnits, number
-from evotol.pareto import ideal_point_knee
+from evotol.units.display import DisplayUnits, number
+from evotol.core.pareto import ideal_point_knee
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
 
@@ -40,7 +40,7 @@ def pose_cells(summary: dict, pose) -> str:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
     pose : sequence of float
         Workspace coordinates in SI (m, rad), in the order of ``summary["workspace"]["names"]``.
 
@@ -96,7 +96,7 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
 
     Returns
     -------
@@ -155,7 +155,7 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
 
     Returns
     -------
@@ -164,7 +164,7 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     header : list of str
         The column titles (error columns name their display unit).
     """
-    if "display_units" not in summary:    # a process-selection study (evotol/process_studyfile.py): no lengths
+    if "display_units" not in summary:    # a process-selection study (evotol/studyfile/processes.py): no lengths
         header = ["method", "cost", "max error / requirement", "status"]
         rows = [[m, f"{r['cost']:.6g}", number(r["normalised_error"]) if "normalised_error" in r else "",
                  "meets the requirement" if r.get("feasible") else "misses the requirement"]
@@ -205,7 +205,7 @@ def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
 
     Returns
     -------
@@ -291,7 +291,7 @@ def map_caption(summary: dict, method: str, comp: str) -> str:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
     method : str
         A method with an error map (``summary["figures"]["error_maps"]``).
     comp : str
@@ -381,7 +381,7 @@ def render_user_study(summary: dict) -> Report:
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.study_outputs`; SI values).
+        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
 
     Returns
     -------

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from evotol.doe import save_entries
+from evotol.design import save_entries
 from evotol.errors import ValidationError
 from evotol.reporting.html import write_json
 

@@ -129,10 +129,10 @@ def render_report(result, name: str):
                      a["nonlinear_at_worst_vertex_mm"], a["mc"]["max_mm"], a["mc"]["q999_mm"],
                      core.get("max_exceed_rate_nonlinear", "–"), core.get("linearisation_error", "–")])
     rep.table(rows, ["design", "cost", "worst case, linear (mm)", "meets 0.2 mm", "nonlinear at worst vertex (mm)",
-                     "MC nonlinear max (mm)", "MC 99.9 % (mm)", "evotol.montecarlo: exceed rate (nonlinear)",
+                     "MC nonlinear max (mm)", "MC 99.9 % (mm)", "evotol.verification.montecarlo: exceed rate (nonlinear)",
                      "linearisation error (relative)"])
     rep.text("Monte Carlo: Latin-hypercube samples uniform in each interval through the nonlinear forward kinematics "
-             "with errors at the critical poses; symmetric designs are also verified with evotol.montecarlo.verify. "
+             "with errors at the critical poses; symmetric designs are also verified with evotol.verification.montecarlo.verify. "
              "Sampling stays well below the worst case (every parameter at the right end of its interval at once is "
              "rare); the worst case itself is checked by pushing each pose's attaining error vector through the "
              "nonlinear model.")

@@ -24,8 +24,8 @@ import numpy as np
 from cost_models.power import PowerCost
 from evotol.allocators.process import Process, ProcessProblem, assembly_problem
 from robots.assembly import AssemblyFunction
+from evotol.units import MM
 
-MM = 1e-3
 KSIGMA = 3.0
 SOURCES = ("X1", "X2", "X3", "X4")
 CITE = "Choi et al. 2000 as coded in yue-w/ToleranceAllocation"

@@ -3,7 +3,7 @@ section of their reports and the counts that section shows (computed in ``comput
 JSON states them)."""
 from __future__ import annotations
 
-from evotol.filtering import DesignStudy
+from evotol.design.filtering import DesignStudy
 from evotol.reporting.parcoords import add_parcoords, preset_table_rows
 from evotol.reporting.parcoords_lines import DEFAULT_MAX_DRAWN, drawn_lines, parcoords_frame
 

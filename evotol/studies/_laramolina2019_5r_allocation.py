@@ -69,11 +69,11 @@ def allocation_problem(case: str, n_samples: int, seed: int, D: float = 0.2, rad
 
     Returns
     -------
-    evotol.problem.ToleranceProblem
+    evotol.core.problem.ToleranceProblem
         Problem at the MIW poses with the shared variables of :data:`SHARED` (clearances in m,
         actuator tolerance t = 3 std in rad) and the link lengths fixed.
     """
-    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 
     robot = Planar5R(case, D=D)
     costs = default_costs()
@@ -146,7 +146,7 @@ def allocate_case(case: str, cfg: dict, seed: int, pareto: bool, grid: int, p_ma
     from scipy.stats import beta
 
     from evotol.allocators import allocate_ga, allocate_nsga2
-    from evotol.montecarlo import calibrate_scale, verify
+    from evotol.verification.montecarlo import calibrate_scale, verify
 
     n = cfg["n_alloc_samples"]
     P = allocation_problem(case, n, seed, p_max=p_max, radius=radius)

@@ -19,8 +19,8 @@ from cost_models.power import PowerCost
 from evotol.allocators.nonlinear_limit import allocate_nonlinear_limit
 from evotol.allocators.process import Process, ProcessProblem, allocate_process_optimum, assembly_problem
 from robots.assembly import AssemblyFunction, LinearStack
+from evotol.units import MM
 
-MM = 1e-3
 
 #: process -> (lower mm, upper mm, fixed cost A, B, k): cost = A + B / t_mm^k on [lower, upper]
 CATALOGUE = {

@@ -83,10 +83,10 @@ def compute(config: dict) -> StudyResult:
         in mm, tolerances in SI), the Pareto front, model checks, timing (s) and ``figures``.
     """
     from evotol.allocators import allocate_ga, allocate_nsga2, allocate_optimum, allocate_sensitivity
-    from evotol.montecarlo import verify
-    from evotol.nonlinear import verify_nonlinear
-    from evotol.refinement import refine_poses, scale_into_requirement
-    from evotol.result import make_result
+    from evotol.verification.montecarlo import verify
+    from evotol.verification.nonlinear import verify_nonlinear
+    from evotol.allocators.workspace_refinement import refine_poses, scale_into_requirement
+    from evotol.core.result import make_result
     from robots.delta import cylinder_poses
 
     t_start = time.perf_counter()
@@ -140,7 +140,7 @@ def compute(config: dict) -> StudyResult:
     tick("problem + screening", t0)
     t0 = time.perf_counter()
     # whole-workspace refinement by the core: allocate on the critical poses, add the dense poses
-    # where the design misses 0.2 mm, repeat (evotol.refinement.refine_poses, index mode)
+    # where the design misses 0.2 mm, repeat (evotol.allocators.workspace_refinement.refine_poses, index mode)
     pose_rounds = dict(start=crit, local=False, add=8, max_rounds=5, dense=full)
     opt_sub, ref = refine_poses(full, lambda p: allocate_optimum(p, max_rows=120), **pose_rounds)
     opt_idx, opt_rounds = ref["pose_indices"], ref["rounds"]

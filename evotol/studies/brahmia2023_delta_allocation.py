@@ -1,5 +1,5 @@
 """Part 2 of the ``brahmia2023-delta`` study (beyond the paper): the 47 Delta tolerances as an evotol
-:class:`~evotol.problem.ToleranceProblem` -- a reciprocal cost model per family (linear /
+:class:`~evotol.core.problem.ToleranceProblem` -- a reciprocal cost model per family (linear /
 angular), a worst-case position requirement over workspace poses, the paper's asymmetric
 intervals stated through the core (Table 3 included) and the screening of critical poses.
 
@@ -55,11 +55,11 @@ def tolerance_problem(robot: DeltaRobot, poses, position_mm: float = REQUIRED_MM
 
     Returns
     -------
-    evotol.problem.ToleranceProblem
+    evotol.core.problem.ToleranceProblem
         Problem with the cost models of :func:`family_cost_models` and the requirement
         ``position = position_mm`` (converted to m), ``measure="worst_case"``.
     """
-    from evotol.problem import Requirement, Tolerance, ToleranceProblem
+    from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 
     models = family_cost_models()
     S = robot.sensitivity(poses)[:, :3]
@@ -77,19 +77,19 @@ def interval_problem(problem, lo, hi):
     """The problem with every source on its interval [lo_j, hi_j] (SI), stated through the core's
     asymmetric tolerances: ``Tolerance.offset`` = (lo + hi)/2 and the design t = (hi − lo)/2.
     Costs follow the core's ``cost_width="half"`` (the cost model sees the half-width), the
-    worst case keeps the offset (full sphere of directions, :mod:`evotol.measures`).
+    worst case keeps the offset (full sphere of directions, :mod:`evotol.measures.linear`).
     Returns (problem, t).
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The symmetric problem (e.g. from :func:`tolerance_problem`).
     lo, hi : (n_sources,) array_like
         Lower and upper interval limits per source, SI (m or rad).
 
     Returns
     -------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         Copy with ``offset = (lo + hi)/2`` and ``cost_width="half"`` for every source.
     t : (n_sources,) ndarray
         The design: half-widths ``(hi - lo)/2``, SI.
@@ -108,12 +108,12 @@ def table3_problem(problem):
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         The symmetric 47-source problem (from :func:`tolerance_problem`).
 
     Returns
     -------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         Copy with the Table 3 interval centres as offsets (see :func:`interval_problem`).
     t : (47,) ndarray
         Table 3 half-widths, m or rad.
@@ -127,7 +127,7 @@ def critical_poses(problem, designs, k: int = 8) -> np.ndarray:
 
     Parameters
     ----------
-    problem : evotol.problem.ToleranceProblem
+    problem : evotol.core.problem.ToleranceProblem
         Problem over the dense pose set.
     designs : (n_designs, n_sources) or (n_sources,) array_like
         Probe tolerance designs, SI (m or rad).

@@ -24,7 +24,7 @@ from evotol.studies import Study, StudyResult
 from evotol.studies import _choi2000 as choi
 from evotol.studies._process_benchmarks import _mc_nonlinear
 
-MM = choi.MM
+from evotol.units import MM
 CONFIG = {"seed": 0, "pop_size": 60, "n_gen": 100, "n_mc": 200_000}
 QUICK = {"pop_size": 30, "n_gen": 30, "n_mc": 20_000}
 

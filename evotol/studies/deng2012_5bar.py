@@ -17,11 +17,11 @@ import time
 
 import numpy as np
 
-from evotol.executor import scheduler_of
+from evotol._runtime.executor import scheduler_of
 from evotol.reporting.html import Report
 from evotol.studies import Study, StudyResult
+from evotol.units import MM
 
-MM = 1e-3
 
 
 def _variants(b_mm: float):

@@ -6,7 +6,7 @@ III.2) and axial Δb_z of joints A, C, B, D, E -- by a design of experiments ove
 cheapest clearances (``deng2012-tolsynth``'s reciprocal cost per clearance) that hold the maximum
 positional error at pose (0, 70) mm below ``p_max_mm`` (0.05 mm: the filter of Fig. VII.4).
 
-Compared on the same problem and the same certified engine (:mod:`evotol.clearances`):
+Compared on the same problem and the same certified engine (:mod:`evotol.measures.clearances`):
   * the DOE: the cheapest entry of the thesis's 4^5 x 2^5 level factorial that holds p_max;
   * the GA on continuous tolerances (pymoo, boundary repair by exact evaluations), started from
     a Latin hypercube only;
@@ -22,15 +22,15 @@ import time
 import numpy as np
 
 from evotol.allocators import allocate_ga, allocate_monotone
-from evotol.clearances import ClearanceSources, thesis_classes
-from evotol.montecarlo import verify
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.measures.clearances import ClearanceSources, thesis_classes
+from evotol.verification.montecarlo import verify
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studies import Study, StudyResult
 from evotol.studies.deng2012_tolsynth import H_MM, JOINTS, LEVELS_XY_MM, LEVELS_Z_MM, POSE_MM, default_cost_model
 from robots.mechanism.model import MechanismModel, resolve_description
+from evotol.units import MM
 
 NAME = "deng2012-clearalloc"
-MM = 1e-3
 
 CONFIG = {"seed": 0, "p_max_mm": 0.05, "n_entries": None, "pop_size": 20, "n_gen": 20, "max_evaluations": 300,
           "mc_samples": 2000}
@@ -48,7 +48,7 @@ def make_problem(p_max_mm: float = 0.05) -> ToleranceProblem:
 
     Returns
     -------
-    evotol.problem.ToleranceProblem
+    evotol.core.problem.ToleranceProblem
         Ten clearance sources (``thesis_classes`` with h = 10 mm), each with
         :func:`~evotol.studies.deng2012_tolsynth.default_cost_model`, at the single pose
         (0, 70) mm.

@@ -30,16 +30,16 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from evotol import doe
-from evotol.doe import Factor, Objective
-from evotol.executor import scheduler_of
-from evotol.filtering import DesignStudy, Preset
-from evotol.pareto import non_dominated
+from evotol import design as doe
+from evotol.design import Factor, Objective
+from evotol._runtime.executor import scheduler_of
+from evotol.design.filtering import DesignStudy, Preset
+from evotol.core.pareto import non_dominated
 from evotol.studies import Study, StudyResult
 from evotol.studies._design_report import parcoords_counts, parcoords_section
 from robots.irsbot2 import IRSBot2, singularity_free_rectangle
+from evotol.units import MM
 
-MM = 1e-3
 
 #: Tab. VI.4 (fixed parameters of the dimension synthesis), SI units
 TAB_VI_4 = {"b": 50 * MM, "d": 50 * MM, "alpha_0": 0.0, "alpha_d": math.pi / 6, "beta": math.pi / 4, "e": 0.0}
@@ -100,7 +100,7 @@ def factors(continuous: bool = False) -> list[Factor]:
 
     Returns
     -------
-    list of evotol.doe.Factor
+    list of evotol.design.Factor
         Factors ``l1_mm``, ``l2_mm``, ``a1_mm``, ``a2_mm``, ``p_mm`` (values in mm, ``si_scale``
         1e-3).
     """
@@ -118,7 +118,7 @@ def presets() -> list[Preset]:
 
     Returns
     -------
-    list of evotol.filtering.Preset
+    list of evotol.design.filtering.Preset
         Five filters on ``area_mm2`` (mm²), ``p_max_mm`` (mm) and ``r_max_deg`` (deg).
     """
     return [Preset("f_a ≥ 4e4 mm²", {"area_mm2": (4e4, None)}, "Fig. VII.12"),

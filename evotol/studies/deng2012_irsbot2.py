@@ -19,11 +19,11 @@ import time
 
 import numpy as np
 
-from evotol.executor import scheduler_of
+from evotol._runtime.executor import scheduler_of
 from evotol.reporting.html import Report
 from evotol.studies import Study, StudyResult
+from evotol.units import MM
 
-MM = 1e-3
 
 
 def _maps_figure(title, x_mm, z_mm, P, R, sing):

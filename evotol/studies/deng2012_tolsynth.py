@@ -31,16 +31,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from evotol import doe
-from evotol.doe import Factor, Objective
+from evotol import design as doe
+from evotol.design import Factor, Objective
 from evotol.errors import EvotolError
-from evotol.executor import scheduler_of
-from evotol.filtering import DesignStudy, Preset
+from evotol._runtime.executor import scheduler_of
+from evotol.design.filtering import DesignStudy, Preset
 from evotol.studies import Study, StudyResult
 from evotol.studies._design_report import PRESET_HEADER, parcoords_counts, parcoords_section
+from evotol.units import MM
 
 NAME = "deng2012-tolsynth"
-MM = 1e-3
 JOINTS = ("A", "C", "B", "D", "E")
 #: thesis names (leg, joint) and whether the joint is actuated (Fig. IV.4)
 THESIS_JOINT = {"A": "(1,1)", "C": "(1,2)", "B": "(2,1)", "D": "(2,2)", "E": "(2,3)"}
@@ -58,7 +58,7 @@ def factors() -> list[Factor]:
 
     Returns
     -------
-    list of evotol.doe.Factor
+    list of evotol.design.Factor
         Ten log-scaled factors ``db_xy_<joint>_mm`` (levels 1e-4, 1e-3, 1e-2, 1e-1 mm) then
         ``db_z_<joint>_mm`` (1e-3, 1e-1 mm), joints in the order A, C, B, D, E; ``si_scale``
         1e-3 (mm to m).
@@ -80,7 +80,7 @@ def presets() -> list[Preset]:
 
     Returns
     -------
-    list of evotol.filtering.Preset
+    list of evotol.design.filtering.Preset
         Six filters on ``p_max_mm`` (mm: >= 1, <= 0.05, <= 0.01) and ``r_max_deg`` (deg: >= 1,
         <= 0.05, <= 0.01).
     """

@@ -28,8 +28,8 @@ import numpy as np
 
 from evotol.reporting.html import Report
 from evotol.studies import Study, StudyResult
+from evotol.units import MM
 
-MM = 1e-3
 
 
 def _rel(a, b) -> float:

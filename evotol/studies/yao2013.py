@@ -15,9 +15,9 @@ import numpy as np
 from cost_models import ExponentialCost
 from evotol.allocators import (allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
-from evotol.display import LENGTHS
-from evotol.montecarlo import verify
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.units.display import LENGTHS
+from evotol.verification.montecarlo import verify
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report
 from evotol.studies import Study, StudyResult
 from robots.ucr3 import UCR3
@@ -54,7 +54,7 @@ def yao2013_problem(variant: str, measure: str = "rss", grid=(11, 11, 6), lower=
 
     Returns
     -------
-    evotol.problem.ToleranceProblem
+    evotol.core.problem.ToleranceProblem
         The 12-source problem with the requirement ``position = 5e-5 m``.
 
     Raises

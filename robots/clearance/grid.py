@@ -5,7 +5,7 @@ each chunk is solved by :func:`robots.clearance.max_pose_error` in a worker, and
 put back in order. Because the chunks do not depend on where they run, a local run and a Dask
 run return identical arrays.
 
-The chunks run on evotol's one executor (:func:`evotol.executor.parallel_map`):
+The chunks run on evotol's one executor (:func:`evotol._runtime.executor.parallel_map`):
 
 * default: local processes, ``workers`` of them (default: the number of CPUs; ``workers=1``
   runs in this process);
@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from evotol.errors import ValidationError
-from evotol.executor import parallel_map
+from evotol._runtime.executor import parallel_map
 from robots.clearance.maxerror import MaxPoseError, max_pose_error
 from robots.clearance.model import ClearanceMechanism
 from robots.clearance.options import DEFAULT, EngineOptions

@@ -35,8 +35,8 @@ import time
 import numpy as np
 
 from evotol.errors import ValidationError
-from evotol.executor import parallel_map
-from evotol.threads import one_blas_thread
+from evotol._runtime.executor import parallel_map
+from evotol._runtime.blas_threads import one_blas_thread
 from robots.clearance.branch_bound import maximise_norm
 from robots.clearance.certificate import _gram_pinv
 from robots.clearance.model import ClearanceMechanism, PoseMaps

@@ -214,7 +214,7 @@ def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflec
     if "chunk_size" not in grid_kw and not grid_kw.get("scheduler"):
         # equal chunks, a multiple of the local processes: half a grid in 256-pose chunks leaves
         # one process idle for most of the last round
-        from evotol.executor.backends import worker_count
+        from evotol._runtime.executor.backends import worker_count
 
         w = worker_count(grid_kw.get("workers"))
         n_chunks = -(-len(solve) // 256)

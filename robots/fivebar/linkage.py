@@ -27,8 +27,8 @@ from evotol.errors import KinematicsError, ValidationError
 from robots.base import Workspace
 from robots.clearance.kinematics import DHFrame, DHTree
 from robots.clearance.model import Chain, ClearanceBounds, ClearanceMechanism, Joint
+from evotol.units import MM
 
-MM = 1e-3
 #: Tab. IV.2 (m)
 THESIS_LENGTHS = dict(L0=100 * MM, L1=50 * MM, L2=50 * MM, L3=50 * MM, L4=50 * MM, L5=0.0)
 #: the thesis's Cartesian grid, Sec. IV.3 (m): x in [-20, 20] mm, y in [30, 70] mm, 41 x 41

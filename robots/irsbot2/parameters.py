@@ -5,8 +5,8 @@ Units: metres and radians (``MM`` and ``PI`` are the unit and constant the table
 from __future__ import annotations
 
 import numpy as np
+from evotol.units import MM
 
-MM = 1e-3
 PI = np.pi
 
 #: Tab. VI.1-VI.2 (used for Figs. VI.1-VI.3): b, d, alpha_d, beta, e, l1, l2, a1, a2, p

@@ -18,8 +18,8 @@ from pathlib import Path
 from typing import Mapping
 
 from evotol.errors import ValidationError
-from evotol.filekinds import check_kind
-from evotol.keywords import check_table_keys
+from evotol._runtime.toml_kinds import check_kind
+from evotol._runtime.keyword_checks import check_table_keys
 from robots.clearance.kinematics import DH_FIELDS
 from robots.clearance.parts import BOUND_NAMES, ClearanceBounds
 from robots.mechanism.expressions import Expression

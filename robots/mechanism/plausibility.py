@@ -24,7 +24,7 @@ import math
 from typing import Mapping
 
 from evotol.errors import ValidationError
-from evotol.keywords import check_table_keys
+from evotol._runtime.keyword_checks import check_table_keys
 from robots.mechanism.expressions import Expression
 
 #: largest plausible length of a description (m), unless ``[checks] max_length`` says otherwise

@@ -17,14 +17,14 @@ cost ``F_p``. A design picks one process per source and a tolerance inside that 
   while the other's range covers it can never be chosen: evotol reports it as inconsistent data
   (usually a unit slip) unless ``check_dominance=False``.
 
-Process selection is a layer over :class:`evotol.problem.ToleranceProblem`: a *process choice*
+Process selection is a layer over :class:`evotol.core.problem.ToleranceProblem`: a *process choice*
 turns the problem into an ordinary convex allocation problem (:meth:`ProcessProblem.subproblem`),
 which :func:`evotol.allocators.optimum.allocate_optimum` solves with a certificate. Methods:
 
 * :func:`allocate_process_optimum` — exact: **branch and bound** over process choices (depth-first,
   children in order of their bound) or full enumeration. Node bound: the Lagrange dual
   ``q(λ) = Σ_j min_{p∈P_j} min_{t∈[lo_p,hi_p]} [F_p + c_p(t) + w_j t + v_j t²] − Σλ − Σμ``
-  with ``w = Aᵀλ, v = Bᵀμ`` over the constraint rows (:mod:`evotol.constraints`), sources already
+  with ``w = Aᵀλ, v = Bᵀμ`` over the constraint rows (:mod:`evotol.measures.constraints`), sources already
   fixed taking their process only. Weak duality makes ``q(λ)`` a lower bound of every completion
   of the node for **any** ``λ, μ >= 0`` (no convexity needed); we take the best over a log-spaced
   family ``s·λ̂`` along the KKT multipliers ``λ̂`` of every leaf solved so far. A node whose

@@ -22,7 +22,7 @@ from evotol.allocators.process.result import FEAS_TOL
 from evotol.allocators.process.result import ProcessResult, _result
 from evotol.allocators.sensitivity import aggregated_sensitivity, allocate_sensitivity
 from evotol.errors import InfeasibleError, ValidationError
-from evotol.threads import single_threaded_blas
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 def check_some_choice_holds(pp: ProcessProblem) -> None:

@@ -14,10 +14,10 @@ from evotol.allocators.process.baselines import check_some_choice_holds, cheapes
 from evotol.allocators.process.problem import ProcessProblem, check_no_budget
 from evotol.allocators.process.result import FEAS_TOL
 from evotol.allocators.process.result import ProcessResult, _result
-from evotol.constraints import ConstraintRows
+from evotol.measures.constraints import ConstraintRows
 from evotol.errors import ValidationError
-from evotol.problem import ToleranceProblem
-from evotol.threads import single_threaded_blas
+from evotol.core.problem import ToleranceProblem
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 def _multipliers(sub: ToleranceProblem, rows: ConstraintRows, t: np.ndarray, active_tol: float = 1e-6):
@@ -113,7 +113,7 @@ def allocate_process_optimum(problem: ProcessProblem, *, budget: None = None, me
     evotol.errors.ValidationError
         An unknown ``method``, a ``budget``, a ``problem`` that is not a :class:`ProcessProblem`,
         no process choice whose convex optimum the solver finds, or a requirement measure other
-        than ``worst_case`` or ``rss`` (from :class:`evotol.constraints.ConstraintRows`).
+        than ``worst_case`` or ``rss`` (from :class:`evotol.measures.constraints.ConstraintRows`).
     evotol.errors.InfeasibleError
         No process choice can hold the requirement (every source at its finest process's lower limit misses it).
     """

@@ -17,7 +17,7 @@ import numpy as np
 
 from cost_models.base import CostModel
 from evotol.errors import ValidationError
-from evotol.problem import Tolerance
+from evotol.core.problem import Tolerance
 from robots.base import RobotErrorModel
 
 

@@ -9,8 +9,8 @@ from pymoo.core.problem import Problem
 from evotol.allocators.process.ga import _decode
 from evotol.allocators.process.problem import check_no_budget, ProcessProblem
 from evotol.errors import ValidationError
-from evotol.pareto import ParetoFront
-from evotol.threads import single_threaded_blas
+from evotol.core.pareto import ParetoFront
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 class _ProcessFrontProblem(Problem):
@@ -62,7 +62,7 @@ def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0
         (``distribution`` per source, default normal with t = 3σ; :meth:`ProcessProblem.assembly_yield`).
     pop_size, n_gen : int
         NSGA-II population and generations.
-    distribution : str or evotol.distributions.Distribution
+    distribution : str or evotol.core.distributions.Distribution
         Distribution of every source for ``objective="yield"``.
     max_miss : float
         For ``objective="yield"``: the miss probability a feasible design may have

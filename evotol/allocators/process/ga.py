@@ -11,9 +11,9 @@ from pymoo.core.repair import Repair
 
 from evotol.allocators.process.problem import check_no_budget, ProcessProblem
 from evotol.allocators.process.result import ProcessResult, _result
-from evotol.constraints import ConstraintRows
+from evotol.measures.constraints import ConstraintRows
 from evotol.errors import ValidationError
-from evotol.threads import single_threaded_blas
+from evotol._runtime.blas_threads import single_threaded_blas
 
 
 def _decode(pp: ProcessProblem, X: np.ndarray):
@@ -111,7 +111,7 @@ def allocate_process_ga(problem: ProcessProblem, *, budget: None = None, seed: i
     evotol.errors.ValidationError
         The GA found no feasible design (raise ``n_gen`` / ``pop_size``), a ``budget``, a
         ``problem`` that is not a :class:`ProcessProblem`, or a requirement measure other than
-        ``worst_case`` or ``rss`` (from :class:`evotol.constraints.ConstraintRows`).
+        ``worst_case`` or ``rss`` (from :class:`evotol.measures.constraints.ConstraintRows`).
     """
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.optimize import minimize

@@ -15,7 +15,7 @@ from cost_models.power import PowerCost
 from evotol.allocators.process.candidates import Process, checked_processes
 from evotol.allocators.process.result import FEAS_TOL, ProcessResult  # noqa: F401  (re-exported)
 from evotol.errors import ValidationError
-from evotol.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from robots.base import RobotErrorModel
 
 
@@ -29,10 +29,10 @@ class ProcessProblem:
         Any error model (e.g. :class:`robots.assembly.AssemblyFunction`).
     processes : Mapping[str, Sequence[Process]]
         Source name -> non-empty list of :class:`Process`.
-    requirement : evotol.problem.Requirement
-        As for :class:`evotol.problem.ToleranceProblem`.
+    requirement : evotol.core.problem.Requirement
+        As for :class:`evotol.core.problem.ToleranceProblem`.
     poses : array_like, shape (n_poses, workspace.dim)
-        As for :class:`evotol.problem.ToleranceProblem` (SI).
+        As for :class:`evotol.core.problem.ToleranceProblem` (SI).
     n_directions : int
         Hemisphere directions for the worst-case measure.
     check_dominance : bool
@@ -77,7 +77,7 @@ class ProcessProblem:
         Parameters
         ----------
         A : float or mapping
-            Loss at the limit (cost units) per response (:func:`evotol.quality_loss.loss_coefficients`;
+            Loss at the limit (cost units) per response (:func:`evotol.core.quality_loss.loss_coefficients`;
             K = A / L², σ = t / 3).
 
         Returns
@@ -92,7 +92,7 @@ class ProcessProblem:
             A negative or unknown coefficient; a problem that already carries a loss.
         """
         from cost_models.quality_loss import QualityLossCost
-        from evotol.quality_loss import loss_coefficients
+        from evotol.core.quality_loss import loss_coefficients
 
         if self.quality_loss_A is not None:
             raise ValidationError("quality_loss", A, f"a problem without a loss term (this one has A = {self.quality_loss_A})")
@@ -274,18 +274,18 @@ class ProcessProblem:
         return self.base.evaluate(np.atleast_2d(T), top_only=True).violation + 1
 
     def yield_model(self, distribution="normal"):
-        """First-order statistical model of the responses (:class:`evotol.statistical.FirstOrderYield`,
+        """First-order statistical model of the responses (:class:`evotol.measures.statistical.FirstOrderYield`,
         ``docs/statistical.md``) with every source distributed as ``distribution`` (a kind name or an
-        :class:`evotol.distributions.Distribution`; default normal with t = 3σ).
+        :class:`evotol.core.distributions.Distribution`; default normal with t = 3σ).
 
         Parameters
         ----------
-        distribution : str or evotol.distributions.Distribution
+        distribution : str or evotol.core.distributions.Distribution
             Distribution of every source inside its tolerance.
 
         Returns
         -------
-        evotol.statistical.FirstOrderYield
+        evotol.measures.statistical.FirstOrderYield
             The first-order model on the problem's poses (the responses).
 
         Raises
@@ -293,10 +293,10 @@ class ProcessProblem:
         ValidationError
             If ``distribution`` is neither a kind name nor a Distribution (or is invalid).
         """
-        from evotol.distributions import Distribution
+        from evotol.core.distributions import Distribution
 
         if not isinstance(distribution, (str, Distribution)):
-            raise ValidationError("distribution", distribution, "a distribution kind name or evotol.distributions.Distribution")
+            raise ValidationError("distribution", distribution, "a distribution kind name or evotol.core.distributions.Distribution")
         tol = {n: Tolerance(t.cost, t.lower, t.upper, distribution=distribution) for n, t in self.base.tolerances.items()}
         req = replace(self.requirement, measure="yield", probability=None, ppm=None)
         return ToleranceProblem(self.robot, tol, req, self.base.poses).first_order_yield()
@@ -307,17 +307,17 @@ class ProcessProblem:
         (poses); exact for one response (the clutch). ``model``: :meth:`yield_model` (default normal).
 
         The response mean m_k and variance s_k² (in units of L_k) are the model's moments
-        (:meth:`evotol.statistical.FirstOrderYield.moments`); an assembly response is a scalar (row z
+        (:meth:`evotol.measures.statistical.FirstOrderYield.moments`); an assembly response is a scalar (row z
         of the error twist), so P(``|Δy_k|`` > L_k) = Φ((−1 − m_k)/s_k) + Φ((m_k − 1)/s_k) exactly
         (normal sources; moment-matched normal otherwise, ``model.exact``) -- the 3-D octant rule
-        of :func:`evotol.statistical.miss_probability` is built for full-rank covariances and is off
+        of :func:`evotol.measures.statistical.miss_probability` is built for full-rank covariances and is off
         by up to ~1e-4 of the miss probability on this rank-one case.
 
         Parameters
         ----------
         T : array_like, (n, n_sources) or (n_sources,)
             Designs (m or rad).
-        model : evotol.statistical.FirstOrderYield or None
+        model : evotol.measures.statistical.FirstOrderYield or None
             The statistical model (default: :meth:`yield_model` with normal sources).
 
         Returns
@@ -399,19 +399,19 @@ def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None
     ----------
     assembly : robots.assembly.AssemblyFunction
         The assembly (its responses are the "poses"; each response's limit is its bound).
-    tolerances : Mapping[str, evotol.problem.Tolerance] or None
+    tolerances : Mapping[str, evotol.core.problem.Tolerance] or None
         Dimension name -> tolerance (SI), for a tolerance problem; or
     measure : str
         Accuracy measure of the requirement (a registered measure name).
     processes : Mapping[str, Sequence[Process]] or None
         Dimension name -> candidate processes, for a process-selection problem.
     **requirement
-        Further :class:`evotol.problem.Requirement` fields (``probability``, ``ppm``...).
+        Further :class:`evotol.core.problem.Requirement` fields (``probability``, ``ppm``...).
 
     Returns
     -------
-    evotol.problem.ToleranceProblem or ProcessProblem
-        A :class:`evotol.problem.ToleranceProblem` when ``tolerances`` are given, a
+    evotol.core.problem.ToleranceProblem or ProcessProblem
+        A :class:`evotol.core.problem.ToleranceProblem` when ``tolerances`` are given, a
         :class:`ProcessProblem` when ``processes`` are; the requirement is normalised (the
         response over its limit, 1).
 

@@ -1,0 +1,423 @@
+"""The tolerance-allocation problem: named error sources with tolerances (:mod:`evotol.core.tolerance`),
+an accuracy requirement (:mod:`evotol.core.requirement`) over a set of workspace poses, and a robot
+error model that maps source errors to end-effector errors.
+
+Design variables are the tolerances t_j (SI units: m or rad; the bound on the norm of source j's
+error vector). The problem is a small, printable value plus cached arrays; every evaluation is
+vectorised over a population of designs ``T`` of shape (n_designs, n_sources) and done by a
+registered measure (:mod:`evotol.measures`).
+
+Tolerance variables (:mod:`evotol.core.variables`, ``docs/tolerances.md``). The optimisers search the
+*free variables* X (n_designs, n_variables): one per free source, a ``shared`` group being one
+variable for all its members. :meth:`~evotol.core.problem.tolerance_problem.ToleranceProblem.full`
+maps X to source tolerances T, inserting locked and fixed sources; ``problem.free`` marks the
+sources that carry a variable.
+
+This module holds the problem's construction and validation, its basic properties, the
+worst-case support coefficients and the evaluation under a measure; the class takes its derived
+copies (:mod:`evotol.core.problem.derived`), variable mapping (:mod:`evotol.core.problem.variable_mapping`)
+and costs (:mod:`evotol.core.problem.costs`) from the mixins defined there.
+"""
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from evotol.measures import clearances as clearance_measure
+
+from evotol.core import distributions
+
+from evotol.measures import linear as measures
+
+from evotol.core import plausibility
+from evotol.measures import registry as measure_registry
+from evotol.measures.protocol import Evaluation
+from evotol.measures.builtin.statistical_yield import first_order_yield
+from evotol.errors import InfeasibleError, ValidationError
+from evotol._runtime.keyword_checks import did_you_mean
+from evotol.core.problem.costs import ProblemCosts
+from evotol.core.problem.derived import DerivedProblems
+from evotol.core.problem.variable_mapping import VariableMapping
+from evotol.core.requirement import Requirement
+from evotol.core.tolerance import Tolerance
+from evotol.core.variables import tolerance_variables
+from robots.base import RobotErrorModel
+
+__all__ = ["ToleranceProblem"]
+
+
+class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
+    """Tolerance allocation over a robot's workspace (see module docstring).
+
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        The error model (sources, sensitivities at poses).
+    tolerances : Mapping[str, Tolerance]
+        Source name -> :class:`Tolerance`, one entry per robot source.
+    requirement : Requirement
+        The accuracy to hold at every pose.
+    poses : array_like, shape (n_poses, workspace.dim)
+        Workspace poses (SI units: m, rad), at least one.
+    n_directions : int
+        Hemisphere directions for the worst-case measure (more: tighter bound).
+    shared : Mapping[str, Sequence[str]] or None
+        Group name -> member source names; each group is one tolerance variable.
+    shared_cost : {"part", "variable"}
+        ``"part"`` (default: cost counted for every member) or ``"variable"`` (once).
+    clearances : evotol.measures.clearances.ClearanceSources or None
+        Joint-clearance classes allocated with the robot's (interval) sources; their names follow
+        the robot's source names, and the ``worst_case`` measure is then the certified engine's
+        (:func:`evotol.measures.clearances.worst_case`). With tolerances for none of the robot's own
+        sources, the problem allocates clearances only.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Before any computation: a robot, requirement, tolerance, pose array, ``shared`` group or
+        ``clearances`` that is not what is expected (the message names the field and the value).
+    evotol.errors.KinematicsError
+        A pose out of reach or at a singularity of the robot.
+
+    See Also
+    --------
+    evotol.core.problem.derived.DerivedProblems : ``with_requirement``, ``with_poses``, ``at_poses``,
+        ``with_tolerances``, ``with_added_poses``.
+    evotol.core.problem.variable_mapping.VariableMapping : ``full``, ``to_variables``, ``locked_part``,
+        ``as_array``, ``intervals``, ``source_errors``.
+    evotol.core.problem.costs.ProblemCosts : ``cost``, ``free_cost``, ``source_costs``, ``dcost``,
+        ``variable_dcost``.
+    """
+
+    def __init__(self, robot: RobotErrorModel, tolerances: Mapping[str, Tolerance], requirement: Requirement,
+                 poses, n_directions: int = 600, shared: Mapping[str, Sequence[str]] | None = None,
+                 shared_cost: str = "part", clearances: "clearance_measure.ClearanceSources | None" = None):
+        if not isinstance(robot, RobotErrorModel):
+            raise ValidationError("robot", robot, "a robots.base.RobotErrorModel")
+        if not isinstance(requirement, Requirement):
+            raise ValidationError("requirement", requirement, "an evotol.Requirement")
+        requirement.validate()
+        if clearances is not None:
+            if not isinstance(clearances, clearance_measure.ClearanceSources):
+                raise ValidationError("clearances", clearances, "an evotol.measures.clearances.ClearanceSources")
+            # tolerances for none of the robot's own sources: a clearance-only problem
+            geometric = not isinstance(tolerances, Mapping) or any(n in tolerances for n in robot.source_names)
+            robot = clearance_measure.WithClearances(robot, clearances, geometric)
+            self._check_clearance_measure(requirement)
+        names = robot.source_names
+        if not isinstance(tolerances, Mapping):
+            raise ValidationError("tolerances", tolerances, "a mapping source name -> Tolerance")
+        missing = [n for n in names if n not in tolerances]
+        extra = [n for n in tolerances if n not in names]
+        if extra:
+            raise ValidationError(f"tolerances[{extra[0]!r}]", extra[0], f"a source of {robot.name}: {list(names)}"
+                                  + did_you_mean(str(extra[0]), names))
+        if missing:
+            raise ValidationError("tolerances", sorted(tolerances), f"an entry for every source of {robot.name}; missing {missing}")
+        for n, src in zip(names, robot.sources):
+            if not isinstance(tolerances[n], Tolerance):
+                raise ValidationError(f"tolerances[{n!r}]", tolerances[n], "an evotol.Tolerance")
+            tolerances[n].validate(n, src.dim)
+        self.robot, self.requirement = robot, requirement
+        self.tolerances = {n: tolerances[n] for n in names}
+        self.distributions = [distributions.as_distribution(self.tolerances[s.name].distribution,
+                                                            f"tolerances[{s.name!r}].distribution", s.dim)
+                              for s in robot.sources]
+        self.names = names
+        self.poses = self._check_pose_set(poses)
+        self.n_directions = int(n_directions)
+        J = np.asarray(robot.sensitivity(self.poses), dtype=float)
+        if J.shape != (len(self.poses), 6, robot.n_columns) or not np.all(np.isfinite(J)):
+            raise ValidationError(f"{robot.name}.sensitivity", J.shape, f"finite array of shape {(len(self.poses), 6, robot.n_columns)}")
+        self._set_jacobian(J)
+        tols = [self.tolerances[n] for n in names]
+        self.shape = measures.IntervalShape(np.array([t.rho for t in tols]), np.array([t.kappa for t in tols]),
+                                            np.array([float(t.offset) for t in tols]))
+        self.lower = np.array([t.lower for t in tols], dtype=float)
+        self.upper = np.array([t.upper for t in tols], dtype=float)
+        locked = [t.locked for t in tols]
+        self.locked_values = np.array([np.nan if v is None else v for v in locked])
+        self._set_shared(shared, shared_cost)
+        if not self.free.any():
+            raise ValidationError("tolerances", "all locked", "at least one source free to optimise")
+        self._coeff_cache: dict[str, tuple] = {}
+        self._measure_cache: dict[str, object] = {}
+        plausibility.warn(plausibility.problem_warnings(self))      # unit slips (issue 27): one line each
+
+    def __copy__(self) -> "ToleranceProblem":
+        """A shallow copy whose measures' caches start empty (the ``with_*`` copies change what
+        they depend on: requirement, poses, tolerances)."""
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new._measure_cache = {}
+        return new
+
+    def measure_cache(self, key: str, build):
+        """The value a measure cached under ``key`` on this problem, built by ``build()`` on first
+        use (e.g. common Monte Carlo samples, the yield model's moments).
+
+        Parameters
+        ----------
+        key : str
+            Cache key (one per measure and purpose).
+        build : callable
+            Called without arguments to make the value when ``key`` is not cached yet.
+
+        Returns
+        -------
+        object
+            The cached value. The ``with_*`` copies start with an empty cache.
+        """
+        if key not in self._measure_cache:
+            self._measure_cache[key] = build()
+        return self._measure_cache[key]
+
+    def _check_pose_set(self, poses) -> np.ndarray:
+        if poses is None or (hasattr(poses, "__len__") and len(poses) == 0):
+            raise ValidationError("poses", [] if poses is None else poses, "at least one workspace pose")
+        return self.robot.check_poses(poses)
+
+    def _set_jacobian(self, J: np.ndarray) -> None:
+        self.jacobian = J
+        sl = self.robot.column_slices
+        self.blocks = {"position": [J[:, 0:3, s] for s in sl], "orientation": [J[:, 3:6, s] for s in sl]}
+        self.sensitivities = {k: measures.spectral_norms(b) for k, b in self.blocks.items()}
+
+    def _set_shared(self, shared, shared_cost: str) -> None:
+        v = tolerance_variables(self.robot, self.tolerances, self.lower, self.upper, self.locked_values,
+                                shared, shared_cost)
+        self.shared, self.shared_cost, self.lower, self.upper = v.shared, v.shared_cost, v.lower, v.upper
+        self.leader, self.follower, self.locked, self.free = v.leader, v.follower, v.locked, v.free
+        self.variable_matrix, self.variables, self.cost_weight = v.variable_matrix, v.variables, v.cost_weight
+
+    # --- basic properties ---------------------------------------------------------------------
+    @property
+    def clearances(self) -> "clearance_measure.ClearanceSources | None":
+        """The allocated joint-clearance classes, or None."""
+        return self.robot.clearances if isinstance(self.robot, clearance_measure.WithClearances) else None
+
+    @staticmethod
+    def _clearance_measures() -> tuple[str, ...]:
+        """Names of the registered measures that judge clearance sources."""
+        return tuple(n for n, m in measure_registry.available().items() if m.clearances)
+
+    @classmethod
+    def _check_clearance_measure(cls, requirement: Requirement) -> None:
+        if not measure_registry.get(requirement.measure).clearances:
+            raise ValidationError("requirement.measure", requirement.measure,
+                                  f"one of {cls._clearance_measures()} with clearance sources (the certified engine's measure)")
+
+    @property
+    def n_sources(self) -> int:
+        """Number of error sources (tolerances), dimensionless."""
+        return len(self.names)
+
+    @property
+    def n_poses(self) -> int:
+        """Number of workspace poses checked, dimensionless."""
+        return len(self.poses)
+
+    @property
+    def n_variables(self) -> int:
+        """Number of free tolerance variables (a ``shared`` group counts once), dimensionless."""
+        return int(self.free.sum())
+
+    @property
+    def asymmetric(self) -> bool:
+        """Some interval is not centred on zero (offset or minus != plus)."""
+        return not self.shape.centred
+
+    @property
+    def components(self) -> list[tuple[str, float]]:
+        """(component, bound) pairs that the requirement constrains."""
+        out = []
+        if self.requirement.position is not None:
+            out.append(("position", float(self.requirement.position)))
+        if self.requirement.orientation is not None:
+            out.append(("orientation", float(self.requirement.orientation)))
+        return out
+
+    def groups(self) -> list[str]:
+        """The robot's group label of each source, in source order.
+
+        Returns
+        -------
+        list of str
+            One group name per source (``robot.sources[j].group``).
+        """
+        return [s.group for s in self.robot.sources]
+
+    def units(self) -> list[str]:
+        """The SI unit of each source's tolerance, in source order.
+
+        Returns
+        -------
+        list of str
+            One unit per source (``"m"`` or ``"rad"``, ``robot.sources[j].unit``).
+        """
+        return [s.unit for s in self.robot.sources]
+
+    # --- accuracy -------------------------------------------------------------------------------
+    def coefficients(self, component: str):
+        """Cached (c[p, d, j], directions, δ[, const[p, d]]) of the worst-case support function
+        (const: the offsets' part, only for asymmetric intervals).
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component.
+
+        Returns
+        -------
+        tuple
+            ``(c, D, delta)`` or, for non-plain interval shapes, ``(c, D, delta, const)``:
+            ``c`` (n_poses, n_directions, n_sources) support coefficients (m or rad per unit of
+            tolerance), ``D`` (n_directions, 3) unit directions, ``delta`` their covering angle
+            (rad; see :func:`evotol.measures.linear.directions_for`), ``const``
+            (n_poses, n_directions) the offsets' part (m or rad).
+        """
+        if component not in self._coeff_cache:
+            blocks = self.blocks[component]
+            D, delta = measures.directions_for(np.concatenate(blocks, axis=2), self.n_directions,
+                                               full_sphere=self.asymmetric)
+            if self.shape.plain:
+                self._coeff_cache[component] = (measures.support_coefficients(blocks, D), D, delta)
+            else:
+                self._coeff_cache[component] = (measures.support_coefficients(blocks, D, self.shape), D, delta,
+                                                measures.support_constant(blocks, D, self.shape))
+        return self._coeff_cache[component]
+
+    def support_row(self, component: str, pose: int, u: np.ndarray) -> tuple[np.ndarray, float]:
+        """The worst-case row at one pose and direction u: h(u) = row·t + const (SI).
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component.
+        pose : int
+            Pose index.
+        u : ndarray, shape (3,)
+            Unit direction.
+
+        Returns
+        -------
+        row : ndarray, shape (n_sources,)
+            Support coefficient of each source (m or rad per unit of tolerance).
+        const : float
+            The offsets' part (m or rad; 0 for plain centred intervals).
+        """
+        if self.shape.plain:
+            return np.array([np.linalg.norm(B[pose].T @ u) for B in self.blocks[component]]), 0.0
+        blocks = [B[pose:pose + 1] for B in self.blocks[component]]
+        row = measures.support_coefficients(blocks, u[None], None if self.shape.plain else self.shape)[0, 0]
+        const = 0.0 if self.shape.plain else float(measures.support_constant(blocks, u[None], self.shape)[0, 0])
+        return row, const
+
+    def evaluate(self, T, measure: str | None = None, top_only: bool = False) -> Evaluation:
+        """Errors of designs at every pose under a measure.
+
+        Parameters
+        ----------
+        T : array_like, shape (n_designs, n_sources) or (n_sources,)
+            Source tolerances (SI: m or rad), or one design as a name -> value mapping.
+        measure : str, optional
+            A registered measure (:mod:`evotol.measures.registry`); default the requirement's.
+        top_only : bool
+            Exact only at the poses that can hold the largest error (faster; enough for
+            feasibility).
+
+        Returns
+        -------
+        Evaluation
+            Errors per design and pose (m, rad) and the requirement's ``violation``.
+
+        Raises
+        ------
+        ValidationError
+            An unknown measure, a measure that cannot judge clearance sources, or bad tolerances.
+        """
+        T = np.atleast_2d(self.as_array(T))
+        name = measure or self.requirement.measure
+        m = measure_registry.get(name)
+        if self.clearances is not None and not m.clearances:
+            raise ValidationError("measure", name, f"one of {self._clearance_measures()} with clearance sources")
+        return m.evaluate(self, T, top_only)
+
+    def first_order_yield(self):
+        """The ``yield`` measure's statistical model of this problem (cached):
+        :class:`evotol.measures.statistical.FirstOrderYield`, or :class:`~evotol.measures.statistical.SampledYield`
+        for ``Requirement(model="nonlinear")``.
+
+        Returns
+        -------
+        evotol.measures.statistical.FirstOrderYield or evotol.measures.statistical.SampledYield
+            The cached model.
+        """
+        return first_order_yield(self)
+
+    def max_errors(self, T, measure: str | None = None) -> dict[str, np.ndarray]:
+        """Largest error over the poses, per constrained component: name -> (n_designs,).
+
+        Parameters
+        ----------
+        T : array_like, shape (n_designs, n_sources) or (n_sources,)
+            Designs (SI: m or rad), or one design as a name -> value mapping.
+        measure : str, optional
+            A registered measure; default the requirement's.
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_designs,)
+            ``"position"`` (m) and/or ``"orientation"`` (rad) maximum over the poses, for the
+            components the requirement constrains.
+        """
+        ev = self.evaluate(T, measure)
+        return {c: np.max(getattr(ev, c), axis=1) for c, _ in self.components}
+
+    def check_feasible(self) -> None:
+        """Raise :class:`InfeasibleError` if even every free tolerance at its lower bound misses
+        the requirement (names the requirement, the smallest achievable error and its pose).
+
+        Raises
+        ------
+        evotol.errors.InfeasibleError
+            The design with every free tolerance at its lower bound violates the requirement.
+        """
+        T = self.full(self.lower[self.free][None])
+        ev = self.evaluate(T)
+        if ev.violation[0] <= 1e-9:
+            return
+        worst = max(self.components, key=lambda cl: np.max(getattr(ev, cl[0])[0]) / cl[1])
+        comp, lim = worst
+        val = getattr(ev, comp)[0]
+        p = int(np.argmax(val))
+        unit = "m" if comp == "position" else "rad"
+        raise InfeasibleError(f"{self.requirement.measure} {comp} error <= {lim:g} {unit}", float(val[p]),
+                              self.poses[p].tolist(), f"pose index {p}")
+
+    # --- summary --------------------------------------------------------------------------------
+    def describe(self) -> str:
+        """A printable summary: robot, poses, measure, requirement and each source's range, cost
+        and interval shape (also the ``repr``).
+
+        Returns
+        -------
+        str
+            Several lines of text.
+        """
+        r = self.requirement
+        lines = [f"ToleranceProblem: {self.robot.name}, {self.n_poses} poses, measure {r.measure}",
+                 f"  requirement: position <= {r.position} m, orientation <= {r.orientation} rad"]
+        for n, s in zip(self.names, self.robot.sources):
+            tol = self.tolerances[n]
+            lk = (" fixed" if tol.is_fixed else f", locked at {tol.locked:g}") if tol.locked is not None else ""
+            sh = ""
+            if tol.offset or tol.minus != 1 or tol.plus != 1:
+                sh = f"  interval [{tol.offset:g} - {tol.minus:g} t, {tol.offset:g} + {tol.plus:g} t]"
+            lines.append(f"  {n:8s} {s.shape:8s} [{tol.lower:.3g}, {tol.upper:.3g}] {s.unit}  cost {tol.cost!r}{lk}{sh}")
+        for g, m in self.shared.items():
+            lines.append(f"  shared {g}: {', '.join(m)} (cost per {self.shared_cost})")
+        return "\n".join(lines)
+
+    __repr__ = describe

@@ -1,0 +1,81 @@
+"""The ``rss`` measure: root sum square of every source's worst-case effect t_j‖B_j‖₂ at each pose,
+plus the norm of the mean shift of asymmetric intervals added linearly (:func:`evotol.measures.linear.rss`,
+``docs/tolerances.md``)."""
+from __future__ import annotations
+
+import numpy as np
+
+from evotol.measures import linear as measures
+from evotol.measures.protocol import COMPONENTS, ComponentErrors, Evaluation, Measure, evaluation_of, violation
+
+
+class RSSMeasure(Measure):
+    """Statistical stack-up: sqrt(Σ_j (ρ_j t_j ‖B_j‖₂)²) + ``|s(t)|`` (m or rad) per pose."""
+
+    name = "rss"
+
+    def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
+        """RSS errors and each source's share of the squared RSS part; see :meth:`Measure.evaluate`.
+
+        Parameters
+        ----------
+        problem : evotol.core.problem.ToleranceProblem
+            The problem (robot sensitivities, tolerances, requirement, poses).
+        T : ndarray, shape (n_designs, n_sources)
+            Source tolerances (SI: m or rad), already validated.
+        top_only : bool
+            Ignored: the RSS is cheap at every pose.
+
+        Returns
+        -------
+        Evaluation
+            ``position`` (m) / ``orientation`` (rad) RSS errors (n_designs, n_poses), also as
+            the ``*_bound``; ``*_contrib`` the sources' shares; the ``violation``.
+        """
+        plain = problem.shape.plain
+        Th = T if plain else T * problem.shape.rho
+        parts = {}
+        for comp in COMPONENTS:
+            shift = None if plain else np.linalg.norm(measures.mean_shift(problem.blocks[comp], problem.shape, T), axis=-1)
+            val = measures.rss(problem.sensitivities[comp], Th, shift)
+            sq = (Th[:, None, :] * problem.sensitivities[comp][None]) ** 2
+            if shift is None:
+                contrib = sq / np.where(val ** 2 > 0, val ** 2, 1.0)[..., None]
+            else:   # share of the RSS part, scaled by the RSS part's share of the total
+                r = val - shift
+                contrib = sq / np.where(r ** 2 > 0, r ** 2, 1.0)[..., None] * (r / np.where(val > 0, val, 1.0))[..., None]
+            parts[comp] = ComponentErrors(val, val, contrib)
+        return evaluation_of(parts, violation(problem, parts))
+
+    def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
+        """Pose by pose and source by source: the largest singular value of each block (SVD),
+        the half-widths ρ_j t_j, and the mean shift Σ_j B_j c_j with c_j = offset_j + κ_j t_j.
+
+        Parameters
+        ----------
+        problem : evotol.core.problem.ToleranceProblem
+            A small problem.
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_poses,)
+            ``"position"`` (m) and ``"orientation"`` (rad) RSS errors per pose.
+        """
+        sh = problem.shape
+        out = {}
+        for comp in COMPONENTS:
+            vals = []
+            for p in range(problem.n_poses):
+                sq, shift = 0.0, np.zeros(3)
+                for j, B in enumerate(problem.blocks[comp]):
+                    sq += (sh.rho[j] * t[j] * np.linalg.svd(B[p], compute_uv=False)[0]) ** 2
+                    if B.shape[2] == 1:
+                        shift += B[p][:, 0] * (sh.offset[j] + sh.kappa[j] * t[j])
+                vals.append(np.sqrt(sq) + np.linalg.norm(shift))
+            out[comp] = np.array(vals)
+        return out
+
+
+RSS = RSSMeasure()

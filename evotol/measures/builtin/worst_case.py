@@ -1,0 +1,104 @@
+"""The ``worst_case`` measure: the largest error of the linear model over every error inside the
+tolerances, exact up to the proven bound (:func:`evotol.measures.linear.worst_case`, support function
+over a direction grid); with allocated joint clearances, the certified engine's worst case of the
+geometric intervals plus the clearances (:func:`evotol.measures.clearances.worst_case`)."""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from evotol.measures import clearances as clearance_measure
+
+from evotol.measures import linear as measures
+from evotol.measures.protocol import COMPONENTS, ComponentErrors, Evaluation, Measure, evaluation_of, violation
+from evotol.errors import ValidationError
+
+
+class WorstCaseMeasure(Measure):
+    """Worst-case position (m) and orientation (rad) error at every pose (``docs/tolerances.md``)."""
+
+    name = "worst_case"
+    clearances = True
+
+    def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
+        """Attained worst case (``position``), proven bound (``position_bound``), worst direction
+        and each source's share, per component; see :meth:`Measure.evaluate`.
+
+        Parameters
+        ----------
+        problem : evotol.core.problem.ToleranceProblem
+            The problem (robot sensitivities, tolerances, requirement, poses).
+        T : ndarray, shape (n_designs, n_sources)
+            Source tolerances (SI: m or rad), already validated.
+        top_only : bool
+            Refine only the poses that can hold the largest error (others keep a lower grid
+            estimate); not used with clearance sources.
+
+        Returns
+        -------
+        Evaluation
+            ``position`` (m) / ``orientation`` (rad) attained worst case (n_designs, n_poses),
+            ``*_bound`` the proven bound, ``*_direction``, ``*_contrib`` and the ``violation``.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Clearance sources next to intervals that are not centred ±t.
+        """
+        if problem.clearances is not None:
+            return self._with_clearances(problem, T)
+        shape = None if problem.shape.plain else problem.shape
+        parts = {}
+        for comp in COMPONENTS:
+            wc = measures.worst_case(problem.blocks[comp], T, coefficients=problem.coefficients(comp),
+                                     top_only=top_only, shape=shape)
+            parts[comp] = ComponentErrors(wc.value, wc.bound, wc.contributions, wc.direction)
+        return evaluation_of(parts, violation(problem, parts))
+
+    @staticmethod
+    def _with_clearances(problem, T: np.ndarray) -> Evaluation:
+        """The certified worst case of geometric intervals + clearance classes (engine)."""
+        if not problem.shape.plain:
+            raise ValidationError("tolerances", "offset/minus/plus", "centred intervals ±t next to clearance sources")
+        comps = [c for c, _ in problem.components]
+        wc = clearance_measure.worst_case(problem.robot, problem.poses, problem.jacobian, T, comps)
+        parts = {c: ComponentErrors(wc.value[c], wc.bound[c], wc.contrib[c], wc.direction[c]) for c in comps}
+        return evaluation_of(parts, violation(problem, parts))
+
+    def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
+        """The largest error norm over every vertex of the box of interval ends (exact for a
+        problem of interval sources only: the norm is convex, its maximum sits at a vertex).
+
+        Parameters
+        ----------
+        problem : evotol.core.problem.ToleranceProblem
+            A small problem.
+        t : ndarray, shape (n_sources,)
+            One design (SI: m or rad).
+
+        Returns
+        -------
+        dict of str to ndarray, shape (n_poses,)
+            ``"position"`` (m) and ``"orientation"`` (rad) worst case per pose.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A source that is not an interval (1-D), or a problem with clearance sources.
+        """
+        if any(s.dim != 1 for s in problem.robot.sources) or problem.clearances is not None:
+            raise ValidationError("problem", problem.robot.name, "interval (1-D) sources only for the vertex search")
+        ends = problem.intervals(t)                          # (n_sources, 2)
+        out = {}
+        for comp in COMPONENTS:
+            B = np.concatenate(problem.blocks[comp], axis=2)   # (n_poses, 3, n_sources)
+            best = np.zeros(problem.n_poses)
+            for signs in itertools.product((0, 1), repeat=problem.n_sources):
+                e = ends[np.arange(problem.n_sources), signs]
+                best = np.maximum(best, np.linalg.norm(B @ e, axis=1))
+            out[comp] = best
+        return out
+
+
+WORST_CASE = WorstCaseMeasure()
