@@ -117,14 +117,14 @@ class Study:
 
     def units_block(self) -> dict:
         """The ``units`` block written into ``NAME.json`` (docs/units.md): the common keys and
-        rules plus this study's own keys (``evotol/studies/_units.py``).
+        rules plus this study's own keys (``evotol/studies/_summary_key_units.py``).
 
         Returns
         -------
         dict
             The units block, as made by :func:`evotol.units.make_units_block`.
         """
-        from evotol.studies._units import study_units
+        from evotol.studies._summary_key_units import study_units
         from evotol.units import make_units_block
         return make_units_block(**study_units(self.name))
 

@@ -11,7 +11,7 @@
 :func:`unit_of` resolves the unit of any number in such a file from its JSON path, so a test can
 check that no number is left without one. ``evotol run`` writes this block, and so does every seed
 study (:meth:`evotol.studies.Study.units_block`, with the study's own keys from
-``evotol/studies/_units.py``).
+``evotol/studies/_summary_key_units.py``).
 """
 from __future__ import annotations
 
