@@ -16,7 +16,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from cost_models import ExponentialCost  # noqa: E402
-from evotol.core.distributions import draw, uniforms  # noqa: E402
+from evotol.measures.statistical.distributions import draw, uniforms  # noqa: E402
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem  # noqa: E402
 from robots.ucr3 import UCR3  # noqa: E402
 

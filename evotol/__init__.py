@@ -40,7 +40,7 @@ _WHERE = {
     "process_front": "evotol.allocators",
     "assembly_problem": "evotol.allocators.process",
     # sources beyond intervals
-    "Distribution": "evotol.core.distributions",
+    "Distribution": "evotol.measures.statistical.distributions",
     "ClearanceClass": "evotol.measures.clearances",
     "ClearanceSources": "evotol.measures.clearances",
     # results and verification

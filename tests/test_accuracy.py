@@ -13,7 +13,7 @@ import pytest
 
 from evotol.measures import Evaluation, available, get, names
 from evotol.measures.protocol import ComponentErrors, evaluation_of, violation
-from evotol.measures.checks import CHECKS, check_measure, measure_checks, small_problem
+from evotol.core.measure_checks import CHECKS, check_measure, measure_checks, small_problem
 from evotol.measures.builtin.worst_case import WorstCaseMeasure
 from evotol.errors import CheckFailed, ValidationError
 from evotol.core.problem import Requirement
@@ -121,7 +121,7 @@ TRIANGLE = Triangle()
 SCRIPT = '''
 import numpy as np
 from evotol.measures import names
-from evotol.measures.checks import check_measure, small_problem
+from evotol.core.measure_checks import check_measure, small_problem
 from evotol.measures.registry import get
 
 P = small_problem().with_requirement(measure="triangle")

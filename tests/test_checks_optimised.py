@@ -40,7 +40,7 @@ from cost_models.checks import check_cost_model
 check_cost_model(CallableCost(lambda t: 1.0 + 1e4 * t, lambda t: 1e4 + 0 * t, name="rising"), 1e-6, 1e-4)
 ''',
     "measure falling with t": '''
-from evotol.measures.checks import check_measure
+from evotol.core.measure_checks import check_measure
 from evotol.measures.builtin.worst_case import WorstCaseMeasure
 
 class Falling(WorstCaseMeasure):

@@ -7,14 +7,17 @@ bottom:
 0. foundation: ``evotol.errors``, ``evotol.units``, ``evotol._runtime`` (no physics, no problem;
    anyone may use them);
 1. models: ``cost_models``, ``robots``;
-2. the problem and the size of its error: ``evotol.core`` (tolerance, requirement, variables,
-   distributions, problem, result, pareto), ``evotol.measures`` (every measure, the support-function
-   bound, constraint rows, the feasibility rule, statistical and nonlinear worst case, clearances);
-3. allocators and design-space search: ``evotol.allocators``, ``evotol.design``;
-4. verification and the data reports read: ``evotol.verification``, ``evotol.summaries``;
-5. reporting: ``evotol.reporting`` (the HTML toolkit; it imports no study);
-6. studies: ``evotol.studies``, ``evotol.studyfile``;
-7. cli: ``evotol.cli``.
+2. the size of an error: ``evotol.measures`` (the measure protocol, registry and built-ins, the
+   linear worst case and RSS, the support-function bound, constraint rows, the feasibility rule,
+   distributions and yield, clearances, the nonlinear worst case); it knows no problem class, only
+   what a problem offers;
+3. the problem: ``evotol.core`` (tolerance, requirement, variables, problem, result, pareto, and the
+   measures' conformance checks, which build small problems);
+4. allocators and design-space search: ``evotol.allocators``, ``evotol.design``;
+5. verification and the data reports read: ``evotol.verification``, ``evotol.summaries``;
+6. reporting: ``evotol.reporting`` (the HTML toolkit; it imports no study);
+7. studies: ``evotol.studies``, ``evotol.studyfile``;
+8. cli: ``evotol.cli``.
 
 Every module must be placed: a module under no room of ``LAYERS`` (a new top-level ``evotol``
 module or room) fails :func:`test_every_module_is_placed` instead of having its layer inferred.
@@ -36,14 +39,15 @@ PACKAGES = ("evotol", "cost_models", "robots")
 LAYERS = {
     "evotol": 0, "evotol.errors": 0, "evotol.units": 0, "evotol._runtime": 0,
     "cost_models": 1, "robots": 1,
-    "evotol.core": 2, "evotol.measures": 2,
-    "evotol.allocators": 3, "evotol.design": 3,
-    "evotol.verification": 4, "evotol.summaries": 4,
-    "evotol.reporting": 5,
-    "evotol.studies": 6, "evotol.studyfile": 6,
-    "evotol.cli": 7,
+    "evotol.measures": 2,
+    "evotol.core": 3,
+    "evotol.allocators": 4, "evotol.design": 4,
+    "evotol.verification": 5, "evotol.summaries": 5,
+    "evotol.reporting": 6,
+    "evotol.studies": 7, "evotol.studyfile": 7,
+    "evotol.cli": 8,
 }
-NAMES = ["foundation", "models", "problem", "allocators", "verification", "reporting", "studies", "cli"]
+NAMES = ["foundation", "models", "measures", "core", "allocators", "verification", "reporting", "studies", "cli"]
 
 #: upward imports that another engineer's open issue removes: (importer, imported) -> issue
 # (issue 10 removed evotol.core.problem -> evotol.verification.montecarlo; issue 11 removed evotol.studies.mechanisms ->

@@ -5,7 +5,7 @@ import pytest
 import cost_models as cm
 from evotol.allocators import allocate_optimum
 from evotol.errors import ValidationError
-from evotol.core.distributions import draw as _draw, uniforms as _uniforms
+from evotol.measures.statistical.distributions import draw as _draw, uniforms as _uniforms
 from evotol.verification.montecarlo import verify
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studies.yao2013 import yao2013_problem

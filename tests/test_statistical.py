@@ -5,7 +5,7 @@ import pytest
 from scipy import stats
 
 import cost_models as cm
-from evotol.core.distributions import Distribution, draw, uniforms, unit_moments
+from evotol.measures.statistical.distributions import Distribution, draw, uniforms, unit_moments
 from evotol.errors import ValidationError
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.measures.statistical import k_equivalent, miss_probability, sym3_eigenvalues

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cost_models.base import CostModel
-from evotol.core import distributions
+from evotol.measures.statistical import distributions
 from evotol.errors import ValidationError
 
 #: the width a tolerance's cost model is evaluated on: the half-width (minus + plus)/2 t ("half",
@@ -28,11 +28,11 @@ class Tolerance:
     locked : float or None
         If given, the tolerance is fixed at this value (m or rad) and not optimised (its cost
         counts).
-    distribution : str or evotol.core.distributions.Distribution
+    distribution : str or evotol.measures.statistical.distributions.Distribution
         How the source is distributed inside its tolerance (Monte Carlo and the ``yield``
         measure): a kind name (``"uniform"``, ``"normal"`` with t = 3σ, ``"truncated_normal"``,
-        ``"contact"``) or a :class:`evotol.core.distributions.Distribution` (``sigma_k``,
-        ``mean_shift``); conventions in :mod:`evotol.core.distributions`. For an asymmetric interval
+        ``"contact"``) or a :class:`evotol.measures.statistical.distributions.Distribution` (``sigma_k``,
+        ``mean_shift``); conventions in :mod:`evotol.measures.statistical.distributions`. For an asymmetric interval
         the distribution is placed on the interval: centre offset + (plus − minus)/2·t,
         half-width (minus + plus)/2·t.
     offset, minus, plus : float

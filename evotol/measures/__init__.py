@@ -1,7 +1,7 @@
 """The size of an error, in one room: accuracy measures as plugins -- one protocol
 (:class:`Measure`: ``evaluate(problem, T, top_only) -> Evaluation``, :mod:`.protocol`), one registry
-(:mod:`.registry`: built-ins plus the entry-point group ``evotol.measures``) and a conformance suite
-(:mod:`.checks`) -- and the numerics they share.
+(:mod:`.registry`: built-ins plus the entry-point group ``evotol.measures``; their conformance suite is
+:mod:`evotol.core.measure_checks`, which builds small problems) -- and the numerics they share.
 
 * Built in (:mod:`.builtin`): ``worst_case`` (:mod:`.builtin.worst_case`), ``rss``
   (:mod:`.builtin.rss`), ``mc_quantile`` (:mod:`.builtin.mc_quantile`) and ``yield``
@@ -10,7 +10,7 @@
   proven support-function bound.
 * The requirement as constraint rows for optimisers (:mod:`.constraints`) and the one rule of
   *feasible* (:mod:`.feasibility`).
-* Yield (:mod:`.statistical`), joint clearances with their certified worst case
+* Source distributions and yield (:mod:`.statistical`), joint clearances with their certified worst case
   (:mod:`.clearances`), the nonlinear worst case with interval arithmetic (:mod:`.nonlinear`).
 """
 from evotol.measures.protocol import ComponentErrors, Evaluation, Measure

@@ -24,7 +24,6 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import ValidationError
-from evotol.core.problem import ToleranceProblem
 
 
 class ConstraintRows:

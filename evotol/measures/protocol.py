@@ -4,7 +4,7 @@ A *measure* judges designs against the requirement: ``measure.evaluate(problem, 
 returns an :class:`Evaluation` of the designs ``T`` (n_designs, n_sources; SI) at every pose of
 ``problem`` (a :class:`evotol.core.problem.ToleranceProblem`). Measures are registered by name in
 :mod:`evotol.measures.registry` (built-ins and the entry-point group ``evotol.measures``) and
-proven by :mod:`evotol.measures.checks`.
+proven by :mod:`evotol.core.measure_checks`.
 """
 from __future__ import annotations
 

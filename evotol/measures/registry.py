@@ -8,7 +8,7 @@ model. A package adds a measure without touching evotol by declaring, in its ``p
 
 The entry point names a :class:`evotol.measures.protocol.Measure` instance (or a class, instantiated
 without arguments) whose ``name`` equals the entry point's name. ``Requirement(measure="my_measure")``
-then selects it; :func:`evotol.measures.checks.check_measure` proves it follows the contract.
+then selects it; :func:`evotol.core.measure_checks.check_measure` proves it follows the contract.
 """
 from __future__ import annotations
 

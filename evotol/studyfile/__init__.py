@@ -29,7 +29,7 @@ from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, a
                                allocate_optimum, allocate_sensitivity)
 from evotol.allocators.budget import check_budget
 from evotol.units.display import DisplayUnits, parse_units, problem_units
-from evotol.core.distributions import Distribution
+from evotol.measures.statistical.distributions import Distribution
 from evotol.errors import ValidationError
 from evotol._runtime.toml_kinds import check_kind
 from evotol._runtime.interrupt import CtrlC

@@ -2,7 +2,7 @@
 every pose, propagate them (first-order map and, where the robot has one, the nonlinear model),
 and report the rate at which the end-effector error exceeds the requirement (Yao 2013 Sec. 5).
 
-Sampling (per source, ``Tolerance.distribution``; conventions in :mod:`evotol.core.distributions`):
+Sampling (per source, ``Tolerance.distribution``; conventions in :mod:`evotol.measures.statistical.distributions`):
 unit-tolerance errors drawn by inverse CDF from Latin-hypercube or plain uniforms, then scaled
 by t_j -- uniform, normal (t = k·σ), truncated normal, contact (clearances), process mean shift;
 disk/ball radius r ~ U(0, t) (``radial="uniform"``, Yao 2013 eq. 12) or uniform over the
@@ -28,8 +28,8 @@ import numpy as np
 
 from evotol.measures import clearances
 
-from evotol.core import distributions
-from evotol.core.distributions import METHODS
+from evotol.measures.statistical import distributions
+from evotol.measures.statistical.distributions import METHODS
 from evotol.errors import ValidationError, is_integer, is_real
 from evotol.verification.nonlinear import verify_nonlinear
 from evotol.core.problem import ToleranceProblem
@@ -247,7 +247,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     nonlinear : bool
         Also sample the robot's nonlinear ``pose_error`` where it has one.
     radial : str
-        Radial law of disk/ball sources, one of ``evotol.core.distributions.RADIAL``.
+        Radial law of disk/ball sources, one of ``evotol.measures.statistical.distributions.RADIAL``.
     chunk_poses : int
         Poses sampled per chunk (memory).
     progress : bool or None

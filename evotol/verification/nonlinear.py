@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
-from evotol.core import distributions
+from evotol.measures.statistical import distributions
 
 from evotol.measures import linear as measures
 from evotol.errors import ValidationError, is_integer

@@ -62,7 +62,7 @@ def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0
         (``distribution`` per source, default normal with t = 3σ; :meth:`ProcessProblem.assembly_yield`).
     pop_size, n_gen : int
         NSGA-II population and generations.
-    distribution : str or evotol.core.distributions.Distribution
+    distribution : str or evotol.measures.statistical.distributions.Distribution
         Distribution of every source for ``objective="yield"``.
     max_miss : float
         For ``objective="yield"``: the miss probability a feasible design may have

@@ -276,11 +276,11 @@ class ProcessProblem:
     def yield_model(self, distribution="normal"):
         """First-order statistical model of the responses (:class:`evotol.measures.statistical.FirstOrderYield`,
         ``docs/statistical.md``) with every source distributed as ``distribution`` (a kind name or an
-        :class:`evotol.core.distributions.Distribution`; default normal with t = 3σ).
+        :class:`evotol.measures.statistical.distributions.Distribution`; default normal with t = 3σ).
 
         Parameters
         ----------
-        distribution : str or evotol.core.distributions.Distribution
+        distribution : str or evotol.measures.statistical.distributions.Distribution
             Distribution of every source inside its tolerance.
 
         Returns
@@ -293,10 +293,10 @@ class ProcessProblem:
         ValidationError
             If ``distribution`` is neither a kind name nor a Distribution (or is invalid).
         """
-        from evotol.core.distributions import Distribution
+        from evotol.measures.statistical.distributions import Distribution
 
         if not isinstance(distribution, (str, Distribution)):
-            raise ValidationError("distribution", distribution, "a distribution kind name or evotol.core.distributions.Distribution")
+            raise ValidationError("distribution", distribution, "a distribution kind name or evotol.measures.statistical.distributions.Distribution")
         tol = {n: Tolerance(t.cost, t.lower, t.upper, distribution=distribution) for n, t in self.base.tolerances.items()}
         req = replace(self.requirement, measure="yield", probability=None, ppm=None)
         return ToleranceProblem(self.robot, tol, req, self.base.poses).first_order_yield()

@@ -26,7 +26,7 @@ import numpy as np
 
 from evotol.measures import clearances as clearance_measure
 
-from evotol.core import distributions
+from evotol.measures.statistical import distributions
 
 from evotol.measures import linear as measures
 

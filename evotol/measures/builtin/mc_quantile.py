@@ -1,11 +1,11 @@
 """The ``mc_quantile`` measure: at every pose, the requirement's ``quantile`` of the error norm of
 the linear model over ``mc_samples`` common Latin-hypercube samples (seed ``seed``) of the
-sources inside their tolerances (:mod:`evotol.core.distributions`)."""
+sources inside their tolerances (:mod:`evotol.measures.statistical.distributions`)."""
 from __future__ import annotations
 
 import numpy as np
 
-from evotol.core import distributions
+from evotol.measures.statistical import distributions
 from evotol.measures.protocol import COMPONENTS, ComponentErrors, Evaluation, Measure, evaluation_of, violation
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from evotol.core import distributions
+from evotol.measures.statistical import distributions
 
 from evotol.measures import statistical
 from evotol.measures.protocol import ComponentErrors, Evaluation, Measure, evaluation_of

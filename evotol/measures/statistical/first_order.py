@@ -1,11 +1,11 @@
 """The first-order yield model of the ``yield`` measure (``docs/statistical.md``).
 
 First-order model. At one pose the position (or orientation) error is x = Σ_j B_j e_j with source
-errors e_j = t_j z_j (:mod:`evotol.core.distributions`). Its mean and covariance are
+errors e_j = t_j z_j (:mod:`evotol.measures.statistical.distributions`). Its mean and covariance are
 
     μ = Σ_j B_j m_j t_j,        Σ = Σ_j t_j² v_j B_j B_jᵀ        (3×3),
 
-with (m_j, v_j) the mean / per-component variance of z_j (:func:`evotol.core.distributions.unit_moments`).
+with (m_j, v_j) the mean / per-component variance of z_j (:func:`evotol.measures.statistical.distributions.unit_moments`).
 With normal sources x ~ N(μ, Σ) exactly; with other sources x is replaced by the normal of the
 same mean and covariance (central limit theorem; CETOL's and 3DCS's "RSS" analysis do the same) and
 the result is flagged as approximate (:attr:`YieldResult.exact`).
@@ -74,12 +74,12 @@ class FirstOrderYield:
     ----------
     blocks : dict of str to list of ndarray, each shape (n_poses, 3, dim_j)
         Component -> sensitivity blocks per source (m or rad per unit of source error).
-    dists : sequence of evotol.core.distributions.Distribution
+    dists : sequence of evotol.measures.statistical.distributions.Distribution
         Each source's distribution inside its tolerance.
     bounds : dict of str to float or None
         Component -> bound E (m or rad); None components are not constrained.
     radial : str
-        Radial law of disk/ball sources (one of ``evotol.core.distributions.RADIAL``).
+        Radial law of disk/ball sources (one of ``evotol.measures.statistical.distributions.RADIAL``).
     shift : tuple of three array_like, shape (n_sources,), optional
         ``(rho, kappa, offset)`` of asymmetric intervals (dimensionless, dimensionless, SI);
         None: centred ±t.
@@ -88,7 +88,7 @@ class FirstOrderYield:
     _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
     def __init__(self, blocks: dict, dists, bounds: dict, radial: str = "uniform", shift=None):
-        from evotol.core.distributions import unit_moments
+        from evotol.measures.statistical.distributions import unit_moments
 
         self.bounds = {c: float(E) for c, E in bounds.items() if E is not None}
         dims = [B.shape[2] for B in next(iter(blocks.values()))]

@@ -56,7 +56,7 @@ class SampledYield:
         A robot with a nonlinear ``pose_error``.
     poses : array_like, shape (n_poses, workspace.dim)
         Workspace poses (SI: m, rad).
-    dists : sequence of evotol.core.distributions.Distribution
+    dists : sequence of evotol.measures.statistical.distributions.Distribution
         Each source's distribution inside its tolerance.
     bounds : dict of str to float or None
         Component -> bound E (m or rad); None components are not constrained.
@@ -67,7 +67,7 @@ class SampledYield:
     method : str
         ``"lhs"`` (Latin hypercube) or ``"mc"``.
     radial : str
-        Radial law of disk/ball sources (one of ``evotol.core.distributions.RADIAL``).
+        Radial law of disk/ball sources (one of ``evotol.measures.statistical.distributions.RADIAL``).
     shift : tuple of three array_like, shape (n_sources,), optional
         ``(rho, kappa, offset)`` of asymmetric intervals (dimensionless, dimensionless, SI);
         None: centred ±t.
@@ -82,7 +82,7 @@ class SampledYield:
 
     def __init__(self, robot, poses: np.ndarray, dists, bounds: dict, n_samples: int = 1024, seed=0,
                  method: str = "lhs", radial: str = "uniform", shift=None, max_rows: int = 2_000_000):
-        from evotol.core.distributions import unit_samples
+        from evotol.measures.statistical.distributions import unit_samples
 
         if not robot.has_nonlinear_model:
             raise ValidationError("requirement.model", "nonlinear", f"a robot with pose_error ({robot.name} has none)")

@@ -140,7 +140,7 @@ def as_distribution(value, field: str = "distribution", dim: int | None = None) 
             raise ValidationError(f"{field}.{sorted(unknown)[0]}", sorted(unknown)[0], "one of kind, sigma_k, mean_shift")
         d = Distribution(**value)
     else:
-        raise ValidationError(field, value, f"a kind name {KINDS} or an evotol.core.distributions.Distribution")
+        raise ValidationError(field, value, f"a kind name {KINDS} or an evotol.measures.statistical.distributions.Distribution")
     d.validate(field, dim)
     return d
 
