@@ -63,8 +63,8 @@ def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> n
         for g in collective_groups:
             members = np.flatnonzero(groups == g)
             if members.size == 0:
-                raise ValidationError("collective_groups", g, f"a source group of {problem.robot.name}: {sorted(set(groups))}")
-            if any(problem.robot.sources[k].dim != 1 for k in members):
+                raise ValidationError("collective_groups", g, f"a source group of {problem.error_model.name}: {sorted(set(groups))}")
+            if any(problem.error_model.sources[k].dim != 1 for k in members):
                 raise ValidationError("collective_groups", g, "a group of interval (dim 1) sources")
             Bsum = sum(problem.blocks[comp][k][:, :, 0] for k in members)
             sc[members] = np.max(np.linalg.norm(Bsum, axis=1)) / lim

@@ -97,8 +97,7 @@ def _normalised_requirement(problem) -> bool:
     """An assembly function's requirement is a ratio of its limits (robots/assembly/)."""
     from robots.assembly import AssemblyFunction
 
-    robot = getattr(problem.robot, "base", problem.robot)       # WithClearances wraps the robot
-    return isinstance(robot, AssemblyFunction)
+    return isinstance(problem.robot, AssemblyFunction)
 
 
 def problem_warnings(problem) -> list[str]:
