@@ -45,6 +45,7 @@ from evotol.measures.constraints import ConstraintRows
 from evotol.measures import feasibility
 from evotol.errors import ConvergenceError, ValidationError
 from evotol.core.problem import ToleranceProblem
+from evotol.core.plausibility import issue
 from evotol.core.result import make_result
 from evotol._runtime.blas_threads import single_threaded_blas
 
@@ -342,8 +343,9 @@ def _allocate_optimum_at_poses(problem: ToleranceProblem, *, budget: float | Non
     cert = certificate(problem, rows, t)
     cert["rounds"] = rounds
     cert["solver"] = "SLSQP + cutting planes"
-    result = make_result(problem, "optimum", t, certificate=cert, seconds=time.perf_counter() - t0, repair=np.inf,
-                         info={"solver_message": str(getattr(res, "message", ""))})
+    t, ev, repair = feasibility.hold_to_rule(problem, t, max_miss=np.inf)     # the working rows' hair outside
+    result = issue(make_result(problem, "optimum", t, evaluation=ev, certificate=cert, seconds=time.perf_counter() - t0,
+                               info={"solver_message": str(getattr(res, "message", "")), **repair}))
     if problem.requirement.measure == "worst_case":
         # the proven bound of the design (tightened: evotol.measures.feasibility), over the requirement, as
         # make_result's one proven evaluation found it
@@ -390,7 +392,6 @@ def _best_accuracy(problem, rows, budget, t0, tol, max_rounds, max_rows):
         if added == 0 and rows.violation(T(z[:-1])[None])[0] <= z[-1] - 1 + tol:
             break
     t = T(np.clip(z[:-1], lo / hi, 1))
-    r = make_result(problem, "optimum (best accuracy at budget)", t, seconds=time.perf_counter() - t0, budget=budget,
-                    certificate={"rounds": rounds, "budget": budget, "solver": "SLSQP + cutting planes"},
-                    info={"budget": budget, "normalised_error": float(rows.normalised_error(t[None])[0])})
-    return r
+    return issue(make_result(problem, "optimum (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
+                             budget=budget, certificate={"rounds": rounds, "budget": budget, "solver": "SLSQP + cutting planes"},
+                             info={"budget": budget, "normalised_error": float(rows.normalised_error(t[None])[0])}))

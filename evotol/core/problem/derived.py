@@ -11,6 +11,7 @@ from typing import Self
 
 import numpy as np
 
+from evotol.core import plausibility
 from evotol.measures import linear as measures
 from evotol.errors import ValidationError
 from evotol._runtime.keyword_checks import did_you_mean
@@ -50,6 +51,7 @@ class DerivedProblems:
         new.requirement.validate()
         if self.clearances is not None:
             self._check_clearance_measure(new.requirement)
+        new.warnings = plausibility.problem_warnings(new)      # they read the requirement (not issued again)
         return new
 
     def with_poses(self, idx) -> Self:

@@ -84,6 +84,9 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         interval sources, unless none has a tolerance, followed by the classes, which have zero
         first-order columns). ``names``, ``groups()``, ``units()``, the Jacobian and the measures
         read it.
+    warnings : list of str
+        The problem's plausibility lines (:func:`evotol.core.plausibility.problem_warnings`:
+        probable unit slips), computed once when it is built and issued then.
 
     Raises
     ------
@@ -159,7 +162,8 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
             raise ValidationError("tolerances", "all locked", "at least one source free to optimise")
         self._coeff_cache: dict[str, tuple] = {}
         self._measure_cache: dict[str, object] = {}
-        plausibility.warn(plausibility.problem_warnings(self))      # unit slips (issue 27): one line each
+        self.warnings = plausibility.problem_warnings(self)        # unit slips (issue 27): one line each,
+        plausibility.warn(self.warnings)                            # computed once, issued once
 
     def __copy__(self) -> "ToleranceProblem":
         """A shallow copy whose measures' caches start empty (the ``with_*`` copies change what
