@@ -152,7 +152,7 @@ def test_make_result_reports_the_design_it_is_given():
     rescaling, no warning issued); hold_to_rule scales it in only when asked (a search method's
     ``max_miss``), and records the scale as before (``feasibility_repair``)."""
     P = _ucr3()
-    t = allocate_sensitivity(P).t * 1.01
+    t = allocate_optimum(P).t * 1.01                # on the requirement, then 1 % outside
     with warnings.catch_warnings():
         warnings.simplefilter("error")          # nothing issued by make_result
         r = make_result(P, "given", t)
