@@ -298,9 +298,12 @@ def check_optimum_options(problem: ToleranceProblem, budget: float | None = None
     evotol.errors.ValidationError
         ``budget`` or ``refine`` given for a problem with clearance sources.
     """
-    if problem.clearances is not None and (budget is not None or refine):
-        raise ValidationError("budget" if budget is not None else "refine", budget if budget is not None else refine,
-                              "None with clearance sources (the optimum bracket minimises cost at the requirement)")
+    if problem.clearances is not None and budget is not None:
+        raise ValidationError("budget", budget, "None with clearance sources (the optimum bracket minimises cost at "
+                              "the requirement)")
+    if problem.clearances is not None and refine:
+        raise ValidationError("refine", refine, "false with clearance sources (the optimum bracket minimises cost on "
+                              "the problem's poses; the GA's refine holds a design over the workspace)")
 
 
 def _allocate_optimum_at_poses(problem: ToleranceProblem, *, budget: float | None, tol: float, max_rounds: int,
