@@ -17,6 +17,7 @@ import pytest
 
 import evotol.studies
 import evotol.studyfile
+import evotol.studyfile.run
 from evotol.cli import main
 from evotol.errors import ValidationError
 
@@ -42,9 +43,10 @@ def _sentinel_like(func):
 @pytest.fixture
 def no_computation(monkeypatch):
     """Every allocator, Monte Carlo and seed study fails the test if it is reached."""
-    monkeypatch.setattr(evotol.studyfile, "METHODS", {m: _sentinel_like(f) for m, f in evotol.studyfile.METHODS.items()})
-    monkeypatch.setattr(evotol.studyfile, "allocate_nsga2", _sentinel_like(evotol.studyfile.allocate_nsga2))
-    monkeypatch.setattr(evotol.studyfile, "verify", _sentinel_like(evotol.studyfile.verify))
+    run = evotol.studyfile.run                  # the module that calls the methods and the Monte Carlo
+    monkeypatch.setattr(run, "METHODS", {m: _sentinel_like(f) for m, f in run.METHODS.items()})
+    monkeypatch.setattr(run, "allocate_nsga2", _sentinel_like(run.allocate_nsga2))
+    monkeypatch.setattr(run, "verify", _sentinel_like(run.verify))
     fake = {n: dataclasses.replace(s, compute=_sentinel)
             for n, s in evotol.studies.available().items()}
     monkeypatch.setattr(evotol.studies, "available", lambda: fake)

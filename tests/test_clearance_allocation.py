@@ -188,7 +188,7 @@ def test_monte_carlo_samples_inside_the_clearance_sets(fivebar):
         verify(pr, t, n_samples=10, model="nonlinear")
     ratio = mc.max_error_over_worst_case["position"]
     assert 0.2 < ratio <= 1.0
-    tw = sample_twists(pr.robot, pr.poses, t, 20000, np.random.default_rng(0), mode="boundary")
+    tw = sample_twists(pr.error_model, pr.poses, t, 20000, np.random.default_rng(0), mode="boundary")
     p = np.linalg.norm(tw[0, :, :3], axis=1)
     assert p.max() <= ev.position_bound[0, 0] * (1 + 1e-9)
     assert p.max() >= 0.5 * ev.position[0, 0]

@@ -106,7 +106,7 @@ def test_every_allocator_meets_the_rule_on_every_shipped_example(path):
     spec = tomllib.loads(path.read_text())
     if "processes" in spec:            # process selection: the same rule on the exact response stack
         from evotol.studyfile.processes import METHODS as PROCESS_METHODS, load_process_problem
-        pp = load_process_problem(spec, load_problem, base_dir=path.parent)
+        pp = load_process_problem(spec, base_dir=path.parent)
         for m in ("optimum", "ga"):
             res = PROCESS_METHODS[m](pp, **({"pop_size": 20, "n_gen": 8} if m == "ga" else {}))
             t = np.array([res.tolerances[n] for n in pp.names])

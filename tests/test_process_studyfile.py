@@ -11,7 +11,7 @@ import pytest
 from evotol.allocators import allocate_optimum
 from evotol.allocators.process import allocate_process_optimum
 from evotol.errors import ValidationError
-from evotol.studyfile.processes import load_process_problem, run_process_study
+from evotol.studyfile import load_process_problem, run_process_study
 from evotol.core.quality_loss import with_quality_loss
 from evotol.studies import _choi2000 as choi
 from evotol.studyfile import load_problem, run_study_file
@@ -29,7 +29,7 @@ def test_shipped_clutch_file_gives_the_python_api_optimum(tmp_path):
     (35.16608: the published Choi 2000 A = 100 allocation recomputed), and the JSON splits machining + loss."""
     spec = _spec()
     spec["methods"] = {"optimum": {}, "ga": {"pop_size": 30, "n_gen": 30}, "baselines": {}, "nsga2": {"pop_size": 20, "n_gen": 10}}
-    run_process_study(spec, CLUTCH, tmp_path, 0, load_problem)     # the file with a smaller GA/NSGA-II budget
+    run_process_study(spec, CLUTCH, tmp_path, 0)     # the file with a smaller GA/NSGA-II budget
     data = json.loads((tmp_path / "clutch_processes.json").read_text())
     py = allocate_process_optimum(choi.problem(choi.load(), 101.6, "rss", 100.0))
     opt = data["results"]["optimum"]
@@ -50,11 +50,11 @@ def test_shipped_file_runs_through_evotol_run(tmp_path):
     spec = _spec()
     spec.pop("methods")
     spec["quality_loss"] = 0.0
-    summary = run_process_study(spec, CLUTCH, tmp_path, 0, load_problem)
+    summary = run_process_study(spec, CLUTCH, tmp_path, 0)
     assert set(summary["results"]) == {"optimum", "ga", "baseline sensitivity", "baseline lagrange"}
     # A = 0: the machining-cost optimum of the Choi clutch, 24.46243 (choi2000-clutch study)
     assert summary["results"]["optimum"]["cost"] == pytest.approx(24.46242558, rel=1e-8)
-    assert run_study_file.__module__ == "evotol.studyfile"
+    assert run_study_file.__module__ == "evotol.studyfile.run"
 
 
 def test_both_spellings_build_the_same_problem():
@@ -62,8 +62,8 @@ def test_both_spellings_build_the_same_problem():
     as_tables = dict(spec)
     as_tables["processes"] = {src: {p["name"]: {k: v for k, v in p.items() if k != "name"} for p in plist}
                               for src, plist in spec["processes"].items()}
-    a = load_process_problem(spec, load_problem)
-    b = load_process_problem(as_tables, load_problem)
+    a = load_process_problem(spec)
+    b = load_process_problem(as_tables)
     assert a.describe() == b.describe()
     assert np.allclose(a.loss_coefficients, b.loss_coefficients) and a.loss_coefficients.any()
 
@@ -82,7 +82,7 @@ def test_bad_process_tables_are_named(edit, field):
     spec = _spec()
     edit(spec)
     with pytest.raises(ValidationError) as exc:
-        load_process_problem(spec, load_problem)
+        load_process_problem(spec)
     assert exc.value.field.startswith(field)
 
 
@@ -105,7 +105,7 @@ def test_nonlinear_limit_method_in_a_process_study_file(tmp_path):
     spec = _spec()
     spec["requirement"]["measure"] = "worst_case"
     spec["methods"] = {"optimum": {}, "nonlinear_limit": {}}
-    summary = run_process_study(spec, CLUTCH, tmp_path, 0, load_problem)
+    summary = run_process_study(spec, CLUTCH, tmp_path, 0)
     nl = summary["nonlinear_limit"]
     assert nl["linear_optimum_nonlinear_worst_case_over_limit"] > 1.2
     assert 1 - 1e-6 <= nl["nonlinear_worst_case_over_limit"] <= 1 + 1e-9

@@ -100,7 +100,7 @@ def test_run_prints_lines_for_a_method_without_a_bar(tmp_path, capsys, monkeypat
     every interval while it runs (here 0.01 s, with a solve made to last 0.1 s)."""
     import functools
 
-    import evotol.studyfile as sf
+    import evotol.studyfile.run as sf
     from evotol._runtime.progress import Heartbeat
     from tests.fast_study import fast_study
 

@@ -80,23 +80,27 @@ def test_a_process_study_records_its_file_too(tmp_path, capsys):
     assert json.loads((tmp_path / "clutch_processes.json").read_text())["study_file"] == str(a.resolve())
 
 
-def test_source_table_keeps_the_nominals_of_a_clearance_wrapped_robot():
-    """With a ``[clearances]`` table the problem's robot is a ``WithClearances`` around the
-    description: the source table still gives the description's nominal lengths (m) of L0..L5
-    (those of the unwrapped model), and none for the clearance classes."""
+def test_source_table_keeps_the_nominals_of_a_robot_with_clearances():
+    """With a ``[clearances]`` table the problem keeps the description as ``problem.robot`` and
+    the classes beside it (``problem.clearances``); its ``error_model`` is the one
+    ``WithClearances`` around the description (issue 32: built once, by the problem). The source
+    table gives the description's nominal lengths (m) of L0..L5, and none for the clearance classes."""
     import tomllib
     from pathlib import Path
 
-    from evotol.measures.clearances import WithClearances
+    from evotol.measures.clearances import ClearanceSources, WithClearances
     from evotol.summaries.user_study import source_nominals, source_table
     from evotol.studyfile import load_problem
+    from robots.mechanism.model import MechanismModel
 
     path = Path(__file__).resolve().parents[1] / "reports" / "studies" / "fivebar_clearances.toml"
     pr = load_problem(tomllib.loads(path.read_text()), base_dir=path.parent)
-    assert isinstance(pr.robot, WithClearances)
-    assert source_nominals(pr.robot) == source_nominals(pr.robot.base) == {
-        "L0": 0.1, "L1": 0.05, "L2": 0.05, "L3": 0.05, "L4": 0.05, "L5": 0.0}
+    assert isinstance(pr.robot, MechanismModel) and isinstance(pr.clearances, ClearanceSources)
+    assert isinstance(pr.error_model, WithClearances) and pr.error_model.base is pr.robot
+    assert pr.error_model.clearances is pr.clearances
+    assert pr.names == (*pr.robot.source_names, *pr.clearances.names)
+    assert source_nominals(pr.robot) == {"L0": 0.1, "L1": 0.05, "L2": 0.05, "L3": 0.05, "L4": 0.05, "L5": 0.0}
     rows = {r["name"]: r for r in source_table(pr)}
     assert [rows[f"L{i}"]["nominal"] for i in range(6)] == [0.1, 0.05, 0.05, 0.05, 0.05, 0.0]
-    classes = [c.name for c in pr.robot.clearances.sources]
+    classes = [c.name for c in pr.clearances.sources]
     assert classes and all("nominal" not in rows[c] for c in classes)

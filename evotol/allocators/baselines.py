@@ -36,6 +36,8 @@ from evotol.allocators.sensitivity import aggregated_sensitivity
 from evotol.measures.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol.core.problem import ToleranceProblem
+from evotol.core.plausibility import issue
+from evotol.measures import feasibility
 from evotol.core.result import make_result
 from evotol._runtime.blas_threads import single_threaded_blas
 
@@ -205,8 +207,8 @@ def _at_budget(problem: ToleranceProblem, name: str, budget, t0, family, log_p):
     """Best accuracy at ``budget`` within a one-parameter family (see :mod:`evotol.allocators.budget`)."""
     budget = check_budget(problem, budget)
     t = spend_budget(problem, family, budget, log_p)
-    return make_result(problem, f"{name} (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
-                       info=budget_info(problem, t, budget), budget=budget)
+    return issue(make_result(problem, f"{name} (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
+                             info=budget_info(problem, t, budget), budget=budget))
 
 
 @single_threaded_blas
@@ -235,7 +237,8 @@ def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None):
     t0 = time.perf_counter()
     if budget is not None:
         return _at_budget(problem, "equal tolerance", budget, t0, *scaled_family(problem, np.ones(problem.n_sources)))
-    return make_result(problem, "equal tolerance", equal_design(problem), seconds=time.perf_counter() - t0, repair=True)
+    t, ev, repair = feasibility.hold_to_rule(problem, equal_design(problem))
+    return issue(make_result(problem, "equal tolerance", t, evaluation=ev, seconds=time.perf_counter() - t0, info=repair))
 
 
 @single_threaded_blas
@@ -269,8 +272,9 @@ def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = N
     if budget is not None:
         w = problem.upper if weights is None else problem.as_array(weights)
         return _at_budget(problem, "proportional scaling", budget, t0, *scaled_family(problem, w))
-    return make_result(problem, "proportional scaling", proportional_design(problem, weights), seconds=time.perf_counter() - t0,
-                       repair=True)
+    t, ev, repair = feasibility.hold_to_rule(problem, proportional_design(problem, weights))
+    return issue(make_result(problem, "proportional scaling", t, evaluation=ev, seconds=time.perf_counter() - t0,
+                             info=repair))
 
 
 @single_threaded_blas
@@ -309,5 +313,6 @@ def allocate_lagrange(problem: ToleranceProblem, *, budget: float | None = None,
         return _at_budget(problem, "Lagrange closed form", budget, t0,
                           lambda x: _t_of_lambda(problem, s, np.exp(-x), m), (-50.0, 50.0))
     t = lagrange_design(problem, measure)
-    return make_result(problem, "Lagrange closed form", t, seconds=time.perf_counter() - t0, repair=True,
-                       info={"stack_up": measure or problem.requirement.measure})
+    t, ev, repair = feasibility.hold_to_rule(problem, t)
+    return issue(make_result(problem, "Lagrange closed form", t, evaluation=ev, seconds=time.perf_counter() - t0,
+                             info={"stack_up": measure or problem.requirement.measure, **repair}))

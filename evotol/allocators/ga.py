@@ -52,6 +52,8 @@ from evotol.errors import ValidationError
 from evotol.core.problem import ToleranceProblem
 from evotol._runtime.progress import progress_bar
 from evotol.core.quality_loss import has_quality_loss
+from evotol.core.plausibility import issue
+from evotol.measures import feasibility
 from evotol.core.result import make_result
 from evotol._runtime.blas_threads import single_threaded_blas
 
@@ -415,12 +417,16 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
 
         best, refinement = hold_on_workspace(problem, best, **({} if refine is True else dict(refine)))
     name = "GA" if budget is None else "GA (best accuracy at budget)"
-    return make_result(problem, name, best, history=history, seconds=time.perf_counter() - t0, budget=budget, repair=np.inf,
-                       info={"operators": operators, "repair": bool(repair), "pop_size": pop_size, "n_gen": n_gen,
-                             "seed": seed, "penalty": penalty, "interrupted": interrupted,
-                             "initial_best": float(history["best_fitness"].iloc[0]) if len(history) else np.nan,
-                             **({"budget": budget} if budget is not None else {}),
-                             **({"refinement": refinement} if refinement else {})})
+    ev, fix = None, {}
+    if budget is None:      # the last generation's best, held to the one rule whatever its miss (a search method)
+        best, ev, fix = feasibility.hold_to_rule(problem, best, max_miss=np.inf)
+    return issue(make_result(problem, name, best, evaluation=ev, history=history, seconds=time.perf_counter() - t0,
+                             budget=budget,
+                             info={"operators": operators, "repair": bool(repair), "pop_size": pop_size, "n_gen": n_gen,
+                                   "seed": seed, "penalty": penalty, "interrupted": interrupted,
+                                   "initial_best": float(history["best_fitness"].iloc[0]) if len(history) else np.nan,
+                                   **({"budget": budget} if budget is not None else {}),
+                                   **({"refinement": refinement} if refinement else {}), **fix}))
 
 
 def _binary_tournament(pop, P, random_state=None, **kwargs):

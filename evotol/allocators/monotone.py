@@ -34,6 +34,8 @@ import numpy as np
 from evotol.measures.constraints import ExactRows
 from evotol.errors import ValidationError
 from evotol.core.problem import ToleranceProblem
+from evotol.core.plausibility import issue
+from evotol.measures import feasibility
 from evotol.core.result import make_result
 
 
@@ -231,5 +233,6 @@ def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None,
     cert = {"lower_bound": res["lower_bound"], "gap": res["gap"],
             "solver": "polyblock (monotonic optimisation, Tuy 2000)", "evaluations": res["evaluations"],
             "vertices": res["vertices"], "rounds": res["rounds"], "converged": res["converged"]}
-    return make_result(problem, "optimum bracket (polyblock)", res["t"], certificate=cert,
-                       seconds=time.perf_counter() - t0, repair=np.inf)
+    t, ev, repair = feasibility.hold_to_rule(problem, res["t"], max_miss=np.inf)     # a search method: any miss
+    return issue(make_result(problem, "optimum bracket (polyblock)", t, evaluation=ev, certificate=cert,
+                             seconds=time.perf_counter() - t0, info=repair))

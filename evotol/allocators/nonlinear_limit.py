@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from evotol.allocators.process.branch_and_bound import allocate_process_optimum
 from evotol.allocators.process.problem import ProcessProblem
 from evotol.errors import ValidationError
 from evotol.measures.nonlinear.worst_case import nonlinear_worst_case
@@ -189,3 +190,33 @@ def allocate_nonlinear_limit(problem, allocate, *, max_iter: int = 12, rtol: flo
     if best is None:
         return NonlinearLimitResult(linear, res, first, wc, it, False, history)
     return NonlinearLimitResult(linear, best[0], first, best[1], it, True, history)
+
+
+def allocate_process_nonlinear_limit(pp: ProcessProblem, *, max_iter: int = 12, rtol: float = 1e-9) -> NonlinearLimitResult:
+    """The exact process optimum (:func:`evotol.allocators.process.allocate_process_optimum`)
+    re-linearised until the assembly's nonlinear worst case holds (:func:`allocate_nonlinear_limit`;
+    worst-case measure). The ``nonlinear_limit`` method of a process-selection study file.
+
+    Parameters
+    ----------
+    pp : ProcessProblem
+        The process-selection problem, on an assembly function.
+    max_iter : int, optional
+        Re-linearisations at most (default 12).
+    rtol : float, optional
+        Relative amount (dimensionless) by which the nonlinear worst case may exceed the limit
+        (default 1e-9).
+
+    Returns
+    -------
+    NonlinearLimitResult
+        The re-linearised design (``result``), the first-order optimum's nonlinear worst case and
+        the cost difference.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        What :func:`allocate_nonlinear_limit` refuses (not an assembly, not the worst-case measure,
+        bad ``max_iter``/``rtol``).
+    """
+    return allocate_nonlinear_limit(pp, allocate_process_optimum, max_iter=max_iter, rtol=rtol)

@@ -40,10 +40,12 @@ from scipy.optimize import minimize, nnls
 from evotol.allocators.sensitivity import sensitivity_design
 from evotol.allocators.budget import check_budget
 from evotol.allocators.monotone import allocate_monotone
+from evotol.allocators.workspace_refinement import allocate_on_workspace
 from evotol.measures.constraints import ConstraintRows
 from evotol.measures import feasibility
 from evotol.errors import ConvergenceError, ValidationError
 from evotol.core.problem import ToleranceProblem
+from evotol.core.plausibility import issue
 from evotol.core.result import make_result
 from evotol._runtime.blas_threads import single_threaded_blas
 
@@ -267,19 +269,46 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
     evotol.errors.ConvergenceError
         The cutting planes did not converge in ``max_rounds``.
     """
-    if refine:
-        from evotol.allocators.workspace_refinement import refine_poses
-
-        opts = {} if refine is True else dict(refine)
-        res, info = refine_poses(problem, lambda p: allocate_optimum(p, budget=budget, tol=tol, max_rounds=max_rounds,
-                                                                     max_rows=max_rows), **opts)
-        res.info["refinement"] = {k: v for k, v in info.items() if k != "pose_indices"}
-        return res
+    check_optimum_options(problem, budget, refine)
     if problem.clearances is not None:   # not convex: the monotone polyblock bracket instead
-        if budget is not None or refine:
-            raise ValidationError("budget" if budget is not None else "refine", budget if budget is not None else refine,
-                                  "None with clearance sources (the optimum bracket minimises cost at the requirement)")
         return allocate_monotone(problem)
+    if refine:      # the whole workspace: this optimum, on a growing pose set (a wrapper, not a call back)
+        return allocate_on_workspace(_allocate_optimum_at_poses, problem, refine, budget=budget, tol=tol,
+                                     max_rounds=max_rounds, max_rows=max_rows)
+    return _allocate_optimum_at_poses(problem, budget=budget, tol=tol, max_rounds=max_rounds, max_rows=max_rows)
+
+
+def check_optimum_options(problem: ToleranceProblem, budget: float | None = None, refine: bool | dict = False) -> None:
+    """Refuse, before any work, the options :func:`allocate_optimum` cannot honour with clearance
+    sources: a ``budget`` or a whole-workspace ``refine`` (the optimum bracket of
+    :func:`evotol.allocators.monotone.allocate_monotone` minimises cost at the requirement on the
+    problem's poses).
+
+    Parameters
+    ----------
+    problem : evotol.core.problem.ToleranceProblem
+        The problem (``problem.clearances`` decides).
+    budget : float or None
+        The ``budget`` option of :func:`allocate_optimum` (cost units).
+    refine : bool or dict
+        The ``refine`` option of :func:`allocate_optimum`.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        ``budget`` or ``refine`` given for a problem with clearance sources.
+    """
+    if problem.clearances is not None and budget is not None:
+        raise ValidationError("budget", budget, "None with clearance sources (the optimum bracket minimises cost at "
+                              "the requirement)")
+    if problem.clearances is not None and refine:
+        raise ValidationError("refine", refine, "false with clearance sources (the optimum bracket minimises cost on "
+                              "the problem's poses; the GA's refine holds a design over the workspace)")
+
+
+def _allocate_optimum_at_poses(problem: ToleranceProblem, *, budget: float | None, tol: float, max_rounds: int,
+                               max_rows: int):
+    """:func:`allocate_optimum` on the problem's poses (no clearances, no refinement)."""
     t0 = time.perf_counter()
     if problem.requirement.measure not in ("worst_case", "rss"):
         raise ValidationError("requirement.measure", problem.requirement.measure,
@@ -317,8 +346,9 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
     cert = certificate(problem, rows, t)
     cert["rounds"] = rounds
     cert["solver"] = "SLSQP + cutting planes"
-    result = make_result(problem, "optimum", t, certificate=cert, seconds=time.perf_counter() - t0, repair=np.inf,
-                         info={"solver_message": str(getattr(res, "message", ""))})
+    t, ev, repair = feasibility.hold_to_rule(problem, t, max_miss=np.inf)     # the working rows' hair outside
+    result = issue(make_result(problem, "optimum", t, evaluation=ev, certificate=cert, seconds=time.perf_counter() - t0,
+                               info={"solver_message": str(getattr(res, "message", "")), **repair}))
     if problem.requirement.measure == "worst_case":
         # the proven bound of the design (tightened: evotol.measures.feasibility), over the requirement, as
         # make_result's one proven evaluation found it
@@ -365,7 +395,6 @@ def _best_accuracy(problem, rows, budget, t0, tol, max_rounds, max_rows):
         if added == 0 and rows.violation(T(z[:-1])[None])[0] <= z[-1] - 1 + tol:
             break
     t = T(np.clip(z[:-1], lo / hi, 1))
-    r = make_result(problem, "optimum (best accuracy at budget)", t, seconds=time.perf_counter() - t0, budget=budget,
-                    certificate={"rounds": rounds, "budget": budget, "solver": "SLSQP + cutting planes"},
-                    info={"budget": budget, "normalised_error": float(rows.normalised_error(t[None])[0])})
-    return r
+    return issue(make_result(problem, "optimum (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
+                             budget=budget, certificate={"rounds": rounds, "budget": budget, "solver": "SLSQP + cutting planes"},
+                             info={"budget": budget, "normalised_error": float(rows.normalised_error(t[None])[0])}))

@@ -26,6 +26,8 @@ from evotol.errors import ValidationError
 from evotol.allocators.budget import budget_info, check_budget, spend_budget
 from evotol.allocators.budget import scaled_family as _scaled
 from evotol.core.problem import ToleranceProblem
+from evotol.core.plausibility import issue
+from evotol.measures import feasibility
 from evotol.core.result import make_result
 from evotol._runtime.blas_threads import single_threaded_blas
 
@@ -63,8 +65,8 @@ def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> n
         for g in collective_groups:
             members = np.flatnonzero(groups == g)
             if members.size == 0:
-                raise ValidationError("collective_groups", g, f"a source group of {problem.robot.name}: {sorted(set(groups))}")
-            if any(problem.robot.sources[k].dim != 1 for k in members):
+                raise ValidationError("collective_groups", g, f"a source group of {problem.error_model.name}: {sorted(set(groups))}")
+            if any(problem.error_model.sources[k].dim != 1 for k in members):
                 raise ValidationError("collective_groups", g, "a group of interval (dim 1) sources")
             Bsum = sum(problem.blocks[comp][k][:, :, 0] for k in members)
             sc[members] = np.max(np.linalg.norm(Bsum, axis=1)) / lim
@@ -178,11 +180,12 @@ def allocate_sensitivity(problem: ToleranceProblem, *, budget: float | None = No
         s = aggregated_sensitivity(problem, collective_groups)
         family, log_p = _scaled(problem, np.where(s > 0, 1 / np.where(s > 0, s, 1.0), np.inf))
         t = spend_budget(problem, family, budget, log_p)
-        return make_result(problem, "sensitivity (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
-                           info=budget_info(problem, t, budget), budget=budget)
+        return issue(make_result(problem, "sensitivity (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
+                                 info=budget_info(problem, t, budget), budget=budget))
     t = sensitivity_design(problem, measure, collective_groups)
     rule = f"equal effect, {measure or problem.requirement.measure} stack-up"
     if collective_groups:
         rule += f", collective groups {list(collective_groups)}"
-    return make_result(problem, "sensitivity" + (" (collective)" if collective_groups else ""), t,
-                       seconds=time.perf_counter() - t0, info={"rule": rule}, repair=True)
+    t, ev, repair = feasibility.hold_to_rule(problem, t)        # a rule's answer a hair outside is scaled in
+    return issue(make_result(problem, "sensitivity" + (" (collective)" if collective_groups else ""), t, evaluation=ev,
+                             seconds=time.perf_counter() - t0, info={"rule": rule, **repair}))

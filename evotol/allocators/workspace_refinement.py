@@ -21,6 +21,7 @@ searched (denser grids: :func:`worst_pose` on the result).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -264,6 +265,48 @@ def refine_poses(problem: ToleranceProblem, allocate, *, candidates=None, grid=N
     if idx is not None:
         info["pose_indices"] = idx
     return res, info
+
+
+def allocate_on_workspace(allocate, problem: ToleranceProblem, refine: bool | dict = True, **options):
+    """The allocator ``allocate`` over the whole workspace: :func:`refine_poses` runs
+    ``allocate(sub_problem, **options)`` on a growing pose set until its design holds on the dense
+    search set; the refinement's record goes in ``result.info["refinement"]``.
+
+    A wrapper around an allocator (``allocate_optimum(problem, refine=True)`` is
+    ``allocate_on_workspace(<the optimum on the given poses>, problem, True)``): the allocator is
+    not called back through itself, so its own checks run once, before the search.
+
+    Parameters
+    ----------
+    allocate : callable
+        ``allocate(problem, **options)`` -> :class:`evotol.core.result.AllocationResult`, an
+        allocator on the problem's poses.
+    problem : ToleranceProblem
+        The coarse problem; its poses start the set.
+    refine : bool or dict
+        ``True``, or a dict of :func:`refine_poses` options (``grid``, ``candidates``, ``local``,
+        ``add``, ``max_rounds``, ...).
+    **options
+        Keyword arguments passed to ``allocate`` at every round.
+
+    Returns
+    -------
+    evotol.core.result.AllocationResult
+        ``allocate``'s result on the last pose set (its ``problem`` holds those poses), with
+        ``info["refinement"]``: ``rounds``, ``worst_pose`` (m or rad), ``worst_normalised_error``,
+        ``n_poses``, ``poses_added``, ``n_dense_poses``, ``holds``.
+
+    Raises
+    ------
+    ValidationError
+        ``refine`` is neither True nor a dict, or a bad :func:`refine_poses` option.
+    """
+    if refine is not True and not isinstance(refine, dict):
+        raise ValidationError("refine", refine, "True or a dict of refinement options")
+    opts = {} if refine is True else dict(refine)
+    result, info = refine_poses(problem, partial(allocate, **options), **opts)
+    result.info["refinement"] = {k: v for k, v in info.items() if k != "pose_indices"}
+    return result
 
 
 def scale_into_requirement(problem: ToleranceProblem, t) -> np.ndarray:

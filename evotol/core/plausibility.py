@@ -14,9 +14,10 @@ numbers and a units hint:
   least :data:`INACTIVE_FACTOR` (10) times below the requirement -- the bounds decide the design,
   not the requirement (worst-case, RSS and quantile measures; not in budget mode).
 
-:func:`problem_warnings` runs before any method (``evotol run`` prints it), :func:`result_warnings`
-on every allocator's result (:func:`evotol.core.result.make_result` stores the lines in
-``info["warnings"]`` and issues each as a :class:`PlausibilityWarning`).
+:func:`problem_warnings` runs once, when the problem is built (kept as ``problem.warnings`` and
+issued then), :func:`result_warnings` once per allocator's result (:func:`evotol.core.result.make_result`
+keeps the lines in ``info["warnings"]``; the allocator issues them with :func:`issue`);
+:func:`study_warnings` lists what was computed, in that order.
 """
 from __future__ import annotations
 
@@ -97,8 +98,7 @@ def _normalised_requirement(problem) -> bool:
     """An assembly function's requirement is a ratio of its limits (robots/assembly/)."""
     from robots.assembly import AssemblyFunction
 
-    robot = getattr(problem.robot, "base", problem.robot)       # WithClearances wraps the robot
-    return isinstance(robot, AssemblyFunction)
+    return isinstance(problem.robot, AssemblyFunction)
 
 
 def problem_warnings(problem) -> list[str]:
@@ -169,24 +169,40 @@ def result_warnings(problem, result) -> list[str]:
 
 
 def study_warnings(problem, results) -> list[str]:
-    """Every line of a study, once: the problem's, then each result's ``info["warnings"]``.
+    """Every line of a study: the problem's (``problem.warnings``), then each result's
+    ``info["warnings"]`` -- each computed once, where it arose.
 
     Parameters
     ----------
     problem : ToleranceProblem
-        The study's problem (:func:`problem_warnings`).
+        The study's problem (its ``warnings``, :func:`problem_warnings` at construction).
     results : iterable of AllocationResult
         The methods' results; their ``info["warnings"]`` are read.
 
     Returns
     -------
     list of str
-        The distinct lines, in that order.
+        The lines, in that order.
     """
-    out = problem_warnings(problem)
-    for r in results:
-        out += [w for w in (r.info or {}).get("warnings", ()) if w not in out]
-    return out
+    return [*problem.warnings, *(w for r in results for w in (r.info or {}).get("warnings", ()))]
+
+
+def issue(result):
+    """Issue a result's plausibility lines (``result.info["warnings"]``) as :class:`PlausibilityWarning`,
+    the allocators' last step.
+
+    Parameters
+    ----------
+    result : AllocationResult
+        An allocator's result.
+
+    Returns
+    -------
+    AllocationResult
+        ``result`` itself.
+    """
+    warn((result.info or {}).get("warnings", ()), stacklevel=4)
+    return result
 
 
 @contextmanager

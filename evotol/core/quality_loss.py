@@ -82,7 +82,7 @@ def loss_coefficients(problem: ToleranceProblem, A) -> np.ndarray:
     ValidationError
         A negative or non-finite coefficient, or a key that is no response/component.
     """
-    robot = problem.robot
+    robot = problem.error_model
     q = np.zeros(problem.n_sources)
     if hasattr(robot, "response_names") and hasattr(robot, "gradient"):
         a = _per_key(A, robot.response_names, "response name")

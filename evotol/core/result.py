@@ -292,9 +292,14 @@ class AllocationResult:
                     "further progress at its working precision; the proven lower bound certifies the cost")
         return f"the solver's exit message: \"{msg}\""
 
-def make_result(problem: ToleranceProblem, method: str, t, *, history=None, certificate=None,
-                seconds: float = 0.0, info=None, budget: float | None = None, repair: bool | float = False) -> AllocationResult:
-    """Evaluate design ``t`` exactly and wrap it as an :class:`AllocationResult`.
+def make_result(problem: ToleranceProblem, method: str, t, *, evaluation: Evaluation | None = None, history=None,
+                certificate=None, seconds: float = 0.0, info=None, budget: float | None = None) -> AllocationResult:
+    """Wrap design ``t`` as an :class:`AllocationResult`: a design in, a result out.
+
+    Pure: the design is reported as given (an allocator that holds its final design to the rule of
+    :mod:`evotol.measures.feasibility` does so before, with
+    :func:`evotol.measures.feasibility.hold_to_rule`), nothing is issued (the plausibility lines
+    go in ``info["warnings"]``; the allocators issue them).
 
     Parameters
     ----------
@@ -304,6 +309,9 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
         The allocator's name, as reports show it.
     t : mapping or ndarray
         The design (SI: m or rad).
+    evaluation : Evaluation, optional
+        The design's proven evaluation (:func:`evotol.measures.feasibility.evaluate_proven`, as
+        ``hold_to_rule`` returns it); computed here when not given.
     history : pandas.DataFrame, optional
         The allocator's progress, stored as is.
     certificate : dict, optional
@@ -311,22 +319,17 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
     seconds : float
         Wall-clock time of the allocation (s).
     info : dict, optional
-        Further entries; ``bound_ratio`` (and the budget entries) are added to a copy.
+        Further entries; ``bound_ratio``, the budget entries and ``warnings`` are added to a copy.
     budget : float, optional
         Budget mode: ``feasible`` then means within the bounds and the budget, and whether the
         requirement is met is ``info["meets_requirement"]`` (issue 15: "feasible" must mean what it says).
-    repair : bool or float
-        An allocator's final design: when it misses the rule of :mod:`evotol.measures.feasibility` (proven
-        bound ≤ requirement × (1 + 1e-6)), scale its free tolerances until it holds; the scale is
-        reported in ``info["feasibility_repair"]``. ``True``: only a miss up to
-        ``feasibility.REPAIR_MAX`` (a rule's answer a hair outside); a float: up to that relative
-        miss (``inf`` for search methods). Not in budget mode.
 
     Returns
     -------
     AllocationResult
         ``feasible``: within the bounds and meeting the requirement by the rule of
-        :mod:`evotol.measures.feasibility`; ``info["bound_ratio"]``: proven largest error / requirement.
+        :mod:`evotol.measures.feasibility`; ``info["bound_ratio"]``: proven largest error / requirement;
+        ``info["warnings"]``: :func:`evotol.core.plausibility.result_warnings`, when there are any.
 
     Raises
     ------
@@ -334,13 +337,8 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
         A design ``t`` that is not one non-negative finite value per source.
     """
     t = np.asarray(problem.as_array(t), dtype=float)
-    ev = feasibility.evaluate_proven(problem, t)
+    ev = feasibility.evaluate_proven(problem, t) if evaluation is None else evaluation
     info = dict(info or {})
-    if repair and budget is None:
-        t, ev, fix = feasibility.repair_by_scaling(problem, t, ev,
-                                                   max_miss=feasibility.REPAIR_MAX if repair is True else float(repair))
-        if fix is not None:
-            info["feasibility_repair"] = fix
     f = problem.free
     in_bounds = bool(np.all(t[f] >= problem.lower[f] * (1 - 1e-9)) and np.all(t[f] <= problem.upper[f] * (1 + 1e-9)))
     cost = float(problem.cost(t))
@@ -358,5 +356,4 @@ def make_result(problem: ToleranceProblem, method: str, t, *, history=None, cert
     lines = plausibility.result_warnings(problem, result)      # unit slips, an inactive requirement (issue 27)
     if lines:
         result.info["warnings"] = lines
-        plausibility.warn(lines)
     return result

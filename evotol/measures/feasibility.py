@@ -19,8 +19,9 @@ attained value, not the proven bound). A miss of at most ``REPAIR_MAX`` = 0.1 % 
 one is a rule's own answer (e.g. a paper's sensitivity rule) and is reported infeasible, unchanged;
 a search method (GA, cutting planes, the polyblock bracket) is repaired whatever its miss. :func:`repair_by_scaling` scales the free tolerances by one
 factor s < 1 until the rule holds (every measure is non-decreasing in each tolerance) and reports
-s; :func:`evotol.core.result.make_result` applies it to every allocator's final design
-(``result.info["feasibility_repair"]``).
+s. The allocators whose final design needs it call :func:`hold_to_rule` as an explicit last step
+(``result.info["feasibility_repair"]``); :func:`evotol.core.result.make_result` then only builds the
+result of the design it is given.
 """
 from __future__ import annotations
 
@@ -232,5 +233,39 @@ def repair_by_scaling(problem, t: np.ndarray, ev=None, max_steps: int = 40, max_
     return t, evaluate_proven(problem, t), {"scale": 1.0, "ratio_before": ratio0, "ratio_after": ratio0, "failed": True}
 
 
+def hold_to_rule(problem, t, max_miss: float = REPAIR_MAX):
+    """An allocator's final design held to the rule: its proven evaluation and, when it misses by at
+    most ``max_miss``, the free tolerances scaled until it holds (:func:`repair_by_scaling`).
+
+    Parameters
+    ----------
+    problem : evotol.core.problem.ToleranceProblem
+        The problem.
+    t : array_like or mapping
+        The final design (SI: m or rad), anything ``problem.as_array`` takes.
+    max_miss : float
+        Largest relative miss repaired: ``REPAIR_MAX`` for a rule's answer (sensitivity, Lagrange,
+        equal tolerance), ``inf`` for a search method (GA, cutting planes, the polyblock bracket).
+
+    Returns
+    -------
+    t : numpy.ndarray, shape (n_sources,)
+        The design to report (SI: m or rad): scaled, or as given.
+    ev : Evaluation
+        Its proven evaluation (:func:`evaluate_proven`), for :func:`evotol.core.result.make_result`.
+    info : dict
+        ``{"feasibility_repair": {...}}`` (:func:`repair_by_scaling`'s record) when the design missed
+        the rule, else empty.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A design that is not one non-negative finite value per source.
+    """
+    t = np.asarray(problem.as_array(t), dtype=float)
+    t, ev, fix = repair_by_scaling(problem, t, max_miss=max_miss)
+    return t, ev, ({} if fix is None else {"feasibility_repair": fix})
+
+
 __all__ = ["FEASIBILITY_RTOL", "REPAIR_MAX", "proven_cuts", "bound_ratio", "meets_requirement", "evaluate_proven",
-           "repair_by_scaling", "tighten_bounds"]
+           "repair_by_scaling", "hold_to_rule", "tighten_bounds"]

@@ -185,7 +185,7 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
         return {"omitted": reason}
     sh = problem.shape
     sources = []
-    for j, (n, s) in enumerate(zip(problem.names, problem.robot.sources)):
+    for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
         tol = problem.tolerances[n]
         sources.append({"name": n, "group": s.group, "unit": s.unit, "dim": s.dim, "rho": float(sh.rho[j]),
                         "kappa": float(sh.kappa[j]), "offset": float(sh.offset[j]), "width": float(tol.width_factor),
@@ -195,7 +195,7 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
     fi = np.flatnonzero(problem.free)
     M = problem.variable_matrix
     variables = [{"name": v, "members": np.flatnonzero(M[:, k]).tolist(), "lower": float(problem.lower[j]),
-                  "upper": float(problem.upper[j]), "unit": problem.robot.sources[j].unit}
+                  "upper": float(problem.upper[j]), "unit": problem.error_model.sources[j].unit}
                  for k, (v, j) in enumerate(zip(problem.variables, fi))]
     owner = np.repeat(np.arange(problem.n_sources), [B.shape[2] for B in problem.blocks["position"]]).tolist()
     components = []

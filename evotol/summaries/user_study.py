@@ -105,7 +105,7 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
     """
     nominal = source_nominals(problem.robot)
     out = []
-    for j, (n, s) in enumerate(zip(problem.names, problem.robot.sources)):
+    for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
         tol = problem.tolerances[n]
         row = {"name": n, "group": s.group, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset),
                "minus": float(tol.minus), "plus": float(tol.plus), "fixed": bool(tol.is_fixed),
@@ -241,7 +241,7 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
                "display_units": units.to_dict(),
                "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
                              "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high)},
-               "robot": problem.robot.name, "n_poses": problem.n_poses, "poses": problem.poses.tolist(),
+               "robot": problem.error_model.name, "n_poses": problem.n_poses, "poses": problem.poses.tolist(),
                "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
                "monte_carlo": checks, "seconds": seconds, "figures": {}}
@@ -256,7 +256,8 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
         names = list(results)
         T = np.array([results[m].t for m in names])
         first = results[names[0]]
-        anchor = problem.poses[first.worst_pose(problem.components[0][0])]
+        # the result's own poses: a refined result's problem has the poses the refinement added
+        anchor = first.problem.poses[first.worst_pose(problem.components[0][0])]
         n = 11 if problem.clearances is not None else DEFAULT_N    # the certified engine is slower per pose
         slices = error_map_slices(problem, T, anchor, n)
         summary["figures"]["error_maps"] = {

@@ -285,7 +285,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     if not isinstance(n_samples, (int, np.integer)) or n_samples < 1:
         raise ValidationError("n_samples", n_samples, "a positive integer")
     t = problem.as_array(tolerances)
-    robot = problem.robot
+    robot = problem.error_model
     dims = [s.dim for s in robot.sources]
     dists = problem.distributions
     comps = problem.components
@@ -410,10 +410,10 @@ def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=
     if zero.size:
         raise ValidationError(f"tolerances[{problem.names[zero[0]]!r}]", t[zero[0]],
                               "a positive tolerance for a free source (calibrate_scale multiplies it by the factor s)")
-    if not problem.robot.has_nonlinear_model:
-        raise ValidationError("robot", problem.robot.name, "a robot with pose_error (calibration samples the exact model)")
+    if not problem.error_model.has_nonlinear_model:
+        raise ValidationError("robot", problem.error_model.name, "a robot with pose_error (calibration samples the exact model)")
     shift = None if problem.shape.plain else (problem.shape.rho, problem.shape.kappa, problem.shape.offset)
-    model = statistical.SampledYield(problem.robot, problem.poses, problem.distributions, dict(problem.components),
+    model = statistical.SampledYield(problem.error_model, problem.poses, problem.distributions, dict(problem.components),
                                      int(n_samples), seed, shift=shift)
     p_max = 1.0 - r.required_yield
 

@@ -36,8 +36,8 @@ ROWS = {"position": slice(0, 3), "orientation": slice(3, 6)}
 
 
 def _check(problem: ToleranceProblem, seed=0) -> None:
-    if not problem.robot.has_nonlinear_model:
-        raise ValidationError("model", "nonlinear", f"a robot with pose_error ({problem.robot.name} has none)")
+    if not problem.error_model.has_nonlinear_model:
+        raise ValidationError("model", "nonlinear", f"a robot with pose_error ({problem.error_model.name} has none)")
     if not is_integer(seed, 0):
         raise ValidationError("seed", seed, "a non-negative integer")
 
@@ -73,7 +73,7 @@ def worst_vertex_errors(problem: ToleranceProblem, t) -> dict[str, np.ndarray]:
         wc = measures.worst_case(problem.blocks[comp], t, coefficients=problem.coefficients(comp), shape=shape)
         errs = measures.worst_case_errors(problem.blocks[comp], t, wc.direction, shape)
         E = np.concatenate(errs, axis=1)                                   # (p, n_columns)
-        nl = problem.robot.pose_error(problem.poses, E[:, None, :])[:, 0]
+        nl = problem.error_model.pose_error(problem.poses, E[:, None, :])[:, 0]
         out[comp] = np.linalg.norm(nl[:, ROWS[comp]], axis=-1)
     return out
 
@@ -105,7 +105,7 @@ def uniform_interval_samples(problem: ToleranceProblem, t, n_samples: int, seed:
         A bad design.
     """
     t = problem.as_array(t)
-    dims = [s.dim for s in problem.robot.sources]
+    dims = [s.dim for s in problem.error_model.sources]
     U = qmc.LatinHypercube(d=sum(dims), seed=seed).random(int(n_samples))
     if all(d == 1 for d in dims):
         iv = problem.intervals(t)
@@ -244,7 +244,7 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
     errs = {c: [] for c, _ in problem.components}
     for start in range(0, problem.n_poses, chunk_poses):
         P = problem.poses[start:start + chunk_poses]
-        nl = pose_error_nan(problem.robot, P, np.broadcast_to(E, (len(P),) + E.shape))
+        nl = pose_error_nan(problem.error_model, P, np.broadcast_to(E, (len(P),) + E.shape))
         for c, lim in problem.components:
             e = np.linalg.norm(nl[..., ROWS[c]], axis=-1)
             e[np.isnan(e)] = np.inf                     # not assembled: a miss, larger than any bound

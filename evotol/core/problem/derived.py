@@ -11,6 +11,7 @@ from typing import Self
 
 import numpy as np
 
+from evotol.core import plausibility
 from evotol.measures import linear as measures
 from evotol.errors import ValidationError
 from evotol._runtime.keyword_checks import did_you_mean
@@ -50,6 +51,7 @@ class DerivedProblems:
         new.requirement.validate()
         if self.clearances is not None:
             self._check_clearance_measure(new.requirement)
+        new.warnings = plausibility.problem_warnings(new)      # they read the requirement (not issued again)
         return new
 
     def with_poses(self, idx) -> Self:
@@ -109,9 +111,9 @@ class DerivedProblems:
             A pose outside the robot's workspace.
         """
         P = self._check_pose_set(poses)
-        J = np.asarray(self.robot.sensitivity(P), dtype=float)
-        if J.shape != (len(P), 6, self.robot.n_columns) or not np.all(np.isfinite(J)):
-            raise ValidationError(f"{self.robot.name}.sensitivity", P.tolist()[:3], "finite sensitivities at the poses")
+        J = np.asarray(self.error_model.sensitivity(P), dtype=float)
+        if J.shape != (len(P), 6, self.error_model.n_columns) or not np.all(np.isfinite(J)):
+            raise ValidationError(f"{self.error_model.name}.sensitivity", P.tolist()[:3], "finite sensitivities at the poses")
         new = copy.copy(self)
         new.poses = P
         new._set_jacobian(J)
@@ -154,7 +156,7 @@ class DerivedProblems:
                 if ch[k] is None:
                     raise ValidationError(k, np.shape(v), f"a scalar or one value per source ({n})")
             tols[nm] = dataclasses.replace(self.tolerances[nm], **ch)
-        for nm, src in zip(self.names, self.robot.sources):
+        for nm, src in zip(self.names, self.error_model.sources):
             tols[nm].validate(nm, src.dim)
         new = copy.copy(self)
         new.tolerances = tols
@@ -184,10 +186,10 @@ class DerivedProblems:
         evotol.errors.KinematicsError
             A pose outside the robot's workspace.
         """
-        P = self.robot.check_poses(poses)
-        J = np.asarray(self.robot.sensitivity(P), dtype=float)
+        P = self.error_model.check_poses(poses)
+        J = np.asarray(self.error_model.sensitivity(P), dtype=float)
         if not np.all(np.isfinite(J)):
-            raise ValidationError(f"{self.robot.name}.sensitivity", P.tolist()[:3], "finite sensitivities at the added poses")
+            raise ValidationError(f"{self.error_model.name}.sensitivity", P.tolist()[:3], "finite sensitivities at the added poses")
         new = copy.copy(self)
         new.poses = np.vstack([self.poses, P])
         new._set_jacobian(np.concatenate([self.jacobian, J], axis=0))

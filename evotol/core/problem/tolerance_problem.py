@@ -72,6 +72,22 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         (:func:`evotol.measures.clearances.worst_case`). With tolerances for none of the robot's own
         sources, the problem allocates clearances only.
 
+    Attributes
+    ----------
+    robot : robots.base.RobotErrorModel
+        The robot passed in, unchanged.
+    clearances : evotol.measures.clearances.ClearanceSources or None
+        The joint-clearance classes passed in, held beside the robot.
+    error_model : robots.base.RobotErrorModel
+        The one place the problem's sources and sensitivities come from: ``robot`` itself, or
+        with clearance classes :class:`evotol.measures.clearances.WithClearances` (the robot's
+        interval sources, unless none has a tolerance, followed by the classes, which have zero
+        first-order columns). ``names``, ``groups()``, ``units()``, the Jacobian and the measures
+        read it.
+    warnings : list of str
+        The problem's plausibility lines (:func:`evotol.core.plausibility.problem_warnings`:
+        probable unit slips), computed once when it is built and issued then.
+
     Raises
     ------
     evotol.errors.ValidationError
@@ -103,33 +119,36 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
                 raise ValidationError("clearances", clearances, "an evotol.measures.clearances.ClearanceSources")
             # tolerances for none of the robot's own sources: a clearance-only problem
             geometric = not isinstance(tolerances, Mapping) or any(n in tolerances for n in robot.source_names)
-            robot = clearance_measure.WithClearances(robot, clearances, geometric)
+            model = clearance_measure.WithClearances(robot, clearances, geometric)
             self._check_clearance_measure(requirement)
-        names = robot.source_names
+        else:
+            model = robot
+        self.robot, self.clearances, self.error_model = robot, clearances, model
+        names = model.source_names
         if not isinstance(tolerances, Mapping):
             raise ValidationError("tolerances", tolerances, "a mapping source name -> Tolerance")
         missing = [n for n in names if n not in tolerances]
         extra = [n for n in tolerances if n not in names]
         if extra:
-            raise ValidationError(f"tolerances[{extra[0]!r}]", extra[0], f"a source of {robot.name}: {list(names)}"
+            raise ValidationError(f"tolerances[{extra[0]!r}]", extra[0], f"a source of {model.name}: {list(names)}"
                                   + did_you_mean(str(extra[0]), names))
         if missing:
-            raise ValidationError("tolerances", sorted(tolerances), f"an entry for every source of {robot.name}; missing {missing}")
-        for n, src in zip(names, robot.sources):
+            raise ValidationError("tolerances", sorted(tolerances), f"an entry for every source of {model.name}; missing {missing}")
+        for n, src in zip(names, model.sources):
             if not isinstance(tolerances[n], Tolerance):
                 raise ValidationError(f"tolerances[{n!r}]", tolerances[n], "an evotol.Tolerance")
             tolerances[n].validate(n, src.dim)
-        self.robot, self.requirement = robot, requirement
+        self.requirement = requirement
         self.tolerances = {n: tolerances[n] for n in names}
         self.distributions = [distributions.as_distribution(self.tolerances[s.name].distribution,
                                                             f"tolerances[{s.name!r}].distribution", s.dim)
-                              for s in robot.sources]
+                              for s in model.sources]
         self.names = names
         self.poses = self._check_pose_set(poses)
         self.n_directions = int(n_directions)
-        J = np.asarray(robot.sensitivity(self.poses), dtype=float)
-        if J.shape != (len(self.poses), 6, robot.n_columns) or not np.all(np.isfinite(J)):
-            raise ValidationError(f"{robot.name}.sensitivity", J.shape, f"finite array of shape {(len(self.poses), 6, robot.n_columns)}")
+        J = np.asarray(model.sensitivity(self.poses), dtype=float)
+        if J.shape != (len(self.poses), 6, model.n_columns) or not np.all(np.isfinite(J)):
+            raise ValidationError(f"{model.name}.sensitivity", J.shape, f"finite array of shape {(len(self.poses), 6, model.n_columns)}")
         self._set_jacobian(J)
         tols = [self.tolerances[n] for n in names]
         self.shape = measures.IntervalShape(np.array([t.rho for t in tols]), np.array([t.kappa for t in tols]),
@@ -143,7 +162,8 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
             raise ValidationError("tolerances", "all locked", "at least one source free to optimise")
         self._coeff_cache: dict[str, tuple] = {}
         self._measure_cache: dict[str, object] = {}
-        plausibility.warn(plausibility.problem_warnings(self))      # unit slips (issue 27): one line each
+        self.warnings = plausibility.problem_warnings(self)        # unit slips (issue 27): one line each,
+        plausibility.warn(self.warnings)                            # computed once, issued once
 
     def __copy__(self) -> "ToleranceProblem":
         """A shallow copy whose measures' caches start empty (the ``with_*`` copies change what
@@ -176,27 +196,22 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     def _check_pose_set(self, poses) -> np.ndarray:
         if poses is None or (hasattr(poses, "__len__") and len(poses) == 0):
             raise ValidationError("poses", [] if poses is None else poses, "at least one workspace pose")
-        return self.robot.check_poses(poses)
+        return self.error_model.check_poses(poses)
 
     def _set_jacobian(self, J: np.ndarray) -> None:
         self.jacobian = J
-        sl = self.robot.column_slices
+        sl = self.error_model.column_slices
         self.blocks = {"position": [J[:, 0:3, s] for s in sl], "orientation": [J[:, 3:6, s] for s in sl]}
         self.sensitivities = {k: measures.spectral_norms(b) for k, b in self.blocks.items()}
 
     def _set_shared(self, shared, shared_cost: str) -> None:
-        v = tolerance_variables(self.robot, self.tolerances, self.lower, self.upper, self.locked_values,
+        v = tolerance_variables(self.error_model, self.tolerances, self.lower, self.upper, self.locked_values,
                                 shared, shared_cost)
         self.shared, self.shared_cost, self.lower, self.upper = v.shared, v.shared_cost, v.lower, v.upper
         self.leader, self.follower, self.locked, self.free = v.leader, v.follower, v.locked, v.free
         self.variable_matrix, self.variables, self.cost_weight = v.variable_matrix, v.variables, v.cost_weight
 
     # --- basic properties ---------------------------------------------------------------------
-    @property
-    def clearances(self) -> "clearance_measure.ClearanceSources | None":
-        """The allocated joint-clearance classes, or None."""
-        return self.robot.clearances if isinstance(self.robot, clearance_measure.WithClearances) else None
-
     @staticmethod
     def _clearance_measures() -> tuple[str, ...]:
         """Names of the registered measures that judge clearance sources."""
@@ -244,9 +259,9 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         Returns
         -------
         list of str
-            One group name per source (``robot.sources[j].group``).
+            One group name per source (``error_model.sources[j].group``).
         """
-        return [s.group for s in self.robot.sources]
+        return [s.group for s in self.error_model.sources]
 
     def units(self) -> list[str]:
         """The SI unit of each source's tolerance, in source order.
@@ -254,9 +269,9 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         Returns
         -------
         list of str
-            One unit per source (``"m"`` or ``"rad"``, ``robot.sources[j].unit``).
+            One unit per source (``"m"`` or ``"rad"``, ``error_model.sources[j].unit``).
         """
-        return [s.unit for s in self.robot.sources]
+        return [s.unit for s in self.error_model.sources]
 
     # --- accuracy -------------------------------------------------------------------------------
     def coefficients(self, component: str):
@@ -407,9 +422,9 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
             Several lines of text.
         """
         r = self.requirement
-        lines = [f"ToleranceProblem: {self.robot.name}, {self.n_poses} poses, measure {r.measure}",
+        lines = [f"ToleranceProblem: {self.error_model.name}, {self.n_poses} poses, measure {r.measure}",
                  f"  requirement: position <= {r.position} m, orientation <= {r.orientation} rad"]
-        for n, s in zip(self.names, self.robot.sources):
+        for n, s in zip(self.names, self.error_model.sources):
             tol = self.tolerances[n]
             lk = (" fixed" if tol.is_fixed else f", locked at {tol.locked:g}") if tol.locked is not None else ""
             sh = ""

@@ -27,7 +27,7 @@ def unit_samples(problem) -> list[np.ndarray]:
     r = problem.requirement
     return problem.measure_cache(
         "mc_quantile.samples",
-        lambda: distributions.unit_samples([s.dim for s in problem.robot.sources], problem.distributions,
+        lambda: distributions.unit_samples([s.dim for s in problem.error_model.sources], problem.distributions,
                                            r.mc_samples, method="lhs", seed=r.seed))
 
 

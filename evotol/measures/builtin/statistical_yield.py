@@ -31,7 +31,7 @@ def first_order_yield(problem) -> "statistical.FirstOrderYield | statistical.Sam
     def build():
         shift = None if problem.shape.plain else (problem.shape.rho, problem.shape.kappa, problem.shape.offset)
         if r.model == "nonlinear":
-            return statistical.SampledYield(problem.robot, problem.poses, problem.distributions,
+            return statistical.SampledYield(problem.error_model, problem.poses, problem.distributions,
                                             dict(problem.components), r.mc_samples, r.seed, shift=shift)
         return statistical.FirstOrderYield(problem.blocks, problem.distributions, dict(problem.components), shift=shift)
 
@@ -86,7 +86,7 @@ class YieldMeasure(Measure):
         dict of str to ndarray, shape (n_poses,)
             ``"probability"``: the estimated yield per pose (dimensionless, 0 to 1).
         """
-        Z = distributions.unit_samples([s.dim for s in problem.robot.sources], problem.distributions, 40_000,
+        Z = distributions.unit_samples([s.dim for s in problem.error_model.sources], problem.distributions, 40_000,
                                        method="mc", seed=7)
         E = np.concatenate(problem.source_errors(Z, t), axis=1)
         rows = {"position": slice(0, 3), "orientation": slice(3, 6)}

@@ -62,7 +62,7 @@ class WorstCaseMeasure(Measure):
         if not problem.shape.plain:
             raise ValidationError("tolerances", "offset/minus/plus", "centred intervals ±t next to clearance sources")
         comps = [c for c, _ in problem.components]
-        wc = clearance_measure.worst_case(problem.robot, problem.poses, problem.jacobian, T, comps)
+        wc = clearance_measure.worst_case(problem.error_model, problem.poses, problem.jacobian, T, comps)
         parts = {c: ComponentErrors(wc.value[c], wc.bound[c], wc.contrib[c], wc.direction[c]) for c in comps}
         return evaluation_of(parts, violation(problem, parts))
 
@@ -87,8 +87,8 @@ class WorstCaseMeasure(Measure):
         evotol.errors.ValidationError
             A source that is not an interval (1-D), or a problem with clearance sources.
         """
-        if any(s.dim != 1 for s in problem.robot.sources) or problem.clearances is not None:
-            raise ValidationError("problem", problem.robot.name, "interval (1-D) sources only for the vertex search")
+        if any(s.dim != 1 for s in problem.error_model.sources) or problem.clearances is not None:
+            raise ValidationError("problem", problem.error_model.name, "interval (1-D) sources only for the vertex search")
         ends = problem.intervals(t)                          # (n_sources, 2)
         out = {}
         for comp in COMPONENTS:

@@ -6,9 +6,10 @@ file's ``[clearances]`` table are in :mod:`evotol.measures.clearances.classes`; 
 as sources and the certified worst case in :mod:`evotol.measures.clearances.certified`
 (``docs/clearance_allocation.md``).
 """
-from evotol.measures.clearances.certified import ClearanceWorstCase, WithClearances, sample_twists, worst_case
+from evotol.measures.clearances.certified import (ClearanceWorstCase, WithClearances, error_sources, sample_twists,
+                                                  worst_case)
 from evotol.measures.clearances.classes import (CLASS_KEYS, COMPONENTS, TABLE_KEYS, ClearanceClass,  # noqa: F401
                                        ClearanceSources, from_table, thesis_classes)
 
-__all__ = ["ClearanceClass", "thesis_classes", "ClearanceSources", "from_table", "WithClearances",
+__all__ = ["ClearanceClass", "thesis_classes", "ClearanceSources", "from_table", "WithClearances", "error_sources",
            "ClearanceWorstCase", "worst_case", "sample_twists"]

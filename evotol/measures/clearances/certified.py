@@ -40,6 +40,43 @@ _SCREW_KIND = (0, 0, 1, 2, 2, 3)
 _TO_ENGINE = [3, 4, 5, 0, 1, 2]
 
 
+def error_sources(robot: RobotErrorModel, clearances: ClearanceSources, geometric: bool = True) -> tuple:
+    """The sources of a robot with clearance classes, in order: the robot's (when ``geometric``)
+    followed by the classes -- the sources of :class:`WithClearances` and of a
+    :class:`~evotol.core.problem.ToleranceProblem` with ``clearances`` (a study file reads them to
+    know which ``[sources.NAME]`` exist before the problem is built).
+
+    Parameters
+    ----------
+    robot : RobotErrorModel
+        The robot whose geometric sources come first (interval sources only).
+    clearances : ClearanceSources
+        The clearance classes, appended after the geometric sources.
+    geometric : bool
+        Whether the robot's geometric sources are included (False: clearances only).
+
+    Returns
+    -------
+    tuple of robots.base.SourceSpec
+        The geometric sources (if any), then ``clearances.sources``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A class named like a geometric source, or a geometric source that is not an interval
+        (dim != 1).
+    """
+    own = tuple(robot.sources) if geometric else ()
+    clash = {s.name for s in own} & set(clearances.names)
+    if clash:
+        raise ValidationError("clearances.classes", sorted(clash), f"names other than the sources of {robot.name}")
+    for s in own:
+        if s.dim != 1:
+            raise ValidationError(f"{robot.name} source {s.name!r}", s.shape,
+                                  "interval sources only next to clearances (the engine adds intervals)")
+    return own + tuple(clearances.sources)
+
+
 class WithClearances(RobotErrorModel):
     """A robot's geometric sources followed by clearance classes, for :class:`ToleranceProblem`.
 
@@ -67,16 +104,8 @@ class WithClearances(RobotErrorModel):
         self.base, self.clearances, self.geometric = robot, clearances, bool(geometric)
         self.name = f"{robot.name} + clearances" if geometric else f"{robot.name} (clearances)"
         self.workspace = robot.workspace
-        own = tuple(robot.sources) if geometric else ()
-        clash = {s.name for s in own} & set(clearances.names)
-        if clash:
-            raise ValidationError("clearances.classes", sorted(clash), f"names other than the sources of {robot.name}")
-        for s in own:
-            if s.dim != 1:
-                raise ValidationError(f"{robot.name} source {s.name!r}", s.shape,
-                                      "interval sources only next to clearances (the engine adds intervals)")
-        self.sources = own + clearances.sources
-        self.n_geometric = len(own)
+        self.sources = error_sources(robot, clearances, geometric)
+        self.n_geometric = len(self.sources) - len(clearances.sources)
 
     def sensitivity(self, poses) -> np.ndarray:
         """First-order map of the geometric sources, with zero columns for the clearance classes.

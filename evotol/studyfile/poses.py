@@ -1,0 +1,56 @@
+"""``[poses]``: the workspace poses of a study file (``grid``, ``latin_hypercube`` or ``list``), and
+its ``refine`` option (the whole workspace, :mod:`evotol.allocators.workspace_refinement`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from evotol.errors import ValidationError
+from robots.base import RobotErrorModel
+
+
+def read_poses(spec: dict, robot: RobotErrorModel) -> np.ndarray:
+    """The poses of ``[poses]`` (default ``grid = 5``), in the robot's workspace coordinates.
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file (``seed`` seeds a Latin hypercube).
+    robot : robots.base.RobotErrorModel
+        The study's robot (its workspace makes grids and Latin hypercubes).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_poses, workspace.dim)
+        The poses (SI: m, rad); checked by the problem, not here.
+
+    Raises
+    ------
+    ValidationError
+        A ``[poses]`` table with none of ``grid``, ``latin_hypercube``, ``list``.
+    """
+    ps = spec.get("poses", {"grid": 5})
+    if "grid" in ps:
+        return robot.workspace.grid(ps["grid"])
+    if "latin_hypercube" in ps:
+        return robot.workspace.latin_hypercube(ps["latin_hypercube"], seed=spec.get("seed", 0))
+    if "list" in ps:
+        return np.asarray(ps["list"], dtype=float)
+    raise ValidationError("poses", ps, "one of grid = [n, ...], latin_hypercube = n, list = [[...], ...]")
+
+
+def refine_option(spec: dict):
+    """The ``[poses] refine`` setting as allocator keyword: False, True or a dict of options.
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file.
+
+    Returns
+    -------
+    bool or dict
+        False when absent; the options table as a dict; else ``bool(refine)``.
+    """
+    ref = spec.get("poses", {}).get("refine", False)
+    return dict(ref) if isinstance(ref, dict) else bool(ref)

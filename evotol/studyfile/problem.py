@@ -1,0 +1,56 @@
+"""The problem of a study file: its robot, poses, sources, tolerances and requirement read by the
+modules beside this one, put together as a :class:`~evotol.core.problem.ToleranceProblem`.
+"""
+from __future__ import annotations
+
+from evotol.core.problem import ToleranceProblem
+from evotol.core.quality_loss import with_quality_loss
+from evotol.errors import ValidationError
+from evotol.studyfile.keys import check_study_keys
+from evotol.studyfile.poses import read_poses
+from evotol.studyfile.requirement import read_requirement
+from evotol.studyfile.robot import read_robot
+from evotol.studyfile.sources import read_clearances, read_tolerances
+
+
+def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
+    """Build the problem from a parsed study file (dict); ``base_dir``: where relative files
+    (``[robot] mechanism = "my_robot.toml"``) are looked up.
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file (keys checked by :func:`evotol.studyfile.keys.check_study_keys`).
+    base_dir : str or Path, optional
+        Where relative files are looked up (default: the current folder).
+
+    Returns
+    -------
+    ToleranceProblem
+        The problem (with the Taguchi loss when ``quality_loss`` is given); tolerances and
+        requirement in SI (m, rad). ``problem.robot`` is the robot the file describes, and
+        ``problem.clearances`` its ``[clearances]`` classes, if any.
+
+    Raises
+    ------
+    ValidationError
+        An unknown key or bad value anywhere in the file: a ``[processes]`` table (read by
+        :func:`evotol.studyfile.processes.load_process_problem` instead), no robot model, robot
+        parameters the model does not take, a bad ``[poses]`` table, an unknown source in
+        ``[sources]``, a bad ``[bounds]`` table or bound, a fixed source with a range, lock or
+        cost, a source without a cost model; and what the problem's own checks refuse.
+    """
+    check_study_keys(spec)
+    if "processes" in spec:
+        raise ValidationError("processes", sorted(spec["processes"]), "no [processes.*] here: a process-selection study "
+                              "is read by evotol.studyfile.processes.load_process_problem (evotol run does so)")
+    robot, spec = read_robot(spec, base_dir)
+    poses = read_poses(spec, robot)
+    # [clearances]: joint-clearance classes allocated with (or, geometric = false, instead of) the
+    # robot's sources (docs/clearance_allocation.md); the problem holds them beside the robot
+    classes, sources = read_clearances(spec, robot)
+    tol = read_tolerances(spec, sources, robot.name if classes is None else f"{robot.name} or its clearance classes")
+    problem = ToleranceProblem(robot, tol, read_requirement(spec), poses, shared=spec.get("shared"),
+                               shared_cost=spec.get("shared_cost", "part"), clearances=classes)
+    # quality_loss = A (or {response = A}): machining cost + Taguchi loss (docs/process_selection.md)
+    return with_quality_loss(problem, spec["quality_loss"]) if "quality_loss" in spec else problem
