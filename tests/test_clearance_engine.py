@@ -13,8 +13,7 @@ from robots.clearance import (ClearanceEvaluator, max_pose_error, multistart_max
 from robots.clearance.kinematics import adjoint, exp_screw, inv_transform, kk_transform, rotation_vector
 from robots.clearance.support import solve_support
 from robots.fivebar import FiveBar
-
-MM = 1e-3
+from evotol.units import MM
 
 
 @pytest.fixture(scope="module")

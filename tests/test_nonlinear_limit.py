@@ -16,8 +16,7 @@ from evotol.measures.nonlinear.interval import Dual, Interval
 from evotol.measures.nonlinear.worst_case import nonlinear_worst_case
 from evotol.studies._process_benchmarks import _mc_nonlinear, clutch_angle, clutch_problem
 from robots.assembly import AssemblyFunction
-
-MM = 1e-3
+from evotol.units import MM
 
 
 def _mixed(a, b, c):
