@@ -9,7 +9,7 @@ import pytest
 from scipy.optimize import minimize
 
 from evotol import studies
-from evotol.studies import _choi2000 as choi
+from evotol.studies import choi2000_clutch as choi
 
 T_LIM = 0.035
 

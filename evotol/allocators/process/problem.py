@@ -343,7 +343,7 @@ class ProcessProblem:
         -------
         dict
             ``cost`` (cost units), ``normalised_error`` (dimensionless), ``holds_requirement``
-            (bool, normalised error <= 1 + 1e-9) and ``outside_process_range`` (list of source
+            (bool, normalised error <= 1 + ``FEAS_TOL`` = 1e-9, as a result's ``feasible``) and ``outside_process_range`` (list of source
             names).
 
         Raises
@@ -362,7 +362,7 @@ class ProcessProblem:
         idx = np.arange(self.n_sources)
         outside = [n for n, ok in zip(self.names, (t >= self.lo[idx, ch] * (1 - 1e-9)) & (t <= self.hi[idx, ch] * (1 + 1e-9))) if not ok]
         ne = float(self.normalised_error(t)[0])
-        return {"cost": float(self.cost(ch, t)[0]), "normalised_error": ne, "holds_requirement": bool(ne <= 1 + 1e-9),
+        return {"cost": float(self.cost(ch, t)[0]), "normalised_error": ne, "holds_requirement": bool(ne <= 1 + FEAS_TOL),
                 "outside_process_range": outside}
 
     def describe(self) -> str:
