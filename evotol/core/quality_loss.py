@@ -20,8 +20,10 @@ and the process-selection allocators) minimises machining cost + expected loss.
 :class:`~evotol.core.problem.ToleranceProblem` and for a process-selection problem
 (:class:`~evotol.allocators.process.ProcessProblem`, whose implementation the process package
 registers; ``pp.with_quality_loss(A)`` is the same call). :func:`loss_coefficients` holds the
-equation above; :class:`~cost_models.quality_loss.QualityLossCost` is the cost term it builds. A nominal off target (``Y_k(x0) ≠ Y0_k``) adds the constant
-``K_k (Y_k(x0) − Y0_k)²``, which changes no allocation and is left out.
+equation above; :class:`~cost_models.quality_loss.QualityLossCost` is the cost term it builds.
+
+A nominal off target (``Y_k(x0) ≠ Y0_k``) adds the constant ``K_k (Y_k(x0) − Y0_k)²``, which
+changes no allocation and is left out.
 
 Responses and weights ``w_k``:
 
