@@ -13,12 +13,12 @@ from cost_models.exponential import ExponentialCost
 from cost_models.fit import FitResult, fit
 from cost_models.polynomial import Polynomial3Cost, Polynomial4Cost
 from cost_models.power import PowerCost
-from cost_models.reciprocal import ReciprocalCost
+from cost_models.reciprocal import ReciprocalCost, ReciprocalPowerCost
 from cost_models.reciprocal_square import ReciprocalSquareCost
 from cost_models.registry import available, from_dict, get
 from cost_models.user import CallableCost
 
-__all__ = ["CostModel", "check_cost_model", "ExponentialCost", "PowerCost", "ReciprocalCost",
+__all__ = ["CostModel", "check_cost_model", "ExponentialCost", "PowerCost", "ReciprocalPowerCost", "ReciprocalCost",
            "ReciprocalSquareCost", "ExpReciprocalCost", "Polynomial3Cost", "Polynomial4Cost",
            "LinearExponentialCost", "SumCost", "CallableCost", "fit", "FitResult", "available",
            "get", "from_dict"]

@@ -115,7 +115,35 @@ class CostModel:
             raise NotImplementedError(f"{cls.__name__} sets no example_params (needed by the conformance test)")
         return cls(*cls.example_params, scale=1e-5)
 
+    @classmethod
+    def initial_guess(cls, tolerances, costs, *, scale: float = 1.0) -> np.ndarray:
+        """Starting coefficients for fitting the model to ``(t, cost)`` data (:func:`cost_models.fit.fit`).
+
+        Each model carries its own guess (a log-linear or linear least-squares fit of its
+        formula, in the subclass's ``_guess``); a model without one starts from ones.
+
+        Parameters
+        ----------
+        tolerances : array_like
+            Tolerances of the data points (SI: m or rad), positive; flattened.
+        costs : array_like
+            Costs at those tolerances (cost units), as many as ``tolerances``; flattened.
+        scale : float, default 1.0
+            SI size of the tolerance unit the coefficients refer to (e.g. ``1e-5`` m).
+
+        Returns
+        -------
+        ndarray
+            One starting value per coefficient, in the order of ``param_names`` (shop units).
+        """
+        x = np.asarray(tolerances, dtype=float).ravel() / scale
+        return np.asarray(cls._guess(x, np.asarray(costs, dtype=float).ravel()), dtype=float)
+
     # --- to implement ----------------------------------------------------------------------
+    @classmethod
+    def _guess(cls, x: np.ndarray, c: np.ndarray) -> np.ndarray:  # starting coefficients at x = t/scale
+        return np.ones(len(cls.param_names))
+
     def _f(self, x: np.ndarray) -> np.ndarray:  # cost at x = t/scale
         raise NotImplementedError
 

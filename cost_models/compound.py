@@ -62,6 +62,12 @@ class LinearExponentialCost(CostModel):
         a0, a1, a2, a3 = self.p
         return a2 * a3 ** 2 * np.exp(-a3 * x)
 
+    @classmethod
+    def _guess(cls, x, c):
+        # the exponential term alone, log-linear least squares (a0 = a1 = 0)
+        k, b = np.polyfit(x, np.log(np.maximum(c, 1e-300)), 1)
+        return np.array([0.0, 0.0, np.exp(b), max(-k, 1e-6)])
+
 
 class SumCost(CostModel):
     """Sum of cost models (e.g. machining + inspection), each with its own scale.

@@ -58,3 +58,10 @@ class ExpReciprocalCost(CostModel):
     def _d2f(self, x):
         a0, a1, a2 = self.p
         return self._f(x) * ((a1 / x + a2) ** 2 + a1 / x ** 2)
+
+    @classmethod
+    def _guess(cls, x, c):
+        # linear least squares of log c = log a0 - a1·log x - a2·x
+        A = np.stack([np.ones_like(x), -np.log(x), -x], 1)
+        sol = np.linalg.lstsq(A, np.log(np.maximum(c, 1e-300)), rcond=None)[0]
+        return np.array([np.exp(sol[0]), max(sol[1], 0.0), max(sol[2], 0.0)])

@@ -54,3 +54,9 @@ class ExponentialCost(CostModel):
 
     def _d2f(self, x):
         return self.p[1] ** 2 * self._f(x)
+
+    @classmethod
+    def _guess(cls, x, c):
+        # log-linear least squares: log c = log a0 - a1·x
+        k, b = np.polyfit(x, np.log(np.maximum(c, 1e-300)), 1)
+        return np.array([np.exp(b), max(-k, 1e-6)])

@@ -46,31 +46,6 @@ class FitResult:
                 f"max relative error = {100 * self.max_relative_error:.2f} %")
 
 
-def _initial_guess(name: str, x: np.ndarray, c: np.ndarray, n: int) -> np.ndarray:
-    lx, lc = np.log(x), np.log(np.maximum(c, 1e-300))
-    if name == "exponential":
-        k, b = np.polyfit(x, lc, 1)
-        return np.array([np.exp(b), max(-k, 1e-6)])
-    if name == "power":
-        k, b = np.polyfit(lx, lc, 1)
-        return np.array([np.exp(b), max(-k, 1e-6)])
-    if name in ("reciprocal", "reciprocal_square"):
-        p = 1 if name == "reciprocal" else 2
-        A = np.stack([np.ones_like(x), x ** -p], 1)
-        sol = np.linalg.lstsq(A, c, rcond=None)[0]
-        return np.array([sol[0], max(sol[1], 1e-9)])
-    if name == "exp_reciprocal":
-        A = np.stack([np.ones_like(x), -lx, -x], 1)
-        sol = np.linalg.lstsq(A, lc, rcond=None)[0]
-        return np.array([np.exp(sol[0]), max(sol[1], 0.0), max(sol[2], 0.0)])
-    if name.startswith("polynomial"):
-        return np.polynomial.polynomial.polyfit(x, c, n - 1)
-    if name == "linear_exponential":
-        k, b = np.polyfit(x, lc, 1)
-        return np.array([0.0, 0.0, np.exp(b), max(-k, 1e-6)])
-    return np.ones(n)
-
-
 def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
     """Least-squares fit of ``model`` (a CostModel class or registered name) to ``(t, cost)`` data.
 
@@ -90,9 +65,9 @@ def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
     scale : float, default 1.0
         SI size of the tolerance unit the fitted coefficients refer to (e.g. ``1e-5`` m).
     p0 : array_like, optional
-        Initial coefficients (in units of ``scale``, order of ``param_names``); by default a
-        guess by log-linear or linear least squares on the data for the built-in models, ones
-        for other models.
+        Initial coefficients (in units of ``scale``, order of ``param_names``); by default the
+        model's own :meth:`~cost_models.base.CostModel.initial_guess` (log-linear or linear least
+        squares on the data for the built-in models, ones for a model that defines none).
 
     Returns
     -------
@@ -125,7 +100,7 @@ def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
         raise ValidationError("costs", c.tolist(), "non-negative finite values")
     x = t / scale
     if p0 is None:
-        guess = _initial_guess(cls.name, x, c, n)
+        guess = cls.initial_guess(t, c, scale=scale)
     else:
         try:
             guess = np.asarray(p0, float).ravel()

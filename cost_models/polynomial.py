@@ -20,6 +20,11 @@ class _Polynomial(CostModel):
     def _d2f(self, x):
         return np.polynomial.polynomial.polyval(x, np.polynomial.polynomial.polyder(self.p, 2))
 
+    @classmethod
+    def _guess(cls, x, c):
+        # the polynomial is linear in its coefficients: ordinary least squares
+        return np.polynomial.polynomial.polyfit(x, c, len(cls.param_names) - 1)
+
 
 class Polynomial3Cost(_Polynomial):
     """Cubic cost ``c = a0 + a1·x + a2·x² + a3·x³``, ``x = t / scale`` (Dong, Hu & Xue 1994).

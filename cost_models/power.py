@@ -55,3 +55,9 @@ class PowerCost(CostModel):
     def _d2f(self, x):
         a0, a1 = self.p
         return a1 * (a1 + 1) * a0 * np.power(x, -a1 - 2)
+
+    @classmethod
+    def _guess(cls, x, c):
+        # log-log least squares: log c = log a0 - a1·log x
+        k, b = np.polyfit(np.log(x), np.log(np.maximum(c, 1e-300)), 1)
+        return np.array([np.exp(b), max(-k, 1e-6)])

@@ -7,13 +7,13 @@ from cost_models.exp_reciprocal import ExpReciprocalCost
 from cost_models.exponential import ExponentialCost
 from cost_models.polynomial import Polynomial3Cost, Polynomial4Cost
 from cost_models.power import PowerCost
-from cost_models.reciprocal import ReciprocalCost
+from cost_models.reciprocal import ReciprocalCost, ReciprocalPowerCost
 from cost_models.reciprocal_square import ReciprocalSquareCost
 from evotol.errors import ValidationError
 
 BUILTIN: dict[str, type[CostModel]] = {
     cls.name: cls
-    for cls in (ExponentialCost, PowerCost, ReciprocalCost, ReciprocalSquareCost, ExpReciprocalCost,
+    for cls in (ExponentialCost, PowerCost, ReciprocalPowerCost, ReciprocalCost, ReciprocalSquareCost, ExpReciprocalCost,
                 Polynomial3Cost, Polynomial4Cost, LinearExponentialCost)
 }
 ALIASES = {"index": "exponential", "negative_square": "reciprocal_square", "michael_siddall": "exp_reciprocal",

@@ -9,7 +9,7 @@ import pytest
 from scipy.optimize import minimize
 
 from evotol import studies
-from evotol.studies import _choi2000 as choi
+from evotol.studies import choi2000_clutch as choi
 
 T_LIM = 0.035
 
@@ -129,8 +129,10 @@ def test_published_a100_is_the_optimum_and_a0_is_not(result):
     assert c100["published"]["processes"] == c100["optimum"]["processes"]
     assert np.allclose(c100["published"]["tolerances_mm"], c100["optimum"]["tolerances_mm"], rtol=5e-4)
     assert c100["published"]["total_cost"] == pytest.approx(c100["optimum"]["total_cost"], rel=1e-6)
+    assert c0["published"]["processes"] == c0["optimum"]["processes"]
     assert c0["published"]["total_cost"] / c0["optimum"]["total_cost"] - 1 == pytest.approx(9.86e-4, rel=0.01)
     assert not c0["published"]["holds_limit"]
+    assert c0["published"]["rss_rad"] / T_LIM - 1 == pytest.approx(1.4e-4, abs=0.05e-4)     # 0.014 % outside
     # with the RSS limit active the loss is A/9 whatever the allocation: A = 0 and A = 20 share tolerances
     assert c20["optimum"]["quality_loss"] == pytest.approx(20 / 9, rel=1e-6)
     assert np.allclose(c20["optimum"]["tolerances_mm"], c0["optimum"]["tolerances_mm"], rtol=1e-5)

@@ -13,8 +13,7 @@ from robots.clearance import (ClearanceEvaluator, max_pose_error, multistart_max
 from robots.clearance.kinematics import adjoint, exp_screw, inv_transform, kk_transform, rotation_vector
 from robots.clearance.support import solve_support
 from robots.fivebar import FiveBar
-
-MM = 1e-3
+from evotol.units import MM
 
 
 @pytest.fixture(scope="module")
@@ -189,13 +188,14 @@ def test_returned_screws_are_feasible_and_attain_the_value_III3_III6(mech, resul
 
 def test_never_below_the_thesis_multistart_method(mech, few_poses, result):
     """Sec. IV.3 method (QR elimination III.29-III.48 + multistart local solves): our certified
-    bound is never below its best local maximum and our attained value matches it to 0.1 %."""
+    bound is never below its best local maximum and our attained value matches it to 0.1 % (either
+    side; measured 1.4e-7 at these poses)."""
     ms = multistart_max_pose_error(mech, few_poses[:2], n_starts=6, seed=1)
     assert ms.n_variables == 24                                   # eq. IV.26
     assert np.all(result.p_upper[:2] >= ms.p_max * (1 - 1e-9))
     assert np.all(result.r_upper[:2] >= ms.r_max * (1 - 1e-9))
-    assert np.all(result.p_max[:2] >= ms.p_max * (1 - 1e-3))
-    assert np.all(result.r_max[:2] >= ms.r_max * (1 - 1e-3))
+    np.testing.assert_allclose(result.p_max[:2], ms.p_max, rtol=1e-3)
+    np.testing.assert_allclose(result.r_max[:2], ms.r_max, rtol=1e-3)
 
 
 def test_split_and_unsplit_formulations_agree(mech, few_poses, result):

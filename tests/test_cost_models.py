@@ -118,3 +118,69 @@ def test_fit_refuses_an_initial_guess_of_the_wrong_size_or_not_finite(p0):
         cm.fit("reciprocal", t, 10 + 5e-4 / t, p0=p0)
     assert str(exc.value) == f"p0 = {p0!r}: expected 2 finite initial coefficients ('a0', 'a1')"
     assert cm.fit("reciprocal", t, 10 + 5e-4 / t, p0=[1, 1]).model.p == pytest.approx([10, 5e-4], rel=1e-9)
+
+
+def test_reciprocal_power_is_the_one_model_behind_reciprocal_and_reciprocal_square():
+    """Issue 32 item 5: ``a0 + a1/x^k`` with k = 1 and k = 2 gives the reciprocal and
+    reciprocal-square models to the last bit (cost, dcost, d2cost); the old names keep their
+    registry names, coefficients and ``to_dict`` round trip."""
+    t = np.geomspace(1e-7, 1e-3, 50)
+    for old, k in ((cm.ReciprocalCost, 1), (cm.ReciprocalSquareCost, 2)):
+        a, b = old(0.3, 1.7, scale=1e-5), cm.ReciprocalPowerCost(0.3, 1.7, k, scale=1e-5)
+        assert isinstance(a, cm.ReciprocalPowerCost) and a.exponent == k and a.param_names == ("a0", "a1")
+        for f in ("cost", "dcost", "d2cost"):
+            np.testing.assert_array_equal(getattr(a, f)(t), getattr(b, f)(t))
+        assert cm.get(old.name) is old
+        back = cm.from_dict(a.to_dict())
+        assert type(back) is old and back.to_dict() == a.to_dict() == {"model": old.name, "a0": 0.3, "a1": 1.7, "scale": 1e-5}
+    m = cm.ReciprocalPowerCost(0.3, 1.7, 1.4, scale=1e-5)
+    assert cm.from_dict(m.to_dict()).to_dict() == m.to_dict() == {"model": "reciprocal_power", "a0": 0.3, "a1": 1.7,
+                                                                  "k": 1.4, "scale": 1e-5}
+    np.testing.assert_allclose(m.cost(t), 0.3 + 1.7 * (t / 1e-5) ** -1.4, rtol=1e-14)
+    assert cm.get("negative_square") is cm.ReciprocalSquareCost
+    with pytest.raises(ValidationError, match=r"reciprocal_power\.k"):
+        cm.ReciprocalPowerCost(0.3, 1.7, 0.0)
+    with pytest.raises(ValidationError, match=r"reciprocal_square\.a1"):
+        cm.ReciprocalSquareCost(0.3, -1.0)
+
+
+def test_fit_recovers_the_exponent_of_a_reciprocal_power_law():
+    """The exponent is a fitted coefficient: noise-free ``0.5 + 3/x^1.7`` is recovered from the
+    model's own starting guess (the best of a few exponents)."""
+    t = np.linspace(0.5e-5, 8e-5, 15)
+    truth = cm.ReciprocalPowerCost(0.5, 3.0, 1.7, scale=1e-5)
+    fit = cm.fit("reciprocal_power", t, truth.cost(t), scale=1e-5)
+    np.testing.assert_allclose(fit.model.p, truth.p, rtol=1e-6)
+    assert cm.ReciprocalPowerCost.initial_guess(t, truth.cost(t), scale=1e-5)[2] in (1.5, 2.0)
+
+
+class _LogCost(cm.CostModel):
+    """c = a0 - a1·log x (a plugin model carrying its own starting guess)."""
+
+    name = "log_test"
+    param_names = ("a0", "a1")
+
+    def _f(self, x):
+        return self.p[0] - self.p[1] * np.log(x)
+
+    def _df(self, x):
+        return -self.p[1] / x
+
+    @classmethod
+    def _guess(cls, x, c):
+        cls.guessed = True
+        return np.polyfit(-np.log(x), c, 1)[::-1]
+
+
+def test_starting_guesses_are_carried_by_the_model_class():
+    """``fit`` asks the model class for its starting coefficients (no table of names in fit.py):
+    a plugin's own ``_guess`` is used, and a model without one starts from ones."""
+    t = np.linspace(1e-5, 8e-5, 12)
+    c = 10.0 - 2.0 * np.log(t / 1e-5)
+    _LogCost.guessed = False
+    np.testing.assert_allclose(cm.fit(_LogCost, t, c, scale=1e-5).model.p, [10.0, 2.0], rtol=1e-9)
+    assert _LogCost.guessed
+    np.testing.assert_allclose(_LogCost.initial_guess(t, c, scale=1e-5), [10.0, 2.0], rtol=1e-9)
+    assert cm.CostModel.initial_guess(t, c).tolist() == []      # no coefficients, no guess
+    np.testing.assert_array_equal(cm.ExponentialCost.initial_guess(t, 3 * np.exp(-0.4 * t / 1e-5), scale=1e-5),
+                                  cm.ExponentialCost.initial_guess(t / 1e-5, 3 * np.exp(-0.4 * t / 1e-5)))

@@ -19,8 +19,8 @@ from evotol.studies import deng2012_dimsynth as ds
 from evotol.studies import deng2012_tolsynth as ts
 from robots.geometry import largest_centred_rectangle, largest_rectangle
 from robots.irsbot2 import IRSBot2, singularity_free_rectangle
+from evotol.units import MM
 
-MM = 1e-3
 TAB_VI_5 = dict(l1=50 * MM, l2=50 * MM, a1=30 * MM, a2=15 * MM, p=25 * MM)
 
 

@@ -19,9 +19,7 @@ import pytest
 
 from evotol import design as doe  # noqa: E402
 from evotol.studies import deng2012_tolsynth as ts  # noqa: E402
-from evotol.units import numbers_without_unit  # noqa: E402
-
-MM = 1e-3
+from evotol.units import MM, numbers_without_unit  # noqa: E402
 
 
 def entry(xy, z):

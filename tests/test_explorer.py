@@ -20,8 +20,10 @@ from tests.browser import require_chromium
 
 STUDIES = Path(__file__).resolve().parents[1] / "reports" / "studies"
 SUM_COST = ('[cost.default]\nmodel = "sum"\nterms = [{ model = "exponential", a0 = 1.1, a1 = 0.6, scale = 1e-5 }, '
-            '{ model = "reciprocal", a0 = 0.1, a1 = 0.5, scale = 1e-5 }]\n')
-#: (study, edits): RSS with a sum cost model, full cost width and a locked source; worst case with
+            '{ model = "reciprocal", a0 = 0.1, a1 = 0.5, scale = 1e-5 }, '
+            '{ model = "reciprocal_power", a0 = 0.05, a1 = 0.3, k = 1.5, scale = 1e-5 }]\n')
+#: (study, edits): RSS with a sum cost model (every term's formula in the page: exponential, reciprocal,
+#: reciprocal power), full cost width and a locked source; worst case with
 #: asymmetric intervals, shared tolerances and a fixed source; a planar mechanism (circle of directions)
 CASES = {
     "ucr3_example": [("grid = [5, 5, 3]", "grid = [3, 3, 2]"), ("[cost.default]\nmodel = \"exponential\"\na0 = 1.1\na1 = 0.6\n"

@@ -30,6 +30,10 @@ def specs(tmp_path_factory):
 
 
 def test_run_writes_the_drawing_table_in_display_units(specs):
+    """The CSV/Excel table: tolerances and deviations in mm, the fixed joint, each source's cost
+    share recomputed here from the study file's cost models (exponential 1.9/0.5 for lengths,
+    1.1/0.6 otherwise, scale 1e-5 m, at the half-width (minus + plus)/2·t) over the allocation's
+    total cost, and the contributions; the workbook holds the same numbers."""
     d, data = specs
     assert data["exports"] == {"csv": "ucr3_tolerance_specs_tolerances.csv", "xlsx": "ucr3_tolerance_specs_tolerances.xlsx"}
     assert chosen_method(data) == "optimum"
@@ -48,9 +52,16 @@ def test_run_writes_the_drawing_table_in_display_units(specs):
     assert legs["upper deviation"] == pytest.approx((2e-6 + 0.5 * t) * 1e3) and legs["lower deviation"] == pytest.approx((2e-6 - 1.5 * t) * 1e3)
     assert csv.set_index("source").loc["R1", "process"] == "fixed (bought in)"
     assert csv.set_index("source").loc["R1", "cost share (%)"] == 0
-    assert csv["cost share (%)"].sum() == pytest.approx(100.0)
-    costs = r["source_costs"]
-    assert csv.set_index("source").loc["l2", "cost share (%)"] == pytest.approx(100 * costs["l2"] / sum(costs.values()))
+    # every share from the study file's cost models (not the shares' own sum, which is 100 by construction)
+    from cost_models import ExponentialCost
+
+    length, joint = ExponentialCost(1.9, 0.5, scale=1e-5), ExponentialCost(1.1, 0.6, scale=1e-5)
+    cost = {n: 0.0 if s["fixed"] else float((length if s["group"] == "length" else joint).cost(
+        (s["minus"] + s["plus"]) / 2 * r["tolerances"][n])) for n, s in src.items()}
+    assert sum(cost.values()) == pytest.approx(r["cost"], rel=1e-12)
+    shares = csv.set_index("source")["cost share (%)"]
+    assert shares.to_dict() == pytest.approx({n: 100 * c / r["cost"] for n, c in cost.items()}, rel=1e-12, abs=1e-12)
+    assert len(set(np.round(shares.to_numpy(), 6))) >= 5            # shares differ: not an equal split
     c = r["contributions"]["position"]
     assert csv.set_index("source").loc[c["source"], CONTRIB].to_numpy() == pytest.approx(c["percent"], rel=1e-12)
     # the workbook: an about sheet, then every method (the chosen one first), the same numbers

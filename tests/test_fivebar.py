@@ -8,8 +8,7 @@ from robots.base import Workspace
 from robots.checks import check_robot
 from robots.clearance import max_pose_error
 from robots.fivebar import FiveBar, FiveBarGeometric, combined_max_pose_error
-
-MM = 1e-3
+from evotol.units import MM
 
 
 @pytest.fixture(scope="module")

@@ -16,9 +16,9 @@ from robots.clearance import max_pose_error
 from robots.fivebar import FiveBar, FiveBarGeometric
 from robots.irsbot2 import IRSBot2, MAP_WORKSPACE
 from robots.mechanism import MechanismModel, load_mechanism, mechanism_from_dict
+from evotol.units import MM
 
 HERE = Path(__file__).resolve().parents[1] / "robots" / "mechanisms"
-MM = 1e-3
 
 
 @pytest.fixture(scope="module")

@@ -98,19 +98,41 @@ def test_verify_nonlinear_counts_an_unassembled_sample_as_a_miss():
     assert chk2.mc_exceed_rate == chk.mc_exceed_rate and chk2.mc_q999["position"] == np.inf
 
 
+class _MissesAbove(ToyRobot):
+    """Linear toy (one source, one pose) whose nonlinear model cannot assemble a sample with
+    |e0| > ``cut``: the misses are then exactly the samples of largest error."""
+
+    cut = np.inf
+
+    def pose_error(self, poses, errors):
+        out = np.einsum("pij,psj->psi", self.sensitivity(poses), errors)
+        out[np.abs(errors[..., 0]) > self.cut] = np.nan
+        return out
+
+
 def test_verify_nonlinear_quantile_puts_a_few_misses_above_every_error():
     """With fewer misses than the 0.1 % tail, mc_q999 is the quantile with the misses placed above
-    every assembled error (finite), and mc_max is inf."""
-    from evotol.verification.nonlinear import _quantile_misses
+    every assembled error (finite, the value without misses), and mc_max is inf; one miss more and
+    the quantile reaches them (inf). 2001 samples: the 0.999 quantile is the third-largest error.
+    Through verify_nonlinear and its public sampler (uniform_interval_samples, same seed)."""
+    from evotol.verification.nonlinear import uniform_interval_samples, verify_nonlinear
 
-    e = np.random.default_rng(0).random(2001)
-    top = np.argsort(e)[-2:]
-    e_miss = e.copy()
-    e_miss[top] = np.inf
-    assert _quantile_misses(e_miss, 0.999) == np.quantile(e, 0.999)   # 2 misses: below the interpolation
-    e_miss[np.argsort(e)[-3]] = np.inf
-    assert _quantile_misses(e_miss, 0.999) == np.inf                  # 3 misses: the quantile reaches them
-    assert _quantile_misses(e, 0.999) == np.quantile(e, 0.999)
+    robot = _MissesAbove(dims=(1,))
+    tol = {"s0": Tolerance(cm.ExponentialCost(1, 1, scale=1e-3), 1e-6, 1e-3)}
+    P = ToleranceProblem(robot, tol, Requirement(position=1e-3), [[0.5]])
+    t = np.array([1e-5])
+    a = np.sort(np.abs(uniform_interval_samples(P, t, 2001, 4)[:, 0]))
+    whole = verify_nonlinear(P, t, n_samples=2001, seed=4)
+    gain = np.linalg.norm(robot.sensitivity(P.poses)[0, :3, 0])
+    assert gain > 0 and a[-4] < a[-3] < a[-2]
+    assert whole.mc_q999["position"] == pytest.approx(gain * a[-3], rel=1e-12)      # no miss: the plain quantile
+    assert whole.mc_max["position"] == pytest.approx(gain * a[-1], rel=1e-12)
+    robot.cut = 0.5 * (a[-3] + a[-2])                       # the 2 largest errors are misses
+    two = verify_nonlinear(P, t, n_samples=2001, seed=4)
+    assert two.mc_q999["position"] == whole.mc_q999["position"] and two.mc_max["position"] == np.inf
+    robot.cut = 0.5 * (a[-4] + a[-3])                       # the 3 largest: the quantile reaches a miss
+    three = verify_nonlinear(P, t, n_samples=2001, seed=4)
+    assert three.mc_q999["position"] == np.inf
 
 
 class _LinearToy(ToyRobot):

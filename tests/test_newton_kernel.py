@@ -41,6 +41,12 @@ CASES = {
 @pytest.mark.parametrize("name", list(CASES))
 @pytest.mark.parametrize("tau", [0.3, 30.0, 3e4])
 def test_one_iteration_equals_numpy(name, tau):
+    """One step of the compiled kernel equals one step of the NumPy reference (Hessian to 1e-13).
+
+    Kept on the private ``_numpy_iteration`` and ``_merge_groups``: a single iteration is internal
+    to ``solve_support``; its public ``kernel=True/False`` flag is compared on whole solves below
+    (test_solve_support_kernel_flag, test_certified_maps_agree_with_the_numpy_iteration), which
+    would not locate a wrong step."""
     nd, ni, m, groups = CASES[name]
     R = 2 * nd + ni
     rng = np.random.default_rng(hash(name) % 2 ** 32)

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from evotol import studies
-from evotol.studies import _laramolina2019_5r_allocation as A
 from evotol.studies import laramolina2019_5r as L
 from robots.planar5r import Planar5R
 from robots.planar5r import uncertainty as U
@@ -53,13 +52,20 @@ def test_study_reproduces_paper_trends(quick_run):
     assert max(c["a"]["poses"]["p_exceed"]) > 0.1 and max(c["c"]["poses"]["p_exceed"]) > 0.1
 
 
+def _design(P, clearance_A, clearance_B, theta_std):
+    """Source tolerances (1, n_sources) of the study's three shared variables through the problem's
+    own mapping (``P.variables``, ``P.full``); the actuator tolerance is SIGMA_K = 3 std."""
+    values = {"clearance_A": clearance_A, "clearance_B": clearance_B, "theta": L.SIGMA_K * theta_std}
+    return P.full([[values[v] for v in P.variables]])
+
+
 def test_core_nonlinear_yield_agrees_with_the_direct_sampler():
     """The core's nonlinear yield of the study's problem (shared tolerances, fixed normal lengths,
     contact clearances, normal actuators) against the 5R's own sampler (robots.planar5r.uncertainty,
     independent code and samples): within 4 standard errors of the difference at every pose."""
     P = L.allocation_problem("d", 2048, 3, radius=0.1e-3)
     rc, sd = 20e-6, np.deg2rad(0.02)
-    T = A._from_variables(P, [[rc, rc, sd]])
+    T = _design(P, rc, rc, sd)
     q = 1 - P.evaluate(T).probability[0]
     robot = P.robot
     m = U.UncertaintyModel(theta_std=sd, clearance=rc, shared_lengths=False, renormalise=False)
@@ -74,12 +80,12 @@ def test_core_nonlinear_yield_agrees_with_the_direct_sampler():
 def test_exceedance_grows_with_every_tolerance():
     P = L.allocation_problem("b", 512, 0, radius=0.1e-3)
     base = np.array([20e-6, 20e-6, 2e-4])
-    p0 = 1 - P.evaluate(A._from_variables(P, [base])).probability.min()
+    p0 = 1 - P.evaluate(_design(P, *base)).probability.min()
     for j in range(3):
         t = base.copy()
         t[j] *= 2
-        assert 1 - P.evaluate(A._from_variables(P, [t])).probability.min() >= p0
-    assert 1 - P.evaluate(A._from_variables(P, [3 * base])).probability.min() > p0
+        assert 1 - P.evaluate(_design(P, *t)).probability.min() >= p0
+    assert 1 - P.evaluate(_design(P, *(3 * base))).probability.min() > p0
 
 
 def test_allocation_is_feasible_and_verified():

@@ -12,7 +12,8 @@ from evotol.allocators.process import (Process, ProcessProblem, allocate_process
                                        process_front)
 from evotol.errors import InfeasibleError, ValidationError
 from evotol.core.problem import Requirement
-from evotol.studies._process_benchmarks import MM, clutch_problem, process, stack_problem
+from evotol.studies._process_benchmarks import clutch_problem, process, stack_problem
+from evotol.units import MM
 from robots.assembly import LinearStack
 
 
@@ -221,7 +222,10 @@ def test_front_and_yield_bad_input_are_validation_errors(clutch_wc):
 
 
 def test_ga_and_front_problems_pickle(clutch_wc):
-    """Module-level pymoo problems (parallel evaluation and checkpointing need them picklable)."""
+    """Module-level pymoo problems (parallel evaluation and checkpointing need them picklable).
+
+    Kept on the private classes: the pymoo problems are internal to allocate_process_ga and
+    process_front, and no public call hands them out or pickles them."""
     import pickle
 
     from evotol.allocators.process.front import _ProcessFrontProblem
@@ -339,7 +343,10 @@ def test_process_optimum_and_ga_name_a_measure_without_constraint_rows(measure):
 def test_feasible_means_within_feas_tol_of_the_limit(clutch_wc):
     """A process result is called feasible when its normalised stack error is <= 1 + FEAS_TOL
     (1e-9), the slack branch and bound and the baselines use -- not 1 + 1e-7 as before, which
-    called a design 5e-8 over the limit feasible. The certified optimum itself is inside it."""
+    called a design 5e-8 over the limit feasible. The certified optimum itself is inside it.
+    ``pp.judge`` (public) applies the same rule to a given design; ``_result`` is kept because it is
+    the one place a ProcessResult's ``feasible`` is set, and no public call builds a result from a
+    given design."""
     from evotol.allocators.process import FEAS_TOL
     from evotol.allocators.process.result import _result
 
@@ -351,3 +358,5 @@ def test_feasible_means_within_feas_tol_of_the_limit(clutch_wc):
     assert over.normalised_error == pytest.approx(1 + 5e-8, abs=1e-12) and not over.feasible
     at = _result(pp, "probe", choice, t * (1 + 0.5e-9) / opt.normalised_error, 0.0)
     assert at.feasible
+    for r in (over, at, opt):
+        assert pp.judge(r.processes, r.tolerances)["holds_requirement"] == r.feasible

@@ -13,7 +13,7 @@ from evotol.allocators.process import allocate_process_optimum
 from evotol.errors import ValidationError
 from evotol.studyfile import load_process_problem, run_process_study
 from evotol.core.quality_loss import with_quality_loss
-from evotol.studies import _choi2000 as choi
+from evotol.studies import choi2000_clutch as choi
 from evotol.studyfile import load_problem, run_study_file
 
 STUDIES = Path(__file__).resolve().parents[1] / "reports" / "studies"

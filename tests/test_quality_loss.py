@@ -12,9 +12,8 @@ from evotol.errors import ValidationError
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.core.quality_loss import expected_loss, loss_coefficients, with_quality_loss
 from robots.assembly import LinearStack
+from evotol.units import MM
 from tests.toy_robot import ToyRobot
-
-MM = 1e-3
 
 
 def _stack_problem(measure="rss"):
@@ -115,3 +114,29 @@ def test_budget_mode_refuses_a_quality_loss_problem():
     for fn in (allocate_optimum, allocate_lagrange):
         with pytest.raises(ValidationError, match="budget"):
             fn(lp, budget=100.0)
+
+
+def test_one_entry_point_for_tolerance_and_process_problems():
+    """``with_quality_loss(problem, A)`` is the one entry point (issue 32 item 5): on a process
+    problem it gives what ``pp.with_quality_loss(A)`` gives (same coefficients q_j as on the plain
+    problem of the same geometry, every process's cost wrapped); another kind of problem, or a
+    second loss on a process problem, is refused in one line."""
+    from evotol.allocators.process import Process, ProcessProblem, allocate_process_optimum
+
+    stack, tp = _stack_problem()
+    procs = {n: [Process("fine", PowerCost(0.2, 1.0, scale=MM), 0.005 * MM, 0.05 * MM),
+                 Process("rough", PowerCost(0.1, 1.0, scale=MM), 0.04 * MM, 0.3 * MM)] for n in "abc"}
+    pp = ProcessProblem(stack, procs, tp.requirement, tp.poses)
+    a, b = with_quality_loss(pp, 50.0), pp.with_quality_loss(50.0)
+    assert isinstance(a, ProcessProblem) and a.quality_loss_A == b.quality_loss_A == 50.0
+    np.testing.assert_array_equal(a.loss_coefficients, loss_coefficients(tp, 50.0))
+    np.testing.assert_array_equal(a.loss_coefficients, b.loss_coefficients)
+    assert all(isinstance(p.cost, QualityLossCost) and p.cost.q == q
+               for n, q in zip(a.names, a.loss_coefficients) for p in a.processes[n])
+    assert allocate_process_optimum(a).cost == allocate_process_optimum(b).cost
+    t = np.array([0.05, 0.02, 0.1]) * MM
+    assert a.quality_loss(t)[0] == pytest.approx(expected_loss(tp, 50.0, t)[0], rel=1e-12)
+    with pytest.raises(ValidationError, match="a problem without a loss term"):
+        with_quality_loss(a, 1.0)
+    with pytest.raises(ValidationError, match="^problem = 'LinearStack'"):
+        with_quality_loss(stack, 1.0)

@@ -84,15 +84,20 @@ def test_yield_matches_1e6_monte_carlo_of_the_linear_model_normal_sources():
 
 def test_yield_of_non_normal_sources_is_the_moment_matched_normal():
     """Uniform, truncated-normal, contact and uniform-radius disk/ball sources: flagged inexact;
-    the moment-matched normal stays within 5 % of 10^6-sample Monte Carlo at ~1 % miss (CLT)."""
+    the moment-matched normal over-estimates the miss rate of 10^6-sample Monte Carlo of the same
+    linear model, by 10.4 % at 1.5 % miss and by 5.2 % at 7.6 % miss (measured; Monte Carlo's
+    standard error 0.8 % and 0.35 % of the rate): bounded sources have lighter tails than the
+    normal of the same variance, so the estimate is conservative, by at most 12 % here."""
     dists = ["uniform", "truncated_normal", "contact", "uniform", "uniform"]
     P = _toy_problem(dists, E=6.5e-4, planar=True)
     t = np.full(P.n_sources, 2e-4)
     assert not P.evaluate(t[None]).exact
     y = P.first_order_yield().evaluate(t[None], 0.99)
     mc = _mc_miss(P, t)["position"]
-    assert np.all(mc > 3e-3)
-    np.testing.assert_allclose(y.miss["position"][0], mc, rtol=0.25)
+    assert np.all(mc > 1e-2)                            # >= 15 000 misses: a 0.8 % standard error
+    over = y.miss["position"][0] / mc - 1
+    assert np.all(over > 0.03) and np.all(over < 0.12), over
+    assert over[0] > over[1]                            # further in the tail, further from normal
 
 
 def test_unit_moments_match_sampled_moments():

@@ -34,11 +34,21 @@ def test_json_has_the_issue_keys(study):
 
 
 def test_paper_comparison_under_the_paper_model(study):
-    """Sensitivity (collective lengths, the rule behind Table 2) / GA ≈ the paper's 1.94."""
+    """Sensitivity (collective lengths, the rule behind Table 2) over the GA: the paper's 1.94
+    (Table 2 / Table 1 = 4.2391 / 2.1837) is reproduced to 1 % against the paper's own GA design
+    (measured 4.2053 / 2.1846 = 1.925: the rule's cost is Table 2's to 0.8 %, Table 1's cost
+    recomputed to 0.04 %). Against evotol's GA the ratio is 2.094, not 1.94: that GA reaches the
+    certified optimum (2.0086), which the paper's Table 1 exceeds by 8.8 %; the ratio is the rule
+    over the optimum to 0.1 %."""
     _, d = study
     v = d["variants"]["paper"]
-    assert v["sensitivity_collective_lengths_cost"] == pytest.approx(4.2391, rel=0.02)
-    assert 1.8 < v["sensitivity_collective_over_ga"] < 2.3
+    sens, table1 = v["sensitivity_collective_lengths_cost"], v["paper_table1"]["cost"]
+    assert sens == pytest.approx(4.2391, rel=0.01)
+    assert table1 == pytest.approx(2.1837, rel=1e-3)
+    assert sens / table1 == pytest.approx(4.2391 / 2.1837, rel=0.01)
+    assert v["ga_over_optimum"] < 1e-3
+    assert v["sensitivity_collective_over_ga"] == pytest.approx(sens / v["optimum_cost"], rel=1e-3)
+    assert table1 / v["optimum_cost"] == pytest.approx(1.088, abs=1e-3)
     # the paper's Table 1 sits on the RSS boundary of its own model (within 2 %)
     assert v["paper_table1"]["rss_error"] == pytest.approx(5e-5, rel=0.02)
     # and does not hold under the verified model

@@ -3,8 +3,9 @@
 Objectives: total cost and the largest normalised error over the poses (error / bound, the
 maximum over the constrained components; 1 = exactly at the requirement). The requirement itself
 is not imposed: the front spans tolerances from the tightest to the loosest bounds. Each
-generation the current front is checked exactly (lazy worst-case rows); the returned front is
-re-evaluated exactly and filtered for non-dominance.
+generation the current front is checked exactly (lazy worst-case rows, a pymoo callback); the
+returned front is re-evaluated exactly and filtered for non-dominance. The run itself is evotol's
+one NSGA-II driver, :func:`evotol.allocators.nsga_driver.run_nsga2`.
 """
 from __future__ import annotations
 
@@ -12,18 +13,16 @@ import time
 
 import numpy as np
 import pandas as pd
-from pymoo.algorithms.moo.nsga2 import NSGA2
 from pymoo.core.callback import Callback
 from pymoo.core.problem import Problem
-from pymoo.termination import get_termination
 
 from evotol.allocators.ga import initial_population
+from evotol.allocators.nsga_driver import run_nsga2  # noqa: F401  (the driver; its old import path)
 from evotol.measures.constraints import ConstraintRows, constraint_rows
 from evotol.measures import feasibility
 from evotol.errors import ValidationError
 from evotol.core.pareto import ParetoFront, non_dominated
 from evotol.core.problem import ToleranceProblem
-from evotol._runtime.progress import progress_bar
 from evotol._runtime.blas_threads import single_threaded_blas
 
 
@@ -45,61 +44,13 @@ class _FrontProblem(Problem):
         out["F"] = np.stack([self.tp.cost(T), err], axis=1)
 
 
-def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, sampling=None, callback=None,
-              verbose: bool = False, interruptible: bool = False) -> NSGA2:
-    """The one NSGA-II run of evotol: pymoo's ``NSGA2`` (duplicates eliminated) for ``n_gen``
-    generations on a pymoo ``problem``; returns the algorithm (``algo.pop``, ``algo.opt``).
-
-    Used by :func:`allocate_nsga2` (tolerance problems), :func:`evotol.design.nsga2` (design studies) and
-    :func:`evotol.allocators.process.process_front` (process selection).
-
-    Parameters
-    ----------
-    problem : pymoo.core.problem.Problem
-        The pymoo problem (decision vectors and objectives in its own units).
-    pop_size : int
-        Population size.
-    n_gen : int
-        Number of generations.
-    seed : int
-        Seed of the run.
-    sampling : numpy.ndarray or None
-        Initial population (array of decision vectors, (pop_size, n_var)) or None (pymoo's
-        random sampling).
-    callback : pymoo.core.callback.Callback or None
-        Called after every generation (progress, lazy constraint checks) -- pymoo's hook, so the
-        loop itself stays pymoo's ``while has_next(): next()``.
-    verbose : bool
-        pymoo's per-generation printout.
-    interruptible : bool
-        If True, Ctrl-C ends the run early and keeps the population reached so far; otherwise
-        the ``KeyboardInterrupt`` propagates.
-
-    Returns
-    -------
-    pymoo.algorithms.moo.nsga2.NSGA2
-        The algorithm after the run: ``algo.pop`` (last population), ``algo.opt`` (its front).
-    """
-    kw = {} if sampling is None else {"sampling": sampling}
-    algo = NSGA2(pop_size=pop_size, eliminate_duplicates=True, **kw)
-    hooks = {} if callback is None else {"callback": callback}
-    algo.setup(problem, termination=get_termination("n_gen", int(n_gen)), seed=seed, verbose=verbose, **hooks)
-    try:
-        while algo.has_next():
-            algo.next()
-    except KeyboardInterrupt:
-        if not interruptible:
-            raise
-    return algo
-
-
 class _CheckFront(Callback):
     """After every generation: check a few front members exactly (lazy worst-case rows; when
-    rows were added, re-score the population), record the front, advance the progress bar."""
+    rows were added, re-score the population), record the front."""
 
-    def __init__(self, fp: _FrontProblem, rows: ConstraintRows | None, rng, n_check: int, bar):
+    def __init__(self, fp: _FrontProblem, rows: ConstraintRows | None, rng, n_check: int):
         super().__init__()
-        self.fp, self.rows, self.rng, self.n_check, self.bar = fp, rows, rng, n_check, bar
+        self.fp, self.rows, self.rng, self.n_check = fp, rows, rng, n_check
         self.history: list[dict] = []
 
     def notify(self, algo):
@@ -115,7 +66,6 @@ class _CheckFront(Callback):
         F = algo.opt.get("F")
         self.history.append({"generation": algo.n_iter, "front_size": len(F), "min_cost": float(F[:, 0].min()),
                              "min_error": float(F[:, 1].min())})
-        self.bar.update(1)
 
 
 @single_threaded_blas
@@ -169,11 +119,9 @@ def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, po
         log_scale = bool(np.any(problem.upper[f] / problem.lower[f] > 100))
     fp = _FrontProblem(problem, rows, log_scale)
     X0 = initial_population(problem, pop_size, seed, seeds, log_scale=log_scale)
-    with progress_bar(n_gen, "NSGA-II", "gen", progress,
-                      size=f"{n_gen} generations × {pop_size} designs × {problem.n_poses} poses") as bar:
-        watch = _CheckFront(fp, rows, np.random.default_rng(seed), n_check, bar)
-        algo = run_nsga2(fp, pop_size=pop_size, n_gen=n_gen, seed=seed, sampling=X0, callback=watch,
-                         interruptible=True)
+    watch = _CheckFront(fp, rows, np.random.default_rng(seed), n_check)
+    algo = run_nsga2(fp, pop_size=pop_size, n_gen=n_gen, seed=seed, sampling=X0, callback=watch, interruptible=True,
+                     progress=progress, size=f"{n_gen} generations × {pop_size} designs × {problem.n_poses} poses")
     T = fp.tolerances(algo.pop.get("X"))
     ev = problem.evaluate(T, top_only=True)
     err = ev.violation + 1

@@ -14,9 +14,16 @@ The sum over responses is separable in the tolerances, ``QL(t) = Σ_j q_j t_j²`
 
 so the loss is added to every source's cost model (:class:`cost_models.quality_loss.QualityLossCost`)
 and every allocator that minimises cost (``allocate_optimum``, ``allocate_ga``, ``allocate_nsga2``,
-and the process-selection allocators through ``ProcessProblem.with_quality_loss``) minimises
-machining cost + expected loss. A nominal off target (``Y_k(x0) ≠ Y0_k``) adds the constant
-``K_k (Y_k(x0) − Y0_k)²``, which changes no allocation and is left out.
+and the process-selection allocators) minimises machining cost + expected loss.
+
+:func:`with_quality_loss` is the one entry point, for a
+:class:`~evotol.core.problem.ToleranceProblem` and for a process-selection problem
+(:class:`~evotol.allocators.process.ProcessProblem`, whose implementation the process package
+registers; ``pp.with_quality_loss(A)`` is the same call). :func:`loss_coefficients` holds the
+equation above; :class:`~cost_models.quality_loss.QualityLossCost` is the cost term it builds.
+
+A nominal off target (``Y_k(x0) ≠ Y0_k``) adds the constant ``K_k (Y_k(x0) − Y0_k)²``, which
+changes no allocation and is left out.
 
 Responses and weights ``w_k``:
 
@@ -29,6 +36,7 @@ Responses and weights ``w_k``:
 """
 from __future__ import annotations
 
+from functools import singledispatch
 from typing import Mapping
 
 import numpy as np
@@ -124,26 +132,36 @@ def expected_loss(problem: ToleranceProblem, A, T) -> np.ndarray:
     return T ** 2 @ loss_coefficients(problem, A)
 
 
-def with_quality_loss(problem: ToleranceProblem, A) -> ToleranceProblem:
-    """The same problem whose cost is machining cost + expected quality loss.
+@singledispatch
+def with_quality_loss(problem, A):
+    """The same problem whose cost is machining cost + expected quality loss (the one entry point).
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem (its cost models are the machining costs).
+    problem : ToleranceProblem or evotol.allocators.process.ProcessProblem
+        The problem (its cost models, or its processes' cost models, are the machining costs).
     A : float or mapping
         Loss coefficients (see :func:`loss_coefficients`).
 
     Returns
     -------
-    ToleranceProblem
-        Every source's cost model wrapped in :class:`QualityLossCost`; geometry shared.
+    ToleranceProblem or evotol.allocators.process.ProcessProblem
+        A problem of the same kind: every source's cost model (a process problem: every
+        process's) wrapped in :class:`QualityLossCost`; geometry shared. A process problem's
+        ``loss_coefficients`` hold the ``q_j`` and ``quality_loss_A`` the ``A`` given.
 
     Raises
     ------
     ValidationError
-        As :func:`loss_coefficients`.
+        As :func:`loss_coefficients`; a ``problem`` of another kind; a process problem that
+        already carries a loss.
     """
+    raise ValidationError("problem", type(problem).__name__,
+                          "a ToleranceProblem or a ProcessProblem to add the quality loss to")
+
+
+@with_quality_loss.register
+def _tolerance_problem_with_quality_loss(problem: ToleranceProblem, A) -> ToleranceProblem:
     import copy
 
     q = loss_coefficients(problem, A)

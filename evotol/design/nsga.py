@@ -1,4 +1,5 @@
-"""NSGA-II beyond the levels: the factors' continuous ranges searched by pymoo (issue "beyond the levels")."""
+"""NSGA-II beyond the levels: the factors' continuous ranges searched by pymoo (issue "beyond the levels"),
+run by evotol's one NSGA-II driver (:func:`evotol.allocators.nsga_driver.run_nsga2`)."""
 from __future__ import annotations
 
 import math
@@ -12,7 +13,7 @@ from pymoo.core.problem import Problem
 
 from evotol.design.evaluation import Evaluator, _evaluate_chunk, evaluate
 from evotol.design.factors import FEASIBLE, SOURCE, Factor, _check_factors, from_unit
-from evotol.allocators.nsga import run_nsga2
+from evotol.allocators.nsga_driver import run_nsga2
 from evotol.errors import EvotolError, ValidationError
 from evotol.core.pareto import ParetoFront, knee_points, non_dominated
 
@@ -158,8 +159,10 @@ def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[
     initial : pandas.DataFrame, optional
         Known entries (one column per factor name, column units) seeding the population; the
         first ``pop_size`` are used (clipped to the ranges), random individuals fill the rest.
-    progress : bool, default False
-        Print pymoo's per-generation output.
+    progress : bool or None, default False
+        The progress display over generations, as every NSGA-II run of evotol's
+        (:func:`~evotol.allocators.nsga_driver.run_nsga2`): None a bar on a terminal only, True
+        also periodic lines off a terminal, False nothing.
     workers : int, default 1
         Local processes; above 1 (or with ``scheduler``) each generation is split into one
         chunk per worker.
@@ -195,7 +198,8 @@ def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[
         rng = np.random.default_rng(seed)
         fill = rng.random((max(0, pop_size - len(U0)), len(factors)))
         sampling = np.vstack([U0[:pop_size], fill])
-    run_nsga2(problem, pop_size=pop_size, n_gen=n_gen, seed=seed, sampling=sampling, verbose=progress)
+    run_nsga2(problem, pop_size=pop_size, n_gen=n_gen, seed=seed, sampling=sampling, progress=progress,
+              size=f"{n_gen} generations × {pop_size} entries")
     seen = problem.seen
     allx = pd.concat(seen, ignore_index=True)
     ok = allx[allx[FEASIBLE]].reset_index(drop=True)

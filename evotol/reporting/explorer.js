@@ -18,6 +18,7 @@
   var MODELS = {
     exponential: function (x, p) { return p[0] * Math.exp(-p[1] * x); },
     power: function (x, p) { return p[0] * Math.pow(x, -p[1]); },
+    reciprocal_power: function (x, p) { return p[0] + p[1] / Math.pow(x, p[2]); },
     reciprocal: function (x, p) { return p[0] + p[1] / x; },
     reciprocal_square: function (x, p) { return p[0] + p[1] / (x * x); },
     exp_reciprocal: function (x, p) { return p[0] * Math.pow(x, -p[1]) * Math.exp(-p[2] * x); },

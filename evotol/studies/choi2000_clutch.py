@@ -22,6 +22,7 @@ from evotol.allocators.process import (ProcessProblem, ProcessResult, allocate_p
                                        process_front)
 from evotol.studies import Study, StudyResult
 from evotol.studies import _choi2000 as choi
+from evotol.studies._choi2000 import load, problem  # noqa: F401  (the study's data and problem, public here)
 from evotol.studies._process_benchmarks import _mc_nonlinear
 
 from evotol.units import MM

@@ -28,7 +28,7 @@ from cost_models.compound import SumCost
 from evotol.core.problem import ToleranceProblem
 
 #: the cost models the page evaluates (``explorer.js``: same kind, same formula, same parameters)
-JS_COST_MODELS = ("exponential", "power", "reciprocal", "reciprocal_square", "exp_reciprocal",
+JS_COST_MODELS = ("exponential", "power", "reciprocal_power", "reciprocal", "reciprocal_square", "exp_reciprocal",
                   "polynomial3", "polynomial4", "linear_exponential")
 #: the page carries at most this many sensitivity numbers (poses × 3 × columns × components)
 MAX_NUMBERS = 400_000

@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 from pymoo.core.problem import Problem
 
+from evotol.allocators.nsga_driver import run_nsga2
 from evotol.allocators.process.ga import _decode
 from evotol.allocators.process.problem import check_no_budget, ProcessProblem
 from evotol.errors import ValidationError
@@ -45,7 +46,7 @@ THREE_SIGMA_MISS = 0.0026997960632601866
 def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0, objective: str = "error",
                   pop_size: int = 60, n_gen: int = 100, distribution="normal",
                   max_miss: float = THREE_SIGMA_MISS) -> ParetoFront:
-    """NSGA-II front (:func:`evotol.allocators.nsga.run_nsga2`) of cost vs. a second objective.
+    """NSGA-II front (:func:`evotol.allocators.nsga_driver.run_nsga2`) of cost vs. a second objective.
 
     Parameters
     ----------
@@ -82,8 +83,6 @@ def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0
         :class:`ProcessProblem`.
     """
     import time
-
-    from evotol.allocators.nsga import run_nsga2
 
     pp = check_no_budget(problem, budget, "process_front")
 

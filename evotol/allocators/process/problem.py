@@ -12,10 +12,12 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from cost_models.power import PowerCost
+from cost_models.quality_loss import QualityLossCost
 from evotol.allocators.process.candidates import Process, checked_processes
 from evotol.allocators.process.result import FEAS_TOL, ProcessResult  # noqa: F401  (re-exported)
 from evotol.errors import ValidationError
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.core.quality_loss import loss_coefficients, with_quality_loss
 from robots.base import RobotErrorModel
 
 
@@ -72,7 +74,8 @@ class ProcessProblem:
         self.quality_loss_A = None
 
     def with_quality_loss(self, A) -> "ProcessProblem":
-        """The same problem with every process's cost = machining cost + expected Taguchi loss.
+        """The same problem with every process's cost = machining cost + expected Taguchi loss:
+        :func:`evotol.core.quality_loss.with_quality_loss` ``(self, A)``, the one entry point.
 
         Parameters
         ----------
@@ -91,17 +94,7 @@ class ProcessProblem:
         ValidationError
             A negative or unknown coefficient; a problem that already carries a loss.
         """
-        from cost_models.quality_loss import QualityLossCost
-        from evotol.core.quality_loss import loss_coefficients
-
-        if self.quality_loss_A is not None:
-            raise ValidationError("quality_loss", A, f"a problem without a loss term (this one has A = {self.quality_loss_A})")
-        q = loss_coefficients(self.base, A)
-        procs = {n: [replace(p, cost=QualityLossCost(p.cost, qj)) for p in self.processes[n]] for n, qj in zip(self.names, q)}
-        out = ProcessProblem(self.robot, procs, self.requirement, self.base.poses, n_directions=self.base.n_directions,
-                             check_dominance=False)
-        out.loss_coefficients, out.quality_loss_A = q, A
-        return out
+        return with_quality_loss(self, A)
 
     def quality_loss(self, T) -> np.ndarray:
         """Expected quality loss Σ_j q_j t_j² of designs T (n, n_sources) SI -> (n,) (0 without a loss term).
@@ -350,7 +343,7 @@ class ProcessProblem:
         -------
         dict
             ``cost`` (cost units), ``normalised_error`` (dimensionless), ``holds_requirement``
-            (bool, normalised error <= 1 + 1e-9) and ``outside_process_range`` (list of source
+            (bool, normalised error <= 1 + ``FEAS_TOL`` = 1e-9, as a result's ``feasible``) and ``outside_process_range`` (list of source
             names).
 
         Raises
@@ -369,7 +362,7 @@ class ProcessProblem:
         idx = np.arange(self.n_sources)
         outside = [n for n, ok in zip(self.names, (t >= self.lo[idx, ch] * (1 - 1e-9)) & (t <= self.hi[idx, ch] * (1 + 1e-9))) if not ok]
         ne = float(self.normalised_error(t)[0])
-        return {"cost": float(self.cost(ch, t)[0]), "normalised_error": ne, "holds_requirement": bool(ne <= 1 + 1e-9),
+        return {"cost": float(self.cost(ch, t)[0]), "normalised_error": ne, "holds_requirement": bool(ne <= 1 + FEAS_TOL),
                 "outside_process_range": outside}
 
     def describe(self) -> str:
@@ -457,3 +450,18 @@ def check_no_budget(problem: ProcessProblem, budget, name: str) -> ProcessProble
     if not isinstance(problem, ProcessProblem):
         raise ValidationError("problem", type(problem).__name__, f"a ProcessProblem for {name} (evotol.allocators.process)")
     return problem
+
+
+@with_quality_loss.register
+def _process_problem_with_quality_loss(problem: ProcessProblem, A) -> ProcessProblem:
+    # the process-selection side of evotol.core.quality_loss.with_quality_loss: the same
+    # coefficients (on the geometry-only base problem), each process's cost wrapped
+    if problem.quality_loss_A is not None:
+        raise ValidationError("quality_loss", A, f"a problem without a loss term (this one has A = {problem.quality_loss_A})")
+    q = loss_coefficients(problem.base, A)
+    procs = {n: [replace(p, cost=QualityLossCost(p.cost, qj)) for p in problem.processes[n]]
+             for n, qj in zip(problem.names, q)}
+    out = ProcessProblem(problem.robot, procs, problem.requirement, problem.base.poses,
+                         n_directions=problem.base.n_directions, check_dominance=False)
+    out.loss_coefficients, out.quality_loss_A = q, A
+    return out
