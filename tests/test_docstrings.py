@@ -28,6 +28,8 @@ import re
 import subprocess
 import sys
 import textwrap
+import warnings
+from functools import lru_cache
 from pathlib import Path
 
 import pytest
@@ -134,21 +136,124 @@ def _raises_itself(func) -> bool:
     return False
 
 
-def audit(path: str, obj, kind: str) -> list[str]:
-    """What one public definition lacks (empty when its docstring is complete), one line each."""
+def _doc_sections(doc: str):
+    """numpydoc's parse of a docstring (``inspect.cleandoc``-ed), or None when it has none."""
+    from numpydoc.docscrape import NumpyDocString
+
+    if not (doc and doc.strip()):
+        return None
+    with warnings.catch_warnings():     # a module docstring may have headings numpydoc does not know
+        warnings.simplefilter("ignore", UserWarning)
+        return NumpyDocString(inspect.cleandoc(doc))
+
+
+def _entries(doc: str) -> dict[str, tuple[str, list[str]]]:
+    """``{name: (type, description)}`` of a docstring's ``Parameters`` (``a, b : float`` gives both)."""
+    parsed = _doc_sections(doc)
+    out = {}
+    for names, type_, desc in (parsed["Parameters"] + parsed["Other Parameters"]) if parsed else []:
+        for name in names.split(", "):
+            out[name.replace("\\", "")] = (type_, desc)
+    return out
+
+
+@lru_cache(maxsize=None)
+def shared_parameters(modname: str) -> dict[str, tuple[str, list[str]]]:
+    """Parameters documented once for a module: the ``Parameters`` section of its docstring and of
+    each package above it (the nearest wins). A function of the module that takes one of them
+    and does not describe it itself is documented by it (the parameter several functions share,
+    written once; the module's API page shows it above them)."""
+    found: dict[str, tuple[str, list[str]]] = {}
+    parts = modname.split(".")
+    for i in range(1, len(parts) + 1):
+        found.update(_entries(importlib.import_module(".".join(parts[:i])).__doc__ or ""))
+    return found
+
+
+def documented_base(path: str, obj, kind: str):
+    """The documented definition this one inherits its contract from, or None: for a method, the
+    same method of the nearest base class that has a docstring (a protocol's ``evaluate``,
+    ``cost``, ``sensitivity``); for a class that keeps its base's constructor (no ``__init__`` of
+    its own), the nearest base class defining that constructor."""
+    modname, _, rest = path.partition(".")
+    while True:      # split ``module.Class.method`` at the module
+        try:
+            module = importlib.import_module(modname)
+            break
+        except ImportError:
+            head, _, rest = rest.partition(".")
+            modname = f"{modname}.{head}"
+    names = rest.split(".")
+    if kind in ("method", "property") and len(names) == 2:
+        cls, member = getattr(module, names[0]), names[1]
+        for base in cls.__mro__[1:]:
+            if base is object or member not in vars(base):
+                continue
+            found = vars(base)[member]
+            found = found.__func__ if isinstance(found, (staticmethod, classmethod)) else found
+            return found if (getattr(found, "__doc__", None) or "").strip() else None
+    if kind == "class" and "__init__" not in vars(obj):
+        for base in obj.__mro__[1:]:
+            if base is not object and "__init__" in vars(base):
+                return base if (base.__doc__ or "").strip() and base.__module__.split(".")[0] in PACKAGES else None
+    return None
+
+
+def _validator(shared: dict, base_returns: list, base_yields: list):
+    """numpydoc's validator, told the parameters documented elsewhere (the base's, the module's)
+    and the ``Returns`` / ``Yields`` of the base (an override states only what differs)."""
     import numpydoc.validate
 
-    if kind == "property":
-        return [] if (obj.__doc__ or "").strip() else ["GL08 no docstring"]
-    if inspect.isclass(obj) and issubclass(obj, BaseException) and "__init__" not in vars(obj):
-        return [] if (obj.__doc__ or "").strip() else ["GL08 no docstring"]
-    result = numpydoc.validate.validate(path)
-    problems = [f"{code} {message}" for code, message in result["errors"] if code in CODES]
+    class Validator(numpydoc.validate.Validator):
+        def __init__(self, obj_name):
+            super().__init__(numpydoc.validate.get_doc_object(self._load_obj(obj_name)))
+
+        @property
+        def doc_all_parameters(self):
+            own = super().doc_all_parameters
+            taken = set(self.signature_parameters)
+            return {**own, **{n: e for n, e in shared.items() if n in taken and n not in own}}
+
+        @property
+        def returns(self):
+            return super().returns or base_returns
+
+        @property
+        def yields(self):
+            return super().yields or base_yields
+
+    return Validator
+
+
+def audit(path: str, obj, kind: str) -> list[str]:
+    """What one public definition lacks (empty when its docstring is complete), one line each.
+
+    A contract is documented once: a method overriding a documented method of a base class (a
+    measure's ``evaluate``, a cost model's ``cost``) needs no docstring of its own, or a short one
+    saying what differs; its parameters, ``Returns`` and ``Raises`` may be the base's. A class that
+    keeps its base's constructor may leave the constructor's parameters to the base. A parameter
+    described in its module's (or package's) docstring needs no entry (:func:`shared_parameters`).
+    """
+    import numpydoc.validate
+
+    base = documented_base(path, obj, kind)
+    own_doc = (obj.__doc__ or "").strip()
+    if kind == "property" or (inspect.isclass(obj) and issubclass(obj, BaseException) and "__init__" not in vars(obj)):
+        return [] if own_doc or base is not None else ["GL08 no docstring"]
     if kind == "class":
         raising = [m for m in ("__init__", "__post_init__") if m in vars(obj) and _raises_itself(vars(obj)[m])]
     else:
         raising = [obj] if _raises_itself(obj) else []
-    if raising and "Raises" not in _sections(obj):
+    base_sections = _sections(base) if base is not None else set()
+    lacks_raises = bool(raising) and "Raises" not in _sections(obj) | base_sections
+    if not own_doc and base is not None:      # inherited whole (inspect.getdoc, help and the site show it)
+        return ["RA01 the body raises, but neither it nor its base has a Raises section"] if lacks_raises else []
+    base_doc = _doc_sections(base.__doc__) if base is not None else None
+    shared = {**shared_parameters(obj.__module__), **(_entries(base.__doc__) if base is not None else {})}
+    result = numpydoc.validate.validate(path, validator_cls=_validator(
+        shared, base_doc["Returns"] if base_doc else [], base_doc["Yields"] if base_doc else []))
+    problems = [f"{code} {message}" for code, message in result["errors"] if code in CODES]
+    if lacks_raises:
         problems.append("RA01 the body raises, but there is no Raises section")
     return problems
 
