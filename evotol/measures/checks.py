@@ -44,18 +44,8 @@ class LinearArm(RobotErrorModel):
         self._A, self._B = rng.normal(size=(6, 4)), rng.normal(size=(6, 4))
 
     def sensitivity(self, poses):
-        """J(x) = A + x·B at each pose.
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 1)
-            Poses x in [0, 1] (m).
-
-        Returns
-        -------
-        ndarray, shape (n, 6, 4)
-            Sensitivity of the end-effector twist to the four length sources (rows 0–2
-            position in m/m, rows 3–5 orientation in rad/m).
+        """J(x) = A + x·B at each pose x in [0, 1] (m), shape (n, 6, 4): the four length sources
+        (rows 0–2 position in m/m, rows 3–5 orientation in rad/m).
 
         Raises
         ------
