@@ -18,6 +18,13 @@ RSS rows with a mean shift, ``|s_p(t)|/E + sqrt(b·t²) <= 1``, are not in ``B``
 quadratic): ``violation`` evaluates them exactly through the problem.
 Rows are in *source* space (one coefficient per source); optimisers map them to the free
 variables with :meth:`ToleranceProblem.to_variables` (shared tolerances).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+    Tolerance designs in source space (m or rad).
 """
 from __future__ import annotations
 
@@ -104,11 +111,6 @@ class ConstraintRows:
         """max over working rows of (row value − 1), per design (n_designs,). A lower estimate for
         the worst case until checked (:meth:`check`); exact for RSS.
 
-        Parameters
-        ----------
-        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
-            Tolerance designs in source space (m or rad).
-
         Returns
         -------
         numpy.ndarray
@@ -128,11 +130,6 @@ class ConstraintRows:
     def normalised_error(self, T: np.ndarray) -> np.ndarray:
         """max error / bound over poses and components (working rows).
 
-        Parameters
-        ----------
-        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
-            Tolerance designs in source space (m or rad).
-
         Returns
         -------
         numpy.ndarray
@@ -143,11 +140,6 @@ class ConstraintRows:
     def check(self, T: np.ndarray) -> tuple[np.ndarray, int]:
         """Exact violation of designs T (refined worst directions); adds the rows it finds.
         Returns (violation (n_designs,), number of rows added).
-
-        Parameters
-        ----------
-        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
-            Tolerance designs in source space (m or rad).
 
         Returns
         -------

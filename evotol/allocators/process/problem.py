@@ -2,7 +2,17 @@
 :mod:`evotol.allocators.process`), and the problem check every process allocator starts with.
 
 Its parts: the candidate processes (:mod:`~evotol.allocators.process.candidates`), the result of an
-allocation (:mod:`~evotol.allocators.process.result`)."""
+allocation (:mod:`~evotol.allocators.process.result`).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+T : array_like, (n, n_sources) or (n_sources,)
+    Designs (m or rad).
+choice : sequence of int, (n_sources,)
+    Index of the chosen process of every source.
+"""
 from __future__ import annotations
 
 import copy
@@ -106,11 +116,6 @@ class ProcessProblem:
     def quality_loss(self, T) -> np.ndarray:
         """Expected quality loss Σ_j q_j t_j² of designs T (n, n_sources) SI -> (n,) (0 without a loss term).
 
-        Parameters
-        ----------
-        T : array_like, (n, n_sources) or (n_sources,)
-            Designs (m or rad).
-
         Returns
         -------
         numpy.ndarray
@@ -131,11 +136,6 @@ class ProcessProblem:
 
     def choice_names(self, choice) -> dict[str, str]:
         """Process names of a choice.
-
-        Parameters
-        ----------
-        choice : sequence of int, (n_sources,)
-            Index of the chosen process of every source.
 
         Returns
         -------
@@ -173,11 +173,6 @@ class ProcessProblem:
     def subproblem(self, choice) -> ToleranceProblem:
         """The convex allocation problem of one process choice (shares the cached geometry).
 
-        Parameters
-        ----------
-        choice : sequence of int, (n_sources,)
-            Index of the chosen process of every source.
-
         Returns
         -------
         ToleranceProblem
@@ -196,11 +191,6 @@ class ProcessProblem:
 
     def fixed_cost(self, choice) -> float:
         """Sum of the set-up costs of a choice.
-
-        Parameters
-        ----------
-        choice : sequence of int, (n_sources,)
-            Index of the chosen process of every source.
 
         Returns
         -------
@@ -261,11 +251,6 @@ class ProcessProblem:
     def normalised_error(self, T) -> np.ndarray:
         """Exact max error / bound over poses and components (<= 1: feasible).
 
-        Parameters
-        ----------
-        T : array_like, (n, n_sources) or (n_sources,)
-            Designs (m or rad).
-
         Returns
         -------
         numpy.ndarray
@@ -315,8 +300,6 @@ class ProcessProblem:
 
         Parameters
         ----------
-        T : array_like, (n, n_sources) or (n_sources,)
-            Designs (m or rad).
         model : evotol.measures.statistical.FirstOrderYield or None
             The statistical model (default: :meth:`yield_model` with normal sources).
 
