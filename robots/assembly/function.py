@@ -78,6 +78,18 @@ class AssemblyFunction(RobotErrorModel):
     -----
     RuntimeWarning
         When the function is not complex-safe and central differences are used.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from evotol import AssemblyFunction
+    >>> def gap(a, b):                                          # housing a, shaft b (m)
+    ...     return a - b
+    >>> asm = AssemblyFunction(gap, {"a": 0.030, "b": 0.029}, {"gap": 2e-4})
+    >>> asm.source_names
+    ('a', 'b')
+    >>> np.round(asm.sensitivity([[0]])[0, 2] * 2e-4, 9)       # d gap / d (a, b)
+    array([ 1., -1.])
     """
 
     def __init__(self, function: Callable, nominal: Mapping[str, float], limits: Mapping[str, float], *,

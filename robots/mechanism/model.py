@@ -52,6 +52,16 @@ class MechanismModel(RobotErrorModel):
     ------
     evotol.errors.ValidationError
         A description that does not load or check (names the entry), or no toleranced source.
+
+    Examples
+    --------
+    >>> from evotol import MechanismModel
+    >>> from robots.mechanism.model import resolve_description
+    >>> robot = MechanismModel(resolve_description("planar3rpr"))   # a shipped description
+    >>> robot.source_names
+    ('Rb', 'rp', 'l1', 'l2', 'l3')
+    >>> robot.sensitivity([[0.0, 0.0, 0.0]]).shape
+    (1, 6, 5)
     """
 
     def __init__(self, mechanism: Mechanism | str | Path, sources=None, workspace: Workspace | None = None):

@@ -55,6 +55,21 @@ class ProcessProblem:
         A robot or requirement of the wrong type, a source without processes or a process for
         no source, a process that is not a :class:`Process`, duplicate process names, a negative
         or non-finite ``fixed_cost``, a cost model invalid on its range, or a dominated process.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import Process
+    >>> turn = Process("turning", PowerCost(1.0, 1.0, scale=1e-3), lower=3e-5, upper=1e-4)
+    >>> grind = Process("grinding", PowerCost(3.0, 1.0, scale=1e-3), lower=2e-6, upper=3e-5)
+    >>> pp = assembly_problem(stack, processes={n: [turn, grind] for n in stack.source_names})
+    >>> pp.n_sources, pp.n_combinations
+    (3, 8)
     """
 
     def __init__(self, robot: RobotErrorModel, processes: Mapping[str, Sequence[Process]], requirement: Requirement,
@@ -403,6 +418,20 @@ def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None
     evotol.errors.ValidationError
         Neither or both of ``tolerances`` and ``processes``, or what the problem's constructor
         refuses.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> problem.n_poses, problem.n_sources                     # one response, three dimensions
+    (1, 3)
+    >>> ev = problem.evaluate([[1e-5, 1e-5, 1e-5]])            # error / limit: (1 + 2 + 0.5) * 1e-5 / 1e-4
+    >>> round(float(ev.position[0, 0]), 12)
+    0.35
     """
     req = Requirement(position=1.0, measure=measure, **requirement)
     if (tolerances is None) == (processes is None):
