@@ -11,6 +11,21 @@
    it yields (YD01); and a ``Raises`` section where the body raises an exception itself (a ``raise``
    statement naming one; a bare re-``raise`` does not count).
 
+A contract is documented once (issue 32 item 3), and the audit counts it where it is written:
+
+- a method that overrides a documented method of a base class (a measure's ``evaluate``, a cost
+  model's ``cost``, a robot's ``sensitivity``) needs no docstring (``inspect.getdoc``, ``help``
+  and the site show the base's) or a short one that says what differs; parameters, ``Returns``
+  and ``Raises`` the base documents count as documented;
+- a class that keeps its base's constructor (a cost model) may leave the constructor's
+  parameters to the base's docstring;
+- a parameter that several definitions of a module or package share may be described once, in a
+  ``Parameters`` section of the module's (or an enclosing package's) docstring
+  (:func:`shared_parameters`); a definition's own entry wins.
+
+``tests/docstring_counts.py`` counts how many ``Parameters`` entries are still repeated verbatim;
+:func:`test_repeated_parameter_entries_at_most_half_of_the_issue` holds it to half the issue's 533.
+
 Every public module has its page in the API reference (``docs/api/<module>.rst``), and the site
 built from them is checked by CI with ``sphinx -W``.
 
@@ -28,16 +43,17 @@ import re
 import subprocess
 import sys
 import textwrap
-import warnings
-from functools import lru_cache
 from pathlib import Path
 
 import pytest
 
-import evotol
+if __name__ == "__main__":      # run as a script: this checkout's packages, not an installed copy
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import evotol  # noqa: E402
+from tests.docstring_rules import PACKAGES, _doc_sections, _entries, documented_base, shared_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("evotol", "robots", "cost_models")
 #: numpydoc validation codes the audit enforces (numpydoc/validate.py): parameters documented (PR01)
 #: and none unknown (PR02), Returns (RT01), Yields (YD01), a docstring at all (GL08)
 CODES = ("GL08", "PR01", "PR02", "RT01", "YD01")
@@ -134,69 +150,6 @@ def _raises_itself(func) -> bool:
             return True
         stack.extend(ast.iter_child_nodes(node))
     return False
-
-
-def _doc_sections(doc: str):
-    """numpydoc's parse of a docstring (``inspect.cleandoc``-ed), or None when it has none."""
-    from numpydoc.docscrape import NumpyDocString
-
-    if not (doc and doc.strip()):
-        return None
-    with warnings.catch_warnings():     # a module docstring may have headings numpydoc does not know
-        warnings.simplefilter("ignore", UserWarning)
-        return NumpyDocString(inspect.cleandoc(doc))
-
-
-def _entries(doc: str) -> dict[str, tuple[str, list[str]]]:
-    """``{name: (type, description)}`` of a docstring's ``Parameters`` (``a, b : float`` gives both)."""
-    parsed = _doc_sections(doc)
-    out = {}
-    for names, type_, desc in (parsed["Parameters"] + parsed["Other Parameters"]) if parsed else []:
-        for name in names.split(", "):
-            out[name.replace("\\", "")] = (type_, desc)
-    return out
-
-
-@lru_cache(maxsize=None)
-def shared_parameters(modname: str) -> dict[str, tuple[str, list[str]]]:
-    """Parameters documented once for a module: the ``Parameters`` section of its docstring and of
-    each package above it (the nearest wins). A function of the module that takes one of them
-    and does not describe it itself is documented by it (the parameter several functions share,
-    written once; the module's API page shows it above them)."""
-    found: dict[str, tuple[str, list[str]]] = {}
-    parts = modname.split(".")
-    for i in range(1, len(parts) + 1):
-        found.update(_entries(importlib.import_module(".".join(parts[:i])).__doc__ or ""))
-    return found
-
-
-def documented_base(path: str, obj, kind: str):
-    """The documented definition this one inherits its contract from, or None: for a method, the
-    same method of the nearest base class that has a docstring (a protocol's ``evaluate``,
-    ``cost``, ``sensitivity``); for a class that keeps its base's constructor (no ``__init__`` of
-    its own), the nearest base class defining that constructor."""
-    parts = path.split(".")
-    for i in range(len(parts) - 1, 0, -1):      # the longest importable prefix is the module
-        try:
-            module = importlib.import_module(".".join(parts[:i]))
-            break
-        except ImportError:
-            continue
-    rest = ".".join(parts[i:])
-    names = rest.split(".")
-    if kind in ("method", "property") and len(names) == 2:
-        cls, member = getattr(module, names[0]), names[1]
-        for base in cls.__mro__[1:]:
-            if base is object or member not in vars(base):
-                continue
-            found = vars(base)[member]
-            found = found.__func__ if isinstance(found, (staticmethod, classmethod)) else found
-            return found if (getattr(found, "__doc__", None) or "").strip() else None
-    if kind == "class" and "__init__" not in vars(obj):
-        for base in obj.__mro__[1:]:
-            if base is not object and "__init__" in vars(base):
-                return base if (base.__doc__ or "").strip() and base.__module__.split(".")[0] in PACKAGES else None
-    return None
 
 
 def _validator(shared: dict, base_returns: list, base_yields: list):
