@@ -151,10 +151,11 @@ class ParetoFront:
     >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
     >>> from evotol import allocate_nsga2
     >>> front = allocate_nsga2(problem, pop_size=20, n_gen=10, seed=0)
-    >>> list(front.table.columns[:2])
+    >>> list(front.table.columns[:2])                          # one row per front member
     ['cost', 'normalised_error']
-    >>> bool(front.cheapest_feasible()["normalised_error"] <= 1.0)
-    True
+    >>> best = front.cheapest_feasible()                        # meets the requirement, cheapest
+    >>> bool(best["normalised_error"] <= 1.0), bool(best["cost"] >= 97.42)   # optimum: 97.426
+    (True, True)
     """
 
     table: pd.DataFrame

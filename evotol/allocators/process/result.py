@@ -59,11 +59,12 @@ class ProcessResult:
     >>> grind = Process("grinding", PowerCost(3.0, 1.0, scale=1e-3), lower=2e-6, upper=3e-5)
     >>> pp = assembly_problem(stack, processes={n: [turn, grind] for n in stack.source_names})
     >>> from evotol import allocate_process_optimum
-    >>> best = allocate_process_optimum(pp)                    # exact: branch and bound
-    >>> best.processes                                          # x2 needs grinding
-    {'x1': 'turning', 'x2': 'grinding', 'x3': 'turning'}
-    >>> best.feasible, round(best.cost, 2)
-    (True, 175.68)
+    >>> best = allocate_process_optimum(pp)
+    >>> print(best.table(pp, unit=1e-6, unit_name="um").round(2).to_string(index=False))
+    source  process  tolerance (um)   cost
+        x1  turning           30.00  33.33
+        x2 grinding           27.16 110.46
+        x3  turning           31.36  31.89
     """
 
     method: str
