@@ -13,6 +13,19 @@ checks hold under ``python -O``); a test turns each into its own pytest id::
 
 The range ``[t_min, t_max]`` (SI) is where the model is used; the default is 0.05 to 10 times
 the model's ``scale`` (its shop unit).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+model : CostModel
+    The model checked.
+t_min : float
+    Smallest tolerance of the range (SI: m or rad).
+t_max : float
+    Largest tolerance of the range (SI).
+rtol : float, default 1e-5
+    Tolerance of :func:`check_derivative_matches_fd`.
 """
 from __future__ import annotations
 
@@ -37,8 +50,6 @@ def check_named(model: CostModel, t_min: float, t_max: float) -> dict:
 
     Parameters
     ----------
-    model : CostModel
-        The model checked.
     t_min : float
         Smallest tolerance of the range (SI: m or rad); unused here (every check takes the range).
     t_max : float
@@ -60,15 +71,6 @@ def check_named(model: CostModel, t_min: float, t_max: float) -> dict:
 
 def check_vectorised(model: CostModel, t_min: float, t_max: float) -> dict:
     """``cost`` and ``dcost`` keep the shape of ``t`` and agree with element-wise calls.
-
-    Parameters
-    ----------
-    model : CostModel
-        The model checked.
-    t_min : float
-        Smallest tolerance of the range (SI: m or rad).
-    t_max : float
-        Largest tolerance of the range (SI).
 
     Returns
     -------
@@ -97,15 +99,6 @@ def check_vectorised(model: CostModel, t_min: float, t_max: float) -> dict:
 def check_positive_and_monotone(model: CostModel, t_min: float, t_max: float) -> dict:
     """On the range the cost is finite, non-negative and non-increasing in t (a looser tolerance
     never costs more), measured on the cost values themselves, not only on ``dcost``.
-
-    Parameters
-    ----------
-    model : CostModel
-        The model checked.
-    t_min : float
-        Smallest tolerance of the range (SI: m or rad).
-    t_max : float
-        Largest tolerance of the range (SI).
 
     Returns
     -------
@@ -136,12 +129,6 @@ def check_derivative_matches_fd(model: CostModel, t_min: float, t_max: float, rt
 
     Parameters
     ----------
-    model : CostModel
-        The model checked.
-    t_min : float
-        Smallest tolerance of the range (SI: m or rad).
-    t_max : float
-        Largest tolerance of the range (SI).
     rtol : float, default 1e-5
         Largest allowed difference, relative to the largest ``|dcost|`` on the range.
 
@@ -167,15 +154,6 @@ def check_derivative_matches_fd(model: CostModel, t_min: float, t_max: float, rt
 def check_convexity_flag(model: CostModel, t_min: float, t_max: float) -> dict:
     """A model that declares ``convex = True`` is convex on the range: second differences of the
     cost values (independent of ``d2cost``) are >= 0, and ``is_convex`` agrees.
-
-    Parameters
-    ----------
-    model : CostModel
-        The model checked.
-    t_min : float
-        Smallest tolerance of the range (SI: m or rad).
-    t_max : float
-        Largest tolerance of the range (SI).
 
     Returns
     -------
@@ -205,15 +183,6 @@ def check_convexity_flag(model: CostModel, t_min: float, t_max: float) -> dict:
 def check_dict_round_trip(model: CostModel, t_min: float, t_max: float) -> dict:
     """``cost_models.from_dict(model.to_dict())`` rebuilds the same model (same class, same costs).
 
-    Parameters
-    ----------
-    model : CostModel
-        The model checked.
-    t_min : float
-        Smallest tolerance of the range (SI: m or rad).
-    t_max : float
-        Largest tolerance of the range (SI).
-
     Returns
     -------
     dict
@@ -235,15 +204,6 @@ def check_dict_round_trip(model: CostModel, t_min: float, t_max: float) -> dict:
 
 def check_pickle_round_trip(model: CostModel, t_min: float, t_max: float) -> dict:
     """The model pickles (cost models travel to worker processes and Dask) and costs the same after.
-
-    Parameters
-    ----------
-    model : CostModel
-        The model checked.
-    t_min : float
-        Smallest tolerance of the range (SI: m or rad).
-    t_max : float
-        Largest tolerance of the range (SI).
 
     Returns
     -------
@@ -284,8 +244,6 @@ def cost_model_checks(model: CostModel, t_min: float | None = None, t_max: float
         Smallest tolerance of the range (SI: m or rad); default ``0.05 * model.scale``.
     t_max : float, optional
         Largest tolerance of the range (SI); default ``10 * model.scale``.
-    rtol : float, default 1e-5
-        Tolerance of :func:`check_derivative_matches_fd`.
 
     Yields
     ------
@@ -321,8 +279,6 @@ def check_cost_model(model: CostModel, t_min: float | None = None, t_max: float 
         Smallest tolerance of the range (SI: m or rad); default ``0.05 * model.scale``.
     t_max : float, optional
         Largest tolerance of the range (SI); default ``10 * model.scale``.
-    rtol : float, default 1e-5
-        Tolerance of :func:`check_derivative_matches_fd`.
 
     Returns
     -------

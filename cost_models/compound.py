@@ -18,17 +18,8 @@ class LinearExponentialCost(CostModel):
         ``a0, a1, a2, a3``: ``a0`` the fixed cost (cost units), ``a1`` the linear slope (cost
         units per shop unit), ``a2 >= 0`` the exponential amplitude (cost units), ``a3 >= 0`` its
         decay rate (per shop unit).
-    scale : float, default 1.0
-        SI size (m or rad) of the tolerance unit the coefficients refer to, e.g. ``1e-5`` m.
-    t_min : float, optional
-        Smallest tolerance used (SI). When ``t_min`` or ``t_max`` is given, the construction
-        checks that the cost is non-negative and non-increasing on the range
-        (:meth:`~cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
-    t_max : float, optional
-        Largest tolerance used (SI); missing while ``t_min`` is given means ``100 * scale``.
-    **kw : float
-        The coefficients by name (``a0=..., a1=..., a2=..., a3=...``) instead of positionally,
-        not both.
+        ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
+        :class:`~cost_models.base.CostModel`.
 
     Raises
     ------
@@ -102,60 +93,21 @@ class SumCost(CostModel):
         return {f"{i}.{m.name}.{k}": v for i, m in enumerate(self.models) for k, v in m.params.items()}
 
     def cost(self, t):
-        """Sum of the terms' costs at tolerance ``t`` (SI), vectorised.
-
-        Parameters
-        ----------
-        t : float or array_like
-            Tolerance(s) in SI units (m or rad), any shape.
-
-        Returns
-        -------
-        ndarray
-            The total cost (cost units), same shape as ``t``.
-        """
+        """Sum of the terms' costs at tolerance ``t`` (SI)."""
         return sum(m.cost(t) for m in self.models)
 
     def dcost(self, t):
-        """Sum of the terms' d cost / d t (per SI unit), vectorised.
-
-        Parameters
-        ----------
-        t : float or array_like
-            Tolerance(s) in SI units (m or rad), any shape.
-
-        Returns
-        -------
-        ndarray
-            The derivative (cost units per m or per rad), same shape as ``t``.
-        """
+        """Sum of the terms' d cost / d t."""
         return sum(m.dcost(t) for m in self.models)
 
     def d2cost(self, t):
-        """Sum of the terms' d² cost / d t² (per SI unit²), vectorised.
-
-        Parameters
-        ----------
-        t : float or array_like
-            Tolerance(s) in SI units (m or rad), any shape.
-
-        Returns
-        -------
-        ndarray
-            The second derivative (cost units per m² or per rad²), same shape as ``t``.
-        """
+        """Sum of the terms' d² cost / d t²."""
         return sum(m.d2cost(t) for m in self.models)
 
     __call__ = cost
 
     def to_dict(self):
-        """The sum as a study-file table, which :func:`cost_models.registry.from_dict` rebuilds.
-
-        Returns
-        -------
-        dict
-            ``{"model": "sum", "terms": [<each term's to_dict()>, ...]}``.
-        """
+        """The sum as ``{"model": "sum", "terms": [<each term's to_dict()>, ...]}``."""
         return {"model": "sum", "terms": [m.to_dict() for m in self.models]}
 
     def __repr__(self):

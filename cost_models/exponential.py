@@ -15,16 +15,8 @@ class ExponentialCost(CostModel):
     *params : float
         ``a0, a1``: ``a0 > 0`` the cost at ``x = 0`` (cost units), ``a1 > 0`` the decay rate
         (per shop unit of tolerance).
-    scale : float, default 1.0
-        SI size (m or rad) of the tolerance unit the coefficients refer to, e.g. ``1e-5`` m.
-    t_min : float, optional
-        Smallest tolerance used (SI). When ``t_min`` or ``t_max`` is given, the construction
-        checks that the cost is non-negative and non-increasing on the range
-        (:meth:`~cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
-    t_max : float, optional
-        Largest tolerance used (SI); missing while ``t_min`` is given means ``100 * scale``.
-    **kw : float
-        The coefficients by name (``a0=..., a1=...``) instead of positionally, not both.
+        ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
+        :class:`~cost_models.base.CostModel`.
 
     Raises
     ------

@@ -54,50 +54,17 @@ class QualityLossCost(CostModel):
         return {**{f"machining.{k}": v for k, v in self.machining.params.items()}, "q": self.q}
 
     def cost(self, t) -> np.ndarray:
-        """Machining cost plus quality loss, ``c_m(t) + q·t²``, vectorised.
-
-        Parameters
-        ----------
-        t : float or array_like
-            Tolerance(s) in SI units (m or rad), any shape.
-
-        Returns
-        -------
-        ndarray
-            The total cost (cost units), same shape as ``t``.
-        """
+        """Machining cost plus quality loss, ``c_m(t) + q·t²``."""
         t = np.asarray(t, dtype=float)
         return self.machining.cost(t) + self.q * t ** 2
 
     def dcost(self, t) -> np.ndarray:
-        """d cost / d t = ``c_m'(t) + 2·q·t`` (per SI unit), vectorised.
-
-        Parameters
-        ----------
-        t : float or array_like
-            Tolerance(s) in SI units (m or rad), any shape.
-
-        Returns
-        -------
-        ndarray
-            The derivative (cost units per m or per rad), same shape as ``t``.
-        """
+        """``c_m'(t) + 2·q·t``."""
         t = np.asarray(t, dtype=float)
         return self.machining.dcost(t) + 2 * self.q * t
 
     def d2cost(self, t) -> np.ndarray:
-        """d² cost / d t² = ``c_m''(t) + 2·q`` (per SI unit²), vectorised.
-
-        Parameters
-        ----------
-        t : float or array_like
-            Tolerance(s) in SI units (m or rad), any shape.
-
-        Returns
-        -------
-        ndarray
-            The second derivative (cost units per m² or per rad²), same shape as ``t``.
-        """
+        """``c_m''(t) + 2·q``."""
         return self.machining.d2cost(t) + 2 * self.q
 
     __call__ = cost
@@ -118,22 +85,8 @@ class QualityLossCost(CostModel):
         return self.q * np.asarray(t, dtype=float) ** 2
 
     def validate_range(self, t_min: float, t_max: float | None, n: int = 257) -> None:
-        """The machining model's range check (the loss term is increasing by design).
-
-        Parameters
-        ----------
-        t_min : float
-            Smallest tolerance (SI: m or rad), >= 0.
-        t_max : float or None
-            Largest tolerance (SI); None means ``100 * scale`` of the machining model.
-        n : int, default 257
-            Number of points of each of the check's two grids (log and linear spacing).
-
-        Raises
-        ------
-        ValidationError
-            The machining model's check fails (see
-            :meth:`~cost_models.base.CostModel.validate_range`).
+        """The machining model's range check (the loss term is increasing by design); ``t_max = None``
+        means ``100 * scale`` of the machining model.
         """
         self.machining.validate_range(t_min, t_max, n)
 
@@ -141,14 +94,8 @@ class QualityLossCost(CostModel):
         return f"QualityLossCost({self.machining!r}, q={self.q:.6g})"
 
     def to_dict(self) -> dict:
-        """The model as a table ``{"model": "quality_loss", "machining": {...}, "q": q}``.
-
-        Note that :func:`cost_models.registry.from_dict` does not rebuild it: ``quality_loss`` is
-        not a registered model name.
-
-        Returns
-        -------
-        dict
-            The name, the machining model's ``to_dict()`` and ``q`` (cost per SI unit²).
+        """The model as ``{"model": "quality_loss", "machining": <its to_dict()>, "q": q}`` (q in cost per
+        SI unit²). :func:`cost_models.registry.from_dict` does not rebuild it: ``quality_loss`` is not a
+        registered model name.
         """
         return {"model": self.name, "machining": self.machining.to_dict(), "q": self.q}

@@ -193,6 +193,58 @@ class EvotolAPI(SphinxDirective):
         return node.children
 
 
+def _documented_elsewhere(app, what, name, obj, options, lines):
+    """Show a definition's whole contract on its page: the parameters (and ``Returns``) it leaves
+    to a shared description -- the protocol method it overrides or the base constructor it keeps,
+    and the ``Parameters`` of its module's or package's docstring -- are added to its docstring
+    before numpydoc renders it, by the rules ``tests/test_docstrings.py`` audits
+    (``tests/docstring_rules.py``)."""
+    if what not in ("function", "method", "class") or not lines:
+        return
+    from tests.docstring_rules import _doc_sections, _entries, documented_base, shared_parameters
+
+    try:
+        signature = inspect.signature(obj)
+    except (TypeError, ValueError):
+        return
+    stars = {inspect.Parameter.VAR_POSITIONAL: "*", inspect.Parameter.VAR_KEYWORD: "**"}
+    taken = [stars.get(p.kind, "") + p.name for p in signature.parameters.values() if p.name not in ("self", "cls")]
+    own = _doc_sections("\n".join(lines))
+    mine = _entries("\n".join(lines))
+    try:
+        base = documented_base(name, obj, "class" if what == "class" else "method" if what == "method" else "function")
+    except Exception:                # a name autodoc reached another way: no base to show
+        base = None
+    elsewhere = {**shared_parameters(getattr(obj, "__module__", "") or name.rpartition(".")[0]),
+                 **(_entries(base.__doc__) if base is not None else {})}
+    missing = [p for p in taken if p not in mine and p in elsewhere]
+    entries: list[str] = []
+    while missing:                   # ``r1, r2, r3 : float`` described together stay together
+        group = [p for p in missing if elsewhere[p] == elsewhere[missing[0]]]
+        missing = [p for p in missing if p not in group]
+        type_, desc = elsewhere[group[0]]
+        entries += [f"{', '.join(group)} : {type_}" if type_ else ", ".join(group)] + [f"    {d}" if d else "" for d in desc]
+    if entries:
+        at = next((i for i in range(len(lines) - 1) if lines[i].strip() == "Parameters"
+                   and set(lines[i + 1].strip()) == {"-"}), None)
+        if at is None:
+            lines += ["", "Parameters", "----------"] + entries
+        else:                        # after the section's last entry (numpydoc orders the sections)
+            end = next((i for i in range(at + 2, len(lines) - 1)
+                        if lines[i].strip() and not lines[i].startswith(" ") and set(lines[i + 1].strip()) == {"-"}),
+                       len(lines))
+            while end > at + 2 and not lines[end - 1].strip():
+                end -= 1
+            lines[end:end] = entries
+    base_doc = _doc_sections(base.__doc__) if base is not None else None
+    if base_doc is not None and what != "class" and not (own and own["Returns"]) and base_doc["Returns"]:
+        lines += ["", "Returns", "-------"]
+        for ret in base_doc["Returns"]:
+            lines += [f"{ret.name} : {ret.type}" if ret.name else ret.type] + [f"    {d}" if d else "" for d in ret.desc]
+
+
 def setup(app):
     app.add_directive("evotol-api", EvotolAPI)
+    # before numpydoc's own handler (priority 500), which parses the sections
+    app.connect("autodoc-process-docstring", _documented_elsewhere, priority=400)
     return {"parallel_read_safe": True}

@@ -6,7 +6,18 @@ import sys
 
 
 class EvotolError(Exception):
-    """Base class of every error evotol raises on purpose."""
+    """Base class of every error evotol raises on purpose.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import EvotolError, Tolerance
+    >>> try:
+    ...     Tolerance(PowerCost(1.0, 1.0), lower=2e-5, upper=1e-5).validate("x1")
+    ... except EvotolError as err:                              # every evotol error is one
+    ...     print(type(err).__name__)
+    ValidationError
+    """
 
 
 class ValidationError(EvotolError, ValueError):
@@ -24,6 +35,14 @@ class ValidationError(EvotolError, ValueError):
         scalar.
     expected : str
         What was expected, in words. Kept as ``self.expected``.
+
+    Examples
+    --------
+    >>> from evotol import ValidationError
+    >>> raise ValidationError("tolerance.lower", -1e-6, "a positive length (m)")
+    Traceback (most recent call last):
+        ...
+    evotol.errors.ValidationError: tolerance.lower = -1e-06: expected a positive length (m)
     """
 
     def __init__(self, field: str, value, expected: str):
@@ -50,6 +69,16 @@ class KinematicsError(EvotolError):
     poses : array_like, optional
         The offending pose(s), ``(d,)`` or ``(n, d)`` in the robot's workspace coordinates (m, rad);
         kept as ``self.poses`` (default None: not known).
+
+    Examples
+    --------
+    >>> from evotol import KinematicsError
+    >>> from robots.ucr3 import UCR3
+    >>> try:
+    ...     UCR3().sensitivity([[0.0, 0.0, 1.0]])              # Z_c = 1 m: outside the workspace
+    ... except KinematicsError as err:
+    ...     print(err)                                          # doctest: +ELLIPSIS
+    3-UCR (verified): pose [0.0, 0.0, 1.0] (alpha, beta, Zc) is outside the workspace ...
     """
 
     def __init__(self, message: str, poses=None):
@@ -62,7 +91,14 @@ class KinematicsError(EvotolError):
 
 
 class ConvergenceError(EvotolError):
-    """A numerical solver did not reach the requested tolerance."""
+    """A numerical solver did not reach the requested tolerance.
+
+    Examples
+    --------
+    >>> from evotol import ConvergenceError, EvotolError
+    >>> issubclass(ConvergenceError, EvotolError)
+    True
+    """
 
 
 class InfeasibleError(EvotolError):
@@ -81,6 +117,19 @@ class InfeasibleError(EvotolError):
         The pose where that error occurs, in workspace coordinates (m, rad). Kept as ``self.pose``.
     detail : str, optional
         Extra explanation appended to the message in parentheses (default: none).
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import InfeasibleError, LinearStack, Tolerance, assembly_problem, allocate_optimum
+    >>> stack = LinearStack({"x1": 1.0, "x2": 1.0}, {"gap": 1e-5})
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-5, upper=1e-4)
+    ...        for n in stack.source_names}                     # even the smallest: 2e-5 > 1e-5
+    >>> try:
+    ...     allocate_optimum(assembly_problem(stack, tol))
+    ... except InfeasibleError as err:
+    ...     print(err)                                          # doctest: +ELLIPSIS
+    infeasible: ... with every free tolerance at its lower bound the error is 2 at pose [0.0] ...
     """
 
     def __init__(self, requirement: str, smallest_error: float, pose, detail: str = ""):

@@ -216,6 +216,16 @@ class RobotErrorModel:
 
     Subclasses set ``name``, ``sources`` and ``workspace`` and implement ``sensitivity``;
     ``pose_error`` (nonlinear propagation) is optional.
+
+    Examples
+    --------
+    >>> from evotol import RobotErrorModel
+    >>> from robots.ucr3 import UCR3
+    >>> robot = UCR3()                                          # the 3-UCR parallel robot
+    >>> isinstance(robot, RobotErrorModel), robot.workspace.names
+    (True, ('alpha', 'beta', 'Zc'))
+    >>> robot.sensitivity([[0.0, 0.0, 0.28]]).shape            # (n_poses, 6, n_columns)
+    (1, 6, 21)
     """
 
     name: str = "robot"

@@ -11,6 +11,27 @@ each into its own pytest id::
         check[1]()
 
 :func:`check_robot` runs them all and reports every failure, not only the first.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+s : _Settings
+    The robot under check, its validated poses (SI units) and the finite-difference
+    settings, shared by every check of one :func:`robot_checks` call.
+robot : RobotErrorModel
+    Any object following :class:`robots.base.RobotErrorModel`'s contract.
+poses : (n, workspace.dim) array_like, optional
+    Poses to check at, in SI units (m, rad); default (None): 8 Latin-hypercube poses of the
+    workspace (seed 1).
+step : float, optional
+    Finite-difference step of each source component, in the source's SI unit (m or rad).
+rtol : float, optional
+    Tolerated finite-difference mismatch relative to the sensitivity's largest entry
+    (dimensionless).
+atol : float, optional
+    Absolute tolerance added to it, and the largest pose error accepted at zero source
+    errors (m or rad).
 """
 from __future__ import annotations
 
@@ -41,12 +62,6 @@ class _Settings:
 def check_sources_declared(s: _Settings) -> dict:
     """At least one error source, unique names, dimensions 1-3.
 
-    Parameters
-    ----------
-    s : _Settings
-        The robot under check, its validated poses (SI units) and the finite-difference
-        settings, shared by every check of one :func:`robot_checks` call.
-
     Returns
     -------
     dict
@@ -69,12 +84,6 @@ def check_sources_declared(s: _Settings) -> dict:
 def check_units_declared(s: _Settings) -> dict:
     """Every source declares an SI unit (m or rad), every workspace coordinate one too (m, rad,
     or "1" when dimensionless), and the display scales (to mm, deg...) are positive numbers.
-
-    Parameters
-    ----------
-    s : _Settings
-        The robot under check, its validated poses (SI units) and the finite-difference
-        settings, shared by every check of one :func:`robot_checks` call.
 
     Returns
     -------
@@ -102,12 +111,6 @@ def check_units_declared(s: _Settings) -> dict:
 def check_sensitivity_shape(s: _Settings) -> dict:
     """``sensitivity(poses)`` has shape (n_poses, 6, n_columns) and finite entries.
 
-    Parameters
-    ----------
-    s : _Settings
-        The robot under check, its validated poses (SI units) and the finite-difference
-        settings, shared by every check of one :func:`robot_checks` call.
-
     Returns
     -------
     dict
@@ -132,12 +135,6 @@ def check_pose_subset_invariance(s: _Settings) -> dict:
 
     The sensitivity must agree to ``1e-10`` of its largest entry; the nonlinear error (random
     source errors of about 1e-6 m or rad, 2 samples per pose) to ``1e-6`` of its largest entry.
-
-    Parameters
-    ----------
-    s : _Settings
-        The robot under check, its validated poses (SI units) and the finite-difference
-        settings, shared by every check of one :func:`robot_checks` call.
 
     Returns
     -------
@@ -172,12 +169,6 @@ def check_pose_subset_invariance(s: _Settings) -> dict:
 def check_pickle_round_trip(s: _Settings) -> dict:
     """The robot pickles (it travels to worker processes and Dask) and gives the same sensitivity.
 
-    Parameters
-    ----------
-    s : _Settings
-        The robot under check, its validated poses (SI units) and the finite-difference
-        settings, shared by every check of one :func:`robot_checks` call.
-
     Returns
     -------
     dict
@@ -206,12 +197,6 @@ def check_out_of_reach_raises(s: _Settings) -> dict:
 
     The pose is ``high + 10 (high - low) + 1`` per coordinate (SI units); ``pose_error`` is called
     only when the robot has a nonlinear model, with zero source errors.
-
-    Parameters
-    ----------
-    s : _Settings
-        The robot under check, its validated poses (SI units) and the finite-difference
-        settings, shared by every check of one :func:`robot_checks` call.
 
     Returns
     -------
@@ -246,12 +231,6 @@ def check_pose_error_consistency(s: _Settings) -> dict:
     relative to the largest entry (+ ``atol``).
 
     The finite differences step each stacked source component by ``+-step`` (SI: m or rad).
-
-    Parameters
-    ----------
-    s : _Settings
-        The robot under check, its validated poses (SI units) and the finite-difference
-        settings, shared by every check of one :func:`robot_checks` call.
 
     Returns
     -------
@@ -296,22 +275,6 @@ def robot_checks(robot: Robot, poses=None, *, step: float = 1e-7, rtol: float = 
     """The named checks of ``robot`` at ``poses`` (default: 8 Latin-hypercube poses of its
     workspace); ``step`` (SI) and ``rtol``/``atol`` set the finite-difference Jacobian check.
 
-    Parameters
-    ----------
-    robot : RobotErrorModel
-        Any object following :class:`robots.base.RobotErrorModel`'s contract.
-    poses : (n, workspace.dim) array_like, optional
-        Poses to check at, in SI units (m, rad); default (None): 8 Latin-hypercube poses of the
-        workspace (seed 1).
-    step : float, optional
-        Finite-difference step of each source component, in the source's SI unit (m or rad).
-    rtol : float, optional
-        Tolerated finite-difference mismatch relative to the sensitivity's largest entry
-        (dimensionless).
-    atol : float, optional
-        Absolute tolerance added to it, and the largest pose error accepted at zero source
-        errors (m or rad).
-
     Yields
     ------
     name : str
@@ -339,22 +302,6 @@ def check_robot(robot: Robot, poses=None, *, step: float = 1e-7, rtol: float = 1
     merged measurements (e.g. ``fd_relative_mismatch``).
 
     Raises one :class:`evotol.errors.CheckFailed` listing every failed check (not only the first).
-
-    Parameters
-    ----------
-    robot : RobotErrorModel
-        Any object following :class:`robots.base.RobotErrorModel`'s contract.
-    poses : (n, workspace.dim) array_like, optional
-        Poses to check at, in SI units (m, rad); default (None): 8 Latin-hypercube poses of the
-        workspace (seed 1).
-    step : float, optional
-        Finite-difference step of each source component, in the source's SI unit (m or rad).
-    rtol : float, optional
-        Tolerated finite-difference mismatch relative to the sensitivity's largest entry
-        (dimensionless).
-    atol : float, optional
-        Absolute tolerance added to it, and the largest pose error accepted at zero source
-        errors (m or rad).
 
     Returns
     -------

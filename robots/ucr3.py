@@ -264,16 +264,8 @@ class UCR3(RobotErrorModel):
     def sensitivity(self, poses) -> np.ndarray:
         """First-order map (n, 6, 21): δx = J_x⁻¹ (δl − J_p δp) per unit source error (eq. 10).
 
-        Parameters
-        ----------
-        poses : array_like, shape (n, 3) or (3,)
-            Poses ``(alpha, beta, Z_c)``: rad, rad, m.
-
-        Returns
-        -------
-        ndarray, shape (n, 6, 21)
-            ``[δp_c (m); δθ (rad)]`` per unit source error (m), columns in the order of ``sources``:
-            ``l1..l3``, then two columns per disk ``U1a..U3a``, ``U1b..U3b``, ``R1..R3``.
+        Poses are ``(alpha, beta, Z_c)`` (rad, rad, m). Columns in the order of ``sources``:
+        ``l1..l3``, then two columns per disk ``U1a..U3a``, ``U1b..U3b``, ``R1..R3``.
 
         Raises
         ------
@@ -308,25 +300,16 @@ class UCR3(RobotErrorModel):
     def pose_error(self, poses, errors, tol: float = 1e-15, max_iter: int = 30) -> np.ndarray:
         """Nonlinear error: re-solve the six loop equations with perturbed lengths and joints.
 
-        errors: (n_poses, n_samples, 21) stacked source errors (m). chord-Newton iterations on
-        ``|p + R a_i' − A_i'| = l_i + δl_i`` and ``(R u_iᵉ)·(p + R a_i' − A_i') = 0`` with the verified
-        Jacobian; returns (n_poses, n_samples, 6) = [δp_c (m); rotation vector of R R₀ᵀ (rad)].
+        Chord-Newton iterations on ``|p + R a_i' − A_i'| = l_i + δl_i`` and
+        ``(R u_iᵉ)·(p + R a_i' − A_i') = 0`` with the verified Jacobian; ``errors`` (m) in the column
+        order of :meth:`sensitivity`; returns ``[δp_c (m); rotation vector of R R₀ᵀ (rad)]``.
 
         Parameters
         ----------
-        poses : array_like, shape (n, 3) or (3,)
-            Poses ``(alpha, beta, Z_c)``: rad, rad, m.
-        errors : array_like, shape (n, s, 21)
-            Source errors, m, in the column order of :meth:`sensitivity`.
         tol : float
             Stopping threshold on the largest loop-equation residual, m.
         max_iter : int
             Maximum number of chord-Newton iterations.
-
-        Returns
-        -------
-        ndarray, shape (n, s, 6)
-            ``[δp_c (m); δθ (rad)]``.
 
         Raises
         ------

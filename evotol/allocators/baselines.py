@@ -233,6 +233,19 @@ def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None):
     evotol.errors.ValidationError
         A ``budget`` that is not a finite positive cost, or below the cost of the cheapest
         design (every free tolerance at its upper bound).
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_equal
+    >>> res = allocate_equal(problem)                          # one t with 3.5 t = 1e-4 m
+    >>> round(res.tolerances["x1"] * 1e6, 3), round(res.cost, 6)
+    (28.571, 105.0)
     """
     t0 = time.perf_counter()
     if budget is not None:
@@ -267,6 +280,19 @@ def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = N
         design (every free tolerance at its upper bound).
     evotol.errors.ValidationError
         Weights that are not positive.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_proportional
+    >>> res = allocate_proportional(problem, weights={"x1": 1.0, "x2": 1.0, "x3": 2.0})
+    >>> round(res.tolerances["x3"] / res.tolerances["x1"], 6), res.feasible
+    (2.0, True)
     """
     t0 = time.perf_counter()
     if budget is not None:
@@ -304,6 +330,19 @@ def allocate_lagrange(problem: ToleranceProblem, *, budget: float | None = None,
         design (every free tolerance at its upper bound).
     evotol.errors.ValidationError
         A requirement the lower tolerance limits cannot hold.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_lagrange
+    >>> res = allocate_lagrange(problem)                       # closed form for power costs
+    >>> round(res.cost, 3), res.feasible
+    (97.426, True)
     """
     t0 = time.perf_counter()
     if budget is not None:

@@ -342,6 +342,19 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
         the cost of the cheapest design, or ``repair=True`` with the ``mc_quantile`` measure.
     evotol.errors.InfeasibleError
         Without a budget: even every free tolerance at its lower bound misses the requirement.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_ga, allocate_optimum
+    >>> ga = allocate_ga(problem, pop_size=20, n_gen=20, seed=0)
+    >>> ga.feasible, ga.cost <= 1.01 * allocate_optimum(problem).cost
+    (True, True)
     """
     t0 = time.perf_counter()
     if operators not in ("pymoo", "paper"):

@@ -221,6 +221,19 @@ def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None,
         A ``budget`` that is not None, or ``max_evaluations`` too few to find a feasible design.
     evotol.errors.InfeasibleError
         Even every free tolerance at its lower bound misses the requirement.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_monotone
+    >>> res = allocate_monotone(problem, rel_gap=0.05)         # a bracket [lower_bound, cost]
+    >>> res.feasible, res.certificate["lower_bound"] <= 97.4264 <= res.cost
+    (True, True)
     """
     t0 = time.perf_counter()
     if budget is not None:

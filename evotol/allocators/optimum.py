@@ -268,6 +268,22 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
         Even every free tolerance at its lower bound misses the requirement.
     evotol.errors.ConvergenceError
         The cutting planes did not converge in ``max_rounds``.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_optimum
+    >>> opt = allocate_optimum(problem)
+    >>> opt.feasible, round(opt.cost, 3)
+    (True, 97.426)
+    >>> import math                                             # Lagrange: t_j ~ 1/sqrt(a_j)
+    >>> math.isclose(opt.cost, 10 * (1 + math.sqrt(2) + math.sqrt(0.5)) ** 2, rel_tol=1e-9)
+    True
     """
     check_optimum_options(problem, budget, refine)
     if problem.clearances is not None:   # not convex: the monotone polyblock bracket instead

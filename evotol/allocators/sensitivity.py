@@ -173,6 +173,21 @@ def allocate_sensitivity(problem: ToleranceProblem, *, budget: float | None = No
     evotol.errors.ValidationError
         A ``collective_groups`` entry that is not a group of interval sources, clearance classes
         in the problem, or locked tolerances that already exceed the requirement.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_sensitivity
+    >>> res = allocate_sensitivity(problem)                    # t_j ~ 1 / |a_j|
+    >>> {n: round(t * 1e6, 2) for n, t in res.tolerances.items()}   # micrometres
+    {'x1': 33.33, 'x2': 16.67, 'x3': 66.67}
+    >>> res.feasible
+    True
     """
     t0 = time.perf_counter()
     if budget is not None:

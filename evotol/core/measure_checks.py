@@ -12,6 +12,16 @@ A plugin author runs them in their own tests::
     @pytest.mark.parametrize("check", list(measure_checks(MY_MEASURE)), ids=lambda c: c[0])
     def test_my_measure(check):
         check[1]()
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+s : _Settings
+    The measure, the problem (default :func:`small_problem`) and four designs ``T``
+    (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
+measure : Measure
+    The measure object (registered or not).
 """
 from __future__ import annotations
 
@@ -44,18 +54,8 @@ class LinearArm(RobotErrorModel):
         self._A, self._B = rng.normal(size=(6, 4)), rng.normal(size=(6, 4))
 
     def sensitivity(self, poses):
-        """J(x) = A + x·B at each pose.
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 1)
-            Poses x in [0, 1] (m).
-
-        Returns
-        -------
-        ndarray, shape (n, 6, 4)
-            Sensitivity of the end-effector twist to the four length sources (rows 0–2
-            position in m/m, rows 3–5 orientation in rad/m).
+        """J(x) = A + x·B at each pose x in [0, 1] (m), shape (n, 6, 4): the four length sources
+        (rows 0–2 position in m/m, rows 3–5 orientation in rad/m).
 
         Raises
         ------
@@ -102,12 +102,6 @@ def check_returns_evaluation(s: _Settings) -> dict:
     """An :class:`Evaluation` with (n_designs, n_poses) errors of every constrained component, a
     finite (n_designs,) violation equal to max(error / bound) − 1 for the errors it reports.
 
-    Parameters
-    ----------
-    s : _Settings
-        The measure, the problem (default :func:`small_problem`) and four designs ``T``
-        (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
-
     Returns
     -------
     dict
@@ -138,12 +132,6 @@ def check_monotone_in_t(s: _Settings) -> dict:
     """Larger tolerances never give smaller errors: t → 1.5 t, and one source at a time × 1.5,
     at every pose and component (relative decrease at most the measure's ``monotone_rtol``), and
     the violation never decreases beyond the same.
-
-    Parameters
-    ----------
-    s : _Settings
-        The measure, the problem (default :func:`small_problem`) and four designs ``T``
-        (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
 
     Returns
     -------
@@ -178,12 +166,6 @@ def check_equals_brute_force(s: _Settings) -> dict:
     """Equal to the measure's own brute-force computation (:meth:`Measure.brute_force`) on the
     small problem, within its declared ``brute_force_rtol`` / ``brute_force_atol``.
 
-    Parameters
-    ----------
-    s : _Settings
-        The measure, the problem (default :func:`small_problem`) and four designs ``T``
-        (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
-
     Returns
     -------
     dict
@@ -216,12 +198,6 @@ def check_equals_brute_force(s: _Settings) -> dict:
 def check_vectorised(s: _Settings) -> dict:
     """Evaluating four designs at once equals evaluating them one by one (every array field).
 
-    Parameters
-    ----------
-    s : _Settings
-        The measure, the problem (default :func:`small_problem`) and four designs ``T``
-        (n_designs, n_sources; SI), as :func:`measure_checks` binds them.
-
     Returns
     -------
     dict
@@ -251,8 +227,6 @@ def measure_checks(measure: Measure, problem: ToleranceProblem | None = None) ->
 
     Parameters
     ----------
-    measure : Measure
-        The measure object (registered or not).
     problem : ToleranceProblem, optional
         A small problem (default :func:`small_problem`); the measure's ``brute_force`` must handle it.
 
@@ -273,8 +247,6 @@ def check_measure(measure: Measure, problem: ToleranceProblem | None = None) -> 
 
     Parameters
     ----------
-    measure : Measure
-        The measure object (registered or not).
     problem : ToleranceProblem, optional
         A small problem (default :func:`small_problem`).
 

@@ -140,6 +140,22 @@ class ParetoFront:
     ------
     ValidationError
         If ``table`` lacks a column of ``objectives``.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_nsga2
+    >>> front = allocate_nsga2(problem, pop_size=20, n_gen=10, seed=0)
+    >>> list(front.table.columns[:2])                          # one row per front member
+    ['cost', 'normalised_error']
+    >>> best = front.cheapest_feasible()                        # meets the requirement, cheapest
+    >>> bool(best["normalised_error"] <= 1.0), bool(best["cost"] >= 97.42)   # optimum: 97.426
+    (True, True)
     """
 
     table: pd.DataFrame

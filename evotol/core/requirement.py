@@ -48,6 +48,14 @@ class Requirement:
     -----
     A plain value: nothing is checked at construction. :meth:`validate` (called by
     :class:`evotol.core.problem.ToleranceProblem`) raises :class:`evotol.errors.ValidationError`.
+
+    Examples
+    --------
+    >>> from evotol import Requirement
+    >>> req = Requirement(position=5e-5, measure="rss")      # RSS position error <= 0.05 mm
+    >>> req.validate()
+    >>> req.measure, req.position, req.orientation
+    ('rss', 5e-05, None)
     """
 
     position: float | None = None

@@ -52,6 +52,22 @@ class AllocationResult:
         Wall-clock time of the allocation (s).
     info : dict
         Further entries (``bound_ratio``, ``budget``, ``solver_message``, ``warnings`` ...).
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_optimum
+    >>> res = allocate_optimum(problem)
+    >>> res.method, res.feasible
+    ('optimum', True)
+    >>> print(res.summary())                                    # doctest: +ELLIPSIS
+    optimum: cost 97.426; meets the requirement
+    ...
     """
 
     method: str

@@ -52,6 +52,16 @@ class Tolerance:
     -----
     A plain value: nothing is checked at construction. :meth:`validate` (called by
     :class:`evotol.core.problem.ToleranceProblem` for every entry) raises :class:`evotol.errors.ValidationError`.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import Tolerance
+    >>> tol = Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-6, upper=1e-4)  # m; cost 1e-3 / t
+    >>> float(tol.cost_of(2e-5))
+    50.0
+    >>> tol.is_fixed
+    False
     """
 
     cost: CostModel | None

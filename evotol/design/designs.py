@@ -4,6 +4,13 @@
 :func:`latin_hypercube` (continuous ranges, log-uniform where ``log=True``) each return a pandas
 DataFrame with an ``entry`` id column and one column per factor; the factor definitions travel
 in ``df.attrs``.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+factors : sequence of Factor
+    The design variables, each with discrete ``levels``.
 """
 from __future__ import annotations
 
@@ -18,11 +25,6 @@ from evotol.errors import ValidationError
 
 def n_factorial(factors: Sequence[Factor]) -> int:
     """Number of entries of the full factorial (product of the level counts).
-
-    Parameters
-    ----------
-    factors : sequence of Factor
-        The design variables, each with discrete ``levels``.
 
     Returns
     -------
@@ -47,8 +49,6 @@ def factorial_entries(factors: Sequence[Factor], ids) -> pd.DataFrame:
 
     Parameters
     ----------
-    factors : sequence of Factor
-        The design variables, each with discrete ``levels``.
     ids : array_like of int
         Entry ids in ``[0, n_factorial(factors) - 1]``; id 0 has every factor at its lowest level.
 
@@ -81,11 +81,6 @@ def factorial_entries(factors: Sequence[Factor], ids) -> pd.DataFrame:
 def full_factorial(factors: Sequence[Factor]) -> pd.DataFrame:
     """All combinations of the factors' levels (Deng 2012 Sec. VII.1.2: 4^5 * 2^5 = 32 768).
 
-    Parameters
-    ----------
-    factors : sequence of Factor
-        The design variables, each with discrete ``levels``.
-
     Returns
     -------
     pandas.DataFrame
@@ -113,8 +108,6 @@ def random_subset(factors: Sequence[Factor], n: int, seed: int = 0) -> pd.DataFr
 
     Parameters
     ----------
-    factors : sequence of Factor
-        The design variables, each with discrete ``levels``.
     n : int
         Number of entries, in ``[1, n_factorial(factors)]``.
     seed : int, default 0

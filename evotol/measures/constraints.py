@@ -18,6 +18,13 @@ RSS rows with a mean shift, ``|s_p(t)|/E + sqrt(b·t²) <= 1``, are not in ``B``
 quadratic): ``violation`` evaluates them exactly through the problem.
 Rows are in *source* space (one coefficient per source); optimisers map them to the free
 variables with :meth:`ToleranceProblem.to_variables` (shared tolerances).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
+    Tolerance designs in source space (m or rad).
 """
 from __future__ import annotations
 
@@ -103,11 +110,6 @@ class ConstraintRows:
         """max over working rows of (row value − 1), per design (n_designs,). A lower estimate for
         the worst case until checked (:meth:`check`); exact for RSS.
 
-        Parameters
-        ----------
-        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
-            Tolerance designs in source space (m or rad).
-
         Returns
         -------
         numpy.ndarray
@@ -127,11 +129,6 @@ class ConstraintRows:
     def normalised_error(self, T: np.ndarray) -> np.ndarray:
         """max error / bound over poses and components (working rows).
 
-        Parameters
-        ----------
-        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
-            Tolerance designs in source space (m or rad).
-
         Returns
         -------
         numpy.ndarray
@@ -142,11 +139,6 @@ class ConstraintRows:
     def check(self, T: np.ndarray) -> tuple[np.ndarray, int]:
         """Exact violation of designs T (refined worst directions); adds the rows it finds.
         Returns (violation (n_designs,), number of rows added).
-
-        Parameters
-        ----------
-        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
-            Tolerance designs in source space (m or rad).
 
         Returns
         -------
@@ -267,52 +259,15 @@ class ExactRows(ConstraintRows):
         self.shifted_rss = False
 
     def violation(self, T: np.ndarray) -> np.ndarray:
-        """Exact violation of designs T (normalised error − 1) by the problem's measure.
-
-        Parameters
-        ----------
-        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
-            Tolerance designs in source space (m or rad).
-
-        Returns
-        -------
-        numpy.ndarray
-            (n_designs,) violation, dimensionless (<= 0 meets the requirement).
-        """
+        """Exact violation of designs T by the problem's measure (no working rows)."""
         return self.problem.evaluate(np.atleast_2d(T), top_only=True).violation
 
     def check(self, T: np.ndarray) -> tuple[np.ndarray, int]:
-        """Exact violation of designs T; no rows to add.
-
-        Parameters
-        ----------
-        T : numpy.ndarray, (n_designs, n_sources) or (n_sources,)
-            Tolerance designs in source space (m or rad).
-
-        Returns
-        -------
-        violation : numpy.ndarray
-            (n_designs,) as :meth:`violation`.
-        added : int
-            Always 0.
-        """
+        """Exact violation of designs T, as :meth:`violation`; no rows to add (``added`` is always 0)."""
         return self.violation(T), 0
 
     def prune(self, T: np.ndarray, keep_ratio: float = 0.8) -> int:
-        """Nothing to drop (no rows).
-
-        Parameters
-        ----------
-        T : numpy.ndarray
-            Designs (ignored).
-        keep_ratio : float
-            Ignored.
-
-        Returns
-        -------
-        int
-            Always 0.
-        """
+        """Nothing to drop (no rows): ignores its arguments and returns 0."""
         return 0
 
     def boundary_scale(self, T: np.ndarray, iters: int = 4, rtol: float = 1e-6) -> np.ndarray:

@@ -51,6 +51,20 @@ class Evaluation:
         ``yield`` measure: a lower bound of the yield at each pose (dimensionless, 0 to 1).
     exact : bool
         ``yield`` measure: False when sources were moment-matched (central limit theorem).
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> ev = problem.evaluate([[1e-5, 1e-5, 1e-5], [4e-5, 1e-5, 1e-5]])
+    >>> ev.position.shape                                      # (n_designs, n_poses)
+    (2, 1)
+    >>> [round(float(v), 12) for v in ev.violation]            # <= 0: meets the requirement
+    [-0.65, -0.35]
     """
 
     position: np.ndarray | None      # (n_designs, n_poses) m

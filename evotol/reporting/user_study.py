@@ -7,6 +7,13 @@ continuous workspace, the contributions at the worst pose, the linearisation che
 the NSGA-II front with the certified optimum, the GA and the sensitivity design marked; the
 what-if explorer (:mod:`evotol.reporting.explorer`). Lengths are shown in µm or mm and angles in
 arcsec, mrad or deg (the study's ``display_units``, :mod:`evotol.units.display`); the JSON stays SI.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+summary : dict
+    A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
 """
 from __future__ import annotations
 
@@ -39,8 +46,6 @@ def pose_cells(summary: dict, pose) -> str:
 
     Parameters
     ----------
-    summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
     pose : sequence of float
         Workspace coordinates in SI (m, rad), in the order of ``summary["workspace"]["names"]``.
 
@@ -92,11 +97,6 @@ def _certificate_cell(r: dict) -> str:
 
 def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
     """Rows of the top table: one per method and, for NSGA-II, its cheapest feasible point and knee.
-
-    Parameters
-    ----------
-    summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
 
     Returns
     -------
@@ -152,11 +152,6 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     A process-selection study (a summary without ``display_units``) gets cost, normalised error
     and status instead, the NSGA-II points read from its ``pareto_front``.
 
-    Parameters
-    ----------
-    summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
-
     Returns
     -------
     rows : list of list of str
@@ -201,11 +196,6 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
 
 def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
     """Source × method table of the tolerances in display units (± values).
-
-    Parameters
-    ----------
-    summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
 
     Returns
     -------
@@ -290,8 +280,6 @@ def map_caption(summary: dict, method: str, comp: str) -> str:
 
     Parameters
     ----------
-    summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
     method : str
         A method with an error map (``summary["figures"]["error_maps"]``).
     comp : str
@@ -377,11 +365,6 @@ def _linearisation_rows(summary: dict) -> list[list]:
 
 def render_user_study(summary: dict) -> Report:
     """The HTML report of ``evotol run`` from its JSON summary (see the module docstring).
-
-    Parameters
-    ----------
-    summary : dict
-        A user study's JSON summary (``evotol run``, :mod:`evotol.summaries.user_study`; SI values).
 
     Returns
     -------

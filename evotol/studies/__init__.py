@@ -18,6 +18,13 @@ Files are written in one place, :func:`write_outputs`: ``OUT/NAME.html``, ``OUT/
 ``evotol reproduce NAME --out DIR`` and ``Study.run``) and ``evotol run STUDY.toml``
 (:mod:`evotol.studyfile`) both go through it. :func:`reproduce` renders the report from the
 summary read back from the written JSON: a page shows nothing its JSON does not hold.
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+result : StudyResult
+    Output of the study module's ``compute`` (its summary).
 """
 from __future__ import annotations
 

@@ -42,11 +42,6 @@ def compute(config: dict) -> StudyResult:
 def render(result: StudyResult):
     """The HTML report of the study, from its summary.
 
-    Parameters
-    ----------
-    result : StudyResult
-        Output of :func:`compute` (its summary).
-
     Returns
     -------
     evotol.reporting.html.Report

@@ -227,11 +227,6 @@ def compute(config: dict) -> StudyResult:
 def render(result: StudyResult) -> Report:
     """Figs. IV.5-IV.6, IV.9-IV.14 with the singular locus, the thesis's statements and the checks.
 
-    Parameters
-    ----------
-    result : StudyResult
-        Output of :func:`compute` (its summary).
-
     Returns
     -------
     evotol.reporting.html.Report

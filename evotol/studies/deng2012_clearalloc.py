@@ -151,11 +151,6 @@ def compute(config: dict) -> StudyResult:
 def render(result: StudyResult):
     """The comparison table, the clearances per method and the Monte Carlo note.
 
-    Parameters
-    ----------
-    result : StudyResult
-        Output of :func:`compute` (its summary).
-
     Returns
     -------
     evotol.reporting.html.Report

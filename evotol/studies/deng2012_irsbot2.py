@@ -180,11 +180,6 @@ def compute(config: dict) -> StudyResult:
 def render(result: StudyResult) -> Report:
     """Figs. VI.1/VI.3 maps with the singular locus, the five points of Figs. VI.4-VI.5, the baseline.
 
-    Parameters
-    ----------
-    result : StudyResult
-        Output of :func:`compute` (its summary).
-
     Returns
     -------
     evotol.reporting.html.Report

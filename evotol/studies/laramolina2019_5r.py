@@ -185,11 +185,6 @@ def compute(config: dict) -> StudyResult:
 def render(result: StudyResult) -> Report:
     """Table 2 with the workspace indices, Figs. 5-12 per case, LHS vs MC, the allocation.
 
-    Parameters
-    ----------
-    result : StudyResult
-        Output of :func:`compute` (its summary).
-
     Returns
     -------
     evotol.reporting.html.Report

@@ -205,11 +205,6 @@ def compute(cfg: dict) -> StudyResult:
 def render(result: StudyResult) -> Report:
     """The table of mechanisms, the URDF arms, the 5-bar's certified errors and the comparisons.
 
-    Parameters
-    ----------
-    result : StudyResult
-        Output of :func:`compute` (its summary).
-
     Returns
     -------
     evotol.reporting.html.Report

@@ -174,11 +174,6 @@ def compute(config: dict) -> StudyResult:
 def render(result: StudyResult) -> Report:
     """The report: what holds, costs, Tables 1-2 with ours, Figs. 4-5 and the NSGA-II front.
 
-    Parameters
-    ----------
-    result : StudyResult
-        Output of :func:`compute` (its summary).
-
     Returns
     -------
     evotol.reporting.html.Report

@@ -65,11 +65,6 @@ def cost_model_spec(model: CostModel | None) -> dict | None:
 def omitted_reason(problem: ToleranceProblem) -> str | None:
     """Why the page has no explorer for ``problem`` (None when it has one).
 
-    Parameters
-    ----------
-    problem : ToleranceProblem
-        The study's problem.
-
     Returns
     -------
     str or None
@@ -122,8 +117,6 @@ def sample_tightness(problem: ToleranceProblem, designs: dict[str, np.ndarray], 
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The study's problem.
     designs : dict
         Method name -> tolerance vector (SI, source order); :data:`N_TIGHTNESS` random vectors
         (log-uniform within the bounds, ``seed``) are added.
@@ -164,8 +157,6 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The study's problem.
     designs : dict
         Method name -> tolerance vector (SI, source order): the explorer's starting points.
     seed : int

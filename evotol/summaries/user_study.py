@@ -90,11 +90,6 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
     """Per source: name, group, SI unit, dimension, nominal (SI, where known), the interval
     [offset − minus·t, offset + plus·t], and whether it is fixed (no cost) or locked.
 
-    Parameters
-    ----------
-    problem : ToleranceProblem
-        The study's problem.
-
     Returns
     -------
     list of dict
@@ -209,8 +204,6 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
     ----------
     name : str
         The study's name.
-    problem : ToleranceProblem
-        The study's problem.
     results : dict
         Method -> :class:`evotol.core.result.AllocationResult`.
     front : evotol.core.pareto.ParetoFront or None

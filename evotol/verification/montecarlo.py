@@ -81,6 +81,21 @@ class MonteCarloResult:
         The same on the nonlinear model (unassembled = miss).
     yield_check : dict
         :func:`yield_check` of the nonlinear yield where there is one, else the linear.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_optimum, verify
+    >>> mc = verify(problem, allocate_optimum(problem).tolerances, n_samples=500, seed=0)
+    >>> mc.requirement_missed                                   # no sample beyond the limit
+    False
+    >>> mc.to_dict()["linearisation_verdict"]                   # doctest: +ELLIPSIS
+    'first-order model adequate: ...'
     """
 
     method: str
@@ -270,6 +285,20 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     evotol.errors.ValidationError
         An unknown ``model``, ``method`` or ``radial``, ``n_samples`` < 1, ``"nonlinear"`` with
         clearance sources, or a design that does not match the problem's sources.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import allocate_optimum, verify
+    >>> opt = allocate_optimum(problem)
+    >>> mc = verify(problem, opt.tolerances, n_samples=500, seed=0)
+    >>> float(mc.exceed_rate["position"][0]), bool(mc.max_error["position"][0] <= 1.0)
+    (0.0, True)
     """
     if model == "nonlinear" and problem.clearances is not None:
         raise ValidationError("model", model, "'linear' with clearance sources (the clearance model is first order)")

@@ -15,6 +15,13 @@ shared, fixed sources included):
 
 Plain sampling cannot verify a worst-case requirement (all sources at the right end at once is
 rare); the worst-vertex check is the nonlinear counterpart of the worst case.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+t : mapping or array_like, shape (n_sources,)
+    The design (SI: m or rad).
 """
 from __future__ import annotations
 
@@ -51,8 +58,6 @@ def worst_vertex_errors(problem: ToleranceProblem, t) -> dict[str, np.ndarray]:
     ----------
     problem : ToleranceProblem
         A problem whose robot has a nonlinear ``pose_error``.
-    t : mapping or array_like, shape (n_sources,)
-        The design (SI: m or rad).
 
     Returns
     -------
@@ -87,8 +92,6 @@ def uniform_interval_samples(problem: ToleranceProblem, t, n_samples: int, seed:
     ----------
     problem : ToleranceProblem
         The problem (sources, interval shapes).
-    t : mapping or array_like, shape (n_sources,)
-        The design (SI: m or rad).
     n_samples : int
         Number of samples.
     seed : int
@@ -210,8 +213,6 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
     ----------
     problem : ToleranceProblem
         A problem whose robot has a nonlinear ``pose_error``.
-    t : mapping or array_like, shape (n_sources,)
-        The design (SI: m or rad).
     n_samples : int
         Monte Carlo samples (>= 1), the same set at every pose.
     seed : int

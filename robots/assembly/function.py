@@ -78,6 +78,18 @@ class AssemblyFunction(RobotErrorModel):
     -----
     RuntimeWarning
         When the function is not complex-safe and central differences are used.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from evotol import AssemblyFunction
+    >>> def gap(a, b):                                          # housing a, shaft b (m)
+    ...     return a - b
+    >>> asm = AssemblyFunction(gap, {"a": 0.030, "b": 0.029}, {"gap": 2e-4})
+    >>> asm.source_names
+    ('a', 'b')
+    >>> np.round(asm.sensitivity([[0]])[0, 2] * 2e-4, 9)       # d gap / d (a, b)
+    array([ 1., -1.])
     """
 
     def __init__(self, function: Callable, nominal: Mapping[str, float], limits: Mapping[str, float], *,
@@ -316,18 +328,9 @@ class AssemblyFunction(RobotErrorModel):
         return k
 
     def sensitivity(self, poses) -> np.ndarray:
-        """Normalised response gradients at the nominal: row 2 holds ``∂f_k/∂x_j / L_k``.
-
-        Parameters
-        ----------
-        poses : (n, 1) array_like
-            Response indices ``k`` (0 .. K-1) as workspace poses.
-
-        Returns
-        -------
-        (n, 6, n_dims) ndarray
-            Zero except row 2 (position z): the gradient of response ``k`` divided by its limit
-            ``L_k`` (1 per dimension unit, m or rad), evaluated once at the nominal.
+        """Normalised response gradients at the nominal: row 2 (position z) holds ``∂f_k/∂x_j / L_k``
+        (1 per dimension unit, m or rad), the other rows zero; a pose is a response index ``k``
+        (0 .. K-1), shape (n, 1).
 
         Raises
         ------
@@ -342,20 +345,9 @@ class AssemblyFunction(RobotErrorModel):
         return J
 
     def pose_error(self, poses, errors) -> np.ndarray:
-        """Nonlinear response errors: ``(f_k(x0 + δx) - f_k(x0)) / L_k`` in row 2.
-
-        Parameters
-        ----------
-        poses : (n_poses, 1) array_like
-            Response indices ``k`` (0 .. K-1) as workspace poses.
-        errors : (n_poses, n_samples, n_dims) array_like
-            Dimension errors ``δx`` (SI: m or rad), added to the nominal.
-
-        Returns
-        -------
-        (n_poses, n_samples, 6) ndarray
-            Zero except row 2: the response's deviation divided by its limit (dimensionless;
-            within ``[-1, 1]`` means within the limit). NaN where the function is not finite.
+        """Nonlinear response errors: ``(f_k(x0 + δx) - f_k(x0)) / L_k`` in row 2 (dimensionless; within
+        ``[-1, 1]`` means within the limit), the other rows zero, NaN where the function is not
+        finite. A pose is a response index ``k``; ``errors`` are the dimension errors ``δx`` (SI).
 
         Raises
         ------

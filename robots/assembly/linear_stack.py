@@ -45,6 +45,15 @@ class LinearStack(AssemblyFunction):
     ------
     evotol.errors.ValidationError
         Empty or non-finite sensitivities, or a response that has no limit.
+
+    Examples
+    --------
+    >>> from evotol import LinearStack
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> stack.source_names
+    ('x1', 'x2', 'x3')
+    >>> stack.sensitivity([[0]])[0, 2] * 1e-4                  # row 2: a_j / L, times L = 0.1 mm
+    array([ 1. , -2. ,  0.5])
     """
 
     def __init__(self, sensitivities: Mapping, limits: Mapping[str, float], *, nominal: Mapping[str, float] | None = None,

@@ -59,6 +59,25 @@ branch and bound over directions) and :mod:`.patches` (its patches and bounds), 
 13), :mod:`.result` (:class:`MaxPoseError`), :mod:`.sampling` (random clearance states),
 :mod:`.multistart` (the thesis's QR + multistart local optimisation, the baseline),
 :mod:`.grid` (grid studies on local cores or a Dask cluster).
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+poses : (n, d) or (d,) array_like
+    Poses in the mechanism's pose coordinates (m).
+options : EngineOptions, optional
+    The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
+nd : int
+    Number of disk cones.
+mech : ClearanceMechanism
+    The mechanism.
+tol : float, optional
+    Relative gap between the attained value and the certified bound (default 1e-3).
+n_solves : int, optional
+    Support problems solved (default 0).
+gram_inv : (K, m, m) ndarray or None, optional
+    Precomputed ``pinv(B^T B)`` (None: computed here).
 """
 from robots.clearance.kinematics import DHFrame, DHTree, adjoint, kk_transform
 from robots.clearance.maxerror import ClearanceEvaluator, MaxPoseError, evaluate_cases, max_pose_error

@@ -3,6 +3,17 @@ decoupled block (Deng 2012 eqs. III.26-III.27), max_|u|=1 h(u) with h the suppor
 per direction by :mod:`robots.clearance.support`, patches bounded by :mod:`robots.clearance.patches`
 (method in :mod:`robots.clearance.maxerror`). Settings come in one
 :class:`~robots.clearance.options.EngineOptions`; the work done is returned with the result.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+case : (n,) int ndarray
+    Case of each problem.
+u : (n, k) ndarray
+    Directions.
+mu : (n, m) ndarray
+    Dual points.
 """
 from __future__ import annotations
 
@@ -29,8 +40,6 @@ class NormMaximum:
         Certified upper bound per case, same units.
     sigma : (K, R) ndarray
         Scaled screws (dimensionless, in the unit cones) attaining ``lower``.
-    n_solves : int, optional
-        Support problems solved (default 0).
     n_newton : int, optional
         Newton iterations summed over the problems (default 0).
     """
@@ -63,8 +72,6 @@ class SupportEvaluator:
         Default relative precision of each support solve.
     groups : tuple or None, optional
         Block sparsity of ``Bt`` (:attr:`robots.clearance.model.PoseMaps.groups`); None: dense.
-    options : EngineOptions, optional
-        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
     """
 
     def __init__(self, Ct, Bt, gi, nd, tol_solve, groups=None, options: EngineOptions = DEFAULT):
@@ -129,15 +136,6 @@ class SupportEvaluator:
     def cheap(self, case, u, mu):
         """Dual objective at given dual points: a certified upper bound without solving.
 
-        Parameters
-        ----------
-        case : (n,) int ndarray
-            Case of each problem.
-        u : (n, k) ndarray
-            Directions.
-        mu : (n, m) ndarray
-            Dual points.
-
         Returns
         -------
         (n,) ndarray
@@ -148,15 +146,6 @@ class SupportEvaluator:
 
     def dual_vectors(self, case, u, mu):
         """``y = D C^T u + D B mu`` (K, R): the cone-wise vectors whose norms sum to the dual bound.
-
-        Parameters
-        ----------
-        case : (n,) int ndarray
-            Case of each problem.
-        u : (n, k) ndarray
-            Directions.
-        mu : (n, m) ndarray
-            Dual points.
 
         Returns
         -------

@@ -28,8 +28,6 @@ def true_dual(Y: np.ndarray, nd: int) -> np.ndarray:
     ----------
     Y : (..., R) ndarray
         Vectors ``y = a + B mu``: ``nd`` disk pairs first, then interval rows.
-    nd : int
-        Number of disk cones.
 
     Returns
     -------
@@ -60,8 +58,6 @@ def recover_primal(Y: np.ndarray, a: np.ndarray, B: np.ndarray, nd: int, eps: np
         Number of disk cones (rows in pairs first; intervals after).
     eps : (K,) ndarray
         Smoothing parameters (0: ``sigma_c = y_c / ||y_c||``).
-    gram_inv : (K, m, m) ndarray or None, optional
-        Precomputed ``pinv(B^T B)`` (None: computed here).
 
     Returns
     -------

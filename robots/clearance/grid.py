@@ -40,23 +40,17 @@ def grid_max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: fl
 
     Parameters
     ----------
-    mech : ClearanceMechanism
-        The mechanism.
     poses : (n, d) array_like
         Poses in the mechanism's pose coordinates (m).
     bounds : array_like or None, optional
         None (default: the joints' own bounds), ``(n_joints, 4)`` or ``(n, n_joints, 4)``; columns
         ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
-    tol : float, optional
-        Relative gap between the attained value and the certified bound (default 1e-3).
     chunk_size : int, optional
         Poses per chunk (default 256).
     workers : int or None, optional
         Local processes (default None: the number of CPUs; 1: in this process).
     scheduler : str or distributed.Client or None, optional
         Dask scheduler address or client (default None: local processes).
-    options : EngineOptions, optional
-        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
 
     Returns
     -------

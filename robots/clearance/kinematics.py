@@ -14,6 +14,15 @@ supplies the variables as arrays over poses, so the whole tree is evaluated for 
 vectorised call. Lengths in metres, angles in radians.
 
 Twists and error screws use the thesis's order ``[rotation (3); translation (3)]`` (eq. III.1).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+a : float or array_like
+    Rotation angle(s), rad, any shape ``(...)``.
+n : int
+    Number of poses.
 """
 from __future__ import annotations
 
@@ -97,11 +106,6 @@ class DHFrame:
 def rot_x(a):
     """Homogeneous rotation about the ``x`` axis, broadcast over arrays.
 
-    Parameters
-    ----------
-    a : float or array_like
-        Rotation angle(s), rad, any shape ``(...)``.
-
     Returns
     -------
     (..., 4, 4) ndarray
@@ -119,11 +123,6 @@ def rot_x(a):
 def rot_y(a):
     """Homogeneous rotation about the ``y`` axis, broadcast over arrays.
 
-    Parameters
-    ----------
-    a : float or array_like
-        Rotation angle(s), rad, any shape ``(...)``.
-
     Returns
     -------
     (..., 4, 4) ndarray
@@ -140,11 +139,6 @@ def rot_y(a):
 
 def rot_z(a):
     """Homogeneous rotation about the ``z`` axis, broadcast over arrays.
-
-    Parameters
-    ----------
-    a : float or array_like
-        Rotation angle(s), rad, any shape ``(...)``.
 
     Returns
     -------
@@ -412,8 +406,6 @@ class DHTree:
         values : mapping of str to array_like
             Value of each variable (m or rad, as its DH parameter), a scalar or an ``(n,)``
             array over poses.
-        n : int
-            Number of poses.
 
         Returns
         -------
@@ -446,8 +438,6 @@ class DHTree:
         ----------
         values : mapping of str to array_like
             Value of each variable (m or rad), a scalar or an ``(n,)`` array over poses.
-        n : int
-            Number of poses.
 
         Returns
         -------

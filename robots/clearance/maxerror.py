@@ -102,8 +102,6 @@ def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: n
     bounds : array_like
         Clearance bounds broadcasting to ``(n_cases, n_joints, 4)``, columns ``[beta_xy (rad),
         beta_z (rad), b_xy (m), b_z (m)]``.
-    tol : float, optional
-        Relative gap between the attained value and the certified bound (default 1e-3).
     tol_solve : float, optional
         Relative precision of each support-function solve (default 2e-5).
     extra : tuple or None, optional
@@ -111,8 +109,6 @@ def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: n
         ``J`` (n_poses, 6, q) maps them to the end-effector twist ``[dtheta; dp]`` (rad, m; base
         axes), ``t`` (q,) or (n_cases, q) are their half-widths (in the sources' units). Each
         source must act on one decoupled block only. None (default): clearances only.
-    options : EngineOptions, optional
-        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
 
     Returns
     -------
@@ -239,20 +235,12 @@ def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float =
 
     Parameters
     ----------
-    mech : ClearanceMechanism
-        The mechanism.
-    poses : (n, d) or (d,) array_like
-        Poses in the mechanism's pose coordinates (m).
     bounds : array_like or None, optional
         None (default: the joints' own bounds), ``(n_joints, 4)`` for all poses or
         ``(n, n_joints, 4)`` per pose; columns ``[beta_xy (rad), beta_z (rad), b_xy (m), b_z (m)]``.
-    tol : float, optional
-        Relative gap between the attained value and the certified bound (default 1e-3).
     extra : tuple or None, optional
         ``(J, t)`` of other interval error sources (see :func:`evaluate_cases`); None (default):
         clearances only.
-    options : EngineOptions, optional
-        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
 
     Returns
     -------
@@ -291,14 +279,8 @@ class ClearanceEvaluator:
 
     Parameters
     ----------
-    mech : ClearanceMechanism
-        The mechanism.
     poses : (n, d) or (d,) array_like
         Poses in the mechanism's pose coordinates (m); their maps are computed here.
-    tol : float, optional
-        Relative gap between the attained value and the certified bound (default 1e-3).
-    options : EngineOptions, optional
-        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
 
     Raises
     ------

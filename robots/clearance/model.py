@@ -38,6 +38,13 @@ per-pose maps in :mod:`robots.clearance.pose_maps`; both are importable from her
 reduction of the chain equations to those maps (the sparse loop basis) is
 :mod:`robots.clearance.loops`; the nonlinear chain model that checks the error mapping
 (:func:`twist_between`, also importable from here) is :mod:`robots.clearance.nonlinear`.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+chain : str or Chain
+    The chain, or its name.
 """
 from __future__ import annotations
 
@@ -298,11 +305,6 @@ class ClearanceMechanism:
     def world(self, poses: np.ndarray) -> dict[str, np.ndarray]:
         """World transforms of every frame at the nominal joint values of each pose.
 
-        Parameters
-        ----------
-        poses : (n, d) or (d,) array_like
-            Poses in the mechanism's pose coordinates (m).
-
         Returns
         -------
         dict of str to (n, 4, 4) ndarray
@@ -315,13 +317,6 @@ class ClearanceMechanism:
     def error_mapping(self, poses: np.ndarray, chain: str | Chain) -> tuple[np.ndarray, np.ndarray]:
         """Error mapping matrices of one chain (eqs. III.22-III.24, V.1): ``M`` (n, 6, 6 n_joints)
         for its joints' screws and ``M^e`` (n, 6, 6) for the start body's twist.
-
-        Parameters
-        ----------
-        poses : (n, d) or (d,) array_like
-            Poses in the mechanism's pose coordinates (m).
-        chain : str or Chain
-            The chain, or its name.
 
         Returns
         -------
@@ -345,8 +340,6 @@ class ClearanceMechanism:
 
         Parameters
         ----------
-        poses : (n, d) or (d,) array_like
-            Poses in the mechanism's pose coordinates (m).
         chain : str or Chain
             The chain, or its name (one that starts at the base).
 
@@ -380,11 +373,6 @@ class ClearanceMechanism:
     def linear_system(self, poses: np.ndarray):
         """``E_s`` (n, 6 n_chains, 6 n_joints) and ``E_d`` (n, 6 n_chains, 6 n_bodies) of
         ``E_s s + E_d delta = 0`` (all chains; the end-effector is body 0 of ``delta``).
-
-        Parameters
-        ----------
-        poses : (n, d) or (d,) array_like
-            Poses in the mechanism's pose coordinates (m).
 
         Returns
         -------
@@ -422,8 +410,6 @@ class ClearanceMechanism:
 
         Parameters
         ----------
-        poses : (n, d) or (d,) array_like
-            Poses in the mechanism's pose coordinates (m).
         split : bool, optional
             True (default): one map per decoupled block (two for a planar mechanism); False: one
             6-D block.
@@ -454,10 +440,6 @@ class ClearanceMechanism:
 
         Parameters
         ----------
-        poses : (n, d) or (d,) array_like
-            Poses in the mechanism's pose coordinates (m).
-        chain : str or Chain
-            The chain, or its name.
         screws : mapping of str to array_like or None, optional
             Error screw ``[dr; dt]`` (rad, m; ``(6,)`` or ``(n, 6)``) by joint name; joints not
             named have none. None (default): no joint error.

@@ -36,6 +36,17 @@ fresh install compiles the kernel (about 6 s) into numba's on-disk cache (``__py
 this file, or numba's user-wide cache directory); later processes load it in about 0.5 s. If numba
 cannot be imported or fails to compile, a ``RuntimeWarning`` says so once and the solver uses the
 NumPy iteration (same results up to round-off); ``EVOTOL_NO_NUMBA=1`` asks for that explicitly.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+rows : (k,) int array_like
+    Original problem of each working problem.
+cidx : (n,) int array_like
+    Working indices of the centred problems.
+B : (K, R, m) ndarray
+    Scaled loop maps of the original problems.
 """
 from __future__ import annotations
 
@@ -179,12 +190,8 @@ def newton_iterate(Y, mu, GB, rows, tau, nd, groups, want_dual: bool):
         Dual points (writeable C-contiguous float64; updated in place).
     GB : (K, sum nr_g s_g) ndarray
         Group blocks of ``B`` of the original problems (:func:`group_blocks`).
-    rows : (k,) int array_like
-        Original problem of each working problem.
     tau : (k,) ndarray
         Barrier parameters.
-    nd : int
-        Number of disk cones.
     groups : tuple
         Output of :func:`group_arrays`.
     want_dual : bool
@@ -227,22 +234,14 @@ def project_centred(cidx, rows, Y, a, B, gram_inv, tau, nd):
 
     Parameters
     ----------
-    cidx : (n,) int array_like
-        Working indices of the centred problems.
-    rows : (k,) int array_like
-        Original problem of each working problem.
     Y : (k, R) ndarray
         Dual vectors of the working problems.
     a : (K, R) ndarray
         Scaled linear terms of the original problems.
-    B : (K, R, m) ndarray
-        Scaled loop maps of the original problems.
     gram_inv : (K, m, m) ndarray
         ``pinv(B^T B)`` of the original problems.
     tau : (k,) ndarray
         Barrier parameters of the working problems.
-    nd : int
-        Number of disk cones.
 
     Returns
     -------
@@ -265,16 +264,10 @@ def predict_centred(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
 
     Parameters
     ----------
-    cidx : (n,) int array_like
-        Working indices of the centred problems.
-    rows : (k,) int array_like
-        Original problem of each working problem.
     Y : (k, R) ndarray
         Dual vectors of the working problems (updated in place).
     mu : (k, m) ndarray
         Dual points of the working problems (updated in place).
-    B : (K, R, m) ndarray
-        Scaled loop maps of the original problems.
     H : (k, m, m) ndarray
         Hessians of the working problems (from :func:`newton_iterate`).
     told : (n,) ndarray
@@ -283,8 +276,6 @@ def predict_centred(cidx, rows, Y, mu, B, H, told, tnew, cand, nd):
         New barrier parameters.
     cand : (n, c) ndarray
         Candidate scales of the predictor step (the one with the lowest barrier is taken).
-    nd : int
-        Number of disk cones.
     """
     _kernel()[2](np.asarray(cidx, np.int64), np.asarray(rows, np.int64), Y, mu, B, H, np.ascontiguousarray(told, float),
                  np.ascontiguousarray(tnew, float), np.ascontiguousarray(cand, float), int(nd))

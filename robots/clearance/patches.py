@@ -6,6 +6,15 @@ targets; a spherical triangle of the half sphere, q = 3, for 3-component targets
 upper values of the support function h at its vertices, :func:`patch_bound` bounds h over the whole
 patch (sublinearity), :func:`interpolated_bound` does so from the vertices' dual points (weak
 duality), and :func:`children` splits patches at their edge midpoints.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+t : (T, 3, 3) ndarray
+    Triangles as three unit vertices.
+U : (P, q, k) ndarray
+    Unit vertices of ``P`` patches.
 """
 from __future__ import annotations
 
@@ -56,11 +65,6 @@ def normalise(v):
 def split_tris(t):
     """Split spherical triangles into four at their edge midpoints (projected to the sphere).
 
-    Parameters
-    ----------
-    t : (T, 3, 3) ndarray
-        Triangles as three unit vertices.
-
     Returns
     -------
     (4 T, 3, 3) ndarray
@@ -73,11 +77,6 @@ def split_tris(t):
 
 def tri_depth(t):
     """Distance from the origin to the plane through each triangle's three vertices.
-
-    Parameters
-    ----------
-    t : (T, 3, 3) ndarray
-        Triangles as three unit vertices.
 
     Returns
     -------
@@ -154,8 +153,6 @@ def patch_bound(U, H, legacy: bool = False):
 
     Parameters
     ----------
-    U : (P, q, k) ndarray
-        Unit vertices of ``P`` patches.
     H : (P, q) ndarray
         Certified upper values of ``h`` at the vertices (m or rad, or scaled).
     legacy : bool, optional
@@ -240,8 +237,6 @@ def interpolated_bound(U, Y, nd: int, n: int):
 
     Parameters
     ----------
-    U : (P, q, k) ndarray
-        Unit vertices of ``P`` patches.
     Y : (P, q, R) ndarray
         Dual vectors ``y_i`` (scaled rows) at the vertices.
     nd : int

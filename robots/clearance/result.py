@@ -40,8 +40,6 @@ class MaxPoseError:
         End-effector error twist produced by ``r_screws``.
     joint_names : tuple of str
         Names of the joints, in the order of the screws' second axis.
-    n_solves : int, optional
-        Support problems solved (default 0).
     seconds : float, optional
         Wall-clock time, s (default 0).
     n_newton : int, optional

@@ -22,8 +22,6 @@ def sample_max_errors(mech: ClearanceMechanism, pose, bounds=None, *, n_samples:
 
     Parameters
     ----------
-    mech : ClearanceMechanism
-        The mechanism.
     pose : (d,) array_like
         One pose in the mechanism's pose coordinates (m).
     bounds : array_like or None, optional

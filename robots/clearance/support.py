@@ -127,8 +127,6 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         Scaled linear terms ``a = D C^T w``.
     B : (K, R, m) ndarray
         Scaled loop maps ``D B`` (rows: ``nd`` disks as pairs, then intervals).
-    nd : int
-        Number of disk cones.
     tol : float or (K,) ndarray
         Absolute duality-gap target per problem (units of ``a``).
     mu0 : (K, m) ndarray or None, optional
@@ -137,8 +135,6 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         Barrier gap to start the path from (None: 10 % of ``f(mu0)``).
     max_iter : int, optional
         Most Newton iterations of the batch (default 100).
-    gram_inv : (K, m, m) ndarray or None, optional
-        Precomputed ``pinv(B^T B)`` (None: computed here).
     growth : float or None, optional
         Factor of ``tau`` at each centring (None: ``options.growth``).
     rtol : float, optional
@@ -149,8 +145,6 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         Stop a problem once its certified upper bound is below this value.
     kernel : bool or None, optional
         Compiled (True) or NumPy (False) Newton iteration; None: ``options.kernel``.
-    options : EngineOptions, optional
-        The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
 
     Returns
     -------

@@ -79,19 +79,8 @@ class DeltaRobot(DeltaChains, DeltaNominalKinematics, DeltaClosure, RobotErrorMo
     def sensitivity(self, poses) -> np.ndarray:
         """First-order map (n, 6, 47): d P / d e = -J_X^{-1} d r / d e (implicit function of eq. 3).
 
-        ``d r / d e`` by complex step through the KK chains (exact to rounding). Rows 3-5 are zero
-        (position-only model).
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 3)
-            Platform positions, m.
-
-        Returns
-        -------
-        ndarray, shape (n, 6, 47)
-            Sensitivity of the pose error to each error parameter, m per m or m per rad (rows 0-2);
-            rows 3-5 are zero.
+        ``d r / d e`` by complex step through the KK chains (exact to rounding). Poses are platform
+        positions (n, 3), m. Rows 3-5 are zero (position-only model).
 
         Raises
         ------
@@ -112,19 +101,8 @@ class DeltaRobot(DeltaChains, DeltaNominalKinematics, DeltaClosure, RobotErrorMo
         return out
 
     def pose_error(self, poses, errors) -> np.ndarray:
-        """Nonlinear position error (n, s, 6): forward kinematics with errors minus the pose.
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 3)
-            Commanded platform positions, m.
-        errors : array_like, shape (n, s, 47), (s, 47) or (47,)
-            Error parameters, SI.
-
-        Returns
-        -------
-        ndarray, shape (n, s, 6)
-            Position error ``P - pose``, m (columns 0-2); columns 3-5 (orientation) are zero.
+        """Nonlinear position error (n, s, 6): forward kinematics with errors minus the commanded pose
+        (m, columns 0-2; columns 3-5, orientation, zero). ``errors`` may also be (s, 47) or (47,).
 
         Raises
         ------

@@ -119,18 +119,9 @@ class FiveBarGeometric(RobotErrorModel):
         return Jp, Jth2
 
     def sensitivity(self, poses) -> np.ndarray:
-        """First-order map of the 8 sources onto the pose error (eqs. IV.37-IV.43).
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2)
-            End-effector positions, m.
-
-        Returns
-        -------
-        ndarray, shape (n, 6, 8)
-            Rows ``dp_x, dp_y`` (m per unit source) from :meth:`jacobian_thesis`, row 5 the rotation
-            ``dtheta1 + dtheta2`` of the end-effector link (rad per unit source); rows 2-4 zero.
+        """First-order map of the 8 sources onto the pose error (eqs. IV.37-IV.43), poses (n, 2) in m:
+        rows ``dp_x, dp_y`` (m per unit source) from :meth:`jacobian_thesis`, row 5 the rotation
+        ``dtheta1 + dtheta2`` of the end-effector link (rad per unit source); rows 2-4 zero.
 
         Raises
         ------
@@ -145,20 +136,9 @@ class FiveBarGeometric(RobotErrorModel):
         return out
 
     def pose_error(self, poses, errors) -> np.ndarray:
-        """Exact pose error: the loop re-solved with perturbed lengths and actuated angles.
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2)
-            End-effector positions, m.
-        errors : array_like, shape (n, m, 8)
-            Source values ``dL0 .. dL5`` (m), ``dtheta1, dtheta3`` (rad), ``m`` samples per pose.
-
-        Returns
-        -------
-        ndarray, shape (n, m, 6)
-            Columns 0-1: position error, m; column 5: rotation of link ``C-E``, rad, wrapped to
-            ``[-pi, pi)``; columns 2-4 zero.
+        """Exact pose error: the loop re-solved with perturbed lengths ``dL0 .. dL5`` (m) and actuated
+        angles ``dtheta1, dtheta3`` (rad); columns 0-1 the position error (m), column 5 the rotation of
+        link ``C-E`` (rad, wrapped to ``[-pi, pi)``), columns 2-4 zero.
 
         Raises
         ------

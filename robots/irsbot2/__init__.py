@@ -12,6 +12,13 @@ Units: metres and radians; poses are ``(x, z)`` in metres.
 * :mod:`.clearance` -- the clearance mechanism (Ch. V-VI, mixin of :class:`IRSBot2`), its leg
   swap :func:`mirror_joint_map` and the error-map square :data:`MAP_WORKSPACE`;
 * :mod:`.subworkspace` -- singularity-free rectangles (Sec. VII.2.1, Figs. VI.4-VI.5).
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+poses : array_like, shape (n, 2) or (2,)
+    Platform points ``(x, z)``, m.
 """
 from robots.irsbot2.clearance import MAP_WORKSPACE, IRSBot2Clearances, mirror_joint_map
 from robots.irsbot2.dh_tables import IRSBot2DHTables

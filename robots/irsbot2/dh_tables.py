@@ -39,8 +39,6 @@ class IRSBot2DHTables:
 
         Parameters
         ----------
-        poses : array_like, shape (n, 2) or (2,)
-            Platform points ``(x, z)``, m.
         variant : {"corrected", "thesis"}
             ``"corrected"`` (default): solved on the corrected DH tree; ``"thesis"``: the
             universal-joint angles of eqs. II.18-II.35.
@@ -174,8 +172,6 @@ class IRSBot2DHTables:
 
         Parameters
         ----------
-        poses : array_like, shape (n, 2) or (2,)
-            Platform points ``(x, z)``, m.
         variant : {"corrected", "printed"}
             DH tree evaluated (the joint values are always those of :meth:`dh_values` on the corrected tree).
 

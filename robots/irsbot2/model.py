@@ -215,11 +215,6 @@ class IRSBot2(IRSBot2DHTables, IRSBot2Clearances):
         """Actuated angles q1, q2 (II.5-II.6), psi1, psi2 (II.7-II.8) and the universal-joint
         angles of the four distal chains (II.18-II.35), for poses (n, 2) = (x, z) in metres.
 
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2) or (2,)
-            Platform points ``(x, z)``, m.
-
         Returns
         -------
         dict of str to ndarray, each shape (n,)
@@ -288,11 +283,6 @@ class IRSBot2(IRSBot2DHTables, IRSBot2Clearances):
         """Type-2 singularity measure ``sin(psi_1 - psi_2)`` (0 when the equivalent distal links
         are parallel, eq. II.38 / Fig. II.9).
 
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2) or (2,)
-            Platform points ``(x, z)``, m.
-
         Returns
         -------
         ndarray, shape (n,)
@@ -308,11 +298,6 @@ class IRSBot2(IRSBot2DHTables, IRSBot2Clearances):
 
     def serial_singularity(self, poses) -> np.ndarray:
         """Type-1 measure ``min_i |sin(q_i - psi_i)|`` (0 at the workspace boundary, eq. II.37).
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2) or (2,)
-            Platform points ``(x, z)``, m.
 
         Returns
         -------
@@ -331,11 +316,6 @@ class IRSBot2(IRSBot2DHTables, IRSBot2Clearances):
         """Boolean mask of the poses the inverse geometry can solve (no exception).
 
         Only the proximal condition of eqs. II.5-II.6 is tested, not the distal chains.
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2) or (2,)
-            Platform points ``(x, z)``, m.
 
         Returns
         -------

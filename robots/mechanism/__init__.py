@@ -17,6 +17,22 @@ errors as local twists), :mod:`.limits` (joint limits), :mod:`.serial` and :mod:
 directions), :mod:`.urdf_check` (agreement with Pinocchio and finite differences),
 :mod:`.inspection` (what ``evotol check-mechanism`` shows).
 ``docs/mechanisms.md`` documents the file format.
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+n : int
+    Number of configurations.
+model : robots.mechanism.model.MechanismModel
+    The mechanism's error model.
+path : str or Path
+    The URDF file.
+poses : (n, n_coordinates) array_like
+    Target poses (SI: m, rad).
+max_step : float, optional
+    Largest continuation step, as a fraction of each coordinate's range (dimensionless;
+    at most 200 steps).
 """
 from robots.mechanism.description import load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import Kinematics

@@ -46,11 +46,6 @@ def understood(model) -> dict:
     pose, joints as declared and as solved, and the end-effector pose there. Raises the
     assembly's KinematicsError (declared joints far from the solved ones, issue 27).
 
-    Parameters
-    ----------
-    model : robots.mechanism.model.MechanismModel
-        The mechanism's error model.
-
     Returns
     -------
     dict

@@ -15,11 +15,6 @@ def sources_with_nominal(model) -> list[dict]:
     """Each source: name, group, unit, description and nominal value (a design parameter's value;
     0 for a placement error, a DH-entry offset or a joint offset, which are errors about the nominal).
 
-    Parameters
-    ----------
-    model : robots.mechanism.model.MechanismModel
-        The mechanism's error model.
-
     Returns
     -------
     list of dict
@@ -46,11 +41,6 @@ def _mimic_joints(model) -> list[str]:
 def limits_and_box(model) -> dict:
     """The workspace box (coordinates, SI) and the joint limits (rad or m; none: unlimited).
 
-    Parameters
-    ----------
-    model : robots.mechanism.model.MechanismModel
-        The mechanism's error model.
-
     Returns
     -------
     dict
@@ -72,8 +62,6 @@ def rank_report(model, q: dict, where: str) -> dict:
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
-        The mechanism's error model.
     q : dict of str to (n,) ndarray
         Every joint variable -> its values (rad or m) at ``n`` configurations.
     where : str
@@ -113,8 +101,6 @@ def model_report(model, poses) -> dict:
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
-        The mechanism's error model.
     poses : (n, n_coordinates) ndarray
         Workspace poses (SI: m, rad), e.g. Latin-hypercube ones.
 

@@ -151,14 +151,6 @@ class InverseGeometry:
         A redundant mechanism takes the solution nearest to the assembly joints. The last few
         results are cached by the poses' bytes: the returned dict is shared, do not modify it.
 
-        Parameters
-        ----------
-        poses : (n, n_coordinates) array_like
-            Target poses (SI: m, rad).
-        max_step : float, optional
-            Largest continuation step, as a fraction of each coordinate's range (dimensionless;
-            at most 200 steps).
-
         Returns
         -------
         dict of str to (n,) ndarray
@@ -209,8 +201,6 @@ class InverseGeometry:
         q : dict of str to (n,) ndarray
             Every joint variable (rad or m): the actuated ones are held, the passive ones are the
             starting point.
-        n : int
-            Number of configurations.
         params : dict or None, optional
             Overrides of design parameters (perturbed values, m or rad).
         offsets : dict or None, optional

@@ -16,6 +16,13 @@
 
 Twists here are ordered ``[translation; rotation]`` like :mod:`robots.base` (the clearance engine
 uses the thesis's ``[rotation; translation]``).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+params : dict or None, optional
+    Overrides of design parameters (scalars or (n,) arrays, m or rad).
 """
 from __future__ import annotations
 
@@ -41,8 +48,6 @@ class State:
 
     Parameters
     ----------
-    n : int
-        Number of configurations.
     world : dict
         Frame or point name (``"0"``: the base) -> (n, 4, 4) transform in the base frame
         (position in m).
@@ -183,10 +188,6 @@ class Kinematics(InverseGeometry):
         ----------
         q : dict of str to float or (n,) ndarray
             Joint variable -> its value(s) (rad or m); every joint variable is required.
-        n : int
-            Number of configurations.
-        params : dict or None, optional
-            Overrides of design parameters (scalars or (n,) arrays, m or rad).
 
         Returns
         -------
@@ -217,13 +218,9 @@ class Kinematics(InverseGeometry):
         ----------
         q : dict of str to (n,) ndarray
             Every joint variable -> its values (rad or m).
-        n : int
-            Number of configurations.
         wrt : iterable of str, optional
             Names (joint variables or parameters) whose derivatives of the entries are wanted in
             ``State.grads``.
-        params : dict or None, optional
-            Overrides of design parameters (scalars or (n,) arrays, m or rad).
         offsets : dict or None, optional
             Additive errors ``{(frame, field): (n,) array}`` of DH entries (m or rad) and
             placement errors ``{(frame, "shift_x" ... "tilt_z"): (n,) array}`` (m, rad).

@@ -5,6 +5,13 @@ continuous joint has none, a mimic joint's range becomes one of its leader) and 
 description's ``[limits]`` table (``q1 = ["-170*deg", "170*deg"]``), which overrides the URDF. The
 assembly configuration and every pose the inverse geometry solves are checked: a joint outside its
 range is a :class:`KinematicsError` that names the pose and the joint.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+limits : mapping
+    Joint variable -> (lower, upper), rad or m.
 """
 from __future__ import annotations
 
@@ -21,8 +28,6 @@ def check_limit_names(limits, variables) -> None:
 
     Parameters
     ----------
-    limits : mapping
-        Joint variable -> (lower, upper), rad or m.
     variables : sequence of str
         The description's joint variables.
 
@@ -43,8 +48,6 @@ def check_joint_limits(name: str, limits, q: dict, poses: np.ndarray, coordinate
     ----------
     name : str
         The mechanism's name (for the message).
-    limits : mapping
-        Joint variable -> (lower, upper), rad or m.
     q : dict
         Joint variable -> (n,) values at ``poses``.
     poses : ndarray (n, n_coordinates)

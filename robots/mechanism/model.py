@@ -52,6 +52,16 @@ class MechanismModel(RobotErrorModel):
     ------
     evotol.errors.ValidationError
         A description that does not load or check (names the entry), or no toleranced source.
+
+    Examples
+    --------
+    >>> from evotol import MechanismModel
+    >>> from robots.mechanism.model import resolve_description
+    >>> robot = MechanismModel(resolve_description("planar3rpr"))   # a shipped description
+    >>> robot.source_names
+    ('Rb', 'rp', 'l1', 'l2', 'l3')
+    >>> robot.sensitivity([[0.0, 0.0, 0.0]]).shape
+    (1, 6, 5)
     """
 
     def __init__(self, mechanism: Mechanism | str | Path, sources=None, workspace: Workspace | None = None):
@@ -143,16 +153,6 @@ class MechanismModel(RobotErrorModel):
 
         ``S = J_e - J_p H_p^+ H_e`` (module docstring); the out-of-plane rows of a planar
         mechanism are zero.
-
-        Parameters
-        ----------
-        poses : (n, n_coordinates) array_like
-            Workspace poses (SI: m, rad).
-
-        Returns
-        -------
-        (n, 6, n_sources) ndarray
-            End-effector error twist per unit of each source (m or rad per m or rad), base frame.
 
         Raises
         ------
@@ -268,23 +268,12 @@ class MechanismModel(RobotErrorModel):
 
     def pose_error(self, poses, errors) -> np.ndarray:
         """Nonlinear end-effector error (n, m, 6) for source errors (n, m, n_sources): the loops
-        re-closed with the perturbed description, actuated joints held at their nominal values.
+        re-closed with the perturbed description, actuated joints held at their nominal values;
+        ``[dp (m); rotation vector of R R0^T (rad)]`` relative to the nominal, out-of-plane rows
+        zero for a planar mechanism.
 
         An actuator-offset source is added to its joint variable; parameter sources perturb the
         parameter wherever it is used; DH-entry and placement sources perturb that entry only.
-
-        Parameters
-        ----------
-        poses : (n, n_coordinates) array_like
-            Workspace poses (SI: m, rad).
-        errors : (n, m, n_sources) array_like
-            Source errors (m or rad), ``m`` samples per pose.
-
-        Returns
-        -------
-        (n, m, 6) ndarray
-            ``[dp (m); rotation vector of R R0^T (rad)]`` of the end-effector frame relative to
-            the nominal, base frame; out-of-plane rows zero for a planar mechanism.
 
         Raises
         ------

@@ -19,6 +19,13 @@ orientation of its first frame. It stands where a frame may stand in a position 
 position-only end-effector: the least-squares closure of an over-constrained sub-chain, e.g.
 Brahmia 2023's Delta, whose leg ends at the midpoint of its two parallelogram rods. A
 **coordinate** is one axis of the end-effector pose and its workspace range.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+description : str, optional
+    One line for reports.
 """
 from __future__ import annotations
 
@@ -60,8 +67,6 @@ class Frame:
         Rot(z, theta) Trans(z, r)``: ``gamma``, ``alpha``, ``theta`` in rad, ``b``, ``d``, ``r`` in m;
         numbers or expression strings (``"-L0/2"``, ``"q1 - pi"``); default 0. ``theta`` holds a
         revolute joint's variable, ``r`` a prismatic one's.
-    description : str, optional
-        One line for reports.
 
     Raises
     ------
@@ -139,8 +144,6 @@ class Point:
         Point name: non-empty, without ``.``.
     frames : tuple of str
         Two or more different frame names whose origins are averaged (``mean_of`` in TOML).
-    description : str, optional
-        One line for reports.
 
     Raises
     ------

@@ -32,8 +32,6 @@ def placement_error(errors: dict, n: int) -> np.ndarray:
     errors : dict of str to (n,) ndarray or float
         Placement field (``"shift_x"`` ... ``"tilt_z"``) -> its error: shifts in m, tilts in rad,
         in the placement's local axes.
-    n : int
-        Number of configurations.
 
     Returns
     -------

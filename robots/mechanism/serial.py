@@ -345,11 +345,6 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
         Kinematics of the description (its assembly, coordinates and orientation targets).
     chain : SerialChain
         The fast path built from ``kin``.
-    poses : (n, n_coordinates) array_like
-        Target poses (SI: m, rad).
-    max_step : float, optional
-        Largest continuation step, as a fraction of each coordinate's range (dimensionless; at
-        most 200 steps).
 
     Returns
     -------

@@ -13,6 +13,25 @@ placement, :mod:`robots.mechanism.placement`). Errors enter as **terms**:
 
 Sensitivities are ``[dp; dphi]`` of the tip (``robots.base`` order); the placement twists and the
 joint twists are those of :mod:`robots.mechanism.kinematics` (same equations, per pose).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+P : (ns, 4, 4) ndarray
+    Constant transform of each stage (m).
+ident : (ns,) ndarray of bool
+    True where ``P_s`` is the identity (skipped).
+kind : (ns,) ndarray of int64
+    0 fixed, 1 revolute (``Rot(z, value)``), 2 prismatic (``Trans(z, value)``).
+var : (ns,) ndarray of int64
+    Joint variable index of each joint stage.
+a, c : (ns,) ndarray
+    Joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
+mark : (ns,) ndarray of int64
+    Mark (placement frame) index of each stage, -1 for none.
+n_marks : int
+    Number of marks.
 """
 from __future__ import annotations
 
@@ -133,20 +152,6 @@ def sensitivity(P, ident, kind, var, a, c, mark, n_marks, Q, t_col, t_mark, t_fi
 
     Parameters
     ----------
-    P : (ns, 4, 4) ndarray
-        Constant transform of each stage (m).
-    ident : (ns,) ndarray of bool
-        True where ``P_s`` is the identity (skipped).
-    kind : (ns,) ndarray of int64
-        0 fixed, 1 revolute (``Rot(z, value)``), 2 prismatic (``Trans(z, value)``).
-    var : (ns,) ndarray of int64
-        Joint variable index of each joint stage.
-    a, c : (ns,) ndarray
-        Joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
-    mark : (ns,) ndarray of int64
-        Mark (placement frame) index of each stage, -1 for none.
-    n_marks : int
-        Number of marks.
     Q : (n, n_vars) ndarray
         Joint values (rad or m).
     t_col, t_mark, t_field : (nt,) ndarray of int64
@@ -217,20 +222,6 @@ def pose_error(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mar
 
     Parameters
     ----------
-    P : (ns, 4, 4) ndarray
-        Constant transform of each stage (m).
-    ident : (ns,) ndarray of bool
-        True where ``P_s`` is the identity (skipped).
-    kind : (ns,) ndarray of int64
-        0 fixed, 1 revolute (``Rot(z, value)``), 2 prismatic (``Trans(z, value)``).
-    var : (ns,) ndarray of int64
-        Joint variable index of each joint stage.
-    a, c : (ns,) ndarray
-        Joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
-    mark : (ns,) ndarray of int64
-        Mark (placement frame) index of each stage, -1 for none.
-    n_marks : int
-        Number of marks.
     Q : (n, n_vars) ndarray
         Nominal joint values (rad or m).
     errors : (n, m, n_cols) ndarray
@@ -392,20 +383,6 @@ def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts,
 
     Parameters
     ----------
-    P : (ns, 4, 4) ndarray
-        Constant transform of each stage (m).
-    ident : (ns,) ndarray of bool
-        True where ``P_s`` is the identity (skipped).
-    kind : (ns,) ndarray of int64
-        0 fixed, 1 revolute (``Rot(z, value)``), 2 prismatic (``Trans(z, value)``).
-    var : (ns,) ndarray of int64
-        Joint variable index of each joint stage.
-    a, c : (ns,) ndarray
-        Joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
-    mark : (ns,) ndarray of int64
-        Mark (placement frame) index of each stage, -1 for none.
-    n_marks : int
-        Number of marks.
     q0 : (n_vars,) ndarray
         Starting (assembly) joint values (rad or m).
     targets : (K, n, n_axes) ndarray

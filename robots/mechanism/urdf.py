@@ -17,6 +17,13 @@ convention) and the joint offsets ``J``; ``docs/mechanisms.md`` states the conve
 In a description file: ``urdf = "arm.urdf"`` (relative to the file) or
 ``urdf = "example-robot-data:ur_description/urdf/ur5_robot.urdf"`` (a file shipped in a pip
 package's ``cmeel.prefix/share/<package>/robots``), ``tip = "tool0"``, instead of ``[[frame]]``.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+model : pinocchio.Model
+    The model built from the URDF.
 """
 from __future__ import annotations
 
@@ -121,8 +128,6 @@ def joint_axis(model, j: int) -> tuple[str, np.ndarray]:
 
     Parameters
     ----------
-    model : pinocchio.Model
-        The model built from the URDF.
     j : int
         Pinocchio joint id (1 .. ``model.njoints - 1``).
 
@@ -184,11 +189,6 @@ def urdf_joints(path) -> dict:
     "limit": (lower, upper) | None}}`` (``<limit>`` of revolute and prismatic joints; continuous
     joints have none; SI as in URDF).
 
-    Parameters
-    ----------
-    path : str or Path
-        The URDF file.
-
     Returns
     -------
     dict of str to dict
@@ -230,8 +230,6 @@ def frame_id(model, name: str) -> int:
 
     Parameters
     ----------
-    model : pinocchio.Model
-        The model built from the URDF.
     name : str
         Name of a link, operational frame or joint.
 
@@ -258,8 +256,6 @@ def chain_joints(model, frame_id: int) -> list[int]:
 
     Parameters
     ----------
-    model : pinocchio.Model
-        The model built from the URDF.
     frame_id : int
         Index into ``model.frames``.
 
@@ -297,8 +293,6 @@ def urdf_frames(path, tip: str) -> tuple[list[dict], dict, dict, dict]:
 
     Parameters
     ----------
-    path : str or Path
-        The URDF file.
     tip : str
         The end-effector link or frame (e.g. ``"tool0"``).
 
@@ -388,8 +382,6 @@ def pinocchio_configuration(model, chain_values: dict, mimic: dict | None = None
 
     Parameters
     ----------
-    model : pinocchio.Model
-        The model built from the URDF.
     chain_values : dict of str to (n,) array_like
         Joint variable (the description's identifier of the URDF joint name) -> values (rad or
         m); at least one entry, whose length sets ``n``.
@@ -427,8 +419,6 @@ def pinocchio_tip_pose(path, tip: str, q) -> np.ndarray:
 
     Parameters
     ----------
-    path : str or Path
-        The URDF file.
     tip : str
         The tip link or frame.
     q : (n, nq) array_like or dict of str to (n,) array_like
@@ -464,8 +454,6 @@ def pinocchio_placement_regressor(model, frame_id: int, Q: np.ndarray, with_tip:
 
     Parameters
     ----------
-    model : pinocchio.Model
-        The model built from the URDF.
     frame_id : int
         Index into ``model.frames`` of the frame.
     Q : ndarray (n, model.nq)

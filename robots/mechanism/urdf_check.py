@@ -35,8 +35,6 @@ def random_joints(variables, limits, n: int, seed: int = 0, units=None) -> dict:
         The joint variables.
     limits : mapping of str to (float, float)
         Joint variable -> (lower, upper), rad or m.
-    n : int
-        Number of configurations.
     seed : int, optional
         Seed of the random generator (reproducible draws).
     units : mapping of str to str, optional
@@ -127,8 +125,6 @@ def check_urdf_file(path, tip: str, n_poses: int = 20, sources=None) -> dict:
 
     Parameters
     ----------
-    path : str or Path
-        The URDF file.
     tip : str
         The end-effector link or frame.
     n_poses : int

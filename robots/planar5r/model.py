@@ -190,18 +190,9 @@ class Planar5R(RobotErrorModel):
 
     # --- contract -----------------------------------------------------------------------------
     def sensitivity(self, poses) -> np.ndarray:
-        """First-order map (n, 6, 16): ``[dx, dy, 0, 0, 0, 0]`` per unit source error (see module).
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2) or (2,)
-            End-effector positions ``(x, y)``, m.
-
-        Returns
-        -------
-        ndarray, shape (n, 6, 16)
-            Rows ``dx, dy`` in m per unit source error (m or rad); rows 2-5 zero. Columns in the
-            order of :data:`SOURCES` (two per clearance).
+        """First-order map (n, 6, 16): ``[dx, dy, 0, 0, 0, 0]`` (m) per unit source error (see module),
+        poses ``(x, y)`` (n, 2) or (2,) in m; columns in the order of :data:`SOURCES` (two per
+        clearance).
 
         Raises
         ------
@@ -258,25 +249,15 @@ class Planar5R(RobotErrorModel):
 
     def pose_error(self, poses, errors, failures: str = "raise") -> np.ndarray:
         """Exact end-effector error (n_poses, n_samples, 6) for stacked source errors
-        (n_poses, n_samples, 16), by re-solving the loop closure (no linearisation).
-
-        failures: a sample whose loop cannot close (the two couplers cannot meet) raises
-        :class:`KinematicsError` naming the pose (``"raise"``) or gives a NaN row (``"nan"``; the
-        core's nonlinear yield counts it as a miss).
+        (n_poses, n_samples, 16), by re-solving the loop closure (no linearisation); columns
+        ``dx, dy`` in m, the others zero.
 
         Parameters
         ----------
-        poses : array_like, shape (n, 2) or (2,)
-            End-effector positions ``(x, y)``, m.
-        errors : array_like, shape (n, s, 16)
-            Stacked source errors, m or rad.
         failures : {"raise", "nan"}
-            What a sample that cannot be assembled gives.
-
-        Returns
-        -------
-        ndarray, shape (n, s, 6)
-            Columns ``dx, dy`` in m, the others zero; NaN rows for failed samples with ``"nan"``.
+            What a sample whose loop cannot close (the two couplers cannot meet) gives:
+            :class:`KinematicsError` naming the pose (``"raise"``) or a NaN row (``"nan"``; the
+            core's nonlinear yield counts it as a miss).
 
         Raises
         ------

@@ -26,6 +26,16 @@ Random variables (one row of the unit hypercube per sample, ``n_dims`` columns):
   The end-effector joint ``P`` is in free flight (assumption 3) and adds no displacement.
 
 The paper gives no value of ``r_c``: :data:`DEFAULT_CLEARANCE` is our choice (see docs).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+r1, r2, r3 : float
+    Nominal crank, coupler and half-base lengths, in the length unit of the design
+    (dimensionless in the paper).
+poses : array_like, shape (n_poses, 2) or (2,)
+    Nominal end-effector positions, length unit.
 """
 from __future__ import annotations
 
@@ -118,9 +128,6 @@ class UncertaintyModel:
         ----------
         u : ndarray, shape (n, n_dims)
             Rows of the unit hypercube ``[0, 1)^n_dims``.
-        r1, r2, r3 : float
-            Nominal crank, coupler and half-base lengths, in the length unit of the design
-            (dimensionless in the paper).
 
         Returns
         -------
@@ -213,11 +220,6 @@ def position_deviations(poses, r1, r2, r3, model: UncertaintyModel, unit: np.nda
 
     Parameters
     ----------
-    poses : array_like, shape (n_poses, 2) or (2,)
-        Nominal end-effector positions, length unit.
-    r1, r2, r3 : float
-        Nominal crank, coupler and half-base lengths, in the length unit of the design
-        (dimensionless in the paper).
     model : UncertaintyModel
         Distributions of the uncertain parameters.
     unit : ndarray, shape (n_samples, n_dims)
@@ -273,11 +275,6 @@ def sample_deviations(poses, r1, r2, r3, model: UncertaintyModel | None = None, 
 
     Parameters
     ----------
-    poses : array_like, shape (n_poses, 2) or (2,)
-        Nominal end-effector positions, length unit.
-    r1, r2, r3 : float
-        Nominal crank, coupler and half-base lengths, in the length unit of the design
-        (dimensionless in the paper).
     model : UncertaintyModel or None
         Distributions; None: :class:`UncertaintyModel` () (Table 1).
     n_samples : int
@@ -374,11 +371,6 @@ def convergence_study(poses, r1, r2, r3, model: UncertaintyModel | None = None,
 
     Parameters
     ----------
-    poses : array_like, shape (n_poses, 2) or (2,)
-        Nominal end-effector positions, length unit.
-    r1, r2, r3 : float
-        Nominal crank, coupler and half-base lengths, in the length unit of the design
-        (dimensionless in the paper).
     model : UncertaintyModel or None
         Distributions; None: :class:`UncertaintyModel` ().
     sizes : sequence of int

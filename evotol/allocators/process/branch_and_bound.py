@@ -116,6 +116,25 @@ def allocate_process_optimum(problem: ProcessProblem, *, budget: None = None, me
         than ``worst_case`` or ``rss`` (from :class:`evotol.measures.constraints.ConstraintRows`).
     evotol.errors.InfeasibleError
         No process choice can hold the requirement (every source at its finest process's lower limit misses it).
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import Process
+    >>> turn = Process("turning", PowerCost(1.0, 1.0, scale=1e-3), lower=3e-5, upper=1e-4)
+    >>> grind = Process("grinding", PowerCost(3.0, 1.0, scale=1e-3), lower=2e-6, upper=3e-5)
+    >>> pp = assembly_problem(stack, processes={n: [turn, grind] for n in stack.source_names})
+    >>> from evotol import allocate_process_optimum
+    >>> best = allocate_process_optimum(pp)                    # exact: branch and bound
+    >>> best.processes                                          # x2 needs grinding
+    {'x1': 'turning', 'x2': 'grinding', 'x3': 'turning'}
+    >>> best.feasible, round(best.cost, 2)
+    (True, 175.68)
     """
     pp = check_no_budget(problem, budget, "allocate_process_optimum")
     if method not in ("branch_and_bound", "enumerate"):

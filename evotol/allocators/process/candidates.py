@@ -40,6 +40,14 @@ class Process:
     -----
     A plain value: :class:`ProcessProblem` checks it and raises
     :class:`evotol.errors.ValidationError` naming the source and the process.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import Process
+    >>> grind = Process("grinding", PowerCost(3.0, 1.0, scale=1e-3), lower=2e-6, upper=2e-5)
+    >>> grind.name, grind.lower, grind.upper                   # tolerance range (m)
+    ('grinding', 2e-06, 2e-05)
     """
 
     name: str

@@ -112,6 +112,23 @@ def allocate_process_ga(problem: ProcessProblem, *, budget: None = None, seed: i
         The GA found no feasible design (raise ``n_gen`` / ``pop_size``), a ``budget``, a
         ``problem`` that is not a :class:`ProcessProblem`, or a requirement measure other than
         ``worst_case`` or ``rss`` (from :class:`evotol.measures.constraints.ConstraintRows`).
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import Process
+    >>> turn = Process("turning", PowerCost(1.0, 1.0, scale=1e-3), lower=3e-5, upper=1e-4)
+    >>> grind = Process("grinding", PowerCost(3.0, 1.0, scale=1e-3), lower=2e-6, upper=3e-5)
+    >>> pp = assembly_problem(stack, processes={n: [turn, grind] for n in stack.source_names})
+    >>> from evotol import allocate_process_ga, allocate_process_optimum
+    >>> ga = allocate_process_ga(pp, pop_size=20, n_gen=10, seed=0)
+    >>> ga.feasible, ga.cost >= allocate_process_optimum(pp).cost * (1 - 1e-9)
+    (True, True)
     """
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.optimize import minimize

@@ -2,7 +2,17 @@
 :mod:`evotol.allocators.process`), and the problem check every process allocator starts with.
 
 Its parts: the candidate processes (:mod:`~evotol.allocators.process.candidates`), the result of an
-allocation (:mod:`~evotol.allocators.process.result`)."""
+allocation (:mod:`~evotol.allocators.process.result`).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+T : array_like, (n, n_sources) or (n_sources,)
+    Designs (m or rad).
+choice : sequence of int, (n_sources,)
+    Index of the chosen process of every source.
+"""
 from __future__ import annotations
 
 import copy
@@ -47,6 +57,21 @@ class ProcessProblem:
         A robot or requirement of the wrong type, a source without processes or a process for
         no source, a process that is not a :class:`Process`, duplicate process names, a negative
         or non-finite ``fixed_cost``, a cost model invalid on its range, or a dominated process.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import Process
+    >>> turn = Process("turning", PowerCost(1.0, 1.0, scale=1e-3), lower=3e-5, upper=1e-4)
+    >>> grind = Process("grinding", PowerCost(3.0, 1.0, scale=1e-3), lower=2e-6, upper=3e-5)
+    >>> pp = assembly_problem(stack, processes={n: [turn, grind] for n in stack.source_names})
+    >>> pp.n_sources, pp.n_combinations
+    (3, 8)
     """
 
     def __init__(self, robot: RobotErrorModel, processes: Mapping[str, Sequence[Process]], requirement: Requirement,
@@ -99,11 +124,6 @@ class ProcessProblem:
     def quality_loss(self, T) -> np.ndarray:
         """Expected quality loss Σ_j q_j t_j² of designs T (n, n_sources) SI -> (n,) (0 without a loss term).
 
-        Parameters
-        ----------
-        T : array_like, (n, n_sources) or (n_sources,)
-            Designs (m or rad).
-
         Returns
         -------
         numpy.ndarray
@@ -124,11 +144,6 @@ class ProcessProblem:
 
     def choice_names(self, choice) -> dict[str, str]:
         """Process names of a choice.
-
-        Parameters
-        ----------
-        choice : sequence of int, (n_sources,)
-            Index of the chosen process of every source.
 
         Returns
         -------
@@ -166,11 +181,6 @@ class ProcessProblem:
     def subproblem(self, choice) -> ToleranceProblem:
         """The convex allocation problem of one process choice (shares the cached geometry).
 
-        Parameters
-        ----------
-        choice : sequence of int, (n_sources,)
-            Index of the chosen process of every source.
-
         Returns
         -------
         ToleranceProblem
@@ -189,11 +199,6 @@ class ProcessProblem:
 
     def fixed_cost(self, choice) -> float:
         """Sum of the set-up costs of a choice.
-
-        Parameters
-        ----------
-        choice : sequence of int, (n_sources,)
-            Index of the chosen process of every source.
 
         Returns
         -------
@@ -254,11 +259,6 @@ class ProcessProblem:
     def normalised_error(self, T) -> np.ndarray:
         """Exact max error / bound over poses and components (<= 1: feasible).
 
-        Parameters
-        ----------
-        T : array_like, (n, n_sources) or (n_sources,)
-            Designs (m or rad).
-
         Returns
         -------
         numpy.ndarray
@@ -308,8 +308,6 @@ class ProcessProblem:
 
         Parameters
         ----------
-        T : array_like, (n, n_sources) or (n_sources,)
-            Designs (m or rad).
         model : evotol.measures.statistical.FirstOrderYield or None
             The statistical model (default: :meth:`yield_model` with normal sources).
 
@@ -413,6 +411,20 @@ def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None
     evotol.errors.ValidationError
         Neither or both of ``tolerances`` and ``processes``, or what the problem's constructor
         refuses.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> problem.n_poses, problem.n_sources                     # one response, three dimensions
+    (1, 3)
+    >>> ev = problem.evaluate([[1e-5, 1e-5, 1e-5]])            # error / limit: (1 + 2 + 0.5) * 1e-5 / 1e-4
+    >>> round(float(ev.position[0, 0]), 12)
+    0.35
     """
     req = Requirement(position=1.0, measure=measure, **requirement)
     if (tolerances is None) == (processes is None):

@@ -45,6 +45,26 @@ class ProcessResult:
         ``rtol``, the leaf's gap and KKT residual, the proof's wording).
     history : list or None
         Per-generation record of the GA (best feasible cost, NaN while none), when kept.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import LinearStack, Tolerance, assembly_problem
+    >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
+    >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
+    ...        for n in stack.source_names}                                   # cost 1e-3 / t
+    >>> problem = assembly_problem(stack, tol)                                # worst case <= 0.1 mm
+    >>> from evotol import Process
+    >>> turn = Process("turning", PowerCost(1.0, 1.0, scale=1e-3), lower=3e-5, upper=1e-4)
+    >>> grind = Process("grinding", PowerCost(3.0, 1.0, scale=1e-3), lower=2e-6, upper=3e-5)
+    >>> pp = assembly_problem(stack, processes={n: [turn, grind] for n in stack.source_names})
+    >>> from evotol import allocate_process_optimum
+    >>> best = allocate_process_optimum(pp)
+    >>> print(best.table(pp, unit=1e-6, unit_name="um").round(2).to_string(index=False))
+    source  process  tolerance (um)   cost
+        x1  turning           30.00  33.33
+        x2 grinding           27.16 110.46
+        x3  turning           31.36  31.89
     """
 
     method: str

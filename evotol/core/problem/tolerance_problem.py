@@ -104,6 +104,21 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         ``as_array``, ``intervals``, ``source_errors``.
     evotol.core.problem.costs.ProblemCosts : ``cost``, ``free_cost``, ``source_costs``, ``dcost``,
         ``variable_dcost``.
+
+    Examples
+    --------
+    >>> from cost_models import PowerCost
+    >>> from evotol import Requirement, Tolerance, ToleranceProblem
+    >>> from robots.ucr3 import UCR3
+    >>> robot = UCR3()
+    >>> tol = {s.name: Tolerance(PowerCost(1.0, 1.0, scale=1e-5), lower=1e-6, upper=1e-4)
+    ...        for s in robot.sources}
+    >>> problem = ToleranceProblem(robot, tol, Requirement(position=5e-5, measure="rss"),
+    ...                            robot.workspace.grid([2, 2, 2]))
+    >>> problem.n_poses, problem.n_sources
+    (8, 12)
+    >>> problem.evaluate([[1e-5] * 12]).position.shape         # RSS error (m) per design and pose
+    (1, 8)
     """
 
     def __init__(self, robot: RobotErrorModel, tolerances: Mapping[str, Tolerance], requirement: Requirement,

@@ -42,22 +42,8 @@ class MCQuantileMeasure(Measure):
     monotone_rtol = 3e-2
 
     def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
-        """The quantile per pose and design; see :meth:`Measure.evaluate`.
-
-        Parameters
-        ----------
-        problem : evotol.core.problem.ToleranceProblem
-            The problem (robot sensitivities, tolerances, requirement, poses).
-        T : ndarray, shape (n_designs, n_sources)
-            Source tolerances (SI: m or rad), already validated.
-        top_only : bool
-            Ignored: every pose is computed.
-
-        Returns
-        -------
-        Evaluation
-            ``position`` (m) / ``orientation`` (rad): the requirement's ``quantile`` of the
-            error norm (n_designs, n_poses), also as the ``*_bound``; and the ``violation``.
+        """The requirement's ``quantile`` of the error norm per pose and design (also as the
+        ``*_bound``); ``top_only`` is ignored (every pose is computed).
         """
         Z = unit_samples(problem)
         parts = {}
@@ -71,20 +57,9 @@ class MCQuantileMeasure(Measure):
         return evaluation_of(parts, violation(problem, parts))
 
     def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
-        """Sample by sample through the whole sensitivity matrix J (n_poses, 6, n_columns): the
-        error twist J·e of each sample's stacked source errors, its norm, the quantile per pose.
-
-        Parameters
-        ----------
-        problem : evotol.core.problem.ToleranceProblem
-            A small problem.
-        t : ndarray, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        dict of str to ndarray, shape (n_poses,)
-            ``"position"`` (m) and ``"orientation"`` (rad) quantiles per pose.
+        """Sample by sample through the whole sensitivity matrix J (n_poses, 6, n_columns): the error
+        twist J·e of each sample's stacked source errors, its norm, the quantile per pose; returns
+        ``"position"`` (m) and ``"orientation"`` (rad) quantiles per pose.
         """
         E = np.concatenate(problem.source_errors(unit_samples(problem), t), axis=1)   # (n_samples, n_columns)
         rows = {"position": slice(0, 3), "orientation": slice(3, 6)}

@@ -15,22 +15,8 @@ class RSSMeasure(Measure):
     name = "rss"
 
     def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
-        """RSS errors and each source's share of the squared RSS part; see :meth:`Measure.evaluate`.
-
-        Parameters
-        ----------
-        problem : evotol.core.problem.ToleranceProblem
-            The problem (robot sensitivities, tolerances, requirement, poses).
-        T : ndarray, shape (n_designs, n_sources)
-            Source tolerances (SI: m or rad), already validated.
-        top_only : bool
-            Ignored: the RSS is cheap at every pose.
-
-        Returns
-        -------
-        Evaluation
-            ``position`` (m) / ``orientation`` (rad) RSS errors (n_designs, n_poses), also as
-            the ``*_bound``; ``*_contrib`` the sources' shares; the ``violation``.
+        """RSS errors per pose, also as the ``*_bound``, and each source's share of the squared RSS part
+        (``*_contrib``); ``top_only`` is ignored (the RSS is cheap at every pose).
         """
         plain = problem.shape.plain
         Th = T if plain else T * problem.shape.rho
@@ -48,20 +34,9 @@ class RSSMeasure(Measure):
         return evaluation_of(parts, violation(problem, parts))
 
     def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
-        """Pose by pose and source by source: the largest singular value of each block (SVD),
-        the half-widths ρ_j t_j, and the mean shift Σ_j B_j c_j with c_j = offset_j + κ_j t_j.
-
-        Parameters
-        ----------
-        problem : evotol.core.problem.ToleranceProblem
-            A small problem.
-        t : ndarray, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        dict of str to ndarray, shape (n_poses,)
-            ``"position"`` (m) and ``"orientation"`` (rad) RSS errors per pose.
+        """Pose by pose and source by source: the largest singular value of each block (SVD), the
+        half-widths ρ_j t_j, and the mean shift Σ_j B_j c_j with c_j = offset_j + κ_j t_j; returns
+        ``"position"`` (m) and ``"orientation"`` (rad) RSS errors per pose.
         """
         sh = problem.shape
         out = {}

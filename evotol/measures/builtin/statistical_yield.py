@@ -47,44 +47,18 @@ class YieldMeasure(Measure):
     brute_force_atol = 0.005   # the Monte Carlo of brute_force has 40 000 samples: σ ≈ 0.0011 at a yield of 0.95
 
     def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
-        """Equivalent errors of the constrained components, the yield's lower bound and whether it
-        is exact (every source normal); see :meth:`Measure.evaluate`.
-
-        Parameters
-        ----------
-        problem : evotol.core.problem.ToleranceProblem
-            The problem (robot sensitivities, tolerances, requirement, poses).
-        T : ndarray, shape (n_designs, n_sources)
-            Source tolerances (SI: m or rad), already validated.
-        top_only : bool
-            Ignored: the yield is computed at every pose.
-
-        Returns
-        -------
-        Evaluation
-            ``position`` (m) / ``orientation`` (rad): the k-sigma equivalent errors of the
-            constrained components (n_designs, n_poses); ``probability`` the yield's lower
-            bound per pose; ``exact``; the ``violation``.
+        """The k-sigma equivalent errors of the constrained components, ``probability`` the yield's
+        lower bound per pose, and whether it is ``exact`` (every source normal); ``top_only`` is
+        ignored (the yield is computed at every pose).
         """
         y = first_order_yield(problem).evaluate(T, problem.requirement.required_yield)
         parts = {c: ComponentErrors(y.equivalent[c], y.equivalent[c], y.contributions.get(c)) for c in y.miss}
         return evaluation_of(parts, y.violation, probability=y.probability, exact=y.exact)
 
     def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
-        """The yield per pose by direct Monte Carlo of the linear model (40 000 samples of the
-        sources' distributions, seed 7): the share of samples whose errors meet every bound.
-
-        Parameters
-        ----------
-        problem : evotol.core.problem.ToleranceProblem
-            A small problem.
-        t : ndarray, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        dict of str to ndarray, shape (n_poses,)
-            ``"probability"``: the estimated yield per pose (dimensionless, 0 to 1).
+        """The yield per pose by direct Monte Carlo of the linear model (40 000 samples of the sources'
+        distributions, seed 7): the share of samples whose errors meet every bound, returned as
+        ``"probability"`` (dimensionless, 0 to 1).
         """
         Z = distributions.unit_samples([s.dim for s in problem.error_model.sources], problem.distributions, 40_000,
                                        method="mc", seed=7)

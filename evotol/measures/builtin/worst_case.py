@@ -22,24 +22,11 @@ class WorstCaseMeasure(Measure):
     clearances = True
 
     def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
-        """Attained worst case (``position``), proven bound (``position_bound``), worst direction
-        and each source's share, per component; see :meth:`Measure.evaluate`.
+        """Attained worst case (``position`` / ``orientation``), proven bound (``*_bound``), worst
+        direction (``*_direction``) and each source's share (``*_contrib``), per component.
 
-        Parameters
-        ----------
-        problem : evotol.core.problem.ToleranceProblem
-            The problem (robot sensitivities, tolerances, requirement, poses).
-        T : ndarray, shape (n_designs, n_sources)
-            Source tolerances (SI: m or rad), already validated.
-        top_only : bool
-            Refine only the poses that can hold the largest error (others keep a lower grid
-            estimate); not used with clearance sources.
-
-        Returns
-        -------
-        Evaluation
-            ``position`` (m) / ``orientation`` (rad) attained worst case (n_designs, n_poses),
-            ``*_bound`` the proven bound, ``*_direction``, ``*_contrib`` and the ``violation``.
+        ``top_only`` refines only the poses that can hold the largest error (others keep a lower grid
+        estimate); it is not used with clearance sources.
 
         Raises
         ------
@@ -67,20 +54,9 @@ class WorstCaseMeasure(Measure):
         return evaluation_of(parts, violation(problem, parts))
 
     def brute_force(self, problem, t: np.ndarray) -> dict[str, np.ndarray]:
-        """The largest error norm over every vertex of the box of interval ends (exact for a
-        problem of interval sources only: the norm is convex, its maximum sits at a vertex).
-
-        Parameters
-        ----------
-        problem : evotol.core.problem.ToleranceProblem
-            A small problem.
-        t : ndarray, shape (n_sources,)
-            One design (SI: m or rad).
-
-        Returns
-        -------
-        dict of str to ndarray, shape (n_poses,)
-            ``"position"`` (m) and ``"orientation"`` (rad) worst case per pose.
+        """The largest error norm over every vertex of the box of interval ends (exact for a problem of
+        interval sources only: the norm is convex, its maximum sits at a vertex); returns
+        ``"position"`` (m) and ``"orientation"`` (rad) worst case per pose.
 
         Raises
         ------

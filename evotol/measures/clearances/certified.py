@@ -108,18 +108,8 @@ class WithClearances(RobotErrorModel):
         self.n_geometric = len(self.sources) - len(clearances.sources)
 
     def sensitivity(self, poses) -> np.ndarray:
-        """First-order map of the geometric sources, with zero columns for the clearance classes.
-
-        Parameters
-        ----------
-        poses : array_like, (n_poses, d)
-            Poses in the robot's pose coordinates (m or rad).
-
-        Returns
-        -------
-        numpy.ndarray
-            (n_poses, 6, n_sources) Jacobian of the twist ``[dp; dtheta]`` (m, rad) with respect
-            to the sources (per SI unit of each source); the clearance columns are 0.
+        """First-order map of the geometric sources (the wrapped robot's), with zero columns for the
+        clearance classes.
         """
         J = np.asarray(self.base.sensitivity(poses), float) if self.geometric else \
             np.zeros((len(self.check_poses(poses)), 6, 0))
@@ -127,13 +117,6 @@ class WithClearances(RobotErrorModel):
 
     def pose_error(self, poses, errors) -> np.ndarray:   # pragma: no cover - guarded by has_nonlinear_model
         """Not available: clearances have no nonlinear model (:attr:`has_nonlinear_model` is False).
-
-        Parameters
-        ----------
-        poses : array_like
-            Poses (unused).
-        errors : array_like
-            Source errors (unused).
 
         Raises
         ------

@@ -49,6 +49,13 @@ class ClearanceClass:
     evotol.errors.ValidationError
         No joint, empty bounds, an unknown component, a factor that is not positive, or a
         ``unit`` other than ``"m"``, ``"rad"``.
+
+    Examples
+    --------
+    >>> from evotol import ClearanceClass
+    >>> radial = ClearanceClass("radial", ("A", "C"), {"b_xy": 1.0})   # one radial play for joints A, C
+    >>> radial.name, radial.joints
+    ('radial', ('A', 'C'))
     """
 
     name: str
@@ -145,6 +152,18 @@ class ClearanceSources:
         Not a clearance mechanism, no class, a class that is not a :class:`ClearanceClass`, a
         joint without clearance, a bound set by two classes, duplicate class names, or
         ``base_bounds`` of the wrong shape or negative.
+
+    Examples
+    --------
+    >>> from evotol import ClearanceClass, ClearanceSources, MechanismModel
+    >>> from robots.mechanism.model import resolve_description
+    >>> robot = MechanismModel(resolve_description("fivebar"))
+    >>> mech = robot.clearance_mechanism()
+    >>> [j.name for j in mech.joints]
+    ['A', 'C', 'B', 'D', 'E']
+    >>> cl = ClearanceSources(mech, [ClearanceClass("radial", ("A", "C"), {"b_xy": 1.0})])
+    >>> cl.names
+    ('radial',)
     """
 
     mechanism: object

@@ -4,6 +4,13 @@ This package only hands names on: the worst-case and RSS stack-ups are in
 :mod:`evotol.measures.linear.stackup`, the support function with asymmetric intervals (interval shape,
 mean shift, support coefficients) in :mod:`evotol.measures.linear.support`, and the direction grids with
 their covering angle in :mod:`evotol.measures.linear.directions`.
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+blocks : list of ndarray, each shape (n_poses, 3, dim_j)
+    Sensitivity blocks B_j of one component.
 """
 from evotol.measures.linear.directions import circle, directions_for
 from evotol.measures.linear.directions import hemisphere  # noqa: F401  (a cached grid, not listed)

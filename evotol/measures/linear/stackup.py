@@ -85,8 +85,6 @@ def refine_direction(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray, ite
 
     Parameters
     ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component.
     t : ndarray, shape (n_designs, n_src)
         Half-widths ρ_j t_j (SI: m or rad).
     u : ndarray, shape (n_designs, n_poses, 3)
@@ -222,8 +220,6 @@ def worst_case_errors(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray,
 
     Parameters
     ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component.
     t : ndarray, shape (n_src,)
         One design (SI: m or rad).
     u : ndarray, shape (n_poses, 3)
@@ -250,11 +246,6 @@ def worst_case_errors(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray,
 
 def spectral_norms(blocks: list[np.ndarray]) -> np.ndarray:
     """‖B_j‖₂ at every pose, shape (n_poses, n_src): each source's largest effect per unit tolerance.
-
-    Parameters
-    ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component.
 
     Returns
     -------

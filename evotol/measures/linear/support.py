@@ -140,8 +140,6 @@ def support_constant(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalSha
 
     Parameters
     ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component.
     D : ndarray, shape (n_dir, 3)
         Unit directions u_d.
     shape : IntervalShape or None

@@ -61,6 +61,14 @@ class Distribution:
     Notes
     -----
     A plain value: :meth:`validate` raises :class:`evotol.errors.ValidationError`.
+
+    Examples
+    --------
+    >>> from evotol import Distribution
+    >>> normal = Distribution("normal", sigma_k=3.0)            # t = 3 sigma
+    >>> normal.validate()
+    >>> normal.is_normal, Distribution().kind
+    (True, 'uniform')
     """
 
     kind: str = "uniform"

@@ -137,8 +137,6 @@ class FirstOrderYield:
 
         Parameters
         ----------
-        T : array_like, shape (n_designs, n_sources) or (n_sources,)
-            Designs (SI: m or rad).
         probability : float
             Required yield p, in (0, 1).
 

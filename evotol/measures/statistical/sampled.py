@@ -118,11 +118,6 @@ class SampledYield:
     def norms(self, T: np.ndarray) -> dict:
         """component -> ``|error|`` (n_designs, n_poses, n_samples), NaN where not assembled.
 
-        Parameters
-        ----------
-        T : array_like, shape (n_designs, n_sources) or (n_sources,)
-            Designs (SI: m or rad).
-
         Returns
         -------
         dict of str to ndarray, shape (n_designs, n_poses, n_samples)
@@ -147,8 +142,6 @@ class SampledYield:
 
         Parameters
         ----------
-        T : array_like, shape (n_designs, n_sources) or (n_sources,)
-            Designs (SI: m or rad).
         probability : float
             Required yield p, in (0, 1).
 

@@ -12,6 +12,18 @@ gives them all:
 * :mod:`.jacobians` -- ``J_x``, ``J_q``, ``det J_x`` and the LCI (Sec. 3);
 * :mod:`.singularities` -- type I circles (eqs. 16-19), type II locus, distance to them;
 * :mod:`.workspace` -- usable workspace and its MIC (eqs. 20-22, closed form and numeric search).
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+r1, r2, r3 : float
+    Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
+    (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
+working_mode : str or tuple of int
+    ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
+assembly : {1, -1}
+    Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
 """
 from robots.planar5r.kinematics.conventions import DEFAULT_WORKING_MODE, WORKING_MODES, cross2, working_mode_signs
 from robots.planar5r.kinematics.jacobians import (inverse_condition_number, jacobian, jacobians,

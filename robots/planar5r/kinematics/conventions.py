@@ -47,11 +47,6 @@ DEFAULT_WORKING_MODE = "+-"
 def working_mode_signs(working_mode) -> tuple[int, int]:
     """Signs ``(m_1, m_2)`` of a working mode (see the module docstring).
 
-    Parameters
-    ----------
-    working_mode : str or tuple of int
-        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
-
     Returns
     -------
     tuple of int

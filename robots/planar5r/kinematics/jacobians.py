@@ -3,6 +3,15 @@
 ``J_x dP = J_q dtheta`` from differentiating ``|P - B_i|^2 = r2^2``; the type II determinant
 ``det J_x`` (its sign is the assembly mode), the closed-form inverse condition number of 2x2
 matrices and the local conditioning index (LCI, Gao et al. 1998).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+p : array_like, shape (..., 2)
+    End-effector positions, length unit.
+theta : array_like, shape (..., 2)
+    Crank angles ``theta_1, theta_2`` at ``p``, rad.
 """
 from __future__ import annotations
 
@@ -20,10 +29,6 @@ def jacobians(p, theta, r1, r3):
 
     Parameters
     ----------
-    p : array_like, shape (..., 2)
-        End-effector positions, length unit.
-    theta : array_like, shape (..., 2)
-        Crank angles ``theta_1, theta_2`` at ``p``, rad.
     r1, r3 : float
         Crank and half-base lengths (the length unit of the positions).
 
@@ -48,10 +53,6 @@ def jacobian(p, theta, r1, r3) -> np.ndarray:
 
     Parameters
     ----------
-    p : array_like, shape (..., 2)
-        End-effector positions, length unit.
-    theta : array_like, shape (..., 2)
-        Crank angles ``theta_1, theta_2`` at ``p``, rad.
     r1, r3 : float
         Crank and half-base lengths (the length unit of the positions).
 
@@ -69,10 +70,6 @@ def type2_determinant(p, theta, r1, r3) -> np.ndarray:
 
     Parameters
     ----------
-    p : array_like, shape (..., 2)
-        End-effector positions, length unit.
-    theta : array_like, shape (..., 2)
-        Crank angles ``theta_1, theta_2`` at ``p``, rad.
     r1, r3 : float
         Crank and half-base lengths (the length unit of the positions).
 
@@ -115,16 +112,6 @@ def local_conditioning_index(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -
 
     Uses ``adj(J_x) diag(J_q)``, which has the condition number of ``J`` and stays finite at
     type II singularities (LCI = 0 there).
-
-    Parameters
-    ----------
-    p : array_like, shape (..., 2)
-        End-effector positions, length unit.
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-    working_mode : str or tuple of int
-        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
 
     Returns
     -------

@@ -36,14 +36,9 @@ def perturbed_position(theta, r1, r2, r3, errors: dict, assembly=1):
     ----------
     theta : array_like, shape (..., 2)
         Nominal crank angles, rad.
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
     errors : dict of str to array_like
         Error values by name of :data:`ERROR_PARAMETERS` (lengths and clearance components in
         the length unit, ``dth*`` in rad); missing names are zero.
-    assembly : {1, -1}
-        Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
 
     Returns
     -------

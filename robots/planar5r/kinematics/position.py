@@ -3,6 +3,13 @@
 Inverse kinematics in the four working modes (law of cosines in each chain) and forward
 kinematics in both assembly modes (intersection of the coupler circles), with the paper's
 closed form eqs. 13-15 beside it. Frame and branch signs: :mod:`.conventions`.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+theta : array_like, shape (..., 2)
+    Crank angles, rad.
 """
 from __future__ import annotations
 
@@ -28,11 +35,6 @@ def inverse_kinematics_raw(px, py, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE
     ----------
     px, py : array_like
         End-effector coordinates, length unit, broadcastable.
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-    working_mode : str or tuple of int
-        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
 
     Returns
     -------
@@ -73,8 +75,6 @@ def inverse_kinematics(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -> np.n
         Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
         (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`); arrays
         broadcast with ``p[..., 0]`` (one set of lengths per pose).
-    working_mode : str or tuple of int
-        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
 
     Returns
     -------
@@ -144,8 +144,6 @@ def crank_points(theta, r1, r3) -> np.ndarray:
 
     Parameters
     ----------
-    theta : array_like, shape (..., 2)
-        Crank angles, rad.
     r1, r3 : float
         Crank and half-base lengths (the length unit of the positions).
 
@@ -172,11 +170,6 @@ def forward_kinematics(theta, r1, r2, r3, assembly=1) -> np.ndarray:
     ----------
     theta : array_like, shape (..., 2)
         Crank angles ``theta_1, theta_2``, rad.
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-    assembly : {1, -1}
-        Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
 
     Returns
     -------
@@ -213,11 +206,6 @@ def forward_kinematics_eq15(theta, r1, r2, r3, sigma=1, printed=False) -> np.nda
 
     Parameters
     ----------
-    theta : array_like, shape (..., 2)
-        Crank angles, rad.
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
     sigma : {1, -1}
         Root of eq. 14 (+1: the larger ``y``).
     printed : bool

@@ -15,12 +15,6 @@ from robots.planar5r.kinematics.position import circle_intersection
 def type1_circles(r1, r2, r3) -> list[dict]:
     """The circles bounding the theoretical workspace, eqs. 16-19 (type I singular loci).
 
-    Parameters
-    ----------
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-
     Returns
     -------
     list of dict
@@ -42,11 +36,6 @@ def type2_locus(r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, n: int = 20000) -
 
     Parameters
     ----------
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-    working_mode : str or tuple of int
-        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
     n : int
         Samples of the coupler direction (and of each ``B_1 = B_2`` circle).
 
@@ -89,11 +78,6 @@ def distance_to_singular_loci(points, r1, r2, r3, working_mode=DEFAULT_WORKING_M
     ----------
     points : array_like, shape (n, 2)
         Points, length unit.
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-    working_mode : str or tuple of int
-        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
     locus : ndarray, shape (k, 2), or None
         Precomputed type II locus; None: :func:`type2_locus`.
 

@@ -26,12 +26,6 @@ def mic_closed_form(r1, r2, r3) -> dict:
     ``y_col`` is the height of the type II posture with ``B_1 = (-r2, y)``, ``P = (0, y)``,
     ``B_2 = (r2, y)``; eq. 22's circle touches it and the outer circles eqs. 16/18.
 
-    Parameters
-    ----------
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-
     Returns
     -------
     dict
@@ -66,13 +60,6 @@ def mic_numeric(r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, assembly=1, n: in
 
     Parameters
     ----------
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-    working_mode : str or tuple of int
-        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
-    assembly : {1, -1}
-        Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
     n : int
         Grid size on the axis ``0 <= y <= r1 + r2`` (``y = 0`` dropped) before the local
         refinement.
@@ -166,13 +153,6 @@ def usable_workspace(r1, r2, r3, working_mode=DEFAULT_WORKING_MODE, assembly=1, 
 
     Parameters
     ----------
-    r1, r2, r3 : float
-        Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`).
-    working_mode : str or tuple of int
-        ``"+-"`` (default), ``"-+"``, ``"++"``, ``"--"`` or a pair ``(m_1, m_2)`` of +1/-1.
-    assembly : {1, -1}
-        Assembly mode sigma (side of ``B_1 -> B_2`` on which ``P`` lies).
     n : int
         Grid points per side of the first grid.
     seed : tuple of float or None
