@@ -42,11 +42,14 @@ from evotol.studyfile.processes import run_process_study
 from evotol.core.quality_loss import with_quality_loss
 from evotol.reporting.export import FORMATS as EXPORT_FORMATS
 from evotol.reporting.export import write_tolerance_table
+from evotol.reporting.callout_drawing import write_callout_exports
 from evotol.reporting.user_study import render_user_study
+from evotol.studyfile.callout_comparison import callout_summary
 from evotol.studies import StudyResult, write_outputs
 from evotol.summaries.user_study import study_summary
 from robots import registry
 from robots.assembly import assembly_from_spec
+from robots.mechanism.callout_table import callout_model_from_table, expand_callout_overrides
 from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
@@ -226,7 +229,9 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         raise ValidationError("processes", sorted(spec["processes"]), "no [processes.*] here: a process-selection study "
                               "is read by evotol.studyfile.processes.load_process_problem (evotol run does so)")
     rs = dict(spec.get("robot", {}))
-    if "mechanism" in rs or "urdf" in rs:       # a description (robots/mechanism, docs/mechanisms.md); its
+    if "callouts" in rs:                        # drawing callouts on joint seats (docs/callouts.md, issue 35)
+        robot = callout_model_from_table(rs, base_dir)
+    elif "mechanism" in rs or "urdf" in rs:     # a description (robots/mechanism, docs/mechanisms.md); its
         robot = model_from_table(rs, base_dir)  # [robot.assembly] table is the assembly configuration
     elif "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
         robot = assembly_from_spec(rs)
@@ -257,7 +262,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     bounds = spec.get("bounds", {})
     _check_bounds_table(bounds, sourced)
     costs = spec.get("cost", {})
-    overrides = spec.get("sources", {})
+    overrides = expand_callout_overrides(spec.get("sources", {}), sourced)   # [sources."J.position"]: its members
     unknown = set(overrides) - set(sourced.source_names)
     if unknown:
         u = sorted(unknown)[0]
@@ -382,6 +387,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["warnings"] = plausibility.study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)
     summary["interrupted"] = bool(stopped)
+    if hasattr(problem.robot, "describe_callouts") and results and not stopped:   # exact zones vs boxes (issue 35)
+        summary["callouts"] = callout_summary(problem, **({"refine": refine_option(spec)} if refine_option(spec) else {}))
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
     if results:     # the drawing table, linked from the page (evotol/reporting/export.py)
@@ -390,5 +397,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     paths = write_outputs(name, out, StudyResult(summary), rep)
     for f in summary.get("exports", {}).values():
         write_tolerance_table(summary, out / f)
+    if summary.get("callouts"):     # the drawing callouts: a CSV, and two sheets of the workbook
+        summary["exports"]["drawing"] = f"{name}_drawing.csv"
+        write_callout_exports(summary, out / f"{name}_drawing.csv", out / summary["exports"]["xlsx"])
     summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary
