@@ -16,7 +16,7 @@ import pytest
 
 from evotol.allocators import allocate_ga, allocate_nsga2, allocate_optimum, allocate_sensitivity
 from evotol.studyfile import load_problem
-from evotol.studyfile.callout_comparison import zone_comparison
+from evotol.studyfile.callouts import zone_comparison
 from evotol.verification.nonlinear import worst_vertex_errors
 
 STUDY = Path(__file__).resolve().parents[1] / "reports" / "studies" / "ur5_callouts.toml"

@@ -7,6 +7,7 @@ cylinder to second order); central finite differences of the nonlinear model
 (:func:`robots.base.check_robot`); a brute-force grid over the two end circles against the
 worst-case measure, linear and nonlinear.
 """
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -14,8 +15,8 @@ import pytest
 
 from evotol.errors import ValidationError
 from robots.checks import check_robot
-from robots.mechanism.callout_model import CalloutModel, joint_seat
-from robots.mechanism.callout_table import callouts_from_tables, parse_length
+from robots.mechanism.callout_model import CalloutModel
+from robots.mechanism.callout_table import callouts_from_tables, joint_seat, parse_length
 from robots.mechanism.callouts import (Callout, axis_displacement, lateral_basis, worst_axis_displacement,
                                        zone_members)
 from robots.mechanism.description import load_mechanism
@@ -187,3 +188,122 @@ def test_lengths_need_their_unit():
     assert parse_length(0, "x") == 0.0
     with pytest.raises(ValidationError, match="with its unit"):
         parse_length(0.05, "x")
+
+
+RP_ARM_TOML = """
+name = "rp"
+[lengths]
+a = 0.2
+e = 0.1
+[[frame]]
+name = "J1"
+antecedent = "0"
+joint = "revolute"
+actuated = true
+theta = "q1"
+[[frame]]
+name = "J2"
+antecedent = "J1"
+joint = "prismatic"
+actuated = true
+d = "a"
+r = "q2"
+[[frame]]
+name = "E"
+antecedent = "J2"
+d = "e"
+[end_effector]
+frame = "E"
+coordinates = [{ name = "y", low = -0.1, high = 0.1 }, { name = "z", low = 0.05, high = 0.25 }]
+[assembly]
+joints = { q1 = 0.0, q2 = 0.15 }
+[limits]
+q2 = [0.0, 0.3]
+[tolerances]
+sources = ["q1", "q2"]
+[[callouts]]
+joint = "J2"
+kind = "parallelism"
+length = "stroke"
+[[callouts]]
+joint = "J1"
+kind = "position"
+length = "30 mm"
+offset = "-20 mm"
+"""
+RP_ARM = tomllib.loads(RP_ARM_TOML)
+
+
+def test_description_callouts_and_a_prismatic_guide_over_its_stroke():
+    """``[[callouts]]`` in a TOML description: a guide's parallelism over its 300 mm stroke is a
+    tilt disc of radius t/L about the guide's centre, on a [[frame]] joint (axis z of its
+    placement); the model agrees with finite differences."""
+    from robots.mechanism.callout_model import with_callouts
+    from robots.mechanism.description import mechanism_from_dict
+    from robots.mechanism.model import MechanismModel
+
+    mech = mechanism_from_dict(RP_ARM)
+    assert [c.name for c in mech.callouts] == ["J2.parallelism", "J1.position"]
+    assert mech.callouts[0].length == pytest.approx(0.3)
+    m = with_callouts(MechanismModel(mech))
+    assert isinstance(m, CalloutModel)
+    assert m.source_names == ("q1", "q2", "J2.parallelism", "J1.position.end1", "J1.position.end2")
+    (g,) = zone_members(mech.callouts[0], [0, 0, 1])
+    assert np.allclose(g.matrix[3:], [[0, -1 / 0.3], [1 / 0.3, 0], [0, 0]])
+    rep = check_robot(m, m.workspace.grid(2), rtol=1e-6)
+    assert rep["fd_relative_mismatch"] < 1e-6
+
+
+def test_check_mechanism_lists_the_callouts(tmp_path, capsys):
+    from evotol.cli import main
+
+    f = tmp_path / "rp.toml"
+    f.write_text(RP_ARM_TOML)
+    main(["check-mechanism", str(f), "--poses", "4"])
+    out = capsys.readouterr().out
+    assert "2 drawing callouts (exact zones" in out
+    assert "J1.position" in out and "from -35 mm to -5 mm along (0, 0, 1)" in out
+    assert "J2.parallelism" in out and "over 300 mm" in out
+
+
+def test_position_refined_by_orientation_is_a_safe_outer_set(ur5):
+    """Position ⌀t_p and perpendicularity ⌀t_o on one seat: sample the true zone (both ends in
+    their discs and |d2 - d1| <= t_o) by rejection; the model's worst case bounds every sample and
+    the model's own extreme points are in the zone only when t_o -> 0."""
+    from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
+    import cost_models
+
+    cs = [Callout("elbow_joint", "position", 0.05), Callout("elbow_joint", "perpendicularity", 0.05)]
+    m = CalloutModel(ur5, cs, sources=["elbow_joint"])
+    assert m.source_names == ("elbow_joint.position", "elbow_joint.perpendicularity", "elbow_joint")
+    cost = cost_models.from_dict({"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-5})
+    tols = {n: Tolerance(cost=cost, lower=1e-7, upper=1e-3) for n in m.source_names}
+    tols["elbow_joint"] = Tolerance.fixed(1e-12)
+    poses = m.workspace.grid(2)[:2]
+    P = ToleranceProblem(m, tols, Requirement(position=1e-3), poses)
+    tp, to = 20e-6, 8e-6
+    wc = P.evaluate(np.array([[tp, to, 1e-12]]), "worst_case").position[0]
+    rng = np.random.default_rng(3)
+    d1, d2 = _circle(rng, 400_000, tp / 2) * np.sqrt(rng.uniform(0, 1, (400_000, 1))), \
+        _circle(rng, 400_000, tp / 2) * np.sqrt(rng.uniform(0, 1, (400_000, 1)))
+    ok = np.linalg.norm(d2 - d1, axis=1) <= to
+    d1, d2 = d1[ok], d2[ok]
+    # the model's sources: centre displacement e_p = 2 d_c, orientation e_o = d2 - d1
+    E = np.concatenate([d1 + d2, d2 - d1, np.zeros((len(d1), 1))], axis=1)
+    err = np.linalg.norm(np.einsum("pij,nj->pni", P.jacobian[:, :3, :], E), axis=-1).max(axis=1)
+    assert np.all(err <= wc * (1 + 1e-9))
+    assert np.all(err >= 0.7 * wc)           # a bound, not a vast over-estimate here
+
+
+def test_an_orientation_tighter_than_its_position_warns(tmp_path):
+    from evotol.core.plausibility import PlausibilityWarning
+    from evotol.studyfile import load_problem
+
+    spec = {"robot": {"mechanism": "ur5", "sources": ["elbow_joint"],
+                      "callouts": [{"joint": "elbow_joint", "kind": "position", "length": "50 mm"},
+                                   {"joint": "elbow_joint", "kind": "perpendicularity", "length": "50 mm"}]},
+            "poses": {"grid": 2}, "requirement": {"position": 5e-4},
+            "bounds": {"position": {"lower": 2e-5, "upper": 1e-4}, "perpendicularity": {"lower": 1e-6, "upper": 1e-5}},
+            "cost": {"default": {"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-5}}}
+    with pytest.warns(PlausibilityWarning, match="elbow_joint.perpendicularity: orientation .* binds the tilt"):
+        load_problem(spec)

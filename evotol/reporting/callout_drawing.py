@@ -1,7 +1,7 @@
 """The drawing table of a study with callouts, and exact zones against independent boxes (issue 35).
 
 Read from a user study's JSON summary alone (``summary["callouts"]``, written by
-:func:`evotol.studyfile.callout_comparison.callout_summary`): per part (the link that carries the
+:func:`evotol.studyfile.callouts.callout_summary`): per part (the link that carries the
 seat), each feature's callout as an engineer copies it onto the drawing -- symbol and value in
 µm, feature length and where the zone sits on the axis, datums -- with its share of the cost and
 of the worst error; and the side-by-side of the certified optimum under exact zones and under the

@@ -44,12 +44,13 @@ from evotol.reporting.export import FORMATS as EXPORT_FORMATS
 from evotol.reporting.export import write_tolerance_table
 from evotol.reporting.callout_drawing import write_callout_exports
 from evotol.reporting.user_study import render_user_study
-from evotol.studyfile.callout_comparison import callout_summary
+from evotol.studyfile.callouts import callout_summary, callout_warnings
 from evotol.studies import StudyResult, write_outputs
 from evotol.summaries.user_study import study_summary
 from robots import registry
 from robots.assembly import assembly_from_spec
-from robots.mechanism.callout_table import callout_model_from_table, expand_callout_overrides
+from robots.mechanism.callout_model import with_callouts
+from robots.mechanism.callout_table import expand_callout_overrides
 from robots.mechanism.model import model_from_table
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
@@ -229,10 +230,10 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         raise ValidationError("processes", sorted(spec["processes"]), "no [processes.*] here: a process-selection study "
                               "is read by evotol.studyfile.processes.load_process_problem (evotol run does so)")
     rs = dict(spec.get("robot", {}))
-    if "callouts" in rs:                        # drawing callouts on joint seats (docs/callouts.md, issue 35)
-        robot = callout_model_from_table(rs, base_dir)
-    elif "mechanism" in rs or "urdf" in rs:     # a description (robots/mechanism, docs/mechanisms.md); its
-        robot = model_from_table(rs, base_dir)  # [robot.assembly] table is the assembly configuration
+    if "mechanism" in rs or "urdf" in rs:       # a description (robots/mechanism, docs/mechanisms.md); its
+        robot = model_from_table({k: v for k, v in rs.items() if k not in ("callouts", "zones")}, base_dir)
+        # drawing callouts on joint seats: [[robot.callouts]] or the description's (docs/callouts.md, issue 35)
+        robot = with_callouts(robot, rs.get("callouts"), rs.get("zones", "exact"), rs.get("sources"))
     elif "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
         robot = assembly_from_spec(rs)
         spec = {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),
@@ -272,6 +273,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     shared = spec.get("shared")
     problem = ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"),
                                clearances=cl)
+    plausibility.warn(callout_warnings(problem))        # an orientation callout that binds (issue 35)
     # quality_loss = A (or {response = A}): machining cost + Taguchi loss (docs/process_selection.md)
     return with_quality_loss(problem, spec["quality_loss"]) if "quality_loss" in spec else problem
 
@@ -389,6 +391,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["interrupted"] = bool(stopped)
     if hasattr(problem.robot, "describe_callouts") and results and not stopped:   # exact zones vs boxes (issue 35)
         summary["callouts"] = callout_summary(problem, **({"refine": refine_option(spec)} if refine_option(spec) else {}))
+        summary["warnings"] = [*summary["warnings"], *callout_warnings(problem)]
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
     if results:     # the drawing table, linked from the page (evotol/reporting/export.py)

@@ -14,72 +14,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from evotol._runtime.keyword_checks import did_you_mean
 from evotol.errors import ValidationError
 from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.mechanism.callouts import ORIENTATION_KINDS, Callout, replaced_fields, zone_members
+from robots.mechanism.callout_table import callouts_from_tables, joint_seat
+from robots.mechanism.callouts import ORIENTATION_KINDS, ZONE_MODELS, Callout, replaced_fields, zone_members
 from robots.mechanism.description import load_mechanism
-from robots.mechanism.expressions import Expression
 from robots.mechanism.mechanism import Mechanism
 from robots.mechanism.model import MechanismModel
 from robots.mechanism.placement import PLACEMENT_FIELDS
-
-
-def joint_seat(mech: Mechanism, joint: str) -> dict:
-    """Where a joint's callouts act: its placement frame, axis, type and the part carrying the seat.
-
-    A URDF joint ``J`` has the fixed frame ``J`` (its ``<origin>``) followed by the joint row
-    ``J__q`` turning about ``Rot(z, gamma) Rot(x, alpha) e_z``; a ``[[frame]]`` joint row's axis is
-    the z of its placement. The part is the URDF parent link, else the antecedent frame.
-
-    Parameters
-    ----------
-    mech : robots.mechanism.mechanism.Mechanism
-        The description.
-    joint : str
-        The joint's name (the placement frame's).
-
-    Returns
-    -------
-    dict
-        ``frame`` (placement frame name), ``axis`` ((3,) unit vector in the placement frame),
-        ``joint`` (``"revolute"`` or ``"prismatic"``), ``part`` (str), ``variable`` (joint variable
-        name or None).
-
-    Raises
-    ------
-    evotol.errors.ValidationError
-        An unknown joint (names the nearest), or a fixed frame (no axis to tolerance).
-    """
-    frames = {f.name: f for f in mech.frames}
-    q = frames.get(f"{joint}__q")
-    if q is not None and q.antecedent == joint and q.joint != "fixed":
-        vals = dict(mech.parameters)
-        g, al = (float(Expression.parse(getattr(q, k), f"frame {q.name}.{k}")(vals)) for k in ("gamma", "alpha"))
-        axis = np.array([np.sin(al) * np.sin(g), -np.sin(al) * np.cos(g), np.cos(al)])
-        return {"frame": joint, "axis": axis, "joint": q.joint, "part": _urdf_parent(mech, joint) or frames[joint].antecedent,
-                "variable": str(getattr(q, q.joint_field)).split()[0]}
-    f = frames.get(joint)
-    if f is None:
-        joints = sorted(n for n, fr in frames.items() if fr.joint != "fixed" and not n.endswith("__q")) + \
-            sorted(n[:-3] for n in frames if n.endswith("__q"))
-        raise ValidationError("callout joint", joint, f"a joint of {mech.name}: {joints}" + did_you_mean(joint, joints))
-    if f.joint == "fixed":
-        raise ValidationError(f"callout {joint}", "fixed frame", f"a revolute or prismatic joint: {mech.name} has no axis at {joint}")
-    return {"frame": joint, "axis": np.array([0.0, 0.0, 1.0]), "joint": f.joint, "part": f.antecedent,
-            "variable": str(getattr(f, f.joint_field))}
-
-
-def _urdf_parent(mech: Mechanism, joint: str) -> str | None:
-    """The URDF parent link of ``joint`` (None without a URDF or that joint)."""
-    if not mech.urdf:
-        return None
-    import xml.etree.ElementTree as ET
-
-    for j in ET.parse(mech.urdf[0]).getroot().iter("joint"):
-        if j.get("name") == joint and j.find("parent") is not None:
-            return j.find("parent").get("link")
-    return None
 
 
 class CalloutModel(RobotErrorModel):
@@ -145,7 +87,7 @@ class CalloutModel(RobotErrorModel):
                         if np.abs(m.matrix[i]).max() > 1e-15:
                             C[index[f"{joint}.{f}"]] = m.matrix[i]
                     cols.append(C)
-                    specs.append(SourceSpec(m.name, m.dim, "m", c.kind, f"{c.symbol}t over {c.length * 1e3:g} mm "
+                    specs.append(SourceSpec(m.name, m.dim, "m", c.kind, f"{c.text()} over {c.length * 1e3:g} mm "
                                             f"({self.zones} zone) on the seat of {joint}, datums {c.datums}"))
                 if len(ms) > 1:
                     tied[c.name] = tuple(m.name for m in ms)
@@ -323,3 +265,37 @@ class CalloutModel(RobotErrorModel):
                         "members": list(self.tied_sources.get(c.name, (c.name,))),
                         "joint_type": seat["joint"]})
         return out
+
+
+def with_callouts(model: MechanismModel, entries=None, zones: str = "exact", sources=None):
+    """A model with the drawing callouts of its description or of a study's ``[[robot.callouts]]``.
+
+    Parameters
+    ----------
+    model : robots.mechanism.model.MechanismModel
+        The model of the description (its ``[[callouts]]``, if any, are in ``mechanism.callouts``).
+    entries : list of dict or None, optional
+        A study file's ``[[robot.callouts]]`` tables (:mod:`robots.mechanism.callout_table`); when
+        given they replace the description's callouts.
+    zones : {"exact", "boxes"}
+        The zone model.
+    sources : sequence of str or None, optional
+        Raw source names/patterns, as given to the model.
+
+    Returns
+    -------
+    MechanismModel or CalloutModel
+        ``model`` itself when there is no callout, else the :class:`CalloutModel`.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A bad callout or ``zones``.
+    """
+    if zones not in ZONE_MODELS:
+        raise ValidationError("robot.zones", zones, f"one of {ZONE_MODELS}")
+    mech = model.mechanism
+    callouts = callouts_from_tables(entries, mech) if entries is not None else list(getattr(mech, "callouts", ()))
+    if not callouts:
+        return model
+    return CalloutModel(mech, callouts, sources, zones, model.workspace)

@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
+
+from evotol._runtime.keyword_checks import check_table_keys, did_you_mean
 from evotol.errors import ValidationError
-from evotol._runtime.keyword_checks import check_table_keys
-from robots.mechanism.callout_model import CalloutModel, joint_seat
-from robots.mechanism.callouts import KINDS, ORIENTATION_KINDS, ZONE_MODELS, Callout
+from robots.mechanism.callouts import KINDS, ORIENTATION_KINDS, Callout
+from robots.mechanism.expressions import Expression
 
 #: keys of one callout table
 CALLOUT_KEYS = ("joint", "kind", "length", "offset", "datums")
@@ -123,37 +125,61 @@ def callouts_from_tables(entries, mech, field: str = "robot.callouts") -> list[C
     return out
 
 
-def callout_model_from_table(table: dict, base_dir=None):
-    """The ``[robot]`` table of a study file with ``[[robot.callouts]]``: a :class:`CalloutModel`.
+def joint_seat(mech, joint: str) -> dict:
+    """Where a joint's callouts act: its placement frame, axis, type and the part carrying the seat.
+
+    A URDF joint ``J`` has the fixed frame ``J`` (its ``<origin>``) followed by the joint row
+    ``J__q`` turning about ``Rot(z, gamma) Rot(x, alpha) e_z``; a ``[[frame]]`` joint row's axis is
+    the z of its placement. The part is the URDF parent link, else the antecedent frame.
 
     Parameters
     ----------
-    table : dict
-        The ``[robot]`` table: ``mechanism`` or ``urdf`` as for
-        :func:`robots.mechanism.model.model_from_table`, ``callouts`` (module docstring), and
-        optionally ``sources`` and ``zones`` (``"exact"`` or ``"boxes"``).
-    base_dir : str or Path or None, optional
-        Directory of the study file.
+    mech : robots.mechanism.mechanism.Mechanism
+        The description (only its frames, parameters and URDF are read).
+    joint : str
+        The joint's name (the placement frame's).
 
     Returns
     -------
-    robots.mechanism.callout_model.CalloutModel
-        The model with the callouts as sources.
+    dict
+        ``frame`` (placement frame name), ``axis`` ((3,) unit vector in the placement frame),
+        ``joint`` (``"revolute"`` or ``"prismatic"``), ``part`` (str), ``variable`` (joint variable
+        name or None).
 
     Raises
     ------
     evotol.errors.ValidationError
-        A bad callout (module docstring), a bad ``zones``, or what ``model_from_table`` refuses.
+        An unknown joint (names the nearest), or a fixed frame (no axis to tolerance).
     """
-    from robots.mechanism.model import model_from_table
+    frames = {f.name: f for f in mech.frames}
+    q = frames.get(f"{joint}__q")
+    if q is not None and q.antecedent == joint and q.joint != "fixed":
+        vals = dict(mech.parameters)
+        g, al = (float(Expression.parse(getattr(q, k), f"frame {q.name}.{k}")(vals)) for k in ("gamma", "alpha"))
+        axis = np.array([np.sin(al) * np.sin(g), -np.sin(al) * np.cos(g), np.cos(al)])
+        return {"frame": joint, "axis": axis, "joint": q.joint, "part": _urdf_parent(mech, joint) or frames[joint].antecedent,
+                "variable": str(getattr(q, q.joint_field)).split()[0]}
+    f = frames.get(joint)
+    if f is None:
+        joints = sorted(n for n, fr in frames.items() if fr.joint != "fixed" and not n.endswith("__q")) + \
+            sorted(n[:-3] for n in frames if n.endswith("__q"))
+        raise ValidationError("callout joint", joint, f"a joint of {mech.name}: {joints}" + did_you_mean(joint, joints))
+    if f.joint == "fixed":
+        raise ValidationError(f"callout {joint}", "fixed frame", f"a revolute or prismatic joint: {mech.name} has no axis at {joint}")
+    return {"frame": joint, "axis": np.array([0.0, 0.0, 1.0]), "joint": f.joint, "part": f.antecedent,
+            "variable": str(getattr(f, f.joint_field))}
 
-    rest = {k: v for k, v in table.items() if k not in ("callouts", "zones")}
-    zones = table.get("zones", "exact")
-    if zones not in ZONE_MODELS:
-        raise ValidationError("robot.zones", zones, f"one of {ZONE_MODELS}")
-    raw = model_from_table(rest, base_dir)
-    callouts = callouts_from_tables(table["callouts"], raw.mechanism)
-    return CalloutModel(raw.mechanism, callouts, table.get("sources"), zones, raw.workspace)
+
+def _urdf_parent(mech, joint: str) -> str | None:
+    """The URDF parent link of ``joint`` (None without a URDF or that joint)."""
+    if not mech.urdf:
+        return None
+    import xml.etree.ElementTree as ET
+
+    for j in ET.parse(mech.urdf[0]).getroot().iter("joint"):
+        if j.get("name") == joint and j.find("parent") is not None:
+            return j.find("parent").get("link")
+    return None
 
 
 def expand_callout_overrides(overrides: dict, robot) -> dict:

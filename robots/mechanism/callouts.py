@@ -106,6 +106,21 @@ class Callout:
         """The drawing symbol (``"⌖ ⌀"``, ``"⊥ ⌀"``, ``"∥ ⌀"``, ``"⌖ face"``)."""
         return SYMBOLS[self.kind]
 
+    def text(self, value: str = "t") -> str:
+        """The callout as a drawing writes it, e.g. ``"⌖ ⌀20 µm"`` or ``"⌖ face 60 µm"``.
+
+        Parameters
+        ----------
+        value : str
+            The value as text (default the letter ``t``).
+
+        Returns
+        -------
+        str
+            Symbol and value.
+        """
+        return f"{self.symbol}{value}" if self.symbol.endswith("⌀") else f"{self.symbol} {value}"
+
     @property
     def ends(self) -> tuple[float, float]:
         """(s1, s2): the feature's ends along the axis from the placement origin (m)."""

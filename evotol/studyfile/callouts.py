@@ -1,4 +1,5 @@
-"""Exact callout zones against the independent-box rule, on the same study (issue 35 item 3).
+"""What a study does with drawing callouts (issue 35): exact zones against independent boxes, and
+the warnings about refinements.
 
 For a problem whose robot is a :class:`robots.mechanism.callout_model.CalloutModel`, the twin
 problem takes the same callouts, tolerances, requirement and poses under the independent-box rule
@@ -20,6 +21,7 @@ from evotol.allocators import allocate_optimum
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.nonlinear import worst_vertex_errors
+from robots.mechanism.callout_table import refinement_warnings
 
 
 def variable_values(problem: ToleranceProblem, t) -> dict:
@@ -154,3 +156,28 @@ def callout_summary(problem: ToleranceProblem, **optimum) -> dict:
         raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
     return {"features": problem.robot.describe_callouts(), "zones": problem.robot.zones,
             "comparison": zone_comparison(problem, **optimum)}
+
+
+def callout_warnings(problem: ToleranceProblem) -> list[str]:
+    """One line per seat whose orientation callout is always tighter than the position callout it
+    refines (it binds the tilt; the pair is modelled by its safe outer set, ``docs/callouts.md``).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        Any problem; only a ``CalloutModel``'s callouts are read.
+
+    Returns
+    -------
+    list of str
+        Warning lines (empty without callouts or refinements).
+    """
+    robot = problem.robot
+    if not hasattr(robot, "callouts"):
+        return []
+    lower, upper = {}, {}
+    for c in robot.callouts:
+        j = problem.names.index(robot.tied_sources.get(c.name, (c.name,))[0])
+        locked = problem.locked_values[j]
+        lower[c.name], upper[c.name] = (locked, locked) if np.isfinite(locked) else (problem.lower[j], problem.upper[j])
+    return refinement_warnings(robot.callouts, lower, upper)
