@@ -118,3 +118,52 @@ def test_exact_zones_cost_less_than_boxes_and_boxes_hold_in_exact_zones(problem)
     assert out["saving"] > 0
     assert out["boxes"]["worst_in_exact_zones"]["position"]["linear"] <= 5e-4 * (1 + 1e-9)
     assert out["exact"]["worst"]["position"]["linear"] == pytest.approx(5e-4, rel=1e-6)
+
+
+def test_the_drawing_table_in_page_terminal_csv_and_xlsx(tmp_path, capsys):
+    """``evotol run`` of the callout study (2x2x2 grid, optimum only): the terminal, the page, the
+    drawing CSV and the workbook carry each callout per part with its value, length, zone, datums,
+    cost share and contribution, and the exact-zones comparison; the values are the optimum's."""
+    import json
+
+    import pandas as pd
+
+    from evotol.cli import main
+
+    text = STUDY.read_text().replace("grid = [3, 3, 3]", "grid = [2, 2, 2]")
+    text = text[:text.index("[methods]")] + "[methods]\noptimum = {}\n\n[verify]\nn_samples = 50\n"
+    f = tmp_path / "ur5_callouts.toml"
+    f.write_text(text)
+    assert main(["run", str(f), "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "drawing callouts (optimum)" in out and "% saved" in out
+    summary = json.loads((tmp_path / "ur5_callouts.json").read_text())
+    t = summary["results"]["optimum"]["tolerances"]
+    d = pd.read_csv(tmp_path / "ur5_callouts_drawing.csv")
+    assert len(d) == 12 and set(d["part"]) >= {"upper_arm_link", "shoulder_link", "base_link"}
+    row = d[d["feature"] == "bore axis of elbow_joint"].iloc[0]
+    assert row["value (µm)"] == pytest.approx(t["elbow_joint.position.end1"] * 1e6)
+    assert row["length (mm)"] == pytest.approx(50.0) and row["datums"] == "A|B"
+    assert "from -25 to 25 mm along the axis (0, 1, 0)" in row["zone"]
+    costs = summary["results"]["optimum"]["source_costs"]
+    callout_cost = sum(costs[s] for s in costs if ".position" in s or ".axial" in s)
+    assert d["cost share (%)"].sum() == pytest.approx(100 * callout_cost / sum(costs.values()))
+    sheets = pd.read_excel(tmp_path / "ur5_callouts_tolerances.xlsx", sheet_name=None)
+    assert {"drawing", "exact zones vs boxes"} <= set(sheets)
+    html = (tmp_path / "ur5_callouts.html").read_text()
+    assert "Drawing callouts" in html and "Exact zones against independent boxes" in html
+    cmp_ = summary["callouts"]["comparison"]
+    assert cmp_["exact"]["cost"] == pytest.approx(summary["results"]["optimum"]["cost"], rel=1e-9)
+
+
+def test_sources_table_sets_a_whole_callout():
+    """``[sources."elbow_joint.position"] locked = ...`` locks both end discs of that zone, which
+    then count once in the cost and carry no variable."""
+    spec = _spec()
+    spec["sources"] = {"elbow_joint.position": {"locked": 1e-5}}
+    P = load_problem(spec, STUDY.parent)
+    j1, j2 = P.names.index("elbow_joint.position.end1"), P.names.index("elbow_joint.position.end2")
+    assert P.locked_values[j1] == P.locked_values[j2] == 1e-5
+    assert P.n_variables == 17 and "elbow_joint.position" not in P.variables
+    T = P.full(np.full((1, P.n_variables), 2e-5))
+    assert P.source_costs(T[0])[j2] == 0.0 and P.source_costs(T[0])[j1] > 0

@@ -152,4 +152,4 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
     w[[index[m] for ms in tied.values() for m in ms[1:]]] = 0.0
     return ToleranceVariables({g: m for g, m in groups.items() if g not in tied}, shared_cost, lower, upper, leader,
                               follower, locked, free, M, tuple(group_of.get(j, names[j]) for j in fi), w,
-                              {g: groups[g] for g in tied})
+                              {g: tuple(m) for g, m in tied.items()})
