@@ -108,7 +108,7 @@ def comparison_table(summary: dict) -> pd.DataFrame:
         rows.append((f"worst {c} error, own zones, nonlinear ({u})", w["nonlinear"] * k, bx["worst"][c]["nonlinear"] * k))
         rows.append((f"worst {c} error under the exact zones, nonlinear ({u})", w["nonlinear"] * k,
                      bx["worst_in_exact_zones"][c]["nonlinear"] * k))
-    rows.append(("saving of the exact zones (% of the box rule's cost)", 100 * cmp_["saving"], 0.0))
+    rows.append(("saving of the exact zones (% of the box rule's cost)", 100 * cmp_["saving"], None))
     return pd.DataFrame(rows, columns=["item", "exact zones", "independent boxes"])
 
 
