@@ -171,6 +171,15 @@ def test_bad_callouts_are_one_line_errors(ur5, entry, field):
     assert field in str(exc.value) and "\n" not in str(exc.value)
 
 
+def test_a_planar_mechanism_has_no_axis_to_place():
+    from robots.mechanism.description import load_mechanism as load
+    from robots.mechanism.shipped import resolve_description
+
+    mech = load(resolve_description("planar3rrr", None))
+    with pytest.raises(ValidationError, match=r"callout A1 .* spatial mechanism"):
+        callouts_from_tables([{"joint": "A1", "kind": "position", "length": "20 mm"}], mech)
+
+
 def test_duplicate_callouts_on_one_seat_are_refused(ur5):
     e = {"joint": "elbow_joint", "kind": "position", "length": "50 mm"}
     with pytest.raises(ValidationError, match=r"one position callout per joint"):

@@ -149,8 +149,12 @@ def joint_seat(mech, joint: str) -> dict:
     Raises
     ------
     evotol.errors.ValidationError
-        An unknown joint (names the nearest), or a fixed frame (no axis to tolerance).
+        An unknown joint (names the nearest), a fixed frame (no axis to tolerance), or a planar
+        mechanism.
     """
+    if mech.planar:
+        raise ValidationError(f"callout {joint}", mech.name, "a joint of a spatial mechanism (a callout's zone moves "
+                              "the axis out of the plane; in a planar mechanism tolerance gamma, d, theta)")
     frames = {f.name: f for f in mech.frames}
     q = frames.get(f"{joint}__q")
     if q is not None and q.antecedent == joint and q.joint != "fixed":
