@@ -316,3 +316,19 @@ def test_an_orientation_tighter_than_its_position_warns(tmp_path):
             "cost": {"default": {"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-5}}}
     with pytest.warns(PlausibilityWarning, match="elbow_joint.perpendicularity: orientation .* binds the tilt"):
         load_problem(spec)
+
+
+@pytest.mark.parametrize("robot, field", [
+    ({"mechanism": "ur5", "zones": "cubes", "callouts": [{"joint": "elbow_joint", "kind": "position", "length": "5 mm"}]},
+     "robot.zones"),
+    ({"mechanism": "ur5", "callouts": {"joint": "elbow_joint"}}, "robot.callouts"),
+    ({"mechanism": "ur5", "callouts": [{"joint": "elbow_joint", "kind": "position"}]}, "robot.callouts[0].length"),
+])
+def test_bad_callout_tables_in_a_study_file(robot, field):
+    from evotol.studyfile import load_problem
+
+    spec = {"robot": robot, "poses": {"grid": 2}, "requirement": {"position": 5e-4},
+            "cost": {"default": {"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-5}}}
+    with pytest.raises(ValidationError) as exc:
+        load_problem(spec)
+    assert str(exc.value).startswith(field) and "\n" not in str(exc.value)
