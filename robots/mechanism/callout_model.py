@@ -261,7 +261,7 @@ class CalloutModel(RobotErrorModel):
             seat = self.seats[c.joint]
             out.append({"name": c.name, "joint": c.joint, "part": seat["part"], "kind": c.kind, "symbol": c.symbol,
                         "length": c.length, "offset": c.offset, "ends": list(c.ends), "datums": c.datums,
-                        "axis": [round(float(v), 12) for v in seat["axis"]], "zones": self.zones,
+                        "axis": [round(float(v), 12) + 0.0 for v in seat["axis"]], "zones": self.zones,
                         "members": list(self.tied_sources.get(c.name, (c.name,))),
                         "joint_type": seat["joint"]})
         return out
