@@ -221,6 +221,7 @@ def _print_results(summary: dict) -> None:
     """One line per method of ``evotol run`` (and, for NSGA-II, its cheapest feasible point and
     knee): cost, largest errors in the study's display units, status and the Monte Carlo exceed
     rate, so the terminal answers "what did I get" without opening the JSON."""
+    from evotol.reporting.callout_drawing import terminal_lines
     from evotol.reporting.user_study import terminal_rows
 
     rows, header = terminal_rows(summary)
@@ -237,6 +238,8 @@ def _print_results(summary: dict) -> None:
     over = summary.get("nsga2", {}).get("cheapest_feasible_over_optimum")
     if over is not None:
         print(f"  nsga2: the front's cheapest feasible point is {100 * over:.3g} % above the certified optimum")
+    for line in terminal_lines(summary):     # drawing callouts and exact zones vs boxes (issue 35)
+        print(line)
 
 
 def cmd_list(args) -> int:

@@ -50,7 +50,10 @@ class ToleranceVariables:
         Each variable's name (the group's or the source's).
     cost_weight : ndarray, shape (n_sources,)
         1 where a source's cost is counted, 0 for fixed sources (and followers under
-        ``shared_cost="variable"``).
+        ``shared_cost="variable"``, and the members after the first of a drawing callout).
+    tied : dict
+        Callout name -> its member sources (the robot's ``tied_sources``, issue 35): one variable
+        each, costed once whatever ``shared_cost``; not listed in ``shared``.
     """
 
     shared: dict
@@ -64,6 +67,7 @@ class ToleranceVariables:
     variable_matrix: np.ndarray
     variables: tuple
     cost_weight: np.ndarray
+    tied: dict = None
 
 
 def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np.ndarray,
@@ -107,7 +111,11 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
         raise ValidationError("shared", shared, "a mapping group name -> list of source names")
     seen: dict[str, str] = {}
     index = {nm: j for j, nm in enumerate(names)}
-    for g, members in (shared or {}).items():
+    # a drawing callout's zone members (robots.mechanism.callout_model): one tolerance, costed once
+    tied = dict(getattr(robot, "tied_sources", None) or {})
+    for g, members in {**tied, **(shared or {})}.items():
+        if g in tied and all(tolerances[m].locked is not None for m in members):
+            continue                              # a locked callout: no variable, costed once below
         if isinstance(members, str) or not isinstance(members, Sequence) or len(members) == 0:
             raise ValidationError(f"shared.{g}", members, "a non-empty list of source names")
         for m in members:
@@ -141,5 +149,7 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
     w[[j for j, nm in enumerate(names) if tolerances[nm].is_fixed]] = 0.0
     if shared_cost == "variable":
         w[follower] = 0.0
-    return ToleranceVariables(groups, shared_cost, lower, upper, leader, follower, locked, free, M,
-                              tuple(group_of.get(j, names[j]) for j in fi), w)
+    w[[index[m] for ms in tied.values() for m in ms[1:]]] = 0.0
+    return ToleranceVariables({g: m for g, m in groups.items() if g not in tied}, shared_cost, lower, upper, leader,
+                              follower, locked, free, M, tuple(group_of.get(j, names[j]) for j in fi), w,
+                              {g: tuple(m) for g, m in tied.items()})

@@ -25,6 +25,7 @@ from plotly.subplots import make_subplots
 
 from evotol.units.display import DisplayUnits, number
 from evotol.core.pareto import ideal_point_knee
+from evotol.reporting.callout_drawing import callout_sections
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
 
@@ -395,6 +396,8 @@ def render_user_study(summary: dict) -> Report:
     if summary.get("exports"):
         rep.text("The tolerance table as a drawing carries it: " + ", ".join(
             f'<a href="{html.escape(p)}">{html.escape(p)}</a>' for p in summary["exports"].values()) + ".", raw=True)
+    if summary.get("callouts"):          # drawing callouts on joint seats (issue 35, docs/callouts.md)
+        callout_sections(rep, summary)
     if "pareto_front" in summary:
         rep.heading("NSGA-II front")
         over = summary.get("nsga2", {}).get("cheapest_feasible_over_optimum")

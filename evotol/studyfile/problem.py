@@ -3,14 +3,17 @@ modules beside this one, put together as a :class:`~evotol.core.problem.Toleranc
 """
 from __future__ import annotations
 
+from evotol.core import plausibility
 from evotol.core.problem import ToleranceProblem
 from evotol.core.quality_loss import with_quality_loss
 from evotol.errors import ValidationError
+from evotol.studyfile.callouts import callout_warnings
 from evotol.studyfile.keys import check_study_keys
 from evotol.studyfile.poses import read_poses
 from evotol.studyfile.requirement import read_requirement
 from evotol.studyfile.robot import read_robot
 from evotol.studyfile.sources import read_clearances, read_tolerances
+from robots.mechanism.callout_table import expand_callout_overrides
 
 
 def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
@@ -49,8 +52,11 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     # [clearances]: joint-clearance classes allocated with (or, geometric = false, instead of) the
     # robot's sources (docs/clearance_allocation.md); the problem holds them beside the robot
     classes, sources = read_clearances(spec, robot)
+    # [sources."J.position"] applies to both members of that callout's zone (docs/callouts.md)
+    spec = {**spec, "sources": expand_callout_overrides(spec.get("sources", {}), robot)}
     tol = read_tolerances(spec, sources, robot.name if classes is None else f"{robot.name} or its clearance classes")
     problem = ToleranceProblem(robot, tol, read_requirement(spec), poses, shared=spec.get("shared"),
                                shared_cost=spec.get("shared_cost", "part"), clearances=classes)
+    plausibility.warn(callout_warnings(problem))        # an orientation callout that binds (issue 35)
     # quality_loss = A (or {response = A}): machining cost + Taguchi loss (docs/process_selection.md)
     return with_quality_loss(problem, spec["quality_loss"]) if "quality_loss" in spec else problem

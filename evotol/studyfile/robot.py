@@ -9,6 +9,7 @@ from evotol.errors import ValidationError
 from robots import registry
 from robots.assembly import assembly_from_spec
 from robots.base import RobotErrorModel
+from robots.mechanism.callout_model import with_callouts
 from robots.mechanism.model import model_from_table
 
 
@@ -41,7 +42,10 @@ def read_robot(spec: dict, base_dir=None) -> tuple[RobotErrorModel, dict]:
     """
     rs = dict(spec.get("robot", {}))
     if "mechanism" in rs or "urdf" in rs:       # a description (robots/mechanism, docs/mechanisms.md); its
-        return model_from_table(rs, base_dir), spec     # [robot.assembly] table is the assembly configuration
+        # its [robot.assembly] table is the assembly configuration; drawing callouts on joint seats:
+        # [[robot.callouts]] or the description's (docs/callouts.md, issue 35)
+        robot = model_from_table({k: v for k, v in rs.items() if k not in ("callouts", "zones")}, base_dir)
+        return with_callouts(robot, rs.get("callouts"), rs.get("zones", "exact"), rs.get("sources")), spec
     if "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
         robot = assembly_from_spec(rs)
         return robot, {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),

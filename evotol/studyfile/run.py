@@ -18,10 +18,13 @@ from evotol.allocators import allocate_nsga2
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.reporting.export import FORMATS as EXPORT_FORMATS
+from evotol.reporting.callout_drawing import write_callout_exports
 from evotol.reporting.export import write_tolerance_table
 from evotol.reporting.user_study import render_user_study
 from evotol.studies import StudyResult, write_outputs
 from evotol.studyfile.methods import METHODS, check_methods, method_options, study_methods
+from evotol.studyfile.callouts import callout_summary, callout_warnings
+from evotol.studyfile.poses import refine_option
 from evotol.studyfile.problem import load_problem
 from evotol.studyfile.process_run import run_process_study
 from evotol.core.plausibility import study_warnings
@@ -179,6 +182,10 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)
     summary["interrupted"] = bool(stopped)
+    if hasattr(problem.robot, "describe_callouts") and results and not stopped:   # exact zones vs boxes (issue 35)
+        refine = refine_option(spec)
+        summary["callouts"] = callout_summary(problem, **({"refine": refine} if refine else {}))
+        summary["warnings"] = [*summary["warnings"], *callout_warnings(problem)]
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
     if results:     # the drawing table, linked from the page (evotol/reporting/export.py)
@@ -187,5 +194,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     paths = write_outputs(name, out, StudyResult(summary), rep)
     for f in summary.get("exports", {}).values():
         write_tolerance_table(summary, out / f)
+    if summary.get("callouts"):     # the drawing callouts: a CSV, and two sheets of the workbook
+        summary["exports"]["drawing"] = f"{name}_drawing.csv"
+        write_callout_exports(summary, out / f"{name}_drawing.csv", out / summary["exports"]["xlsx"])
     summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary

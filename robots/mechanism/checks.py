@@ -102,10 +102,11 @@ def check_mechanism(file, n_poses: int = 20, sources=None) -> dict:
     """
     from robots.base import check_robot
     from robots.mechanism.inspection import model_report
+    from robots.mechanism.callout_model import with_callouts
     from robots.mechanism.model import MechanismModel, resolve_description
 
     t0 = time.perf_counter()
-    model = MechanismModel(resolve_description(file), sources=sources)
+    model = with_callouts(MechanismModel(resolve_description(file), sources=sources), sources=sources)   # [[callouts]]: issue 35
     seen = understood(model)
     poses = model.workspace.latin_hypercube(n_poses, seed=0)
     residual = model.closure_residual(poses)
@@ -115,6 +116,8 @@ def check_mechanism(file, n_poses: int = 20, sources=None) -> dict:
            "sources": [{"name": s.name, "group": s.group, "unit": s.unit, "description": s.description} for s in model.sources],
            "n_sources": len(model.sources), "n_poses": len(poses), "closure_residual": residual,
            "fd_rel_error": rep.get("fd_relative_mismatch"), "max_sensitivity": float(np.abs(model.sensitivity(poses)).max())}
+    if hasattr(model, "describe_callouts"):
+        out["callouts"] = model.describe_callouts()
     out.update(model_report(model, poses))     # issue 23: nominal values, box and limits, rank (robots/mechanism/inspection.py)
     if model.mechanism.clearance is not None:
         from robots.clearance import max_pose_error

@@ -13,6 +13,7 @@ importable from here too.
 """
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 from pathlib import Path
 from typing import Mapping
@@ -22,6 +23,7 @@ from evotol._runtime.toml_kinds import check_kind
 from evotol._runtime.keyword_checks import check_table_keys
 from robots.clearance.kinematics import DH_FIELDS
 from robots.clearance.parts import BOUND_NAMES, ClearanceBounds
+from robots.mechanism.callout_table import callouts_from_tables
 from robots.mechanism.expressions import Expression
 from robots.mechanism.mechanism import Mechanism
 from robots.mechanism.parts import AXES, ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point, joint_units
@@ -30,7 +32,7 @@ from robots.mechanism.plausibility import check_written_values
 from robots.mechanism.urdf import resolve_urdf, urdf_frames
 
 TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "point", "loop", "end_effector", "assembly",
-            "tolerances", "clearance", "urdf", "tip", "checks", "limits")
+            "tolerances", "clearance", "urdf", "tip", "checks", "limits", "callouts")
 
 
 def _number(v, where: str) -> float:
@@ -150,6 +152,8 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
                      sources=tuple(tol.get("sources", sources_default)), clearance=clearance, description=spec.get("description", ""),
                      path=str(path), points=tuple(points), limits={**limits, **_limits(spec.get("limits", {}))}, urdf=urdf)
+    if "callouts" in spec:          # [[callouts]] on joint seats (docs/callouts.md, issue 35)
+        mech = dataclasses.replace(mech, callouts=tuple(callouts_from_tables(spec["callouts"], mech, "callouts")))
     return mech
 
 

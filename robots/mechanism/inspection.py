@@ -77,7 +77,9 @@ def rank_report(model, q: dict, where: str) -> dict:
         and ``pinocchio_reference``.
     """
     S = model.sensitivity_at_joints(q)
-    out = {"over": where, "n_configurations": int(len(next(iter(q.values())))), **analyse(S, model.source_names)}
+    # one name per column: a disk source (a callout's zone, issue 35) has two, "<name>[0]", "<name>[1]"
+    columns = [s.name if s.dim == 1 else f"{s.name}[{k}]" for s in model.sources for k in range(s.dim)]
+    out = {"over": where, "n_configurations": int(len(next(iter(q.values())))), **analyse(S, columns)}
     if model.mechanism.urdf:
         from robots.mechanism.urdf import chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
 
@@ -85,9 +87,9 @@ def rank_report(model, q: dict, where: str) -> dict:
         mdl, fid = info["model"], info["tip_frame_id"]
         cols = [6 * (j - 1) + c for j in chain_joints(mdl, fid) for c in range(6)]
         R = pinocchio_placement_regressor(mdl, fid, pinocchio_configuration(mdl, q, info["mimic"]))[:, :, cols]
-        own = [i for i, s in enumerate(model.source_names) if not s.endswith("_multiplier")]
+        own = [i for i, s in enumerate(columns) if not s.endswith("_multiplier")]
         names = [f"{mdl.names[j]}.{f}" for j in chain_joints(mdl, fid) for f in PLACEMENT_FIELDS]
-        ref = analyse(S[:, :, own], [model.source_names[i] for i in own], R, names)
+        ref = analyse(S[:, :, own], [columns[i] for i in own], R, names)
         out["pinocchio_rank"], out["combined_rank"] = ref["reference_rank"], ref["combined_rank"]
         out["rank_without_multipliers"] = ref["rank"]      # the columns Pinocchio's placement regressor can hold
         out["missing"] = ref["missing"]       # placement directions of the chain that no source reproduces

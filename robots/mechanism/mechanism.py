@@ -68,6 +68,9 @@ class Mechanism:
         Joint variable -> (lower, upper), SI (rad or m).
     urdf : tuple of str, optional
         ``(resolved URDF path, tip frame)`` of a description read from a URDF; empty otherwise.
+    callouts : tuple of robots.mechanism.callouts.Callout, optional
+        Drawing callouts on joint seats (``[[callouts]]``, ``docs/callouts.md``); the error model
+        with them is :class:`robots.mechanism.callout_model.CalloutModel`.
 
     Raises
     ------
@@ -98,6 +101,7 @@ class Mechanism:
     points: tuple[Point, ...] = ()
     limits: Mapping[str, tuple[float, float]] = field(default_factory=dict)   # joint variable -> (lower, upper), SI
     urdf: tuple[str, ...] = ()        # (resolved URDF path, tip frame) of a description read from a URDF
+    callouts: tuple = ()              # drawing callouts on joint seats (robots.mechanism.callouts, issue 35)
 
     def __post_init__(self):
         names = [f.name for f in self.frames]

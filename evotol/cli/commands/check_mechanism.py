@@ -124,6 +124,7 @@ def cmd_check_mechanism(args) -> int:
     print(f"  {out['n_sources']} error sources:")
     for s in out["sources"]:
         print(f"    {s['name']:14s} {s['group']:9s} {s['unit']:4s} {s['description']}")
+    print_callouts(out)
     print(f"  loop-closure residual over {out['n_poses']} poses: {out['closure_residual']:.3g} (m or rad)")
     print(f"  sensitivity vs central finite differences of the closure: {_fd_text(out['fd_rel_error'], ok, args.rtol)}")
     print_limits_and_rank(out)
@@ -136,6 +137,36 @@ def cmd_check_mechanism(args) -> int:
 
 
 # ------------------------------------------------------------------ issue 23: URDF files, limits, rank
+def print_callouts(out: dict) -> None:
+    """The drawing callouts understood (issue 35, ``docs/callouts.md``), their zones in mm: the
+    feature on the joint axis, the zone and the sources it became.
+
+    Parameters
+    ----------
+    out : dict
+        :func:`robots.mechanism.checks.check_mechanism`'s report; nothing is printed without
+        ``callouts``.
+    """
+    cs = out.get("callouts") or []
+    if not cs:
+        return
+    print(f"  {len(cs)} drawing callouts ({cs[0]['zones']} zones; t is each callout's value, allocated):")
+    for c in cs:
+        lo, hi = (v * 1e3 for v in c["ends"])
+        axis = "(" + ", ".join(f"{v:g}" for v in c["axis"]) + ")"
+        if c["kind"] == "axial":
+            zone = f"shoulder face within ±t/2 along the axis {axis}"
+        elif c["kind"] == "position":
+            zone = (f"axis within a cylinder ⌀t from {lo:g} mm to {hi:g} mm along {axis}: each end's displacement in a "
+                    "disc of radius t/2")
+        else:
+            zone = (f"axis direction within a cylinder ⌀t over {c['length'] * 1e3:g} mm ({lo:g} to {hi:g} mm along "
+                    f"{axis}), location free")
+        sym = f"{c['symbol']}t" if c["symbol"].endswith("⌀") else f"{c['symbol']} t"
+        print(f"    {c['name']:30s} {sym} | {c['datums']} on {c['part']}: {zone}; sources "
+              f"{', '.join(c['members'])}")
+
+
 def print_limits_and_rank(out: dict) -> None:
     """Workspace box, joint limits and the rank of the sources over the workspace, in mm and deg,
     naming blind and duplicated sources (:mod:`robots.mechanism.inspection`).

@@ -66,5 +66,9 @@ def cmd_export(args) -> int:
                                                        "(with display_units and sources)")
     out = Path(args.out) if args.out else Path(path).with_name(f"{summary['name']}_tolerances.xlsx")
     written = write_tolerance_table(summary, out, args.method)
+    if summary.get("callouts") and written.suffix.lower() == ".xlsx":     # drawing callouts: two more sheets (issue 35)
+        from evotol.reporting.callout_drawing import write_callout_exports
+
+        write_callout_exports(summary, written.with_name(f"{summary['name']}_drawing.csv"), written)
     print(f"[evotol] wrote {written}")
     return 0

@@ -1,0 +1,169 @@
+"""Every allocator and measure on drawing callouts (issue 35 items 2, 3): the UR5 with a
+position and an axial callout per joint seat (``reports/studies/ur5_callouts.toml`` on a 2x2x2
+grid).
+
+Independent checks: the cost of a callout counted once (its cost model at its value); the RSS
+measure against its closed form over the zone's discs; the yield against direct sampling of
+each zone (the stated in-zone distribution); every allocator against the certified optimum's
+lower bound; the certified optimum on the nonlinear model; the independent-box rule's zone
+containing the exact one (its design holds under the exact zones).
+"""
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evotol.allocators import allocate_ga, allocate_nsga2, allocate_optimum, allocate_sensitivity
+from evotol.studyfile import load_problem
+from evotol.studyfile.callouts import zone_comparison
+from evotol.verification.nonlinear import worst_vertex_errors
+
+STUDY = Path(__file__).resolve().parents[1] / "reports" / "studies" / "ur5_callouts.toml"
+
+
+def _spec(**requirement):
+    spec = tomllib.loads(STUDY.read_text())
+    spec["poses"] = {"grid": 2}
+    if requirement:
+        spec["requirement"] = requirement
+    return spec
+
+
+@pytest.fixture(scope="module")
+def problem():
+    return load_problem(_spec(), STUDY.parent)
+
+
+@pytest.fixture(scope="module")
+def optimum(problem):
+    return allocate_optimum(problem)
+
+
+def test_a_callout_is_one_variable_costed_once(problem):
+    assert problem.n_sources == 24 and problem.n_variables == 18
+    assert "elbow_joint.position" in problem.variables
+    x = np.linspace(5e-6, 5e-5, problem.n_variables)
+    T = problem.full(x[None])
+    by_var = dict(zip(problem.variables, x))
+    want = sum(float(problem.tolerances[problem.robot.tied_sources.get(v, (v,))[0]].cost_of(np.array([by_var[v]]))[0])
+               for v in problem.variables)
+    assert problem.cost(T)[0] == pytest.approx(want, rel=1e-12)
+
+
+def test_certified_optimum_holds_on_the_nonlinear_model(problem, optimum):
+    assert optimum.feasible and optimum.certificate is not None
+    t = np.array([optimum.tolerances[n] for n in problem.names])
+    nl = worst_vertex_errors(problem, t)["position"].max()
+    assert nl == pytest.approx(5e-4, rel=1e-3)
+
+
+def test_ga_nsga_sensitivity_and_budget_on_callouts(problem, optimum):
+    lb = optimum.cost * (1 - 1e-6)
+    ga = allocate_ga(problem, pop_size=30, n_gen=30, seed=0, progress=False)
+    assert ga.feasible and ga.cost >= lb
+    sens = allocate_sensitivity(problem)
+    assert sens.feasible and sens.cost >= lb
+    budget = allocate_optimum(problem, budget=optimum.cost)
+    assert budget.errors.position.max() == pytest.approx(5e-4, rel=1e-4)
+    front = allocate_nsga2(problem, pop_size=20, n_gen=10, seed=0, progress=False)
+    assert len(front.cost) >= 1
+
+
+def test_rss_is_the_closed_form_over_the_discs(problem):
+    x = np.linspace(5e-6, 5e-5, problem.n_variables)
+    T = problem.full(x[None])
+    got = problem.evaluate(T, "rss").position[0]
+    S = problem.jacobian[:, :3, :]
+    want = np.sqrt(sum((T[0, j] * np.linalg.norm(S[:, :, sl], ord=2, axis=(1, 2))) ** 2
+                       for j, sl in enumerate(problem.robot.column_slices)))
+    assert np.allclose(got, want, rtol=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["normal", "uniform"])
+def test_yield_matches_direct_sampling_of_the_zones(kind):
+    """In-zone distribution (docs/callouts.md): each end of the axis displaced independently and
+    isotropically; ``normal``: components N(0, (t/2k)^2), k = 3; ``uniform``: radius uniform in
+    [0, t/2], direction uniform. Sampled here from that statement, not from evotol's sampler."""
+    spec = _spec(position=1.5e-4, measure="yield", probability=0.9, model="nonlinear" if kind == "uniform" else "linear")
+    spec["distribution"] = kind
+    P = load_problem(spec, STUDY.parent)
+    x = np.array([2e-5 if v.endswith("position") else (6e-5 if v.endswith("axial") else 1e-4) for v in P.variables])
+    T = P.full(x[None])
+    got = P.evaluate(T, "yield").probability[0]
+    rng = np.random.default_rng(5)
+    n, k = 60_000, 3.0
+    cols = []
+    for s, t in zip(P.robot.sources, T[0]):
+        if s.dim == 2:
+            if kind == "normal":
+                d = rng.normal(0, t / (2 * k), (n, 2))
+            else:
+                a, r = rng.uniform(0, 2 * np.pi, n), rng.uniform(0, t / 2, n)
+                d = np.c_[r * np.cos(a), r * np.sin(a)]
+            cols.append(2 * d)                         # a member's error is twice the end's displacement
+        else:
+            cols.append(rng.normal(0, t / k, (n, 1)) if kind == "normal" else rng.uniform(-t, t, (n, 1)))
+    E = np.concatenate(cols, axis=1)
+    err = np.linalg.norm(np.einsum("pij,nj->pni", P.jacobian[:, :3, :], E), axis=-1)
+    sampled = (err <= 1.5e-4).mean(axis=1)
+    assert 0.3 < sampled.min() and sampled.max() < 0.999          # a yield that can tell them apart
+    assert np.abs(got - sampled).max() < 0.02
+
+
+def test_exact_zones_cost_less_than_boxes_and_boxes_hold_in_exact_zones(problem):
+    out = zone_comparison(problem)
+    assert out["exact"]["feasible"] and out["boxes"]["feasible"]
+    assert out["exact"]["cost"] < out["boxes"]["cost"]
+    assert out["saving"] > 0
+    assert out["boxes"]["worst_in_exact_zones"]["position"]["linear"] <= 5e-4 * (1 + 1e-9)
+    assert out["exact"]["worst"]["position"]["linear"] == pytest.approx(5e-4, rel=1e-6)
+
+
+def test_the_drawing_table_in_page_terminal_csv_and_xlsx(tmp_path, capsys):
+    """``evotol run`` of the callout study (2x2x2 grid, optimum only): the terminal, the page, the
+    drawing CSV and the workbook carry each callout per part with its value, length, zone, datums,
+    cost share and contribution, and the exact-zones comparison; the values are the optimum's."""
+    import json
+
+    import pandas as pd
+
+    from evotol.cli import main
+
+    text = STUDY.read_text().replace("grid = [3, 3, 3]", "grid = [2, 2, 2]")
+    text = text[:text.index("[methods]")] + "[methods]\noptimum = {}\n\n[verify]\nn_samples = 50\n"
+    f = tmp_path / "ur5_callouts.toml"
+    f.write_text(text)
+    assert main(["run", str(f), "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "drawing callouts (optimum)" in out and "% saved" in out
+    summary = json.loads((tmp_path / "ur5_callouts.json").read_text())
+    t = summary["results"]["optimum"]["tolerances"]
+    d = pd.read_csv(tmp_path / "ur5_callouts_drawing.csv")
+    assert len(d) == 12 and set(d["part"]) >= {"upper_arm_link", "shoulder_link", "base_link"}
+    row = d[d["feature"] == "bore axis of elbow_joint"].iloc[0]
+    assert row["value (µm)"] == pytest.approx(t["elbow_joint.position.end1"] * 1e6)
+    assert row["length (mm)"] == pytest.approx(50.0) and row["datums"] == "A|B"
+    assert "from -25 to 25 mm along the axis (0, 1, 0)" in row["zone"]
+    costs = summary["results"]["optimum"]["source_costs"]
+    callout_cost = sum(costs[s] for s in costs if ".position" in s or ".axial" in s)
+    assert d["cost share (%)"].sum() == pytest.approx(100 * callout_cost / sum(costs.values()))
+    sheets = pd.read_excel(tmp_path / "ur5_callouts_tolerances.xlsx", sheet_name=None)
+    assert {"drawing", "exact zones vs boxes"} <= set(sheets)
+    html = (tmp_path / "ur5_callouts.html").read_text()
+    assert "Drawing callouts" in html and "Exact zones against independent boxes" in html
+    cmp_ = summary["callouts"]["comparison"]
+    assert cmp_["exact"]["cost"] == pytest.approx(summary["results"]["optimum"]["cost"], rel=1e-9)
+
+
+def test_sources_table_sets_a_whole_callout():
+    """``[sources."elbow_joint.position"] locked = ...`` locks both end discs of that zone, which
+    then count once in the cost and carry no variable."""
+    spec = _spec()
+    spec["sources"] = {"elbow_joint.position": {"locked": 1e-5}}
+    P = load_problem(spec, STUDY.parent)
+    j1, j2 = P.names.index("elbow_joint.position.end1"), P.names.index("elbow_joint.position.end2")
+    assert P.locked_values[j1] == P.locked_values[j2] == 1e-5
+    assert P.n_variables == 17 and "elbow_joint.position" not in P.variables
+    T = P.full(np.full((1, P.n_variables), 2e-5))
+    assert P.source_costs(T[0])[j2] == 0.0 and P.source_costs(T[0])[j1] > 0
