@@ -37,7 +37,7 @@ LAYERS = {
     "evotol": 0, "evotol.errors": 0, "evotol.units": 0, "evotol._runtime": 0,
     "cost_models": 1, "robots": 1,
     "evotol.core": 2, "evotol.measures": 2,
-    "evotol.allocators": 3, "evotol.design": 3,
+    "evotol.allocators": 3, "evotol.design": 3, "evotol.calibration": 3,
     "evotol.verification": 4, "evotol.summaries": 4,
     "evotol.reporting": 5,
     "evotol.studies": 6, "evotol.studyfile": 6,
