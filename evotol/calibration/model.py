@@ -8,8 +8,10 @@ it unchanged. The instrument noise, propagated through the fit to a task pose, i
 (:func:`noise_allowance`):
 
 * worst-case measures (``worst_case``, ``mc_quantile`` and the other bounds) keep ``k`` sigma of it:
-  the geometric error must stay below ``E − k max_poses sqrt(λ_max(C))`` -- the triangle
-  inequality, so the bound is conservative by at most the noise ellipsoid's shape;
+  the geometric error must stay below ``E − k max_poses sqrt(λ_max(C))`` (the triangle inequality).
+  ``k`` sigma bounds the noise's component along every direction with the 1-D probability (99.73 %
+  at ``k = 3``); its 3-D norm stays inside the ball with probability at least ``P(χ₃ ≤ k)``
+  (97.1 % at ``k = 3``), stated in the report as the coverage;
 * ``rss`` adds it in quadrature: ``sqrt(E² − (k σ)²)``;
 * ``yield`` adds ``C`` to the first-order covariance at every pose (exact for normal sources: the
   noise is normal and independent of the geometric errors).
@@ -20,6 +22,7 @@ calibration, :mod:`evotol.calibration.simulation`, which draws one robot for eve
 from __future__ import annotations
 
 import numpy as np
+from scipy.stats import chi
 
 from evotol.errors import ValidationError
 from robots.base import RobotErrorModel
@@ -162,7 +165,8 @@ def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: di
         ``rule`` (``"linear"``, ``"quadrature"`` or ``"covariance"``), ``k``, and per constrained
         component: ``{component: {"sigma": largest propagated sigma (m or rad), "allowance": k sigma,
         "second_order": the noise's second-order term, "bound": the user's bound,
-        "geometric_bound": what is left for the tolerances}}``.
+        "geometric_bound": what is left for the tolerances, "coverage": the probability that the
+        3-D noise stays inside the ball of radius k sigma_max, at least ``P(chi_3 <= k)``}}``.
 
     Raises
     ------
@@ -190,5 +194,6 @@ def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: di
             geo = float(E - d)
         else:
             geo = float(E - d - a) if rule == "linear" else float(np.sqrt((E - d) ** 2 - a * a))
-        out[comp] = {"sigma": s, "allowance": a, "second_order": d, "bound": float(E), "geometric_bound": geo}
+        out[comp] = {"sigma": s, "allowance": a, "second_order": d, "bound": float(E), "geometric_bound": geo,
+                     "coverage": float(chi(df=3).cdf(k))}
     return out

@@ -47,6 +47,8 @@ class CalibrationInfo:
         ``upper`` before and after.
     requirement : evotol.core.requirement.Requirement
         The user's requirement (the problem's is the geometric share).
+    simulate : int
+        Robots of the simulated calibration per design in a study (``[calibration] simulate``).
     """
 
     plan: CalibrationPlan
@@ -54,6 +56,7 @@ class CalibrationInfo:
     noise: dict
     bounds: dict
     requirement: object
+    simulate: int = 200
 
     def to_dict(self) -> dict:
         """Plain data for the JSON summary and the report (SI).
@@ -72,7 +75,7 @@ class CalibrationInfo:
                 "identify": p.identify if isinstance(p.identify, str) else list(p.identify)}
 
 
-def calibrated_problem(problem, plan: CalibrationPlan):
+def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
     """The problem of the same robot after the plan's calibration (module docstring).
 
     Parameters
@@ -81,6 +84,8 @@ def calibrated_problem(problem, plan: CalibrationPlan):
         The uncalibrated problem (a robot without clearance sources).
     plan : evotol.calibration.plan.CalibrationPlan
         The calibration plan.
+    simulate : int
+        Robots of the simulated calibration per design when a study is run (kept on ``calibration``).
 
     Returns
     -------
@@ -123,6 +128,6 @@ def calibrated_problem(problem, plan: CalibrationPlan):
     shared = problem.shared or None
     out = ToleranceProblem(cal, tolerances, new_req, problem.poses, n_directions=problem.n_directions,
                            shared=shared, shared_cost=problem.shared_cost)
-    out.calibration = CalibrationInfo(plan, idn, noise, bounds, req)
+    out.calibration = CalibrationInfo(plan, idn, noise, bounds, req, int(simulate))
     out.uncalibrated = problem
     return out

@@ -31,7 +31,8 @@ def comparison(problem, t_calibrated, t_uncalibrated) -> list[dict]:
     list of dict
         One per source: ``source``, ``unit``, ``group``, ``uncalibrated``, ``calibrated`` (m or
         rad), ``ratio``, ``identified``, ``freed``, ``effect`` (m or rad: first-order position
-        effect after calibration at the worst pose), ``effect_share`` (of the sum of effects),
+        effect after calibration at the worst pose; 0 below 1e-9 of the requirement, round-off),
+        ``effect_share`` (of the sum of effects),
         ``upper`` (the bound the calibrated problem gives it), ``capped_by`` (``"linear range"``,
         ``"compensation range"`` or ``""``).
     """
@@ -39,6 +40,7 @@ def comparison(problem, t_calibrated, t_uncalibrated) -> list[dict]:
     tc, tu = np.asarray(t_calibrated, float), np.asarray(t_uncalibrated, float)
     comp = "position" if problem.requirement.position is not None else "orientation"
     eff = (problem.sensitivities[comp] * tc[None]).max(axis=0)
+    eff[eff <= 1e-9 * getattr(info.requirement, comp)] = 0.0       # round-off of J M: calibration removed it
     total = eff.sum()
     ident = set(info.identification.identified_names)
     out = []
@@ -88,3 +90,36 @@ def calibration_summary(problem, results: dict, uncalibrated, checks: dict | Non
             entry["simulation"] = checks[m].to_dict()
         out["methods"][m] = entry
     return out
+
+
+def study_calibration(problem, results: dict, seed: int = 0, simulate: int | None = None) -> dict:
+    """Everything ``evotol run`` adds for a calibrated study: the uncalibrated optimum, the simulated calibration
+    of every design, and :func:`calibration_summary`.
+
+    Parameters
+    ----------
+    problem : evotol.core.problem.ToleranceProblem
+        The calibrated problem (its ``uncalibrated`` problem is allocated here by the certified optimum).
+    results : dict of str to evotol.core.result.AllocationResult
+        The methods' results on the calibrated problem.
+    seed : int
+        Seed of the simulated calibrations.
+    simulate : int, optional
+        Robots simulated per design (default ``problem.calibration.simulate``; 0: none; a model without a
+        nonlinear joint-space model: none).
+
+    Returns
+    -------
+    dict
+        :func:`calibration_summary`.
+    """
+    from evotol.allocators import allocate_optimum
+    from evotol.calibration.simulation import simulate_calibration
+
+    n = problem.calibration.simulate if simulate is None else simulate
+    uncal = allocate_optimum(problem.uncalibrated)
+    checks = {}
+    if n and problem.calibration.identification.joints is not None:
+        for m, r in results.items():
+            checks[m] = simulate_calibration(problem, r.t, n_samples=n, seed=seed)
+    return calibration_summary(problem, results, uncal, checks)

@@ -65,3 +65,31 @@ def plan_from_table(table, seed: int = 0) -> tuple[CalibrationPlan, int]:
         raise ValidationError("calibration.count", None, "the calibration configurations: count = n, joints = [[...]] "
                               "or poses = [[...]]")
     return CalibrationPlan(require_units=True, **kw), int(simulate)
+
+
+def calibrate_study_problem(problem, table, seed: int = 0):
+    """The study's problem after its ``[calibration]`` table (``evotol run``; module docstring).
+
+    Parameters
+    ----------
+    problem : evotol.core.problem.ToleranceProblem
+        The uncalibrated problem of the study file.
+    table : dict
+        The ``[calibration]`` table.
+    seed : int
+        The study's seed.
+
+    Returns
+    -------
+    evotol.core.problem.ToleranceProblem
+        :func:`evotol.calibration.problem.calibrated_problem`.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        What :func:`plan_from_table` and :func:`~evotol.calibration.problem.calibrated_problem` refuse.
+    """
+    from evotol.calibration.problem import calibrated_problem
+
+    plan, simulate = plan_from_table(table, seed)
+    return calibrated_problem(problem, plan, simulate)

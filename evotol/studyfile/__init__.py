@@ -7,7 +7,8 @@ See ``reports/studies/ucr3_example.toml`` for every field. Units are SI (m, rad)
 ``[shared]`` table (``legs = ["l1", "l2", "l3"]``) with ``shared_cost = "part" | "variable"``;
 ``[poses] refine = true`` (or a table of refinement options) for the whole workspace;
 ``[clearances]`` joint-clearance classes allocated with the geometric sources
-(``docs/clearance_allocation.md``); ``[report] units = "mm"`` (or ``"um, arcsec"``...): the units
+(``docs/clearance_allocation.md``); ``[calibration]`` a calibration plan: tolerances are allocated
+on the error left after calibration (``docs/calibration.md``); ``[report] units = "mm"`` (or ``"um, arcsec"``...): the units
 the report, the terminal and the drawing export show (``docs/units.md``; the JSON stays SI).
 The outputs and the page: ``docs/user_reports.md``.
 Every key is checked: an unknown one is an error naming it and the nearest valid key.
@@ -37,6 +38,8 @@ from evotol._runtime.keyword_checks import check_keywords, check_table_keys, unk
 from evotol.verification.montecarlo import verify
 from evotol._runtime.output_paths import check_not_overwriting
 from evotol._runtime.progress import Heartbeat
+from evotol.calibration.summary import study_calibration
+from evotol.calibration.table import calibrate_study_problem
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studyfile.processes import run_process_study
 from evotol.core.quality_loss import with_quality_loss
@@ -52,7 +55,8 @@ from robots.mechanism.model import model_from_table
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange, "monotone": allocate_monotone}
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
-            "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report")
+            "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report",
+            "calibration")
 REPORT_KEYS = ("units",)
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
@@ -267,6 +271,8 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     shared = spec.get("shared")
     problem = ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"),
                                clearances=cl)
+    if "calibration" in spec:   # a robot that will be calibrated (docs/calibration.md, evotol/calibration)
+        problem = calibrate_study_problem(problem, spec["calibration"], spec.get("seed", 0))
     # quality_loss = A (or {response = A}): machining cost + Taguchi loss (docs/process_selection.md)
     return with_quality_loss(problem, spec["quality_loss"]) if "quality_loss" in spec else problem
 
@@ -381,6 +387,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = plausibility.study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)
+    if getattr(problem, "calibration", None) is not None and results:   # what calibration buys (docs/calibration.md)
+        summary["calibration"] = study_calibration(problem, results, seed)
     summary["interrupted"] = bool(stopped)
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
