@@ -64,11 +64,15 @@ class CalibrationInfo:
         Returns
         -------
         dict
-            ``identification`` (:meth:`Identification.to_dict`), ``noise``, ``bounds``, the plan's
+            ``identification`` (:meth:`Identification.to_dict`), ``noise``, ``tolerance_bounds``
+            (``linear_range``, ``compensation_range``, ``upper_before``, ``upper``: source -> m or
+            rad), the plan's
             ``measure``, ``instrument``, ``k``, ``linear_fraction`` and noise sigmas.
         """
         p = self.plan
-        return {"identification": self.identification.to_dict(), "noise": self.noise, "bounds": self.bounds,
+        fields = ("linear_range", "compensation_range", "upper_before", "upper")
+        bounds = {f: {n: b[f] for n, b in self.bounds.items() if b.get(f) is not None} for f in fields}
+        return {"identification": self.identification.to_dict(), "noise": self.noise, "tolerance_bounds": bounds,
                 "measure": list(p.measure), "instrument": p.instrument, "k": float(p.k),
                 "linear_fraction": float(p.linear_fraction),
                 "noise_sigma": {c: v.tolist() for c, v in p.noise.items()},

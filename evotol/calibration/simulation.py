@@ -79,12 +79,13 @@ class CalibrationCheck:
         Returns
         -------
         dict
-            Every field but the raw samples.
+            Every field but the raw samples (``exceed_rate_<component>``, ``quantile_level``,
+        ``n_fit_failures`` for the JSON unit rules, docs/units.md).
         """
         return {"n_samples": self.n_samples, "simulated": self.simulated, "predicted": self.predicted,
                 "difference": self.difference, "worst_case": self.worst_case, "requirement": self.requirement,
-                "exceed_rate": self.exceed_rate, "quantile": self.quantile, "nls_failures": self.nls_failures,
-                "seconds": self.seconds}
+                **{f"exceed_rate_{c}": v for c, v in self.exceed_rate.items()}, "quantile_level": self.quantile,
+                "n_fit_failures": self.nls_failures, "seconds": self.seconds}
 
 
 def _pose_error(model, Q, E) -> np.ndarray:

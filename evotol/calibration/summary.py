@@ -12,6 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from evotol.allocators import allocate_optimum
+from evotol.calibration.simulation import simulate_calibration
+
 #: a tolerance at least this many times the uncalibrated one counts as freed by calibration
 FREED = 1.5
 
@@ -57,6 +60,21 @@ def comparison(problem, t_calibrated, t_uncalibrated) -> list[dict]:
     return out
 
 
+def _by_quantity(rows: list[dict]) -> dict:
+    """Per-source rows as one table per quantity (source -> value), the JSON's unit rule for tolerances."""
+    out = {"tolerances": {k: {r["source"]: r[k] for r in rows} for k in ("uncalibrated", "calibrated", "upper", "effect")},
+           "effect_share_percent": {r["source"]: 100 * r["effect_share"] for r in rows},
+           "identified": [r["source"] for r in rows if r["identified"]],
+           "freed": [r["source"] for r in rows if r["freed"]],
+           "capped_by": {r["source"]: r["capped_by"] for r in rows if r["capped_by"]}}
+    return out
+
+
+#: units of the calibration block's own keys (added to a study JSON's ``units`` block; docs/units.md)
+UNIT_KEYS = {"k": "1: coverage factor (standard deviations)", "condition_number": "1 (dimensionless ratio)",
+             "rank": "count", "coverage": "1: probability", "quantile_level": "1: probability"}
+
+
 def calibration_summary(problem, results: dict, uncalibrated, checks: dict | None = None) -> dict:
     """The calibration block of a study's JSON summary (SI).
 
@@ -76,7 +94,9 @@ def calibration_summary(problem, results: dict, uncalibrated, checks: dict | Non
     dict
         ``plan`` (:meth:`CalibrationInfo.to_dict`), ``uncalibrated`` (cost, feasible,
         tolerances), per method ``methods[m]`` with ``cost``, ``saving`` (fraction of the
-        uncalibrated cost), ``n_freed``, ``sources`` (:func:`comparison`) and ``simulation``.
+        uncalibrated cost), ``n_freed``, the :func:`comparison` as one table per quantity
+        (``tolerances``: ``uncalibrated``, ``calibrated``, ``upper``, ``effect``, source -> m or rad;
+        ``effect_share_percent``; ``identified``, ``freed`` (names); ``capped_by``) and ``simulation``.
     """
     out = {"plan": problem.calibration.to_dict(),
            "uncalibrated": {"method": "optimum", "cost": float(uncalibrated.cost), "feasible": bool(uncalibrated.feasible),
@@ -85,19 +105,22 @@ def calibration_summary(problem, results: dict, uncalibrated, checks: dict | Non
     for m, r in results.items():
         rows = comparison(problem, r.t, uncalibrated.t)
         entry = {"cost": float(r.cost), "saving": float(1 - r.cost / uncalibrated.cost) if uncalibrated.cost else None,
-                 "n_freed": int(sum(x["freed"] for x in rows)), "sources": rows}
+                 "n_freed": int(sum(x["freed"] for x in rows)), **_by_quantity(rows)}
         if checks and m in checks:
             entry["simulation"] = checks[m].to_dict()
         out["methods"][m] = entry
     return out
 
 
-def study_calibration(problem, results: dict, seed: int = 0, simulate: int | None = None) -> dict:
-    """Everything ``evotol run`` adds for a calibrated study: the uncalibrated optimum, the simulated calibration
-    of every design, and :func:`calibration_summary`.
+def add_to_study(summary: dict, problem, results: dict, seed: int = 0, simulate: int | None = None) -> None:
+    """What ``evotol run`` adds to a calibrated study's JSON summary: the uncalibrated optimum, the simulated
+    calibration of every design, :func:`calibration_summary` under ``"calibration"``, and the units of its
+    keys (:data:`UNIT_KEYS`) in ``summary["units"]["keys"]``.
 
     Parameters
     ----------
+    summary : dict
+        The study's JSON summary (:func:`evotol.summaries.user_study.study_summary`), changed in place.
     problem : evotol.core.problem.ToleranceProblem
         The calibrated problem (its ``uncalibrated`` problem is allocated here by the certified optimum).
     results : dict of str to evotol.core.result.AllocationResult
@@ -107,19 +130,12 @@ def study_calibration(problem, results: dict, seed: int = 0, simulate: int | Non
     simulate : int, optional
         Robots simulated per design (default ``problem.calibration.simulate``; 0: none; a model without a
         nonlinear joint-space model: none).
-
-    Returns
-    -------
-    dict
-        :func:`calibration_summary`.
     """
-    from evotol.allocators import allocate_optimum
-    from evotol.calibration.simulation import simulate_calibration
-
     n = problem.calibration.simulate if simulate is None else simulate
     uncal = allocate_optimum(problem.uncalibrated)
     checks = {}
     if n and problem.calibration.identification.joints is not None:
         for m, r in results.items():
             checks[m] = simulate_calibration(problem, r.t, n_samples=n, seed=seed)
-    return calibration_summary(problem, results, uncal, checks)
+    summary["calibration"] = calibration_summary(problem, results, uncal, checks)
+    summary.setdefault("units", {}).setdefault("keys", {}).update(UNIT_KEYS)

@@ -68,12 +68,15 @@ def calibration_section(rep, summary: dict) -> None:
     if m is None:
         return
     e = cal["methods"][m]
+    tol = e["tolerances"]
+    share = e["effect_share_percent"]
+    units = summary["units"]["tolerances"]
     srows = []
-    for s in sorted(e["sources"], key=lambda s: -s["effect_share"]):
-        srows.append([s["source"], s["group"], _fmt(summary, s["uncalibrated"], s["unit"]), _fmt(summary, s["calibrated"], s["unit"]),
-                      "yes" if s["identified"] else "", "freed" if s["freed"] else "",
-                      f"{100 * s['effect_share']:.1f}", s["capped_by"]])
-    if not any(s["effect"] for s in e["sources"]):
+    for n in sorted(tol["calibrated"], key=lambda n: -share.get(n, 0.0)):
+        srows.append([n, _fmt(summary, tol["uncalibrated"][n], units[n]), _fmt(summary, tol["calibrated"][n], units[n]),
+                      "yes" if n in e["identified"] else "", "freed" if n in e["freed"] else "",
+                      f"{share.get(n, 0.0):.1f}", e["capped_by"].get(n, "")])
+    if not any(share.values()):
         rep.text("The calibration removes every first-order effect of the sources at the task poses: what is left "
                  "to pay for is the noise, the second-order terms (the linear-range bounds) and what the model does "
                  "not contain.", note=True)
@@ -82,7 +85,7 @@ def calibration_section(rep, summary: dict) -> None:
              f"'freed' marks a tolerance at least 1.5 times the uncalibrated one. A source's upper bound is capped "
              f"by the identification's linear range (second-order terms below {100 * plan['linear_fraction']:g} % "
              "of the requirement) or the controller's compensation range.")
-    rep.table(srows, ["source", "group", "uncalibrated", "calibrated", "identified", "freed", "share after calibration (%)",
+    rep.table(srows, ["source", "uncalibrated", "calibrated", "identified", "freed", "share after calibration (%)",
                       "capped by"], table_id="calibration-sources")
     checks = {k: v["simulation"] for k, v in cal["methods"].items() if "simulation" in v}
     if checks:
@@ -94,11 +97,11 @@ def calibration_section(rep, summary: dict) -> None:
                              _fmt(summary, c["predicted"][comp]["max"], u),
                              _fmt(summary, c["simulated"][comp]["quantile"], u), _fmt(summary, c["predicted"][comp]["quantile"], u),
                              _fmt(summary, c["difference"][comp], u), _fmt(summary, c["worst_case"][comp], u),
-                             f"{c['exceed_rate'][comp]:.2%}", c["nls_failures"]])
+                             f"{c['exceed_rate_' + comp]:.2%}", c["n_fit_failures"]])
         rep.text("Simulated calibration (nonlinear model): robots drawn within the tolerances, readings with noise, "
                  "nonlinear least squares, compensation by the actuators, residual at the task poses -- beside the "
                  "first-order prediction for the same robots (the quantile is of each robot's worst pose).")
         rep.table(crow, ["design", "component", "robots", "simulated max", "first-order max",
-                         f"simulated q{round(100 * next(iter(checks.values()))['quantile'])}",
-                         f"first-order q{round(100 * next(iter(checks.values()))['quantile'])}", "largest difference",
+                         f"simulated q{round(100 * next(iter(checks.values()))['quantile_level'])}",
+                         f"first-order q{round(100 * next(iter(checks.values()))['quantile_level'])}", "largest difference",
                          "first-order worst case + noise", "exceed rate", "fit failures"], table_id="calibration-check")

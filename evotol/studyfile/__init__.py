@@ -38,7 +38,7 @@ from evotol._runtime.keyword_checks import check_keywords, check_table_keys, unk
 from evotol.verification.montecarlo import verify
 from evotol._runtime.output_paths import check_not_overwriting
 from evotol._runtime.progress import Heartbeat
-from evotol.calibration.summary import study_calibration
+from evotol.calibration.summary import add_to_study as add_calibration
 from evotol.calibration.table import calibrate_study_problem
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studyfile.processes import run_process_study
@@ -388,7 +388,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["warnings"] = plausibility.study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)
     if getattr(problem, "calibration", None) is not None and results:   # what calibration buys (docs/calibration.md)
-        summary["calibration"] = study_calibration(problem, results, seed)
+        add_calibration(summary, problem, results, seed)
     summary["interrupted"] = bool(stopped)
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
