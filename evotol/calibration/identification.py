@@ -22,9 +22,11 @@ asked for -- with ``identify = "identifiable"`` the actuator offsets first, then
 model order) and keeps one when its unit-norm column has a residual above ``RTOL`` after
 projection on the kept ones: a QR factorisation with the pivots in that order (Gram-Schmidt,
 re-orthogonalised), rank-revealing because a column is dropped exactly when it lies in the span
-of the kept ones. Each dropped source is reported with the kept columns it is a combination of,
-or as unseen (its column is zero: it moves no measured coordinate). The kept set's rank agrees with
-the singular values of all the columns (checked).
+of the kept ones. Each dropped source is reported with the kept columns it is a combination of
+(and its residual), or as unseen (its column is zero: it moves no measured coordinate). The rank
+reported is that of all the columns from their singular values (above 1e-9 of the largest); a
+column whose residual lies between 1e-9 and ``RTOL`` counts in the rank but is not kept: its
+identified value would carry the noise amplified by more than 1e6.
 """
 from __future__ import annotations
 
@@ -194,6 +196,10 @@ class Identification:
         The calibration configurations (rad, m), for a described mechanism.
     poses : ndarray or None
         The calibration poses (SI), for a model without joint maps.
+    estimator : (n_K, n_measurements) ndarray or None
+        ``(B⁺)_K``: the identified values from the weighted readings ``w y`` (m or rad per unit).
+    weights : (n_measurements,) ndarray or None
+        ``1/σ`` of each measured row (1/m, 1/rad), or ones for a noiseless plan.
     """
 
     source_names: list
@@ -321,7 +327,8 @@ def identify(robot, plan) -> Identification:
     rank = int((sv > 1e-9 * sv[0]).sum()) if sv.size else 0
     dropped = {}
     for j, (res, coef) in dependent.items():
-        dropped[labels[j]] = "not identifiable apart from " + _combination(coef, kept, labels)
+        dropped[labels[j]] = (f"not identifiable apart from {_combination(coef, kept, labels)} (residual {res:.1g} "
+                              f"of its unit column, below {RTOL:g})")
     for j in unseen:
         dropped[labels[j]] = "moves no measured coordinate at any calibration configuration"
     return Identification(names, K, [reg_names[j] for j in regk], M, sigma_K, cond, rank, n_rows, dropped,

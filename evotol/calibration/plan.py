@@ -143,6 +143,8 @@ class CalibrationPlan:
     compensation_range : mapping of str to float, optional
         Source pattern -> the largest correction the controller applies (m or rad); a calibrated
         source's tolerance never exceeds it.
+    require_units : bool
+        Refuse noise values without a unit (a study file's table); False (Python) takes numbers as SI.
 
     Raises
     ------

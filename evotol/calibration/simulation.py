@@ -59,6 +59,9 @@ class CalibrationCheck:
         Robots whose least-squares fit did not converge (kept in the statistics).
     seconds : float
         Wall time.
+    samples : dict
+        ``simulated`` and ``predicted`` residuals (n_poses, n_samples, 6) and the drawn ``errors``
+        (n_samples, n_columns), SI; not written to JSON.
     """
 
     n_samples: int
