@@ -48,7 +48,8 @@ class CalibrationCheck:
     difference : dict
         Component -> largest ``|simulated − predicted|`` over robots and poses (m or rad).
     worst_case : dict
-        Component -> first-order worst case of the design plus the noise allowance (m or rad).
+        Component -> first-order worst case of the design plus the noise allowance (``k`` sigma and
+        the second-order term; m or rad).
     requirement : dict
         Component -> the user's bound (m or rad).
     exceed_rate : dict
@@ -196,7 +197,8 @@ def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 
         out["simulated"][comp] = {"max": float(ns.max()), "quantile": float(np.quantile(ns, quantile))}
         out["predicted"][comp] = {"max": float(nl.max()), "quantile": float(np.quantile(nl, quantile))}
         out["difference"][comp] = float(np.abs(sim[:, :, ROWS[comp]] - lin[:, :, ROWS[comp]]).max())
-        allow = info.noise.get(comp, {}).get("allowance", 0.0)
+        nz = info.noise.get(comp, {})
+        allow = nz.get("allowance", 0.0) + nz.get("second_order", 0.0)
         out["worst_case"][comp] = float(np.max(getattr(wc, comp)[0])) + float(allow)
         out["requirement"][comp] = float(E_req)
         out["exceed_rate"][comp] = float(np.mean(ns > E_req))
