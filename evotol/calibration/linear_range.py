@@ -20,7 +20,10 @@ bounds
 
 give ``|½ Σ_jk H_jk x_j x_k| ≤ ½ Σ_jk N_jk u_j u_k ≤ ½ Σ_j u_j² r_j ≤ φ E`` at every pose for every
 ``|x_j| ≤ u_j`` (``u_j u_k ≤ (u_j² + u_k²)/2``; n sources): the second-order terms stay below the
-fraction ``φ`` (``plan.linear_fraction``) of the requirement ``E``. A source with no second-order effect
+fraction ``φ`` (``plan.linear_fraction``) of the requirement ``E``. The second derivatives are
+taken at every task pose up to ``MAX_POSES`` (64), beyond that at a farthest-point subset in joint
+space (:func:`pose_subset`; the terms vary smoothly over the workspace, and the simulated
+calibration checks every pose). A source with no second-order effect
 (``r_j = 0``) is bounded by the user's upper bound only. The controller's compensation range
 (``plan.compensation_range``, by source pattern) bounds an identified source's tolerance too. The
 bound holds to second order with a linear fit; the simulated calibration
@@ -37,6 +40,38 @@ from evotol.calibration.plan import MEASURED
 
 #: finite-difference step of the second derivatives (m or rad)
 STEP = 1e-3
+#: task poses at which the second derivatives are taken at most (a farthest-point subset beyond)
+MAX_POSES = 64
+
+
+def pose_subset(joints: np.ndarray, n: int = MAX_POSES) -> np.ndarray:
+    """Indices of at most ``n`` task configurations spread over the set: all of them when there are no
+    more, else a farthest-point subset in joint space (started at the first, each next one the
+    farthest from those taken).
+
+    Parameters
+    ----------
+    joints : (m, n_variables) ndarray
+        Joint values of the task poses (rad, m).
+    n : int
+        Largest subset.
+
+    Returns
+    -------
+    (min(m, n),) ndarray of int
+        Indices into ``joints``, sorted.
+    """
+    m = len(joints)
+    if m <= n:
+        return np.arange(m)
+    Q = (joints - joints.mean(0)) / np.maximum(joints.std(0), 1e-12)
+    take = [0]
+    d = np.linalg.norm(Q - Q[0], axis=1)
+    for _ in range(n - 1):
+        i = int(np.argmax(d))
+        take.append(i)
+        d = np.minimum(d, np.linalg.norm(Q - Q[i], axis=1))
+    return np.sort(np.array(take))
 
 
 def _post_error(robot, idn, plan, comp, E) -> np.ndarray:
@@ -109,7 +144,7 @@ def linear_range_bounds(robot, idn, plan, task_joints, requirement) -> np.ndarra
     (n,) ndarray
         Upper bound per source (m or rad).
     """
-    H = second_order(robot, idn, plan, task_joints)
+    H = second_order(robot, idn, plan, task_joints[pose_subset(task_joints)])
     n = H.shape[-1]
     u = np.full(n, np.inf)
     for comp, rows in MEASURED.items():
@@ -192,6 +227,7 @@ def noise_second_order(robot, idn, plan, task_joints, step: float = STEP) -> dic
     s = plan.k * np.sqrt(np.maximum(np.diag(idn.sigma_K), 0.0)) if nK else np.zeros(0)
     if not nK or not np.any(s > 0):
         return {"position": 0.0, "orientation": 0.0}
+    task_joints = task_joints[pose_subset(task_joints)]
     comp = Compensation(robot, task_joints)
     pairs = [(j, k) for j in range(nK) for k in range(j, nK)]
     signs = np.array([(1, 1), (1, -1), (-1, 1), (-1, -1)], float) * step
