@@ -86,8 +86,8 @@ def calibration_summary(problem, results: dict, uncalibrated, checks: dict | Non
         The methods' results on the calibrated problem.
     uncalibrated : evotol.core.result.AllocationResult
         The certified optimum of the uncalibrated problem (``problem.uncalibrated``).
-    checks : dict of str to evotol.calibration.simulation.CalibrationCheck, optional
-        The simulated calibration of each method's design.
+    checks : dict of str to evotol.calibration.simulation.CalibrationCheck or dict, optional
+        The simulated calibration of each method's design (or its ``to_dict``).
 
     Returns
     -------
@@ -107,7 +107,7 @@ def calibration_summary(problem, results: dict, uncalibrated, checks: dict | Non
         entry = {"cost": float(r.cost), "saving": float(1 - r.cost / uncalibrated.cost) if uncalibrated.cost else None,
                  "n_freed": int(sum(x["freed"] for x in rows)), **_by_quantity(rows)}
         if checks and m in checks:
-            entry["simulation"] = checks[m].to_dict()
+            entry["simulation"] = checks[m] if isinstance(checks[m], dict) else checks[m].to_dict()
         out["methods"][m] = entry
     return out
 
@@ -135,7 +135,8 @@ def add_to_study(summary: dict, problem, results: dict, seed: int = 0, simulate:
     uncal = allocate_optimum(problem.uncalibrated)
     checks = {}
     if n and problem.calibration.identification.joints is not None:
-        for m, r in results.items():
-            checks[m] = simulate_calibration(problem, r.t, n_samples=n, seed=seed)
+        for m, r in results.items():   # verify() has simulated it already (its "calibration" entry), else here
+            done = (summary.get("monte_carlo", {}).get(m) or {}).get("calibration")
+            checks[m] = done if done is not None else simulate_calibration(problem, r.t, n_samples=n, seed=seed).to_dict()
     summary["calibration"] = calibration_summary(problem, results, uncal, checks)
     summary.setdefault("units", {}).setdefault("keys", {}).update(UNIT_KEYS)
