@@ -133,3 +133,18 @@ def test_yield_with_noise_against_monte_carlo(ur5):
     inside = np.mean(np.linalg.norm(e, axis=1) <= pc.requirement.position)
     assert inside == pytest.approx(res.probability[0, p], abs=4 * np.sqrt(0.01 / n) + 2e-3)
     assert isinstance(tol[pc.names[0]], Tolerance)
+
+
+def test_plans_by_joints_poses_and_orientation(ur5):
+    """Joint values of the same configurations give the same map as the count they came from; workspace poses work;
+    measuring the orientation too makes wrist_3_joint (unseen by a position reading at tool0) identifiable."""
+    a = identify(ur5.robot, CalibrationPlan(noise="20 um", identify=OFFSETS, count=40, seed=0))
+    b = identify(ur5.robot, CalibrationPlan(noise="20 um", identify=OFFSETS, joints=a.joints))
+    assert np.allclose(a.M, b.M, atol=1e-12)
+    c = identify(ur5.robot, CalibrationPlan(noise="20 um", identify=OFFSETS, poses=ur5.poses))
+    assert c.n_measurements == 3 * ur5.n_poses and c.condition < 100
+    with pytest.raises(ValidationError, match="wrist_3_joint"):
+        identify(ur5.robot, CalibrationPlan(noise="20 um", identify=["*_joint"], count=40))
+    d = identify(ur5.robot, CalibrationPlan(noise={"position": "20 um", "orientation": "10 urad"}, identify=["*_joint"],
+                                            count=40, measure=["position", "orientation"]))
+    assert "wrist_3_joint" in d.identified_names and d.n_measurements == 240
