@@ -37,7 +37,7 @@ def comparison(problem, t_calibrated, t_uncalibrated) -> list[dict]:
         effect after calibration at the worst pose; 0 below 1e-9 of the requirement, round-off),
         ``effect_share`` (of the sum of effects),
         ``upper`` (the bound the calibrated problem gives it), ``capped_by`` (``"linear range"``,
-        ``"compensation range"`` or ``""``).
+        ``"compensation range"`` or ``""``; `` (binding)`` when the tolerance sits at that cap).
     """
     info = problem.calibration
     tc, tu = np.asarray(t_calibrated, float), np.asarray(t_uncalibrated, float)
@@ -52,6 +52,7 @@ def comparison(problem, t_calibrated, t_uncalibrated) -> list[dict]:
         cap = ""
         if b.get("bound") is not None and b["bound"] < b.get("upper_before", np.inf):
             cap = "compensation range" if b.get("compensation_range") == b["bound"] else "linear range"
+            cap += " (binding)" if tc[j] >= problem.upper[j] * (1 - 1e-6) else ""
         out.append({"source": n, "unit": s.unit, "group": s.group, "uncalibrated": float(tu[j]), "calibrated": float(tc[j]),
                     "ratio": float(tc[j] / tu[j]) if tu[j] > 0 else None, "identified": n in ident,
                     "freed": bool(tc[j] >= FREED * tu[j]), "effect": float(eff[j]),
