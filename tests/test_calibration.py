@@ -148,3 +148,18 @@ def test_plans_by_joints_poses_and_orientation(ur5):
     d = identify(ur5.robot, CalibrationPlan(noise={"position": "20 um", "orientation": "10 urad"}, identify=["*_joint"],
                                             count=40, measure=["position", "orientation"]))
     assert "wrist_3_joint" in d.identified_names and d.n_measurements == 240
+
+
+def test_a_model_without_joint_maps_and_with_disk_sources():
+    """The 3-UCR (robots.ucr3: lengths plus joint-clearance disks): calibrated from workspace poses, only its
+    interval sources are identified; a disk named is refused; no linear range, and the report says so."""
+    spec = tomllib.loads((ROOT / "reports/studies/ucr3_example.toml").read_text())
+    p = load_problem(spec, base_dir=ROOT / "reports/studies")
+    pc = calibrated_problem(p, CalibrationPlan(noise=1e-6, count=30))
+    assert pc.calibration.identification.identified_names == ["l1", "l2", "l3"]
+    assert any("no linear-range check" in n for n in pc.robot.notes())
+    assert np.abs(pc.jacobian[:, :, :3]).max() < 1e-9 * np.abs(p.jacobian).max()
+    with pytest.raises(ValidationError, match="U1a"):
+        calibrated_problem(p, CalibrationPlan(noise=1e-6, count=30, identify=["U1a"]))
+    with pytest.raises(ValidationError, match="calibration.joints"):
+        calibrated_problem(p, CalibrationPlan(noise=1e-6, count=30, over="joints"))

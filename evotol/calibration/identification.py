@@ -173,7 +173,8 @@ class Identification:
     Parameters
     ----------
     source_names : list of str
-        The model's sources (one column each; only interval sources are identified).
+        One label per column of the model's map: the source's name, ``name[k]`` for the k-th
+        component of a disk or ball source (only interval sources are identified).
     identified : list of int
         Column indices ``K`` of the identified (compensated) sources.
     registration : list of str
@@ -276,12 +277,12 @@ def identify(robot, plan) -> Identification:
         Rr = _rows(Rg, plan)
     else:
         Rr, reg_names = np.zeros((n_rows, 0)), []
-    interval = [j for j, d in enumerate(cols) if d == 1]
-    if sum(cols) != len(cols):   # disk/ball sources: columns != sources; identify only intervals
-        raise ValidationError("calibration", robot.name, "a model whose sources are intervals (one column each)")
+    start = np.concatenate([[0], np.cumsum(cols)[:-1]]).astype(int)        # first column of each source
+    colnames = [n if d == 1 else f"{n}[{k}]" for n, d in zip(names, cols) for k in range(d)]
+    interval = [int(start[j]) for j, d in enumerate(cols) if d == 1]       # only intervals are identified
     if plan.identify == IDENTIFIABLE:
-        actuator = [j for j in interval if robot.sources[j].group == "actuator"]
-        candidates = actuator + [j for j in interval if j not in actuator]
+        actuator = [int(start[j]) for j, d in enumerate(cols) if d == 1 and robot.sources[j].group == "actuator"]
+        candidates = actuator + [c for c in interval if c not in actuator]
     else:
         candidates = []
         for pat in plan.identify:
@@ -289,8 +290,13 @@ def identify(robot, plan) -> Identification:
             if not hit:
                 raise ValidationError("calibration.identify", pat, f"a pattern matching a source of {robot.name}"
                                       + did_you_mean(pat, names))
-            candidates += [j for j in hit if j not in candidates]
+            shaped = [names[j] for j in hit if cols[j] != 1]
+            if shaped:
+                raise ValidationError("calibration.identify", shaped[0], "interval sources (a clearance disk or ball "
+                                      "is not identified by a geometric calibration)")
+            candidates += [int(start[j]) for j in hit if int(start[j]) not in candidates]
         candidates.sort()
+    names = colnames
     n_reg = len(reg_names)
     Z = np.column_stack([Rr, A]) * w[:, None]
     order = list(range(n_reg)) + [n_reg + j for j in candidates]

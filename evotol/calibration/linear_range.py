@@ -183,8 +183,11 @@ def calibrated_upper_bounds(robot, idn, plan, task_joints, requirement) -> dict:
     names = list(idn.source_names)
     lin = linear_range_bounds(robot, idn, plan, task_joints, requirement) if task_joints is not None else np.full(len(names), np.inf)
     ident = set(idn.identified)
+    sources = set(robot.source_names)
     out = {}
     for j, n in enumerate(names):
+        if n not in sources:       # a component of a disk or ball source: no bound of its own
+            continue
         comp = [float(v) for p, v in dict(plan.compensation_range).items() if fnmatch.fnmatchcase(n, p)]
         c = min(comp) if comp and j in ident else None
         u = float(lin[j]) if np.isfinite(lin[j]) else None

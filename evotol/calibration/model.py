@@ -51,6 +51,8 @@ class CalibratedRobot(RobotErrorModel):
         self.name = robot.name
         self.sources = robot.sources
         self.workspace = robot.workspace
+        #: False for a model without a nonlinear joint-space model: no linear-range bounds (set by calibrated_problem)
+        self.linear_range_checked = True
 
     def sensitivity(self, poses) -> np.ndarray:
         """Post-calibration first-order map ``J M`` (n, 6, n_columns) at task poses.
@@ -140,7 +142,10 @@ class CalibratedRobot(RobotErrorModel):
         idn = self.identification
         return base + [f"Calibrated: {len(idn.identified)} sources identified from {idn.n_measurements} measured "
                        f"coordinates (condition number {idn.condition:.3g}); tolerances are allocated on the error "
-                       "left after compensation (docs/calibration.md)."]
+                       "left after compensation (docs/calibration.md)."] + (
+            [] if self.linear_range_checked else
+            [f"{self.name} has no nonlinear joint-space model: the identified sources' tolerances are bounded by "
+             "their upper bounds only (no linear-range check, no simulated calibration)."])
 
 
 def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: dict | None = None) -> dict:

@@ -118,6 +118,7 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
         q = robot.joint_values(problem.poses)
         task_joints = np.stack([np.asarray(q[v], float) for v in robot.kin.variables], axis=1)
         second = noise_second_order(robot, idn, plan, task_joints)
+    cal.linear_range_checked = task_joints is not None
     noise = noise_allowance(cal, problem.poses, req, second)
     bounds = calibrated_upper_bounds(robot, idn, plan, task_joints, req)
     tolerances = dict(problem.tolerances)
