@@ -41,7 +41,7 @@ LAYERS = {
     "cost_models": 1, "robots": 1,
     "evotol.measures": 2,
     "evotol.core": 3,
-    "evotol.allocators": 4, "evotol.design": 4,
+    "evotol.allocators": 4, "evotol.design": 4, "evotol.calibration": 4,
     "evotol.verification": 5, "evotol.summaries": 5,
     "evotol.reporting": 6,
     "evotol.studies": 7, "evotol.studyfile": 7,

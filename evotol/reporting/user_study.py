@@ -26,6 +26,7 @@ from plotly.subplots import make_subplots
 from evotol.units.display import DisplayUnits, number
 from evotol.core.pareto import ideal_point_knee
 from evotol.reporting.callout_drawing import callout_sections
+from evotol.reporting.calibration import calibration_section
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
 
@@ -393,6 +394,8 @@ def render_user_study(summary: dict) -> Report:
     rep.heading("Allocated tolerances")
     rows, header = tolerance_rows(summary)
     rep.table(rows, header, table_id="tolerances")
+    if "calibration" in summary:    # a calibrated robot: uncalibrated vs calibrated (docs/calibration.md)
+        calibration_section(rep, summary)
     if summary.get("exports"):
         rep.text("The tolerance table as a drawing carries it: " + ", ".join(
             f'<a href="{html.escape(p)}">{html.escape(p)}</a>' for p in summary["exports"].values()) + ".", raw=True)

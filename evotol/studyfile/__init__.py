@@ -7,7 +7,8 @@ See ``reports/studies/ucr3_example.toml`` for every field. Units are SI (m, rad)
 ``[shared]`` table (``legs = ["l1", "l2", "l3"]``) with ``shared_cost = "part" | "variable"``;
 ``[poses] refine = true`` (or a table of refinement options) for the whole workspace;
 ``[clearances]`` joint-clearance classes allocated with the geometric sources
-(``docs/clearance_allocation.md``); ``[report] units = "mm"`` (or ``"um, arcsec"``...): the units
+(``docs/clearance_allocation.md``); ``[calibration]`` a calibration plan: tolerances are allocated
+on the error left after calibration (``docs/calibration.md``); ``[report] units = "mm"`` (or ``"um, arcsec"``...): the units
 the report, the terminal and the drawing export show (``docs/units.md``; the JSON stays SI).
 The outputs and the page: ``docs/user_reports.md``.
 Every key is checked: an unknown one is an error naming it and the nearest valid key.

@@ -3,6 +3,7 @@ modules beside this one, put together as a :class:`~evotol.core.problem.Toleranc
 """
 from __future__ import annotations
 
+from evotol.calibration.table import calibrate_study_problem
 from evotol.core import plausibility
 from evotol.core.problem import ToleranceProblem
 from evotol.core.quality_loss import with_quality_loss
@@ -58,5 +59,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     problem = ToleranceProblem(robot, tol, read_requirement(spec), poses, shared=spec.get("shared"),
                                shared_cost=spec.get("shared_cost", "part"), clearances=classes)
     plausibility.warn(callout_warnings(problem))        # an orientation callout that binds (issue 35)
+    if "calibration" in spec:   # a robot that will be calibrated (docs/calibration.md, evotol/calibration)
+        problem = calibrate_study_problem(problem, spec["calibration"], spec.get("seed", 0))
     # quality_loss = A (or {response = A}): machining cost + Taguchi loss (docs/process_selection.md)
     return with_quality_loss(problem, spec["quality_loss"]) if "quality_loss" in spec else problem

@@ -15,6 +15,7 @@ from evotol._runtime.output_paths import check_not_overwriting
 from evotol._runtime.progress import Heartbeat
 from evotol._runtime.toml_kinds import check_kind
 from evotol.allocators import allocate_nsga2
+from evotol.calibration.summary import add_to_study as add_calibration
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.reporting.export import FORMATS as EXPORT_FORMATS
@@ -181,6 +182,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)
+    if getattr(problem, "calibration", None) is not None and results:   # what calibration buys (docs/calibration.md)
+        add_calibration(summary, problem, results, seed)
     summary["interrupted"] = bool(stopped)
     if hasattr(problem.robot, "describe_callouts") and results and not stopped:   # exact zones vs boxes (issue 35)
         refine = refine_option(spec)

@@ -28,6 +28,7 @@ import numpy as np
 
 from evotol.measures import clearances
 
+from evotol.calibration.simulation import simulate_calibration
 from evotol.measures.statistical import distributions
 from evotol.measures.statistical.distributions import METHODS
 from evotol.errors import ValidationError, is_integer, is_real
@@ -81,6 +82,9 @@ class MonteCarloResult:
         The same on the nonlinear model (unassembled = miss).
     yield_check : dict
         :func:`yield_check` of the nonlinear yield where there is one, else the linear.
+    calibration : evotol.calibration.simulation.CalibrationCheck, optional
+        For a calibrated problem (:func:`evotol.calibration.calibrated_problem`): the calibration
+        simulated on the nonlinear model beside the first-order prediction; None otherwise.
 
     Examples
     --------
@@ -111,6 +115,7 @@ class MonteCarloResult:
     yield_linear: np.ndarray | None = None        # (n_poses,) fraction of samples inside every bound
     yield_nonlinear: np.ndarray | None = None     # the same on robot.pose_error (unassembled = miss)
     yield_check: dict = field(default_factory=dict)
+    calibration: object = None    # a calibrated problem's simulated calibration (evotol.calibration.simulation)
 
     @property
     def requirement_missed(self) -> bool:
@@ -163,8 +168,9 @@ class MonteCarloResult:
         dict
             ``method``, ``n_samples``, ``seed``, ``seconds``, ``max_exceed_rate``,
             ``linearisation_error``, ``max_error_over_worst_case`` and, where available,
-            ``linearisation_verdict``, ``max_exceed_rate_nonlinear`` and ``yield``
-            (:func:`yield_check`'s entries); no per-pose arrays.
+            ``linearisation_verdict``, ``max_exceed_rate_nonlinear``, ``yield``
+            (:func:`yield_check`'s entries) and ``calibration`` (the simulated calibration of a
+            calibrated problem); no per-pose arrays.
         """
         d = {"method": self.method, "n_samples": self.n_samples, "seed": self.seed, "seconds": self.seconds,
              "max_exceed_rate": self.max_exceed_rate(), "linearisation_error": self.linearisation_error,
@@ -175,6 +181,8 @@ class MonteCarloResult:
             d["max_exceed_rate_nonlinear"] = self.max_exceed_rate(True)
         if self.yield_check:
             d["yield"] = dict(self.yield_check)
+        if self.calibration is not None:
+            d["calibration"] = self.calibration.to_dict()
         return d
 
 
@@ -371,6 +379,9 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     ev = problem.evaluate(t[None], "worst_case")
     for c, _ in comps:
         res.max_error_over_worst_case[c] = float(np.max(maxerr[c] / np.maximum(getattr(ev, c)[0], 1e-300)))
+    info = getattr(problem, "calibration", None)     # a calibrated robot: simulate its calibration (docs/calibration.md)
+    if nonlinear and info is not None and info.simulate and info.identification.joints is not None:
+        res.calibration = simulate_calibration(problem, t, n_samples=info.simulate, seed=seed)
     res.seconds = time.perf_counter() - t0
     return res
 

@@ -33,7 +33,10 @@ def first_order_yield(problem) -> "statistical.FirstOrderYield | statistical.Sam
         if r.model == "nonlinear":
             return statistical.SampledYield(problem.error_model, problem.poses, problem.distributions,
                                             dict(problem.components), r.mc_samples, r.seed, shift=shift)
-        return statistical.FirstOrderYield(problem.blocks, problem.distributions, dict(problem.components), shift=shift)
+        # a calibrated robot (evotol.calibration.model) adds its propagated instrument noise to the covariance
+        noise = problem.robot.noise_cov6(problem.poses) if hasattr(problem.robot, "noise_cov6") else None
+        return statistical.FirstOrderYield(problem.blocks, problem.distributions, dict(problem.components), shift=shift,
+                                           noise=noise)
 
     return problem.measure_cache("yield.model", build)
 

@@ -83,11 +83,15 @@ class FirstOrderYield:
     shift : tuple of three array_like, shape (n_sources,), optional
         ``(rho, kappa, offset)`` of asymmetric intervals (dimensionless, dimensionless, SI);
         None: centred ±t.
+    noise : dict of str to ndarray, shape (n_poses, 6), optional
+        Component -> covariance (xx, yy, zz, xy, xz, yz; m² or rad²) of a normal error
+        independent of the sources, added at every pose (a calibrated robot's instrument noise,
+        :meth:`evotol.calibration.model.CalibratedRobot.noise_cov6`); None: none.
     """
 
     _PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
-    def __init__(self, blocks: dict, dists, bounds: dict, radial: str = "uniform", shift=None):
+    def __init__(self, blocks: dict, dists, bounds: dict, radial: str = "uniform", shift=None, noise=None):
         from evotol.measures.statistical.distributions import unit_moments
 
         self.bounds = {c: float(E) for c, E in bounds.items() if E is not None}
@@ -101,6 +105,7 @@ class FirstOrderYield:
         self.offsets = offset
         contributing = [j for j in range(len(dims)) if any(np.any(blocks[c][j]) for c in self.bounds)]
         self.exact = all(dists[j].is_normal for j in contributing)
+        self.noise = {c: np.asarray(v, float) for c, v in (noise or {}).items()}
         self.G, self.Bmean, self.frob = {}, {}, {}
         for c in self.bounds:
             G = np.stack([np.einsum("pik,pjk->pij", B, B) for B in blocks[c]], 1)   # (p, n_src, 3, 3)
@@ -127,6 +132,8 @@ class FirstOrderYield:
             Mean error (m or rad); None when every source is centred.
         """
         S = np.einsum("pjk,nj->npk", self.G[comp], T * T * self.unit_var)
+        if comp in self.noise:
+            S = S + self.noise[comp][None]
         m = T * self.unit_mean + self.offsets
         mean = np.einsum("pji,nj->npi", self.Bmean[comp], m) if np.any(m) else None
         return S, mean

@@ -1,0 +1,204 @@
+"""The calibrated robot: the error left after calibration, as a robot error model.
+
+:class:`CalibratedRobot` wraps an error model and a plan's :class:`~evotol.calibration.identification.Identification`.
+Its first-order map at task poses is ``J M`` (``e = (J − J_K A_K⁺ A) δp``, the identification's
+module docstring): a linear map of the sensitivity, so every allocator and every measure works on
+it unchanged. The instrument noise, propagated through the fit to a task pose, is the covariance
+``C = J_K Σ_K J_Kᵀ`` (:meth:`CalibratedRobot.noise_covariance`); it enters the requirement
+(:func:`noise_allowance`):
+
+* worst-case measures (``worst_case``, ``mc_quantile`` and the other bounds) keep ``k`` sigma of it:
+  the geometric error must stay below ``E − k max_poses sqrt(λ_max(C))`` (the triangle inequality).
+  ``k`` sigma bounds the noise's component along every direction with the 1-D probability (99.73 %
+  at ``k = 3``); its 3-D norm stays inside the ball with probability at least ``P(χ₃ ≤ k)``
+  (97.1 % at ``k = 3``), stated in the report as the coverage;
+* ``rss`` adds it in quadrature: ``sqrt(E² − (k σ)²)``;
+* ``yield`` adds ``C`` to the first-order covariance at every pose (exact for normal sources: the
+  noise is normal and independent of the geometric errors).
+
+The calibrated model has no nonlinear ``pose_error`` (the nonlinear check is the simulated
+calibration, :mod:`evotol.calibration.simulation`, which draws one robot for every pose).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import chi
+
+from evotol.errors import ValidationError
+from robots.base import RobotErrorModel
+
+#: how each measure accounts for the noise: "linear" (E - k sigma), "quadrature" (sqrt(E^2 - (k sigma)^2)), "covariance"
+NOISE_RULE = {"rss": "quadrature", "yield": "covariance"}
+
+
+class CalibratedRobot(RobotErrorModel):
+    """An error model after calibration: first-order map ``J M``, plus the propagated noise (module docstring).
+
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        The uncalibrated model (its sources, workspace, sensitivities).
+    identification : evotol.calibration.identification.Identification
+        What the plan identifies (``M``, ``Σ_K``).
+    plan : evotol.calibration.plan.CalibrationPlan
+        The plan (kept for reports and the simulated calibration).
+    """
+
+    def __init__(self, robot: RobotErrorModel, identification, plan):
+        self.base = robot
+        self.identification = identification
+        self.plan = plan
+        self.name = robot.name
+        self.sources = robot.sources
+        self.workspace = robot.workspace
+        #: False for a model without a nonlinear joint-space model: no linear-range bounds (set by calibrated_problem)
+        self.linear_range_checked = True
+
+    def sensitivity(self, poses) -> np.ndarray:
+        """Post-calibration first-order map ``J M`` (n, 6, n_columns) at task poses.
+
+        Parameters
+        ----------
+        poses : (n, workspace.dim) array_like
+            Task poses (SI: m, rad).
+
+        Returns
+        -------
+        (n, 6, n_columns) ndarray
+            Error twist after compensation per unit source error (m or rad per m or rad); the
+            columns of the identified sources are zero up to round-off.
+
+        Raises
+        ------
+        evotol.errors.ValidationError, evotol.errors.KinematicsError
+            What the uncalibrated model's ``sensitivity`` raises.
+        """
+        return np.asarray(self.base.sensitivity(poses), float) @ self.identification.M
+
+    def noise_covariance(self, poses) -> np.ndarray:
+        """Covariance (n, 6, 6) of the instrument noise propagated to task poses (m², rad²).
+
+        Parameters
+        ----------
+        poses : (n, workspace.dim) array_like
+            Task poses (SI).
+
+        Returns
+        -------
+        (n, 6, 6) ndarray
+            ``J_K Σ_K J_Kᵀ``: position block (m²) rows 0-2, orientation (rad²) rows 3-5.
+
+        Raises
+        ------
+        evotol.errors.ValidationError, evotol.errors.KinematicsError
+            What the uncalibrated model's ``sensitivity`` raises.
+        """
+        J = np.asarray(self.base.sensitivity(poses), float)[:, :, self.identification.identified]
+        return J @ self.identification.sigma_K @ np.swapaxes(J, 1, 2)
+
+    def noise_cov6(self, poses) -> dict:
+        """The noise covariance in the yield model's packed form: component -> (n, 6) (xx, yy, zz, xy, xz, yz).
+
+        Parameters
+        ----------
+        poses : (n, workspace.dim) array_like
+            Task poses (SI).
+
+        Returns
+        -------
+        dict of str to (n, 6) ndarray
+            ``"position"`` (m²) and ``"orientation"`` (rad²).
+        """
+        C = self.noise_covariance(poses)
+        pairs = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+        return {c: np.stack([C[:, o + a, o + b] for a, b in pairs], -1) for c, o in (("position", 0), ("orientation", 3))}
+
+    def noise_sigma(self, poses) -> dict:
+        """Largest standard deviation of the propagated noise per pose: component -> (n,) (m, rad).
+
+        Parameters
+        ----------
+        poses : (n, workspace.dim) array_like
+            Task poses (SI).
+
+        Returns
+        -------
+        dict of str to (n,) ndarray
+            ``sqrt(λ_max)`` of the position (m) and orientation (rad) blocks of the covariance.
+        """
+        C = self.noise_covariance(poses)
+        return {c: np.sqrt(np.maximum(np.linalg.eigvalsh(C[:, o:o + 3, o:o + 3])[:, -1], 0.0))
+                for c, o in (("position", 0), ("orientation", 3))}
+
+    def notes(self) -> list[str]:
+        """Report lines of the wrapped model plus one stating the calibration.
+
+        Returns
+        -------
+        list of str
+            The base model's notes and the calibration's sentence.
+        """
+        base = list(getattr(self.base, "notes", list)())
+        idn = self.identification
+        return base + [f"Calibrated: {len(idn.identified)} sources identified from {idn.n_measurements} measured "
+                       f"coordinates (condition number {idn.condition:.3g}); tolerances are allocated on the error "
+                       "left after compensation (docs/calibration.md)."] + (
+            [] if self.linear_range_checked else
+            [f"{self.name} has no nonlinear joint-space model: the identified sources' tolerances are bounded by "
+             "their upper bounds only (no linear-range check, no simulated calibration)."])
+
+
+def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: dict | None = None) -> dict:
+    """How much of the requirement the instrument noise takes, per constrained component (module docstring).
+
+    Parameters
+    ----------
+    robot : CalibratedRobot
+        The calibrated model.
+    poses : (n, dim) ndarray
+        Task poses (SI).
+    requirement : evotol.core.requirement.Requirement
+        The user's requirement (``measure`` chooses the rule).
+    second_order : dict, optional
+        Component -> second-order effect of the noise-driven identified values (m, rad;
+        :func:`evotol.calibration.linear_range.noise_second_order`), taken off the bound first
+        under every rule.
+
+    Returns
+    -------
+    dict
+        ``rule`` (``"linear"``, ``"quadrature"`` or ``"covariance"``), ``k``, and per constrained
+        component: ``{component: {"sigma": largest propagated sigma (m or rad), "allowance": k sigma,
+        "second_order": the noise's second-order term, "bound": the user's bound,
+        "geometric_bound": what is left for the tolerances, "coverage": the probability that the
+        3-D noise stays inside the ball of radius k sigma_max, at least ``P(chi_3 <= k)``}}``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        The noise alone takes the whole requirement (names the component and the k sigma).
+    """
+    rule = NOISE_RULE.get(requirement.measure, "linear")
+    k = float(robot.plan.k)
+    sig = robot.noise_sigma(poses)
+    out = {"rule": rule, "k": k}
+    for comp in ("position", "orientation"):
+        E = getattr(requirement, comp)
+        if E is None:
+            continue
+        s = float(sig[comp].max())
+        d = float((second_order or {}).get(comp, 0.0))
+        a = k * s
+        if a + d >= E or (rule == "covariance" and d >= E):
+            u = "m" if comp == "position" else "rad"
+            raise ValidationError("calibration.noise", f"{k:g} sigma = {a:.3g} {u} + second order {d:.3g} {u}",
+                                  f"an instrument noise whose {comp} effect after calibration stays below the requirement "
+                                  f"{E:g} {u} (condition number {robot.identification.condition:.3g}: spread the "
+                                  "configurations, e.g. over = 'joints', or identify fewer sources)")
+        if rule == "covariance":
+            geo = float(E - d)
+        else:
+            geo = float(E - d - a) if rule == "linear" else float(np.sqrt((E - d) ** 2 - a * a))
+        out[comp] = {"sigma": s, "allowance": a, "second_order": d, "bound": float(E), "geometric_bound": geo,
+                     "coverage": float(chi(df=3).cdf(k))}
+    return out

@@ -1,0 +1,138 @@
+"""A tolerance problem for a robot that will be calibrated: :func:`calibrated_problem`.
+
+The problem keeps the user's tolerances, cost models and poses; it changes three things
+(``docs/calibration.md``):
+
+1. the robot is the :class:`~evotol.calibration.model.CalibratedRobot` of the plan (first-order
+   map ``J M``), so every allocator and measure sees the error left after compensation;
+2. the requirement gives the instrument noise its share (:func:`evotol.calibration.model.noise_allowance`:
+   ``k`` sigma off worst-case bounds, in quadrature for ``rss``, in the covariance for ``yield``);
+3. each identified source's upper bound is lowered to its linear range and the controller's
+   compensation range (:mod:`evotol.calibration.linear_range`), so it never runs to infinity.
+
+The result carries ``problem.calibration`` (:class:`CalibrationInfo`: the plan, the identification,
+the noise allowance, the bounds) and ``problem.uncalibrated`` (the problem it was made from), for
+the report's side-by-side comparison.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from evotol.calibration.configurations import is_described
+from evotol.calibration.identification import Identification, identify
+from evotol.calibration.linear_range import calibrated_upper_bounds, noise_second_order
+from evotol.calibration.model import CalibratedRobot, noise_allowance
+from evotol.calibration.plan import CalibrationPlan
+from evotol.core.problem import ToleranceProblem
+from evotol.errors import ValidationError
+
+
+@dataclass
+class CalibrationInfo:
+    """What a calibrated problem was made with (SI).
+
+    Parameters
+    ----------
+    plan : evotol.calibration.plan.CalibrationPlan
+        The plan.
+    identification : evotol.calibration.identification.Identification
+        Its identification.
+    noise : dict
+        :func:`evotol.calibration.model.noise_allowance` of the user's requirement.
+    bounds : dict
+        :func:`evotol.calibration.linear_range.calibrated_upper_bounds`, plus each source's
+        ``upper`` before and after.
+    requirement : evotol.core.requirement.Requirement
+        The user's requirement (the problem's is the geometric share).
+    simulate : int
+        Robots of the simulated calibration per design in a study (``[calibration] simulate``).
+    """
+
+    plan: CalibrationPlan
+    identification: Identification
+    noise: dict
+    bounds: dict
+    requirement: object
+    simulate: int = 200
+
+    def to_dict(self) -> dict:
+        """Plain data for the JSON summary and the report (SI).
+
+        Returns
+        -------
+        dict
+            ``identification`` (:meth:`Identification.to_dict`), ``noise``, ``tolerance_bounds``
+            (``linear_range``, ``compensation_range``, ``upper_before``, ``upper``: source -> m or
+            rad), the plan's
+            ``measure``, ``instrument``, ``k``, ``linear_fraction`` and noise sigmas.
+        """
+        p = self.plan
+        fields = ("linear_range", "compensation_range", "upper_before", "upper")
+        bounds = {f: {n: b[f] for n, b in self.bounds.items() if b.get(f) is not None} for f in fields}
+        return {"identification": self.identification.to_dict(), "noise": self.noise, "tolerance_bounds": bounds,
+                "measure": list(p.measure), "instrument": p.instrument, "k": float(p.k),
+                "linear_fraction": float(p.linear_fraction),
+                "noise_sigma": {c: v.tolist() for c, v in p.noise.items()},
+                "identify": p.identify if isinstance(p.identify, str) else list(p.identify)}
+
+
+def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
+    """The problem of the same robot after the plan's calibration (module docstring).
+
+    Parameters
+    ----------
+    problem : evotol.core.problem.ToleranceProblem
+        The uncalibrated problem (a robot without clearance sources).
+    plan : evotol.calibration.plan.CalibrationPlan
+        The calibration plan.
+    simulate : int
+        Robots of the simulated calibration per design when a study is run (kept on ``calibration``).
+
+    Returns
+    -------
+    evotol.core.problem.ToleranceProblem
+        The calibrated problem, with ``calibration`` (:class:`CalibrationInfo`) and
+        ``uncalibrated`` attributes.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A problem with clearance sources, a plan that is not a :class:`CalibrationPlan`, what
+        :func:`evotol.calibration.identification.identify` refuses, or a noise that takes the
+        whole requirement.
+    """
+    if not isinstance(plan, CalibrationPlan):
+        raise ValidationError("calibration", plan, "an evotol.calibration.CalibrationPlan")
+    if problem.clearances is not None:
+        raise ValidationError("calibration", "clearances", "a problem without clearance sources (a clearance is not "
+                              "identified by a geometric calibration)")
+    robot = problem.robot
+    idn = identify(robot, plan)
+    cal = CalibratedRobot(robot, idn, plan)
+    req = problem.requirement
+    task_joints, second = None, None
+    if is_described(robot):
+        q = robot.joint_values(problem.poses)
+        task_joints = np.stack([np.asarray(q[v], float) for v in robot.kin.variables], axis=1)
+        second = noise_second_order(robot, idn, plan, task_joints)
+    cal.linear_range_checked = task_joints is not None
+    noise = noise_allowance(cal, problem.poses, req, second)
+    bounds = calibrated_upper_bounds(robot, idn, plan, task_joints, req)
+    tolerances = dict(problem.tolerances)
+    for n, b in bounds.items():
+        tol = tolerances[n]
+        b["upper_before"] = float(tol.upper)
+        if b["bound"] is not None and b["bound"] < tol.upper and tol.locked is None:
+            tolerances[n] = dataclasses.replace(tol, upper=max(b["bound"], tol.lower))
+        b["upper"] = float(tolerances[n].upper)
+    changes = {c: v["geometric_bound"] for c, v in noise.items() if isinstance(v, dict)}
+    new_req = dataclasses.replace(req, **changes) if noise["rule"] != "covariance" else req
+    shared = problem.shared or None
+    out = ToleranceProblem(cal, tolerances, new_req, problem.poses, n_directions=problem.n_directions,
+                           shared=shared, shared_cost=problem.shared_cost)
+    out.calibration = CalibrationInfo(plan, idn, noise, bounds, req, int(simulate))
+    out.uncalibrated = problem
+    return out

@@ -1,0 +1,85 @@
+"""``evotol run`` of a calibrated study (issue 36 items 1, 5, 6, 7): the [calibration] table, the JSON block with a
+unit for every number (docs/units.md), the report's comparison; bad plans refused in one line before any work."""
+from __future__ import annotations
+
+import json
+import time
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from evotol.calibration import CalibrationPlan, calibrated_problem
+from evotol.calibration.table import plan_from_table
+from evotol.errors import ValidationError
+from evotol.studyfile import load_problem, run_study_file
+from evotol.units import numbers_without_unit
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDY = ROOT / "reports/studies/ur5_calibrated.toml"
+OFFSETS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint"]
+
+
+@pytest.fixture(scope="module")
+def run_json(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cal")
+    text = STUDY.read_text().replace("grid = [3, 3, 3]", "grid = [2, 2, 2]").replace("simulate = 200", "simulate = 20")
+    text = text[:text.index("[methods]")] + "[methods]\nsensitivity = {}\noptimum = {}\n\n[verify]\nn_samples = 30\n"
+    (d / "s.toml").write_text(text)
+    run_study_file(d / "s.toml", out=d)
+    return json.loads((d / "ur5_calibrated.json").read_text()), (d / "ur5_calibrated.html").read_text()
+
+
+def test_calibrated_study_json_and_report(run_json):
+    data, page = run_json
+    cal = data["calibration"]
+    assert cal["plan"]["identification"]["rank"] == 24 and cal["plan"]["identification"]["condition_number"] < 10
+    assert cal["methods"]["optimum"]["cost"] < 0.2 * cal["uncalibrated"]["cost"]
+    sim = cal["methods"]["optimum"]["simulation"]
+    assert sim["simulated"]["position"]["max"] <= 5e-4 and sim["n_fit_failures"] == 0
+    assert numbers_without_unit(data, data["units"]) == []
+    assert "What calibration buys" in page and "uncalibrated optimum" in page and "condition number" in page
+
+
+@pytest.mark.parametrize("table, field, words", [
+    ({"count": 1, "noise": "20 um", "identify": OFFSETS}, "calibration.configurations", "fewer measurements"),
+    ({"count": 40, "noise": "20 um", "identify": ["elbow_jiont"]}, "calibration.identify", "matching a source"),
+    ({"count": 40, "noise": "20 um", "identify": ["*_joint"]}, "calibration.identify", "wrist_3_joint"),
+    ({"count": 40, "noise": 20, "identify": OFFSETS}, "calibration.noise", "unit"),
+    ({"count": 40, "noise": "-5 um", "identify": OFFSETS}, "calibration.noise", ">= 0"),
+    ({"count": 40, "noise": "5 parsecs", "identify": OFFSETS}, "calibration.noise", "um"),
+    ({"joints": [[0, -1.2, 1.6, -1.9, -1.57, 0], [0, 0, 4.0, 0, 0, 0]], "noise": "20 um", "identify": ["elbow_joint"]},
+     "calibration.joints[1]", "elbow_joint = 4"),
+    ({"count": 40, "noise": "20 um", "identfy": OFFSETS}, "calibration.identfy", "identify"),
+    ({"noise": "20 um"}, "calibration.count", "configurations"),
+    ({"count": 40, "noise": "2 mm", "identify": OFFSETS}, "calibration.noise", "below the requirement"),
+])
+def test_bad_plans_one_line_before_work(table, field, words):
+    spec = tomllib.loads(STUDY.read_text())
+    spec["calibration"] = table
+    t0 = time.perf_counter()
+    with pytest.raises(ValidationError) as exc:
+        load_problem(spec, base_dir=STUDY.parent)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(field) and words in msg, msg
+    assert time.perf_counter() - t0 < 30
+
+
+def test_plan_from_table_reads_units_and_defaults():
+    plan, n = plan_from_table({"count": 12, "noise": {"position": ["20 um", "0.02 mm", "40um"]}, "identify": "identifiable"})
+    assert plan.noise["position"].tolist() == pytest.approx([2e-5, 2e-5, 4e-5]) and n == 200 and plan.k == 3
+    with pytest.raises(ValidationError, match="calibration.noise.orientation"):
+        plan_from_table({"count": 12, "noise": {"position": "20 um", "orientation": "5 arcsec"}})
+    plan, _ = plan_from_table({"count": 12, "measure": ["position", "orientation"],
+                               "noise": {"position": "20 um", "orientation": "5 arcsec"}})
+    assert plan.rows_per_configuration == 6 and plan.noise["orientation"][0] == pytest.approx(5 * 4.8481368e-6)
+
+
+def test_compensation_range_caps_an_identified_source():
+    spec = tomllib.loads((ROOT / "reports/studies/ur5_urdf.toml").read_text())
+    p = load_problem(spec, base_dir=STUDY.parent)
+    pc = calibrated_problem(p, CalibrationPlan(noise="20 um", identify=OFFSETS, count=40, seed=0,
+                                               compensation_range={"elbow_joint": 2e-4}))
+    j = pc.names.index("elbow_joint")
+    assert pc.upper[j] == pytest.approx(2e-4)
+    assert pc.calibration.bounds["elbow_joint"]["compensation_range"] == 2e-4
