@@ -286,8 +286,8 @@ def contributions(stack: Stack) -> list[dict]:
     hi = np.array([max(ai * d.lower, ai * d.upper) for ai, d in zip(a, stack.dimensions)])
     slo, shi = float(lo.sum()), float(hi.sum())
     return [{"name": d.name, "below": float(l) + 0.0, "above": float(u) + 0.0,
-             "below_percent": 100 * float(l) / slo if slo else 0.0,
-             "above_percent": 100 * float(u) / shi if shi else 0.0}
+             "below_percent": 100 * float(l) / slo + 0.0 if slo else 0.0,
+             "above_percent": 100 * float(u) / shi + 0.0 if shi else 0.0}
             for d, l, u in zip(stack.dimensions, lo, hi)]
 
 

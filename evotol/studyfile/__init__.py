@@ -9,7 +9,8 @@ See ``reports/studies/ucr3_example.toml`` for every field. Units are SI (m, rad)
 ``[clearances]`` joint-clearance classes allocated with the geometric sources
 (``docs/clearance_allocation.md``); ``[report] units = "mm"`` (or ``"um, arcsec"``...): the units
 the report, the terminal and the drawing export show (``docs/units.md``; the JSON stays SI).
-The outputs and the page: ``docs/user_reports.md``.
+The outputs and the page: ``docs/user_reports.md``. A ``[stack]`` table is a tolerance stack written in
+the file, no robot and no Python (:mod:`evotol.studyfile.stack_table`, ``docs/stack_analysis.md``).
 Every key is checked: an unknown one is an error naming it and the nearest valid key.
 """
 from __future__ import annotations
@@ -39,6 +40,7 @@ from evotol._runtime.output_paths import check_not_overwriting
 from evotol._runtime.progress import Heartbeat
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studyfile.processes import run_process_study
+from evotol.studyfile.stack_table import run_stack_study
 from evotol.core.quality_loss import with_quality_loss
 from evotol.reporting.export import FORMATS as EXPORT_FORMATS
 from evotol.reporting.export import write_tolerance_table
@@ -229,7 +231,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     if "mechanism" in rs or "urdf" in rs:       # a description (robots/mechanism, docs/mechanisms.md); its
         robot = model_from_table(rs, base_dir)  # [robot.assembly] table is the assembly configuration
     elif "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
-        robot = assembly_from_spec(rs)
+        robot = assembly_from_spec(rs, base_dir)    # 'module:function' also beside the study file
         spec = {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),
                 "requirement": {"position": 1.0, **spec.get("requirement", {})}}
     elif "model" not in rs:
@@ -323,6 +325,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     check_not_overwriting(out, name, path, force)     # another study's files (issue 27); before any work
     if "processes" in spec:     # process selection: [processes.<dimension>] (evotol/studyfile/processes.py)
         return run_process_study(spec, path, out, seed, load_problem)
+    if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
+        return run_stack_study(spec, path, out, seed)
     problem = load_problem(spec, base_dir=path.parent)
     units = report_units(spec, problem)
     methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None   # no sensitivity rule
