@@ -16,6 +16,7 @@ import pandas as pd
 
 from evotol.units.display import DisplayUnits
 from evotol.errors import ValidationError
+from evotol.summaries.user_study import tolerance_zone
 
 FORMATS = ("csv", "xlsx")
 
@@ -88,12 +89,12 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     rows = []
     for s in summary["sources"]:
         n, k = s["name"], u.factor(s["unit"])
-        t = r["tolerances"][n]
+        z = tolerance_zone(s, r["tolerances"][n])          # the page's zone (one function)
         rows.append({"source": n, "group": s["group"], "unit": u.unit_for(s["unit"]),
                      "nominal": s["nominal"] * k if "nominal" in s else None,
-                     "± tolerance": t * k * (s["minus"] + s["plus"]) / 2,
-                     "lower deviation": (s["offset"] - s["minus"] * t) * k,
-                     "upper deviation": (s["offset"] + s["plus"] * t) * k,
+                     "± tolerance": z["half_width"] * k,
+                     "lower deviation": z["lower"] * k,
+                     "upper deviation": z["upper"] * k,
                      "process": processes.get(n, "fixed (bought in)" if s.get("fixed") else ""),
                      "cost share (%)": 100 * costs.get(n, 0.0) / total if total else 0.0,
                      f"contribution to the {comp} error at the worst pose (%)": share.get(n)})

@@ -14,6 +14,7 @@ import numpy as np
 
 from evotol.units.display import DisplayUnits, error_unit
 from evotol.summaries.explorer_data import explorer_data
+from evotol.core.distributions import as_distribution
 from evotol.core.problem import ToleranceProblem
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
@@ -39,6 +40,8 @@ KEYS = {
     "worst_pose_agrees": "1: fraction of designs whose sampled worst pose is the certified one",
     "yield_at_worst_pose": "1: first-order yield (lower bound) at the worst pose",
     "required_yield": "1: required probability", "source_costs": COST,
+    "half_width": _PER_SOURCE + ": (minus + plus)/2·t", "sigma_k": RELATIVE + ": t = sigma_k·σ",
+    "mean_shift": RELATIVE + ": process mean shift / t",
     "best_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
     "mean_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
 }
@@ -86,6 +89,29 @@ def source_nominals(robot) -> dict[str, float]:
     return {}
 
 
+def tolerance_zone(source: dict, t: float) -> dict:
+    """The zone a drawing states for one source at tolerance t: the deviations from the nominal
+    ``lower = offset − minus·t`` and ``upper = offset + plus·t`` and the half-width
+    ``(minus + plus)/2·t`` (``docs/tolerances.md``). Every view of a tolerance (the JSON's
+    ``zones``, the page's tolerance table, the CSV and the workbook) takes its zone from here.
+
+    Parameters
+    ----------
+    source : dict
+        A row of :func:`source_table` (``offset`` in m or rad, ``minus``, ``plus`` per unit t).
+    t : float
+        The tolerance (m or rad, the source's unit).
+
+    Returns
+    -------
+    dict
+        ``lower``, ``upper`` (signed deviations, m or rad) and ``half_width`` (m or rad).
+    """
+    t = float(t)
+    return {"lower": source["offset"] - source["minus"] * t, "upper": source["offset"] + source["plus"] * t,
+            "half_width": 0.5 * (source["minus"] + source["plus"]) * t}
+
+
 def source_table(problem: ToleranceProblem) -> list[dict]:
     """Per source: name, group, SI unit, dimension, nominal (SI, where known), the interval
     [offset − minus·t, offset + plus·t], and whether it is fixed (no cost) or locked.
@@ -100,8 +126,9 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
     list of dict
         One row per source, in source order: ``name``, ``group``, ``unit`` (``"m"`` or
         ``"rad"``), ``dim``, ``offset`` (m or rad), ``minus``, ``plus`` (dimensionless, per unit
-        t), ``fixed`` (bool), ``locked`` (m or rad, or None) and, where known, ``nominal`` (m or
-        rad).
+        t), ``fixed`` (bool), ``locked`` (m or rad, or None), ``distribution`` (``kind``,
+        ``sigma_k``, ``mean_shift``: what the Monte Carlo samples) and, where known, ``nominal``
+        (m or rad).
     """
     nominal = source_nominals(problem.robot)
     out = []
@@ -110,6 +137,8 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         row = {"name": n, "group": s.group, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset),
                "minus": float(tol.minus), "plus": float(tol.plus), "fixed": bool(tol.is_fixed),
                "locked": None if tol.locked is None else float(tol.locked)}
+        dist = as_distribution(tol.distribution)
+        row["distribution"] = {"kind": dist.kind, "sigma_k": float(dist.sigma_k), "mean_shift": float(dist.mean_shift)}
         if n in nominal:
             row["nominal"] = nominal[n]
         out.append(row)
@@ -133,13 +162,14 @@ def result_details(problem: ToleranceProblem, r) -> dict:
     dict
         ``normalised_error`` (dimensionless: largest error / requirement), ``worst_pose`` (index
         per component), ``worst_pose_coordinates`` (SI), ``errors_per_pose`` (m or rad),
-        ``contributions`` (``source``, ``percent``), ``source_costs`` (cost units); a GA's
-        ``history`` and, for a yield design, ``yield_at_worst_pose`` and ``required_yield``
+        ``contributions`` (``source``, ``percent``), ``source_costs`` (cost units), ``zones``
+        (per source, :func:`tolerance_zone`); a GA's ``history`` and, for a yield design, ``yield_at_worst_pose`` and ``required_yield``
         (probabilities).
     """
     d = {"normalised_error": float(r.errors.violation[0] + 1), "worst_pose": {}, "worst_pose_coordinates": {},
          "errors_per_pose": {}, "contributions": {},
-         "source_costs": dict(zip(problem.names, problem.source_costs(r.t).tolist()))}
+         "source_costs": dict(zip(problem.names, problem.source_costs(r.t).tolist())),
+         "zones": {row["name"]: tolerance_zone(row, t) for row, t in zip(source_table(problem), r.t)}}
     for comp, _ in problem.components:
         p = r.worst_pose(comp)
         d["worst_pose"][comp] = p
