@@ -218,6 +218,39 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
 
 
 @single_threaded_blas
+def check_optimum(problem: ToleranceProblem, *, budget: float | None = None, refine: bool | dict = False) -> None:
+    """The refusals of :func:`allocate_optimum` that need no solve, so that a study checks every
+    method against its problem before the first one runs (issue 34 item 6).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+    budget : float or None
+        The method's budget (cost units).
+    refine : bool or dict
+        The method's workspace refinement option.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        ``budget``/``refine`` with clearance sources; a measure other than ``worst_case``/``rss``;
+        ``rss`` with asymmetric intervals; a cost model that is not convex on its range.
+    """
+    if problem.clearances is not None:      # (refine wraps the bracket, as allocate_optimum does)
+        if budget is not None:
+            raise ValidationError("budget", budget,
+                                  "None with clearance sources (the optimum bracket minimises cost at the requirement)")
+        return
+    if problem.requirement.measure not in ("worst_case", "rss"):
+        raise ValidationError("requirement.measure", problem.requirement.measure,
+                              "'worst_case' or 'rss' for the exact optimum (mc_quantile and yield have no convex rows: use allocate_ga)")
+    if problem.requirement.measure == "rss" and problem.asymmetric:
+        raise ValidationError("requirement.measure", "rss", "'worst_case' for the exact optimum of asymmetric "
+                              "intervals (|shift| + RSS rows are not quadratic: use allocate_ga)")
+    _check_convex(problem)
+
+
 def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, tol: float = 1e-9,
                      max_rounds: int = 60, max_rows: int = 400, refine: bool | dict = False):
     """Certified optimum (min cost at the requirement, or best accuracy at ``budget``).
@@ -275,19 +308,10 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
                                                                      max_rows=max_rows), **opts)
         res.info["refinement"] = {k: v for k, v in info.items() if k != "pose_indices"}
         return res
+    check_optimum(problem, budget=budget, refine=refine)
     if problem.clearances is not None:   # not convex: the monotone polyblock bracket instead
-        if budget is not None or refine:
-            raise ValidationError("budget" if budget is not None else "refine", budget if budget is not None else refine,
-                                  "None with clearance sources (the optimum bracket minimises cost at the requirement)")
         return allocate_monotone(problem)
     t0 = time.perf_counter()
-    if problem.requirement.measure not in ("worst_case", "rss"):
-        raise ValidationError("requirement.measure", problem.requirement.measure,
-                              "'worst_case' or 'rss' for the exact optimum (mc_quantile and yield have no convex rows: use allocate_ga)")
-    if problem.requirement.measure == "rss" and problem.asymmetric:
-        raise ValidationError("requirement.measure", "rss", "'worst_case' for the exact optimum of asymmetric "
-                              "intervals (|shift| + RSS rows are not quadratic: use allocate_ga)")
-    _check_convex(problem)
     problem.check_feasible()
     rows = ConstraintRows(problem)
     if budget is not None:

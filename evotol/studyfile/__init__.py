@@ -29,6 +29,7 @@ from evotol.core import plausibility
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_monotone, allocate_nsga2,
                                allocate_optimum, allocate_sensitivity)
 from evotol.allocators.budget import check_budget
+from evotol.allocators.preflight import check_methods
 from evotol.units.display import DisplayUnits, parse_units, problem_units
 from evotol.core.distributions import Distribution
 from evotol.errors import ValidationError
@@ -339,6 +340,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
         if "budget" in kw:
             check_budget(problem, kw["budget"], field=f"methods.{m}.budget")
     check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
+    check_methods(problem, methods)         # each method's refusals, before the first one runs (issue 34)
     if any("budget" not in kw for m, kw in methods.items() if m != "nsga2"):
         problem.check_feasible()            # a requirement no design meets: say so before the first method
     results, front, stopped, skipped = {}, None, [], []
