@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from evotol.studyfile import run_study_file
-from evotol.summaries.user_study import tolerance_zone
+from evotol.summaries.drawing import tolerance_zone
 
 STUDY = '''name = "views"
 seed = 0

@@ -20,8 +20,8 @@ from evotol.units.display import DisplayUnits, number
 from evotol.core.pareto import ideal_point_knee
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
-from evotol.reporting.drawing import zone_text
-from evotol.summaries.user_study import tolerance_zone
+from evotol.reporting.drawing import drawing_check_text, zone_text
+from evotol.summaries.drawing import tolerance_zone
 
 #: marker of each method on the NSGA-II plot (symbol, colour)
 MARKS = {"optimum": ("star", "#d62728"), "ga": ("diamond", "#2ca02c"), "sensitivity": ("square", "#ff7f0e"),
@@ -445,6 +445,8 @@ def render_user_study(summary: dict) -> Report:
     rep.table(rows, header, table_id="tolerances")
     rep.text("Each cell is the zone as the drawing states it: deviations from the nominal, ±t when symmetric, "
              "+upper / −lower otherwise (the CSV's lower and upper deviation columns).")
+    for m, d in (summary.get("drawing") or {}).items():
+        rep.text(f"Drawing, {m}: {drawing_check_text(d)}.", note=not d["meets"])
     if summary.get("exports"):
         rep.text("The tolerance table as a drawing carries it: " + ", ".join(
             f'<a href="{html.escape(p)}">{html.escape(p)}</a>' for p in summary["exports"].values()) + ".", raw=True)

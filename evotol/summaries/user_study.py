@@ -16,6 +16,8 @@ from evotol.units.display import DisplayUnits, error_unit
 from evotol.summaries.explorer_data import explorer_data
 from evotol.core.distributions import as_distribution
 from evotol.core.problem import ToleranceProblem
+from evotol.summaries.drawing import KEYS as DRAWING_KEYS
+from evotol.summaries.drawing import rounded_design, tolerance_zone
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
 
@@ -60,7 +62,7 @@ def study_units_block(problem: ToleranceProblem) -> dict:
     dict
         :func:`evotol.units.make_units_block` with this module's ``KEYS`` added.
     """
-    return make_units_block(keys=KEYS, tolerances=dict(zip(problem.names, problem.units())))
+    return make_units_block(keys={**KEYS, **DRAWING_KEYS}, tolerances=dict(zip(problem.names, problem.units())))
 
 
 def source_nominals(robot) -> dict[str, float]:
@@ -87,29 +89,6 @@ def source_nominals(robot) -> dict[str, float]:
         return {n: float(v) for table in (getattr(mech, "lengths", {}), getattr(mech, "angles", {}))
                 for n, v in table.items() if np.isscalar(v)}
     return {}
-
-
-def tolerance_zone(source: dict, t: float) -> dict:
-    """The zone a drawing states for one source at tolerance t: the deviations from the nominal
-    ``lower = offset − minus·t`` and ``upper = offset + plus·t`` and the half-width
-    ``(minus + plus)/2·t`` (``docs/tolerances.md``). Every view of a tolerance (the JSON's
-    ``zones``, the page's tolerance table, the CSV and the workbook) takes its zone from here.
-
-    Parameters
-    ----------
-    source : dict
-        A row of :func:`source_table` (``offset`` in m or rad, ``minus``, ``plus`` per unit t).
-    t : float
-        The tolerance (m or rad, the source's unit).
-
-    Returns
-    -------
-    dict
-        ``lower``, ``upper`` (signed deviations, m or rad) and ``half_width`` (m or rad).
-    """
-    t = float(t)
-    return {"lower": source["offset"] - source["minus"] * t, "upper": source["offset"] + source["plus"] * t,
-            "half_width": 0.5 * (source["minus"] + source["plus"]) * t}
 
 
 def source_table(problem: ToleranceProblem) -> list[dict]:
@@ -298,5 +277,7 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
         if isinstance(p, dict) and "tolerances" in p:
             starts[f"nsga2 {key.replace('_', ' ')}"] = problem.as_array(p["tolerances"])
     summary["explorer"] = explorer_data(problem, starts, seed)
+    # the drawing: every method's zones rounded to the drawing precision, the drawn design re-checked
+    summary["drawing"] = {m: rounded_design(problem, r.t, units) for m, r in results.items()}
     summary["units"] = study_units_block(problem)
     return summary

@@ -1,0 +1,70 @@
+"""Drawing-ready values (issue 34 item 5): zones rounded to a stated drawing precision, the drawn
+zones re-checked against the requirement (checked here against the worst-case closed form of a
+linear stack), no float noise in the exported table."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from cost_models.power import PowerCost
+from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
+from evotol.summaries.drawing import clean, rounded_design
+from evotol.units.display import DisplayUnits
+from robots.assembly import LinearStack
+
+LIMIT = 1e-4          # m: gap within ±100 µm of its nominal
+
+
+def stack_problem():
+    robot = LinearStack({"a": 1.0, "b": -1.0, "c": 1.0}, {"gap": LIMIT})
+    cost = PowerCost(1.0, 1.0, scale=1e-3)
+    tol = {"a": Tolerance(cost, 1e-6, 1e-3, minus=1.0, plus=0.0),          # +0 / -t
+           "b": Tolerance(cost, 1e-6, 1e-3, minus=0.4, plus=1.6),          # unequal
+           "c": Tolerance.fixed(12.34e-6)}                                 # bought in: outward
+    return ToleranceProblem(robot, tol, Requirement(position=1.0), np.zeros((1, 1)))
+
+
+def test_rounded_zones_and_their_worst_case_closed_form():
+    p = stack_problem()
+    t = np.array([38.438e-6, 21.488e-6, 12.34e-6])
+    d = rounded_design(p, t, DisplayUnits("µm"))
+    z = d["zones"]
+    assert z["a"] == {"drawing_lower": -38.4, "drawing_upper": 0.0}              # inward
+    assert z["b"] == {"drawing_lower": -8.5, "drawing_upper": 34.3}              # -8.5952 up, 34.3808 down
+    assert z["c"] == {"drawing_lower": -12.4, "drawing_upper": 12.4}             # fixed: outward
+    # worst case of gap = a - b + c over the drawn zones (closed form), over the limit
+    lower = -38.4 - 34.3 - 12.4
+    upper = 0.0 + 8.5 + 12.4
+    assert d["normalised_error"] == pytest.approx(max(-lower, upper) * 1e-6 / LIMIT, rel=1e-9)
+    assert d["meets"] is (max(-lower, upper) <= 100)
+
+
+def test_a_coarse_precision_says_the_zone_vanishes():
+    p = stack_problem()
+    d = rounded_design(p, np.array([38.438e-6, 21.488e-6, 12.34e-6]), DisplayUnits("mm"), {"mm": 0.1})
+    assert set(d["vanished"]) >= {"a", "b"} and d["normalised_error"] is None
+
+
+@pytest.mark.parametrize("v, want", [(9524.999999999998, 9525.0), (0.1 + 0.2, 0.3), (-0.0, 0.0), (1.0e-7 * 3, 3e-7)])
+def test_clean_removes_float_noise(v, want):
+    assert clean(v) == want and repr(clean(v)) == repr(want)
+
+
+def test_exported_table_has_no_float_noise_and_states_the_drawing(tmp_path):
+    from evotol.reporting.export import tolerance_table
+    from evotol.summaries.user_study import study_summary
+    from evotol.allocators import allocate_optimum
+
+    p = stack_problem()
+    r = allocate_optimum(p)
+    summary = study_summary("s", p, {"optimum": r}, None, {}, seed=0, units=DisplayUnits("mm"), seconds=0.0, maps=False)
+    table = tolerance_table(summary)
+    for col in ("drawing lower deviation", "drawing upper deviation"):      # at most the precision's 4 decimals
+        assert all(len(repr(float(v)).split(".")[1]) <= 4 for v in table[col]), table[col]
+    for col in ("nominal", "± tolerance", "lower deviation", "upper deviation"):   # no 9524.999999999998
+        assert not any(re.search(r"(9{8,}|0{8,})[1-9]$", repr(float(v))) for v in table[col]), table[col]
+    row = table.set_index("source").loc["b"]
+    assert row["drawing upper deviation"] <= row["upper deviation"] and row["drawing lower deviation"] >= row["lower deviation"]
+    assert summary["drawing"]["optimum"]["meets"]
