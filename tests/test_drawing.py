@@ -34,9 +34,9 @@ def test_rounded_zones_and_their_worst_case_closed_form():
     assert z["a"] == {"drawing_lower": -38.4, "drawing_upper": 0.0}              # inward
     assert z["b"] == {"drawing_lower": -8.5, "drawing_upper": 34.3}              # -8.5952 up, 34.3808 down
     assert z["c"] == {"drawing_lower": -12.4, "drawing_upper": 12.4}             # fixed: outward
-    # worst case of gap = a - b + c over the drawn zones (closed form), over the limit
-    lower = -38.4 - 34.3 - 12.4
-    upper = 0.0 + 8.5 + 12.4
+    # worst case of gap = a - b + c over the drawn zones and c as given (closed form), over the limit
+    lower = -38.4 - 34.3 - 12.34
+    upper = 0.0 + 8.5 + 12.34
     assert d["normalised_error"] == pytest.approx(max(-lower, upper) * 1e-6 / LIMIT, rel=1e-9)
     assert d["meets"] is (max(-lower, upper) <= 100)
 

@@ -186,6 +186,71 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     return out, header[:4]
 
 
+def allocation_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
+    """The allocations of a stack side by side: each dimension's drawn zone per method, then
+    cost, the allocated design's worst-case and RSS limits, Cpk and the drawn design's re-check.
+
+    Parameters
+    ----------
+    summary : dict
+        A stack summary with an ``allocation`` block (:func:`evotol.summaries.stack.allocation_summary`).
+
+    Returns
+    -------
+    rows : list of list of str
+        Per dimension its zone ``+upper / lower`` (display unit, rounded inward to the drawing
+        precision) and cost share; then the figures.
+    header : list of str
+        The column titles.
+    """
+    unit, f, dev = _formatters(summary)
+    al = summary["allocation"]["methods"]
+    names = [d["name"] for d in summary["stack"]["dimensions"]]
+    rows = []
+    for n in names:
+        row = [n]
+        for r in al.values():
+            z = r["drawing"]["zones"][n]
+            k = LENGTHS[unit]                      # the drawn zone is in the display unit; dev() takes metres
+            zone = f"{dev(z['drawing_upper'] * k)} / {dev(z['drawing_lower'] * k)}"
+            row.append(f"{zone} ({r['cost_share_percent'][n]:.1f} %)" if n in r["tolerances"] else f"{zone} (kept)")
+        rows.append(row)
+    first_model = lambda r: next(iter(r["stack"]["models"].values()), {})      # noqa: E731
+    rows += [["cost"] + [f"{r['cost']:.6g}" for r in al.values()],
+             ["status"] + [r["status"] for r in al.values()],
+             ["worst case (lower, upper)"] + [f"{f(r['stack']['worst_case']['limits'][0])}, {f(r['stack']['worst_case']['limits'][1])}"
+                                              for r in al.values()],
+             ["RSS (lower, upper)"] + [f"{f(r['stack']['rss']['limits'][0])}, {f(r['stack']['rss']['limits'][1])}"
+                                       for r in al.values()],
+             ["Cpk (first model)"] + ["–" if first_model(r).get("cpk") is None else f"{first_model(r)['cpk']:.3f}"
+                                      for r in al.values()],
+             ["drawn zones re-checked"] + [("meets" if r["drawing"]["meets"] else "misses")
+                                           + (f" ({r['drawing']['normalised_error']:.4f} of the limit)"
+                                              if r["drawing"]["normalised_error"] is not None else " (a zone vanishes)")
+                                           for r in al.values()]]
+    return rows, ["dimension"] + [f"{m}: zone ({unit}), cost share" for m in al]
+
+
+def allocation_section(rep: Report, summary: dict) -> None:
+    """Add the allocation of a stack to its page (:func:`allocation_rows` and the measure stated).
+
+    Parameters
+    ----------
+    rep : Report
+        The page.
+    summary : dict
+        A stack summary with an ``allocation`` block.
+    """
+    measure = summary["allocation"]["measure"]
+    rep.heading("Allocated tolerances")
+    rep.text(f"Half-widths chosen by cost so that the gap stays within [LSL, USL] under the {measure} measure "
+             + ("(the worst-case limits inside the specification)" if measure == "worst_case" else
+                "(every tolerance 3σ of a normal: the RSS limits inside the specification)")
+             + "; each zone keeps its drawing's shape (a one-sided tolerance stays one-sided); zones rounded inward to "
+               "the drawing precision and the drawn design re-checked.")
+    rep.table(*allocation_rows(summary), table_id="allocation")
+
+
 def render_stack(summary: dict, title: str | None = None) -> Report:
     """The stack-analysis page (dimensions, gap limits by method, capability and fractions
     outside, contributions to each side, the conventions).
@@ -231,6 +296,8 @@ def render_stack(summary: dict, title: str | None = None) -> Report:
     rep.table(rows, ["dimension", f"worst case below the nominal gap ({unit})", "share of the lower side (%)",
                      f"worst case above the nominal gap ({unit})", "share of the upper side (%)"]
               + ([f"share of the gap variance, model {first} (%)"] if share else []), table_id="contributions")
+    if summary.get("allocation"):
+        allocation_section(rep, summary)
     pub = summary.get("published")
     if pub:
         rep.heading("Beside the published figures")

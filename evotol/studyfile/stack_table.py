@@ -23,6 +23,9 @@
     nominal = 0.032
     tolerance = 0.002         # ± symmetric, instead of upper/lower
 
+An optional ``[stack.allocation]`` table allocates the half-widths by cost
+(:func:`allocation_from_table`, :mod:`evotol.allocators.stack_allocation`).
+
 The figures and their conventions: :mod:`evotol.measures.stack_analysis`; the page:
 :mod:`evotol.reporting.stack_report`. ``evotol run`` writes ``NAME.json`` (SI, m) and ``NAME.html``.
 """
@@ -31,17 +34,26 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from evotol._runtime.keyword_checks import check_table_keys
+import cost_models
+from evotol._runtime.keyword_checks import check_keywords, check_table_keys, unknown_key_message
+from evotol.allocators import allocate_equal, allocate_ga, allocate_lagrange, allocate_optimum, allocate_sensitivity
+from evotol.allocators.preflight import check_methods
+from evotol.allocators.stack_allocation import stack_problem
 from evotol.errors import ValidationError
 from evotol.measures.stack_analysis import DISTRIBUTIONS, Stack, StackDimension, StackModel, analyse_stack
 from evotol.reporting.stack_report import DEFAULT_PRECISION, render_stack
 from evotol.studies import StudyResult, write_outputs
-from evotol.summaries.stack import stack_summary
+from evotol.summaries.stack import allocation_summary, stack_summary
 from evotol.units.display import ALIASES, LENGTHS
 
-STACK_KEYS = ("gap", "unit", "lower_limit", "upper_limit", "distribution", "precision", "models", "dimensions",
+STACK_KEYS = ("gap", "unit", "lower_limit", "upper_limit", "distribution", "precision", "models", "dimensions", "allocation",
               "n_samples", "confidence")
-DIMENSION_KEYS = ("nominal", "upper", "lower", "tolerance", "direction", "sensitivity", "distribution", "same_part_as")
+DIMENSION_KEYS = ("nominal", "upper", "lower", "tolerance", "direction", "sensitivity", "distribution", "same_part_as",
+                  "cost")
+ALLOCATION_KEYS = ("measure", "lower", "upper", "cost", "methods", "fixed")
+#: allocators a stack takes (their keyword tables as in [methods])
+STACK_METHODS = {"optimum": allocate_optimum, "sensitivity": allocate_sensitivity, "ga": allocate_ga,
+                 "equal": allocate_equal, "lagrange": allocate_lagrange}
 MODEL_KEYS = ("cp", "k", "shift_model")
 #: study-file top-level keys beside [stack]
 TOP_KEYS = ("name", "seed", "stack", "report")
@@ -147,7 +159,76 @@ def stack_from_table(table) -> tuple[Stack, dict, dict]:
     if prec <= 0:
         raise ValidationError("stack.precision", prec, f"a positive drawing precision in {display_unit}")
     return stack, models, {"unit": display_unit, "precision": prec, "n_samples": table.get("n_samples", 200_000),
-                           "confidence": table.get("confidence", 0.95)}
+                           "confidence": table.get("confidence", 0.95), "scale": scale}
+
+
+def allocation_from_table(table: dict, stack: Stack, scale: float):
+    """The allocation problem and methods of a ``[stack.allocation]`` table.
+
+    ``measure`` (``"worst_case"`` or ``"rss"``), ``lower``/``upper`` (the half-widths allowed, in
+    ``stack.unit``), ``cost`` (a cost-model table: its ``scale`` is SI, as everywhere; a dimension's
+    own ``cost`` overrides it), ``fixed`` (dimensions whose drawn zone is kept), ``methods``
+    (method -> keyword table; default ``{optimum = {}, sensitivity = {}}``, GA for ``rss``: the
+    exact optimum takes no asymmetric RSS).
+
+    Parameters
+    ----------
+    table : dict
+        The ``[stack]`` table (its ``allocation`` and the dimensions' ``cost``).
+    stack : Stack
+        The stack (SI).
+    scale : float
+        Metres per unit of ``stack.unit``.
+
+    Returns
+    -------
+    problem : ToleranceProblem
+        :func:`evotol.allocators.stack_allocation.stack_problem`.
+    methods : dict
+        Method -> keyword arguments, checked against the problem.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown key or method, a bad bound or cost model, a method option the problem refuses
+        (all before any allocation runs).
+    """
+    al = table["allocation"]
+    check_table_keys(al, ALLOCATION_KEYS, "stack.allocation")
+    measure = al.get("measure", "worst_case")
+    fixed = tuple(al.get("fixed", ()))
+    for n in fixed:
+        if n not in stack.names:
+            raise ValidationError("stack.allocation.fixed", n, unknown_key_message(n, stack.names))
+    dims_t = table["dimensions"]
+    dims_t = {t["name"]: t for t in dims_t} if isinstance(dims_t, list) else dims_t
+    costs, lo, up = {}, {}, {}
+    for d in stack.dimensions:
+        if d.name in fixed:
+            continue
+        cspec = dims_t[d.name].get("cost", al.get("cost"))
+        if cspec is None:
+            raise ValidationError(f"stack.dimensions.{d.name}.cost", None, "a cost-model table (or stack.allocation.cost)")
+        try:
+            costs[d.name] = cost_models.from_dict(cspec)
+        except ValidationError as exc:
+            raise ValidationError(f"stack.dimensions.{d.name}.cost: {exc.field}", exc.value, exc.expected) from None
+        for k, tab in (("lower", lo), ("upper", up)):
+            if k not in al:
+                raise ValidationError(f"stack.allocation.{k}", None, "the smallest/largest half-width allowed (stack.unit)")
+            tab[d.name] = _num(f"stack.allocation.{k}", al[k]) * scale
+    try:
+        problem = stack_problem(stack, costs, lo, up, measure=measure, fixed=fixed)
+    except ValidationError as exc:
+        raise ValidationError(f"stack.{exc.field}" if not exc.field.startswith("stack") else exc.field,
+                              exc.value, exc.expected) from None
+    methods = al.get("methods", {"optimum": {}, "sensitivity": {}} if measure == "worst_case" else {"ga": {}, "sensitivity": {}})
+    for m, kw in methods.items():
+        if m not in STACK_METHODS:
+            raise ValidationError(f"stack.allocation.methods.{m}", m, unknown_key_message(m, sorted(STACK_METHODS)))
+        check_keywords(STACK_METHODS[m], kw, f"stack.allocation.methods.{m}", exclude=("problem",))
+    check_methods(problem, methods)
+    return problem, methods
 
 
 def run_stack_study(spec: dict, path, out, seed: int) -> dict:
@@ -173,7 +254,9 @@ def run_stack_study(spec: dict, path, out, seed: int) -> dict:
     ------
     evotol.errors.ValidationError
         A top-level key other than ``name``, ``seed``, ``stack``, ``report``, or a bad ``[stack]``
-        table (:func:`stack_from_table`), before any computation.
+        table (:func:`stack_from_table`, :func:`allocation_from_table`), before any computation.
+    evotol.errors.InfeasibleError
+        No allowed half-widths hold the gap within its limits.
     """
     t0 = time.perf_counter()
     check_table_keys(spec, TOP_KEYS, "")
@@ -186,7 +269,16 @@ def run_stack_study(spec: dict, path, out, seed: int) -> dict:
         display = {**display, "unit": u, "precision": DEFAULT_PRECISION[u] if "precision" not in spec["stack"]
                    else display["precision"]}
     name = spec.get("name", Path(path).stem)
+    alloc = allocation_from_table(spec["stack"], stack, display["scale"]) if "allocation" in spec["stack"] else None
     summary = stack_summary(name, stack, models, display, seed=seed)
+    if alloc is not None:
+        problem, methods = alloc
+        results = {}
+        for m, kw in methods.items():
+            print(f"[evotol] {m} ...", flush=True)
+            kw = {**({"seed": seed, "progress": False} if m == "ga" else {}), **kw}
+            results[m] = STACK_METHODS[m](problem, **kw)
+        summary["allocation"] = allocation_summary(stack, problem, results, models, display, seed=seed)
     summary.update(study_file=str(Path(path).resolve()), seconds=time.perf_counter() - t0)
     paths = write_outputs(name, out, StudyResult(summary), render_stack(summary))
     summary.update(html=str(paths["html"]), json=str(paths["json"]))

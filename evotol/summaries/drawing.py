@@ -4,7 +4,7 @@ rounded design re-checked against the requirement (issue 34 item 5).
 A free tolerance's zone ``[lower, upper]`` (deviations from the nominal, display unit) is rounded
 **inward** to the precision -- ``lower`` up, ``upper`` down -- so the drawing never allows more than
 the allocation. A fixed or locked source is a given, not a choice: its zone is rounded **outward**
-(the drawing states at least what it is). The re-check is made on exactly the drawn zones: the
+(the drawing states at least what it is) and re-checked as it is given. The re-check is made on exactly the drawn zones: the
 problem's intervals are re-shaped (:meth:`ToleranceProblem.with_tolerances`: ``minus``/``plus``
 such that ``[offset − minus·t, offset + plus·t]`` is the rounded zone at the same ``t``; a disk or
 ball source takes the rounded radius as its ``t``), evaluated with the problem's own measure, and
@@ -126,13 +126,16 @@ def rounded_design(problem: ToleranceProblem, t, units: DisplayUnits, precision:
             continue
         used[du] = p
         lo_q, up_q = z["lower"] * k / p, z["upper"] * k / p
-        if row["fixed"] or row["locked"] is not None:     # outward: the drawing states at least the given zone
+        given = row["fixed"] or row["locked"] is not None
+        if given:       # outward: the drawing states at least the given zone (re-checked as given)
             lo_r, up_r = math.floor(lo_q + 1e-9) * p, math.ceil(up_q - 1e-9) * p
-        else:                                             # inward: never more than the allocation
+        else:           # inward: never more than the allocation
             lo_r, up_r = math.ceil(lo_q - 1e-9) * p, math.floor(up_q + 1e-9) * p
         d = _decimals(p)
         lo_r, up_r = round(lo_r, d) + 0.0, round(up_r, d) + 0.0
         zones[row["name"]] = {"drawing_lower": lo_r, "drawing_upper": up_r}
+        if given:
+            continue
         if row["dim"] > 1:
             T[j] = up_r / k
         else:
