@@ -113,3 +113,12 @@ def test_rss_verdict_and_monte_carlo_state_their_models(tmp_path, dist, stated):
     run_study_file(tmp_path / "rss.toml", out=tmp_path)
     page = (tmp_path / "rss.html").read_text()
     assert ("Two models: the RSS verdict takes every tolerance as 3σ of a normal" in page) is stated
+
+
+def test_an_assembly_is_reported_by_its_responses(run):
+    """An assembly's page names its response and limit, not a robot's pose and position (issue 34)."""
+    d, data = run
+    page = html.unescape((d / "views.html").read_text())
+    assert data["assembly"] == {"responses": ["gap"], "limits": [1e-4]}
+    assert "gap within ±0.0001000 of its nominal" in page and "#0: gap" in page and "× limit" in page
+    assert "response = 0" not in page and "max position error" not in page

@@ -33,6 +33,8 @@ def _units(summary: dict) -> DisplayUnits:
 
 
 def _error_text(summary: dict, comp: str, value) -> str:
+    if summary.get("assembly") and summary["error_units"][comp] == "1" and value is not None:
+        return f"{number(float(value))} × limit"        # an assembly's error: deviation / its limit
     return _units(summary).format(value, summary["error_units"][comp])
 
 
@@ -52,6 +54,8 @@ def pose_cells(summary: dict, pose) -> str:
         ``name = value unit`` per coordinate, comma-separated (no unit for dimensionless ones).
     """
     ws = summary["workspace"]
+    if summary.get("assembly") and list(ws["names"]) == ["response"]:      # an assembly: name the response
+        return summary["assembly"]["responses"][int(round(pose[0]))]
     return ", ".join(f"{n} = {number(v * k)}" + (f" {u}" if u not in ("1", "") else "")
                      for n, v, k, u in zip(ws["names"], pose, ws["display_scale"], ws["display_units"]))
 
@@ -112,7 +116,8 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
     comps = list(summary["requirement"])
     yield_measure = summary["measure"] == "yield"
     kind = ", yield-equivalent" if yield_measure else ""   # the error whose bound the yield requirement is
-    header = ["method", "cost"] + [f"max {c} error{kind} (requirement {_error_text(summary, c, summary['requirement'][c])})"
+    what = (lambda c: "response deviation") if summary.get("assembly") else (lambda c: f"{c} error")   # noqa: E731
+    header = ["method", "cost"] + [f"max {what(c)}{kind} (requirement {_error_text(summary, c, summary['requirement'][c])})"
                                    for c in comps]
     header += ["worst pose (workspace coordinates)", "status", "verdict / certificate", "MC exceed rate"]
     if yield_measure:
@@ -421,6 +426,11 @@ def render_user_study(summary: dict) -> Report:
     """
     u = _units(summary)
     req = ", ".join(f"{c} ≤ {_error_text(summary, c, v)}" for c, v in summary["requirement"].items())
+    if summary.get("assembly"):
+        a = summary["assembly"]
+        req = ("every response within its limit: " + ", ".join(f"{n} within ±{number(v)} of its nominal"
+                                                               for n, v in zip(a["responses"], a["limits"]))
+               + " (the response's unit); errors are shown as deviation / limit")
     rep = Report(f"evotol study: {summary['name']}",
                  f"{summary['robot']}, {summary['n_poses']} poses, measure {summary['measure']}, requirement {req}; "
                  f"lengths in {u.length}, angles in {u.angle} (the JSON holds SI values)")

@@ -44,6 +44,7 @@ KEYS = {
     "required_yield": "1: required probability", "source_costs": COST,
     "half_width": _PER_SOURCE + ": (minus + plus)/2·t", "sigma_k": RELATIVE + ": t = sigma_k·σ",
     "mean_shift": RELATIVE + ": process mean shift / t",
+    "limits": "the response's own unit: an assembly's allowed deviation from its nominal response",
     "best_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
     "mean_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
 }
@@ -254,6 +255,9 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
                "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
                "monte_carlo": checks, "seconds": seconds, "figures": {}}
+    inner = getattr(problem.robot, "base", problem.robot)
+    if hasattr(inner, "response_names") and hasattr(inner, "limits"):   # an assembly: responses, not poses
+        summary["assembly"] = {"responses": list(inner.response_names), "limits": [float(v) for v in inner.limits]}
     if front is not None:
         summary["pareto_front"] = front.table.to_dict(orient="list")
         summary["nsga2"] = front_summary(problem, front, results)
