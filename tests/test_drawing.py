@@ -64,7 +64,17 @@ def test_exported_table_has_no_float_noise_and_states_the_drawing(tmp_path):
     for col in ("drawing lower deviation", "drawing upper deviation"):      # at most the precision's 4 decimals
         assert all(len(repr(float(v)).split(".")[1]) <= 4 for v in table[col]), table[col]
     for col in ("nominal", "± tolerance", "lower deviation", "upper deviation"):   # no 9524.999999999998
-        assert not any(re.search(r"(9{8,}|0{8,})[1-9]$", repr(float(v))) for v in table[col]), table[col]
+        assert not any(re.search(r"(9{8,}|0{8,})[1-9]$", repr(float(v))) for v in table[col] if v is not None), table[col]
     row = table.set_index("source").loc["b"]
     assert row["drawing upper deviation"] <= row["upper deviation"] and row["drawing lower deviation"] >= row["lower deviation"]
     assert summary["drawing"]["optimum"]["meets"]
+
+
+def test_nominal_blank_when_not_known_and_filled_when_given():
+    """A LinearStack built without nominals has none in the drawing table (not a made-up 0); with
+    them, the nominal column carries them in display units."""
+    from evotol.summaries.user_study import source_nominals
+
+    assert source_nominals(stack_problem().robot) == {}
+    robot = LinearStack({"a": 1.0, "b": -1.0}, {"gap": LIMIT}, nominal={"a": 0.05, "b": 0.02})
+    assert source_nominals(robot) == {"a": 0.05, "b": 0.02}

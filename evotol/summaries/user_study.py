@@ -80,10 +80,11 @@ def source_nominals(robot) -> dict[str, float]:
     Returns
     -------
     dict of str to float
-        Source name -> nominal value, m or rad; empty when the model knows none.
+        Source name -> nominal value, m or rad; empty when the model knows none (a
+        :class:`robots.assembly.LinearStack` built without its nominals: 0 would be a made-up value).
     """
     inner = getattr(robot, "base", robot)         # clearances.WithClearances wraps the robot in .base
-    if hasattr(inner, "dimension_names") and hasattr(inner, "x0"):
+    if hasattr(inner, "dimension_names") and hasattr(inner, "x0") and getattr(inner, "nominal_given", True):
         return {n: float(v) for n, v in zip(inner.dimension_names, np.ravel(inner.x0))}
     mech = getattr(inner, "mechanism", None)
     if mech is not None:
