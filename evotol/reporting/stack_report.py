@@ -175,7 +175,8 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     Returns
     -------
     rows : list of list of str
-        Figure rows (:func:`gap_rows` without the convention) and model rows.
+        Figure rows (:func:`gap_rows` without the convention), model rows and, for an
+        allocation, each method's cost, allocated worst-case limits and status.
     header : list of str
         The column titles.
     """
@@ -183,6 +184,10 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     out = [r[:4] for r in rows]
     cap, _ = capability_rows(summary)
     out += [[f"{r[0]}: Cp {r[4]}, Cpk {r[5]}", f"below {r[6]}", f"above {r[7]}", ""] for r in cap]
+    _, f, _ = _formatters(summary)
+    for m, r in (summary.get("allocation") or {}).get("methods", {}).items():    # the page's allocation figures
+        lo, hi = r["stack"]["worst_case"]["limits"]
+        out.append([f"{m}: cost {r['cost']:.6g}, worst case of the allocated design", f(lo), f(hi), r["status"]])
     return out, header[:4]
 
 
