@@ -306,7 +306,9 @@ def render_stack(summary: dict, title: str | None = None) -> Report:
     pub = summary.get("published")
     if pub:
         rep.heading("Beside the published figures")
-        rows = [[p["figure"], p["published"], f(p["computed"]), p.get("note", "")] for p in pub["figures"]]
+        digits = lambda text: len(text.split(".")[1]) if "." in text else 0     # noqa: E731 -- the published digits
+        rows = [[p["figure"], p["published"], length_text(p["computed"], unit, 10.0 ** -digits(p["published"])),
+                 p.get("note", "")] for p in pub["figures"]]
         rep.table(rows, ["figure", f"published ({unit})", f"evotol ({unit})", "note"], table_id="published")
         rep.text("Source: " + pub["source"], note=True)
     rep.text("Conventions: a dimension lies in [nominal + lower, nominal + upper] (signed deviations as on the "
