@@ -78,3 +78,24 @@ def test_nominal_blank_when_not_known_and_filled_when_given():
     assert source_nominals(stack_problem().robot) == {}
     robot = LinearStack({"a": 1.0, "b": -1.0}, {"gap": LIMIT}, nominal={"a": 0.05, "b": 0.02})
     assert source_nominals(robot) == {"a": 0.05, "b": 0.02}
+
+
+def test_report_precision_is_stated_and_checked_before_work(tmp_path):
+    """[report] precision = 0.01 (mm) rounds the drawn zones to 0.01 mm; a bad value is refused
+    before any method runs."""
+    from evotol.errors import ValidationError
+    from evotol.studyfile import run_study_file
+
+    (tmp_path / "h34_prec_gap.py").write_text("def gap(a, b):\n    return a - b\n")
+    text = ('name = "prec"\n[robot]\nassembly = "h34_prec_gap:gap"\nnominal = { a = 0.05, b = 0.02 }\n'
+            'limits = { gap = 1e-4 }\n[bounds]\nlower = 1e-6\nupper = 1e-3\n[cost.default]\nmodel = "power"\n'
+            'a0 = 1.0\na1 = 1.0\nscale = 1e-3\n[methods]\noptimum = {}\n[verify]\nn_samples = 20\n'
+            '[report]\nunits = "mm"\nprecision = PREC\n')
+    (tmp_path / "p.toml").write_text(text.replace("PREC", "0.01"))
+    s = run_study_file(tmp_path / "p.toml", out=tmp_path)
+    d = s["drawing"]["optimum"]
+    assert d["precision"] == {"mm": 0.01} and d["zones"]["a"] == {"drawing_lower": -0.05, "drawing_upper": 0.05}
+    (tmp_path / "p.toml").write_text(text.replace("PREC", "-1"))
+    with pytest.raises(ValidationError, match="report.precision"):
+        run_study_file(tmp_path / "p.toml", out=tmp_path / "out")
+    assert not (tmp_path / "out").exists()

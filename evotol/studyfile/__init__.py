@@ -8,7 +8,8 @@ See ``reports/studies/ucr3_example.toml`` for every field. Units are SI (m, rad)
 ``[poses] refine = true`` (or a table of refinement options) for the whole workspace;
 ``[clearances]`` joint-clearance classes allocated with the geometric sources
 (``docs/clearance_allocation.md``); ``[report] units = "mm"`` (or ``"um, arcsec"``...): the units
-the report, the terminal and the drawing export show (``docs/units.md``; the JSON stays SI).
+the report, the terminal and the drawing export show (``docs/units.md``; the JSON stays SI);
+``[report] precision = 0.001`` (or ``{length = 0.001, angle = 0.1}``, in those units): the drawing step.
 The outputs and the page: ``docs/user_reports.md``. A ``[stack]`` table is a tolerance stack written in
 the file, no robot and no Python (:mod:`evotol.studyfile.stack_table`, ``docs/stack_analysis.md``).
 Every key is checked: an unknown one is an error naming it and the nearest valid key.
@@ -47,6 +48,7 @@ from evotol.reporting.export import FORMATS as EXPORT_FORMATS
 from evotol.reporting.export import write_tolerance_table
 from evotol.reporting.user_study import render_user_study
 from evotol.studies import StudyResult, write_outputs
+from evotol.summaries.drawing import drawing_precision
 from evotol.summaries.user_study import study_summary
 from robots import registry
 from robots.assembly import assembly_from_spec
@@ -56,7 +58,7 @@ METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga
            "equal": allocate_equal, "lagrange": allocate_lagrange, "monotone": allocate_monotone}
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
             "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report")
-REPORT_KEYS = ("units",)
+REPORT_KEYS = ("units", "precision")
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
@@ -330,6 +332,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
         return run_stack_study(spec, path, out, seed)
     problem = load_problem(spec, base_dir=path.parent)
     units = report_units(spec, problem)
+    precision = drawing_precision(spec.get("report", {}).get("precision"), units)   # [report] precision (issue 34)
     methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None   # no sensitivity rule
                        else {"sensitivity": {}, "optimum": {}, "ga": {}})
     vspec = spec.get("verify", {"n_samples": 1000})
@@ -383,7 +386,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
             if ctrl_c.count > before:
                 stopped.append(f"verify {m}")
     summary = study_summary(name, problem, results, front, checks, seed=seed, units=units,
-                            seconds=time.perf_counter() - t0)
+                            seconds=time.perf_counter() - t0, precision=precision)
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = plausibility.study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)

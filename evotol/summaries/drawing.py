@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from evotol.core.problem import ToleranceProblem
+from evotol.errors import ValidationError, is_real
 from evotol.units.display import DisplayUnits
 
 #: units of the keys this module adds to a study's JSON (docs/units.md)
@@ -81,6 +82,43 @@ def clean(value: float, digits: int = 13) -> float:
     if v == 0 or not math.isfinite(v):
         return v + 0.0          # + 0.0: no "-0.0"
     return round(v, digits - 1 - int(math.floor(math.log10(abs(v))))) + 0.0
+
+
+def drawing_precision(spec, units: DisplayUnits, field: str = "report.precision") -> dict:
+    """The drawing precision a study states (``[report] precision``), keyed by display unit.
+
+    Parameters
+    ----------
+    spec : float, dict or None
+        A number (the step of the length display unit), ``{length = step, angle = step}``, or
+        None for :data:`DEFAULT_PRECISION`.
+    units : DisplayUnits
+        The study's display units (the steps are in them).
+    field : str
+        The setting's name in error messages.
+
+    Returns
+    -------
+    dict
+        Display unit -> step (only the units the study states; the rest take the defaults).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A step that is not a positive number, or a table with keys other than ``length``/``angle``.
+    """
+    if spec is None:
+        return {}
+    table = {"length": spec} if not isinstance(spec, dict) else dict(spec)
+    out = {}
+    for k, v in table.items():
+        if k not in ("length", "angle"):
+            raise ValidationError(f"{field}.{k}", v, "length and/or angle: the drawing step in the display unit")
+        if not is_real(v) or not math.isfinite(v) or v <= 0:
+            raise ValidationError(f"{field}.{k}" if isinstance(spec, dict) else field, v,
+                                  f"a positive drawing step in {units.length if k == 'length' else units.angle}")
+        out[units.length if k == "length" else units.angle] = float(v)
+    return out
 
 
 def _decimals(step: float) -> int:

@@ -213,7 +213,7 @@ def front_summary(problem: ToleranceProblem, front, results: dict) -> dict:
 
 
 def study_summary(name: str, problem: ToleranceProblem, results: dict, front, checks: dict, *, seed: int,
-                  units: DisplayUnits, seconds: float, maps: bool = True) -> dict:
+                  units: DisplayUnits, seconds: float, maps: bool = True, precision: dict | None = None) -> dict:
     """The JSON-ready summary of a user study (see the module docstring).
 
     Parameters
@@ -237,6 +237,9 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
     maps : bool
         Compute the error maps over workspace slices (default True; not for a workspace that is
         a list of responses).
+    precision : dict, optional
+        Display unit -> drawing step (:func:`evotol.summaries.drawing.drawing_precision`); the
+        defaults of :data:`evotol.summaries.drawing.DEFAULT_PRECISION` otherwise.
 
     Returns
     -------
@@ -283,6 +286,6 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
             starts[f"nsga2 {key.replace('_', ' ')}"] = problem.as_array(p["tolerances"])
     summary["explorer"] = explorer_data(problem, starts, seed)
     # the drawing: every method's zones rounded to the drawing precision, the drawn design re-checked
-    summary["drawing"] = {m: rounded_design(problem, r.t, units) for m, r in results.items()}
+    summary["drawing"] = {m: rounded_design(problem, r.t, units, precision) for m, r in results.items()}
     summary["units"] = study_units_block(problem)
     return summary
