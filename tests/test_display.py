@@ -40,13 +40,14 @@ def test_conversions_are_the_definitions_of_the_units():
 @pytest.mark.parametrize("spec,expected", [
     ("mm", ("mm", "arcsec")), ("um, mrad", ("µm", "mrad")), (["mm", "deg"], ("mm", "deg")),
     ({"angle": "deg"}, ("µm", "deg")), ({"length": "mm", "angle": "mrad"}, ("mm", "mrad")), (None, ("µm", "arcsec")),
+    ("inch", ("in", "arcsec")), ("in, deg", ("in", "deg")),      # issue 34: stacks in inch
 ])
 def test_report_units_setting(spec, expected):
     u = parse_units(spec)
     assert (u.length, u.angle) == expected
 
 
-@pytest.mark.parametrize("spec", ["inch", "mm, cm", ["mm", "um"], {"length": "deg"}, {"lenght": "mm"}, 3])
+@pytest.mark.parametrize("spec", ["furlong", "mm, cm", ["mm", "um"], {"length": "deg"}, {"lenght": "mm"}, 3])
 def test_bad_report_units_are_named_errors(spec):
     with pytest.raises(ValidationError, match="report.units"):
         parse_units(spec)

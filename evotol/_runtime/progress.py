@@ -26,7 +26,7 @@ from tqdm.auto import tqdm
 
 EXPECTED_SECONDS = {
     "brahmia2023-delta": 42, "chase1990-clutch": 5, "deng2012-5bar": 21, "deng2012-clearalloc": 9,
-    "deng2012-dimsynth": 35, "deng2012-irsbot2": 56, "deng2012-tolsynth": 17, "laramolina2019-5r": 33,
+    "deng2012-dimsynth": 35, "drake1999-motor": 1, "deng2012-irsbot2": 56, "deng2012-tolsynth": 17, "laramolina2019-5r": 33,
     "mechanisms": 8, "process-stack": 4, "yao2013": 30,
 }
 

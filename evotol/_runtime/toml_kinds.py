@@ -15,7 +15,7 @@ from typing import Mapping
 from evotol.errors import ValidationError
 
 STUDY_KEYS = frozenset({"robot", "requirement", "methods", "poses", "cost", "bounds", "verify", "sources", "shared",
-                        "shared_cost", "clearances", "seed", "processes"})
+                        "shared_cost", "clearances", "seed", "processes", "stack"})
 MECHANISM_KEYS = frozenset({"frame", "end_effector", "loop", "lengths", "angles", "point", "urdf", "tip", "assembly",
                             "tolerances", "clearance", "planar", "checks"})
 WHAT = {"study": "a study file ([robot], [requirement], [methods], ...)",

@@ -281,6 +281,28 @@ def initial_population(tp: ToleranceProblem, pop_size: int, seed: int, seeds=(),
 
 
 @single_threaded_blas
+def check_ga_options(*, operators: str = "pymoo", pop_size: int = 100, n_gen: int = 200, seed: int = 0) -> None:
+    """The GA's settings checked before any work (also by :mod:`evotol.allocators.preflight`).
+
+    Parameters
+    ----------
+    operators : str
+        ``"pymoo"`` or ``"paper"``.
+    pop_size, n_gen, seed : int
+        Population size (>= 4), generations (>= 1), seed (>= 0).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        An unknown ``operators`` or a count out of range.
+    """
+    if operators not in ("pymoo", "paper"):
+        raise ValidationError("operators", operators, "'pymoo' or 'paper'")
+    for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1), ("seed", seed, 0)):
+        if not isinstance(v, (int, np.integer)) or v < lo:
+            raise ValidationError(name, v, f"an integer >= {lo}")
+
+
 def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
                 operators: str = "pymoo", repair: bool | None = None, penalty: float | None = None,
                 seeds=None, seed_with_baselines: bool = True, budget: float | None = None,
@@ -357,11 +379,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     (True, True)
     """
     t0 = time.perf_counter()
-    if operators not in ("pymoo", "paper"):
-        raise ValidationError("operators", operators, "'pymoo' or 'paper'")
-    for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1), ("seed", seed, 0)):
-        if not isinstance(v, (int, np.integer)) or v < lo:
-            raise ValidationError(name, v, f"an integer >= {lo}")
+    check_ga_options(operators=operators, pop_size=pop_size, n_gen=n_gen, seed=seed)
     if budget is not None:           # below the cheapest design: no answer (issue 15)
         budget = check_budget(problem, budget)
     measure = problem.requirement.measure

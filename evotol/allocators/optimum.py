@@ -220,6 +220,42 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
 
 
 @single_threaded_blas
+def check_optimum(problem: ToleranceProblem, *, budget: float | None = None, refine: bool | dict = False) -> None:
+    """The refusals of :func:`allocate_optimum` that need no solve, so that a study checks every
+    method against its problem before the first one runs (issue 34 item 6).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+    budget : float or None
+        The method's budget (cost units).
+    refine : bool or dict
+        The method's workspace refinement option.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        ``budget`` or ``refine`` with clearance sources; a measure other than ``worst_case``/``rss``;
+        ``rss`` with asymmetric intervals; a cost model that is not convex on its range.
+    """
+    if problem.clearances is not None:      # not convex: the monotone bracket, on the problem's poses
+        if budget is not None:
+            raise ValidationError("budget", budget,
+                                  "None with clearance sources (the optimum bracket minimises cost at the requirement)")
+        if refine:
+            raise ValidationError("refine", refine, "false with clearance sources (the optimum bracket minimises cost "
+                                  "on the problem's poses; the GA's refine holds a design over the workspace)")
+        return
+    if problem.requirement.measure not in ("worst_case", "rss"):
+        raise ValidationError("requirement.measure", problem.requirement.measure,
+                              "'worst_case' or 'rss' for the exact optimum (mc_quantile and yield have no convex rows: use allocate_ga)")
+    if problem.requirement.measure == "rss" and problem.asymmetric:
+        raise ValidationError("requirement.measure", "rss", "'worst_case' for the exact optimum of asymmetric "
+                              "intervals (|shift| + RSS rows are not quadratic: use allocate_ga)")
+    _check_convex(problem)
+
+
 def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, tol: float = 1e-9,
                      max_rounds: int = 60, max_rows: int = 400, refine: bool | dict = False):
     """Certified optimum (min cost at the requirement, or best accuracy at ``budget``).
@@ -285,7 +321,7 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
     >>> math.isclose(opt.cost, 10 * (1 + math.sqrt(2) + math.sqrt(0.5)) ** 2, rel_tol=1e-9)
     True
     """
-    check_optimum_options(problem, budget, refine)
+    check_optimum(problem, budget=budget, refine=refine)
     if problem.clearances is not None:   # not convex: the monotone polyblock bracket instead
         return allocate_monotone(problem)
     if refine:      # the whole workspace: this optimum, on a growing pose set (a wrapper, not a call back)
@@ -294,45 +330,10 @@ def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, 
     return _allocate_optimum_at_poses(problem, budget=budget, tol=tol, max_rounds=max_rounds, max_rows=max_rows)
 
 
-def check_optimum_options(problem: ToleranceProblem, budget: float | None = None, refine: bool | dict = False) -> None:
-    """Refuse, before any work, the options :func:`allocate_optimum` cannot honour with clearance
-    sources: a ``budget`` or a whole-workspace ``refine`` (the optimum bracket of
-    :func:`evotol.allocators.monotone.allocate_monotone` minimises cost at the requirement on the
-    problem's poses).
-
-    Parameters
-    ----------
-    problem : evotol.core.problem.ToleranceProblem
-        The problem (``problem.clearances`` decides).
-    budget : float or None
-        The ``budget`` option of :func:`allocate_optimum` (cost units).
-    refine : bool or dict
-        The ``refine`` option of :func:`allocate_optimum`.
-
-    Raises
-    ------
-    evotol.errors.ValidationError
-        ``budget`` or ``refine`` given for a problem with clearance sources.
-    """
-    if problem.clearances is not None and budget is not None:
-        raise ValidationError("budget", budget, "None with clearance sources (the optimum bracket minimises cost at "
-                              "the requirement)")
-    if problem.clearances is not None and refine:
-        raise ValidationError("refine", refine, "false with clearance sources (the optimum bracket minimises cost on "
-                              "the problem's poses; the GA's refine holds a design over the workspace)")
-
-
 def _allocate_optimum_at_poses(problem: ToleranceProblem, *, budget: float | None, tol: float, max_rounds: int,
                                max_rows: int):
     """:func:`allocate_optimum` on the problem's poses (no clearances, no refinement)."""
     t0 = time.perf_counter()
-    if problem.requirement.measure not in ("worst_case", "rss"):
-        raise ValidationError("requirement.measure", problem.requirement.measure,
-                              "'worst_case' or 'rss' for the exact optimum (mc_quantile and yield have no convex rows: use allocate_ga)")
-    if problem.requirement.measure == "rss" and problem.asymmetric:
-        raise ValidationError("requirement.measure", "rss", "'worst_case' for the exact optimum of asymmetric "
-                              "intervals (|shift| + RSS rows are not quadratic: use allocate_ga)")
-    _check_convex(problem)
     problem.check_feasible()
     rows = ConstraintRows(problem)
     if budget is not None:

@@ -74,6 +74,24 @@ def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> n
     return s
 
 
+def check_sensitivity(problem: ToleranceProblem) -> None:
+    """The sensitivity rule's refusal that needs no work (also by :mod:`evotol.allocators.preflight`).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A problem with clearance classes.
+    """
+    if problem.clearances is not None:
+        raise ValidationError("method", "sensitivity", "a problem without clearance classes (a clearance has no "
+                                                      "linear sensitivity: use optimum, ga or nsga2)")
+
+
 def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, collective_groups=()) -> np.ndarray:
     """The equal-effect design of the module docstring (no budget, no repair).
 
@@ -99,9 +117,7 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
         A problem with clearance classes, locked tolerances and offsets that leave no error
         budget for the free sources, or an invalid ``collective_groups`` entry.
     """
-    if problem.clearances is not None:
-        raise ValidationError("method", "sensitivity", "a problem without clearance classes (a clearance has no "
-                                                      "linear sensitivity: use optimum, ga or nsga2)")
+    check_sensitivity(problem)
     measure = measure or problem.requirement.measure
     if measure not in ("worst_case", "rss"):
         measure = "rss"

@@ -220,19 +220,26 @@ def cmd_run(args) -> int:
 def _print_results(summary: dict) -> None:
     """One line per method of ``evotol run`` (and, for NSGA-II, its cheapest feasible point and
     knee): cost, largest errors in the study's display units, status and the Monte Carlo exceed
-    rate, so the terminal answers "what did I get" without opening the JSON."""
+    rate, so the terminal answers "what did I get" without opening the JSON. A stack (``[stack]``)
+    prints its gap figures, Cp, Cpk and fractions outside, the page's cells."""
+    from evotol.reporting import stack_report
     from evotol.reporting.callout_drawing import terminal_lines
     from evotol.reporting.user_study import terminal_rows
 
-    rows, header = terminal_rows(summary)
+    if "stack" in summary:
+        rows, header = stack_report.terminal_rows(summary)
+        print(f"[evotol] gap '{summary['stack']['gap']}' ({summary['display']['unit']})")
+    else:
+        rows, header = terminal_rows(summary)
     if not rows:
         return
-    print("[evotol] results (cost in the cost models' unit; errors: largest over the allocation poses)")
+    if "stack" not in summary:
+        print("[evotol] results (cost in the cost models' unit; errors: largest over the allocation poses)")
     widths = [max(len(str(x)) for x in col) for col in zip(header, *rows)]
     for line in [header, *rows]:
         print("  " + "  ".join(f"{x:<{w}s}" if i in (0, len(line) - 1) else f"{x:>{w}s}"
                                for i, (x, w) in enumerate(zip(line, widths))).rstrip())
-    for name, r in summary["results"].items():
+    for name, r in summary.get("results", {}).items():
         if r.get("verdict"):
             print(f"  {name}: {r['verdict']}")
     over = summary.get("nsga2", {}).get("cheapest_feasible_over_optimum")

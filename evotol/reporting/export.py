@@ -16,6 +16,8 @@ import pandas as pd
 
 from evotol.units.display import DisplayUnits
 from evotol.errors import ValidationError
+from evotol.reporting.drawing import drawing_check_text
+from evotol.summaries.drawing import clean, tolerance_zone
 
 FORMATS = ("csv", "xlsx")
 
@@ -85,18 +87,23 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     costs = r.get("source_costs", {})
     total = sum(costs.values())
     processes = r.get("processes", {})
+    drawn = (summary.get("drawing") or {}).get(method, {}).get("zones", {})
     rows = []
     for s in summary["sources"]:
         n, k = s["name"], u.factor(s["unit"])
-        t = r["tolerances"][n]
+        z = tolerance_zone(s, r["tolerances"][n])          # the page's zone (one function)
+        dz = drawn.get(n, {})
+        pc = share.get(n)
         rows.append({"source": n, "group": s["group"], "unit": u.unit_for(s["unit"]),
-                     "nominal": s["nominal"] * k if "nominal" in s else None,
-                     "± tolerance": t * k * (s["minus"] + s["plus"]) / 2,
-                     "lower deviation": (s["offset"] - s["minus"] * t) * k,
-                     "upper deviation": (s["offset"] + s["plus"] * t) * k,
+                     "nominal": clean(s["nominal"] * k) if "nominal" in s else None,
+                     "± tolerance": clean(z["half_width"] * k),
+                     "lower deviation": clean(z["lower"] * k),
+                     "upper deviation": clean(z["upper"] * k),
+                     "drawing lower deviation": dz.get("drawing_lower"),
+                     "drawing upper deviation": dz.get("drawing_upper"),
                      "process": processes.get(n, "fixed (bought in)" if s.get("fixed") else ""),
-                     "cost share (%)": 100 * costs.get(n, 0.0) / total if total else 0.0,
-                     f"contribution to the {comp} error at the worst pose (%)": share.get(n)})
+                     "cost share (%)": clean(100 * costs.get(n, 0.0) / total) if total else 0.0,
+                     f"contribution to the {comp} error at the worst pose (%)": None if pc is None else clean(pc)})
     return pd.DataFrame(rows)
 
 
@@ -119,6 +126,7 @@ def about_table(summary: dict) -> pd.DataFrame:
     rows += [(f"requirement: {c}", u.format(v, summary["error_units"][c])) for c, v in summary["requirement"].items()]
     rows += [(f"method {m}", f"cost {r['cost']:.6g}; {r.get('status', '')}") for m, r in summary["results"].items()]
     rows.append(("values", "± tolerance is the half-width (minus + plus)/2·t; deviations are from the nominal"))
+    rows += [(f"drawing, method {m}", drawing_check_text(d)) for m, d in (summary.get("drawing") or {}).items()]
     return pd.DataFrame(rows, columns=["item", "value"])
 
 

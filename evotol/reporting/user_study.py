@@ -29,6 +29,8 @@ from evotol.reporting.callout_drawing import callout_sections
 from evotol.reporting.calibration import calibration_section
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
+from evotol.reporting.drawing import drawing_check_text, zone_text
+from evotol.summaries.drawing import tolerance_zone
 
 #: marker of each method on the NSGA-II plot (symbol, colour)
 MARKS = {"optimum": ("star", "#d62728"), "ga": ("diamond", "#2ca02c"), "sensitivity": ("square", "#ff7f0e"),
@@ -40,6 +42,8 @@ def _units(summary: dict) -> DisplayUnits:
 
 
 def _error_text(summary: dict, comp: str, value) -> str:
+    if summary.get("assembly") and summary["error_units"][comp] == "1" and value is not None:
+        return f"{number(float(value))} × limit"        # an assembly's error: deviation / its limit
     return _units(summary).format(value, summary["error_units"][comp])
 
 
@@ -57,6 +61,8 @@ def pose_cells(summary: dict, pose) -> str:
         ``name = value unit`` per coordinate, comma-separated (no unit for dimensionless ones).
     """
     ws = summary["workspace"]
+    if summary.get("assembly") and list(ws["names"]) == ["response"]:      # an assembly: name the response
+        return summary["assembly"]["responses"][int(round(pose[0]))]
     return ", ".join(f"{n} = {number(v * k)}" + (f" {u}" if u not in ("1", "") else "")
                      for n, v, k, u in zip(ws["names"], pose, ws["display_scale"], ws["display_units"]))
 
@@ -112,7 +118,8 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
     comps = list(summary["requirement"])
     yield_measure = summary["measure"] == "yield"
     kind = ", yield-equivalent" if yield_measure else ""   # the error whose bound the yield requirement is
-    header = ["method", "cost"] + [f"max {c} error{kind} (requirement {_error_text(summary, c, summary['requirement'][c])})"
+    what = (lambda c: "response deviation") if summary.get("assembly") else (lambda c: f"{c} error")   # noqa: E731
+    header = ["method", "cost"] + [f"max {what(c)}{kind} (requirement {_error_text(summary, c, summary['requirement'][c])})"
                                    for c in comps]
     header += ["worst pose (workspace coordinates)", "status", "verdict / certificate", "MC exceed rate"]
     if yield_measure:
@@ -196,26 +203,55 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     return rows, header
 
 
+def model_line(summary: dict) -> str:
+    """One line when the verdict's model and the Monte Carlo's differ: the ``rss`` measure takes
+    every tolerance as 3σ of a normal, the Monte Carlo samples each source's own distribution.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (``sources`` with their ``distribution``).
+
+    Returns
+    -------
+    str
+        The line, or ``""`` when the models agree (every source normal with t = 3σ and no mean
+        shift), the measure is not ``rss`` or no Monte Carlo ran.
+    """
+    if summary.get("measure") != "rss" or not summary.get("monte_carlo"):
+        return ""
+    other = sorted({f"{d['kind']}" + (f" (t = {d['sigma_k']:g}σ)" if "normal" in d["kind"] else "")
+                    + (f", mean shift {d['mean_shift']:g}·t" if d["mean_shift"] else "")
+                    for d in (s.get("distribution") for s in summary["sources"]) if d is not None
+                    and not (d["kind"] == "normal" and d["sigma_k"] == 3 and d["mean_shift"] == 0)})
+    if not other:
+        return ""
+    return ("Two models: the RSS verdict takes every tolerance as 3σ of a normal; the Monte Carlo exceed rate samples "
+            f"the sources' own distributions ({', '.join(other)}), so the two can differ. Give the sources "
+            "distribution = \"normal\" (sigma_k = 3) to check the RSS verdict on its own model.")
+
+
 def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
-    """Source × method table of the tolerances in display units (± values).
+    """Source × method table of the tolerance zones in display units (``±t`` or ``+upper / −lower``).
 
     Returns
     -------
     rows : list of list
-        Per source: name, group, ``"± <unit>"``, then the tolerance of each method and of the
-        NSGA-II cheapest feasible point and knee (display units, formatted).
+        Per source: name, group, display unit, then the zone of each method and of the NSGA-II
+        cheapest feasible point and knee (:func:`zone_text` of
+        :func:`evotol.summaries.user_study.tolerance_zone`: the deviations the CSV and the
+        workbook give).
     header : list of str
         The column titles.
     """
     u = _units(summary)
     methods = list(summary["results"])
     extra = {k: summary["nsga2"][k]["tolerances"] for k in ("cheapest_feasible", "knee") if k in summary.get("nsga2", {})}
+    columns = [summary["results"][m]["tolerances"] for m in methods] + list(extra.values())
     rows = []
     for s in summary["sources"]:
-        unit = u.unit_for(s["unit"])
-        vals = [number(u.convert(summary["results"][m]["tolerances"][s["name"]], s["unit"])) for m in methods]
-        vals += [number(u.convert(t[s["name"]], s["unit"])) for t in extra.values()]
-        rows.append([s["name"], s["group"], f"± {unit}"] + vals)
+        rows.append([s["name"], s["group"], u.unit_for(s["unit"])]
+                    + [zone_text(tolerance_zone(s, t[s["name"]]), u, s["unit"]) for t in columns])
     header = ["source", "group", "unit"] + methods + [f"NSGA-II {k.replace('_', ' ')}" for k in extra]
     return rows, header
 
@@ -375,6 +411,11 @@ def render_user_study(summary: dict) -> Report:
     """
     u = _units(summary)
     req = ", ".join(f"{c} ≤ {_error_text(summary, c, v)}" for c, v in summary["requirement"].items())
+    if summary.get("assembly"):
+        a = summary["assembly"]
+        req = ("every response within its limit: " + ", ".join(f"{n} within ±{number(v)} of its nominal"
+                                                               for n, v in zip(a["responses"], a["limits"]))
+               + " (the response's unit); errors are shown as deviation / limit")
     rep = Report(f"evotol study: {summary['name']}",
                  f"{summary['robot']}, {summary['n_poses']} poses, measure {summary['measure']}, requirement {req}; "
                  f"lengths in {u.length}, angles in {u.angle} (the JSON holds SI values)")
@@ -391,9 +432,16 @@ def render_user_study(summary: dict) -> Report:
     rep.heading("Results")
     rows, header = top_table_rows(summary)
     rep.table(rows, header, table_id="top")
+    line = model_line(summary)
+    if line:
+        rep.text(line, note=True)
     rep.heading("Allocated tolerances")
     rows, header = tolerance_rows(summary)
     rep.table(rows, header, table_id="tolerances")
+    rep.text("Each cell is the zone as the drawing states it: deviations from the nominal, ±t when symmetric, "
+             "+upper / −lower otherwise (the CSV's lower and upper deviation columns).")
+    for m, d in (summary.get("drawing") or {}).items():
+        rep.text(f"Drawing, {m}: {drawing_check_text(d)}.", note=not d["meets"])
     if "calibration" in summary:    # a calibrated robot: uncalibrated vs calibrated (docs/calibration.md)
         calibration_section(rep, summary)
     if summary.get("exports"):
@@ -416,10 +464,9 @@ def render_user_study(summary: dict) -> Report:
                 rep.text(map_caption(summary, m, comp))
             c = r["contributions"].get(comp)
             if c:
-                unit_of = {s["name"]: s["unit"] for s in summary["sources"]}
-                group_of = {s["name"]: s["group"] for s in summary["sources"]}
-                rows = [[s, group_of[s], u.format(r["tolerances"][s], unit_of[s], sign="±"), pc]
-                        for s, pc in zip(c["source"], c["percent"])]
+                src = {s["name"]: s for s in summary["sources"]}
+                rows = [[s, src[s]["group"], f"{zone_text(tolerance_zone(src[s], r['tolerances'][s]), u, src[s]['unit'])} "
+                         f"{u.unit_for(src[s]['unit'])}", pc] for s, pc in zip(c["source"], c["percent"])]
                 rep.text(f"Contributions to the {comp} error at the worst pose "
                          f"(#{r['worst_pose'][comp]}: {pose_cells(summary, r['worst_pose_coordinates'][comp])}):")
                 rep.table(rows, ["source", "group", "tolerance", "share (%)"])

@@ -9,8 +9,10 @@ See ``reports/studies/ucr3_example.toml`` for every field. Units are SI (m, rad)
 ``[clearances]`` joint-clearance classes allocated with the geometric sources
 (``docs/clearance_allocation.md``); ``[calibration]`` a calibration plan: tolerances are allocated
 on the error left after calibration (``docs/calibration.md``); ``[report] units = "mm"`` (or ``"um, arcsec"``...): the units
-the report, the terminal and the drawing export show (``docs/units.md``; the JSON stays SI).
-The outputs and the page: ``docs/user_reports.md``.
+the report, the terminal and the drawing export show (``docs/units.md``; the JSON stays SI);
+``[report] precision = 0.001`` (or ``{length = 0.001, angle = 0.1}``, in those units): the drawing step.
+The outputs and the page: ``docs/user_reports.md``. A ``[stack]`` table is a tolerance stack written in
+the file, no robot and no Python (:mod:`evotol.studyfile.stack_table`, ``docs/stack_analysis.md``).
 Every key is checked: an unknown one is an error naming it and the nearest valid key.
 
 This package only hands names on. The reader is split by job, each module reading its tables:

@@ -11,7 +11,7 @@ from evotol.errors import ValidationError
 
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
             "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report", "calibration")
-REPORT_KEYS = ("units",)
+REPORT_KEYS = ("units", "precision")
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")

@@ -8,7 +8,8 @@ from evotol._runtime.keyword_checks import check_keywords, unknown_key_message
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_monotone, allocate_nsga2,
                                allocate_optimum, allocate_sensitivity)
 from evotol.allocators.budget import check_budget
-from evotol.allocators.optimum import check_optimum_options
+from evotol.allocators.optimum import check_optimum
+from evotol.allocators.preflight import check_methods as check_refusals
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.studyfile.poses import refine_option
@@ -80,7 +81,7 @@ def check_methods(spec: dict, problem: ToleranceProblem, methods: dict) -> None:
     ValidationError
         An unknown method, a keyword the method does not take, a bad budget, or ``refine``/
         ``budget`` for the optimum of a problem with clearance sources
-        (:func:`evotol.allocators.optimum.check_optimum_options`).
+        (:func:`evotol.allocators.optimum.check_optimum`).
     """
     for m, kw in methods.items():
         if m != "nsga2" and m not in METHODS:
@@ -91,7 +92,10 @@ def check_methods(spec: dict, problem: ToleranceProblem, methods: dict) -> None:
         if m == "optimum":
             opts = method_options(spec, m, kw)
             try:
-                check_optimum_options(problem, opts.get("budget"), opts.get("refine", False))
+                check_optimum(problem, budget=opts.get("budget"), refine=opts.get("refine", False))
             except ValidationError as exc:
+                if exc.field not in ("budget", "refine"):
+                    raise ValidationError(f"methods.optimum: {exc.field}", exc.value, exc.expected) from None
                 field = f"methods.optimum.{exc.field}" if exc.field in kw else f"poses.{exc.field}"
                 raise ValidationError(field, exc.value, exc.expected) from None
+    check_refusals(problem, methods)    # every other method's own refusals, before the first one runs (issue 34)

@@ -47,7 +47,7 @@ def read_robot(spec: dict, base_dir=None) -> tuple[RobotErrorModel, dict]:
         robot = model_from_table({k: v for k, v in rs.items() if k not in ("callouts", "zones")}, base_dir)
         return with_callouts(robot, rs.get("callouts"), rs.get("zones", "exact"), rs.get("sources")), spec
     if "assembly" in rs:  # an assembly function (docs/process_selection.md): one pose per response
-        robot = assembly_from_spec(rs)
+        robot = assembly_from_spec(rs, base_dir)    # 'module:function' also beside the study file
         return robot, {**spec, "poses": spec.get("poses", {"list": robot.response_poses.tolist()}),
                        "requirement": {"position": 1.0, **spec.get("requirement", {})}}
     if "model" not in rs:

@@ -27,6 +27,8 @@ from evotol.studyfile.methods import METHODS, check_methods, method_options, stu
 from evotol.studyfile.callouts import callout_summary, callout_warnings
 from evotol.studyfile.poses import refine_option
 from evotol.studyfile.problem import load_problem
+from evotol.studyfile.stack_table import run_stack_study
+from evotol.summaries.drawing import drawing_precision
 from evotol.studyfile.process_run import run_process_study
 from evotol.core.plausibility import study_warnings
 from evotol.summaries.user_study import study_summary
@@ -132,8 +134,11 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     check_not_overwriting(out, name, path, force)     # another study's files (issue 27); before any work
     if "processes" in spec:     # process selection: [processes.<dimension>] (evotol/studyfile/processes.py)
         return run_process_study(spec, path, out, seed)
+    if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
+        return run_stack_study(spec, path, out, seed)
     problem = load_problem(spec, base_dir=path.parent)
     units = report_units(spec, problem)
+    precision = drawing_precision(spec.get("report", {}).get("precision"), units)   # [report] precision (issue 34)
     methods = study_methods(spec, problem)
     vspec = spec.get("verify", {"n_samples": 1000})
     check_methods(spec, problem, methods)           # every table checked before the first method runs
@@ -178,7 +183,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
             if ctrl_c.count > before:
                 stopped.append(f"verify {m}")
     summary = study_summary(name, problem, results, front, checks, seed=seed, units=units,
-                            seconds=time.perf_counter() - t0)
+                            seconds=time.perf_counter() - t0, precision=precision)
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)

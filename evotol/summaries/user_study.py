@@ -14,7 +14,10 @@ import numpy as np
 
 from evotol.units.display import DisplayUnits, error_unit
 from evotol.summaries.explorer_data import explorer_data
+from evotol.measures.statistical.distributions import as_distribution
 from evotol.core.problem import ToleranceProblem
+from evotol.summaries.drawing import KEYS as DRAWING_KEYS
+from evotol.summaries.drawing import rounded_design, tolerance_zone
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
 
@@ -39,6 +42,9 @@ KEYS = {
     "worst_pose_agrees": "1: fraction of designs whose sampled worst pose is the certified one",
     "yield_at_worst_pose": "1: first-order yield (lower bound) at the worst pose",
     "required_yield": "1: required probability", "source_costs": COST,
+    "half_width": _PER_SOURCE + ": (minus + plus)/2·t", "sigma_k": RELATIVE + ": t = sigma_k·σ",
+    "mean_shift": RELATIVE + ": process mean shift / t",
+    "limits": "the response's own unit: an assembly's allowed deviation from its nominal response",
     "best_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
     "mean_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
 }
@@ -57,7 +63,7 @@ def study_units_block(problem: ToleranceProblem) -> dict:
     dict
         :func:`evotol.units.make_units_block` with this module's ``KEYS`` added.
     """
-    return make_units_block(keys=KEYS, tolerances=dict(zip(problem.names, problem.units())))
+    return make_units_block(keys={**KEYS, **DRAWING_KEYS}, tolerances=dict(zip(problem.names, problem.units())))
 
 
 def source_nominals(robot) -> dict[str, float]:
@@ -74,10 +80,11 @@ def source_nominals(robot) -> dict[str, float]:
     Returns
     -------
     dict of str to float
-        Source name -> nominal value, m or rad; empty when the model knows none.
+        Source name -> nominal value, m or rad; empty when the model knows none (a
+        :class:`robots.assembly.LinearStack` built without its nominals: 0 would be a made-up value).
     """
     inner = getattr(robot, "base", robot)         # clearances.WithClearances wraps the robot in .base
-    if hasattr(inner, "dimension_names") and hasattr(inner, "x0"):
+    if hasattr(inner, "dimension_names") and hasattr(inner, "x0") and getattr(inner, "nominal_given", True):
         return {n: float(v) for n, v in zip(inner.dimension_names, np.ravel(inner.x0))}
     mech = getattr(inner, "mechanism", None)
     if mech is not None:
@@ -95,8 +102,9 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
     list of dict
         One row per source, in source order: ``name``, ``group``, ``unit`` (``"m"`` or
         ``"rad"``), ``dim``, ``offset`` (m or rad), ``minus``, ``plus`` (dimensionless, per unit
-        t), ``fixed`` (bool), ``locked`` (m or rad, or None) and, where known, ``nominal`` (m or
-        rad).
+        t), ``fixed`` (bool), ``locked`` (m or rad, or None), ``distribution`` (``kind``,
+        ``sigma_k``, ``mean_shift``: what the Monte Carlo samples) and, where known, ``nominal``
+        (m or rad).
     """
     nominal = source_nominals(problem.robot)
     out = []
@@ -105,6 +113,8 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         row = {"name": n, "group": s.group, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset),
                "minus": float(tol.minus), "plus": float(tol.plus), "fixed": bool(tol.is_fixed),
                "locked": None if tol.locked is None else float(tol.locked)}
+        dist = as_distribution(tol.distribution)
+        row["distribution"] = {"kind": dist.kind, "sigma_k": float(dist.sigma_k), "mean_shift": float(dist.mean_shift)}
         if n in nominal:
             row["nominal"] = nominal[n]
         out.append(row)
@@ -128,13 +138,14 @@ def result_details(problem: ToleranceProblem, r) -> dict:
     dict
         ``normalised_error`` (dimensionless: largest error / requirement), ``worst_pose`` (index
         per component), ``worst_pose_coordinates`` (SI), ``errors_per_pose`` (m or rad),
-        ``contributions`` (``source``, ``percent``), ``source_costs`` (cost units); a GA's
-        ``history`` and, for a yield design, ``yield_at_worst_pose`` and ``required_yield``
+        ``contributions`` (``source``, ``percent``), ``source_costs`` (cost units), ``zones``
+        (per source, :func:`tolerance_zone`); a GA's ``history`` and, for a yield design, ``yield_at_worst_pose`` and ``required_yield``
         (probabilities).
     """
     d = {"normalised_error": float(r.errors.violation[0] + 1), "worst_pose": {}, "worst_pose_coordinates": {},
          "errors_per_pose": {}, "contributions": {},
-         "source_costs": dict(zip(problem.names, problem.source_costs(r.t).tolist()))}
+         "source_costs": dict(zip(problem.names, problem.source_costs(r.t).tolist())),
+         "zones": {row["name"]: tolerance_zone(row, t) for row, t in zip(source_table(problem), r.t)}}
     for comp, _ in problem.components:
         p = r.worst_pose(comp)
         d["worst_pose"][comp] = p
@@ -197,7 +208,7 @@ def front_summary(problem: ToleranceProblem, front, results: dict) -> dict:
 
 
 def study_summary(name: str, problem: ToleranceProblem, results: dict, front, checks: dict, *, seed: int,
-                  units: DisplayUnits, seconds: float, maps: bool = True) -> dict:
+                  units: DisplayUnits, seconds: float, maps: bool = True, precision: dict | None = None) -> dict:
     """The JSON-ready summary of a user study (see the module docstring).
 
     Parameters
@@ -219,6 +230,9 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
     maps : bool
         Compute the error maps over workspace slices (default True; not for a workspace that is
         a list of responses).
+    precision : dict, optional
+        Display unit -> drawing step (:func:`evotol.summaries.drawing.drawing_precision`); the
+        defaults of :data:`evotol.summaries.drawing.DEFAULT_PRECISION` otherwise.
 
     Returns
     -------
@@ -238,6 +252,9 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
                "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
                "monte_carlo": checks, "seconds": seconds, "figures": {}}
+    inner = getattr(problem.robot, "base", problem.robot)
+    if hasattr(inner, "response_names") and hasattr(inner, "limits"):   # an assembly: responses, not poses
+        summary["assembly"] = {"responses": list(inner.response_names), "limits": [float(v) for v in inner.limits]}
     if front is not None:
         summary["pareto_front"] = front.table.to_dict(orient="list")
         summary["nsga2"] = front_summary(problem, front, results)
@@ -262,5 +279,7 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
         if isinstance(p, dict) and "tolerances" in p:
             starts[f"nsga2 {key.replace('_', ' ')}"] = problem.as_array(p["tolerances"])
     summary["explorer"] = explorer_data(problem, starts, seed)
+    # the drawing: every method's zones rounded to the drawing precision, the drawn design re-checked
+    summary["drawing"] = {m: rounded_design(problem, r.t, units, precision) for m, r in results.items()}
     summary["units"] = study_units_block(problem)
     return summary

@@ -1,4 +1,4 @@
-"""Display units: tolerances and errors as a drawing states them (µm or mm, arcsec, mrad or deg).
+"""Display units: tolerances and errors as a drawing states them (µm, mm or inch, arcsec, mrad or deg).
 
 SI inside (m, rad), display units at the edges (STYLE.md): every HTML table, terminal table and
 ``summary()`` converts with one :class:`DisplayUnits` value; JSON files and Python values stay SI.
@@ -19,10 +19,10 @@ from typing import Mapping, Sequence
 from evotol.errors import ValidationError
 
 #: display unit -> its size in SI (m or rad)
-LENGTHS = {"µm": 1e-6, "mm": 1e-3}
+LENGTHS = {"µm": 1e-6, "mm": 1e-3, "in": 0.0254}
 ANGLES = {"arcsec": math.pi / (180 * 3600), "mrad": 1e-3, "deg": math.pi / 180}
 #: spellings accepted in study files
-ALIASES = {"um": "µm", "micron": "µm", "microns": "µm", "μm": "µm", "\"": "arcsec", "°": "deg"}
+ALIASES = {"um": "µm", "micron": "µm", "microns": "µm", "μm": "µm", "inch": "in", "\"": "arcsec", "°": "deg"}
 DEFAULT_LENGTH, DEFAULT_ANGLE = "µm", "arcsec"
 
 

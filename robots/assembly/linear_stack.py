@@ -76,6 +76,7 @@ class LinearStack(AssemblyFunction):
                     raise ValidationError(f"stack sensitivities[{r!r}][{d!r}]", v, "a finite number")
                 A[i, j] = float(v)
         self.matrix = A
+        self.nominal_given = nominal is not None      # reports leave the nominal blank when it was not given
         nominal = dict(nominal or {d: 0.0 for d in dims})
 
         super().__init__(_LinearResponses(tuple(dims), A), {d: nominal.get(d, 0.0) for d in dims}, limits, name=name, **kw)

@@ -1,0 +1,124 @@
+"""One truth per page (issue 34 item 4): the JSON's zones, the page's tolerance table, the CSV
+and the workbook give the same zone for every tolerance -- symmetric, one-sided (+0/−t) and
+unequal (+1.6t/−0.4t) -- and the page never shows a one-sided zone as ±t."""
+from __future__ import annotations
+
+import html
+import json
+import re
+
+import pandas as pd
+import pytest
+
+from evotol.studyfile import run_study_file
+from evotol.summaries.drawing import tolerance_zone
+
+STUDY = '''name = "views"
+seed = 0
+[robot]
+assembly = "h34_views_gap:gap"
+nominal = { a = 0.05, b = 0.02, c = 0.01 }
+limits = { gap = 1e-4 }
+[bounds]
+lower = 1e-6
+upper = 1e-3
+[cost.default]
+model = "power"
+a0 = 1.0
+a1 = 1.0
+scale = 1e-3
+[sources.a]
+minus = 1.0
+plus = 0.0
+[sources.b]
+minus = 0.4
+plus = 1.6
+[methods]
+optimum = {}
+sensitivity = {}
+[verify]
+n_samples = 50
+[report]
+units = "mm"
+'''
+
+
+def _cell_numbers(text: str) -> tuple[float, float]:
+    """(lower, upper) from a page cell ``±x``, ``+u / −l``, ``0 / −l``."""
+    text = text.replace("−", "-")
+    if text.startswith("±"):
+        v = float(text[1:])
+        return -v, v
+    up, lo = (p.strip() for p in text.split("/"))
+    return float(lo), float(up)
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("views")
+    (d / "h34_views_gap.py").write_text("def gap(a, b, c):\n    return a - b + c\n")
+    (d / "views.toml").write_text(STUDY)
+    run_study_file(d / "views.toml", out=d)
+    return d, json.loads((d / "views.json").read_text())
+
+
+def test_json_csv_xlsx_and_page_show_one_zone(run):
+    d, data = run
+    src = {s["name"]: s for s in data["sources"]}
+    csv = pd.read_csv(d / "views_tolerances.csv", keep_default_na=False).set_index("source")
+    book = pd.read_excel(d / "views_tolerances.xlsx", sheet_name=None)
+    page = (d / "views.html").read_text()
+    table = page[re.search(r"id=['\"]tolerances['\"]", page).start():]
+    table = table[:table.index("</table>")]
+    head = [html.unescape(h) for h in re.findall(r"<th>(.*?)</th>", table)]
+    cells = {r[0]: r for r in ([html.unescape(c) for c in re.findall(r"<td>(.*?)</td>", row)]
+                               for row in table.split("<tr>")[2:])}
+    method = "optimum"
+    r = data["results"][method]
+    col = head.index(method)
+    sheet = book[method].set_index("source")
+    for n, s in src.items():
+        z = tolerance_zone(s, r["tolerances"][n])
+        assert r["zones"][n] == pytest.approx(z, rel=1e-15)                          # JSON
+        for table_ in (csv, sheet):                                                   # CSV, XLSX (mm)
+            assert table_.loc[n, "lower deviation"] == pytest.approx(z["lower"] * 1e3, rel=1e-12, abs=1e-15)
+            assert table_.loc[n, "upper deviation"] == pytest.approx(z["upper"] * 1e3, rel=1e-12, abs=1e-15)
+            assert table_.loc[n, "± tolerance"] == pytest.approx(z["half_width"] * 1e3, rel=1e-12)
+        lo, up = _cell_numbers(cells[n][col])                                         # page (4 digits)
+        assert lo == pytest.approx(z["lower"] * 1e3, rel=1e-3, abs=1e-12)
+        assert up == pytest.approx(z["upper"] * 1e3, rel=1e-3, abs=1e-12)
+    t = r["tolerances"]["a"]
+    assert cells["a"][col].startswith("0 / −")                                       # one-sided, not "± t"
+    assert csv.loc["a", "± tolerance"] == pytest.approx(t * 1e3 / 2)
+    assert cells["c"][col].startswith("±")
+    assert cells["b"][col].startswith("+")
+
+
+def test_page_states_the_zone_convention(run):
+    d, _ = run
+    page = (d / "views.html").read_text()
+    assert "deviations from the nominal, ±t when symmetric, +upper / −lower otherwise" in page
+
+
+@pytest.mark.parametrize("dist, stated", [("uniform", True), ("normal", False)])
+def test_rss_verdict_and_monte_carlo_state_their_models(tmp_path, dist, stated):
+    """RSS measure (t = 3σ normal): with uniform sources the page says in one line that the Monte
+    Carlo samples another model; with normal t = 3σ sources it does not need to."""
+    (tmp_path / "h34_views_rss.py").write_text("def gap(a, b, c):\n    return a - b + c\n")
+    text = STUDY.replace("h34_views_gap", "h34_views_rss").replace('name = "views"', 'name = "rss"')
+    text = text[:text.index("[sources.a]")] + text[text.index("[methods]"):]
+    text = text.replace("seed = 0\n", f'seed = 0\ndistribution = "{dist}"\n')
+    text = text.replace("[robot]", '[requirement]\nmeasure = "rss"\n[robot]').replace("sensitivity = {}\n", "")
+    (tmp_path / "rss.toml").write_text(text)
+    run_study_file(tmp_path / "rss.toml", out=tmp_path)
+    page = (tmp_path / "rss.html").read_text()
+    assert ("Two models: the RSS verdict takes every tolerance as 3σ of a normal" in page) is stated
+
+
+def test_an_assembly_is_reported_by_its_responses(run):
+    """An assembly's page names its response and limit, not a robot's pose and position (issue 34)."""
+    d, data = run
+    page = html.unescape((d / "views.html").read_text())
+    assert data["assembly"] == {"responses": ["gap"], "limits": [1e-4]}
+    assert "gap within ±0.0001000 of its nominal" in page and "#0: gap" in page and "× limit" in page
+    assert "response = 0" not in page and "max position error" not in page
