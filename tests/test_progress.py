@@ -78,7 +78,7 @@ def test_run_shows_the_size_and_progress_of_every_long_method_in_a_log(tmp_path,
     import functools
 
     import evotol.allocators.ga as ga
-    import evotol.allocators.nsga as nsga
+    import evotol.allocators.nsga_driver as nsga
     import evotol.verification.montecarlo as mc
     from evotol._runtime.progress import progress_bar
     from tests.fast_study import fast_study
