@@ -68,6 +68,10 @@ class Mechanism:
         Joint variable -> (lower, upper), SI (rad or m).
     urdf : tuple of str, optional
         ``(resolved URDF path, tip frame)`` of a description read from a URDF; empty otherwise.
+    aliases : Mapping[str, str], optional
+        Source name -> design parameter it tolerances, for names a parameter cannot have (a
+        standard-DH description's ``base.d`` -> ``base_d``, :mod:`robots.mechanism.standard_dh`);
+        the parameter is then listed under its alias only.
 
     Raises
     ------
@@ -98,6 +102,7 @@ class Mechanism:
     points: tuple[Point, ...] = ()
     limits: Mapping[str, tuple[float, float]] = field(default_factory=dict)   # joint variable -> (lower, upper), SI
     urdf: tuple[str, ...] = ()        # (resolved URDF path, tip frame) of a description read from a URDF
+    aliases: Mapping[str, str] = field(default_factory=dict)    # source name -> parameter (standard DH: base.d)
 
     def __post_init__(self):
         names = [f.name for f in self.frames]
@@ -177,7 +182,9 @@ class Mechanism:
             ``lengths``, ``angles``, ``actuated``, then :meth:`entry_names` (with the placement
             errors), in that order.
         """
-        return list(self.lengths) + list(self.angles) + list(actuated) + self.entry_names()
+        hidden = set(self.aliases.values())
+        params = [p for p in (*self.lengths, *self.angles) if p not in hidden]
+        return params + list(self.aliases) + list(actuated) + self.entry_names()
 
     def select_sources(self, patterns: Sequence[str] | None = None, actuated: Sequence[str] = ()) -> list[str]:
         """Source names matching ``patterns`` (fnmatch: ``"*.d"``, ``"A*.theta"``, ``"L?"``), in
