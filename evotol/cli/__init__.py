@@ -223,6 +223,9 @@ def _print_results(summary: dict) -> None:
     rate, so the terminal answers "what did I get" without opening the JSON."""
     from evotol.reporting.user_study import terminal_rows
 
+    if summary.get("kind") == "analysis":      # every tolerance given: their analysis (issue 33)
+        from evotol.studyfile.given_tolerances import print_analysis
+        return print_analysis(summary)
     rows, header = terminal_rows(summary)
     if not rows:
         return

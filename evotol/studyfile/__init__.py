@@ -48,18 +48,21 @@ from evotol.summaries.user_study import study_summary
 from robots import registry
 from robots.assembly import assembly_from_spec
 from robots.mechanism.model import model_from_table
+from evotol.core.axis_limits import AXIS_KEYS, axis_requirement
+from evotol.studyfile.given_tolerances import run_given_tolerances
+from evotol.studyfile.joint_poses import joint_poses
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange, "monotone": allocate_monotone}
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
             "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report")
 REPORT_KEYS = ("units",)
-POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
+POSE_KEYS = ("grid", "latin_hypercube", "list", "refine", "joints")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
 SOURCE_KEYS = ("lower", "upper", "locked", "fixed", "cost", "distribution", "sigma_k", "mean_shift", "offset", "minus",
                "plus", "cost_width", "contains_nominal")
-REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement))
+REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement)) + AXIS_KEYS
 #: methods that take the whole-workspace refinement option
 REFINING_METHODS = ("optimum", "ga")
 
@@ -242,7 +245,9 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         except TypeError as exc:
             raise ValidationError("robot", rs, f"parameters accepted by {cls.__name__} ({exc})") from None
     ps = spec.get("poses", {"grid": 5})
-    if "grid" in ps:
+    if "joints" in ps:      # joint configurations of a serial arm, held exactly (issue 33)
+        robot, poses = joint_poses(robot, ps)
+    elif "grid" in ps:
         poses = robot.workspace.grid(ps["grid"])
     elif "latin_hypercube" in ps:
         poses = robot.workspace.latin_hypercube(ps["latin_hypercube"], seed=spec.get("seed", 0))
@@ -263,10 +268,12 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         u = sorted(unknown)[0]
         raise ValidationError(f"sources.{u}", u, f"a source of {sourced.name}: " + unknown_key_message(u, sourced.source_names))
     tol = {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec) for s in sourced.sources}
-    req = Requirement(**spec.get("requirement", {}))
+    # position = { x = "0.5*mm", ... }: per-axis limits (evotol/core/axis_limits.py, issue 33)
+    robot, poses, req_table = axis_requirement(robot, poses, spec.get("requirement", {}), clearances=cl)
+    req = Requirement(**req_table)
     shared = spec.get("shared")
     problem = ToleranceProblem(robot, tol, req, poses, shared=shared, shared_cost=spec.get("shared_cost", "part"),
-                               clearances=cl)
+                               clearances=cl, all_given=True)     # every tolerance given: analysed (issue 33)
     # quality_loss = A (or {response = A}): machining cost + Taguchi loss (docs/process_selection.md)
     return with_quality_loss(problem, spec["quality_loss"]) if "quality_loss" in spec else problem
 
@@ -325,6 +332,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
         return run_process_study(spec, path, out, seed, load_problem)
     problem = load_problem(spec, base_dir=path.parent)
     units = report_units(spec, problem)
+    if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
+        return run_given_tolerances(spec, path, out, name, problem, units, seed, t0)
     methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None   # no sensitivity rule
                        else {"sensitivity": {}, "optimum": {}, "ga": {}})
     vspec = spec.get("verify", {"n_samples": 1000})
