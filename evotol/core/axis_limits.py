@@ -13,7 +13,7 @@ bound ``L_ref`` (:func:`axis_requirement`). Why this is exact:
   t), and :func:`evotol.measures.linear.directions_for` gives a one-row block the single direction z
   with covering angle 0, so the worst-case measure, the certified optimum and its lower bound
   are exact here (no direction grid, nothing to refine);
-* RSS is ``sqrt(Σ_j (J_a,j t_j)^2)`` per axis; the yield measure gives P(|δ_a| <= L_a) per axis
+* RSS is ``sqrt(Σ_j (J_a,j t_j)^2)`` per axis; the yield measure gives ``P(|δ_a| <= L_a)`` per axis
   and pose (per axis, not jointly over the axes: documented in ``docs/mechanisms.md``);
 * ``frame = "tool"``: the error is first rotated into the nominal tool frame at that pose,
   ``δ_tool = R^T δ`` (R the end-effector's nominal orientation), so the limits follow the tool.

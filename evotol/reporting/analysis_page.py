@@ -8,9 +8,8 @@ the Monte Carlo check. Values are shown in the study's display units; the JSON s
 """
 from __future__ import annotations
 
-import math
-
 from evotol.reporting.html import Report
+from evotol.reporting.joints_section import joints_section
 from evotol.units.display import DisplayUnits
 
 AXES = ("x", "y", "z")
@@ -84,13 +83,7 @@ def render_analysis(summary: dict) -> Report:
                                                                      ws["display_units"]))
     rep.heading("Worst pose")
     rep.text(f"Pose #{p} ({pose}): |δp| ≤ {L(wc['value'][p])} (proven bound {L(wc['bound'][p])}).")
-    joints = summary.get("joints") or {}
-    if joints:
-        rep.heading("Joints used at every pose")
-        rep.text("The joint values of the arm at each pose, revolute joints wrapped to (−180°, 180°] (prismatic in mm).")
-        vs = joints["variables"]
-        rep.table([[str(i)] + [_joint(joints["values"][v][i], un) for v, un in zip(vs, joints["units"])]
-                   for i in range(len(summary["poses"]))], ["pose"] + vs, table_id="joints")
+    joints_section(rep, summary)
     mc = a.get("monte_carlo") or {}
     if mc:
         rep.heading("Monte Carlo")
@@ -103,7 +96,3 @@ def render_analysis(summary: dict) -> Report:
 
 def _num(v: float) -> str:
     return f"{0.0 if abs(v) < 1e-9 else v:.5g}"
-
-
-def _joint(v: float, unit: str) -> str:
-    return f"{_num(math.degrees(v))} deg" if unit == "rad" else f"{_num(v * 1e3)} mm"

@@ -18,6 +18,7 @@ from plotly.subplots import make_subplots
 
 from evotol.units.display import DisplayUnits, number
 from evotol.core.pareto import ideal_point_knee
+from evotol.reporting.joints_section import joints_section
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
 
@@ -442,5 +443,6 @@ def render_user_study(summary: dict) -> Report:
         rep.heading("Monte Carlo and the linearisation check")
         rep.table(_linearisation_rows(summary), ["method", "samples", "exceed rate (first-order)",
                                                  "exceed rate (nonlinear)", "linearisation error", "verdict"])
+    joints_section(rep, summary)           # the posture used at every pose (issue 33)
     explorer_section(rep, summary)
     return rep

@@ -23,7 +23,7 @@ from evotol.studies import StudyResult, write_outputs
 from evotol.summaries.user_study import source_table, study_units_block
 from evotol.units.display import DisplayUnits
 from evotol.verification.tolerance_analysis import analyse
-from robots.mechanism.posture import wrapped
+from robots.mechanism.posture import joint_table
 
 #: the ``[verify]`` keys an analysis reads (the others belong to allocation studies)
 VERIFY_KEYS = ("n_samples", "nonlinear")
@@ -57,11 +57,7 @@ def analysis_summary(name: str, problem, analysis, *, seed: int, units: DisplayU
     robot = getattr(problem.robot, "base", problem.robot) if hasattr(problem.robot, "slots") else problem.robot
     ws = robot.workspace
     d = analysis.to_dict()
-    joints = {}
-    kin = getattr(getattr(robot, "base", robot), "kin", None)
-    if analysis.joints and kin is not None:
-        joints = {"variables": list(analysis.joints), "units": [kin.joint_unit.get(v, "rad") for v in analysis.joints],
-                  "values": {k: v.tolist() for k, v in wrapped(kin, analysis.joints).items()}}
+    joints = joint_table(robot, analysis.poses)
     sources = source_table(problem)
     for row, t in zip(sources, analysis.t):
         row["tolerance"] = float(t)

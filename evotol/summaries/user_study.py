@@ -14,6 +14,7 @@ import numpy as np
 
 from evotol.units.display import DisplayUnits, error_unit
 from evotol.summaries.explorer_data import explorer_data
+from evotol.summaries.pose_joints import pose_joints
 from evotol.core.problem import ToleranceProblem
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
@@ -268,5 +269,6 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
         if isinstance(p, dict) and "tolerances" in p:
             starts[f"nsga2 {key.replace('_', ' ')}"] = problem.as_array(p["tolerances"])
     summary["explorer"] = explorer_data(problem, starts, seed)
+    summary["joints"] = pose_joints(problem)        # the posture used at every pose (issue 33)
     summary["units"] = study_units_block(problem)
     return summary

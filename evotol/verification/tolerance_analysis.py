@@ -32,6 +32,7 @@ from evotol.core.axis_limits import AxisErrorModel, tool_rotation
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.montecarlo import verify
+from robots.mechanism.posture import joints_at
 
 AXES = ("x", "y", "z")
 COMPONENT_ROWS = {"position": slice(0, 3), "orientation": slice(3, 6)}
@@ -173,35 +174,12 @@ def _base(problem):
     return robot, problem.poses
 
 
-def joints_at(robot, poses) -> dict:
-    """The joint values a mechanism description uses at its poses (empty for other robots).
-
-    Parameters
-    ----------
-    robot : robots.base.RobotErrorModel
-        A :class:`~robots.mechanism.joint_space.JointSpaceModel` (the poses are the joints), a
-        :class:`~robots.mechanism.model.MechanismModel` (its inverse geometry) or another robot.
-    poses : (n, workspace.dim) ndarray
-        The robot's poses (SI).
-
-    Returns
-    -------
-    dict of str to (n,) ndarray
-        Joint variable -> values (rad or m); empty when the robot has no joint variables.
-    """
-    if hasattr(robot, "variables") and hasattr(robot, "tool_pose"):
-        return {v: np.asarray(poses[:, i], float) for i, v in enumerate(robot.variables)}
-    if hasattr(robot, "joint_values") and hasattr(robot, "kin"):
-        return {k: np.asarray(v, float) for k, v in robot.joint_values(poses).items()}
-    return {}
-
-
 def error_at_probability(problem, t: np.ndarray, probability: float, component: str = "position",
                          rtol: float = 1e-6) -> np.ndarray:
     """The bound on ``component``'s error norm met with ``probability`` at each pose (first-order yield model).
 
-    Bisection on the bound of the ``yield`` measure (:mod:`evotol.statistical`): the smallest E with
-    P(|δ| <= E) >= probability, to ``rtol``.
+    Bisection on the bound of the ``yield`` measure (:mod:`evotol.measures.statistical`): the smallest E with
+    ``P(|δ| <= E) >= probability``, to ``rtol``.
 
     Parameters
     ----------
