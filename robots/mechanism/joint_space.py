@@ -38,6 +38,8 @@ class JointSpaceModel(RobotErrorModel):
     span : (n_variables, 2) array_like or None, optional
         Range of each joint variable for the box (rad or m) where the description has no limit;
         None: one turn each way for a revolute joint, ±1 m for a prismatic one.
+    where : str, optional
+        The field named in errors (default ``"poses.joints"``).
 
     Raises
     ------
@@ -45,14 +47,14 @@ class JointSpaceModel(RobotErrorModel):
         A model that is not a mechanism description, or one with closed loops.
     """
 
-    def __init__(self, model, span=None):
+    def __init__(self, model, span=None, where: str = "poses.joints"):
         mech = getattr(model, "mechanism", None)
         kin = getattr(model, "kin", None)
         if mech is None or kin is None:
-            raise ValidationError("poses.joints", getattr(model, "name", model), "a mechanism description "
+            raise ValidationError(where, getattr(model, "name", model), "a mechanism description "
                                   "(robot.mechanism or robot.urdf): joint configurations need its joint variables")
         if mech.loops:
-            raise ValidationError("poses.joints", mech.name, "a serial arm: with closed loops the passive joints are "
+            raise ValidationError(where, mech.name, "a serial arm: with closed loops the passive joints are "
                                   "not free (give tool poses: grid, latin_hypercube or list)")
         self.base = model
         self.name = model.name
@@ -189,7 +191,7 @@ def joint_configurations(model, joints, where: str = "poses.joints") -> tuple[Jo
         that is not a constant (or a plain number beyond 2π for a revolute joint), a value outside
         the joint's limits, or a mechanism with closed loops (names the configuration and joint).
     """
-    jm = JointSpaceModel(model)
+    jm = JointSpaceModel(model, where=where)
     names, units = jm.variables, jm.workspace.units
     if not isinstance(joints, Sequence) or isinstance(joints, str) or not joints:
         raise ValidationError(where, joints, f"a list of joint configurations, each [{', '.join(names)}] or a table by name")
