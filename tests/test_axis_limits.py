@@ -104,3 +104,14 @@ def test_axis_limits_value_checks():
         AxisLimits(position={"x": 0.0})
     lim = AxisLimits(position={"z": 1e-3, "x": 2e-3}, orientation={"y": 1e-3})
     assert lim.axes("position") == ("x", "z") and lim.reference("position") == 1e-3
+
+
+def test_reports_name_the_axis():
+    from evotol.reporting.user_study import pose_cells
+    problem = load_problem(per_axis_study({"x": "0.5*mm", "z": "0.5*mm"}))
+    assert problem.robot.coordinate_labels == {"axis": ["x", "z"]}
+    ws = problem.robot.workspace
+    summary = {"workspace": {"names": list(ws.names), "display_scale": list(ws.display_scale),
+                             "display_units": list(ws.display_units), "labels": problem.robot.coordinate_labels}}
+    assert pose_cells(summary, problem.poses[3]).endswith("axis = z")       # configuration 1, slot 1
+    assert "q1 = 0" in pose_cells(summary, problem.poses[3])

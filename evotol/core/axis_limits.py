@@ -216,6 +216,26 @@ class AxisErrorModel(RobotErrorModel):
         axes = self.limits.axes(component)
         return axes[slot] if axes and 0 <= slot < len(axes) else None
 
+    @property
+    def coordinate_labels(self) -> dict:
+        """What each value of the ``axis`` coordinate means, for reports: ``{"axis": [label per slot]}``.
+
+        Returns
+        -------
+        dict of str to list of str
+            ``"x"``, ``"y"``, ``"z"`` per slot (``"position x, orientation z"`` when both
+            components are per axis).
+        """
+        labels = []
+        both = bool(self.limits.position) and bool(self.limits.orientation)
+        for s in range(self.slots):
+            p, o = self.axis_of("position", s), self.axis_of("orientation", s)
+            if both:
+                labels.append(", ".join(x for x in (p and f"position {p}", o and f"orientation {o}") if x))
+            else:
+                labels.append(p or o)
+        return {"axis": labels}
+
     def _split(self, poses):
         P = self.check_poses(poses)
         return P[:, :-1], np.clip(np.rint(P[:, -1]), 0, self.slots - 1).astype(int)

@@ -51,7 +51,9 @@ def pose_cells(summary: dict, pose) -> str:
         ``name = value unit`` per coordinate, comma-separated (no unit for dimensionless ones).
     """
     ws = summary["workspace"]
-    return ", ".join(f"{n} = {number(v * k)}" + (f" {u}" if u not in ("1", "") else "")
+    labels = ws.get("labels") or {}         # a coordinate whose values are names (a per-axis requirement's axis)
+    return ", ".join(f"{n} = {labels[n][int(round(v))]}" if n in labels else
+                     f"{n} = {number(v * k)}" + (f" {u}" if u not in ("1", "") else "")
                      for n, v, k, u in zip(ws["names"], pose, ws["display_scale"], ws["display_units"]))
 
 

@@ -241,7 +241,8 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
                "error_units": {c: error_unit(problem, c) for c, _ in problem.components},
                "display_units": units.to_dict(),
                "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
-                             "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high)},
+                             "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high),
+                             "labels": getattr(problem.robot, "coordinate_labels", {})},     # per-axis slots (issue 33)
                "robot": problem.robot.name, "n_poses": problem.n_poses, "poses": problem.poses.tolist(),
                "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
