@@ -125,3 +125,31 @@ def test_typed_assembly_pose_and_joints_of_a_serial_arm_must_agree(tmp_path):
     # the same joints, exactly those of the pose: accepted, unchanged
     x0, q = MechanismModel(FIXTURE).kin.assembly()
     assert np.allclose([q[f"q{i}"] for i in range(1, 7)], ASSEMBLY, atol=1e-9)
+
+
+def test_unreachable_poses_are_reported_together_or_dropped(tmp_path):
+    from evotol.studyfile import load_problem
+    from tests.test_standard_dh import PUMA
+    text = PUMA.read_text().replace('high = "700*mm"', 'high = "1100*mm"')       # beyond the arm's reach in x
+    f = tmp_path / "puma_far.toml"
+    f.write_text(text)
+    spec = {"robot": {"mechanism": str(f), "sources": ["a2", "d4"]}, "poses": {"grid": [5, 2, 2]},
+            "requirement": {"position": 5e-4}, "cost": {"default": {"model": "exponential", "a0": 1.9, "a1": 0.5, "scale": 1e-5}}}
+    with pytest.raises(KinematicsError) as e:
+        load_problem(spec)
+    msg = str(e.value)
+    n_bad = len(e.value.poses)
+    assert f"{n_bad} of 20 poses" in msg and "loops" not in msg and "drop_unreachable" in msg and n_bad >= 4
+    # every pose named is beyond the reach of the wrist centre (frame 6's origin): farther from the shoulder
+    # than sqrt((a2 + sqrt(a3^2 + d4^2))^2 + d3^2)
+    reach = np.hypot(A2 + np.hypot(A3, D4), 0.15005)
+    assert np.all(np.linalg.norm(np.asarray(e.value.poses), axis=1) > reach)
+    spec["poses"]["drop_unreachable"] = True
+    problem = load_problem(spec)
+    assert problem.n_poses == 20 - n_bad
+    assert any(f"{n_bad} of 20 poses dropped" in line for line in problem.robot.notes())
+    # what is kept is reached: the model's joints reproduce those poses (textbook forward kinematics)
+    q = problem.robot.joint_values(problem.poses)
+    for i, p in enumerate(problem.poses):
+        T = textbook_fk([q[f"q{k}"][i] for k in range(1, 7)])
+        assert np.allclose(T[:3, 3], p, atol=1e-9)

@@ -50,14 +50,14 @@ from robots.assembly import assembly_from_spec
 from robots.mechanism.model import model_from_table
 from evotol.core.axis_limits import AXIS_KEYS, axis_requirement
 from evotol.studyfile.given_tolerances import run_given_tolerances
-from evotol.studyfile.joint_poses import joint_poses
+from evotol.studyfile.joint_poses import drop_unreachable, joint_poses
 
 METHODS = {"sensitivity": allocate_sensitivity, "optimum": allocate_optimum, "ga": allocate_ga,
            "equal": allocate_equal, "lagrange": allocate_lagrange, "monotone": allocate_monotone}
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
             "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report")
 REPORT_KEYS = ("units",)
-POSE_KEYS = ("grid", "latin_hypercube", "list", "refine", "joints")
+POSE_KEYS = ("grid", "latin_hypercube", "list", "refine", "joints", "drop_unreachable")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
 SOURCE_KEYS = ("lower", "upper", "locked", "fixed", "cost", "distribution", "sigma_k", "mean_shift", "offset", "minus",
@@ -255,6 +255,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         poses = np.asarray(ps["list"], dtype=float)
     else:
         raise ValidationError("poses", ps, "one of grid = [n, ...], latin_hypercube = n, list = [[...], ...]")
+    poses = drop_unreachable(robot, poses, ps)      # unreachable poses together, or dropped (issue 33)
     # [clearances]: joint-clearance classes allocated with (or, geometric = false, instead of) the
     # robot's sources (docs/clearance_allocation.md)
     cl = clearances.from_table(spec["clearances"], robot) if "clearances" in spec else None

@@ -186,13 +186,20 @@ def posture_notes(model) -> list[str]:
     Returns
     -------
     list of str
-        One line listing up to five such poses (SI), or nothing.
+        A line on the poses dropped as unreachable (``dropped_poses``, set by the study-file
+        reader) and one listing up to five poses near a singularity (SI), or nothing.
     """
+    out = []
+    dropped = getattr(model, "dropped_poses", None)
+    if dropped:
+        n, total, first = dropped
+        out.append(f"{n} of {total} poses dropped ([poses] drop_unreachable): out of reach, singular, outside the joint "
+                   f"limits or on another branch; the first (SI): {first}.")
     near = getattr(model, "_near_singular", {})
     if not near:
-        return []
+        return out
     shown = "; ".join(str(list(np.round(p, 6))) for p in list(near)[:5])
-    return [f"{len(near)} pose(s) near a singularity of the arm (smallest singular value of the task Jacobian below "
+    return out + [f"{len(near)} pose(s) near a singularity of the arm (smallest singular value of the task Jacobian below "
             f"{NEAR_SINGULAR:g} of the largest): {shown}{' ...' if len(near) > 5 else ''}."]
 
 
@@ -244,3 +251,33 @@ def joint_table(robot, poses) -> dict:
         return {}
     return {"variables": list(q), "units": [kin.joint_unit.get(v, "rad") for v in q],
             "values": {k: v.tolist() for k, v in wrapped(kin, q).items()}}
+
+
+def unreachable_message(mech, poses: np.ndarray, bad: np.ndarray, residual: np.ndarray) -> str:
+    """One line naming every pose the inverse geometry could not reach (how many, the first few).
+
+    Parameters
+    ----------
+    mech : robots.mechanism.mechanism.Mechanism
+        The description (name, coordinates, loops).
+    poses : (n, n_coordinates) ndarray
+        The poses (SI).
+    bad : (n,) ndarray of bool
+        The poses not reached.
+    residual : (n,) ndarray
+        The scaled residual at each pose.
+
+    Returns
+    -------
+    str
+        ``"<name>: k of n poses out of reach or singular ... : #i (x = ..), ..."``; for a mechanism
+        with loops "the loops cannot close", for a serial arm "out of reach"; with the option
+        that drops them (``[poses] drop_unreachable = true``).
+    """
+    idx = np.flatnonzero(bad)
+    names = [c.name for c in mech.coordinates]
+    shown = "; ".join(f"#{int(i)} ({', '.join(f'{n} = {v:.6g}' for n, v in zip(names, poses[i]))})" for i in idx[:5])
+    what = "the loops cannot close (out of reach or singular)" if mech.loops else "out of reach or singular"
+    return (f"{mech.name}: {len(idx)} of {len(poses)} poses: {what}, SI, largest scaled residual "
+            f"{float(np.max(residual[idx])):.2g}: {shown}{' ...' if len(idx) > 5 else ''}. Shrink the task box, or drop "
+            "them with [poses] drop_unreachable = true")
