@@ -190,6 +190,14 @@ def posture_notes(model) -> list[str]:
         reader) and one listing up to five poses near a singularity (SI), or nothing.
     """
     out = []
+    kin = model.kin
+    if not kin.mech.loops and getattr(model, "_posture_checked", None):
+        x0, q0 = kin.assembly()
+        J0 = _task_jacobian(kin, {k: np.array([v]) for k, v in q0.items()}, x0[None])
+        if J0 is not None:
+            out.append("Posture held: every pose is solved on the branch of the assembly configuration ("
+                       + _shown(kin, wrapped(kin, q0)) + "); a pose on another elbow, shoulder or wrist branch is "
+                       "refused (robots/mechanism/posture.py); the joints used are in the table 'Joints used at every pose'.")
     dropped = getattr(model, "dropped_poses", None)
     if dropped:
         n, total, first = dropped
