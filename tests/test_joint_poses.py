@@ -95,3 +95,30 @@ def test_joint_limits_and_closed_loops_are_refused_before_work(tmp_path):
     with pytest.raises(ValidationError) as e:
         load_problem(spec)
     assert e.value.field == "poses.grid"
+
+
+def test_sources_without_effect_are_marked():
+    # PUMA 560 with d6 = 0: frame 6's origin is the wrist centre, so the wrist rows' alpha and theta cannot move it
+    from evotol.reporting.user_study import tolerance_rows
+    from evotol.summaries.user_study import source_table, sources_without_effect
+    spec = study(joints=[[0, 0.5, 1.0, 0, 0.5, 0], [0.3, 0.2, 1.5, 0.4, 0.5, 0.2]])
+    spec["robot"] = {"mechanism": str(PUMA)}
+    problem = load_problem(spec)
+    flagged = [n for n, f in zip(problem.names, sources_without_effect(problem)) if f]
+    # independently: perturb each entry of the textbook table by 1e-3 and see whether frame 6's origin moves
+    moves = {}
+    for q in problem.poses:
+        for row in range(6):
+            for field, name in ((0, "d"), (1, "a"), (2, "alpha")):
+                up = [list(r) for r in TABLE]
+                up[row][field] += 1e-3
+                d = np.linalg.norm(textbook_fk(q, up)[:3, 3] - textbook_fk(q)[:3, 3])
+                moves[f"{name}{row + 1}"] = max(moves.get(f"{name}{row + 1}", 0.0), d)
+            d = np.linalg.norm(textbook_fk(q + 1e-3 * (np.arange(6) == row))[:3, 3] - textbook_fk(q)[:3, 3])
+            moves[f"theta{row + 1}"] = max(moves.get(f"theta{row + 1}", 0.0), d)
+    assert flagged == [n for n in problem.names if moves[n] < 1e-12]
+    assert set(flagged) == {"alpha4", "theta4", "alpha5", "theta5", "alpha6", "theta6"}
+    summary = {"sources": source_table(problem), "results": {"x": {"tolerances": dict(zip(problem.names, problem.upper))}},
+               "display_units": {"length": "mm", "angle": "mrad"}}
+    rows, _ = tolerance_rows(summary)
+    assert [r[0] for r in rows if "no effect" in r[1]] == flagged

@@ -226,7 +226,8 @@ def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
         unit = u.unit_for(s["unit"])
         vals = [number(u.convert(summary["results"][m]["tolerances"][s["name"]], s["unit"])) for m in methods]
         vals += [number(u.convert(t[s["name"]], s["unit"])) for t in extra.values()]
-        rows.append([s["name"], s["group"], f"± {unit}"] + vals)
+        mark = " (no effect on the requirement)" if s.get("no_effect") else ""     # issue 33
+        rows.append([s["name"], s["group"] + mark, f"± {unit}"] + vals)
     header = ["source", "group", "unit"] + methods + [f"NSGA-II {k.replace('_', ' ')}" for k in extra]
     return rows, header
 

@@ -101,10 +101,12 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
     list of dict
         One row per source, in source order: ``name``, ``group``, ``unit`` (``"m"`` or
         ``"rad"``), ``dim``, ``offset`` (m or rad), ``minus``, ``plus`` (dimensionless, per unit
-        t), ``fixed`` (bool), ``locked`` (m or rad, or None) and, where known, ``nominal`` (m or
-        rad).
+        t), ``fixed`` (bool), ``locked`` (m or rad, or None), where known ``nominal`` (m or
+        rad), and ``no_effect = True`` for a source that cannot move the constrained errors
+        (:func:`sources_without_effect`).
     """
     nominal = source_nominals(problem.robot)
+    no_effect = sources_without_effect(problem)
     out = []
     for j, (n, s) in enumerate(zip(problem.names, problem.robot.sources)):
         tol = problem.tolerances[n]
@@ -113,7 +115,35 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
                "locked": None if tol.locked is None else float(tol.locked)}
         if n in nominal:
             row["nominal"] = nominal[n]
+        if no_effect[j]:
+            row["no_effect"] = True
         out.append(row)
+    return out
+
+
+#: a source moves the constrained errors by less than this fraction of the requirement at its upper bound: no effect
+NO_EFFECT_FRACTION = 1e-9
+
+
+def sources_without_effect(problem: ToleranceProblem) -> np.ndarray:
+    """Which sources cannot move any constrained error component (issue 33: they were shown at their
+    upper bound with no mark).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The study's problem (its per-source spectral norms ``sensitivities`` over the poses).
+
+    Returns
+    -------
+    (n_sources,) ndarray of bool
+        True where ``max over poses ||B_j|| x upper_j < NO_EFFECT_FRACTION x limit`` for every
+        constrained component.
+    """
+    out = np.ones(problem.n_sources, bool)
+    for comp, lim in problem.components:
+        s = np.asarray(problem.sensitivities[comp], float).max(axis=0)          # (n_poses, n_sources) -> per source
+        out &= s * np.asarray(problem.upper, float) < NO_EFFECT_FRACTION * lim
     return out
 
 
