@@ -115,3 +115,9 @@ def test_reports_name_the_axis():
                              "display_units": list(ws.display_units), "labels": problem.robot.coordinate_labels}}
     assert pose_cells(summary, problem.poses[3]).endswith("axis = z")       # configuration 1, slot 1
     assert "q1 = 0" in pose_cells(summary, problem.poses[3])
+
+
+def test_pose_cells_show_round_off_as_zero():
+    from evotol.reporting.user_study import pose_cells
+    summary = {"workspace": {"names": ["q4", "x"], "display_scale": [180 / np.pi, 1e3], "display_units": ["deg", "mm"]}}
+    assert pose_cells(summary, [-1.946e-16, 2e-7]) == "q4 = 0 deg, x = 0.0002000 mm"     # 0.2 um is kept

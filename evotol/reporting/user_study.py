@@ -52,8 +52,9 @@ def pose_cells(summary: dict, pose) -> str:
     """
     ws = summary["workspace"]
     labels = ws.get("labels") or {}         # a coordinate whose values are names (a per-axis requirement's axis)
+    # round-off below 1e-9 of a display unit (mm, deg) shows as 0, not -1.115e-14 (issue 33)
     return ", ".join(f"{n} = {labels[n][int(round(v))]}" if n in labels else
-                     f"{n} = {number(v * k)}" + (f" {u}" if u not in ("1", "") else "")
+                     f"{n} = {number(0.0 if abs(v * k) < 1e-9 else v * k)}" + (f" {u}" if u not in ("1", "") else "")
                      for n, v, k, u in zip(ws["names"], pose, ws["display_scale"], ws["display_units"]))
 
 
