@@ -153,3 +153,18 @@ def test_unreachable_poses_are_reported_together_or_dropped(tmp_path):
     for i, p in enumerate(problem.poses):
         T = textbook_fk([q[f"q{k}"][i] for k in range(1, 7)])
         assert np.allclose(T[:3, 3], p, atol=1e-9)
+
+
+def test_compiled_task_jacobian_equals_the_general_one():
+    from robots.mechanism.posture import _task_jacobian
+    from robots.mechanism.serial import SERIAL_COMPILED, SerialChain
+    if not SERIAL_COMPILED:
+        pytest.skip("numba not available: the general path is the only one")
+    for f in (FIXTURE, Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"):
+        m = MechanismModel(f)
+        kin = m.kin
+        chain = SerialChain.build(kin, list(kin.variables))
+        Q = np.random.default_rng(0).uniform(-3, 3, (20, len(kin.variables)))
+        q = {v: Q[:, i] for i, v in enumerate(kin.variables)}
+        P = m.workspace.latin_hypercube(20)
+        assert np.abs(_task_jacobian(kin, q, P, chain) - _task_jacobian(kin, q, P)).max() < 1e-12

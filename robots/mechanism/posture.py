@@ -25,6 +25,7 @@ import warnings
 import numpy as np
 
 from evotol.errors import KinematicsError
+from robots.mechanism.serial import SERIAL_COMPILED, SerialChain
 
 #: relative smallest singular value of the scaled task Jacobian below which a pose counts as near a singularity
 NEAR_SINGULAR = 1e-3
@@ -54,17 +55,26 @@ def wrapped(kin, q: dict) -> dict:
     return out
 
 
-def _task_jacobian(kin, q: dict, poses: np.ndarray) -> np.ndarray | None:
-    """Scaled square task Jacobian (n, m, m), or None when the system is not square (redundant)."""
-    Rt = kin._target_orientation(poses)
-    _, J, is_len = kin._ig_system(q, poses, Rt)
+def _task_jacobian(kin, q: dict, poses: np.ndarray, chain=None) -> np.ndarray | None:
+    """Scaled square task Jacobian (n, m, m), or None when the system is not square (redundant).
+
+    ``chain``: the compiled serial chain (:class:`robots.mechanism.serial.SerialChain`) built with
+    the joint variables as columns: its end-effector Jacobian gives the same rows, faster."""
+    if chain is None or kin.mech.loops:
+        Rt = kin._target_orientation(poses)
+        _, J, is_len = kin._ig_system(q, poses, Rt)
+    else:
+        Je = chain.sensitivity(chain.joints_array(q))                  # (n, 6, n_variables)
+        rows = [ax for _, ax in kin.coord_axes] + ([3, 4, 5] if kin.orientation else [])
+        J = Je[:, rows]
+        is_len = np.array([r < 3 for r in rows])
     if J.shape[1] != J.shape[2]:
         return None
     w = np.where(is_len, 1.0 / kin.length_scale, 1.0)
     return J * w[None, :, None]
 
 
-def check_branch(kin, poses: np.ndarray, q: dict, names) -> np.ndarray:
+def check_branch(kin, poses: np.ndarray, q: dict, names, chain=None) -> np.ndarray:
     """Refuse poses reached on another branch than the assembly's; report those near a singularity.
 
     The joint-space path from the assembly joints ``q0`` to each solution ``q`` (revolute
@@ -83,6 +93,8 @@ def check_branch(kin, poses: np.ndarray, q: dict, names) -> np.ndarray:
         The joint values the inverse geometry found there (rad or m).
     names : sequence of str
         The pose coordinates' names (for the message).
+    chain : robots.mechanism.serial.SerialChain or None, optional
+        The compiled chain with the joint variables as columns (faster Jacobians), or None.
 
     Returns
     -------
@@ -99,22 +111,22 @@ def check_branch(kin, poses: np.ndarray, q: dict, names) -> np.ndarray:
     if kin.mech.loops or len(poses) == 0:
         return np.zeros(0, int)
     x0, q0 = kin.assembly()
-    J0 = _task_jacobian(kin, {k: np.array([v]) for k, v in q0.items()}, x0[None])
+    J0 = _task_jacobian(kin, {k: np.array([v]) for k, v in q0.items()}, x0[None], chain)
     if J0 is None:
         return np.zeros(0, int)
     sign0 = np.sign(np.linalg.det(J0[0]))
     n = len(poses)
     diff = {k: np.asarray(q[k], float) - q0[k] for k in kin.variables}
     diff = {k: (wrapped(kin, {k: d})[k]) for k, d in diff.items()}
-    crossed = np.zeros(n, bool)
-    rel_end = None
-    for s in np.linspace(0.0, 1.0, PATH_SAMPLES + 1)[1:]:
-        qs = {k: q0[k] + s * diff[k] for k in kin.variables}
-        J = _task_jacobian(kin, qs, poses)
-        sv = np.linalg.svd(J, compute_uv=False)
-        rel = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
-        crossed |= (np.sign(np.linalg.det(J)) != sign0) & (rel >= NEAR_SINGULAR)
-        rel_end = rel
+    # every sample of every path in one batch (n x PATH_SAMPLES configurations): one pass over the frames
+    S = np.linspace(0.0, 1.0, PATH_SAMPLES + 1)[1:]
+    qs = {k: (q0[k] + S[:, None] * diff[k][None, :]).ravel() for k in kin.variables}
+    J = _task_jacobian(kin, qs, np.tile(poses, (len(S), 1)), chain).reshape(len(S), n, *J0.shape[1:])
+    det = np.linalg.det(J)                                          # (samples, n)
+    sv = np.linalg.svd(J[-1], compute_uv=False)                     # at the solution
+    rel_end = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
+    scale = np.abs(np.linalg.det(J0[0])) if np.linalg.det(J0[0]) != 0 else 1.0
+    crossed = ((np.sign(det) != sign0) & (np.abs(det) > 1e-12 * scale)).any(axis=0)
     near = np.flatnonzero(rel_end < NEAR_SINGULAR)
     other = np.flatnonzero(crossed & ~(rel_end < NEAR_SINGULAR))
     if other.size:
@@ -161,7 +173,9 @@ def check_posture(model, poses: np.ndarray, q: dict) -> None:
     key = poses.tobytes()
     if key in seen:
         return
-    near = check_branch(model.kin, poses, q, model.workspace.names)
+    if "_posture_chain" not in model.__dict__:     # the compiled chain over the joint variables (None: general path)
+        model._posture_chain = SerialChain.build(model.kin, list(model.kin.variables)) if SERIAL_COMPILED else None
+    near = check_branch(model.kin, poses, q, model.workspace.names, model._posture_chain)
     store = model.__dict__.setdefault("_near_singular", {})
     for i in near:
         pose = tuple(float(v) for v in poses[i])
