@@ -114,3 +114,22 @@ n_samples = 300
     html = (tmp_path / "puma_given.html").read_text()
     assert "Joints used at every pose" in html and "δx range" in html
     assert ("<b>meets</b>" in html) == data["analysis"]["meets"]
+
+
+def test_per_axis_tool_frame_analysis_and_verdict():
+    from evotol.core.axis_limits import AxisErrorModel, AxisLimits
+    problem, jm, Q = given_problem()
+    model = AxisErrorModel(jm, AxisLimits(position={"x": 3e-4, "z": 5e-4}, frame="tool"))
+    P = model.expand(Q)
+    tol = {n: Tolerance.fixed(GIVEN[n]) for n in SOURCES}
+    per_axis = ToleranceProblem(model, tol, Requirement(position=3e-4), P, all_given=True)
+    a = analyse(per_axis, n_samples=0)
+    R = jm.tool_pose(Q)[:, :3, :3]
+    Jt = np.concatenate([np.swapaxes(R, 1, 2) @ jm.sensitivity(Q)[:, :3], np.zeros((2, 3, len(SOURCES)))], axis=1)
+    t = np.array([GIVEN[n] for n in SOURCES])
+    lo, hi, _ = corners(Jt, np.stack([-t, t], axis=1))
+    for i, ax in enumerate("xyz"):
+        assert np.allclose(a.axes["tool"]["position"][ax]["high"], hi[:, i], rtol=1e-12)
+        assert np.allclose(a.axes["tool"]["position"][ax]["low"], lo[:, i], rtol=1e-12)
+    expect = max(hi[:, 0].max() / 3e-4, hi[:, 2].max() / 5e-4)
+    assert a.violation + 1 == pytest.approx(expect, rel=1e-9) and a.meets == (expect <= 1)

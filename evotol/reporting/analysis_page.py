@@ -32,7 +32,9 @@ def render_analysis(summary: dict) -> Report:
     a = summary["analysis"]
     L = lambda v: u.format(v, "m")          # noqa: E731
     A = lambda v: u.format(v, "rad")        # noqa: E731
-    req = ", ".join(f"{c} ≤ {(L if c == 'position' else A)(v)}" for c, v in summary["requirement"].items())
+    al = summary.get("axis_limits") or {}
+    req = (", ".join([f"|δ{k}| ≤ {L(v)}" for k, v in al["position"].items()] + [f"|δθ{k}| ≤ {A(v)}" for k, v in al["orientation"].items()])
+           + f" ({al['frame']} frame)") if al else ", ".join(f"{c} ≤ {(L if c == 'position' else A)(v)}" for c, v in summary["requirement"].items())
     rep = Report(f"evotol analysis: {summary['name']}",
                  f"{summary['robot']}, {len(summary['poses'])} poses, requirement ({summary['measure']}) {req}; "
                  f"lengths in {u.length}, angles in {u.angle} (the JSON holds SI values)")

@@ -58,16 +58,42 @@ def analysis_summary(name: str, problem, analysis, *, seed: int, units: DisplayU
     ws = robot.workspace
     d = analysis.to_dict()
     joints = joint_table(robot, analysis.poses)
+    lim = getattr(problem.robot, "limits", None) if hasattr(problem.robot, "slots") else None
+    axis_limits = {"frame": lim.frame, "position": dict(lim.position), "orientation": dict(lim.orientation)} if lim else {}
     sources = source_table(problem)
     for row, t in zip(sources, analysis.t):
         row["tolerance"] = float(t)
     return {"name": name, "kind": "analysis", "problem": problem.describe(), "seed": seed, "robot": problem.robot.name,
-            "measure": problem.requirement.measure, "requirement": {c: lim for c, lim in problem.components},
+            "measure": problem.requirement.measure, "requirement": {c: v for c, v in problem.components},
+            "axis_limits": axis_limits,
             "display_units": units.to_dict(),
             "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
                           "display_scale": list(ws.display_scale)},
             "poses": np.asarray(analysis.poses).tolist(), "sources": sources, "analysis": d, "joints": joints,
             "notes": list(getattr(problem.robot, "notes", list)()), "seconds": seconds, "units": study_units_block(problem)}
+
+
+def requirement_text(summary: dict, u: DisplayUnits) -> str:
+    """The requirement in words: per-axis limits with their frame, or the norm bounds.
+
+    Parameters
+    ----------
+    summary : dict
+        :func:`analysis_summary`.
+    u : DisplayUnits
+        Display units.
+
+    Returns
+    -------
+    str
+        E.g. ``"|dx| <= 300.0 µm, |dz| <= 500.0 µm (tool frame)"`` or ``"position <= 500.0 µm"``.
+    """
+    al = summary.get("axis_limits") or {}
+    if al:
+        parts = [f"|d{a}| <= {u.format(v, 'm')}" for a, v in al["position"].items()]
+        parts += [f"|dθ{a}| <= {u.format(v, 'rad')}" for a, v in al["orientation"].items()]
+        return ", ".join(parts) + f" ({al['frame']} frame)"
+    return ", ".join(f"{c} <= {u.format(v, 'm' if c == 'position' else 'rad')}" for c, v in summary["requirement"].items())
 
 
 def print_analysis(summary: dict) -> None:
@@ -81,7 +107,7 @@ def print_analysis(summary: dict) -> None:
     u = DisplayUnits(**summary["display_units"])
     a = summary["analysis"]
     L = lambda v: u.format(v, "m")          # noqa: E731
-    req = ", ".join(f"{c} <= {u.format(v, 'm' if c == 'position' else 'rad')}" for c, v in summary["requirement"].items())
+    req = requirement_text(summary, u)
     verdict = "meets" if a["meets"] else "MISSES"
     print(f"[evotol] analysis of the given tolerances (every source given: nothing to allocate)")
     print(f"  requirement ({summary['measure']}): {req}: the design {verdict} it (largest error / limit = "
@@ -94,6 +120,10 @@ def print_analysis(summary: dict) -> None:
         rng = "  ".join(f"{'[' + L(ax[k]['low'][i]).split()[0] + ', ' + L(ax[k]['high'][i]).split()[0] + ']':>21s}" for k in "xyz")
         prob = f"  {a['probability'][i]:8.5f}" if a.get("probability") is not None and len(a["probability"]) == len(wc["value"]) else ""
         print(f"  {i:4d}  {L(wc['value'][i]):>11s}  {rng}  {L(a['rss']['position'][i]):>10s}{prob}")
+    if "tool" in a["axes"]:
+        tx = a["axes"]["tool"]["position"]
+        for i in range(len(wc["value"])):
+            print(f"  {i:4d}  tool frame: " + "  ".join(f"d{k} [{L(tx[k]['low'][i]).split()[0]}, {L(tx[k]['high'][i])}]" for k in "xyz"))
     p = wc["worst_pose"]
     pose = summary["poses"][p]
     shown = ", ".join(f"{n} = {v * k:.4g}" for n, v, k in zip(names, pose, summary["workspace"]["display_scale"]))
