@@ -281,6 +281,10 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
         summary["pareto_front"] = front.table.to_dict(orient="list")
         summary["nsga2"] = front_summary(problem, front, results)
     continuous = tuple(ws.units) != ("1",) and any(h > lo for lo, h in zip(ws.low, ws.high))
+    if maps and results and continuous and getattr(problem.robot, "coordinate_labels", None):
+        maps = False        # a per-axis requirement: the axis is a label, not a coordinate to map (issue 33)
+        summary["figures"]["error_maps_note"] = ("no error map: with a per-axis requirement each pose is a configuration "
+                                                 "and an axis; the per-pose values are in the tables")
     if maps and results and not continuous:
         summary["figures"]["error_maps_note"] = ("no error map: the workspace is a list of responses "
                                                  "(an assembly), not a continuous range")
