@@ -16,8 +16,7 @@ import numpy as np
 from evotol.errors import KinematicsError, ValidationError
 from robots.clearance.kinematics import rotation_vector
 from robots.mechanism import working_mode
-from robots.mechanism.limits import check_joint_limits
-from robots.mechanism.posture import unreachable_message
+from robots.mechanism.limits import check_joint_limits, unreachable_message
 from robots.mechanism.rotations import AXIS_ROT
 
 

@@ -274,32 +274,3 @@ def joint_table(robot, poses) -> dict:
     return {"variables": list(q), "units": [kin.joint_unit.get(v, "rad") for v in q],
             "values": {k: v.tolist() for k, v in wrapped(kin, q).items()}}
 
-
-def unreachable_message(mech, poses: np.ndarray, bad: np.ndarray, residual: np.ndarray) -> str:
-    """One line naming every pose the inverse geometry could not reach (how many, the first few).
-
-    Parameters
-    ----------
-    mech : robots.mechanism.mechanism.Mechanism
-        The description (name, coordinates, loops).
-    poses : (n, n_coordinates) ndarray
-        The poses (SI).
-    bad : (n,) ndarray of bool
-        The poses not reached.
-    residual : (n,) ndarray
-        The scaled residual at each pose.
-
-    Returns
-    -------
-    str
-        ``"<name>: k of n poses out of reach or singular ... : #i (x = ..), ..."``; for a mechanism
-        with loops "the loops cannot close", for a serial arm "out of reach"; with the option
-        that drops them (``[poses] drop_unreachable = true``).
-    """
-    idx = np.flatnonzero(bad)
-    names = [c.name for c in mech.coordinates]
-    shown = "; ".join(f"#{int(i)} ({', '.join(f'{n} = {v:.6g}' for n, v in zip(names, poses[i]))})" for i in idx[:5])
-    what = "the loops cannot close (out of reach or singular)" if mech.loops else "out of reach or singular"
-    return (f"{mech.name}: {len(idx)} of {len(poses)} poses: {what}, SI, largest scaled residual "
-            f"{float(np.max(residual[idx])):.2g}: {shown}{' ...' if len(idx) > 5 else ''}. Shrink the task box, or drop "
-            "them with [poses] drop_unreachable = true")

@@ -366,8 +366,7 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
         From the assembly (an ``[assembly] joints`` key that is not a joint variable).
     """
     from evotol.errors import KinematicsError
-    from robots.mechanism.limits import check_joint_limits
-    from robots.mechanism.posture import unreachable_message
+    from robots.mechanism.limits import check_joint_limits, unreachable_message
 
     poses = np.atleast_2d(np.asarray(poses, float))
     key = poses.tobytes()
