@@ -15,6 +15,7 @@ import numpy as np
 from evotol.units.display import DisplayUnits, error_unit
 from evotol.summaries.explorer_data import explorer_data
 from evotol.summaries.pose_joints import pose_joints
+from evotol.summaries.yield_quantile import largest_quantile
 from evotol.core.problem import ToleranceProblem
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
@@ -184,6 +185,9 @@ def result_details(problem: ToleranceProblem, r) -> dict:
     if r.errors.probability is not None:
         d["yield_at_worst_pose"] = float(np.min(r.errors.probability[0]))
         d["required_yield"] = problem.requirement.required_yield
+        # the error at the required yield, a quantile of the stated model (the measure's value is E·k_req/k; issue 33)
+        d["error_at_required_yield"] = largest_quantile(problem, r.t, problem.requirement.required_yield,
+                                                        seed=problem.requirement.seed)
     return d
 
 
