@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from evotol.units.display import number
-from evotol.reporting.user_study import render_user_study, top_table_rows
+from evotol.reporting.user_study import _error_text, render_user_study, top_table_rows
 from evotol.studyfile import load_problem, run_study_file
 
 STUDIES = Path(__file__).resolve().parents[1] / "reports" / "studies"
@@ -124,8 +124,10 @@ def test_yield_study_has_a_yield_column(tmp_path_factory):
                          "equal = {}\n", "n_samples = 200\nmethod = \"mc\"")
     rows, header = top_table_rows(summary)
     col = header.index("yield at the worst pose (first-order; required)")
-    assert header[2].startswith("max position error, yield-equivalent")   # not read as a worst case
+    # issue 33: the column is the error at the required yield (a quantile of the stated model), not E·k_req/k
+    assert header[2].startswith("max position error at the required yield")
     r = summary["results"]["equal"]
+    assert rows[0][2] == _error_text(summary, "position", r["error_at_required_yield"]["position"]["value"])
     assert rows[0][col].startswith(f"{r['yield_at_worst_pose']:.6f} (required 0.9973); Monte Carlo:")
 
 

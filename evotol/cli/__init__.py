@@ -226,6 +226,9 @@ def _print_results(summary: dict) -> None:
     from evotol.reporting.callout_drawing import terminal_lines
     from evotol.reporting.user_study import terminal_rows
 
+    if summary.get("kind") == "analysis":      # every tolerance given: their analysis (issue 33)
+        from evotol.studyfile.given_tolerances import print_analysis
+        return print_analysis(summary)
     if "stack" in summary:
         rows, header = stack_report.terminal_rows(summary)
         print(f"[evotol] gap '{summary['stack']['gap']}' ({summary['display']['unit']})")

@@ -27,6 +27,7 @@ from evotol.units.display import DisplayUnits, number
 from evotol.core.pareto import ideal_point_knee
 from evotol.reporting.callout_drawing import callout_sections
 from evotol.reporting.calibration import calibration_section
+from evotol.reporting.joints_section import joints_section
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
 from evotol.reporting.drawing import drawing_check_text, zone_text
@@ -63,7 +64,10 @@ def pose_cells(summary: dict, pose) -> str:
     ws = summary["workspace"]
     if summary.get("assembly") and list(ws["names"]) == ["response"]:      # an assembly: name the response
         return summary["assembly"]["responses"][int(round(pose[0]))]
-    return ", ".join(f"{n} = {number(v * k)}" + (f" {u}" if u not in ("1", "") else "")
+    labels = ws.get("labels") or {}         # a coordinate whose values are names (a per-axis requirement's axis)
+    # round-off below 1e-9 of a display unit (mm, deg) shows as 0, not -1.115e-14 (issue 33)
+    return ", ".join(f"{n} = {labels[n][int(round(v))]}" if n in labels else
+                     f"{n} = {number(0.0 if abs(v * k) < 1e-9 else v * k)}" + (f" {u}" if u not in ("1", "") else "")
                      for n, v, k, u in zip(ws["names"], pose, ws["display_scale"], ws["display_units"]))
 
 
@@ -117,7 +121,8 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
     """
     comps = list(summary["requirement"])
     yield_measure = summary["measure"] == "yield"
-    kind = ", yield-equivalent" if yield_measure else ""   # the error whose bound the yield requirement is
+    # the yield column is the error at the required yield (a quantile of the stated model, issue 33)
+    kind = " at the required yield" if yield_measure else ""
     what = (lambda c: "response deviation") if summary.get("assembly") else (lambda c: f"{c} error")   # noqa: E731
     header = ["method", "cost"] + [f"max {what(c)}{kind} (requirement {_error_text(summary, c, summary['requirement'][c])})"
                                    for c in comps]
@@ -127,7 +132,7 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
     rows = []
     for m, r in summary["results"].items():
         comp0 = comps[0]
-        row = [m, r["cost"]] + [_error_text(summary, c, r.get(f"max_{c}_error")) for c in comps]
+        row = [m, r["cost"]] + [_error_text(summary, c, _shown_error(r, c)) for c in comps]
         if yield_measure:
             mc = summary["monte_carlo"].get(m) or {}
             row.append((f"{r['yield_at_worst_pose']:.6f} (required {r['required_yield']:g})" if "yield_at_worst_pose" in r
@@ -152,6 +157,13 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
                 "no certificate" + (f"; {100 * over:.3g} % above the certified optimum" if over is not None else ""), "not run"]
         rows.append(row)
     return rows, header
+
+
+def _shown_error(r: dict, comp: str):
+    """The error a method's row shows: the quantile at the required yield for a yield design, else the
+    measure's largest error (SI)."""
+    q = r.get("error_at_required_yield", {}).get(comp)
+    return q["value"] if q else r.get(f"max_{comp}_error")
 
 
 def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
@@ -188,7 +200,7 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     rows = []
     for m, r in (summary.get("results") or {}).items():
         mc = (summary.get("monte_carlo") or {}).get(m)
-        rows.append([m, f"{r['cost']:.6g}"] + [number(u.convert(r[f"max_{c}_error"], summary["error_units"][c]))
+        rows.append([m, f"{r['cost']:.6g}"] + [number(u.convert(_shown_error(r, c), summary["error_units"][c]))
                                                for c in comps]
                     + [f"{mc['max_exceed_rate']:.2%}" if mc else "", r.get("status", "")])
     for key, label in (("cheapest_feasible", "nsga2 cheapest feasible"), ("knee", "nsga2 knee")):
@@ -250,7 +262,8 @@ def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
     columns = [summary["results"][m]["tolerances"] for m in methods] + list(extra.values())
     rows = []
     for s in summary["sources"]:
-        rows.append([s["name"], s["group"], u.unit_for(s["unit"])]
+        mark = " (no effect on the requirement)" if s.get("no_effect") else ""     # issue 33
+        rows.append([s["name"], s["group"] + mark, u.unit_for(s["unit"])]
                     + [zone_text(tolerance_zone(s, t[s["name"]]), u, s["unit"]) for t in columns])
     header = ["source", "group", "unit"] + methods + [f"NSGA-II {k.replace('_', ' ')}" for k in extra]
     return rows, header
@@ -478,5 +491,6 @@ def render_user_study(summary: dict) -> Report:
         rep.heading("Monte Carlo and the linearisation check")
         rep.table(_linearisation_rows(summary), ["method", "samples", "exceed rate (first-order)",
                                                  "exceed rate (nonlinear)", "linearisation error", "verdict"])
+    joints_section(rep, summary)           # the posture used at every pose (issue 33)
     explorer_section(rep, summary)
     return rep

@@ -6,18 +6,19 @@ from __future__ import annotations
 import dataclasses
 
 from evotol._runtime.keyword_checks import check_table_keys
+from evotol.core.axis_limits import AXIS_KEYS
 from evotol.core.requirement import Requirement
 from evotol.errors import ValidationError
 
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
             "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report", "calibration")
 REPORT_KEYS = ("units", "precision")
-POSE_KEYS = ("grid", "latin_hypercube", "list", "refine")
+POSE_KEYS = ("grid", "latin_hypercube", "list", "refine", "joints", "drop_unreachable")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
 SOURCE_KEYS = ("lower", "upper", "locked", "fixed", "cost", "distribution", "sigma_k", "mean_shift", "offset", "minus",
                "plus", "cost_width", "contains_nominal")
-REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement))
+REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement)) + AXIS_KEYS
 #: keys of [bounds.GROUP] / [bounds.SOURCE]
 GROUP_BOUND_KEYS = ("lower", "upper")
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 
 from evotol.calibration.table import calibrate_study_problem
 from evotol.core import plausibility
+from evotol.core.axis_limits import axis_requirement
 from evotol.core.problem import ToleranceProblem
 from evotol.core.quality_loss import with_quality_loss
 from evotol.errors import ValidationError
 from evotol.studyfile.callouts import callout_warnings
+from evotol.studyfile.joint_poses import drop_unreachable, joint_poses
 from evotol.studyfile.keys import check_study_keys
 from evotol.studyfile.poses import read_poses
 from evotol.studyfile.requirement import read_requirement
@@ -49,15 +51,23 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         raise ValidationError("processes", sorted(spec["processes"]), "no [processes.*] here: a process-selection study "
                               "is read by evotol.studyfile.processes.load_process_problem (evotol run does so)")
     robot, spec = read_robot(spec, base_dir)
-    poses = read_poses(spec, robot)
+    ps = spec.get("poses", {})
+    if "joints" in ps:      # joint configurations of a serial arm, held exactly (issue 33)
+        robot, poses = joint_poses(robot, ps)
+    else:
+        poses = read_poses(spec, robot)
+    poses = drop_unreachable(robot, poses, ps)      # unreachable poses together, or dropped (issue 33)
     # [clearances]: joint-clearance classes allocated with (or, geometric = false, instead of) the
     # robot's sources (docs/clearance_allocation.md); the problem holds them beside the robot
     classes, sources = read_clearances(spec, robot)
     # [sources."J.position"] applies to both members of that callout's zone (docs/callouts.md)
     spec = {**spec, "sources": expand_callout_overrides(spec.get("sources", {}), robot)}
     tol = read_tolerances(spec, sources, robot.name if classes is None else f"{robot.name} or its clearance classes")
-    problem = ToleranceProblem(robot, tol, read_requirement(spec), poses, shared=spec.get("shared"),
-                               shared_cost=spec.get("shared_cost", "part"), clearances=classes)
+    # position = { x = "0.5*mm", ... }: per-axis limits (evotol/core/axis_limits.py, issue 33)
+    robot, poses, req_table = axis_requirement(robot, poses, spec.get("requirement", {}), clearances=classes)
+    problem = ToleranceProblem(robot, tol, read_requirement({**spec, "requirement": req_table}), poses,
+                               shared=spec.get("shared"), shared_cost=spec.get("shared_cost", "part"),
+                               clearances=classes, all_given=True)     # every tolerance given: analysed (issue 33)
     plausibility.warn(callout_warnings(problem))        # an orientation callout that binds (issue 35)
     if "calibration" in spec:   # a robot that will be calibrated (docs/calibration.md, evotol/calibration)
         problem = calibrate_study_problem(problem, spec["calibration"], spec.get("seed", 0))

@@ -26,6 +26,7 @@ from evotol.studies import StudyResult, write_outputs
 from evotol.studyfile.methods import METHODS, check_methods, method_options, study_methods
 from evotol.studyfile.callouts import callout_summary, callout_warnings
 from evotol.studyfile.poses import refine_option
+from evotol.studyfile.given_tolerances import run_given_tolerances
 from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import run_stack_study
 from evotol.summaries.drawing import drawing_precision
@@ -138,6 +139,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
         return run_stack_study(spec, path, out, seed)
     problem = load_problem(spec, base_dir=path.parent)
     units = report_units(spec, problem)
+    if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
+        return run_given_tolerances(spec, path, out, name, problem, units, seed, t0)
     precision = drawing_precision(spec.get("report", {}).get("precision"), units)   # [report] precision (issue 34)
     methods = study_methods(spec, problem)
     vspec = spec.get("verify", {"n_samples": 1000})

@@ -15,6 +15,8 @@ import numpy as np
 from evotol.units.display import DisplayUnits, error_unit
 from evotol.summaries.explorer_data import explorer_data
 from evotol.measures.statistical.distributions import as_distribution
+from evotol.summaries.pose_joints import pose_joints
+from evotol.summaries.yield_quantile import largest_quantile
 from evotol.core.problem import ToleranceProblem
 from evotol.summaries.drawing import KEYS as DRAWING_KEYS
 from evotol.summaries.drawing import rounded_design, tolerance_zone
@@ -103,10 +105,12 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         One row per source, in source order: ``name``, ``group``, ``unit`` (``"m"`` or
         ``"rad"``), ``dim``, ``offset`` (m or rad), ``minus``, ``plus`` (dimensionless, per unit
         t), ``fixed`` (bool), ``locked`` (m or rad, or None), ``distribution`` (``kind``,
-        ``sigma_k``, ``mean_shift``: what the Monte Carlo samples) and, where known, ``nominal``
-        (m or rad).
+        ``sigma_k``, ``mean_shift``: what the Monte Carlo samples), where known ``nominal`` (m or
+        rad), and ``no_effect = True`` for a source that cannot move the constrained errors
+        (:func:`sources_without_effect`).
     """
     nominal = source_nominals(problem.robot)
+    no_effect = sources_without_effect(problem)
     out = []
     for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
         tol = problem.tolerances[n]
@@ -117,7 +121,35 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         row["distribution"] = {"kind": dist.kind, "sigma_k": float(dist.sigma_k), "mean_shift": float(dist.mean_shift)}
         if n in nominal:
             row["nominal"] = nominal[n]
+        if no_effect[j]:
+            row["no_effect"] = True
         out.append(row)
+    return out
+
+
+#: a source moves the constrained errors by less than this fraction of the requirement at its upper bound: no effect
+NO_EFFECT_FRACTION = 1e-9
+
+
+def sources_without_effect(problem: ToleranceProblem) -> np.ndarray:
+    """Which sources cannot move any constrained error component (issue 33: they were shown at their
+    upper bound with no mark).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The study's problem (its per-source spectral norms ``sensitivities`` over the poses).
+
+    Returns
+    -------
+    (n_sources,) ndarray of bool
+        True where ``max over poses ||B_j|| x upper_j < NO_EFFECT_FRACTION x limit`` for every
+        constrained component.
+    """
+    out = np.ones(problem.n_sources, bool)
+    for comp, lim in problem.components:
+        s = np.asarray(problem.sensitivities[comp], float).max(axis=0)          # (n_poses, n_sources) -> per source
+        out &= s * np.asarray(problem.upper, float) < NO_EFFECT_FRACTION * lim
     return out
 
 
@@ -159,6 +191,9 @@ def result_details(problem: ToleranceProblem, r) -> dict:
     if r.errors.probability is not None:
         d["yield_at_worst_pose"] = float(np.min(r.errors.probability[0]))
         d["required_yield"] = problem.requirement.required_yield
+        # the error at the required yield, a quantile of the stated model (the measure's value is E·k_req/k; issue 33)
+        d["error_at_required_yield"] = largest_quantile(problem, r.t, problem.requirement.required_yield,
+                                                        seed=problem.requirement.seed)
     return d
 
 
@@ -247,7 +282,8 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
                "error_units": {c: error_unit(problem, c) for c, _ in problem.components},
                "display_units": units.to_dict(),
                "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
-                             "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high)},
+                             "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high),
+                             "labels": getattr(problem.robot, "coordinate_labels", {})},     # per-axis slots (issue 33)
                "robot": problem.error_model.name, "n_poses": problem.n_poses, "poses": problem.poses.tolist(),
                "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
@@ -259,6 +295,10 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
         summary["pareto_front"] = front.table.to_dict(orient="list")
         summary["nsga2"] = front_summary(problem, front, results)
     continuous = tuple(ws.units) != ("1",) and any(h > lo for lo, h in zip(ws.low, ws.high))
+    if maps and results and continuous and getattr(problem.robot, "coordinate_labels", None):
+        maps = False        # a per-axis requirement: the axis is a label, not a coordinate to map (issue 33)
+        summary["figures"]["error_maps_note"] = ("no error map: with a per-axis requirement each pose is a configuration "
+                                                 "and an axis; the per-pose values are in the tables")
     if maps and results and not continuous:
         summary["figures"]["error_maps_note"] = ("no error map: the workspace is a list of responses "
                                                  "(an assembly), not a continuous range")
@@ -281,5 +321,6 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
     summary["explorer"] = explorer_data(problem, starts, seed)
     # the drawing: every method's zones rounded to the drawing precision, the drawn design re-checked
     summary["drawing"] = {m: rounded_design(problem, r.t, units, precision) for m, r in results.items()}
+    summary["joints"] = pose_joints(problem)        # the posture used at every pose (issue 33)
     summary["units"] = study_units_block(problem)
     return summary

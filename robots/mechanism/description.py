@@ -29,10 +29,11 @@ from robots.mechanism.mechanism import Mechanism
 from robots.mechanism.parts import AXES, ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point, joint_units
 from robots.mechanism.parts import ANGLE_FIELDS, JOINT_TYPES, LENGTH_FIELDS, LOOP_COMPONENTS, UNIT_SCALE  # noqa: F401  (re-exported)
 from robots.mechanism.plausibility import check_written_values
+from robots.mechanism.standard_dh import STANDARD_TOP_KEYS, convention_of, standard_to_modified
 from robots.mechanism.urdf import resolve_urdf, urdf_frames
 
 TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "point", "loop", "end_effector", "assembly",
-            "tolerances", "clearance", "urdf", "tip", "checks", "limits", "callouts")
+            "tolerances", "clearance", "urdf", "tip", "checks", "limits", "callouts") + STANDARD_TOP_KEYS
 
 
 def _number(v, where: str) -> float:
@@ -46,6 +47,9 @@ def _number(v, where: str) -> float:
 
 def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     """Build a :class:`Mechanism` from a parsed TOML document (dict); errors name the field.
+
+    With ``convention = "standard"`` the rows are a textbook's standard-DH table, rewritten
+    exactly in the modified convention (:mod:`robots.mechanism.standard_dh`).
 
     With a ``urdf`` key the frames, lengths, angles, default sources and joint limits come from
     the URDF chain to ``tip`` (:func:`robots.mechanism.urdf.urdf_frames`); the table's own
@@ -80,6 +84,9 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     if path:
         check_kind(spec, "mechanism", path)     # a study file given as a description (issue 27)
     check_table_keys(spec, TOP_KEYS, "mechanism")
+    aliases = {}
+    if convention_of(spec) == "standard":       # a textbook's a, alpha, d, theta table (issue 33)
+        spec, aliases = standard_to_modified(spec)
     name = spec.get("name") or (Path(path).stem if path else "mechanism")
     lengths = {k: _number(v, f"lengths.{k}") for k, v in dict(spec.get("lengths", {})).items()}
     angles = {k: _number(v, f"angles.{k}") for k, v in dict(spec.get("angles", {})).items()}
@@ -151,7 +158,8 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
                      loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
                      sources=tuple(tol.get("sources", sources_default)), clearance=clearance, description=spec.get("description", ""),
-                     path=str(path), points=tuple(points), limits={**limits, **_limits(spec.get("limits", {}))}, urdf=urdf)
+                     path=str(path), points=tuple(points), limits={**limits, **_limits(spec.get("limits", {}))}, urdf=urdf,
+                     aliases=aliases)
     if "callouts" in spec:          # [[callouts]] on joint seats (docs/callouts.md, issue 35)
         mech = dataclasses.replace(mech, callouts=tuple(callouts_from_tables(spec["callouts"], mech, "callouts")))
     return mech

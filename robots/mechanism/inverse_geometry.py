@@ -16,7 +16,7 @@ import numpy as np
 from evotol.errors import KinematicsError, ValidationError
 from robots.clearance.kinematics import rotation_vector
 from robots.mechanism import working_mode
-from robots.mechanism.limits import check_joint_limits
+from robots.mechanism.limits import check_joint_limits, unreachable_message
 from robots.mechanism.rotations import AXIS_ROT
 
 
@@ -183,9 +183,7 @@ class InverseGeometry:
                                   1 if s < 1 else 40, tol=1e-6 if s < 1 else 1e-12, final_check=s >= 1, posture=q0)
         bad = ~(res < 1e-9)
         if bad.any():
-            raise KinematicsError(f"{self.mech.name}: the loops cannot close at pose {poses[bad][0].tolist()} "
-                                  f"({', '.join(c.name for c in self.mech.coordinates)}, SI): out of reach or singular "
-                                  f"(scaled residual {res[bad][0]:.2g})", poses=poses[bad])
+            raise KinematicsError(unreachable_message(self.mech, poses, bad, res), poses=poses[bad])
         check_joint_limits(self.mech.name, self.mech.limits, q, poses, [c.name for c in self.mech.coordinates])
         if len(self._cache) > 8:
             self._cache.clear()

@@ -71,6 +71,10 @@ class Mechanism:
     callouts : tuple of robots.mechanism.callouts.Callout, optional
         Drawing callouts on joint seats (``[[callouts]]``, ``docs/callouts.md``); the error model
         with them is :class:`robots.mechanism.callout_model.CalloutModel`.
+    aliases : Mapping[str, str], optional
+        Source name -> design parameter it tolerances, for names a parameter cannot have (a
+        standard-DH description's ``base.d`` -> ``base_d``, :mod:`robots.mechanism.standard_dh`);
+        the parameter is then listed under its alias only.
 
     Raises
     ------
@@ -102,6 +106,7 @@ class Mechanism:
     limits: Mapping[str, tuple[float, float]] = field(default_factory=dict)   # joint variable -> (lower, upper), SI
     urdf: tuple[str, ...] = ()        # (resolved URDF path, tip frame) of a description read from a URDF
     callouts: tuple = ()              # drawing callouts on joint seats (robots.mechanism.callouts, issue 35)
+    aliases: Mapping[str, str] = field(default_factory=dict)    # source name -> parameter (standard DH: base.d)
 
     def __post_init__(self):
         names = [f.name for f in self.frames]
@@ -181,7 +186,9 @@ class Mechanism:
             ``lengths``, ``angles``, ``actuated``, then :meth:`entry_names` (with the placement
             errors), in that order.
         """
-        return list(self.lengths) + list(self.angles) + list(actuated) + self.entry_names()
+        hidden = set(self.aliases.values())
+        params = [p for p in (*self.lengths, *self.angles) if p not in hidden]
+        return params + list(self.aliases) + list(actuated) + self.entry_names()
 
     def select_sources(self, patterns: Sequence[str] | None = None, actuated: Sequence[str] = ()) -> list[str]:
         """Source names matching ``patterns`` (fnmatch: ``"*.d"``, ``"A*.theta"``, ``"L?"``), in

@@ -29,6 +29,7 @@ from robots.mechanism.kinematics import IN_PLANE, Kinematics
 from robots.mechanism.mechanism import Mechanism
 from robots.mechanism.parts import UNIT_SCALE
 from robots.mechanism.placement import PLACEMENT_FIELDS
+from robots.mechanism.posture import check_posture, posture_notes
 from robots.mechanism.serial import SERIAL_COMPILED, SerialChain, serial_inverse_geometry
 from robots.mechanism.shipped import resolve_description
 from robots.mechanism.shipped import SHIPPED  # noqa: F401  (re-exported: robots.mechanism.model.SHIPPED)
@@ -131,13 +132,17 @@ class MechanismModel(RobotErrorModel):
             The redundancy text of :attr:`redundancy` for a redundant mechanism, else empty.
         """
         r = self.redundancy
-        return [r["text"]] if r else []
+        return ([r["text"]] if r else []) + posture_notes(self)
 
     def _inverse_geometry(self, poses) -> dict:
-        """:meth:`Kinematics.inverse_geometry`, compiled for a serial chain (same steps, per pose)."""
+        """:meth:`Kinematics.inverse_geometry`, compiled for a serial chain (same steps, per pose);
+        a serial arm's posture is then held (:func:`robots.mechanism.posture.check_posture`)."""
         if self._serial is None:
-            return self.kin.inverse_geometry(poses)
-        return serial_inverse_geometry(self.kin, self._serial, poses)
+            q = self.kin.inverse_geometry(poses)
+        else:
+            q = serial_inverse_geometry(self.kin, self._serial, poses)
+        check_posture(self, poses, q)
+        return q
 
     def _param_names(self):
         return [c for c in self.columns if isinstance(c, str)]  # parameters and actuated variables

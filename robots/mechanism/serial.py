@@ -361,7 +361,7 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
         From the assembly (an ``[assembly] joints`` key that is not a joint variable).
     """
     from evotol.errors import KinematicsError
-    from robots.mechanism.limits import check_joint_limits
+    from robots.mechanism.limits import check_joint_limits, unreachable_message
 
     poses = np.atleast_2d(np.asarray(poses, float))
     key = poses.tobytes()
@@ -384,9 +384,7 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
                                     kin.length_scale)
     bad = ~(res < 1e-9)
     if bad.any():
-        raise KinematicsError(f"{mech.name}: the loops cannot close at pose {poses[bad][0].tolist()} "
-                              f"({', '.join(c.name for c in mech.coordinates)}, SI): out of reach or singular "
-                              f"(scaled residual {res[bad][0]:.2g})", poses=poses[bad])
+        raise KinematicsError(unreachable_message(mech, poses, bad, res), poses=poses[bad])
     q = {v: Q[:, i].copy() for i, v in enumerate(chain.variables)}
     check_joint_limits(mech.name, mech.limits, q, poses, [c.name for c in mech.coordinates])
     if len(kin._cache) > 8:

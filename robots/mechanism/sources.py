@@ -60,7 +60,8 @@ def source_columns(mech: Mechanism, kin: Kinematics, sources=None) -> tuple[list
         raise ValidationError(f"{mech.name} sources", names, "at least one toleranced parameter or DH entry")
     columns, specs = [], []
     frames = mech.frame
-    for nm in names:
+    for alias in names:
+        nm = mech.aliases.get(alias, alias)     # a standard-DH base/tool entry: base.d -> parameter base_d
         if nm in act:
             unit = "m" if any(frames[fr].joint == "prismatic" for fr, k in kin.uses[nm]) else "rad"
             columns.append(nm)
@@ -74,7 +75,7 @@ def source_columns(mech: Mechanism, kin: Kinematics, sources=None) -> tuple[list
                 raise ValidationError(f"{mech.name} source", nm, "a parameter of in-plane entries only (gamma, d, theta) "
                                                                  "in a planar mechanism")
             columns.append(nm)
-            specs.append(SourceSpec(nm, 1, unit, "length" if unit == "m" else "angle", f"design parameter {nm}"))
+            specs.append(SourceSpec(alias, 1, unit, "length" if unit == "m" else "angle", f"design parameter {alias}"))
         elif nm.split(".")[1] in PLACEMENT_FIELDS:
             fr, k = nm.split(".")
             if mech.planar:

@@ -33,6 +33,8 @@ def register(subparsers) -> None:
     p.add_argument("--rtol", type=float, default=1e-5, help="largest relative FD mismatch accepted (default 1e-5)")
     p.add_argument("--json", action="store_true", help="print the check as JSON")
     p.add_argument("--tip", default=None, help="with a URDF file: the end-effector link or frame (e.g. tool0)")
+    p.add_argument("--at", default=None, help="joint values (joint order, comma-separated; SI or '30*deg'): print the "
+                                              "forward kinematics there")
     p.set_defaults(func=cmd_check_mechanism)
 
 
@@ -112,6 +114,8 @@ def cmd_check_mechanism(args) -> int:
     # which must not pay for NumPy, the clearance engine and Pinocchio (tests/test_front_door.py)
     from robots.mechanism.checks import check_mechanism
 
+    if args.at is not None:          # the forward kinematics at given joints (issue 33)
+        return print_forward_at(args)
     out = check_mechanism(args.file, args.poses, srcs)
     ok = out["fd_rel_error"] is None or out["fd_rel_error"] <= args.rtol
     if args.json:
@@ -134,6 +138,42 @@ def cmd_check_mechanism(args) -> int:
               f"(bound {c['p_upper_m'] * 1e3:.6g}), r_max {c['r_max_rad']:.6g} rad (bound {c['r_upper_rad']:.6g})")
     print(f"  {out['seconds']:.2f} s")
     return 0 if ok else 1
+
+
+def print_forward_at(args) -> int:
+    """``--at``: the end-effector pose at the given joint values, in mm and deg.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``file`` (a description or a shipped name) and ``at`` (comma-separated joint values).
+
+    Returns
+    -------
+    int
+        0 (or the JSON with ``--json``).
+
+    Raises
+    ------
+    ValidationError
+        A description that cannot be read, or joint values it refuses
+        (:func:`robots.mechanism.forward_at.forward_at`).
+    """
+    from robots.mechanism.forward_at import forward_at
+    from robots.mechanism.model import MechanismModel
+    from robots.mechanism.shipped import resolve_description
+
+    model = MechanismModel(resolve_description(args.file, None))
+    out = forward_at(model, args.at)
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return 0
+    print(f"{model.name}: forward kinematics at " + ", ".join(f"{k} = {_shown(v, out['units'][k])}" for k, v in out["joints"].items()))
+    print(f"  end-effector {out['frame']}: position ({', '.join(_shown(v, 'm')[:-3] for v in out['position'])}) mm")
+    print("  orientation ZYX (yaw, pitch, roll): (" + ", ".join(_shown(v, 'rad')[:-4] for v in out["zyx"]) + ") deg")
+    for i, row in enumerate(out["rotation"]):
+        print(("  R = " if i == 0 else "      ") + "[" + ", ".join(f"{0.0 if abs(v) < 1e-12 else v: .6f}" for v in row) + "]")
+    return 0
 
 
 # ------------------------------------------------------------------ issue 23: URDF files, limits, rank
@@ -232,7 +272,10 @@ def cmd_check_urdf(args, srcs) -> int:
     from robots.mechanism.urdf_check import check_urdf_file
 
     if not args.tip:
-        raise ValidationError("--tip", None, "the URDF link or frame that is the end-effector, e.g. --tip tool0")
+        from robots.mechanism.forward_at import urdf_end_links
+        ends = urdf_end_links(args.file)
+        raise ValidationError("--tip", None, "the URDF link or frame that is the end-effector; its end links: "
+                                             + (", ".join(ends) if ends else "none found"))
     out = check_urdf_file(args.file, args.tip, args.poses, srcs)
     ok = out["fd_rel_error"] is None or out["fd_rel_error"] <= args.rtol
     if args.json:

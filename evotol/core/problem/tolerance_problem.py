@@ -65,6 +65,9 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     shared : Mapping[str, Sequence[str]] or None
         Group name -> member source names; each group is one tolerance variable.
     shared_cost : {"part", "variable"}
+    all_given : bool
+        Accept a problem whose every tolerance is fixed or locked: nothing to allocate, only to
+        analyse (:mod:`evotol.verification.tolerance_analysis`); default False (such a problem is an error).
         ``"part"`` (default: cost counted for every member) or ``"variable"`` (once).
     clearances : evotol.measures.clearances.ClearanceSources or None
         Joint-clearance classes allocated with the robot's (interval) sources; their names follow
@@ -123,7 +126,8 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
 
     def __init__(self, robot: RobotErrorModel, tolerances: Mapping[str, Tolerance], requirement: Requirement,
                  poses, n_directions: int = 600, shared: Mapping[str, Sequence[str]] | None = None,
-                 shared_cost: str = "part", clearances: "clearance_measure.ClearanceSources | None" = None):
+                 shared_cost: str = "part", clearances: "clearance_measure.ClearanceSources | None" = None,
+                 all_given: bool = False):
         if not isinstance(robot, RobotErrorModel):
             raise ValidationError("robot", robot, "a robots.base.RobotErrorModel")
         if not isinstance(requirement, Requirement):
@@ -173,7 +177,7 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         locked = [t.locked for t in tols]
         self.locked_values = np.array([np.nan if v is None else v for v in locked])
         self._set_shared(shared, shared_cost)
-        if not self.free.any():
+        if not self.free.any() and not all_given:     # all_given: an analysis (evotol.verification.tolerance_analysis)
             raise ValidationError("tolerances", "all locked", "at least one source free to optimise")
         self._coeff_cache: dict[str, tuple] = {}
         self._measure_cache: dict[str, object] = {}

@@ -1,0 +1,193 @@
+"""``evotol run`` on a study whose every tolerance is given: the analysis, not a refusal (issue 33).
+
+When every source of a study file is ``fixed`` (or ``locked``), there is nothing to allocate; the
+question is what those tolerances give. :func:`run_given_tolerances` analyses them
+(:func:`evotol.verification.tolerance_analysis.analyse`: worst case of the norm and per axis with
+both signed limits, RSS, the probability of meeting the requirement and the error at the
+requirement's probability, Monte Carlo on the nonlinear model, contributions, the worst pose, the
+joints used at every pose), prints it, and writes ``NAME.json`` and ``NAME.html``
+(:func:`evotol.reporting.analysis_page.render_analysis`). ``[verify] n_samples`` (default 1000)
+and ``seed`` set the Monte Carlo; ``[requirement] probability`` (default 0.9973) the quantile.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from evotol._runtime.keyword_checks import check_table_keys
+from evotol.core import plausibility
+from evotol.reporting.analysis_page import render_analysis
+from evotol.studies import StudyResult, write_outputs
+from evotol.summaries.user_study import source_table, study_units_block
+from evotol.units.display import DisplayUnits
+from evotol.verification.tolerance_analysis import analyse
+from robots.mechanism.posture import joint_table
+
+#: the ``[verify]`` keys an analysis reads (the others belong to allocation studies)
+VERIFY_KEYS = ("n_samples", "nonlinear")
+
+
+def analysis_summary(name: str, problem, analysis, *, seed: int, units: DisplayUnits, seconds: float) -> dict:
+    """The JSON-ready summary of an analysis study (SI, with the display units stored).
+
+    Parameters
+    ----------
+    name : str
+        The study's name.
+    problem : evotol.core.problem.ToleranceProblem
+        The problem (every tolerance given).
+    analysis : evotol.verification.tolerance_analysis.ToleranceAnalysis
+        Its analysis.
+    seed : int
+        The Monte Carlo seed.
+    units : DisplayUnits
+        Display units of the page and the terminal.
+    seconds : float
+        Wall time, s.
+
+    Returns
+    -------
+    dict
+        ``kind = "analysis"``, the problem text, workspace, sources (with their given tolerance),
+        ``analysis`` (:meth:`ToleranceAnalysis.to_dict`), ``joints`` (wrapped to (-π, π] for
+        revolute joints) and the ``units`` block.
+    """
+    robot = getattr(problem.robot, "base", problem.robot) if hasattr(problem.robot, "slots") else problem.robot
+    ws = robot.workspace
+    d = analysis.to_dict()
+    joints = joint_table(robot, analysis.poses)
+    lim = getattr(problem.robot, "limits", None) if hasattr(problem.robot, "slots") else None
+    axis_limits = {"frame": lim.frame, "position": dict(lim.position), "orientation": dict(lim.orientation)} if lim else {}
+    sources = source_table(problem)
+    for row, t in zip(sources, analysis.t):
+        row["tolerance"] = float(t)
+    return {"name": name, "kind": "analysis", "problem": problem.describe(), "seed": seed, "robot": problem.robot.name,
+            "measure": problem.requirement.measure, "requirement": {c: v for c, v in problem.components},
+            "axis_limits": axis_limits,
+            "display_units": units.to_dict(),
+            "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
+                          "display_scale": list(ws.display_scale)},
+            "poses": np.asarray(analysis.poses).tolist(), "sources": sources, "analysis": d, "joints": joints,
+            "notes": list(getattr(problem.robot, "notes", list)()), "seconds": seconds, "units": study_units_block(problem)}
+
+
+def requirement_text(summary: dict, u: DisplayUnits) -> str:
+    """The requirement in words: per-axis limits with their frame, or the norm bounds.
+
+    Parameters
+    ----------
+    summary : dict
+        :func:`analysis_summary`.
+    u : DisplayUnits
+        Display units.
+
+    Returns
+    -------
+    str
+        E.g. ``"|dx| <= 300.0 µm, |dz| <= 500.0 µm (tool frame)"`` or ``"position <= 500.0 µm"``.
+    """
+    al = summary.get("axis_limits") or {}
+    if al:
+        parts = [f"|d{a}| <= {u.format(v, 'm')}" for a, v in al["position"].items()]
+        parts += [f"|dθ{a}| <= {u.format(v, 'rad')}" for a, v in al["orientation"].items()]
+        return ", ".join(parts) + f" ({al['frame']} frame)"
+    return ", ".join(f"{c} <= {u.format(v, 'm' if c == 'position' else 'rad')}" for c, v in summary["requirement"].items())
+
+
+def print_analysis(summary: dict) -> None:
+    """The analysis in the terminal, in the study's display units (one line per pose).
+
+    Parameters
+    ----------
+    summary : dict
+        :func:`analysis_summary`.
+    """
+    u = DisplayUnits(**summary["display_units"])
+    a = summary["analysis"]
+    L = lambda v: u.format(v, "m")          # noqa: E731
+    req = requirement_text(summary, u)
+    verdict = "meets" if a["meets"] else "MISSES"
+    print(f"[evotol] analysis of the given tolerances (every source given: nothing to allocate)")
+    print(f"  requirement ({summary['measure']}): {req}: the design {verdict} it (largest error / limit = "
+          f"{a['violation'] + 1:.4g})")
+    wc, ax = a["worst_case"]["position"], a["axes"]["base"]["position"]
+    names = summary["workspace"]["names"]
+    print(f"  {'pose':>4s}  {'worst |dp|':>11s}  {'x range':>21s}  {'y range':>21s}  {'z range':>21s}  {'RSS |dp|':>10s}"
+          + (f"  {'P(meet)':>8s}" if a.get("probability") is not None else ""))
+    for i in range(len(wc["value"])):
+        rng = "  ".join(f"{'[' + L(ax[k]['low'][i]).split()[0] + ', ' + L(ax[k]['high'][i]).split()[0] + ']':>21s}" for k in "xyz")
+        prob = f"  {a['probability'][i]:8.5f}" if a.get("probability") is not None and len(a["probability"]) == len(wc["value"]) else ""
+        print(f"  {i:4d}  {L(wc['value'][i]):>11s}  {rng}  {L(a['rss']['position'][i]):>10s}{prob}")
+    if "tool" in a["axes"]:
+        tx = a["axes"]["tool"]["position"]
+        for i in range(len(wc["value"])):
+            print(f"  {i:4d}  tool frame: " + "  ".join(f"d{k} [{L(tx[k]['low'][i]).split()[0]}, {L(tx[k]['high'][i])}]" for k in "xyz"))
+    p = wc["worst_pose"]
+    pose = summary["poses"][p]
+    shown = ", ".join(f"{n} = {v * k:.4g}" for n, v, k in zip(names, pose, summary["workspace"]["display_scale"]))
+    print(f"  worst pose #{p} ({shown}): |dp| <= {L(wc['value'][p])} (proven bound {L(wc['bound'][p])})")
+    top = sorted(wc["contributions"].items(), key=lambda kv: -kv[1])[:5]
+    print("  contributions there: " + ", ".join(f"{n} {v:.1f} %" for n, v in top))
+    ap = a.get("error_at_probability", {})
+    if ap:
+        print(f"  |dp| at probability {ap['probability']:.4g} (first-order, stated distributions): largest "
+              f"{L(max(ap['position']))}")
+    mc = a.get("monte_carlo", {})
+    if mc:
+        print(f"  Monte Carlo ({mc['n_samples']} samples per pose): exceed rate {100 * mc['max_exceed_rate']:.3g} % (linear)"
+              + (f", {100 * mc['max_exceed_rate_nonlinear']:.3g} % (nonlinear)" if mc.get("max_exceed_rate_nonlinear") is not None else "")
+              + (f"; {mc['linearisation_verdict']}" if mc.get("linearisation_verdict") else ""))
+    for line in summary.get("notes", []):
+        print(f"  note: {line}")
+
+
+def run_given_tolerances(spec: dict, path: Path, out: Path, name: str, problem, units: DisplayUnits, seed: int,
+                         t0: float) -> dict:
+    """Analyse, print and write a study whose every tolerance is given (module docstring).
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file.
+    path : Path
+        The study file.
+    out : Path
+        The output folder.
+    name : str
+        The study's name.
+    problem : evotol.core.problem.ToleranceProblem
+        Its problem (every source fixed or locked).
+    units : DisplayUnits
+        Display units.
+    seed : int
+        The Monte Carlo seed.
+    t0 : float
+        ``time.perf_counter()`` at the start of the run.
+
+    Returns
+    -------
+    dict
+        The summary written (:func:`analysis_summary`) with ``study_file``, ``warnings``, ``html``
+        and ``json``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A ``[verify]`` key other than ``n_samples`` and ``nonlinear``.
+    """
+    vspec = dict(spec.get("verify", {}))
+    check_table_keys(vspec, VERIFY_KEYS, "verify")
+    prob = problem.requirement.required_yield
+    analysis = analyse(problem, probability=float(prob), n_samples=int(vspec.get("n_samples", 1000)), seed=seed,
+                       nonlinear=bool(vspec.get("nonlinear", True)))
+    summary = analysis_summary(name, problem, analysis, seed=seed, units=units, seconds=time.perf_counter() - t0)
+    summary["study_file"] = str(Path(path).resolve())
+    summary["warnings"] = plausibility.problem_warnings(problem)
+    if "methods" in spec:
+        summary["notes"].append(f"[methods] {sorted(spec['methods'])} not run: every tolerance is given, so there is "
+                                "nothing to allocate; this is their analysis.")
+    paths = write_outputs(name, out, StudyResult(summary), render_analysis(summary))
+    summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
+    return summary

@@ -1,0 +1,170 @@
+"""One posture, stated and held (issue 33 item 2): robots/mechanism/posture.py.
+
+The PUMA 560's inverse-geometry branches are told apart by three independent factors of its
+Jacobian determinant (derived here from the textbook product and checked numerically below):
+``det J = a2 · s5 · (d4 c3 + a3 s3) · (a2 c2 + a3 c23 - d4 s23)`` -- wrist, elbow and shoulder.
+A pose whose solution has every factor's sign of the assembly is kept; one that changes any is
+refused, naming the pose.
+"""
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evotol.errors import KinematicsError
+from robots.mechanism.model import MechanismModel
+from robots.mechanism.posture import PostureWarning, wrapped
+from tests.test_standard_dh import textbook_fk
+
+FIXTURE = Path(__file__).resolve().parent / "data" / "puma560_rpy.toml"
+A2, A3, D4 = 0.4318, 0.0203, 0.4318
+ASSEMBLY = np.radians([10, 10, -100, -20, 30, -60])
+
+
+def factors(q):
+    q = np.atleast_2d(q)
+    c2, c3, s3 = np.cos(q[:, 1]), np.cos(q[:, 2]), np.sin(q[:, 2])
+    c23, s23 = np.cos(q[:, 1] + q[:, 2]), np.sin(q[:, 1] + q[:, 2])
+    return np.stack([np.sin(q[:, 4]), D4 * c3 + A3 * s3, A2 * c2 + A3 * c23 - D4 * s23], axis=1)
+
+
+def pose_of(q):
+    T = textbook_fk(q)
+    R = T[:3, :3]
+    return np.r_[T[:3, 3], np.arctan2(R[1, 0], R[0, 0]), np.arcsin(-R[2, 0]), np.arctan2(R[2, 1], R[2, 2])]
+
+
+def geometric_jacobian_det(q, h=1e-6):
+    """det of the geometric Jacobian by central differences of the textbook forward kinematics."""
+    T0 = textbook_fk(q)
+    J = np.zeros((6, 6))
+    for i in range(6):
+        up, dn = np.array(q, float), np.array(q, float)
+        up[i] += h
+        dn[i] -= h
+        Tu, Td = textbook_fk(up), textbook_fk(dn)
+        J[:3, i] = (Tu[:3, 3] - Td[:3, 3]) / (2 * h)
+        W = (Tu[:3, :3] - Td[:3, :3]) / (2 * h) @ T0[:3, :3].T
+        J[3:, i] = [W[2, 1], W[0, 2], W[1, 0]]
+    return np.linalg.det(J)
+
+
+def test_the_three_factors_are_the_determinant():
+    Q = np.random.default_rng(0).uniform(-np.pi, np.pi, (30, 6))
+    det = np.array([geometric_jacobian_det(q) for q in Q])
+    assert np.allclose(det, A2 * np.prod(factors(Q), axis=1), rtol=1e-6, atol=1e-12)
+
+
+def test_branch_changes_are_refused_and_kept_branches_are_kept():
+    model = MechanismModel(FIXTURE)
+    sign0 = np.sign(factors(ASSEMBLY)[0])
+    rng = np.random.default_rng(3)
+    kept = refused = 0
+    for _ in range(60):
+        q = ASSEMBLY + rng.normal(0, 0.5, 6)
+        P = pose_of(q)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PostureWarning)
+            try:
+                sol = model.joint_values(P[None])
+            except KinematicsError as e:
+                assert "another branch" in str(e) and "pose 0" in str(e) and "\n" not in str(e)
+                refused += 1
+                continue
+        qs = np.array([sol[f"q{i}"][0] for i in range(1, 7)])
+        assert np.allclose(textbook_fk(qs), textbook_fk(q), atol=1e-9)          # it is that pose
+        assert np.array_equal(np.sign(factors(qs)[0]), sign0)                    # on the assembly's branch
+        kept += 1
+    assert kept >= 30 and refused >= 3
+
+
+def test_refused_poses_are_on_another_branch():
+    model = MechanismModel(FIXTURE)
+    sign0 = np.sign(factors(ASSEMBLY)[0])
+    rng = np.random.default_rng(3)
+    for _ in range(60):
+        q = ASSEMBLY + rng.normal(0, 0.5, 6)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", PostureWarning)
+                model.joint_values(pose_of(q)[None])
+        except KinematicsError as e:
+            # the solution named in the message differs from the assembly in one factor's sign
+            text = str(e).split("to the solution there (")[1].split(")")[0]
+            qs = np.radians([float(part.split("=")[1].split()[0]) for part in text.split(",")])
+            assert not np.array_equal(np.sign(factors(qs)[0]), sign0)
+
+
+def test_a_wrist_singularity_is_a_warning_naming_the_pose():
+    model = MechanismModel(FIXTURE)
+    P = pose_of(np.radians([0, -90, 90, 0, 0, 0]))
+    with pytest.warns(PostureWarning, match="near a singularity"):
+        model.joint_values(P[None])
+    assert any("near a singularity" in n for n in model.notes())
+
+
+def test_wrapped_angles():
+    model = MechanismModel(FIXTURE)
+    w = wrapped(model.kin, {"q1": np.radians([180, -180, 507.5, -226.4, 0])})
+    assert np.allclose(np.degrees(w["q1"]), [180, 180, 147.5, 133.6, 0])
+
+
+def test_typed_assembly_pose_and_joints_of_a_serial_arm_must_agree(tmp_path):
+    # issue 33: the typed joints were moved by 12.6 deg in silence; now an error naming both
+    text = FIXTURE.read_text().replace('q4 = "-20*deg"', 'q4 = "-7.4*deg"')
+    f = tmp_path / "puma_disagree.toml"
+    f.write_text(text)
+    model = MechanismModel(f)
+    with pytest.raises(KinematicsError) as e:
+        model.kin.assembly()
+    msg = str(e.value)
+    assert "[assembly] pose" in msg and "q4 from -7.4 deg" in msg and "disagree" in msg
+    # the same joints, exactly those of the pose: accepted, unchanged
+    x0, q = MechanismModel(FIXTURE).kin.assembly()
+    assert np.allclose([q[f"q{i}"] for i in range(1, 7)], ASSEMBLY, atol=1e-9)
+
+
+def test_unreachable_poses_are_reported_together_or_dropped(tmp_path):
+    from evotol.studyfile import load_problem
+    from tests.test_standard_dh import PUMA
+    text = PUMA.read_text().replace('high = "700*mm"', 'high = "1100*mm"')       # beyond the arm's reach in x
+    f = tmp_path / "puma_far.toml"
+    f.write_text(text)
+    spec = {"robot": {"mechanism": str(f), "sources": ["a2", "d4"]}, "poses": {"grid": [5, 2, 2]},
+            "requirement": {"position": 5e-4}, "cost": {"default": {"model": "exponential", "a0": 1.9, "a1": 0.5, "scale": 1e-5}}}
+    with pytest.raises(KinematicsError) as e:
+        load_problem(spec)
+    msg = str(e.value)
+    n_bad = len(e.value.poses)
+    assert f"{n_bad} of 20 poses" in msg and "loops" not in msg and "drop_unreachable" in msg and n_bad >= 4
+    # every pose named is beyond the reach of the wrist centre (frame 6's origin): farther from the shoulder
+    # than sqrt((a2 + sqrt(a3^2 + d4^2))^2 + d3^2)
+    reach = np.hypot(A2 + np.hypot(A3, D4), 0.15005)
+    assert np.all(np.linalg.norm(np.asarray(e.value.poses), axis=1) > reach)
+    spec["poses"]["drop_unreachable"] = True
+    problem = load_problem(spec)
+    assert problem.n_poses == 20 - n_bad
+    assert any(f"{n_bad} of 20 poses dropped" in line for line in problem.robot.notes())
+    # what is kept is reached: the model's joints reproduce those poses (textbook forward kinematics)
+    q = problem.robot.joint_values(problem.poses)
+    for i, p in enumerate(problem.poses):
+        T = textbook_fk([q[f"q{k}"][i] for k in range(1, 7)])
+        assert np.allclose(T[:3, 3], p, atol=1e-9)
+
+
+def test_compiled_task_jacobian_equals_the_general_one():
+    from robots.mechanism.posture import _task_jacobian
+    from robots.mechanism.serial import SERIAL_COMPILED, SerialChain
+    if not SERIAL_COMPILED:
+        pytest.skip("numba not available: the general path is the only one")
+    for f in (FIXTURE, Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"):
+        m = MechanismModel(f)
+        kin = m.kin
+        chain = SerialChain.build(kin, list(kin.variables))
+        Q = np.random.default_rng(0).uniform(-3, 3, (20, len(kin.variables)))
+        q = {v: Q[:, i] for i, v in enumerate(kin.variables)}
+        P = m.workspace.latin_hypercube(20)
+        assert np.abs(_task_jacobian(kin, q, P, chain) - _task_jacobian(kin, q, P)).max() < 1e-12
