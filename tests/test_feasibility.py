@@ -112,9 +112,14 @@ def test_every_allocator_meets_the_rule_on_every_shipped_example(path):
             t = np.array([res.tolerances[n] for n in pp.names])
             assert res.feasible and float(pp.normalised_error(t)[0]) <= 1 + FEASIBILITY_RTOL, m
         return
-    problem = load_problem(spec, base_dir=path.parent)
-    methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None
-                       else {"sensitivity": {}, "optimum": {}, "ga": {}})
+    if "stack" in spec:                # a [stack] table: the same rule on its allocation problem
+        from evotol.studyfile.stack_table import allocation_from_table, stack_from_table
+        stack, _models, display = stack_from_table(spec["stack"])
+        problem, methods = allocation_from_table(spec["stack"], stack, display["scale"])
+    else:
+        problem = load_problem(spec, base_dir=path.parent)
+        methods = spec.get("methods", {"ga": {}, "monotone": {}} if problem.clearances is not None
+                           else {"sensitivity": {}, "optimum": {}, "ga": {}})
     checked = 0
     for m, kw in methods.items():
         if m not in METHODS or "budget" in kw:
