@@ -8,7 +8,7 @@ import math
 from evotol.units.display import DisplayUnits, number
 
 
-def zone_text(zone: dict, u: DisplayUnits, si_unit: str) -> str:
+def zone_text(zone: dict, u: DisplayUnits, si_unit: str, dim: int = 1) -> str:
     """A tolerance zone as a drawing writes it, in display units: ``±144.3`` when it is symmetric
     about the nominal, else the two deviations ``+0 / −288.6`` (never a doubled or halved ±).
 
@@ -21,6 +21,8 @@ def zone_text(zone: dict, u: DisplayUnits, si_unit: str) -> str:
         The study's display units.
     si_unit : str
         The source's SI unit (``"m"`` or ``"rad"``).
+    dim : {1, 2, 3}
+        The source's dimension: a disc or ball zone (2, 3) is stated by its radius, ``r ≤ 1.554``.
 
     Returns
     -------
@@ -28,6 +30,8 @@ def zone_text(zone: dict, u: DisplayUnits, si_unit: str) -> str:
         The zone's text (4 significant digits, no unit).
     """
     lo, hi = float(u.convert(zone["lower"], si_unit)), float(u.convert(zone["upper"], si_unit))
+    if dim > 1:         # a disc or ball: the error vector's length within r (no sign, no axis)
+        return f"r ≤ {number(hi)}"
     if abs(lo + hi) <= 1e-9 * max(abs(lo), abs(hi)):
         return f"±{number(hi)}"
 

@@ -264,7 +264,7 @@ def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
     for s in summary["sources"]:
         mark = " (no effect on the requirement)" if s.get("no_effect") else ""     # issue 33
         rows.append([s["name"], s["group"] + mark, u.unit_for(s["unit"])]
-                    + [zone_text(tolerance_zone(s, t[s["name"]]), u, s["unit"]) for t in columns])
+                    + [zone_text(tolerance_zone(s, t[s["name"]]), u, s["unit"], s["dim"]) for t in columns])
     header = ["source", "group", "unit"] + methods + [f"NSGA-II {k.replace('_', ' ')}" for k in extra]
     return rows, header
 
@@ -478,7 +478,7 @@ def render_user_study(summary: dict) -> Report:
             c = r["contributions"].get(comp)
             if c:
                 src = {s["name"]: s for s in summary["sources"]}
-                rows = [[s, src[s]["group"], f"{zone_text(tolerance_zone(src[s], r['tolerances'][s]), u, src[s]['unit'])} "
+                rows = [[s, src[s]["group"], f"{zone_text(tolerance_zone(src[s], r['tolerances'][s]), u, src[s]['unit'], src[s]['dim'])} "
                          f"{u.unit_for(src[s]['unit'])}", pc] for s, pc in zip(c["source"], c["percent"])]
                 rep.text(f"Contributions to the {comp} error at the worst pose "
                          f"(#{r['worst_pose'][comp]}: {pose_cells(summary, r['worst_pose_coordinates'][comp])}):")

@@ -45,9 +45,11 @@ def tolerance_zone(source: dict, t: float) -> dict:
     Returns
     -------
     dict
-        ``lower``, ``upper`` (signed deviations, m or rad) and ``half_width`` (m or rad).
+        ``lower``, ``upper`` (signed deviations, m or rad) and ``half_width`` (m or rad); for a
+        callout member (``zone_per_t`` in the row, :attr:`CalloutModel.zone_per_t`) the zone of the
+        member itself, e.g. the disc of radius t/2 at a bore's end for a position ⌀t.
     """
-    t = float(t)
+    t = float(t) * source.get("zone_per_t", 1.0)     # a callout member's zone is t/2 per unit of the callout's t
     return {"lower": source["offset"] - source["minus"] * t, "upper": source["offset"] + source["plus"] * t,
             "half_width": 0.5 * (source["minus"] + source["plus"]) * t}
 
@@ -58,7 +60,8 @@ def _source_rows(problem: ToleranceProblem) -> list[dict]:
     for n, s in zip(problem.names, problem.robot.sources):
         tol = problem.tolerances[n]
         rows.append({"name": n, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset), "minus": float(tol.minus),
-                     "plus": float(tol.plus), "fixed": bool(tol.is_fixed), "locked": tol.locked})
+                     "plus": float(tol.plus), "fixed": bool(tol.is_fixed), "locked": tol.locked,
+                     "zone_per_t": getattr(problem.robot, "zone_per_t", {}).get(n, 1.0)})
     return rows
 
 
@@ -174,11 +177,12 @@ def rounded_design(problem: ToleranceProblem, t, units: DisplayUnits, precision:
         zones[row["name"]] = {"drawing_lower": lo_r, "drawing_upper": up_r}
         if given:
             continue
+        f = row["zone_per_t"]      # back from the member's zone to the callout's value
         if row["dim"] > 1:
-            T[j] = up_r / k
+            T[j] = up_r / k / f
         else:
-            minus[j] = max(row["offset"] - lo_r / k, 0.0) / t[j]
-            plus[j] = max(up_r / k - row["offset"], 0.0) / t[j]
+            minus[j] = max(row["offset"] - lo_r / k, 0.0) / (t[j] * f)
+            plus[j] = max(up_r / k - row["offset"], 0.0) / (t[j] * f)
         if up_r <= lo_r or T[j] <= 0:
             vanished.append(row["name"])
     out = {"precision": used, "zones": zones, "vanished": vanished, "normalised_error": None, "meets": False, "cost": None}

@@ -110,6 +110,7 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         (:func:`sources_without_effect`).
     """
     nominal = source_nominals(problem.robot)
+    zone_per_t = getattr(problem.robot, "zone_per_t", {})
     no_effect = sources_without_effect(problem)
     out = []
     for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
@@ -119,6 +120,8 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
                "locked": None if tol.locked is None else float(tol.locked)}
         dist = as_distribution(tol.distribution)
         row["distribution"] = {"kind": dist.kind, "sigma_k": float(dist.sigma_k), "mean_shift": float(dist.mean_shift)}
+        if n in zone_per_t:      # a callout member: its zone per unit of the drawing's value (docs/callouts.md)
+            row["zone_per_t"] = zone_per_t[n]
         if n in nominal:
             row["nominal"] = nominal[n]
         if no_effect[j]:

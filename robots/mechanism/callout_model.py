@@ -61,6 +61,12 @@ class CalloutModel(RobotErrorModel):
         for c in self.callouts:
             refined = c.kind == "position" and any(o.kind in ORIENTATION_KINDS for o in by_joint[c.joint])
             members[c.name] = zone_members(c, self.seats[c.joint]["axis"], refined, zones)
+        #: member source -> its zone's half-width (radius) per unit of the callout's value t, where it
+        #: is not t: a position zone's ends are discs of radius t/2, a face's zone is ±t/2 (the
+        #: tolerance tables show the member's own zone; the drawing table states the callout's t)
+        self.zone_per_t = {m.name: 0.5 for c in self.callouts for m in members[c.name]
+                           if c.kind == "axial" or (c.kind == "position" and (m.name == c.name or m.name.endswith(
+                               (".end1", ".end2", ".shift_e1", ".shift_e2"))))}
         raw = MechanismModel(mech, sources, workspace)
         names = list(raw.source_names)
         needed = []
