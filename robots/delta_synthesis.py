@@ -9,6 +9,15 @@ tables and the study around them are :mod:`evotol.studies.brahmia2023_delta`.
 Two objectives F are available: ``"closed"`` (the platform position from the loop-closure
 forward kinematics with errors must move by ΔP) and ``"open"`` (the paper's eq. 10 read
 literally: every serial sub-chain, joints held at Q_k, must end at P + ΔP).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+robot : DeltaRobot
+    The robot whose kinematics are used.
+lo, hi : array_like, shape (47,)
+    Lower and upper interval limits of each parameter, SI (m or rad).
 """
 from __future__ import annotations
 
@@ -104,8 +113,6 @@ def solve_displacement(robot: DeltaRobot, pose, displacement, bounds=None, *, ob
 
     Parameters
     ----------
-    robot : DeltaRobot
-        The robot whose kinematics are used.
     pose : array_like, shape (3,)
         Nominal platform position P, m.
     displacement : array_like, shape (3,)
@@ -213,11 +220,6 @@ VERIFICATION_CASES = {
 def verification_error_vectors(lo, hi) -> dict[str, np.ndarray]:
     """The four error vectors of Sec. 4.1 (SI, (47,)), from interval limits lo, hi (SI).
 
-    Parameters
-    ----------
-    lo, hi : array_like, shape (47,)
-        Lower and upper interval limits of each parameter, SI (m or rad).
-
     Returns
     -------
     dict of str to ndarray, shape (47,)
@@ -237,10 +239,6 @@ def verification_errors(robot: DeltaRobot, lo, hi, postures=None) -> dict[str, d
 
     Parameters
     ----------
-    robot : DeltaRobot
-        The robot whose kinematics are used.
-    lo, hi : array_like, shape (47,)
-        Lower and upper interval limits of each parameter, SI (m or rad).
     postures : iterable of str or None
         Posture names (see :func:`postures_m`); None: all 15.
 

@@ -25,6 +25,13 @@ Two first-order error models (eq. 10: δl = J_x δx + J_p δp, solved for δx = 
   * ``variant="paper"`` – eq. 11 exactly as printed: constraint row ``[u_iᵀ, (s_i × u_i)ᵀ]``. It
     omits the term l_i (u_i × n_i) and therefore does not match finite differences (the printed
     J_p rows are the same as ours). Kept because the paper's numbers come from it.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+R : ndarray, shape (n, 3, 3)
+    Platform orientations.
 """
 from __future__ import annotations
 
@@ -169,8 +176,6 @@ class UCR3(RobotErrorModel):
 
         Parameters
         ----------
-        R : ndarray, shape (n, 3, 3)
-            Platform orientations.
         p : ndarray, shape (n, 3)
             Platform centres, m.
 
@@ -239,8 +244,6 @@ class UCR3(RobotErrorModel):
 
         Parameters
         ----------
-        R : ndarray, shape (n, 3, 3)
-            Platform orientations.
         n : ndarray, shape (n, 3, 3)
             Unit leg vectors (from :meth:`legs`).
 

@@ -4,6 +4,13 @@
 Python's own ``TypeError: got an unexpected keyword argument`` arrives only when the function is
 called -- after the earlier methods of a study have computed -- and names neither the table nor
 the valid keys (issue 15).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+valid : iterable of str
+    The names accepted.
 """
 from __future__ import annotations
 
@@ -21,8 +28,6 @@ def nearest(name: str, valid: Iterable[str]) -> str | None:
     ----------
     name : str
         The name given (a possible typo).
-    valid : iterable of str
-        The names accepted.
 
     Returns
     -------
@@ -40,8 +45,6 @@ def did_you_mean(name: str, valid: Iterable[str]) -> str:
     ----------
     name : str
         The name given.
-    valid : iterable of str
-        The names accepted.
 
     Returns
     -------

@@ -23,6 +23,15 @@ problem first, everything else by keyword (``seed`` where the method is random; 
 *best accuracy at a budget*, and is refused with a one-line error by the methods that have no such
 mode: NSGA-II, whose front spans every budget, and the polyblock bracket). What *feasible* means in
 every result is one rule, :mod:`evotol.measures.feasibility`.
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+problem : ToleranceProblem
+    The problem (tolerances in SI: m or rad).
+t : numpy.ndarray, (n_sources,)
+    The design (m or rad).
 """
 from evotol.allocators.baselines import allocate_equal, allocate_lagrange, allocate_proportional
 from evotol.allocators.ga import allocate_ga

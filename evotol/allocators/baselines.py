@@ -71,8 +71,6 @@ def equal_design(problem: ToleranceProblem, rows: ConstraintRows | None = None) 
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem (tolerances in SI: m or rad).
     rows : ConstraintRows or None
         Constraint rows to reuse (``worst_case``/``rss``); default: built from ``problem``.
 
@@ -92,8 +90,6 @@ def proportional_design(problem: ToleranceProblem, weights=None) -> np.ndarray:
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem (tolerances in SI: m or rad).
     weights : array_like, mapping or None
         Weights w_j per source (anything ``problem.as_array`` takes; only ratios matter);
         default: the upper bounds.
@@ -169,8 +165,6 @@ def lagrange_design(problem: ToleranceProblem, measure: str | None = None) -> np
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem (tolerances in SI: m or rad).
     measure : {"worst_case", "rss"} or None
         Stack-up (default: the requirement's measure; any other measure uses ``"rss"``).
 

@@ -14,6 +14,13 @@ min Σ c_j s.t. Σ s_j t_j <= 1 share the stationarity condition c_j'(t_j) + λ 
 the family the error grows with p, so the best accuracy at the budget is the smallest p whose
 cost is <= B: :func:`spend_budget` finds it by bisection, always returning a design within the
 budget.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+budget : float
+    The budget (cost units).
 """
 from __future__ import annotations
 
@@ -30,11 +37,6 @@ from evotol.core.quality_loss import has_quality_loss
 def cheapest_design(problem: ToleranceProblem) -> np.ndarray:
     """Every free tolerance at its upper bound (locked ones at their value), SI.
 
-    Parameters
-    ----------
-    problem : ToleranceProblem
-        The problem.
-
     Returns
     -------
     numpy.ndarray
@@ -45,11 +47,6 @@ def cheapest_design(problem: ToleranceProblem) -> np.ndarray:
 
 def dearest_design(problem: ToleranceProblem) -> np.ndarray:
     """Every free tolerance at its lower bound: the most accurate design the bounds allow.
-
-    Parameters
-    ----------
-    problem : ToleranceProblem
-        The problem.
 
     Returns
     -------
@@ -65,8 +62,6 @@ def check_budget(problem: ToleranceProblem, budget, field: str = "budget") -> fl
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem.
     budget : float
         The budget (cost models' unit).
     field : str
@@ -112,8 +107,6 @@ def spend_budget(problem: ToleranceProblem, family: Callable[[float], np.ndarray
     family : callable
         ``family(log_p)`` -> (n_sources,) full design (m or rad), cost non-increasing in
         ``log_p``.
-    budget : float
-        The budget (cost units).
     log_p : tuple of float
         ``(lo, hi)`` range of ``log p`` searched.
     iters : int
@@ -153,8 +146,6 @@ def scaled_family(problem: ToleranceProblem, shape: np.ndarray) -> tuple[Callabl
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem.
     shape : array_like, (n_sources,)
         Relative tolerances of the design (m or rad; only ratios matter). Positive on the free
         sources; ``inf`` keeps a source at its upper bound.
@@ -190,15 +181,6 @@ def scaled_family(problem: ToleranceProblem, shape: np.ndarray) -> tuple[Callabl
 def budget_info(problem: ToleranceProblem, t: np.ndarray, budget: float) -> dict:
     """What a budget-mode result reports besides its cost: the budget and the normalised error
     (max over poses and components of error / bound; <= 1 means the requirement also holds).
-
-    Parameters
-    ----------
-    problem : ToleranceProblem
-        The problem.
-    t : numpy.ndarray, (n_sources,)
-        The design (m or rad).
-    budget : float
-        The budget (cost units).
 
     Returns
     -------

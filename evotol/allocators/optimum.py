@@ -131,12 +131,8 @@ def certificate(problem: ToleranceProblem, rows: ConstraintRows, t: np.ndarray, 
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem.
     rows : ConstraintRows
         The working rows.
-    t : numpy.ndarray, (n_sources,)
-        The design (m or rad).
     active_tol : float
         A row counts as active when its value is >= 1 − active_tol (quadratic rows:
         1 − 2·active_tol) (dimensionless).
@@ -226,8 +222,6 @@ def check_optimum(problem: ToleranceProblem, *, budget: float | None = None, ref
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem.
     budget : float or None
         The method's budget (cost units).
     refine : bool or dict

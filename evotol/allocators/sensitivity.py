@@ -77,11 +77,6 @@ def aggregated_sensitivity(problem: ToleranceProblem, collective_groups=()) -> n
 def check_sensitivity(problem: ToleranceProblem) -> None:
     """The sensitivity rule's refusal that needs no work (also by :mod:`evotol.allocators.preflight`).
 
-    Parameters
-    ----------
-    problem : ToleranceProblem
-        The problem.
-
     Raises
     ------
     evotol.errors.ValidationError
@@ -97,8 +92,6 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The problem (tolerances in SI: m or rad).
     measure : {"worst_case", "rss"} or None
         Stack-up of the equal shares (default: the requirement's measure; any other measure uses
         ``"rss"``).

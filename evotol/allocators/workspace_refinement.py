@@ -17,6 +17,15 @@ searched (denser grids: :func:`worst_pose` on the result).
 
 :func:`hold_on_workspace` is the GA's final check: the same search, but the design is scaled
 (one factor on every free tolerance, bisection) until it holds at the poses found.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+tol : float
+    The requirement holds when the normalised error is <= 1 + tol (dimensionless).
+dense : ToleranceProblem, optional
+    A ready dense problem (overrides ``candidates`` and ``grid``).
 """
 from __future__ import annotations
 
@@ -201,10 +210,6 @@ def refine_poses(problem: ToleranceProblem, allocate, *, candidates=None, grid=N
         search, the worst pose and up to ``add`` violating local maxima).
     max_rounds : int
         Maximum number of allocations (>= 1).
-    tol : float
-        The requirement holds when the normalised error is <= 1 + tol (dimensionless).
-    dense : ToleranceProblem, optional
-        A ready dense problem (overrides ``candidates`` and ``grid``).
     n_final : int
         Number of local searches of the final sweep before the search is declared done.
     n_local : int
@@ -381,10 +386,6 @@ def hold_on_workspace(problem: ToleranceProblem, t, *, candidates=None, grid=Non
         Whether to search locally between the dense poses.
     max_rounds : int
         Maximum number of search-and-scale rounds.
-    tol : float
-        The requirement holds when the normalised error is <= 1 + tol (dimensionless).
-    dense : ToleranceProblem, optional
-        A ready dense problem (overrides ``candidates`` and ``grid``).
     n_final : int
         Number of local searches of the final sweep.
 

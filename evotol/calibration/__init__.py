@@ -7,6 +7,15 @@
 * :mod:`evotol.calibration.linear_range` -- upper bounds of the identified sources;
 * :mod:`evotol.calibration.problem` -- the calibrated tolerance problem;
 * :mod:`evotol.calibration.simulation` -- the calibration simulated on the nonlinear model.
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+plan : evotol.calibration.plan.CalibrationPlan
+    The plan.
+robot : robots.mechanism.model.MechanismModel
+    The uncalibrated model.
 """
 from evotol.calibration.identification import Identification, identify
 from evotol.calibration.model import CalibratedRobot, noise_allowance

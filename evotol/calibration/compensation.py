@@ -42,8 +42,6 @@ class Compensation:
 
     Parameters
     ----------
-    robot : robots.mechanism.model.MechanismModel
-        The uncalibrated model.
     joints : (n, n_variables) ndarray
         Nominal joint values of the poses to reach (rad, m).
     """

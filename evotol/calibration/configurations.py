@@ -44,8 +44,6 @@ def calibration_joints(robot, plan) -> np.ndarray | None:
     ----------
     robot : robots.base.RobotErrorModel
         The error model; joint values need a described mechanism (:func:`is_described`).
-    plan : evotol.calibration.plan.CalibrationPlan
-        The plan.
 
     Returns
     -------

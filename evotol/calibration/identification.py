@@ -60,8 +60,6 @@ def measured_map(robot, plan):
     ----------
     robot : robots.base.RobotErrorModel
         The error model.
-    plan : evotol.calibration.plan.CalibrationPlan
-        The plan.
 
     Returns
     -------
@@ -246,8 +244,6 @@ def identify(robot, plan) -> Identification:
     ----------
     robot : robots.base.RobotErrorModel
         The (uncalibrated) error model.
-    plan : evotol.calibration.plan.CalibrationPlan
-        The plan.
 
     Returns
     -------

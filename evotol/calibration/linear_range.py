@@ -28,6 +28,17 @@ calibration checks every pose). A source with no second-order effect
 (``plan.compensation_range``, by source pattern) bounds an identified source's tolerance too. The
 bound holds to second order with a linear fit; the simulated calibration
 (:mod:`evotol.calibration.simulation`, nonlinear fit) checks it.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+task_joints : (n_task, n_variables) ndarray
+    Joint values of the task poses (rad, m).
+idn : evotol.calibration.identification.Identification
+    The identification.
+step : float
+    Central-difference step (m or rad).
 """
 from __future__ import annotations
 
@@ -94,12 +105,6 @@ def second_order(robot, idn, plan, task_joints, step: float = STEP) -> np.ndarra
         The uncalibrated model (nonlinear ``pose_error_at_joints``).
     idn : evotol.calibration.identification.Identification
         The identification (a described mechanism's, with joint values).
-    plan : evotol.calibration.plan.CalibrationPlan
-        The plan.
-    task_joints : (n_task, n_variables) ndarray
-        Joint values of the task poses (rad, m).
-    step : float
-        Central-difference step (m or rad).
 
     Returns
     -------
@@ -128,14 +133,8 @@ def linear_range_bounds(robot, idn, plan, task_joints, requirement) -> np.ndarra
 
     Parameters
     ----------
-    robot : robots.mechanism.model.MechanismModel
-        The uncalibrated model.
-    idn : evotol.calibration.identification.Identification
-        The identification.
     plan : evotol.calibration.plan.CalibrationPlan
         The plan (``linear_fraction``).
-    task_joints : (n_task, n_variables) ndarray
-        Joint values of the task poses (rad, m).
     requirement : evotol.core.requirement.Requirement
         Its position (m) and orientation (rad) bounds.
 
@@ -163,10 +162,6 @@ def calibrated_upper_bounds(robot, idn, plan, task_joints, requirement) -> dict:
 
     Parameters
     ----------
-    robot : robots.mechanism.model.MechanismModel
-        The uncalibrated model.
-    idn : evotol.calibration.identification.Identification
-        The identification.
     plan : evotol.calibration.plan.CalibrationPlan
         The plan (``linear_fraction``, ``compensation_range``).
     task_joints : (n_task, n_variables) ndarray or None
@@ -209,16 +204,10 @@ def noise_second_order(robot, idn, plan, task_joints, step: float = STEP) -> dic
 
     Parameters
     ----------
-    robot : robots.mechanism.model.MechanismModel
-        The uncalibrated model.
     idn : evotol.calibration.identification.Identification
         The identification (``sigma_K``).
     plan : evotol.calibration.plan.CalibrationPlan
         The plan (``k``).
-    task_joints : (n_task, n_variables) ndarray
-        Joint values of the task poses (rad, m).
-    step : float
-        Central-difference step (m or rad).
 
     Returns
     -------

@@ -18,6 +18,13 @@ it unchanged. The instrument noise, propagated through the fit to a task pose, i
 
 The calibrated model has no nonlinear ``pose_error`` (the nonlinear check is the simulated
 calibration, :mod:`evotol.calibration.simulation`, which draws one robot for every pose).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+poses : (n, workspace.dim) array_like
+    Task poses (SI).
 """
 from __future__ import annotations
 
@@ -78,11 +85,6 @@ class CalibratedRobot(RobotErrorModel):
     def noise_covariance(self, poses) -> np.ndarray:
         """Covariance (n, 6, 6) of the instrument noise propagated to task poses (m², rad²).
 
-        Parameters
-        ----------
-        poses : (n, workspace.dim) array_like
-            Task poses (SI).
-
         Returns
         -------
         (n, 6, 6) ndarray
@@ -99,11 +101,6 @@ class CalibratedRobot(RobotErrorModel):
     def noise_cov6(self, poses) -> dict:
         """The noise covariance in the yield model's packed form: component -> (n, 6) (xx, yy, zz, xy, xz, yz).
 
-        Parameters
-        ----------
-        poses : (n, workspace.dim) array_like
-            Task poses (SI).
-
         Returns
         -------
         dict of str to (n, 6) ndarray
@@ -115,11 +112,6 @@ class CalibratedRobot(RobotErrorModel):
 
     def noise_sigma(self, poses) -> dict:
         """Largest standard deviation of the propagated noise per pose: component -> (n,) (m, rad).
-
-        Parameters
-        ----------
-        poses : (n, workspace.dim) array_like
-            Task poses (SI).
 
         Returns
         -------

@@ -36,8 +36,6 @@ class CalibrationInfo:
 
     Parameters
     ----------
-    plan : evotol.calibration.plan.CalibrationPlan
-        The plan.
     identification : evotol.calibration.identification.Identification
         Its identification.
     noise : dict

@@ -7,6 +7,13 @@ worst pose (``max_p |(J M)_j| t_j``, the sources that still drive the error), an
 caps it (:mod:`evotol.calibration.linear_range`). :func:`calibration_summary` adds the plan, the
 identification (base set, condition number, unseen sources), the noise's share of the
 requirement and the simulated calibration of each design.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+results : dict of str to evotol.core.result.AllocationResult
+    The methods' results on the calibrated problem.
 """
 from __future__ import annotations
 
@@ -83,8 +90,6 @@ def calibration_summary(problem, results: dict, uncalibrated, checks: dict | Non
     ----------
     problem : evotol.core.problem.ToleranceProblem
         The calibrated problem.
-    results : dict of str to evotol.core.result.AllocationResult
-        The methods' results on the calibrated problem.
     uncalibrated : evotol.core.result.AllocationResult
         The certified optimum of the uncalibrated problem (``problem.uncalibrated``).
     checks : dict of str to evotol.calibration.simulation.CalibrationCheck or dict, optional
@@ -124,8 +129,6 @@ def add_to_study(summary: dict, problem, results: dict, seed: int = 0, simulate:
         The study's JSON summary (:func:`evotol.summaries.user_study.study_summary`), changed in place.
     problem : evotol.core.problem.ToleranceProblem
         The calibrated problem (its ``uncalibrated`` problem is allocated here by the certified optimum).
-    results : dict of str to evotol.core.result.AllocationResult
-        The methods' results on the calibrated problem.
     seed : int
         Seed of the simulated calibrations.
     simulate : int, optional

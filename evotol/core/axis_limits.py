@@ -21,6 +21,13 @@ bound ``L_ref`` (:func:`axis_requirement`). Why this is exact:
 A component given as a plain number stays the norm (rows 0-2 or 3-5 unchanged, repeated at every
 axis slot). Values reported per pose are ``|δ_a| L_ref / L_a``: equal to the axis error when the
 limits are equal; :func:`axis_errors` gives the errors in each axis's own unit and limit.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+component : {"position", "orientation"}
+    The error component.
 """
 from __future__ import annotations
 
@@ -91,11 +98,6 @@ class AxisLimits:
     def axes(self, component: str) -> tuple[str, ...]:
         """The axes limited for ``component`` (``"position"`` or ``"orientation"``), in x, y, z order.
 
-        Parameters
-        ----------
-        component : {"position", "orientation"}
-            The error component.
-
         Returns
         -------
         tuple of str
@@ -105,11 +107,6 @@ class AxisLimits:
 
     def reference(self, component: str) -> float | None:
         """The smallest limit of ``component`` (m or rad): the problem's norm bound; None if not per axis.
-
-        Parameters
-        ----------
-        component : {"position", "orientation"}
-            The error component.
 
         Returns
         -------
@@ -203,8 +200,6 @@ class AxisErrorModel(RobotErrorModel):
 
         Parameters
         ----------
-        component : {"position", "orientation"}
-            The error component.
         slot : int
             The axis slot (last pose coordinate).
 

@@ -1,4 +1,14 @@
-"""Pareto fronts: the one front type and the one knee definition used by every NSGA-II front in evotol."""
+"""Pareto fronts: the one front type and the one knee definition used by every NSGA-II front in evotol.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+F : array_like, (n, m)
+    Objective values of the n front members (any units; all minimised).
+log : sequence of bool, optional
+    Per objective, whether it is taken as log10 before normalising. Default: none.
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -25,13 +35,6 @@ def ideal_point_knee(F: np.ndarray, log: Sequence[bool] | None = None) -> int:
     nearest (Euclidean) to the ideal point after normalising every objective to [0, 1] over the
     front (log10 first where ``log``). On the front ``y = 1/x`` in log-log axes it is ``x = 1``.
 
-    Parameters
-    ----------
-    F : array_like, (n, m)
-        Objective values of the n front members (any units; all minimised).
-    log : sequence of bool, optional
-        Per objective, whether it is taken as log10 before normalising. Default: none.
-
     Returns
     -------
     int
@@ -54,13 +57,6 @@ def knee_points(F: np.ndarray, log: Sequence[bool] | None = None) -> np.ndarray:
     Both marks of the one knee definition, deduplicated: :func:`ideal_point_knee` and the high
     trade-off points of pymoo's ``HighTradeoffPoints`` (Rachmawati & Srinivasan 2009) on the same
     normalised front.
-
-    Parameters
-    ----------
-    F : array_like, (n, m)
-        Objective values of the n front members (any units; all minimised).
-    log : sequence of bool, optional
-        Per objective, whether it is taken as log10 before normalising. Default: none.
 
     Returns
     -------

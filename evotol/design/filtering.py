@@ -12,6 +12,13 @@ column that carries it with a unit suffix (``p_max`` -> ``p_max_mm``), so the th
 
 :func:`main_effects` summarises how much each input moves an objective (mean of log10 objective
 per level, averaged over all other inputs): the data behind the report's findings.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+among : pandas.DataFrame, optional
+    Entries to use instead of the study's.
 """
 from __future__ import annotations
 
@@ -365,11 +372,6 @@ class DesignStudy:
     def objective_ranges(self, among: pd.DataFrame | None = None) -> dict:
         """Range of every objective over the entries (unfiltered).
 
-        Parameters
-        ----------
-        among : pandas.DataFrame, optional
-            Entries to use instead of the study's.
-
         Returns
         -------
         dict
@@ -388,8 +390,6 @@ class DesignStudy:
             An objective column.
         log : bool, optional
             Average log10 of the objective (default True: effects in decades).
-        among : pandas.DataFrame, optional
-            Entries to use instead of the study's.
 
         Returns
         -------

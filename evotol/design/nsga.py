@@ -1,5 +1,24 @@
 """NSGA-II beyond the levels: the factors' continuous ranges searched by pymoo (issue "beyond the levels"),
-run by evotol's one NSGA-II driver (:func:`evotol.allocators.nsga_driver.run_nsga2`)."""
+run by evotol's one NSGA-II driver (:func:`evotol.allocators.nsga_driver.run_nsga2`).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+factors : sequence of Factor
+    The design variables; their continuous ``[low, high]`` ranges (log-scaled where ``log``)
+    are searched, levels are ignored.
+evaluator : callable
+    Picklable ``DataFrame -> DataFrame`` computing the objective columns (and optionally
+    ``feasible`` and the ``constraint`` column) of a whole population, as for
+    :func:`~evotol.design.evaluation.evaluate`.
+objectives : sequence of Objective
+    The objective columns and their senses.
+constraint : str, optional
+    Column of the evaluator output that must be <= 0 for a feasible entry.
+scheduler : str, optional
+    Address of a Dask scheduler (``"tcp://host:8786"``) to run the chunks on.
+"""
 from __future__ import annotations
 
 import math
@@ -57,23 +76,10 @@ class DesignProblem(Problem):
 
     Parameters
     ----------
-    factors : sequence of Factor
-        The design variables; their continuous ``[low, high]`` ranges (log-scaled where ``log``)
-        are searched, levels are ignored.
-    evaluator : callable
-        Picklable ``DataFrame -> DataFrame`` computing the objective columns (and optionally
-        ``feasible`` and the ``constraint`` column) of a whole population, as for
-        :func:`~evotol.design.evaluation.evaluate`.
-    objectives : sequence of Objective
-        The objective columns and their senses.
-    constraint : str, optional
-        Column of the evaluator output that must be <= 0 for a feasible entry.
     workers : int, default 1
         Local processes; above 1 (or with ``scheduler``) a generation is split into one chunk
         per worker and run by :func:`~evotol.design.evaluation.evaluate`, else it runs in this
         process.
-    scheduler : str, optional
-        Address of a Dask scheduler (``"tcp://host:8786"``) to run the chunks on.
     """
 
     def __init__(self, factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[Objective], *,
@@ -139,23 +145,12 @@ def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[
 
     Parameters
     ----------
-    factors : sequence of Factor
-        The design variables; their continuous ``[low, high]`` ranges (log-scaled where ``log``)
-        are searched, levels are ignored.
-    evaluator : callable
-        Picklable ``DataFrame -> DataFrame`` computing the objective columns (and optionally
-        ``feasible`` and the ``constraint`` column) of a whole population, as for
-        :func:`~evotol.design.evaluation.evaluate`.
-    objectives : sequence of Objective
-        The objective columns and their senses.
     pop_size : int, default 64
         Population size.
     n_gen : int, default 40
         Number of generations.
     seed : int, default 0
         Seed of NSGA-II and of the random individuals that complete an ``initial`` population.
-    constraint : str, optional
-        Column of the evaluator output that must be <= 0 for a feasible entry.
     initial : pandas.DataFrame, optional
         Known entries (one column per factor name, column units) seeding the population; the
         first ``pop_size`` are used (clipped to the ranges), random individuals fill the rest.
@@ -166,8 +161,6 @@ def nsga2(factors: Sequence[Factor], evaluator: Evaluator, objectives: Sequence[
     workers : int, default 1
         Local processes; above 1 (or with ``scheduler``) each generation is split into one
         chunk per worker.
-    scheduler : str, optional
-        Address of a Dask scheduler (``"tcp://host:8786"``) to run the chunks on.
 
     Returns
     -------

@@ -22,6 +22,15 @@ factor s < 1 until the rule holds (every measure is non-decreasing in each toler
 s. The allocators whose final design needs it call :func:`hold_to_rule` as an explicit last step
 (``result.info["feasibility_repair"]``); :func:`evotol.core.result.make_result` then only builds the
 result of the design it is given.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+t : array_like, shape (n_sources,)
+    The design (SI: m or rad).
+problem : evotol.core.problem.ToleranceProblem
+    The problem.
 """
 from __future__ import annotations
 
@@ -86,8 +95,6 @@ def proven_cuts(problem, rows, t: np.ndarray) -> int:
         The problem; nothing is added unless its measure is ``worst_case`` without clearances.
     rows : evotol.measures.constraints.ConstraintRows
         The working set, extended in place with rows ``row·t / requirement`` (+ constant).
-    t : array_like, shape (n_sources,)
-        The design (SI: m or rad).
 
     Returns
     -------
@@ -144,8 +151,6 @@ def meets_requirement(problem, ev) -> bool:
 
     Parameters
     ----------
-    problem : evotol.core.problem.ToleranceProblem
-        The problem.
     ev : Evaluation
         Evaluation of one design (ideally :func:`evaluate_proven`'s).
 
@@ -164,8 +169,6 @@ def evaluate_proven(problem, t: np.ndarray):
     ----------
     problem : evotol.core.problem.ToleranceProblem
         The problem (its requirement's measure is used).
-    t : array_like, shape (n_sources,)
-        The design (SI: m or rad).
 
     Returns
     -------
@@ -239,8 +242,6 @@ def hold_to_rule(problem, t, max_miss: float = REPAIR_MAX):
 
     Parameters
     ----------
-    problem : evotol.core.problem.ToleranceProblem
-        The problem.
     t : array_like or mapping
         The final design (SI: m or rad), anything ``problem.as_array`` takes.
     max_miss : float

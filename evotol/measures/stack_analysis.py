@@ -31,6 +31,15 @@ Figures (all in the stack's length unit; the functions are homogeneous in it):
   Monte Carlo with a Clopper–Pearson interval otherwise (uniform or triangular inputs);
 * **contributions to each side**: each dimension's part of the worst-case deviation below and
   above the nominal gap, and its share of the gap's variance.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+stack : Stack
+    The stack.
+model : StackModel
+    Capability and mean shift.
 """
 from __future__ import annotations
 
@@ -51,11 +60,6 @@ __all__ = ["Stack", "StackDimension", "StackModel", "DISTRIBUTIONS", "SHIFT_MODE
 def worst_case(stack: Stack) -> tuple[float, float]:
     """Worst-case (arithmetic) gap limits: the gap's extremes over the tolerance box.
 
-    Parameters
-    ----------
-    stack : Stack
-        The stack.
-
     Returns
     -------
     tuple of float
@@ -68,11 +72,6 @@ def worst_case(stack: Stack) -> tuple[float, float]:
 
 def rss_half_width(stack: Stack) -> float:
     """``T_rss = sqrt(Σ (a_i h_i)²)`` (length unit).
-
-    Parameters
-    ----------
-    stack : Stack
-        The stack.
 
     Returns
     -------
@@ -107,13 +106,6 @@ def mrss_factor(stack: Stack) -> float:
 def gap_moments(stack: Stack, model: StackModel = StackModel()) -> dict:
     """Mean and standard deviation of the gap under ``model`` (normal dimensions' σ; the other
     distributions' own variances).
-
-    Parameters
-    ----------
-    stack : Stack
-        The stack.
-    model : StackModel
-        Capability and mean shift.
 
     Returns
     -------
@@ -159,8 +151,6 @@ def fraction_outside(stack: Stack, model: StackModel = StackModel(), *, n_sample
     ----------
     stack : Stack
         The stack, with at least one limit.
-    model : StackModel
-        Capability and mean shift.
     n_samples : int
         Monte Carlo samples (non-normal dimensions only).
     seed : int or numpy.random.Generator
@@ -213,8 +203,6 @@ def check_model(stack: Stack, model: StackModel) -> None:
 
     Parameters
     ----------
-    stack : Stack
-        The stack.
     model : StackModel
         The model.
 
@@ -236,8 +224,6 @@ def sample_gap(stack: Stack, model: StackModel, n: int, seed=0) -> np.ndarray:
 
     Parameters
     ----------
-    stack : Stack
-        The stack.
     model : StackModel
         Capability (normal dimensions' σ = h/(3 C_p)) and the dynamic shift's σ inflation.
     n : int
@@ -267,11 +253,6 @@ def sample_gap(stack: Stack, model: StackModel, n: int, seed=0) -> np.ndarray:
 
 def contributions(stack: Stack) -> list[dict]:
     """Each dimension's part of the worst-case gap below and above the nominal gap.
-
-    Parameters
-    ----------
-    stack : Stack
-        The stack.
 
     Returns
     -------
@@ -347,8 +328,6 @@ def analyse_stack(stack: Stack, models: dict | None = None, *, n_samples: int = 
 
     Parameters
     ----------
-    stack : Stack
-        The stack.
     models : dict of str to StackModel, optional
         Named statistical models (default ``{"rss": StackModel()}``, t = 3σ normal).
     n_samples, seed, confidence

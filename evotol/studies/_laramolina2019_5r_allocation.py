@@ -5,6 +5,15 @@ evotol core: shared tolerances (one per joint pair / motor pair), link lengths a
 sources (Table 1), contact-mode clearances (Sec. 2.5), a nonlinear ``yield`` requirement at the
 MIW poses; ``allocate_ga`` / ``allocate_nsga2``, ``calibrate_scale``, ``verify``; and the exact
 worst-case counterpart. The cost models are illustrative (the paper has none).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+case : {"a", "b", "c", "d"}
+    Design case of Table 2.
+radius : float, optional
+    Allowed position deviation, m (default 0.2 mm).
 """
 from __future__ import annotations
 
@@ -51,16 +60,12 @@ def allocation_problem(case: str, n_samples: int, seed: int, D: float = 0.2, rad
 
     Parameters
     ----------
-    case : {"a", "b", "c", "d"}
-        Design case of Table 2.
     n_samples : int
         Monte Carlo samples of the yield requirement (ignored for other measures).
     seed : int
         Random seed of those samples.
     D : float, optional
         Scale of the mechanism, m (physical length = non-dimensional length x D); default 0.2 m.
-    radius : float, optional
-        Allowed position deviation, m (default 0.2 mm).
     p_max : float, optional
         Allowed probability of exceeding ``radius`` at each pose (default 0.01).
     measure : str, optional
@@ -117,8 +122,6 @@ def allocate_case(case: str, cfg: dict, seed: int, pareto: bool, grid: int, p_ma
 
     Parameters
     ----------
-    case : {"a", "b", "c", "d"}
-        Design case of Table 2.
     cfg : dict
         Settings: ``n_alloc_samples`` (samples of the yield problem), ``pop`` and ``n_gen`` (GA
         and NSGA-II), ``n_verify`` (verification samples).
@@ -130,8 +133,6 @@ def allocate_case(case: str, cfg: dict, seed: int, pareto: bool, grid: int, p_ma
         Points per axis of the equal-clearance x actuator-tolerance grid; 0 for none.
     p_max : float, optional
         Allowed exceedance probability per pose (default 0.01).
-    radius : float, optional
-        Allowed position deviation, m (default 0.2 mm).
     seed_designs : sequence of array_like, optional
         Extra GA start designs, source tolerances in SI (m, rad).
 
@@ -224,8 +225,6 @@ def worst_case_case(case: str, seed: int) -> dict:
 
     Parameters
     ----------
-    case : {"a", "b", "c", "d"}
-        Design case of Table 2.
     seed : int
         Random seed of the probabilistic check (``seed + 31``).
 

@@ -32,6 +32,17 @@ This package only hands names on. The reader is split by job, each module readin
 
 Data flows one way: ``run`` reads through ``problem`` (and ``processes`` through ``problem``);
 no part calls another back.
+
+The parameters several definitions of this package share are described once, here.
+
+Parameters
+----------
+spec : dict
+    The parsed study file.
+problem : ToleranceProblem
+    The study's problem.
+robot : robots.base.RobotErrorModel
+    The study's robot.
 """
 from evotol.studyfile.keys import (BOUND_KEYS, GROUP_BOUND_KEYS, POSE_KEYS, REFINE_KEYS, REPORT_KEYS,
                                    REQUIREMENT_KEYS, SOURCE_KEYS, TOP_KEYS, check_study_keys)

@@ -10,6 +10,13 @@ The box rule's zone contains the exact one, so its callouts also hold under the 
 a margin that is the money the box rule spends; the comparison reports both costs, every callout
 under both, the saving ``1 - cost_exact / cost_boxes``, and the worst error each design holds:
 under its own zone model and (for the box design) under the exact zones its drawing really gives.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+problem : ToleranceProblem
+    A problem whose robot is a ``CalloutModel``.
 """
 from __future__ import annotations
 
@@ -48,8 +55,6 @@ def twin_problem(problem: ToleranceProblem, zones: str) -> ToleranceProblem:
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        A problem whose robot is a ``CalloutModel``.
     zones : {"exact", "boxes"}
         The twin's zone model.
 
@@ -134,8 +139,6 @@ def callout_summary(problem: ToleranceProblem, **optimum) -> dict:
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        A problem whose robot is a ``CalloutModel``.
     **optimum
         Keywords of :func:`evotol.allocators.allocate_optimum` for the comparison.
 

@@ -49,8 +49,6 @@ def drop_unreachable(robot, poses, poses_table: dict):
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
-        The study's robot.
     poses : (n, workspace.dim) ndarray
         The poses of the grid, Latin hypercube or list (SI).
     poses_table : dict

@@ -27,11 +27,6 @@ def check_study_keys(spec: dict) -> None:
     """Check every table of a study file whose keys evotol defines (typos like ``lowr`` or
     ``[requirment]`` are errors, not silently ignored).
 
-    Parameters
-    ----------
-    spec : dict
-        The parsed study file.
-
     Raises
     ------
     ValidationError

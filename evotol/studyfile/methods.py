@@ -24,13 +24,6 @@ def study_methods(spec: dict, problem: ToleranceProblem) -> dict:
     """The ``[methods]`` table, or the default: sensitivity, optimum and GA; with clearance
     sources (no sensitivity rule) the GA and the optimum bracket.
 
-    Parameters
-    ----------
-    spec : dict
-        The parsed study file.
-    problem : ToleranceProblem
-        The study's problem.
-
     Returns
     -------
     dict
@@ -46,8 +39,6 @@ def method_options(spec: dict, method: str, kw: dict) -> dict:
 
     Parameters
     ----------
-    spec : dict
-        The parsed study file.
     method : str
         The method's name in ``[methods]``.
     kw : dict
@@ -71,8 +62,6 @@ def check_methods(spec: dict, problem: ToleranceProblem, methods: dict) -> None:
     ----------
     spec : dict
         The parsed study file (its ``[poses] refine`` option is checked with the methods).
-    problem : ToleranceProblem
-        The study's problem.
     methods : dict
         Method name -> keyword table (:func:`study_methods`).
 

@@ -42,11 +42,6 @@ def read_poses(spec: dict, robot: RobotErrorModel) -> np.ndarray:
 def refine_option(spec: dict):
     """The ``[poses] refine`` setting as allocator keyword: False, True or a dict of options.
 
-    Parameters
-    ----------
-    spec : dict
-        The parsed study file.
-
     Returns
     -------
     bool or dict

@@ -21,8 +21,6 @@ def read_robot(spec: dict, base_dir=None) -> tuple[RobotErrorModel, dict]:
 
     Parameters
     ----------
-    spec : dict
-        The parsed study file.
     base_dir : str or Path, optional
         Where a relative ``mechanism``/``urdf`` file is looked up (default: the current folder).
 

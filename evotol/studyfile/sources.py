@@ -20,13 +20,6 @@ def read_clearances(spec: dict, robot: RobotErrorModel) -> tuple["clearances.Cle
     """``[clearances]``: the joint-clearance classes allocated with (or, ``geometric = false``,
     instead of) the robot's sources, and the problem's sources in order.
 
-    Parameters
-    ----------
-    spec : dict
-        The parsed study file.
-    robot : robots.base.RobotErrorModel
-        The study's robot.
-
     Returns
     -------
     classes : evotol.measures.clearances.ClearanceSources or None
@@ -53,8 +46,6 @@ def read_tolerances(spec: dict, sources, owner: str) -> dict[str, Tolerance]:
 
     Parameters
     ----------
-    spec : dict
-        The parsed study file.
     sources : sequence of robots.base.SourceSpec
         The problem's sources (:func:`read_clearances`).
     owner : str

@@ -236,8 +236,6 @@ def run_stack_study(spec: dict, path, out, seed: int) -> dict:
 
     Parameters
     ----------
-    spec : dict
-        The parsed study file.
     path : str or Path
         The study file (its stem is the default name).
     out : str or Path

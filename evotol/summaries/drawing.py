@@ -133,8 +133,6 @@ def rounded_design(problem: ToleranceProblem, t, units: DisplayUnits, precision:
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        The study's problem.
     t : array_like, shape (n_sources,)
         The allocated tolerances (SI: m or rad).
     units : DisplayUnits

@@ -9,6 +9,13 @@ the error at the required probability only when the design sits exactly on the r
 distributions (``Distribution``: uniform, normal with ``t = k σ``, mean shifts, disks and balls),
 from ``n`` common Monte Carlo samples (seeded, the same at every pose), with the distribution-free
 confidence interval of the quantile from the order statistics (binomial, 95 %).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+seed : int, optional
+    Seed of the samples.
 """
 from __future__ import annotations
 
@@ -34,8 +41,6 @@ def yield_quantiles(problem, t, probability: float, n: int = 100_000, seed: int 
         In (0, 1), e.g. the requirement's ``required_yield``.
     n : int, optional
         Monte Carlo samples (common to every pose).
-    seed : int, optional
-        Seed of the samples.
     chunk : int, optional
         Poses per batch (memory: chunk x n x 3 floats).
 
@@ -84,8 +89,6 @@ def largest_quantile(problem, t, probability: float, n: int = 100_000, seed: int
         The required yield, in (0, 1).
     n : int, optional
         Monte Carlo samples (when the model is not exact).
-    seed : int, optional
-        Seed of the samples.
     rtol : float, optional
         Relative precision of the bisection.
 

@@ -22,6 +22,8 @@ Parameters
 ----------
 t : mapping or array_like, shape (n_sources,)
     The design (SI: m or rad).
+problem : ToleranceProblem
+    A problem whose robot has a nonlinear ``pose_error``.
 """
 from __future__ import annotations
 
@@ -53,11 +55,6 @@ def worst_vertex_errors(problem: ToleranceProblem, t) -> dict[str, np.ndarray]:
     """Nonlinear ``|error|`` per pose at each pose's linear worst-case error vector, per constrained
     component (SI, (n_poses,)). The vertex is the one that attains the linear worst case of that
     component.
-
-    Parameters
-    ----------
-    problem : ToleranceProblem
-        A problem whose robot has a nonlinear ``pose_error``.
 
     Returns
     -------
@@ -211,8 +208,6 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
 
     Parameters
     ----------
-    problem : ToleranceProblem
-        A problem whose robot has a nonlinear ``pose_error``.
     n_samples : int
         Monte Carlo samples (>= 1), the same set at every pose.
     seed : int

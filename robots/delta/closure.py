@@ -10,6 +10,13 @@ closure of the three legs solved for the platform position and the free passive 
 :class:`DeltaClosure` is a mixin of :class:`robots.delta.model.DeltaRobot`, which supplies the
 leg end points (:class:`robots.delta.chains.DeltaChains`), the nominal inverse kinematics and the
 iteration settings ``newton_tol`` and ``max_iter``. Units: metres and radians.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+poses : array_like, shape (n, 3)
+    Commanded platform positions, m.
 """
 from __future__ import annotations
 
@@ -70,8 +77,6 @@ class DeltaClosure:
 
         Parameters
         ----------
-        poses : array_like, shape (n, 3)
-            Commanded platform positions, m.
         errors : array_like, shape (n, s, 47), (s, 47) or (47,)
             Error parameters (:data:`PARAMETER_NAMES`), SI; ``s`` samples per pose.
 
@@ -96,8 +101,6 @@ class DeltaClosure:
 
         Parameters
         ----------
-        poses : array_like, shape (n, 3)
-            Commanded platform positions, m.
         errors : array_like, shape (n, s, 47), (s, 47) or (47,)
             Error parameters, SI.
 

@@ -5,6 +5,13 @@ actuated-joint errors of :class:`~robots.fivebar.linkage.FiveBar`, and the worst
 clearances and geometric variations together (:func:`combined_max_pose_error`, Sec. VIII.2).
 
 Units: metres and radians inside; poses are ``(x, y)`` in metres.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+poses : array_like, shape (n, 2)
+    End-effector positions, m.
 """
 from __future__ import annotations
 
@@ -70,11 +77,6 @@ class FiveBarGeometric(RobotErrorModel):
 
     def jacobian_thesis(self, poses) -> np.ndarray:
         """J_p (n, 2, 8) of eq. IV.43 and J_theta2 (n, 8) of eq. IV.40, columns dL0..dL5, dth1, dth3.
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2)
-            End-effector positions, m.
 
         Returns
         -------
@@ -181,8 +183,6 @@ def combined_max_pose_error(fivebar: FiveBar, poses, *, clearance=None, geometri
     ----------
     fivebar : FiveBar
         The linkage.
-    poses : array_like, shape (n, 2)
-        End-effector positions, m.
     clearance : ClearanceMechanism or None
         Clearance model; None: ``fivebar.clearance_mechanism()``.
     geometric : dict of str to float, or None

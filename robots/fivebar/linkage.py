@@ -16,6 +16,13 @@ triangle ``A P B``, and the type-2 (parallel) singularity -- ``C``, ``E``, ``D``
 the thesis's grid (through ``(0, 50) mm``), as the thesis says its workspace does.
 
 Units: metres and radians inside; poses are ``(x, y)`` in metres.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+poses : array_like, shape (n, 2) or (2,)
+    End-effector positions ``(x, y)``, m.
 """
 from __future__ import annotations
 
@@ -91,11 +98,6 @@ class FiveBar:
 
         Raises KinematicsError naming the pose when it is out of reach (no NaN).
 
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2) or (2,)
-            End-effector positions ``(x, y)``, m.
-
         Returns
         -------
         dict of str to ndarray
@@ -152,11 +154,6 @@ class FiveBar:
     def joint_values(self, poses) -> dict[str, np.ndarray]:
         """Joint angles ``theta1`` ... ``theta5`` of :meth:`inverse_geometry` (the clearance model's joint values).
 
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2) or (2,)
-            End-effector positions ``(x, y)``, m.
-
         Returns
         -------
         dict of str to ndarray
@@ -173,11 +170,6 @@ class FiveBar:
     def parallel_singularity(self, poses) -> np.ndarray:
         """Type-2 singularity measure: sine of the angle between links C-E and D-E (0 when C, E, D
         are aligned, the parallel singularity of the 5-bar).
-
-        Parameters
-        ----------
-        poses : array_like, shape (n, 2) or (2,)
-            End-effector positions ``(x, y)``, m.
 
         Returns
         -------

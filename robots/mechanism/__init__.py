@@ -33,6 +33,8 @@ poses : (n, n_coordinates) array_like
 max_step : float, optional
     Largest continuation step, as a fraction of each coordinate's range (dimensionless;
     at most 200 steps).
+zones : {"exact", "boxes"}
+    The zone model.
 """
 from robots.mechanism.description import load_mechanism, mechanism_from_dict
 from robots.mechanism.kinematics import Kinematics

@@ -9,6 +9,13 @@ sampled zone point by a second-order ``~ t^2/L``, ``tests/test_callouts.py``). A
 several members (a position zone's two end discs, a box rule's four intervals) is **one
 tolerance**: ``tied_sources`` names the group, which :func:`evotol.core.variables.tolerance_variables`
 makes one variable costed once.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+q : dict or (n, n_variables) array_like
+    Joint values (rad, m).
 """
 from __future__ import annotations
 
@@ -134,11 +141,6 @@ class CalloutModel(RobotErrorModel):
     def with_zones(self, zones: str) -> "CalloutModel":
         """The same mechanism and callouts under another zone model (``"exact"`` or ``"boxes"``).
 
-        Parameters
-        ----------
-        zones : {"exact", "boxes"}
-            The zone model.
-
         Returns
         -------
         CalloutModel
@@ -190,11 +192,6 @@ class CalloutModel(RobotErrorModel):
     def sensitivity_at_joints(self, q) -> np.ndarray:
         """:meth:`MechanismModel.sensitivity_at_joints` times ``C``.
 
-        Parameters
-        ----------
-        q : dict or (n, n_variables) array_like
-            Joint values (rad, m).
-
         Returns
         -------
         (n, 6, n_columns) ndarray
@@ -235,8 +232,6 @@ class CalloutModel(RobotErrorModel):
 
         Parameters
         ----------
-        q : dict or (n, n_variables) array_like
-            Joint values (rad, m).
         errors : (n, m, n_columns) array_like
             Source errors (m or rad).
 
@@ -283,8 +278,6 @@ def with_callouts(model: MechanismModel, entries=None, zones: str = "exact", sou
     entries : list of dict or None, optional
         A study file's ``[[robot.callouts]]`` tables (:mod:`robots.mechanism.callout_table`); when
         given they replace the description's callouts.
-    zones : {"exact", "boxes"}
-        The zone model.
     sources : sequence of str or None, optional
         Raw source names/patterns, as given to the model.
 

@@ -40,6 +40,13 @@ The **independent-box rule** of common tolerance tools (``zones = "boxes"``): tr
 feature centre within ±t/2 along ``e1`` and ``e2`` and tilts within ±t/L about ``e1`` and ``e2``,
 each an interval source sharing the callout's tolerance. It contains the exact zone, so it holds
 whatever the exact zone holds, at a higher cost.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+axis : (3,) array_like
+    The joint axis in the placement frame.
 """
 from __future__ import annotations
 
@@ -187,8 +194,6 @@ def zone_members(callout: Callout, axis, refined: bool = False, zones: str = "ex
     ----------
     callout : Callout
         The callout.
-    axis : (3,) array_like
-        The joint axis in the placement frame.
     refined : bool
         For a ``position`` callout: an orientation callout refines it on the same feature (the
         feature centre's disc replaces the two end discs; module docstring).
@@ -247,8 +252,6 @@ def replaced_fields(callouts, axis) -> np.ndarray:
     ----------
     callouts : sequence of Callout
         The joint's callouts.
-    axis : (3,) array_like
-        The joint axis in the placement frame.
 
     Returns
     -------
@@ -279,8 +282,6 @@ def axis_displacement(delta, axis, s) -> np.ndarray:
     ----------
     delta : (..., 6) array_like
         Placement twists ``[shift (m); tilt (rad)]``.
-    axis : (3,) array_like
-        The joint axis in the placement frame.
     s : float
         Position along the axis from the placement origin (m).
 
@@ -311,8 +312,6 @@ def worst_axis_displacement(t: float, length: float, s: float, zones: str = "exa
         Feature length L (m).
     s : float
         Distance of the point from the feature centre along the axis (m).
-    zones : {"exact", "boxes"}
-        The zone model.
 
     Returns
     -------

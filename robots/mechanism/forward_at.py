@@ -60,11 +60,6 @@ def urdf_end_links(path) -> list[str]:
     """The links of a URDF that are the child of some joint and the parent of none: the candidates
     for ``--tip`` (a tool flange, a gripper's fingers...).
 
-    Parameters
-    ----------
-    path : str or Path
-        The URDF file.
-
     Returns
     -------
     list of str

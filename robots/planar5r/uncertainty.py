@@ -36,6 +36,10 @@ r1, r2, r3 : float
     (dimensionless in the paper).
 poses : array_like, shape (n_poses, 2) or (2,)
     Nominal end-effector positions, length unit.
+working_mode : str or tuple of int
+    Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
+assembly : {1, -1}
+    Assembly mode sigma of eq. 15.
 """
 from __future__ import annotations
 
@@ -224,10 +228,6 @@ def position_deviations(poses, r1, r2, r3, model: UncertaintyModel, unit: np.nda
         Distributions of the uncertain parameters.
     unit : ndarray, shape (n_samples, n_dims)
         Unit-hypercube rows (see :func:`unit_samples`).
-    working_mode : str or tuple of int
-        Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
-    assembly : {1, -1}
-        Assembly mode sigma of eq. 15.
     failures : {"raise", "mask"}
         What a sample that cannot be assembled gives.
 
@@ -283,10 +283,6 @@ def sample_deviations(poses, r1, r2, r3, model: UncertaintyModel | None = None, 
         Sampling method.
     seed : int, numpy.random.Generator or None
         Seed of the unit samples.
-    working_mode : str or tuple of int
-        Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
-    assembly : {1, -1}
-        Assembly mode sigma of eq. 15.
     failures : {"raise", "mask"}
         As :func:`position_deviations`.
 
@@ -381,10 +377,6 @@ def convergence_study(poses, r1, r2, r3, model: UncertaintyModel | None = None,
         Samples of the reference LHS run.
     seed : int
         Seed of the replications (the reference uses ``seed + 10000``).
-    working_mode : str or tuple of int
-        Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
-    assembly : {1, -1}
-        Assembly mode sigma of eq. 15.
 
     Returns
     -------

@@ -2,6 +2,15 @@
 
 The chunks do not depend on where they run, so all three return identical results; callers
 choose the chunking (a fixed chunk size keeps local and Dask runs comparable).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+fn : callable
+    Picklable (a module-level function) when it runs in other processes.
+items : sequence
+    The items, one call each.
 """
 from __future__ import annotations
 
@@ -74,10 +83,6 @@ def run_chunks(fn: Callable, items: Sequence, on_done: OnDone, *, common: tuple 
 
     Parameters
     ----------
-    fn : callable
-        Picklable (a module-level function) when it runs in other processes.
-    items : sequence
-        The items, one call each.
     on_done : callable
         ``on_done(i, result)``, called in this process for every finished item, in the order
         they finish.
@@ -123,10 +128,6 @@ def parallel_map(fn: Callable, items: Sequence, *, common: tuple = (), workers: 
 
     Parameters
     ----------
-    fn : callable
-        Picklable (a module-level function) when it runs in other processes.
-    items : sequence
-        The items, one call each.
     common : tuple, optional
         Arguments shared by all items, passed before the item.
     workers : int, optional

@@ -9,6 +9,13 @@ allows that but some choice holds the exact limit (several responses sharing the
 choice is made on the exact limit and a rule that cannot size it is replaced by its tightest
 tolerances scaled onto the exact limit (said in the method's name). :class:`InfeasibleError`
 only when no process choice holds the limit at all.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+pp : ProcessProblem
+    The problem.
 """
 from __future__ import annotations
 
@@ -28,11 +35,6 @@ from evotol._runtime.blas_threads import single_threaded_blas
 def check_some_choice_holds(pp: ProcessProblem) -> None:
     """:class:`InfeasibleError` when even every source's finest process at its lower limit misses
     the requirement (then no process choice can hold it); names the smallest error and its pose.
-
-    Parameters
-    ----------
-    pp : ProcessProblem
-        The problem.
 
     Raises
     ------
@@ -61,8 +63,6 @@ def cheapest_feasible_processes(pp: ProcessProblem, *, model: str = "exact") -> 
 
     Parameters
     ----------
-    pp : ProcessProblem
-        The problem.
     model : {"exact", "rule"}
         ``"exact"``: the problem's measure (:meth:`ProcessProblem.normalised_error`); ``"rule"``: the
         rules' one-stack model with aggregated sensitivities.

@@ -22,6 +22,17 @@ Structure (proved in ``docs/clearance_allocation.md``, checked numerically in th
 
 So the certified optimum's cutting planes do not apply; :mod:`evotol.allocators.monotone` uses
 the monotonicity instead (polyblock outer approximation: a proven lower bound on the cost).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+geometric : bool
+    Whether the robot's geometric sources are included (False: clearances only).
+poses : numpy.ndarray, (n_poses, d)
+    Poses (m or rad).
+robot : WithClearances
+    The robot with its clearance classes.
 """
 from __future__ import annotations
 
@@ -52,8 +63,6 @@ def error_sources(robot: RobotErrorModel, clearances: ClearanceSources, geometri
         The robot whose geometric sources come first (interval sources only).
     clearances : ClearanceSources
         The clearance classes, appended after the geometric sources.
-    geometric : bool
-        Whether the robot's geometric sources are included (False: clearances only).
 
     Returns
     -------
@@ -90,8 +99,6 @@ class WithClearances(RobotErrorModel):
         The robot whose geometric sources come first (interval sources only).
     clearances : ClearanceSources
         The clearance classes, appended as sources after the geometric ones.
-    geometric : bool
-        Whether the robot's geometric sources are included (False: clearances only).
 
     Raises
     ------
@@ -180,10 +187,6 @@ def worst_case(robot: WithClearances, poses: np.ndarray, jacobian: np.ndarray, T
 
     Parameters
     ----------
-    robot : WithClearances
-        The robot with its clearance classes.
-    poses : numpy.ndarray, (n_poses, d)
-        Poses (m or rad).
     jacobian : numpy.ndarray, (n_poses, 6, n_sources)
         First-order map of the twist ``[dp; dtheta]`` (:meth:`WithClearances.sensitivity`).
     T : array_like, (n, n_sources) or (n_sources,)
@@ -247,10 +250,6 @@ def sample_twists(robot: WithClearances, poses: np.ndarray, c: np.ndarray, n_sam
 
     Parameters
     ----------
-    robot : WithClearances
-        The robot with its clearance classes.
-    poses : numpy.ndarray, (n_poses, d)
-        Poses (m or rad).
     c : array_like, (n_classes,)
         Class tolerances (m or rad).
     n_samples : int

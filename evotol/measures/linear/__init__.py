@@ -10,7 +10,7 @@ The parameters several definitions of this package share are described once, her
 Parameters
 ----------
 blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-    Sensitivity blocks B_j of one component.
+    Sensitivity blocks B_j of one component (m or rad per unit of source error).
 """
 from evotol.measures.linear.directions import circle, directions_for
 from evotol.measures.linear.directions import hemisphere  # noqa: F401  (a cached grid, not listed)

@@ -24,6 +24,13 @@ with each tolerance taken as the same multiple of its standard deviation.
 Asymmetric intervals (``docs/tolerances.md``; the support function with a mean shift and the RSS
 with a shift ``|s(t)| + sqrt(Σ_j (ρ_j t_j ‖B_j‖₂)²)``): :mod:`evotol.measures.linear.support`. The
 direction grids and their covering angle δ: :mod:`evotol.measures.linear.directions`.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+shape : IntervalShape, optional
+    Interval shape; None: plain ±t.
 """
 from __future__ import annotations
 
@@ -130,8 +137,6 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
 
     Parameters
     ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component (m or rad per unit of source error).
     t : array_like, shape (n_designs, n_src) or (n_src,)
         Tolerances (SI: m or rad).
     n_directions : int
@@ -140,8 +145,6 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
         Precomputed ``(c, D, delta[, const])``.
     top_only : bool
         Refine only the poses that can hold the maximum.
-    shape : IntervalShape, optional
-        Interval shape; None: plain ±t.
     n_starts : int
         Ascent starts per pose for non-plain shapes.
 
@@ -224,8 +227,6 @@ def worst_case_errors(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray,
         One design (SI: m or rad).
     u : ndarray, shape (n_poses, 3)
         Worst direction at each pose (unit vectors).
-    shape : IntervalShape, optional
-        Interval shape; None: plain ±t.
 
     Returns
     -------

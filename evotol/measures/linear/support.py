@@ -21,6 +21,13 @@ covering angle of the full grid equals that of ±hemisphere). For fixed u, h is 
 the rows of :mod:`evotol.measures.constraints` gain a constant term u·Σ_j B_j offset_j. RSS with a shift:
 ``|s(t)| + sqrt(Σ_j (ρ_j t_j ‖B_j‖₂)²)`` (mean shift added linearly to the RSS of the variation,
 the CETOL/3DCS convention for a mean shift).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+D : ndarray, shape (n_dir, 3)
+    Unit directions u_d.
 """
 from __future__ import annotations
 
@@ -84,8 +91,6 @@ def mean_shift(blocks: list[np.ndarray], shape: IntervalShape, T: np.ndarray) ->
 
     Parameters
     ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component (m or rad per unit of source error).
     shape : IntervalShape
         Where each interval sits.
     T : array_like, shape (n_designs, n_src) or (n_src,)
@@ -111,10 +116,6 @@ def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: Interva
 
     Parameters
     ----------
-    blocks : list of ndarray, each shape (n_poses, 3, dim_j)
-        Sensitivity blocks B_j of one component (m or rad per unit of source error).
-    D : ndarray, shape (n_dir, 3)
-        Unit directions u_d.
     shape : IntervalShape or None
         Interval shape; None: plain ±t.
 
@@ -140,8 +141,6 @@ def support_constant(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalSha
 
     Parameters
     ----------
-    D : ndarray, shape (n_dir, 3)
-        Unit directions u_d.
     shape : IntervalShape or None
         Interval shape; None: no offsets (zeros).
 

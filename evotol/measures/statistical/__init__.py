@@ -11,6 +11,17 @@ Parameters
 ----------
 T : array_like, shape (n_designs, n_sources) or (n_sources,)
     Designs (SI: m or rad).
+dists : sequence of evotol.measures.statistical.distributions.Distribution
+    Each source's distribution inside its tolerance.
+bounds : dict of str to float or None
+    Component -> bound E (m or rad); None components are not constrained.
+radial : str
+    Radial law of disk/ball sources (one of ``evotol.measures.statistical.distributions.RADIAL``).
+shift : tuple of three array_like, shape (n_sources,), optional
+    ``(rho, kappa, offset)`` of asymmetric intervals (dimensionless, dimensionless, SI);
+    None: centred ±t.
+probability : float
+    Required yield p, in (0, 1).
 """
 from evotol.measures.statistical.first_order import FirstOrderYield, YieldResult
 from evotol.measures.statistical.normal_miss import (chi3_cdf, chi3_survival, k_equivalent, miss_probability,

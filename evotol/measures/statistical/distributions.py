@@ -29,6 +29,15 @@ Every distribution is isotropic, so its covariance per unit tolerance is ``varia
 (:func:`unit_moments`); that is what the first-order ``yield`` measure uses
 (:mod:`evotol.measures.statistical`). Samples are generated from uniforms by inverse CDFs
 (:func:`draw`), so Latin hypercube stratification carries over to every distribution.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+dims : sequence of int
+    Dimension of each source (1, 2 or 3).
+n : int
+    Number of samples.
 """
 from __future__ import annotations
 
@@ -199,8 +208,6 @@ def uniforms(n: int, d: int, method: str = "lhs", seed=0) -> np.ndarray:
 
     Parameters
     ----------
-    n : int
-        Number of samples.
     d : int
         Number of columns (the sum of the source dimensions).
     method : {"lhs", "mc"}
@@ -251,8 +258,6 @@ def draw(U: np.ndarray, dims, dists, radial: str = "uniform") -> list[np.ndarray
     ----------
     U : numpy.ndarray, (n, sum(dims))
         Uniforms in [0, 1), e.g. from :func:`uniforms`.
-    dims : sequence of int
-        Dimension of each source (1, 2 or 3).
     dists : sequence of Distribution or str
         Distribution of each source (anything :func:`as_distribution` takes).
     radial : {"uniform", "area"}
@@ -310,12 +315,8 @@ def unit_samples(dims, dists, n: int, method: str = "lhs", seed=0, radial: str =
 
     Parameters
     ----------
-    dims : sequence of int
-        Dimension of each source (1, 2 or 3).
     dists : sequence of Distribution or str
         Distribution of each source.
-    n : int
-        Number of samples.
     method : {"lhs", "mc"}
         Latin hypercube or plain Monte Carlo (:func:`uniforms`).
     seed : int, numpy.random.Generator or None

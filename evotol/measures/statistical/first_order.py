@@ -74,15 +74,6 @@ class FirstOrderYield:
     ----------
     blocks : dict of str to list of ndarray, each shape (n_poses, 3, dim_j)
         Component -> sensitivity blocks per source (m or rad per unit of source error).
-    dists : sequence of evotol.measures.statistical.distributions.Distribution
-        Each source's distribution inside its tolerance.
-    bounds : dict of str to float or None
-        Component -> bound E (m or rad); None components are not constrained.
-    radial : str
-        Radial law of disk/ball sources (one of ``evotol.measures.statistical.distributions.RADIAL``).
-    shift : tuple of three array_like, shape (n_sources,), optional
-        ``(rho, kappa, offset)`` of asymmetric intervals (dimensionless, dimensionless, SI);
-        None: centred ±t.
     noise : dict of str to ndarray, shape (n_poses, 6), optional
         Component -> covariance (xx, yy, zz, xy, xz, yz; m² or rad²) of a normal error
         independent of the sources, added at every pose (a calibrated robot's instrument noise,
@@ -141,11 +132,6 @@ class FirstOrderYield:
     def evaluate(self, T: np.ndarray, probability: float) -> YieldResult:
         """Miss probabilities, Bonferroni yield bound, equivalent errors and violation (module
         docstring) of designs at every pose.
-
-        Parameters
-        ----------
-        probability : float
-            Required yield p, in (0, 1).
 
         Returns
         -------

@@ -2,6 +2,13 @@
 ``docs/statistical.md``): :class:`SampledYield` counts misses of ``robot.pose_error`` on common
 random samples, and :func:`pose_error_nan` lets a sample that cannot be assembled count as a miss
 (also for :mod:`evotol.verification.montecarlo` and :mod:`evotol.verification.nonlinear`).
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+robot : robots.base.RobotErrorModel
+    A robot with a nonlinear ``pose_error``.
 """
 from __future__ import annotations
 
@@ -18,8 +25,6 @@ def pose_error_nan(robot, poses: np.ndarray, errors: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
-        A robot with a nonlinear ``pose_error``.
     poses : ndarray, shape (n_poses, workspace.dim)
         Workspace poses (SI: m, rad).
     errors : ndarray, shape (n_poses, n_samples, n_columns)
@@ -52,25 +57,14 @@ class SampledYield:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
-        A robot with a nonlinear ``pose_error``.
     poses : array_like, shape (n_poses, workspace.dim)
         Workspace poses (SI: m, rad).
-    dists : sequence of evotol.measures.statistical.distributions.Distribution
-        Each source's distribution inside its tolerance.
-    bounds : dict of str to float or None
-        Component -> bound E (m or rad); None components are not constrained.
     n_samples : int
         Common samples per design and pose.
     seed : int or None
         Seed of the common samples.
     method : str
         ``"lhs"`` (Latin hypercube) or ``"mc"``.
-    radial : str
-        Radial law of disk/ball sources (one of ``evotol.measures.statistical.distributions.RADIAL``).
-    shift : tuple of three array_like, shape (n_sources,), optional
-        ``(rho, kappa, offset)`` of asymmetric intervals (dimensionless, dimensionless, SI);
-        None: centred ±t.
     max_rows : int
         Largest number of (design, pose, sample) rows passed to ``pose_error`` at once (memory).
 
@@ -139,11 +133,6 @@ class SampledYield:
 
     def evaluate(self, T: np.ndarray, probability: float) -> YieldResult:
         """Sampled miss rates, joint yield, error quantiles and violation of designs at every pose.
-
-        Parameters
-        ----------
-        probability : float
-            Required yield p, in (0, 1).
 
         Returns
         -------

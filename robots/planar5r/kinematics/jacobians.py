@@ -27,11 +27,6 @@ def jacobians(p, theta, r1, r3):
     ``J_x`` (..., 2, 2) has rows ``(P - B_i)^T``; ``J_q`` (..., 2) is the diagonal
     ``cross(B_i - A_i, P - B_i)``. Type II singular: ``det J_x = 0``; type I: ``J_q,i = 0``.
 
-    Parameters
-    ----------
-    r1, r3 : float
-        Crank and half-base lengths (the length unit of the positions).
-
     Returns
     -------
     J_x : ndarray, shape (..., 2, 2)
@@ -51,11 +46,6 @@ def jacobians(p, theta, r1, r3):
 def jacobian(p, theta, r1, r3) -> np.ndarray:
     """``J = J_x^{-1} diag(J_q)``, (..., 2, 2): ``dP = J dtheta`` (length per radian).
 
-    Parameters
-    ----------
-    r1, r3 : float
-        Crank and half-base lengths (the length unit of the positions).
-
     Returns
     -------
     ndarray, shape (..., 2, 2)
@@ -67,11 +57,6 @@ def jacobian(p, theta, r1, r3) -> np.ndarray:
 
 def type2_determinant(p, theta, r1, r3) -> np.ndarray:
     """``det J_x = cross(P - B_1, P - B_2)``; its sign is the assembly mode sigma.
-
-    Parameters
-    ----------
-    r1, r3 : float
-        Crank and half-base lengths (the length unit of the positions).
 
     Returns
     -------

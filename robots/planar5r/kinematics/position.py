@@ -142,11 +142,6 @@ def circle_intersection(c1x, c1y, rho1, c2x, c2y, rho2, assembly=1):
 def crank_points(theta, r1, r3) -> np.ndarray:
     """Elbows ``B_i = A_i + r1 (cos theta_i, sin theta_i)``, shape (..., 2 chains, 2).
 
-    Parameters
-    ----------
-    r1, r3 : float
-        Crank and half-base lengths (the length unit of the positions).
-
     Returns
     -------
     ndarray, shape (..., 2, 2)
