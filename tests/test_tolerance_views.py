@@ -1,15 +1,18 @@
-"""One truth per page (issue 34 item 4): the JSON's zones, the page's tolerance table, the CSV
-and the workbook give the same zone for every tolerance -- symmetric, one-sided (+0/−t) and
+"""One truth per page (issue 34 item 4): the JSON's zones, the page's tolerance table, the terminal,
+the CSV and the workbook give the same zone for every tolerance -- symmetric, one-sided (+0/−t) and
 unequal (+1.6t/−0.4t) -- and the page never shows a one-sided zone as ±t."""
 from __future__ import annotations
 
+import contextlib
 import html
+import io
 import json
 import re
 
 import pandas as pd
 import pytest
 
+from evotol.cli import main
 from evotol.studyfile import run_study_file
 from evotol.summaries.drawing import tolerance_zone
 
@@ -58,8 +61,35 @@ def run(tmp_path_factory):
     d = tmp_path_factory.mktemp("views")
     (d / "h34_views_gap.py").write_text("def gap(a, b, c):\n    return a - b + c\n")
     (d / "views.toml").write_text(STUDY)
-    run_study_file(d / "views.toml", out=d)
+    terminal = io.StringIO()
+    with contextlib.redirect_stdout(terminal):          # `evotol run`, as a user types it
+        assert main(["run", str(d / "views.toml"), "--out", str(d)]) == 0
+    (d / "terminal.txt").write_text(terminal.getvalue())
     return d, json.loads((d / "views.json").read_text())
+
+
+def _page_cells(d) -> tuple[list[str], dict]:
+    """The page's tolerance table: its header and its rows by source (text, unescaped)."""
+    page = (d / "views.html").read_text()
+    table = page[re.search(r"id=['\"]tolerances['\"]", page).start():]
+    table = table[:table.index("</table>")]
+    head = [html.unescape(h) for h in re.findall(r"<th>(.*?)</th>", table)]
+    return head, {r[0]: r for r in ([html.unescape(c) for c in re.findall(r"<td>(.*?)</td>", row)]
+                                    for row in table.split("<tr>")[2:])}
+
+
+def _terminal_table(d) -> tuple[list[str], dict]:
+    """The terminal's tolerance table: its header and its rows by source (columns: 2+ spaces)."""
+    lines = (d / "terminal.txt").read_text().splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith("[evotol] tolerances"))
+    head = re.split(r"\s{2,}", lines[i + 1].strip())
+    rows = {}
+    for line in lines[i + 2:]:
+        if not line.startswith("  "):
+            break
+        cells = re.split(r"\s{2,}", line.strip())
+        rows[cells[0]] = cells
+    return head, rows
 
 
 def test_json_csv_xlsx_and_page_show_one_zone(run):
@@ -67,12 +97,7 @@ def test_json_csv_xlsx_and_page_show_one_zone(run):
     src = {s["name"]: s for s in data["sources"]}
     csv = pd.read_csv(d / "views_tolerances.csv", keep_default_na=False).set_index("source")
     book = pd.read_excel(d / "views_tolerances.xlsx", sheet_name=None)
-    page = (d / "views.html").read_text()
-    table = page[re.search(r"id=['\"]tolerances['\"]", page).start():]
-    table = table[:table.index("</table>")]
-    head = [html.unescape(h) for h in re.findall(r"<th>(.*?)</th>", table)]
-    cells = {r[0]: r for r in ([html.unescape(c) for c in re.findall(r"<td>(.*?)</td>", row)]
-                               for row in table.split("<tr>")[2:])}
+    head, cells = _page_cells(d)
     method = "optimum"
     r = data["results"][method]
     col = head.index(method)
@@ -92,6 +117,36 @@ def test_json_csv_xlsx_and_page_show_one_zone(run):
     assert csv.loc["a", "± tolerance"] == pytest.approx(t * 1e3 / 2)
     assert cells["c"][col].startswith("±")
     assert cells["b"][col].startswith("+")
+
+
+@pytest.mark.parametrize("method", ["optimum", "sensitivity"])
+def test_terminal_shows_the_page_zones_and_the_csv_cost_shares(run, method):
+    """`evotol run` prints one line per source: the page's zone cell (one function) and the cost
+    share of the CSV; the zone's numbers are those of tolerance_zone in the display unit (mm),
+    one-sided a (+0/−t), unequal b (+1.6t/−0.4t), symmetric c."""
+    d, data = run
+    head, cells = _page_cells(d)
+    thead, trows = _terminal_table(d)
+    assert thead[:2] == ["source", "unit"] and method in thead
+    book = pd.read_excel(d / "views_tolerances.xlsx", sheet_name=method).set_index("source")
+    r = data["results"][method]
+    assert set(trows) == {s["name"] for s in data["sources"]}
+    for s in data["sources"]:
+        n = s["name"]
+        cell = trows[n][thead.index(method)]
+        zone, share = re.fullmatch(r"(.*) \(([0-9.]+) %\)", cell).groups()
+        assert trows[n][1] == "mm"
+        assert zone == cells[n][head.index(method)]                                   # the page's very cell
+        z = tolerance_zone(s, r["tolerances"][n])
+        lo, up = _cell_numbers(zone)                                                  # its numbers (4 digits)
+        assert lo == pytest.approx(z["lower"] * 1e3, rel=1e-3, abs=1e-12)
+        assert up == pytest.approx(z["upper"] * 1e3, rel=1e-3, abs=1e-12)
+        assert float(share) == pytest.approx(book.loc[n, "cost share (%)"], abs=0.051)   # the workbook's share
+    assert trows["a"][thead.index(method)].startswith("0 / −")                        # one-sided
+    assert re.match(r"\+[0-9.]+ / −[0-9.]+ ", trows["b"][thead.index(method)])          # unequal
+    assert trows["c"][thead.index(method)].startswith("±")
+    total = sum(float(re.search(r"\(([0-9.]+) %\)", trows[n][thead.index(method)]).group(1)) for n in trows)
+    assert total == pytest.approx(100, abs=0.15)
 
 
 def test_page_states_the_zone_convention(run):

@@ -256,6 +256,59 @@ def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
     return rows, header
 
 
+def cost_share(r: dict, name: str) -> float | None:
+    """One source's share of a method's cost, in percent: ``100·cost_j / Σ cost`` (the CSV's
+    ``cost share (%)`` column, :func:`evotol.reporting.export.tolerance_table`).
+
+    Parameters
+    ----------
+    r : dict
+        One method's entry of a study summary's ``results`` (its ``source_costs``, cost units).
+    name : str
+        The source.
+
+    Returns
+    -------
+    float or None
+        The share (%); 0 when the design costs nothing, None when ``r`` has no ``source_costs``.
+    """
+    costs = r.get("source_costs")
+    if costs is None:
+        return None
+    total = sum(costs.values())
+    return 100.0 * costs.get(name, 0.0) / total if total else 0.0
+
+
+def terminal_tolerance_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
+    """The tolerance table of ``evotol run`` in the terminal: the page's cells (:func:`tolerance_rows`,
+    one zone function for every view), one line per source, each method's zone followed by the
+    source's cost share (issue 34: one truth per page).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (with ``display_units``).
+
+    Returns
+    -------
+    rows : list of list of str
+        Per source: name, display unit, then per method ``zone (share %)`` (the NSGA-II points:
+        the zone alone).
+    header : list of str
+        The column titles.
+    """
+    rows, header = tolerance_rows(summary)
+    results = [summary["results"][m] for m in summary["results"]]
+    out = []
+    for row in rows:
+        cells = []
+        for i, cell in enumerate(row[3:]):
+            share = cost_share(results[i], row[0]) if i < len(results) else None
+            cells.append(cell if share is None else f"{cell} ({share:.1f} %)")
+        out.append([row[0], row[2], *cells])
+    return out, ["source", "unit", *header[3:]]
+
+
 def _error_map_figure(summary: dict, method: str, comp: str):
     """Heatmaps of ``comp`` error over the workspace slices (display units), allocation poses
     projected as dots, the worst allocation pose as a star."""
