@@ -177,3 +177,69 @@ def test_an_assembly_is_reported_by_its_responses(run):
     assert data["assembly"] == {"responses": ["gap"], "limits": [1e-4]}
     assert "gap within ±0.0001000 of its nominal" in page and "#0: gap" in page and "× limit" in page
     assert "response = 0" not in page and "max position error" not in page
+
+
+def _normal_outside(mu: float, sigma: float, limit: float) -> float:
+    """P(|gap| > limit) for gap ~ N(mu, sigma²): Φ((−L − μ)/σ) + Φ((μ − L)/σ) (closed form)."""
+    from scipy.stats import norm
+    return float(norm.cdf((-limit - mu) / sigma) + norm.cdf((mu - limit) / sigma))
+
+
+def _gap_moments(t: dict) -> tuple[float, float]:
+    """Mean and σ of gap = a − b + c under the RSS model (normal about each zone's centre, σ =
+    half-width/3): a on [−t, 0], b on [−0.4t, 1.6t], c on [−t, t] (STUDY's zones)."""
+    mu = -0.5 * t["a"] - 0.6 * t["b"]
+    sigma = ((0.5 * t["a"] / 3) ** 2 + (t["b"] / 3) ** 2 + (t["c"] / 3) ** 2) ** 0.5
+    return mu, sigma
+
+
+@pytest.mark.parametrize("scale", [0.8, 1.0, 1.4])
+def test_verify_samples_the_rss_model_when_told(scale):
+    """verify(distribution=normal, t = 3σ) on a linear stack: the exceed rate is the exact normal
+    P(|gap| > L) within 4 binomial σ (Latin hypercube only narrows it); without the option the
+    same problem samples its sources' own (uniform) distributions, another number."""
+    from cost_models import PowerCost
+    from evotol import Distribution, LinearStack, Tolerance, assembly_problem, verify
+    L = 1e-4
+    stack = LinearStack({"a": 1.0, "b": -1.0, "c": 1.0}, {"gap": L})
+    shape = {"a": {"minus": 1.0, "plus": 0.0}, "b": {"minus": 0.4, "plus": 1.6}, "c": {}}
+    tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-3, **shape[n]) for n in "abc"}
+    problem = assembly_problem(stack, tol)
+    t = {"a": 6e-5 * scale, "b": 4e-5 * scale, "c": 5e-5 * scale}
+    n = 40000
+    mc = verify(problem, t, n_samples=n, seed=3, distribution=Distribution("normal", sigma_k=3.0))
+    p = _normal_outside(*_gap_moments(t), L)
+    rate = float(mc.exceed_rate["position"][0])
+    assert abs(rate - p) <= 4 * (p * (1 - p) / n) ** 0.5 + 1 / n
+    assert mc.to_dict()["sampled_distribution"] == {"kind": "normal", "sigma_k": 3.0, "mean_shift": 0.0}
+    own = verify(problem, t, n_samples=n, seed=3)                # uniform sources: not the normal figure
+    assert "sampled_distribution" not in own.to_dict()
+    assert abs(float(own.exceed_rate["position"][0]) - p) > 8 * (p * (1 - p) / n) ** 0.5
+
+
+def test_an_rss_study_checks_its_verdict_on_the_rss_model(tmp_path):
+    """A study file with an rss requirement and no stated distribution: its Monte Carlo samples the
+    normal t = 3σ model (the JSON says so, the page says so in one line) and its exceed rate is the
+    exact normal probability of the allocated design; the worst-case study beside it samples its
+    sources' own distributions as before (no sampled_distribution)."""
+    (tmp_path / "h34_views_exact.py").write_text("def gap(a, b, c):\n    return a - b + c\n")
+    text = STUDY.replace("h34_views_gap", "h34_views_exact").replace('name = "views"', 'name = "exact"')
+    text = text.replace("[robot]", '[requirement]\nmeasure = "rss"\n[robot]').replace("optimum = {}\n", "")
+    text = text.replace("n_samples = 50", "n_samples = 40000")
+    (tmp_path / "exact.toml").write_text(text)
+    run_study_file(tmp_path / "exact.toml", out=tmp_path)
+    data = json.loads((tmp_path / "exact.json").read_text())
+    mc = data["monte_carlo"]["sensitivity"]
+    assert mc["sampled_distribution"] == {"kind": "normal", "sigma_k": 3.0, "mean_shift": 0.0}
+    t = data["results"]["sensitivity"]["tolerances"]
+    p, n = _normal_outside(*_gap_moments(t), 1e-4), 40000
+    assert abs(mc["max_exceed_rate"] - p) <= 4 * (p * (1 - p) / n) ** 0.5 + 1 / n
+    page = html.unescape((tmp_path / "exact.html").read_text())
+    assert "The Monte Carlo sampled every source from one model: normal (t = 3σ) about its zone's centre" in page
+    assert "the RSS verdict's own model" in page and "Two models" not in page
+
+
+def test_a_worst_case_study_samples_the_sources_own_distributions(run):
+    d, data = run
+    assert all("sampled_distribution" not in c for c in data["monte_carlo"].values())
+    assert "The Monte Carlo sampled each source's own distribution (uniform)." in html.unescape((d / "views.html").read_text())

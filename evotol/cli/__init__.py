@@ -225,7 +225,8 @@ def _print_results(summary: dict) -> None:
     (``[stack]``) prints its gap figures, Cp, Cpk and fractions outside, the page's cells."""
     from evotol.reporting import stack_report
     from evotol.reporting.callout_drawing import terminal_lines
-    from evotol.reporting.user_study import terminal_rows, terminal_tolerance_rows
+    from evotol.reporting.drawing import terminal_tolerance_rows
+    from evotol.reporting.user_study import model_line, terminal_rows
 
     if "stack" in summary:
         rows, header = stack_report.terminal_rows(summary)
@@ -243,6 +244,9 @@ def _print_results(summary: dict) -> None:
     for name, r in summary.get("results", {}).items():
         if r.get("verdict"):
             print(f"  {name}: {r['verdict']}")
+    line = model_line(summary) if "stack" not in summary and "sources" in summary else ""
+    if line:
+        print(f"  {line}")             # the model the Monte Carlo sampled (the page's line)
     over = summary.get("nsga2", {}).get("cheapest_feasible_over_optimum")
     if over is not None:
         print(f"  nsga2: the front's cheapest feasible point is {100 * over:.3g} % above the certified optimum")

@@ -1,10 +1,11 @@
 """A tolerance as a drawing states it: the zone's text in display units (``±t`` or
 ``+upper / −lower``), one function for the page and the terminal (issue 34: a one-sided zone
-``+0 / −288.6 µm`` was shown as ``± 288.6``)."""
+``+0 / −288.6 µm`` was shown as ``± 288.6``); the page's and the terminal's tolerance tables."""
 from __future__ import annotations
 
 import math
 
+from evotol.summaries.drawing import tolerance_zone
 from evotol.units.display import DisplayUnits, number
 
 
@@ -57,3 +58,86 @@ def drawing_check_text(check: dict) -> str:
     verdict = "meets the requirement" if check["meets"] else "misses the requirement"
     return (f"rounded inward to {steps} (fixed sources outward): the drawn zones give normalised error "
             f"{check['normalised_error']:.6g}, {verdict} (cost {check['cost']:.6g})")
+
+
+def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
+    """Source × method table of the tolerance zones in display units (``±t`` or ``+upper / −lower``).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (with ``display_units``).
+
+    Returns
+    -------
+    rows : list of list
+        Per source: name, group, display unit, then the zone of each method and of the NSGA-II
+        cheapest feasible point and knee (:func:`zone_text` of
+        :func:`evotol.summaries.user_study.tolerance_zone`: the deviations the CSV and the
+        workbook give).
+    header : list of str
+        The column titles.
+    """
+    u = DisplayUnits(**summary["display_units"])
+    methods = list(summary["results"])
+    extra = {k: summary["nsga2"][k]["tolerances"] for k in ("cheapest_feasible", "knee") if k in summary.get("nsga2", {})}
+    columns = [summary["results"][m]["tolerances"] for m in methods] + list(extra.values())
+    rows = []
+    for s in summary["sources"]:
+        rows.append([s["name"], s["group"], u.unit_for(s["unit"])]
+                    + [zone_text(tolerance_zone(s, t[s["name"]]), u, s["unit"]) for t in columns])
+    header = ["source", "group", "unit"] + methods + [f"NSGA-II {k.replace('_', ' ')}" for k in extra]
+    return rows, header
+
+
+def cost_share(r: dict, name: str) -> float | None:
+    """One source's share of a method's cost, in percent: ``100·cost_j / Σ cost`` (the CSV's
+    ``cost share (%)`` column, :func:`evotol.reporting.export.tolerance_table`).
+
+    Parameters
+    ----------
+    r : dict
+        One method's entry of a study summary's ``results`` (its ``source_costs``, cost units).
+    name : str
+        The source.
+
+    Returns
+    -------
+    float or None
+        The share (%); 0 when the design costs nothing, None when ``r`` has no ``source_costs``.
+    """
+    costs = r.get("source_costs")
+    if costs is None:
+        return None
+    total = sum(costs.values())
+    return 100.0 * costs.get(name, 0.0) / total if total else 0.0
+
+
+def terminal_tolerance_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
+    """The tolerance table of ``evotol run`` in the terminal: the page's cells (:func:`tolerance_rows`,
+    one zone function for every view), one line per source, each method's zone followed by the
+    source's cost share (issue 34: one truth per page).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (with ``display_units``).
+
+    Returns
+    -------
+    rows : list of list of str
+        Per source: name, display unit, then per method ``zone (share %)`` (the NSGA-II points:
+        the zone alone).
+    header : list of str
+        The column titles.
+    """
+    rows, header = tolerance_rows(summary)
+    results = [summary["results"][m] for m in summary["results"]]
+    out = []
+    for row in rows:
+        cells = []
+        for i, cell in enumerate(row[3:]):
+            share = cost_share(results[i], row[0]) if i < len(results) else None
+            cells.append(cell if share is None else f"{cell} ({share:.1f} %)")
+        out.append([row[0], row[2], *cells])
+    return out, ["source", "unit", *header[3:]]
