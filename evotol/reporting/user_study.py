@@ -29,7 +29,7 @@ from evotol.reporting.callout_drawing import callout_sections
 from evotol.reporting.calibration import calibration_section
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
-from evotol.reporting.drawing import drawing_check_text, tolerance_rows, zone_text
+from evotol.reporting.drawing import drawing_check_text, nominal_line, tolerance_rows, zone_text
 from evotol.summaries.drawing import tolerance_zone
 
 #: marker of each method on the NSGA-II plot (symbol, colour)
@@ -433,6 +433,8 @@ def render_user_study(summary: dict) -> Report:
     rep.table(rows, header, table_id="tolerances")
     rep.text("Each cell is the zone as the drawing states it: deviations from the nominal, ±t when symmetric, "
              "+upper / −lower otherwise (the CSV's lower and upper deviation columns).")
+    if nominal_line(summary):
+        rep.text(nominal_line(summary))
     for m, d in (summary.get("drawing") or {}).items():
         rep.text(f"Drawing, {m}: {drawing_check_text(d)}.", note=not d["meets"])
     if "calibration" in summary:    # a calibrated robot: uncalibrated vs calibrated (docs/calibration.md)

@@ -73,7 +73,7 @@ def verification_model(spec: dict, problem: ToleranceProblem, vspec: dict) -> Di
     Parameters
     ----------
     spec : dict
-        The parsed study file.
+        The parsed study file (its ``distribution`` keys).
     problem : ToleranceProblem
         The study's problem (its requirement's measure).
     vspec : dict
