@@ -243,3 +243,14 @@ def test_a_worst_case_study_samples_the_sources_own_distributions(run):
     d, data = run
     assert all("sampled_distribution" not in c for c in data["monte_carlo"].values())
     assert "The Monte Carlo sampled each source's own distribution (uniform)." in html.unescape((d / "views.html").read_text())
+
+
+def test_a_bad_verify_distribution_is_refused_before_any_method(tmp_path, capsys):
+    """[verify] distribution = "gauss": one line naming the field, nothing run, nothing written."""
+    (tmp_path / "h34_views_bad.py").write_text("def gap(a, b, c):\n    return a - b + c\n")
+    text = STUDY.replace("h34_views_gap", "h34_views_bad").replace('name = "views"', 'name = "bad"')
+    (tmp_path / "bad.toml").write_text(text.replace("n_samples = 50", 'n_samples = 50\ndistribution = "gauss"'))
+    assert main(["run", str(tmp_path / "bad.toml"), "--out", str(tmp_path)]) == 2
+    out = capsys.readouterr()
+    assert "verify.distribution" in out.err and "gauss" in out.err and "[evotol] optimum" not in out.out
+    assert not (tmp_path / "bad.json").exists()

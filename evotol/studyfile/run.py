@@ -18,7 +18,7 @@ from evotol.allocators import allocate_nsga2
 from evotol.calibration.summary import add_to_study as add_calibration
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
-from evotol.measures.statistical.distributions import Distribution
+from evotol.measures.statistical.distributions import Distribution, as_distribution
 from evotol.reporting.export import FORMATS as EXPORT_FORMATS
 from evotol.reporting.callout_drawing import write_callout_exports
 from evotol.reporting.export import write_tolerance_table
@@ -155,7 +155,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     ValidationError
         The file does not exist, is not valid TOML, is a mechanism description, would overwrite
         another study's files, or has a bad key or value (:func:`load_problem`, an unknown
-        method, a keyword a method or ``verify`` does not take, a bad budget, an option a method
+        method, a keyword a method or ``verify`` does not take, a ``[verify] distribution`` that does not suit a source, a bad budget, an option a method
         cannot honour for the problem).
     evotol.errors.InfeasibleError
         No allowed design meets the requirement (checked before the first method).
@@ -178,6 +178,9 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     vspec = spec.get("verify", {"n_samples": 1000})
     check_methods(spec, problem, methods)           # every table checked before the first method runs
     check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
+    if "distribution" in vspec:     # [verify] distribution: checked against every source before any work
+        for src in problem.error_model.sources:
+            as_distribution(vspec["distribution"], "verify.distribution", src.dim)
     vmodel = verification_model(spec, problem, vspec)     # an rss requirement: checked on its own model (issue 34)
     if vmodel is not None:
         vspec = {**vspec, "distribution": vmodel}
