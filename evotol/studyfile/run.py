@@ -155,8 +155,9 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     ValidationError
         The file does not exist, is not valid TOML, is a mechanism description, would overwrite
         another study's files, or has a bad key or value (:func:`load_problem`, an unknown
-        method, a keyword a method or ``verify`` does not take, a ``[verify] distribution`` that does not suit a source, a bad budget, an option a method
-        cannot honour for the problem).
+        method, a keyword a method or ``verify`` does not take, a ``[verify] distribution``
+        that does not suit a source, a bad budget, an option a method cannot honour for the
+        problem).
     evotol.errors.InfeasibleError
         No allowed design meets the requirement (checked before the first method).
     """
