@@ -254,3 +254,32 @@ def test_a_bad_verify_distribution_is_refused_before_any_method(tmp_path, capsys
     out = capsys.readouterr()
     assert "verify.distribution" in out.err and "gauss" in out.err and "[evotol] optimum" not in out.out
     assert not (tmp_path / "bad.json").exists()
+
+
+def test_a_stack_allocation_prints_the_page_drawn_zones(tmp_path):
+    """The shipped motor stack (reports/studies/motor_stack.toml, [stack.allocation]): the terminal's
+    drawn zone and cost share per dimension are the page's allocation cells, and each zone's numbers
+    are the JSON's drawn zone (inches)."""
+    from pathlib import Path
+    study = Path(__file__).resolve().parents[1] / "reports" / "studies" / "motor_stack.toml"
+    terminal = io.StringIO()
+    with contextlib.redirect_stdout(terminal):
+        assert main(["run", str(study), "--out", str(tmp_path)]) == 0
+    data = json.loads((tmp_path / "motor_stack.json").read_text())
+    page = (tmp_path / "motor_stack.html").read_text()
+    table = page[re.search(r"id=['\"]allocation['\"]", page).start():]
+    table = table[:table.index("</table>")]
+    cells = {r[0]: r for r in ([html.unescape(c) for c in re.findall(r"<td>(.*?)</td>", row)]
+                               for row in table.split("<tr>")[2:])}
+    lines = terminal.getvalue().splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith("[evotol] allocated zones"))
+    names = [d["name"] for d in data["stack"]["dimensions"]]
+    rows = {c[0]: c for c in (re.split(r"\s{2,}", line.strip()) for line in lines[i + 2:i + 2 + len(names)])}
+    methods = list(data["allocation"]["methods"])
+    assert set(rows) == set(names) and len(methods) >= 2
+    for n in names:
+        assert rows[n] == cells[n]                                            # the page's very cells
+        for k, m in enumerate(methods):
+            z = data["allocation"]["methods"][m]["drawing"]["zones"][n]
+            up, lo = (float(v.replace("−", "-")) for v in rows[n][1 + k].split(" (")[0].split(" / "))
+            assert (lo, up) == pytest.approx((z["drawing_lower"], z["drawing_upper"]), abs=5e-5)
