@@ -220,11 +220,13 @@ def cmd_run(args) -> int:
 def _print_results(summary: dict) -> None:
     """One line per method of ``evotol run`` (and, for NSGA-II, its cheapest feasible point and
     knee): cost, largest errors in the study's display units, status and the Monte Carlo exceed
-    rate, so the terminal answers "what did I get" without opening the JSON. A stack (``[stack]``)
-    prints its gap figures, Cp, Cpk and fractions outside, the page's cells."""
+    rate, so the terminal answers "what did I get" without opening the JSON; then one line per source
+    with each method's tolerance zone and cost share, the page's cells (issue 34). A stack
+    (``[stack]``) prints its gap figures, Cp, Cpk and fractions outside, the page's cells."""
     from evotol.reporting import stack_report
     from evotol.reporting.callout_drawing import terminal_lines
-    from evotol.reporting.user_study import terminal_rows
+    from evotol.reporting.drawing import terminal_tolerance_rows
+    from evotol.reporting.user_study import model_line, terminal_rows
 
     if summary.get("kind") == "analysis":      # every tolerance given: their analysis (issue 33)
         from evotol.studyfile.given_tolerances import print_analysis
@@ -245,11 +247,30 @@ def _print_results(summary: dict) -> None:
     for name, r in summary.get("results", {}).items():
         if r.get("verdict"):
             print(f"  {name}: {r['verdict']}")
+    line = model_line(summary) if "stack" not in summary and "sources" in summary else ""
+    if line:
+        print(f"  {line}")             # the model the Monte Carlo sampled (the page's line)
     over = summary.get("nsga2", {}).get("cheapest_feasible_over_optimum")
     if over is not None:
         print(f"  nsga2: the front's cheapest feasible point is {100 * over:.3g} % above the certified optimum")
+    if "stack" in summary and summary.get("allocation"):      # the drawn zones of each allocation, as on the page
+        rows, header = stack_report.allocation_rows(summary)
+        _print_table(rows[:len(summary["stack"]["dimensions"])], header,
+                     title="[evotol] allocated zones as drawn (+upper / lower from the nominal), (cost share)")
+    elif "stack" not in summary and "display_units" in summary and summary.get("results"):
+        _print_table(*terminal_tolerance_rows(summary),
+                     title="[evotol] tolerances: the zone a drawing states (display units; ±t, or +upper / −lower "
+                           "from the nominal; as on the page and in the CSV), (cost share)")
     for line in terminal_lines(summary):     # drawing callouts and exact zones vs boxes (issue 35)
         print(line)
+
+
+def _print_table(rows: list, header: list, title: str) -> None:
+    """Print ``title`` and a left-aligned table (two spaces of indent)."""
+    print(title)
+    widths = [max(len(str(x)) for x in col) for col in zip(header, *rows)]
+    for line in [header, *rows]:
+        print("  " + "  ".join(f"{x:<{w}s}" for x, w in zip(line, widths)).rstrip())
 
 
 def cmd_list(args) -> int:

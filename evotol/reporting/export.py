@@ -66,8 +66,9 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        Columns: source, group, unit (display), nominal, ± tolerance, lower deviation, upper
-        deviation (display units; the deviations from the nominal that the interval allows),
+        Columns: source, group, unit (display), nominal (display unit, where the model knows
+        it), nominal is (what the nominal is: the description's entry, the URDF joint origin
+        the deviation is about), ± tolerance, lower deviation, upper deviation (display units; the deviations from the nominal that the interval allows),
         process, cost share (%), contribution (%) to the first constrained component's error at
         the worst pose.
 
@@ -96,6 +97,7 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
         pc = share.get(n)
         rows.append({"source": n, "group": s["group"], "unit": u.unit_for(s["unit"]),
                      "nominal": clean(s["nominal"] * k) if "nominal" in s else None,
+                     "nominal is": s.get("nominal_note", ""),
                      "± tolerance": clean(z["half_width"] * k),
                      "lower deviation": clean(z["lower"] * k),
                      "upper deviation": clean(z["upper"] * k),

@@ -30,7 +30,7 @@ from evotol.reporting.calibration import calibration_section
 from evotol.reporting.joints_section import joints_section
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
-from evotol.reporting.drawing import drawing_check_text, zone_text
+from evotol.reporting.drawing import drawing_check_text, nominal_line, tolerance_rows, zone_text
 from evotol.summaries.drawing import tolerance_zone
 
 #: marker of each method on the NSGA-II plot (symbol, colour)
@@ -215,58 +215,50 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     return rows, header
 
 
+def _dist_text(d: dict) -> str:
+    """``normal (t = 3σ)``, ``uniform, mean shift 0.2·t``: a distribution as the page names it."""
+    return (d["kind"] + (f" (t = {d['sigma_k']:g}σ)" if "normal" in d["kind"] else "")
+            + (f", mean shift {d['mean_shift']:g}·t" if d["mean_shift"] else ""))
+
+
 def model_line(summary: dict) -> str:
-    """One line when the verdict's model and the Monte Carlo's differ: the ``rss`` measure takes
-    every tolerance as 3σ of a normal, the Monte Carlo samples each source's own distribution.
+    """One line stating the model the Monte Carlo sampled (issue 34: every verdict on one stated
+    model). The ``rss`` measure takes every tolerance as 3σ of a normal about its zone's centre;
+    a study file whose sources' distributions are not stated samples that model
+    (:func:`evotol.studyfile.run.verification_model`), else the sources' own distributions, and
+    the line says when the two models differ.
 
     Parameters
     ----------
     summary : dict
-        A user study's JSON summary (``sources`` with their ``distribution``).
+        A user study's JSON summary (``sources`` with their ``distribution``; each Monte Carlo's
+        ``sampled_distribution`` when it sampled one distribution for every source).
 
     Returns
     -------
     str
-        The line, or ``""`` when the models agree (every source normal with t = 3σ and no mean
-        shift), the measure is not ``rss`` or no Monte Carlo ran.
+        The line, or ``""`` when no Monte Carlo ran.
     """
-    if summary.get("measure") != "rss" or not summary.get("monte_carlo"):
+    checks = [c for c in (summary.get("monte_carlo") or {}).values() if c]
+    if not checks:
         return ""
-    other = sorted({f"{d['kind']}" + (f" (t = {d['sigma_k']:g}σ)" if "normal" in d["kind"] else "")
-                    + (f", mean shift {d['mean_shift']:g}·t" if d["mean_shift"] else "")
-                    for d in (s.get("distribution") for s in summary["sources"]) if d is not None
-                    and not (d["kind"] == "normal" and d["sigma_k"] == 3 and d["mean_shift"] == 0)})
-    if not other:
-        return ""
-    return ("Two models: the RSS verdict takes every tolerance as 3σ of a normal; the Monte Carlo exceed rate samples "
-            f"the sources' own distributions ({', '.join(other)}), so the two can differ. Give the sources "
-            "distribution = \"normal\" (sigma_k = 3) to check the RSS verdict on its own model.")
-
-
-def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:
-    """Source × method table of the tolerance zones in display units (``±t`` or ``+upper / −lower``).
-
-    Returns
-    -------
-    rows : list of list
-        Per source: name, group, display unit, then the zone of each method and of the NSGA-II
-        cheapest feasible point and knee (:func:`zone_text` of
-        :func:`evotol.summaries.user_study.tolerance_zone`: the deviations the CSV and the
-        workbook give).
-    header : list of str
-        The column titles.
-    """
-    u = _units(summary)
-    methods = list(summary["results"])
-    extra = {k: summary["nsga2"][k]["tolerances"] for k in ("cheapest_feasible", "knee") if k in summary.get("nsga2", {})}
-    columns = [summary["results"][m]["tolerances"] for m in methods] + list(extra.values())
-    rows = []
-    for s in summary["sources"]:
-        mark = " (no effect on the requirement)" if s.get("no_effect") else ""     # issue 33
-        rows.append([s["name"], s["group"] + mark, u.unit_for(s["unit"])]
-                    + [zone_text(tolerance_zone(s, t[s["name"]]), u, s["unit"], s["dim"]) for t in columns])
-    header = ["source", "group", "unit"] + methods + [f"NSGA-II {k.replace('_', ' ')}" for k in extra]
-    return rows, header
+    rss = summary.get("measure") == "rss"
+    one = next((c["sampled_distribution"] for c in checks if "sampled_distribution" in c), None)
+    if one is not None:
+        same = one["kind"] == "normal" and one["sigma_k"] == 3 and not one["mean_shift"]
+        text = (f"The Monte Carlo sampled every source from one model: {_dist_text(one)} about its zone's centre"
+                + (", σ = half-width / 3" if same else ""))
+        if rss and same:
+            return text + " -- the RSS verdict's own model (no source distribution was stated in the study file)."
+        return text + (" -- the RSS verdict takes t = 3σ, so the two can differ." if rss else ".")
+    own = sorted({_dist_text(d) for d in (s.get("distribution") for s in summary["sources"]) if d is not None})
+    other = [t for t in own if t != "normal (t = 3σ)"]
+    if rss and other:
+        return ("Two models: the RSS verdict takes every tolerance as 3σ of a normal; the Monte Carlo exceed rate samples "
+                f"the sources' own distributions ({', '.join(other)}), as the study file states them, so the two can differ. "
+                "Leave the distributions unstated (or give distribution = \"normal\") to check the RSS verdict on its own model.")
+    return ("The Monte Carlo sampled each source's own distribution (" + ", ".join(own) + ")"
+            + (": the RSS verdict's own model." if rss else "."))
 
 
 def _error_map_figure(summary: dict, method: str, comp: str):
@@ -453,6 +445,8 @@ def render_user_study(summary: dict) -> Report:
     rep.table(rows, header, table_id="tolerances")
     rep.text("Each cell is the zone as the drawing states it: deviations from the nominal, ±t when symmetric, "
              "+upper / −lower otherwise (the CSV's lower and upper deviation columns).")
+    if nominal_line(summary):
+        rep.text(nominal_line(summary))
     for m, d in (summary.get("drawing") or {}).items():
         rep.text(f"Drawing, {m}: {drawing_check_text(d)}.", note=not d["meets"])
     if "calibration" in summary:    # a calibrated robot: uncalibrated vs calibrated (docs/calibration.md)

@@ -18,6 +18,7 @@ from evotol.allocators import allocate_nsga2
 from evotol.calibration.summary import add_to_study as add_calibration
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
+from evotol.measures.statistical.distributions import Distribution, as_distribution
 from evotol.reporting.export import FORMATS as EXPORT_FORMATS
 from evotol.reporting.callout_drawing import write_callout_exports
 from evotol.reporting.export import write_tolerance_table
@@ -58,6 +59,40 @@ def report_units(spec: dict, problem: ToleranceProblem) -> DisplayUnits:
         A bad ``[report] units`` (:func:`evotol.units.display.parse_units`).
     """
     return parse_units(spec.get("report", {}).get("units"), problem_units(problem))
+
+
+def verification_model(spec: dict, problem: ToleranceProblem, vspec: dict) -> Distribution | None:
+    """The one distribution the study's Monte Carlo samples every source from, or None for each
+    source's own (issue 34: every verdict on one stated model).
+
+    An ``rss`` requirement takes every tolerance as 3σ of a normal about its zone's centre; its
+    Monte Carlo samples that model -- normal with σ = half-width / 3, or with the file's top-level
+    ``sigma_k`` -- unless the file states the sources' distributions (a top-level or ``[bounds]``
+    ``distribution``, or ``distribution``/``sigma_k``/``mean_shift`` in a ``[sources.NAME]``
+    table) or ``[verify]`` chooses (its ``distribution``, or ``model = "nonlinear"``).
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file (its ``distribution`` keys).
+    problem : ToleranceProblem
+        The study's problem (its requirement's measure).
+    vspec : dict
+        The ``[verify]`` table.
+
+    Returns
+    -------
+    Distribution or None
+        ``Distribution("normal", sigma_k)`` for an ``rss`` requirement whose sources' distributions
+        the file does not state; None otherwise.
+    """
+    if problem.requirement.measure != "rss" or "distribution" in vspec or vspec.get("model") == "nonlinear":
+        return None
+    per_source = any(k in o for o in spec.get("sources", {}).values() if isinstance(o, dict)
+                     for k in ("distribution", "sigma_k", "mean_shift"))
+    if per_source or "distribution" in spec or "distribution" in spec.get("bounds", {}):
+        return None
+    return Distribution("normal", float(spec.get("sigma_k", 3.0)))
 
 
 def read_study_file(path: Path) -> dict:
@@ -121,8 +156,9 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     ValidationError
         The file does not exist, is not valid TOML, is a mechanism description, would overwrite
         another study's files, or has a bad key or value (:func:`load_problem`, an unknown
-        method, a keyword a method or ``verify`` does not take, a bad budget, an option a method
-        cannot honour for the problem).
+        method, a keyword a method or ``verify`` does not take, a ``[verify] distribution``
+        that does not suit a source, a bad budget, an option a method cannot honour for the
+        problem).
     evotol.errors.InfeasibleError
         No allowed design meets the requirement (checked before the first method).
     """
@@ -146,6 +182,12 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     vspec = spec.get("verify", {"n_samples": 1000})
     check_methods(spec, problem, methods)           # every table checked before the first method runs
     check_keywords(verify, vspec, "verify", exclude=("problem", "tolerances", "seed", "progress"))
+    if "distribution" in vspec:     # [verify] distribution: checked against every source before any work
+        for src in problem.error_model.sources:
+            as_distribution(vspec["distribution"], "verify.distribution", src.dim)
+    vmodel = verification_model(spec, problem, vspec)     # an rss requirement: checked on its own model (issue 34)
+    if vmodel is not None:
+        vspec = {**vspec, "distribution": vmodel}
     if any("budget" not in kw for m, kw in methods.items() if m != "nsga2"):
         problem.check_feasible()            # a requirement no design meets: say so before the first method
     results, front, stopped, skipped = {}, None, [], []

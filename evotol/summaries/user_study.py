@@ -20,6 +20,7 @@ from evotol.summaries.yield_quantile import largest_quantile
 from evotol.core.problem import ToleranceProblem
 from evotol.summaries.drawing import KEYS as DRAWING_KEYS
 from evotol.summaries.drawing import rounded_design, tolerance_zone
+from evotol.summaries.nominals import nominal_notes, source_nominals
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
 
@@ -32,7 +33,8 @@ KEYS = {
     "unreachable": COUNT, "dim": COUNT, "row": "index", "members": "index", "owner": "index",
     "rho": RELATIVE + ": half-width per unit t", "kappa": RELATIVE + ": centre shift per unit t",
     "width": RELATIVE + ": width the cost model sees per unit t", "cost_weight": RELATIVE,
-    "offset": _PER_SOURCE, "nominal": _PER_SOURCE, "minus": RELATIVE + ": lower deviation per unit t",
+    "offset": _PER_SOURCE, "nominal": _PER_SOURCE, "nominal_note": "text: what the nominal is",
+    "minus": RELATIVE + ": lower deviation per unit t",
     "plus": RELATIVE + ": upper deviation per unit t", "locked": _PER_SOURCE, "lower": _PER_SOURCE, "upper": _PER_SOURCE, "starts": _PER_SOURCE,
     "params": "cost-model coefficients (t in units of scale)", "scale": _PER_SOURCE + ": the cost model's unit of t",
     "limit": "m or rad (the component's unit)", "directions": "1: unit direction vector", "covering_angle": "rad",
@@ -68,33 +70,6 @@ def study_units_block(problem: ToleranceProblem) -> dict:
     return make_units_block(keys={**KEYS, **DRAWING_KEYS}, tolerances=dict(zip(problem.names, problem.units())))
 
 
-def source_nominals(robot) -> dict[str, float]:
-    """Nominal values (SI) of the sources where the model knows them: an assembly's dimensions, a
-    mechanism description's named lengths and angles; none for joint errors and encoder offsets.
-
-    Parameters
-    ----------
-    robot : robots.base.RobotErrorModel
-        The problem's robot (an assembly function with ``dimension_names`` and ``x0``, or a model
-        with a ``mechanism`` description), or a :class:`evotol.measures.clearances.WithClearances` around
-        one (its ``base``; the clearance classes have no nominal).
-
-    Returns
-    -------
-    dict of str to float
-        Source name -> nominal value, m or rad; empty when the model knows none (a
-        :class:`robots.assembly.LinearStack` built without its nominals: 0 would be a made-up value).
-    """
-    inner = getattr(robot, "base", robot)         # clearances.WithClearances wraps the robot in .base
-    if hasattr(inner, "dimension_names") and hasattr(inner, "x0") and getattr(inner, "nominal_given", True):
-        return {n: float(v) for n, v in zip(inner.dimension_names, np.ravel(inner.x0))}
-    mech = getattr(inner, "mechanism", None)
-    if mech is not None:
-        return {n: float(v) for table in (getattr(mech, "lengths", {}), getattr(mech, "angles", {}))
-                for n, v in table.items() if np.isscalar(v)}
-    return {}
-
-
 def source_table(problem: ToleranceProblem) -> list[dict]:
     """Per source: name, group, SI unit, dimension, nominal (SI, where known), the interval
     [offset − minus·t, offset + plus·t], and whether it is fixed (no cost) or locked.
@@ -106,10 +81,12 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         ``"rad"``), ``dim``, ``offset`` (m or rad), ``minus``, ``plus`` (dimensionless, per unit
         t), ``fixed`` (bool), ``locked`` (m or rad, or None), ``distribution`` (``kind``,
         ``sigma_k``, ``mean_shift``: what the Monte Carlo samples), where known ``nominal`` (m or
-        rad), and ``no_effect = True`` for a source that cannot move the constrained errors
+        rad) and ``nominal_note`` (what the nominal is: :func:`evotol.summaries.nominals.nominal_notes`),
+        and ``no_effect = True`` for a source that cannot move the constrained errors
         (:func:`sources_without_effect`).
     """
-    nominal = source_nominals(problem.robot)
+    nominal = source_nominals(problem.robot, problem.names)
+    notes = nominal_notes(problem.robot, problem.names)
     zone_per_t = getattr(problem.robot, "zone_per_t", {})
     no_effect = sources_without_effect(problem)
     out = []
@@ -126,6 +103,8 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
             row["nominal"] = nominal[n]
         if no_effect[j]:
             row["no_effect"] = True
+        if n in notes:
+            row["nominal_note"] = notes[n]
         out.append(row)
     return out
 

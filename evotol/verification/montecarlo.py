@@ -85,6 +85,9 @@ class MonteCarloResult:
     calibration : evotol.calibration.simulation.CalibrationCheck, optional
         For a calibrated problem (:func:`evotol.calibration.calibrated_problem`): the calibration
         simulated on the nonlinear model beside the first-order prediction; None otherwise.
+    sampled : evotol.measures.statistical.distributions.Distribution, optional
+        The distribution every source was sampled from (``verify(distribution=...)``); None: each
+        source's own.
 
     Examples
     --------
@@ -116,6 +119,7 @@ class MonteCarloResult:
     yield_nonlinear: np.ndarray | None = None     # the same on robot.pose_error (unassembled = miss)
     yield_check: dict = field(default_factory=dict)
     calibration: object = None    # a calibrated problem's simulated calibration (evotol.calibration.simulation)
+    sampled: object = None        # verify(distribution=...): the one distribution every source was sampled from
 
     @property
     def requirement_missed(self) -> bool:
@@ -169,8 +173,10 @@ class MonteCarloResult:
             ``method``, ``n_samples``, ``seed``, ``seconds``, ``max_exceed_rate``,
             ``linearisation_error``, ``max_error_over_worst_case`` and, where available,
             ``linearisation_verdict``, ``max_exceed_rate_nonlinear``, ``yield``
-            (:func:`yield_check`'s entries) and ``calibration`` (the simulated calibration of a
-            calibrated problem); no per-pose arrays.
+            (:func:`yield_check`'s entries), ``calibration`` (the simulated calibration of a
+            calibrated problem) and ``sampled_distribution`` (``kind``, ``sigma_k``,
+            ``mean_shift``: the one distribution every source was sampled from, when
+            ``verify`` was given one); no per-pose arrays.
         """
         d = {"method": self.method, "n_samples": self.n_samples, "seed": self.seed, "seconds": self.seconds,
              "max_exceed_rate": self.max_exceed_rate(), "linearisation_error": self.linearisation_error,
@@ -183,6 +189,9 @@ class MonteCarloResult:
             d["yield"] = dict(self.yield_check)
         if self.calibration is not None:
             d["calibration"] = self.calibration.to_dict()
+        if self.sampled is not None:
+            d["sampled_distribution"] = {"kind": self.sampled.kind, "sigma_k": float(self.sampled.sigma_k),
+                                         "mean_shift": float(self.sampled.mean_shift)}
         return d
 
 
@@ -247,7 +256,8 @@ def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: 
 @single_threaded_blas
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
            nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
-           progress: bool | None = None, confidence: float = 0.95, model: str = "linear") -> MonteCarloResult:
+           progress: bool | None = None, confidence: float = 0.95, model: str = "linear",
+           distribution=None) -> MonteCarloResult:
     """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose.
 
     Besides exceedance rates, reports the yield (fraction of samples inside every bound) per pose,
@@ -280,6 +290,10 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     model : {"linear", "nonlinear"}
         ``"nonlinear"``: the worst-vertex check and interval Monte Carlo through the robot's
         ``pose_error`` instead (:func:`evotol.verification.nonlinear.verify_nonlinear`).
+    distribution : str, dict or Distribution, optional
+        Sample every source from this one distribution, e.g. ``Distribution("normal", sigma_k=3)``:
+        the ``rss`` measure's model (normal about each zone's centre, σ = half-width / 3). None
+        (default): each source's own distribution.
 
     Returns
     -------
@@ -292,7 +306,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     ------
     evotol.errors.ValidationError
         An unknown ``model``, ``method`` or ``radial``, ``n_samples`` < 1, ``"nonlinear"`` with
-        clearance sources, or a design that does not match the problem's sources.
+        clearance sources or with a ``distribution``, a ``distribution`` that does not suit a
+        source, or a design that does not match the problem's sources.
 
     Examples
     --------
@@ -310,6 +325,9 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     """
     if model == "nonlinear" and problem.clearances is not None:
         raise ValidationError("model", model, "'linear' with clearance sources (the clearance model is first order)")
+    if model == "nonlinear" and distribution is not None:
+        raise ValidationError("distribution", distribution, "None with model='nonlinear' (its interval Monte Carlo "
+                                                            "samples each source's own distribution)")
     if model == "nonlinear":
         return verify_nonlinear(problem, tolerances, n_samples=n_samples, seed=seed, chunk_poses=chunk_poses)
     if model != "linear":
@@ -324,7 +342,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     t = problem.as_array(tolerances)
     robot = problem.error_model
     dims = [s.dim for s in robot.sources]
-    dists = problem.distributions
+    dists = problem.distributions if distribution is None else \
+        [distributions.as_distribution(distribution, f"distribution (source {s.name})", s.dim) for s in robot.sources]
     comps = problem.components
     seeds = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(problem.n_poses)]
     P = problem.n_poses
@@ -373,6 +392,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     res = MonteCarloResult(method, int(n_samples), seed, exceed, maxerr, q95, exceed_nl,
                            (lin_err / lin_scale) if exceed_nl and lin_scale > 0 else None)
     res.yield_linear, res.yield_nonlinear = inside_lin, inside_nl
+    res.sampled = None if distribution is None else dists[0]
     req = problem.requirement.required_yield if problem.requirement.measure == "yield" else None
     res.yield_check = yield_check(inside_nl if inside_nl is not None else inside_lin, n_samples, req, confidence,
                                   "nonlinear" if inside_nl is not None else "linear")
