@@ -138,3 +138,26 @@ def test_urdf_study_csv_carries_the_nominal(tmp_path):
     assert (csv.loc[tilts, "nominal"] == 0).all() and (csv.loc[tilts, "unit"] == "arcsec").all()
     assert csv.loc[shifts | tilts, "nominal is"].str.contains("URDF joint origin").all()
     assert csv.loc[~(shifts | tilts), "nominal"].isna().all()
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_nominals_reach_through_joint_space_and_per_axis_wrappers():
+    """The PUMA 560 study (standard DH, poses as joint values, per-axis limits) wraps the description's
+    model twice; its nominals are still the description's: a2 = 431.8 mm, d4 = 431.8 mm (Corke's
+    table in robots/mechanisms/puma560.toml), alpha1 = 90 deg."""
+    import math
+    import tomllib
+
+    from evotol.studyfile import load_problem
+    from evotol.summaries.nominals import source_nominals
+
+    path = ROOT / "reports" / "studies" / "puma560_axes.toml"
+    problem = load_problem(tomllib.loads(path.read_text()), base_dir=path.parent)
+    nominal = source_nominals(problem.robot, problem.names)
+    text = (ROOT / "robots" / "mechanisms" / "puma560.toml").read_text()
+    assert text.count('"431.8*mm"') == 2            # a2 and d4 as the description writes them
+    assert nominal["a2"] == pytest.approx(0.4318, abs=1e-12)
+    assert nominal["d4"] == pytest.approx(0.4318, abs=1e-12)
+    assert nominal["alpha1"] == pytest.approx(math.pi / 2, abs=1e-12)

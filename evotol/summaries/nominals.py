@@ -25,7 +25,9 @@ from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
 
 def _nominals(robot, names) -> tuple[dict, dict]:
     """(values, notes) by source name (module docstring); ``names`` None: the robot's sources."""
-    inner = getattr(robot, "base", robot)         # clearances.WithClearances / CalloutModel wrap a model in .base
+    inner = robot       # WithClearances, CalloutModel, joint-space poses and per-axis limits wrap a model in .base
+    while not (hasattr(inner, "mechanism") or hasattr(inner, "dimension_names")) and hasattr(inner, "base"):
+        inner = inner.base
     names = list(getattr(robot, "source_names", ())) if names is None else list(names)
     if hasattr(inner, "dimension_names") and hasattr(inner, "x0"):
         if not getattr(inner, "nominal_given", True):
