@@ -179,8 +179,8 @@ def rounded_design(problem: ToleranceProblem, t, units: DisplayUnits, precision:
         if given:
             continue
         f = row["zone_per_t"]      # back from the member's zone to the callout's value
-        if row["dim"] > 1:
-            T[j] = up_r / k / f
+        if row["dim"] > 1 or (row["offset"] == 0 and minus[j] == plus[j] == 1 and lo_r == -up_r):
+            T[j] = up_r / k / f     # a centred ±t stays centred (the clearance measure takes only ±t)
         else:
             minus[j] = max(row["offset"] - lo_r / k, 0.0) / (t[j] * f)
             plus[j] = max(up_r / k - row["offset"], 0.0) / (t[j] * f)
