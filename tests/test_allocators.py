@@ -189,3 +189,26 @@ def test_position_and_orientation_requirements_together():
             B = [b[:, 2] for b in P.blocks["orientation"]]
             closed = sum(opt.t[j] * np.linalg.norm(B[j], axis=1) for j in range(len(B)))
             np.testing.assert_allclose(opt.errors.orientation[0], closed, rtol=1e-12)
+
+
+@pytest.mark.parametrize("measure", ["rss", "worst_case"])
+@pytest.mark.parametrize("cost", [cm.ExponentialCost(1.9, 0.5, scale=1e-3), cm.PowerCost(2.0, 1.5, scale=1e-3)],
+                         ids=["exponential", "power"])
+def test_lagrange_gives_a_source_without_effect_its_upper_bound_without_warnings(measure, cost):
+    """Issue 33 item 7: a source whose sensitivity is exactly 0 (third column) made the closed forms
+    divide by zero (a RuntimeWarning on the terminal). Its limit is the upper bound; with parallel
+    effects the closed form is the optimum, so both agree on every source and on the cost."""
+    import warnings
+
+    r = ToyRobot(dims=(1, 1, 1, 1))
+    r._A[:] = np.outer(np.array([1.0, 0, 0, 0, 0, 0]), [1.0, 2.0, 0.0, 3.0])
+    r._B[:] = 0
+    tol = {s.name: Tolerance(cost, 1e-6, 1e-2) for s in r.sources}
+    P = ToleranceProblem(r, tol, Requirement(position=1e-3, measure=measure), np.array([[0.2]]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        lag = allocate_lagrange(P)
+        opt = allocate_optimum(P)
+    assert lag.t[2] == 1e-2 and opt.t[2] == pytest.approx(1e-2, rel=1e-5)     # SLSQP: the cost is flat there
+    assert lag.feasible and lag.cost == pytest.approx(opt.cost, rel=1e-6)
+    np.testing.assert_allclose(lag.t, opt.t, rtol=1e-4)

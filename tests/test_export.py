@@ -3,6 +3,7 @@ workbook (pandas + openpyxl), from evotol run and from evotol export."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -98,3 +99,57 @@ def test_nominal_is_the_assembly_dimension(tmp_path):
     table = tolerance_table(data).set_index("source")
     assert table["nominal"].to_numpy() == pytest.approx(np.array([27.645, 11.43, 50.8]), rel=1e-12)
     assert list(table["group"]) == ["hub", "roller", "ring"]
+
+
+@pytest.fixture(scope="module")
+def puma(tmp_path_factory):
+    """The PUMA 560 per-axis study (d6 = 0: the wrist's alpha4..6, theta4..6 cannot move frame 6's
+    origin), 50 Monte Carlo samples; run with RuntimeWarnings as errors (issue 33: none leak)."""
+    import warnings
+
+    d = tmp_path_factory.mktemp("puma")
+    text = (STUDIES / "puma560_axes.toml").read_text().replace("n_samples = 500", "n_samples = 50")
+    (d / "s.toml").write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        run_study_file(d / "s.toml", out=d)
+    return d, json.loads((d / "puma560_axes.json").read_text())
+
+
+def test_sources_without_effect_are_marked_in_the_export_with_their_cost(puma):
+    """Issue 33 item 7: the CSV's effect column is "none" exactly for the sources the summary flags,
+    and the about sheet states what they cost: recomputed here from the study file's cost model
+    (exponential a0 = 1.9, a1 = 0.5, scale 1e-5 m) at their allocated tolerance."""
+    d, data = puma
+    csv = pd.read_csv(d / data["exports"]["csv"], keep_default_na=False).set_index("source")
+    flagged = {s["name"] for s in data["sources"] if s.get("no_effect")}
+    assert flagged == {"alpha4", "alpha5", "alpha6", "theta4", "theta5", "theta6"}
+    assert set(csv.index[csv["effect"] == "none"]) == flagged
+    assert set(csv["effect"]) == {"none", ""}
+    about = pd.read_excel(d / data["exports"]["xlsx"], sheet_name="about").set_index("item")["value"]
+    for m, r in data["results"].items():
+        own = sum(1.9 * np.exp(-0.5 * r["tolerances"][n] / 1e-5) for n in flagged)
+        total = sum(1.9 * np.exp(-0.5 * t / 1e-5) for t in r["tolerances"].values())
+        text = about[f"no effect on the requirement, method {m}"]
+        assert text.startswith("alpha4, theta4, alpha5, theta5, alpha6, theta6 (effect 'none'): together cost ")
+        shown, of = re.search(r"together cost (\S+) of the allocation's (\S+) \(", text).groups()
+        assert float(shown) == pytest.approx(own, rel=1e-5) and float(of) == pytest.approx(total, rel=1e-5)
+
+
+def test_round_off_shows_as_zero_in_every_table(puma):
+    """Issue 33 item 7: this study's contributions hold round-off (d4's share of the error at the
+    worst pose is ~4e-15 %; the wrist angles' ~1e-15 %): the CSV, the page's contribution tables and
+    the formatting helper all show 0, never 4e-15; a real small value (0.2 um) is kept."""
+    from evotol.units.display import number
+
+    d, data = puma
+    csv = pd.read_csv(d / data["exports"]["csv"], keep_default_na=False).set_index("source")
+    c = data["results"]["optimum"]["contributions"]["position"]
+    noise = [(s, p) for s, p in zip(c["source"], c["percent"]) if 0 < abs(p) < 1e-9]
+    assert noise                                       # the study does produce round-off
+    for s, _ in noise:
+        assert csv.loc[s, CONTRIB] == 0.0
+    page = (d / "puma560_axes.html").read_text()
+    assert not re.search(r"<td>-?[0-9.]+e-1[0-9]</td>", page)          # e.g. <td>7.0474e-15</td> before
+    assert "<td>alpha5</td><td>angle (no effect on the requirement)</td>" in page
+    assert number(-1.115e-14) == "0" and number(2e-7) == "2.000e-07" and number(-3e-4) == "-0.0003000"

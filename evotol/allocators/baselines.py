@@ -130,8 +130,11 @@ def _t_of_lambda(problem: ToleranceProblem, s: np.ndarray, lam: float, measure: 
                 dc = sum(problem.cost_weight[k] * float(problem.tolerances[problem.names[k]].dcost_of(x)) for k in mem)
                 return dc + lam * (sv if measure == "worst_case" else 2 * sv * x)
             tj = lo if g(lo) >= 0 else hi if g(hi) <= 0 else brentq(g, lo, hi, xtol=1e-15 * hi)
-        elif s[j] == 0 and isinstance(cm, (ExponentialCost, PowerCost)):
-            tj = hi     # no effect on the requirement: the closed form's limit (without a division by zero, issue 33)
+        elif isinstance(cm, (ExponentialCost, PowerCost)) and \
+                lam * (s[j] if measure == "worst_case" else s[j] ** 2) == 0:
+            # no effect on the requirement (or a product that underflows to 0): the closed forms' limit
+            # as lambda s_j -> 0+ is t -> infinity, clipped to the upper bound (no division by zero, issue 33)
+            tj = hi
         elif isinstance(cm, ExponentialCost):
             a0, a1 = cm.p
             if measure == "worst_case":

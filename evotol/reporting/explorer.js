@@ -139,9 +139,10 @@
   }
 
   /* ---- display ---- */
-  function number(v, digits) {        /* evotol.display.number */
+  function number(v, digits) {        /* evotol.units.display.number */
     digits = digits || 4;
-    if (v === 0 || !isFinite(v)) return String(v);
+    if (!isFinite(v)) return String(v);
+    if (Math.abs(v) < 1e-9) return "0";   /* ROUND_OFF: round-off shows as 0 (issue 33) */
     var a = Math.abs(v);
     if (a >= 1e-4 && a < 1e6) {
       var r = +v.toExponential(digits - 1);   /* rounded first: 0.0999999 -> 0.1000 */

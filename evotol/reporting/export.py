@@ -70,7 +70,9 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
         it), nominal is (what the nominal is: the description's entry, the URDF joint origin
         the deviation is about), ± tolerance, lower deviation, upper deviation (display units; the deviations from the nominal that the interval allows),
         process, cost share (%), contribution (%) to the first constrained component's error at
-        the worst pose.
+        the worst pose, effect (``"none"`` for a source that cannot move the constrained errors,
+        summary ``sources[].no_effect``; its cost is in the cost share, and stated in the
+        ``about`` sheet by :func:`no_effect_cost`).
 
     Raises
     ------
@@ -105,8 +107,35 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
                      "drawing upper deviation": dz.get("drawing_upper"),
                      "process": processes.get(n, "fixed (bought in)" if s.get("fixed") else ""),
                      "cost share (%)": clean(100 * costs.get(n, 0.0) / total) if total else 0.0,
-                     f"contribution to the {comp} error at the worst pose (%)": None if pc is None else clean(pc)})
+                     f"contribution to the {comp} error at the worst pose (%)": None if pc is None else clean(pc),
+                     "effect": "none" if s.get("no_effect") else ""})        # issue 33: marked in every table
     return pd.DataFrame(rows)
+
+
+def no_effect_cost(summary: dict, method: str) -> tuple[list[str], float, float]:
+    """What the sources with no effect on the requirement cost in one method's allocation (issue 33:
+    such a source is marked, and its cost stated).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary (:mod:`evotol.summaries.user_study`); a source row with
+        ``no_effect = True`` cannot move any constrained error component.
+    method : str
+        A method of ``summary["results"]``.
+
+    Returns
+    -------
+    names : list of str
+        The sources with no effect, in source order (empty when none).
+    cost : float
+        Their summed cost in that allocation (cost models' unit; ``source_costs``).
+    total : float
+        The allocation's summed source cost.
+    """
+    costs = summary["results"][method].get("source_costs", {})
+    names = [s["name"] for s in summary["sources"] if s.get("no_effect")]
+    return names, float(sum(costs.get(n, 0.0) for n in names)), float(sum(costs.values()))
 
 
 def about_table(summary: dict) -> pd.DataFrame:
@@ -120,7 +149,8 @@ def about_table(summary: dict) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        Two columns, ``item`` and ``value`` (text; requirement in display units).
+        Two columns, ``item`` and ``value`` (text; requirement in display units; per method, the
+        sources with no effect on the requirement and their cost, :func:`no_effect_cost`).
     """
     u = DisplayUnits(**summary["display_units"])
     rows = [("study", summary["name"]), ("robot", summary["robot"]), ("measure", summary["measure"]),
@@ -129,6 +159,13 @@ def about_table(summary: dict) -> pd.DataFrame:
     rows += [(f"method {m}", f"cost {r['cost']:.6g}; {r.get('status', '')}") for m, r in summary["results"].items()]
     rows.append(("values", "± tolerance is the half-width (minus + plus)/2·t; deviations are from the nominal"))
     rows += [(f"drawing, method {m}", drawing_check_text(d)) for m, d in (summary.get("drawing") or {}).items()]
+    for m in summary["results"]:
+        names, cost, total = no_effect_cost(summary, m)
+        if names:
+            rows.append((f"no effect on the requirement, method {m}",
+                         f"{', '.join(names)} (effect 'none'): together cost {cost:.6g} of the allocation's {total:.6g}"
+                         + (f" ({100 * cost / total:.3g} %)" if total else "")
+                         + "; they cannot move the constrained errors"))
     return pd.DataFrame(rows, columns=["item", "value"])
 
 

@@ -472,8 +472,9 @@ def render_user_study(summary: dict) -> Report:
             c = r["contributions"].get(comp)
             if c:
                 src = {s["name"]: s for s in summary["sources"]}
-                rows = [[s, src[s]["group"], f"{zone_text(tolerance_zone(src[s], r['tolerances'][s]), u, src[s]['unit'], src[s]['dim'])} "
-                         f"{u.unit_for(src[s]['unit'])}", pc] for s, pc in zip(c["source"], c["percent"])]
+                rows = [[s, src[s]["group"] + (" (no effect on the requirement)" if src[s].get("no_effect") else ""),
+                         f"{zone_text(tolerance_zone(src[s], r['tolerances'][s]), u, src[s]['unit'], src[s]['dim'])} "
+                         f"{u.unit_for(src[s]['unit'])}", number(pc)] for s, pc in zip(c["source"], c["percent"])]
                 rep.text(f"Contributions to the {comp} error at the worst pose "
                          f"(#{r['worst_pose'][comp]}: {pose_cells(summary, r['worst_pose_coordinates'][comp])}):")
                 rep.table(rows, ["source", "group", "tolerance", "share (%)"])

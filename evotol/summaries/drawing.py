@@ -19,7 +19,7 @@ import numpy as np
 
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError, is_real
-from evotol.units.display import DisplayUnits
+from evotol.units.display import ROUND_OFF, DisplayUnits
 
 #: units of the keys this module adds to a study's JSON (docs/units.md)
 KEYS = {"drawing_lower": "the source's display unit (display_units), rounded to the drawing precision",
@@ -66,7 +66,8 @@ def _source_rows(problem: ToleranceProblem) -> list[dict]:
 
 
 def clean(value: float, digits: int = 13) -> float:
-    """``value`` rounded to ``digits`` significant digits: no float noise (9524.999999999998 -> 9525.0).
+    """``value`` rounded to ``digits`` significant digits: no float noise (9524.999999999998 -> 9525.0);
+    a value in a display unit below ``ROUND_OFF`` (1e-9, :mod:`evotol.units.display`) is 0.
 
     Parameters
     ----------
@@ -79,11 +80,13 @@ def clean(value: float, digits: int = 13) -> float:
     Returns
     -------
     float
-        The rounded number; 0 (never -0.0), inf and NaN unchanged.
+        The rounded number; 0 (never -0.0) below ``ROUND_OFF`` in magnitude; inf and NaN unchanged.
     """
     v = float(value)
-    if v == 0 or not math.isfinite(v):
-        return v + 0.0          # + 0.0: no "-0.0"
+    if abs(v) < ROUND_OFF:
+        return 0.0              # round-off, never "-0.0"
+    if not math.isfinite(v):
+        return v
     return round(v, digits - 1 - int(math.floor(math.log10(abs(v))))) + 0.0
 
 
@@ -176,8 +179,8 @@ def rounded_design(problem: ToleranceProblem, t, units: DisplayUnits, precision:
         if given:
             continue
         f = row["zone_per_t"]      # back from the member's zone to the callout's value
-        if row["dim"] > 1:
-            T[j] = up_r / k / f
+        if row["dim"] > 1 or (row["offset"] == 0 and minus[j] == plus[j] == 1 and lo_r == -up_r):
+            T[j] = up_r / k / f     # a centred ±t stays centred (the clearance measure takes only ±t)
         else:
             minus[j] = max(row["offset"] - lo_r / k, 0.0) / (t[j] * f)
             plus[j] = max(up_r / k - row["offset"], 0.0) / (t[j] * f)

@@ -126,12 +126,15 @@ def sources_without_effect(problem: ToleranceProblem) -> np.ndarray:
     -------
     (n_sources,) ndarray of bool
         True where ``max over poses ||B_j|| x upper_j < NO_EFFECT_FRACTION x limit`` for every
-        constrained component.
+        constrained component; never for a joint clearance class, whose effect the certified
+        clearance measure computes outside the first-order map (its columns there are 0).
     """
     out = np.ones(problem.n_sources, bool)
     for comp, lim in problem.components:
         s = np.asarray(problem.sensitivities[comp], float).max(axis=0)          # (n_poses, n_sources) -> per source
         out &= s * np.asarray(problem.upper, float) < NO_EFFECT_FRACTION * lim
+    if problem.clearances is not None:
+        out &= ~np.isin(list(problem.names), list(problem.clearances.names))
     return out
 
 

@@ -144,24 +144,32 @@ class DisplayUnits:
         return {"length": self.length, "angle": self.angle}
 
 
+#: a displayed value smaller than this (in its display unit) is round-off and shows as 0 (issue 33:
+#: no "-1.115e-14 deg" in a table); no tolerance, error or coordinate is meaningful at 1e-9 of mm, µm, deg
+ROUND_OFF = 1e-9
+
+
 def number(v: float, digits: int = 4) -> str:
-    """A number with ``digits`` significant digits, in plain decimals from 1e-4 to 1e6.
+    """A number with ``digits`` significant digits, in plain decimals from 1e-4 to 1e6; below
+    :data:`ROUND_OFF` in magnitude, ``"0"``.
 
     Parameters
     ----------
     v : float
-        The number (any unit; it is only formatted).
+        The number in its display unit (mm, µm, deg, × limit, ...; it is only formatted).
     digits : int, optional
         Significant digits (default 4).
 
     Returns
     -------
     str
-        Plain decimals when ``1e-4 <= |v| < 1e6``, scientific notation otherwise; ``"0"``,
-        ``"inf"``, ``"nan"`` as ``format(v, "g")`` gives them.
+        Plain decimals when ``1e-4 <= |v| < 1e6``, scientific notation otherwise; ``"0"`` when
+        ``|v| < ROUND_OFF`` (never ``"-0"``); ``"inf"``, ``"nan"`` as ``format(v, "g")`` gives them.
     """
-    if v == 0 or not math.isfinite(v):
+    if not math.isfinite(v):
         return f"{v:g}"
+    if abs(v) < ROUND_OFF:
+        return "0"
     if 1e-4 <= abs(v) < 1e6:
         r = float(f"{v:.{digits - 1}e}")        # rounded first: 0.0999999 -> 0.1000, not 0.10000
         decimals = max(0, digits - 1 - int(math.floor(math.log10(abs(r)))))
