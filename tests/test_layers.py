@@ -13,7 +13,8 @@ bottom:
    what a problem offers;
 3. the problem: ``evotol.core`` (tolerance, requirement, variables, problem, result, pareto, and the
    measures' conformance checks, which build small problems);
-4. allocators and design-space search: ``evotol.allocators``, ``evotol.design``;
+4. allocators, design-space search and calibration plans: ``evotol.allocators``, ``evotol.design``,
+   ``evotol.calibration``;
 5. verification and the data reports read: ``evotol.verification``, ``evotol.summaries``;
 6. reporting: ``evotol.reporting`` (the HTML toolkit; it imports no study);
 7. studies: ``evotol.studies``, ``evotol.studyfile``;
