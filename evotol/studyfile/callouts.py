@@ -89,13 +89,16 @@ def _worst(problem: ToleranceProblem, t) -> dict:
     return {c: {"linear": float(lin[c][0]), "nonlinear": float(np.max(nl[c]))} for c, _ in problem.components}
 
 
-def zone_comparison(problem: ToleranceProblem, **optimum) -> dict:
+def zone_comparison(problem: ToleranceProblem, exact_result=None, **optimum) -> dict:
     """Certified optimum under exact zones and under independent boxes (module docstring).
 
     Parameters
     ----------
     problem : ToleranceProblem
         A problem whose robot is a ``CalloutModel`` (its zones exact or boxes).
+    exact_result : AllocationResult, optional
+        ``allocate_optimum(problem, **optimum)`` when the caller already has it (a study's own
+        optimum, same problem and options): used for the exact zones instead of solving again.
     **optimum
         Keywords of :func:`evotol.allocators.allocate_optimum` (``refine``...).
 
@@ -121,7 +124,8 @@ def zone_comparison(problem: ToleranceProblem, **optimum) -> dict:
     boxes = twin_problem(exact, "boxes")
     out = {}
     for key, p in (("exact", exact), ("boxes", boxes)):
-        r = allocate_optimum(p, **optimum)
+        reuse = key == "exact" and exact_result is not None and exact is problem
+        r = exact_result if reuse else allocate_optimum(p, **optimum)
         t = np.array([r.tolerances[n] for n in p.names])
         out[key] = {"cost": float(r.cost), "feasible": bool(r.feasible), "values": variable_values(p, t),
                     "worst": _worst(p, t)}
@@ -134,11 +138,13 @@ def zone_comparison(problem: ToleranceProblem, **optimum) -> dict:
     return out
 
 
-def callout_summary(problem: ToleranceProblem, **optimum) -> dict:
+def callout_summary(problem: ToleranceProblem, exact_result=None, **optimum) -> dict:
     """What a study's summary carries about its callouts: the features and the comparison.
 
     Parameters
     ----------
+    exact_result : AllocationResult, optional
+        The study's own optimum on this problem with these options (:func:`zone_comparison`).
     **optimum
         Keywords of :func:`evotol.allocators.allocate_optimum` for the comparison.
 
@@ -158,7 +164,7 @@ def callout_summary(problem: ToleranceProblem, **optimum) -> dict:
     if not hasattr(problem.robot, "describe_callouts"):
         raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
     return {"features": problem.robot.describe_callouts(), "zones": problem.robot.zones,
-            "comparison": zone_comparison(problem, **optimum)}
+            "comparison": zone_comparison(problem, exact_result, **optimum)}
 
 
 def callout_warnings(problem: ToleranceProblem) -> list[str]:

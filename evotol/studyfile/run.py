@@ -237,7 +237,10 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["interrupted"] = bool(stopped)
     if hasattr(problem.robot, "describe_callouts") and results and not stopped:   # exact zones vs boxes (issue 35)
         refine = refine_option(spec)
-        summary["callouts"] = callout_summary(problem, **({"refine": refine} if refine else {}))
+        opts = {"refine": refine} if refine else {}
+        # the study's own optimum is the exact zones' side of the comparison when it ran with these options
+        same = "optimum" in results and method_options(spec, "optimum", methods.get("optimum", {})) == opts
+        summary["callouts"] = callout_summary(problem, results["optimum"] if same else None, **opts)
         summary["warnings"] = [*summary["warnings"], *callout_warnings(problem)]
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}

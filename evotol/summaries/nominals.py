@@ -65,6 +65,26 @@ def _nominals(robot, names) -> tuple[dict, dict]:
     return values, notes
 
 
+def nominals_with_notes(robot, names=None) -> tuple[dict[str, float], dict[str, str]]:
+    """:func:`source_nominals` and :func:`nominal_notes` in one pass over the model.
+
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        As for :func:`source_nominals`.
+    names : sequence of str, optional
+        The sources asked about (default: the robot's).
+
+    Returns
+    -------
+    values : dict of str to float
+        Source name -> nominal value, m or rad (:func:`source_nominals`).
+    notes : dict of str to str
+        Source name -> what the nominal is (:func:`nominal_notes`).
+    """
+    return _nominals(robot, names)
+
+
 def source_nominals(robot, names=None) -> dict[str, float]:
     """Nominal values (SI) of the sources where the model knows them (module docstring).
 

@@ -20,7 +20,7 @@ from evotol.summaries.yield_quantile import largest_quantile
 from evotol.core.problem import ToleranceProblem
 from evotol.summaries.drawing import KEYS as DRAWING_KEYS
 from evotol.summaries.drawing import rounded_design, tolerance_zone
-from evotol.summaries.nominals import nominal_notes, source_nominals
+from evotol.summaries.nominals import nominal_notes, nominals_with_notes, source_nominals  # noqa: F401 (re-exported)
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
 
@@ -85,8 +85,7 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         and ``no_effect = True`` for a source that cannot move the constrained errors
         (:func:`sources_without_effect`).
     """
-    nominal = source_nominals(problem.robot, problem.names)
-    notes = nominal_notes(problem.robot, problem.names)
+    nominal, notes = nominals_with_notes(problem.robot, problem.names)
     zone_per_t = getattr(problem.robot, "zone_per_t", {})
     no_effect = sources_without_effect(problem)
     out = []
