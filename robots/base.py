@@ -340,3 +340,28 @@ class RobotErrorModel:
                 f"is outside the workspace {list(zip(self.workspace.low, self.workspace.high))}",
                 poses=arr[outside])
         return arr
+
+
+def inner_model(robot, wanted):
+    """The first model, from the outside in, of a chain of wrappers that each hold the model they
+    wrap in ``.base`` (clearances, drawing callouts, joint-space poses, per-axis limits) for which
+    ``wanted(model)`` holds.
+
+    Parameters
+    ----------
+    robot : RobotErrorModel
+        A model, possibly wrapped.
+    wanted : callable
+        ``wanted(model) -> bool``: the model looked for (e.g. one with a ``mechanism`` description).
+
+    Returns
+    -------
+    RobotErrorModel or None
+        That model, or None when no model of the chain is wanted.
+    """
+    model = robot
+    while model is not None:
+        if wanted(model):
+            return model
+        model = getattr(model, "base", None)
+    return None
