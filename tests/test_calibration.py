@@ -163,3 +163,19 @@ def test_a_model_without_joint_maps_and_with_disk_sources():
         calibrated_problem(p, CalibrationPlan(noise=1e-6, count=30, identify=["U1a"]))
     with pytest.raises(ValidationError, match="calibration.joints"):
         calibrated_problem(p, CalibrationPlan(noise=1e-6, count=30, over="joints"))
+
+
+def test_no_source_of_a_calibrated_robot_is_marked_without_effect(ur5):
+    """Calibrating every identifiable source zeroes the first-order map at the task poses (below
+    1e-9 of the uncalibrated one), yet each source still acts through the second-order terms its
+    linear-range bound limits: the tables must not call any of them 'no effect on the requirement'.
+    The uncalibrated problem's own marks are what the first-order map says."""
+    import numpy as np
+
+    from evotol.summaries.user_study import sources_without_effect
+
+    pc = calibrated_problem(ur5, CalibrationPlan(noise="2 um", count=40, seed=0))
+    J = ur5.robot.sensitivity(ur5.poses)[:, :3]            # position: the requirement's component
+    assert np.abs(pc.jacobian[:, :3]).max() < 1e-9 * np.abs(J).max()   # the first-order map is gone ...
+    assert not sources_without_effect(pc).any()            # ... but no source is called without effect
+    assert sources_without_effect(ur5).sum() < ur5.n_sources

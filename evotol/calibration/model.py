@@ -60,6 +60,10 @@ class CalibratedRobot(RobotErrorModel):
         self.workspace = robot.workspace
         #: False for a model without a nonlinear joint-space model: no linear-range bounds (set by calibrated_problem)
         self.linear_range_checked = True
+        #: sources whose effect the first-order map does not show: after calibration every source acts
+        #: through the second-order terms its linear-range bound limits (docs/calibration.md), so a zero
+        #: column here never means "no effect on the requirement"
+        self.effect_beyond_first_order = frozenset(robot.source_names)
 
     def sensitivity(self, poses) -> np.ndarray:
         """Post-calibration first-order map ``J M`` (n, 6, n_columns) at task poses.

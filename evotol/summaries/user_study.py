@@ -127,7 +127,8 @@ def sources_without_effect(problem: ToleranceProblem) -> np.ndarray:
     (n_sources,) ndarray of bool
         True where ``max over poses ||B_j|| x upper_j < NO_EFFECT_FRACTION x limit`` for every
         constrained component; never for a joint clearance class, whose effect the certified
-        clearance measure computes outside the first-order map (its columns there are 0).
+        clearance measure computes outside the first-order map (its columns there are 0), nor for
+        a source the error model lists in ``effect_beyond_first_order`` (a calibrated robot's).
     """
     out = np.ones(problem.n_sources, bool)
     for comp, lim in problem.components:
@@ -135,6 +136,7 @@ def sources_without_effect(problem: ToleranceProblem) -> np.ndarray:
         out &= s * np.asarray(problem.upper, float) < NO_EFFECT_FRACTION * lim
     if problem.clearances is not None:
         out &= ~np.isin(list(problem.names), list(problem.clearances.names))
+    out &= ~np.isin(list(problem.names), list(getattr(problem.error_model, "effect_beyond_first_order", ())))
     return out
 
 
