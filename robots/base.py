@@ -22,7 +22,7 @@ Everything is in SI units inside (m, rad). Poses outside the workspace or at a s
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -231,6 +231,119 @@ class RobotErrorModel:
     name: str = "robot"
     sources: tuple[SourceSpec, ...] = ()
     workspace: Workspace
+    #: the part this model adds to the model it wraps (:data:`PARTS`); None for a robot as described
+    part: str | None = None
+    #: the model this one wraps (None for a robot as described)
+    base: "RobotErrorModel | None" = None
+    #: True when the model also maps joint values (``sensitivity_at_joints``, ``pose_error_at_joints``,
+    #: ``joint_values``, ``kin``, ``mechanism``): a described mechanism and the parts that keep its joints
+    joint_maps: bool = False
+
+    # --- composition (docs/architecture.md, "The error model, composed") ----------------------
+    @property
+    def tied_sources(self) -> Mapping[str, tuple[str, ...]]:
+        """Callout name -> its member sources, costed as one tolerance; every part keeps its base's ties."""
+        return self.base.tied_sources if self.base is not None else {}
+
+    def parts(self) -> tuple["RobotErrorModel", ...]:
+        """The models of the composition, from the outside in (this model first, the described robot last).
+
+        Returns
+        -------
+        tuple of RobotErrorModel
+            Each part's model.
+        """
+        out, model = [], self
+        while model is not None:
+            out.append(model)
+            model = model.base
+        return tuple(out)
+
+    def part_of(self, kind: str) -> "RobotErrorModel | None":
+        """The model of the composition that adds ``kind`` (one of :data:`PARTS`), or None.
+
+        Parameters
+        ----------
+        kind : str
+            ``"callouts"``, ``"joint_space"``, ``"axis_limits"``, ``"calibration"`` or ``"clearances"``.
+
+        Returns
+        -------
+        RobotErrorModel or None
+            That part's model.
+
+        Raises
+        ------
+        ValueError
+            ``kind`` is not one of :data:`PARTS` (a misspelt part would otherwise read as absent).
+        """
+        if kind not in PARTS:
+            raise ValueError(f"part {kind!r}: expected one of {PARTS}")
+        return next((m for m in self.parts() if m.part == kind), None)
+
+    def notes(self) -> list[str]:
+        """Sentences the report states about the model (a redundant arm's posture, a dropped pose, ...).
+
+        Returns
+        -------
+        list of str
+            The base model's notes for a part; none for a described robot that states none.
+        """
+        return list(self.base.notes()) if self.base is not None else []
+
+    @property
+    def described(self) -> "RobotErrorModel":
+        """The robot as the user described it: the innermost model of the composition."""
+        return self.parts()[-1]
+
+    def rebuilt(self, inner: "RobotErrorModel") -> "RobotErrorModel":
+        """This part around another inner model (a part overrides it; the described robot has none).
+
+        Parameters
+        ----------
+        inner : RobotErrorModel
+            The model to wrap instead of ``base``.
+
+        Returns
+        -------
+        RobotErrorModel
+            The same part on ``inner``.
+
+        Raises
+        ------
+        NotImplementedError
+            A model that is not a part of a composition.
+        """
+        raise NotImplementedError(f"{type(self).__name__} cannot be rebuilt on another model")
+
+    def with_part(self, kind: str, change) -> "RobotErrorModel":
+        """The composition with the part ``kind`` replaced by ``change(part_model)`` and the outer parts rebuilt.
+
+        Parameters
+        ----------
+        kind : str
+            One of :data:`PARTS`, present in the composition.
+        change : callable
+            ``change(model) -> model``: the new model of that part (e.g. callouts under boxes).
+
+        Returns
+        -------
+        RobotErrorModel
+            The new composition (this model is not changed).
+
+        Raises
+        ------
+        ValueError
+            No part ``kind`` in the composition.
+        """
+        chain = self.parts()
+        k = next((i for i, m in enumerate(chain) if m.part == kind), None)
+        if k is None:
+            raise ValueError(f"{self.name}: no {kind!r} part in the composition {[m.part for m in chain]}")
+        model = change(chain[k])
+        for outer in reversed(chain[:k]):
+            model = outer.rebuilt(model)
+        return model
 
     # --- contract -----------------------------------------------------------------------
     def sensitivity(self, poses: np.ndarray) -> np.ndarray:
@@ -342,26 +455,7 @@ class RobotErrorModel:
         return arr
 
 
-def inner_model(robot, wanted):
-    """The first model, from the outside in, of a chain of wrappers that each hold the model they
-    wrap in ``.base`` (clearances, drawing callouts, joint-space poses, per-axis limits) for which
-    ``wanted(model)`` holds.
-
-    Parameters
-    ----------
-    robot : RobotErrorModel
-        A model, possibly wrapped.
-    wanted : callable
-        ``wanted(model) -> bool``: the model looked for (e.g. one with a ``mechanism`` description).
-
-    Returns
-    -------
-    RobotErrorModel or None
-        That model, or None when no model of the chain is wanted.
-    """
-    model = robot
-    while model is not None:
-        if wanted(model):
-            return model
-        model = getattr(model, "base", None)
-    return None
+#: the parts a model can be composed of, in the order they are composed (docs/architecture.md):
+#: source transforms of the described robot (callouts), the pose set (joint configurations), the
+#: calibration projection, the requirement's components (per-axis limits), joint clearances
+PARTS = ("callouts", "joint_space", "calibration", "axis_limits", "clearances")

@@ -26,7 +26,7 @@ def is_described(robot) -> bool:
     bool
         The model has ``sensitivity_at_joints``, ``pose_error_at_joints`` and ``joint_values``.
     """
-    return all(hasattr(robot, a) for a in ("sensitivity_at_joints", "pose_error_at_joints", "joint_values", "kin"))
+    return bool(getattr(robot, "joint_maps", False))
 
 
 def _joint_limits(robot) -> tuple[np.ndarray, np.ndarray]:

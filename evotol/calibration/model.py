@@ -51,6 +51,8 @@ class CalibratedRobot(RobotErrorModel):
         The plan (kept for reports and the simulated calibration).
     """
 
+    part = "calibration"
+
     def __init__(self, robot: RobotErrorModel, identification, plan):
         self.base = robot
         self.identification = identification
@@ -134,7 +136,7 @@ class CalibratedRobot(RobotErrorModel):
         list of str
             The base model's notes and the calibration's sentence.
         """
-        base = list(getattr(self.base, "notes", list)())
+        base = list(self.base.notes())
         idn = self.identification
         return base + [f"Calibrated: {len(idn.identified)} sources identified from {idn.n_measurements} measured "
                        f"coordinates (condition number {idn.condition:.3g}); tolerances are allocated on the error "

@@ -77,6 +77,46 @@ class CalibrationInfo:
                 "identify": p.identify if isinstance(p.identify, str) else list(p.identify)}
 
 
+def check_composable(problem) -> None:
+    """Refuse, before any work, the parts a calibration cannot be composed with (docs/combinations.md).
+
+    Parameters
+    ----------
+    problem : evotol.core.problem.ToleranceProblem
+        The uncalibrated problem.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        One line naming the calibration and the other part, and why: joint clearances (a clearance
+        is not identified by a geometric calibration); drawing callouts (their zone members are 2-D
+        discs and faces, the identification and the controller's compensation work on 1-D source
+        errors); per-axis limits (the noise allowance and the linear-range bounds are derived for
+        the error's norm); every tolerance given (nothing to allocate: the analysis of a given
+        design does not model the calibration); a model without joint maps (no linear-range bound
+        and no simulated calibration could be derived).
+    """
+    robot = problem.robot
+    if problem.clearances is not None:
+        raise ValidationError("calibration", "clearances", "a problem without clearance sources (a clearance is not "
+                              "identified by a geometric calibration)")
+    if robot.part_of("callouts") is not None:
+        raise ValidationError("calibration", "[[robot.callouts]]", "a robot without drawing callouts: calibration with "
+                              "callouts is not supported (a callout's zone members are 2-D discs and faces; the "
+                              "identification and the controller's compensation work on 1-D source errors)")
+    if robot.part_of("axis_limits") is not None:
+        raise ValidationError("calibration", "requirement per axis", "a requirement on the error's norm (position = "
+                              "'0.5 mm'): calibration with per-axis limits is not supported (the noise allowance and "
+                              "the linear-range bounds are derived for the norm)")
+    if not problem.free.any():
+        raise ValidationError("calibration", "every tolerance given", "at least one source free to allocate: the analysis "
+                              "of given tolerances does not model a calibration (in Python, evotol.calibration."
+                              "simulate_calibration(calibrated_problem(...), tolerances) checks a given design)")
+    if not robot.joint_maps:
+        raise ValidationError("calibration", robot.name, "a described mechanism (robot.mechanism or robot.urdf): its "
+                              "joint maps give the linear-range bounds and the simulated calibration")
+
+
 def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
     """The problem of the same robot after the plan's calibration (module docstring).
 
@@ -104,9 +144,7 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
     """
     if not isinstance(plan, CalibrationPlan):
         raise ValidationError("calibration", plan, "an evotol.calibration.CalibrationPlan")
-    if problem.clearances is not None:
-        raise ValidationError("calibration", "clearances", "a problem without clearance sources (a clearance is not "
-                              "identified by a geometric calibration)")
+    check_composable(problem)
     robot = problem.robot
     idn = identify(robot, plan)
     cal = CalibratedRobot(robot, idn, plan)

@@ -149,6 +149,31 @@ def tool_rotation(robot, poses) -> np.ndarray:
     return np.array(kin.state(q, len(P), twists=False).world[mech.end_effector][:, :3, :3])
 
 
+def configurations(robot: RobotErrorModel, poses) -> tuple[RobotErrorModel, np.ndarray]:
+    """The model and poses of a composition before its requirement's parts (per-axis limits, clearances).
+
+    Parameters
+    ----------
+    robot : robots.base.RobotErrorModel
+        A composed model (:data:`robots.base.PARTS`).
+    poses : (n, workspace.dim) array_like
+        Its poses (SI; with per-axis limits, one row per configuration and axis slot).
+
+    Returns
+    -------
+    model : robots.base.RobotErrorModel
+        The model inside the per-axis limits and the clearances.
+    poses : (k, model.workspace.dim) ndarray
+        Its configurations (one per configuration, SI).
+    """
+    model, P = robot, np.asarray(poses, float)
+    while model.part in ("axis_limits", "clearances"):
+        if model.part == "axis_limits":
+            P = P[::model.slots, :-1]
+        model = model.base
+    return model, P
+
+
 class AxisErrorModel(RobotErrorModel):
     """The robot seen per axis: one pose per (configuration, axis slot) (see the module docstring).
 
@@ -168,6 +193,8 @@ class AxisErrorModel(RobotErrorModel):
         Axis slots per configuration: the largest number of limited axes of a component.
     """
 
+    part = "axis_limits"
+
     def __init__(self, robot: RobotErrorModel, limits: AxisLimits, norm_components=()):
         self.base, self.limits = robot, limits
         self.norm_components = frozenset(norm_components)
@@ -177,6 +204,16 @@ class AxisErrorModel(RobotErrorModel):
         self.workspace = Workspace(names=(*ws.names, "axis"), low=(*ws.low, 0.0), high=(*ws.high, float(self.slots - 1)),
                                    units=(*ws.units, "1"), display_units=(*ws.display_units, "1"),
                                    display_scale=(*ws.display_scale, 1.0))
+
+    def rebuilt(self, inner: RobotErrorModel) -> "AxisErrorModel":
+        """The same per-axis limits on another model of the robot.
+
+        Returns
+        -------
+        AxisErrorModel
+            ``inner`` seen per axis.
+        """
+        return AxisErrorModel(inner, self.limits, self.norm_components)
 
     def expand(self, poses) -> np.ndarray:
         """The problem's poses for the robot's: each configuration once per axis slot.
@@ -318,7 +355,7 @@ class AxisErrorModel(RobotErrorModel):
         list of str
             One line per per-axis component, plus the wrapped robot's notes.
         """
-        lines = list(getattr(self.base, "notes", list)())
+        lines = list(self.base.notes())
         for comp, unit, scale in (("position", "mm", 1e3), ("orientation", "mrad", 1e3)):
             axes = self.limits.axes(comp)
             if not axes:

@@ -70,12 +70,13 @@ def twin_problem(problem: ToleranceProblem, zones: str) -> ToleranceProblem:
         The robot has no callouts.
     """
     robot = problem.robot
-    if not hasattr(robot, "with_zones"):
+    callouts = robot.part_of("callouts")
+    if callouts is None:
         raise ValidationError("robot", robot.name, "a model with drawing callouts ([[robot.callouts]], docs/callouts.md)")
-    twin = robot.with_zones(zones)
+    twin = robot.with_part("callouts", lambda m: m.with_zones(zones))   # the outer parts (joint space, ...) kept
     tols = {}
     for s in twin.sources:
-        c = twin.callout_of(s.name)
+        c = callouts.callout_of(s.name)
         src = robot.tied_sources.get(c.name, (c.name,))[0] if c is not None else s.name
         tols[s.name] = copy.copy(problem.tolerances[src])
     return ToleranceProblem(twin, tols, problem.requirement, problem.poses, n_directions=problem.n_directions,
@@ -118,9 +119,10 @@ def zone_comparison(problem: ToleranceProblem, exact_result=None, **optimum) -> 
     evotol.errors.InfeasibleError
         No design meets the requirement.
     """
-    if not hasattr(problem.robot, "with_zones"):
+    callouts = problem.robot.part_of("callouts")
+    if callouts is None:
         raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
-    exact = problem if problem.robot.zones == "exact" else twin_problem(problem, "exact")
+    exact = problem if callouts.zones == "exact" else twin_problem(problem, "exact")
     boxes = twin_problem(exact, "boxes")
     out = {}
     for key, p in (("exact", exact), ("boxes", boxes)):
@@ -134,7 +136,7 @@ def zone_comparison(problem: ToleranceProblem, exact_result=None, **optimum) -> 
             te = exact.full(np.array([vals[v] for v in exact.variables])[None])[0]
             out[key]["worst_in_exact_zones"] = _worst(exact, te)
     out["saving"] = 1.0 - out["exact"]["cost"] / out["boxes"]["cost"]
-    out["callouts"] = [c.name for c in exact.robot.callouts]
+    out["callouts"] = [c.name for c in callouts.callouts]
     return out
 
 
@@ -161,9 +163,10 @@ def callout_summary(problem: ToleranceProblem, exact_result=None, **optimum) -> 
     evotol.errors.InfeasibleError
         No design meets the requirement.
     """
-    if not hasattr(problem.robot, "describe_callouts"):
+    callouts = problem.robot.part_of("callouts")
+    if callouts is None:
         raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
-    return {"features": problem.robot.describe_callouts(), "zones": problem.robot.zones,
+    return {"features": callouts.describe_callouts(), "zones": callouts.zones,
             "comparison": zone_comparison(problem, exact_result, **optimum)}
 
 
@@ -181,8 +184,8 @@ def callout_warnings(problem: ToleranceProblem) -> list[str]:
     list of str
         Warning lines (empty without callouts or refinements).
     """
-    robot = problem.robot
-    if not hasattr(robot, "callouts"):
+    robot = problem.robot.part_of("callouts")
+    if robot is None:
         return []
     lower, upper = {}, {}
     for c in robot.callouts:

@@ -18,6 +18,7 @@ import numpy as np
 
 from evotol._runtime.keyword_checks import check_table_keys
 from evotol.core import plausibility
+from evotol.core.axis_limits import configurations
 from evotol.reporting.analysis_page import render_analysis
 from evotol.studies import StudyResult, write_outputs
 from evotol.summaries.user_study import source_table, study_units_block
@@ -54,11 +55,12 @@ def analysis_summary(name: str, problem, analysis, *, seed: int, units: DisplayU
         ``analysis`` (:meth:`ToleranceAnalysis.to_dict`), ``joints`` (wrapped to (-π, π] for
         revolute joints) and the ``units`` block.
     """
-    robot = getattr(problem.robot, "base", problem.robot) if hasattr(problem.robot, "slots") else problem.robot
+    axis = problem.robot.part_of("axis_limits")
+    robot = configurations(problem.robot, problem.poses)[0] if axis is not None else problem.robot
     ws = robot.workspace
     d = analysis.to_dict()
     joints = joint_table(robot, analysis.poses)
-    lim = getattr(problem.robot, "limits", None) if hasattr(problem.robot, "slots") else None
+    lim = axis.limits if axis is not None else None
     axis_limits = {"frame": lim.frame, "position": dict(lim.position), "orientation": dict(lim.orientation)} if lim else {}
     sources = source_table(problem)
     for row, t in zip(sources, analysis.t):
@@ -70,7 +72,7 @@ def analysis_summary(name: str, problem, analysis, *, seed: int, units: DisplayU
             "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
                           "display_scale": list(ws.display_scale)},
             "poses": np.asarray(analysis.poses).tolist(), "sources": sources, "analysis": d, "joints": joints,
-            "notes": list(getattr(problem.robot, "notes", list)()), "seconds": seconds, "units": study_units_block(problem)}
+            "notes": list(problem.robot.notes()), "seconds": seconds, "units": study_units_block(problem)}
 
 
 def requirement_text(summary: dict, u: DisplayUnits) -> str:

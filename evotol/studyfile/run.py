@@ -231,11 +231,11 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
                             seconds=time.perf_counter() - t0, precision=precision)
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
-    summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)
+    summary["notes"] = list(problem.robot.notes())      # e.g. a redundant arm's posture (issue 23)
     if getattr(problem, "calibration", None) is not None and results:   # what calibration buys (docs/calibration.md)
         add_calibration(summary, problem, results, seed)
     summary["interrupted"] = bool(stopped)
-    if hasattr(problem.robot, "describe_callouts") and results and not stopped:   # exact zones vs boxes (issue 35)
+    if problem.robot.part_of("callouts") is not None and results and not stopped:   # exact zones vs boxes (issue 35)
         refine = refine_option(spec)
         opts = {"refine": refine} if refine else {}
         # the study's own optimum is the exact zones' side of the comparison when it ran with these options

@@ -61,7 +61,7 @@ def _source_rows(problem: ToleranceProblem) -> list[dict]:
         tol = problem.tolerances[n]
         rows.append({"name": n, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset), "minus": float(tol.minus),
                      "plus": float(tol.plus), "fixed": bool(tol.is_fixed), "locked": tol.locked,
-                     "zone_per_t": getattr(problem.robot, "zone_per_t", {}).get(n, 1.0)})
+                     "zone_per_t": (getattr(problem.robot.part_of("callouts"), "zone_per_t", None) or {}).get(n, 1.0)})
     return rows
 
 

@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.base import inner_model
+from robots.base import RobotErrorModel
 from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
 
 
 def _nominals(robot, names) -> tuple[dict, dict]:
     """(values, notes) by source name (module docstring); ``names`` None: the robot's sources."""
-    # WithClearances, CalloutModel, joint-space poses and per-axis limits wrap a model in .base
-    inner = inner_model(robot, lambda m: hasattr(m, "mechanism") or hasattr(m, "dimension_names")) or robot
+    inner = robot.described if isinstance(robot, RobotErrorModel) else robot     # the robot as described
     names = list(getattr(robot, "source_names", ())) if names is None else list(names)
     if hasattr(inner, "dimension_names") and hasattr(inner, "x0"):
         if not getattr(inner, "nominal_given", True):

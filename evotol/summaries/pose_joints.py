@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from evotol.core.axis_limits import AxisErrorModel
+from evotol.core.axis_limits import configurations
 from evotol.errors import EvotolError
 from robots.mechanism.posture import joint_table
 
@@ -29,11 +29,7 @@ def pose_joints(problem) -> dict:
         :func:`robots.mechanism.posture.joint_table` plus ``poses`` (the configurations, SI);
         empty for a robot without joint variables or when the joints cannot be solved.
     """
-    robot, poses = problem.robot, np.asarray(problem.poses, float)
-    if isinstance(robot, AxisErrorModel):
-        robot, poses = robot.base, poses[::robot.slots, :-1]
-    elif hasattr(robot, "clearances") and hasattr(robot, "base"):       # measures.clearances.WithClearances
-        robot = robot.base
+    robot, poses = configurations(problem.robot, problem.poses)
     try:
         table = joint_table(robot, poses)
     except EvotolError:          # a pose the model refuses was already refused when the problem was built

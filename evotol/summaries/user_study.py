@@ -23,7 +23,7 @@ from evotol.summaries.drawing import rounded_design, tolerance_zone
 from evotol.summaries.nominals import nominal_notes, nominals_with_notes, source_nominals  # noqa: F401 (re-exported)
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
-from robots.base import inner_model
+from robots.assembly import AssemblyFunction
 
 _PER_SOURCE = "m or rad (the source's unit, see units.tolerances)"
 _COORD = "workspace coordinate, SI (see workspace.units)"
@@ -87,7 +87,7 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         (:func:`sources_without_effect`).
     """
     nominal, notes = nominals_with_notes(problem.robot, problem.names)
-    zone_per_t = getattr(problem.robot, "zone_per_t", {})
+    zone_per_t = (getattr(problem.robot.part_of("callouts"), "zone_per_t", None) or {})
     no_effect = sources_without_effect(problem)
     out = []
     for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
@@ -275,8 +275,8 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
                "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
                "monte_carlo": checks, "seconds": seconds, "figures": {}}
-    inner = inner_model(problem.robot, lambda m: hasattr(m, "response_names") and hasattr(m, "limits"))
-    if inner is not None:   # an assembly: responses, not poses
+    inner = problem.robot.described
+    if isinstance(inner, AssemblyFunction):   # an assembly: responses, not poses
         summary["assembly"] = {"responses": list(inner.response_names), "limits": [float(v) for v in inner.limits]}
     if front is not None:
         summary["pareto_front"] = front.table.to_dict(orient="list")

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from evotol.core.axis_limits import AxisErrorModel, tool_rotation
+from evotol.core.axis_limits import configurations, tool_rotation
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.montecarlo import verify
@@ -168,10 +168,7 @@ class ToleranceAnalysis:
 
 def _base(problem):
     """The robot and configurations behind a per-axis problem (evotol.core.axis_limits), else the problem's."""
-    robot = problem.robot
-    if isinstance(robot, AxisErrorModel):
-        return robot.base, problem.poses[::robot.slots, :-1]
-    return robot, problem.poses
+    return configurations(problem.robot, problem.poses)
 
 
 def error_at_probability(problem, t: np.ndarray, probability: float, component: str = "position",
@@ -270,7 +267,8 @@ def analyse(problem, t=None, *, probability: float = 0.9973, n_samples: int = 20
     ends = bp.intervals(t)
     J = bp.jacobian
     frames = {"base": J}
-    if isinstance(problem.robot, AxisErrorModel) and problem.robot.limits.frame == "tool":
+    axis = problem.robot.part_of("axis_limits")
+    if axis is not None and axis.limits.frame == "tool":
         Rt = np.swapaxes(tool_rotation(robot, configs), 1, 2)
         frames["tool"] = np.concatenate([Rt @ J[:, 0:3], Rt @ J[:, 3:6]], axis=1)
     axes = {}

@@ -56,6 +56,9 @@ class CalloutModel(RobotErrorModel):
         :class:`MechanismModel` refuses.
     """
 
+    part = "callouts"
+    joint_maps = True
+
     def __init__(self, mechanism, callouts, sources=None, zones: str = "exact", workspace: Workspace | None = None):
         mech = mechanism if isinstance(mechanism, Mechanism) else load_mechanism(mechanism)
         self.callouts = tuple(callouts)
@@ -128,13 +131,18 @@ class CalloutModel(RobotErrorModel):
                 add_callouts(j)
         self.C = np.concatenate(cols, axis=1)
         self.sources = tuple(specs)
-        self.tied_sources = tied
+        self._ties = tied
         self.name = base.name
         self.workspace = base.workspace
 
+    @property
+    def tied_sources(self) -> dict:
+        """Callout name -> its member sources (a position zone's two end discs, ...): one tolerance each."""
+        return self._ties
+
     def __getattr__(self, item):
         # everything else (joint_values, notes, redundancy, mechanism, kin, ...) is the base model's
-        if item in ("base", "C"):
+        if item in ("base", "C", "_ties"):
             raise AttributeError(item)
         return getattr(self.base, item)
 

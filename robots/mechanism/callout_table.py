@@ -201,7 +201,7 @@ def expand_callout_overrides(overrides: dict, robot) -> dict:
     dict
         The table with each callout name replaced by its members (the same settings each).
     """
-    tied = getattr(robot, "tied_sources", None) or {}
+    tied = robot.tied_sources
     out = {}
     for k, v in overrides.items():
         for m in tied.get(k, (k,)):

@@ -13,6 +13,19 @@ the requirement holds at exactly the configurations given.
 ...]`` in the joint order, or ``[{q1 = "30*deg", ...}, ...]`` by name; numbers in SI, or
 expressions such as ``"30*deg"``) and checks them before any work: one value per joint, inside the
 joint limits, a serial arm (with closed loops the passive joints are not free to choose).
+
+In a composed error model (:data:`robots.base.PARTS`) the joint-space poses are the part after the
+source transforms (callouts): the model keeps every joint map of the model it wraps, so a
+calibration or a callout comparison finds them on it.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+q : dict or (n, n_variables) array_like
+    Joint values (rad, m).
+errors : (n, m, n_columns) array_like
+    Source errors (m or rad).
 """
 from __future__ import annotations
 
@@ -47,12 +60,15 @@ class JointSpaceModel(RobotErrorModel):
         A model that is not a mechanism description, or one with closed loops.
     """
 
+    part = "joint_space"
+    joint_maps = True
+
     def __init__(self, model, span=None, where: str = "poses.joints"):
-        mech = getattr(model, "mechanism", None)
-        kin = getattr(model, "kin", None)
-        if mech is None or kin is None:
+        if not isinstance(model, RobotErrorModel) or not model.joint_maps:
             raise ValidationError(where, getattr(model, "name", model), "a mechanism description "
                                   "(robot.mechanism or robot.urdf): joint configurations need its joint variables")
+        mech, kin = model.mechanism, model.kin
+        self._span, self._where = span, where
         if mech.loops:
             raise ValidationError(where, mech.name, "a serial arm: with closed loops the passive joints are "
                                   "not free (give tool poses: grid, latin_hypercube or list)")
@@ -74,6 +90,72 @@ class JointSpaceModel(RobotErrorModel):
         self.workspace = Workspace(names=self.variables, low=tuple(low), high=tuple(high), units=units,
                                    display_units=tuple("deg" if u == "rad" else "mm" for u in units),
                                    display_scale=tuple(180 / np.pi if u == "rad" else 1e3 for u in units))
+
+    def rebuilt(self, inner) -> "JointSpaceModel":
+        """The same joint-space poses on another model of the arm (e.g. its callouts under boxes).
+
+        Returns
+        -------
+        JointSpaceModel
+            ``inner`` evaluated at joint configurations.
+        """
+        return JointSpaceModel(inner, self._span, self._where)
+
+    @property
+    def kin(self):
+        """The arm's kinematics (:class:`robots.mechanism.kinematics.Kinematics`)."""
+        return self.base.kin
+
+    @property
+    def mechanism(self):
+        """The arm's description (:class:`robots.mechanism.mechanism.Mechanism`)."""
+        return self.base.mechanism
+
+    def notes(self) -> list[str]:
+        """The arm's notes (:meth:`MechanismModel.notes <robots.mechanism.model.MechanismModel.notes>`).
+
+        Returns
+        -------
+        list of str
+            One sentence each.
+        """
+        return list(self.base.notes())
+
+    def joint_values(self, poses) -> dict:
+        """The joint values of joint-space poses: the poses themselves, by joint variable.
+
+        Parameters
+        ----------
+        poses : (n, n_variables) array_like
+            Joint values in the mechanism's joint order (rad, m).
+
+        Returns
+        -------
+        dict
+            Joint variable -> (n,) values (rad, m).
+        """
+        Q = self.check_poses(poses)
+        return {v: Q[:, i] for i, v in enumerate(self.variables)}
+
+    def sensitivity_at_joints(self, q) -> np.ndarray:
+        """The arm's first-order map at joint values (its base model's).
+
+        Returns
+        -------
+        (n, 6, n_columns) ndarray
+            End-effector error twist per unit of each source column.
+        """
+        return self.base.sensitivity_at_joints(q)
+
+    def pose_error_at_joints(self, q, errors) -> np.ndarray:
+        """The arm's nonlinear error at joint values (its base model's).
+
+        Returns
+        -------
+        (n, m, 6) ndarray
+            ``[dp (m); rotation vector (rad)]`` of the end-effector.
+        """
+        return self.base.pose_error_at_joints(q, errors)
 
     def sensitivity(self, poses) -> np.ndarray:
         """First-order map (n, 6, n_columns) at joint configurations (no inverse geometry).

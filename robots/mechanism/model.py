@@ -81,6 +81,8 @@ class MechanismModel(RobotErrorModel):
         self._serial = SerialChain.build(self.kin, self.columns) if SERIAL_COMPILED else None   # robots/mechanism/serial.py
 
     # ------------------------------------------------------------------ helpers
+    joint_maps = True
+
     def joint_values(self, poses) -> dict:
         """All joint variables at poses (SI), from the continued Newton inverse geometry.
 

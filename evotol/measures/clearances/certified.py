@@ -107,6 +107,8 @@ class WithClearances(RobotErrorModel):
         (dim != 1).
     """
 
+    part = "clearances"
+
     def __init__(self, robot: RobotErrorModel, clearances: ClearanceSources, geometric: bool = True):
         self.base, self.clearances, self.geometric = robot, clearances, bool(geometric)
         self.name = f"{robot.name} + clearances" if geometric else f"{robot.name} (clearances)"

@@ -1,0 +1,194 @@
+"""The combination matrix of docs/combinations.md: every pair (and the listed triples) of capabilities
+either runs, with its numbers checked against an independent route, or is refused before any work
+with one line naming both (issue 39).
+
+The independent routes used here:
+
+* **finite differences**: the composed first-order map equals central differences of the composed
+  nonlinear model (``pose_error``), which goes through other code (the perturbed chain, not the
+  sensitivity kernels) -- so a part lost or applied twice in either path shows;
+* **joint configurations vs task poses**: a study on joint configurations equals the same study on
+  the task poses those configurations reach (forward kinematics outside the joint-space part; the
+  inverse geometry holds the posture), optimum to 1e-6;
+* **ties**: a callout is one variable, costed once, whatever wraps the model (the cost of a design
+  recomputed by hand from the cost models);
+* **a simulated calibration**: robots drawn within the optimum's tolerances, calibrated on the
+  nonlinear model, stay within the requirement.
+"""
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evotol.allocators import allocate_optimum
+from evotol.errors import ValidationError
+from evotol.studyfile.problem import load_problem
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDIES = ROOT / "reports" / "studies"
+
+#: UR5 (URDF), two joint configurations inside the joint limits (rad): elbow up, wrist down
+JOINTS = [[0.0, -1.0, 1.5, -2.0, -1.5, 0.3], [0.6, -1.4, 1.9, -1.8, -1.6, -0.4]]
+COST = {"model": "exponential", "a0": 1.9, "a1": 0.5, "scale": 1e-5}
+
+
+def ur5(**extra) -> dict:
+    """A small UR5 study (as a parsed study file): norm requirement 0.5 mm, worst case."""
+    spec = {"name": "combo", "seed": 0, "robot": {"mechanism": "ur5"},
+            "poses": {"list": [[0.35, -0.05, 0.25], [0.45, 0.05, 0.35]]},
+            "requirement": {"position": 5e-4, "measure": "worst_case"},
+            "bounds": {"lower": 1e-6, "upper": 1e-3},
+            "cost": {"length": COST, "angle": COST, "actuator": {"model": "reciprocal", "a0": 0.2, "a1": 1.0,
+                                                                  "scale": 1e-4},
+                     "position": COST, "axial": COST}}
+    spec.update(copy.deepcopy(extra))
+    return spec
+
+
+def with_joints(spec):
+    spec["poses"] = {"joints": copy.deepcopy(JOINTS)}
+    return spec
+
+
+def with_callouts(spec):
+    spec["robot"]["callouts"] = [{"joint": "shoulder_lift_joint", "kind": "position", "length": "60 mm"},
+                                 {"joint": "elbow_joint", "kind": "position", "length": "50 mm"},
+                                 {"joint": "elbow_joint", "kind": "axial", "length": "75 mm"}]
+    return spec
+
+
+def with_axes(spec):
+    spec["requirement"]["position"] = {"x": "0.5*mm", "y": "0.5*mm", "z": "0.3*mm"}
+    return spec
+
+
+def with_calibration(spec):
+    spec["calibration"] = {"count": 24, "over": "joints", "measure": "position", "noise": "20 um",
+                           "identify": "identifiable", "k": 3, "linear_fraction": 0.1, "simulate": 40}
+    return spec
+
+
+def with_given(spec):
+    p = load_problem({k: v for k, v in copy.deepcopy(spec).items() if k != "calibration"}, base_dir=STUDIES)
+    spec["sources"] = {n: {"fixed": 2e-5} for n in p.robot.source_names}
+    return spec
+
+
+CAPABILITIES = {"joints": with_joints, "callouts": with_callouts, "per-axis": with_axes,
+                "calibration": with_calibration, "analysis": with_given}
+
+
+def build(*caps):
+    spec = ur5()
+    for c in sorted(caps, key=list(CAPABILITIES).index):     # analysis last: it reads the composed sources
+        spec = CAPABILITIES[c](spec)
+    return load_problem(spec, base_dir=STUDIES)
+
+
+def fd_check(problem, h=1e-7, n_dirs=3, seed=0):
+    """Largest relative difference between the composed first-order map and central differences of the
+    composed nonlinear model, over a few random source-error directions at the problem's poses."""
+    robot, poses = problem.robot, problem.poses[:4]
+    J = robot.sensitivity(poses)
+    rng = np.random.default_rng(seed)
+    worst = 0.0
+    for _ in range(n_dirs):
+        d = rng.standard_normal(robot.n_columns)
+        E = np.broadcast_to(np.stack([h * d, -h * d]), (len(poses), 2, robot.n_columns))
+        P = robot.pose_error(poses, E)
+        fd = (P[:, 0] - P[:, 1]) / (2 * h)
+        lin = J @ d
+        worst = max(worst, float(np.abs(fd - lin).max() / np.abs(lin).max()))
+    return worst
+
+
+# --- pairs that run -------------------------------------------------------------------------------
+@pytest.mark.parametrize("caps", [("joints",), ("callouts",), ("joints", "callouts"), ("joints", "per-axis"),
+                                  ("callouts", "per-axis"), ("joints", "callouts", "per-axis")],
+                         ids=lambda c: "+".join(c))
+def test_composed_first_order_map_equals_finite_differences_of_the_composed_nonlinear_model(caps):
+    problem = build(*caps)
+    assert problem.robot.described.part is None
+    for c, part in (("callouts", "callouts"), ("joints", "joint_space"), ("per-axis", "axis_limits")):
+        assert (problem.robot.part_of(part) is not None) == (c in caps), (c, [m.part for m in problem.robot.parts()])
+    assert fd_check(problem) < 1e-5
+
+
+@pytest.mark.parametrize("extra", [(), ("per-axis",)], ids=["norm", "per-axis"])
+def test_callouts_on_joint_configurations_keep_their_ties_and_equal_the_task_pose_study(extra):
+    """Issue 39: under joint configurations the two end discs of a position zone were two costed variables
+    (20.65 'certified' vs 13.14). Now: one variable per callout, and the optimum equals the same study on
+    the task poses the configurations reach (an independent route: inverse geometry, posture held)."""
+    spec = with_callouts(ur5())
+    if extra:
+        spec = with_axes(spec)
+    pt = load_problem(copy.deepcopy(spec), base_dir=STUDIES)            # task poses (inverse geometry)
+    arm = pt.robot.described
+    q = arm.joint_values(ur5()["poses"]["list"])                         # the posture the task study holds
+    spec["poses"] = {"joints": np.stack([q[v] for v in arm.kin.variables], axis=1).tolist()}
+    pj = load_problem(spec, base_dir=STUDIES)                             # the same arm on those configurations
+    callouts = pj.robot.part_of("callouts")
+    ties = callouts.tied_sources
+    assert set(ties) == {"shoulder_lift_joint.position", "elbow_joint.position"}
+    assert pj.n_variables == pj.n_sources - sum(len(m) - 1 for m in ties.values())
+    rj, rt = allocate_optimum(pj), allocate_optimum(pt)
+    assert rj.feasible and rt.feasible
+    assert rj.cost == pytest.approx(rt.cost, rel=1e-6)
+    # the cost counts each callout once: recomputed from the cost models by hand
+    t = rj.tolerances
+    by_hand = sum(pj.tolerances[n].cost.cost(t[n]) for n in pj.names
+                  if not any(n in m[1:] for m in ties.values()))
+    assert rj.cost == pytest.approx(by_hand, rel=1e-9)
+
+
+def test_exact_zones_vs_boxes_comparison_kept_under_joint_configurations():
+    """The exact-zone optimum is never dearer than the independent-box rule's, and both are computed on the
+    joint configurations (the joint-space part rebuilt around the boxes)."""
+    from evotol.studyfile.callouts import zone_comparison, twin_problem
+
+    pj = build("joints", "callouts")
+    boxes = twin_problem(pj, "boxes")
+    assert boxes.robot.part_of("joint_space") is not None and boxes.robot.part_of("callouts").zones == "boxes"
+    assert np.array_equal(boxes.poses, pj.poses)
+    cmp = zone_comparison(pj)
+    assert cmp["exact"]["feasible"] and cmp["boxes"]["feasible"]
+    assert cmp["exact"]["cost"] <= cmp["boxes"]["cost"] * (1 + 1e-9)
+
+
+def test_calibration_on_joint_configurations_keeps_its_linear_range_bound_and_simulation():
+    """Issue 39: over joint configurations the linear-range bound was dropped and the study printed
+    'certified optimal, meets' at 8.8e-21. Now the identified sources' upper bounds are lowered to their
+    linear range, and a calibration simulated on the nonlinear model (robots drawn within the optimum's
+    tolerances, each fitted and compensated) stays within the requirement."""
+    from evotol.calibration import simulate_calibration
+
+    pc = build("joints", "calibration")
+    info = pc.calibration
+    ident = info.identification.identified_names
+    lowered = [n for n in ident if info.bounds[n]["upper"] < info.bounds[n]["upper_before"]]
+    assert lowered, "no identified source got a linear-range bound"
+    r = allocate_optimum(pc)
+    assert r.feasible and r.cost > 1e-3           # bounded by the linear range, not ~0
+    sim = simulate_calibration(pc, r.tolerances, n_samples=60, seed=1)
+    assert sim.simulated["position"]["max"] <= 5e-4
+
+
+# --- pairs that are refused before any work, with one line naming both ------------------------------
+@pytest.mark.parametrize("caps, other", [(("calibration", "callouts"), r"\[\[robot\.callouts\]\]"),
+                                         (("calibration", "per-axis"), "requirement per axis"),
+                                         (("calibration", "analysis"), "every tolerance given"),
+                                         (("calibration", "callouts", "joints"), r"\[\[robot\.callouts\]\]")],
+                         ids=lambda c: "+".join(c) if isinstance(c, tuple) else "")
+def test_refused_pairs_name_both_capabilities_before_any_work(caps, other, monkeypatch):
+    import evotol.calibration.problem as cp
+
+    def no_work(*a, **k):                         # the identification is the first piece of work
+        raise AssertionError("the calibration was identified before the refusal")
+
+    monkeypatch.setattr(cp, "identify", no_work)
+    with pytest.raises(ValidationError, match=rf"^calibration = '{other}': expected .*") as exc:
+        build(*caps)
+    assert "\n" not in str(exc.value)
