@@ -65,8 +65,8 @@ html_title = f"evotol {release}"
 #: the API pages, in the order they claim the objects they document (docs/api/<module>.rst)
 API_PAGES = [
     "evotol.core.problem", "evotol.measures", "evotol.allocators", "evotol.core.result", "evotol.verification.montecarlo", "evotol.measures.feasibility",
-    "evotol.measures.statistical.distributions", "evotol.measures.clearances", "evotol.errors", "robots", "robots.base", "robots.checks",
-    "robots.mechanism", "robots.assembly", "cost_models",
+    "evotol.measures.statistical.distributions", "evotol.measures.clearances", "evotol.errors", "evotol.robots", "evotol.robots.base", "evotol.robots.checks",
+    "evotol.robots.mechanism", "evotol.robots.assembly", "evotol.cost_models",
 ]
 
 
@@ -75,12 +75,12 @@ def public_modules() -> tuple[str, ...]:
     """Every public module of the three packages (no ``_`` in its dotted name), in import order."""
     import pkgutil
     found = []
-    for pkg in ("evotol", "robots", "cost_models"):
+    for pkg in ("evotol", "evotol.robots", "evotol.cost_models"):
         found.append(pkg)
         for info in pkgutil.walk_packages(importlib.import_module(pkg).__path__, pkg + "."):
             if not any(part.startswith("_") for part in info.name.split(".")):
                 found.append(info.name)
-    return tuple(found)
+    return tuple(dict.fromkeys(found))
 
 
 # then every other public module that has its page (docs/api/<module>.rst; tests/test_docstrings.py

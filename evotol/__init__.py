@@ -11,6 +11,37 @@ that says where each name lives; ``tests/test_front_door.py`` imports every one 
 from __future__ import annotations
 
 import importlib
+import importlib.abc
+import importlib.util
+import sys
+from pathlib import Path
+
+#: sub-packages kept in the repository's own top-level folders (the design card's ``robots/``,
+#: ``cost_models/``); an installed evotol holds them inside its folder (setup.py maps them)
+_MAPPED = ("robots", "cost_models")
+
+
+class _SourceTreeFinder(importlib.abc.MetaPathFinder):
+    """``evotol.robots`` / ``evotol.cost_models`` from a checkout's ``robots/`` and ``cost_models/`` when
+    evotol is imported from the source tree itself (the repository root on ``sys.path``), as an
+    editable install does through setup.py's mapping."""
+
+    def __init__(self, root: Path):
+        self.root = root
+
+    def find_spec(self, fullname, path=None, target=None):
+        head, _, name = fullname.partition(".")
+        if head != __name__ or name not in _MAPPED:
+            return None
+        folder = self.root / name
+        return importlib.util.spec_from_file_location(fullname, folder / "__init__.py",
+                                                      submodule_search_locations=[str(folder)])
+
+
+_HERE = Path(__file__).resolve().parent
+if not (_HERE / "robots").is_dir() and (_HERE.parent / "robots" / "__init__.py").is_file() \
+        and (_HERE.parent / "pyproject.toml").is_file():
+    sys.meta_path.append(_SourceTreeFinder(_HERE.parent))
 
 __version__ = "0.1.0"
 
@@ -55,10 +86,10 @@ _WHERE = {
     "ConvergenceError": "evotol.errors",
     "InfeasibleError": "evotol.errors",
     # mechanisms and assemblies
-    "MechanismModel": "robots.mechanism.model",
-    "AssemblyFunction": "robots.assembly",
-    "LinearStack": "robots.assembly",
-    "RobotErrorModel": "robots.base",
+    "MechanismModel": "evotol.robots.mechanism.model",
+    "AssemblyFunction": "evotol.robots.assembly",
+    "LinearStack": "evotol.robots.assembly",
+    "RobotErrorModel": "evotol.robots.base",
 }
 
 __all__ = sorted(_WHERE)

@@ -13,7 +13,7 @@ import inspect
 import warnings
 from functools import lru_cache
 
-PACKAGES = ("evotol", "robots", "cost_models")
+PACKAGES = ("evotol", "evotol.robots", "evotol.cost_models")
 
 
 def _doc_sections(doc: str):

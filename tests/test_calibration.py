@@ -151,7 +151,7 @@ def test_plans_by_joints_poses_and_orientation(ur5):
 
 
 def test_a_model_without_joint_maps_and_with_disk_sources():
-    """The 3-UCR (robots.ucr3: lengths plus joint-clearance disks): from workspace poses only its interval
+    """The 3-UCR (evotol.robots.ucr3: lengths plus joint-clearance disks): from workspace poses only its interval
     sources are identified and a disk named is refused; but a calibrated *problem* is refused with its
     reason (no joint maps: no linear-range bound, no simulated calibration), since without them every
     identified source would run to its upper bound and the first-order model would call that design

@@ -31,7 +31,7 @@ built from them is checked by CI with ``sphinx -W``.
 
 Run as a script to list what a module (or package, with its submodules) lacks::
 
-    python tests/test_docstrings.py robots.delta evotol.measures
+    python tests/test_docstrings.py evotol.robots.delta evotol.measures
 """
 from __future__ import annotations
 
@@ -110,7 +110,7 @@ def public_modules(packages=PACKAGES) -> list[str]:
         for info in pkgutil.walk_packages(importlib.import_module(pkg).__path__, pkg + "."):
             if not any(part.startswith("_") for part in info.name.split(".")):
                 names.append(info.name)
-    return names
+    return list(dict.fromkeys(names))      # an installed evotol also walks evotol.robots inside evotol
 
 
 def public_definitions(modname: str):

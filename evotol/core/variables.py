@@ -15,7 +15,7 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol._runtime.keyword_checks import did_you_mean
-from robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel
 
 #: how a shared tolerance is costed: every member part pays its own cost model ("part") or only
 #: the group's first member ("variable"); the values ``shared_cost`` accepts
@@ -77,7 +77,7 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         Its ``sources`` (names, units) in order.
     tolerances : mapping
         Source name -> :class:`evotol.Tolerance`, in the robot's source order.
@@ -112,7 +112,7 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
         raise ValidationError("shared", shared, "a mapping group name -> list of source names")
     seen: dict[str, str] = {}
     index = {nm: j for j, nm in enumerate(names)}
-    # a drawing callout's zone members (robots.mechanism.callout_model): one tolerance, costed once
+    # a drawing callout's zone members (evotol.robots.mechanism.callout_model): one tolerance, costed once
     tied = dict(robot.tied_sources) if isinstance(robot, RobotErrorModel) else {}
     for g, members in {**tied, **(shared or {})}.items():
         if g in tied and all(tolerances[m].locked is not None for m in members):

@@ -6,7 +6,7 @@ find them again from the tool pose, and may land on another elbow or wrist branc
 :class:`JointSpaceModel` avoids that: its poses *are* the joint values (in the mechanism's joint
 order, rad or m), its ``sensitivity`` and ``pose_error`` are the mechanism's at those joints
 (:meth:`MechanismModel.sensitivity_at_joints
-<robots.mechanism.model.MechanismModel.sensitivity_at_joints>`), and no inverse geometry runs, so
+<evotol.robots.mechanism.model.MechanismModel.sensitivity_at_joints>`), and no inverse geometry runs, so
 the requirement holds at exactly the configurations given.
 
 :func:`joint_configurations` reads them as a study file writes them (``[poses] joints = [[...],
@@ -14,7 +14,7 @@ the requirement holds at exactly the configurations given.
 expressions such as ``"30*deg"``) and checks them before any work: one value per joint, inside the
 joint limits, a serial arm (with closed loops the passive joints are not free to choose).
 
-In a composed error model (:data:`robots.base.PARTS`) the joint-space poses are the part after the
+In a composed error model (:data:`evotol.robots.base.PARTS`) the joint-space poses are the part after the
 source transforms (callouts): the model keeps every joint map of the model it wraps, so a
 calibration or a callout comparison finds them on it.
 
@@ -34,19 +34,19 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel, Workspace
-from robots.mechanism.expressions import Expression
+from evotol.robots.base import RobotErrorModel, Workspace
+from evotol.robots.mechanism.expressions import Expression
 
 #: the reach of a revolute joint without limits in the joint-space box (rad): one turn each way
 FREE_REVOLUTE = 2 * np.pi
 
 
 class JointSpaceModel(RobotErrorModel):
-    """A serial :class:`~robots.mechanism.model.MechanismModel` evaluated at joint configurations.
+    """A serial :class:`~evotol.robots.mechanism.model.MechanismModel` evaluated at joint configurations.
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         The serial arm (no loops).
     span : (n_variables, 2) array_like or None, optional
         Range of each joint variable for the box (rad or m) where the description has no limit;
@@ -103,16 +103,16 @@ class JointSpaceModel(RobotErrorModel):
 
     @property
     def kin(self):
-        """The arm's kinematics (:class:`robots.mechanism.kinematics.Kinematics`)."""
+        """The arm's kinematics (:class:`evotol.robots.mechanism.kinematics.Kinematics`)."""
         return self.base.kin
 
     @property
     def mechanism(self):
-        """The arm's description (:class:`robots.mechanism.mechanism.Mechanism`)."""
+        """The arm's description (:class:`evotol.robots.mechanism.mechanism.Mechanism`)."""
         return self.base.mechanism
 
     def notes(self) -> list[str]:
-        """The arm's notes (:meth:`MechanismModel.notes <robots.mechanism.model.MechanismModel.notes>`).
+        """The arm's notes (:meth:`MechanismModel.notes <evotol.robots.mechanism.model.MechanismModel.notes>`).
 
         Returns
         -------
@@ -250,7 +250,7 @@ def joint_configurations(model, joints, where: str = "poses.joints") -> tuple[Jo
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         A serial arm.
     joints : sequence of sequence or sequence of Mapping
         One entry per configuration: the joint values in the mechanism's joint order, or a table
