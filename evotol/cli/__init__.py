@@ -94,7 +94,8 @@ def cmd_reproduce(args) -> int:
         try:
             extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
             with Heartbeat(name), CtrlC() as ctrl_c:   # progress lines in a log file (no terminal, no tqdm)
-                summaries[name] = study.run(out, quick=args.quick, seed=args.seed, force=args.force, **extra)
+                extra.update({"force": True} if args.force else {})    # overwrite a study file's outputs (issue 42)
+                summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
         except KeyboardInterrupt:
             interrupted = (name, "stopped before its files were written (files of an earlier run, if any, are untouched)")
             break
@@ -376,6 +377,14 @@ def main(argv=None) -> int:
     # small matrices: one BLAS thread per process (see evotol._runtime.blas_threads); override with the usual variables
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
+    for stream in (sys.stdout, sys.stderr):     # an ASCII locale: '±', 'µ' printed as escapes, not a traceback
+        try:
+            "±µ".encode(stream.encoding or "ascii")
+        except (UnicodeEncodeError, LookupError):
+            if hasattr(stream, "reconfigure"):
+                stream.reconfigure(errors="backslashreplace")
+        except AttributeError:
+            pass
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)

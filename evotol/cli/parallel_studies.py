@@ -139,6 +139,8 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
         Seconds between "running: ..." lines (default 30).
     stream : file, optional
         Where the progress lines go (default ``sys.stdout``; a failure's log tail goes to stderr).
+    force : bool, optional
+        Pass ``--force`` to each study (overwrite a study file's outputs of the same name).
 
     Returns
     -------

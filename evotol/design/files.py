@@ -61,7 +61,7 @@ def load_entries(path: str | Path) -> pd.DataFrame:
     if path.suffix.lower() in (".parquet", ".pq"):
         return pd.read_parquet(path)
     if path.suffix.lower() == ".csv":
-        df = pd.read_csv(path)
+        df = pd.read_csv(path, encoding="utf-8")
         if ERROR in df:
             df[ERROR] = df[ERROR].astype(object).where(df[ERROR].notna(), "").astype(str)
         return df

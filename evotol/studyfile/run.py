@@ -118,8 +118,8 @@ def read_study_file(path: Path) -> dict:
         raise ValidationError("study file", str(path), "an existing TOML file")
     try:
         spec = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValidationError("study file", str(path), f"valid TOML ({exc})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValidationError("study file", str(path), f"valid TOML in UTF-8 ({exc})") from None
     check_kind(spec, "study", path)          # a mechanism description given as a study file (issue 27)
     return spec
 
