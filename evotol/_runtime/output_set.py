@@ -27,7 +27,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
-from evotol._runtime.atomic_files import pid_alive, recording, remove_stale_temporaries, write_text
+from evotol._runtime.atomic_files import pid_alive, recording, refused, remove_stale_temporaries, write_text
 from evotol._runtime.output_paths import check_not_overwriting, check_output_name, path_inside
 from evotol.errors import ValidationError
 
@@ -80,24 +80,35 @@ def _take_lock(lock: Path, owner: str) -> None:
         try:
             fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
         except FileExistsError:
-            try:
-                held = json.loads(lock.read_text(encoding="utf-8"))
-            except (OSError, ValueError):
-                held = {}
-            if not held and time.time() - lock.stat().st_mtime < 5:   # being written this instant
-                time.sleep(0.2)
-                continue
-            pid, where = int(held.get("pid", -1)), held.get("host")
-            if not held or (where == host and pid != os.getpid() and not pid_alive(pid)):
-                lock.unlink(missing_ok=True)    # stale: its writer ended (killed) on this machine
-                continue
-            raise ValidationError("--out", str(lock.parent),
-                                  f"a folder no other evotol is writing {lock.stem}'s files into: process {pid} on "
-                                  f"{where} ({held.get('owner')}) holds {lock.name}; wait for it, or delete "
-                                  f"{lock.name} if that process no longer runs") from None
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(record)
-        return
+            pass
+        except OSError as exc:          # a read-only folder, a full disk: one line (WriteFailed)
+            failed = refused(exc, lock)
+            if failed is None:
+                raise
+            raise failed from None
+        else:
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(record)
+            return
+        try:
+            held = json.loads(lock.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            held = {}
+        try:
+            young = time.time() - lock.stat().st_mtime < 5
+        except FileNotFoundError:       # its writer just finished
+            continue
+        if not held and young:          # being written this instant
+            time.sleep(0.2)
+            continue
+        pid, where = int(held.get("pid", -1)), held.get("host")
+        if not held or (where == host and pid != os.getpid() and not pid_alive(pid)):
+            lock.unlink(missing_ok=True)    # stale: its writer ended (killed) on this machine
+            continue
+        raise ValidationError("--out", str(lock.parent),
+                              f"a folder no other evotol is writing {lock.stem}'s files into: process {pid} on "
+                              f"{where} ({held.get('owner')}) holds {lock.name}; wait for it, or delete "
+                              f"{lock.name} if that process no longer runs") from None
     raise ValidationError("--out", str(lock.parent), f"a lock file {lock.name} that can be taken (it keeps changing)")
 
 

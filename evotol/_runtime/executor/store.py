@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from evotol._runtime.atomic_files import atomic_path, sha256_of, write_text
+from evotol._runtime.atomic_files import atomic_path, remove_stale_temporaries, sha256_of, write_text
 
 log = logging.getLogger("evotol")
 
@@ -93,6 +93,7 @@ class ChunkStore:
         """
         path = self.path
         path.mkdir(parents=True, exist_ok=True)
+        remove_stale_temporaries(path)          # left by a writer killed outright (its pid ended)
         manifest = path / "manifest.json"
         if manifest.exists():
             try:
