@@ -27,22 +27,14 @@ from evotol import design as doe
 from evotol._runtime.atomic_files import pid_alive
 from evotol._runtime.output_paths import path_inside
 from evotol._runtime.output_set import claim_outputs, read_manifest
-from evotol.cli import main
 from evotol.errors import ValidationError, WriteFailed
 from evotol.reporting.html import Report
 from evotol.studies import StudyResult, write_outputs
 from tests.fast_study import fast_study
+from tests.test_study_outputs import _run
 
 ROOT = Path(__file__).resolve().parents[1]
 ESCAPES = ["../escaped", "/tmp/x", "a/b", "..", "CON", "nul.txt", "", "a\\b", "tab\there"]
-
-
-def _run(argv, capsys):
-    try:
-        code = main(argv)
-    except SystemExit as exc:
-        code = exc.code
-    return code, capsys.readouterr().err
 
 
 def _tree(folder: Path) -> dict[str, bytes]:

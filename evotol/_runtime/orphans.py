@@ -17,6 +17,8 @@ import sys
 import threading
 import time
 
+from evotol._runtime.atomic_files import pid_alive
+
 PR_SET_PDEATHSIG = 1      # <linux/prctl.h>
 
 
@@ -31,18 +33,8 @@ def _prctl_death_signal() -> bool:
         return False
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:
-        return True
-    return True
-
-
 def _watch_parent(parent: int, every: float) -> None:
-    while _alive(parent):
+    while pid_alive(parent):
         time.sleep(every)
     os._exit(1)              # the parent is gone: nobody will read this worker's results
 
@@ -66,7 +58,7 @@ def end_with_parent(parent: int | None = None, every: float = 1.0) -> str:
     """
     parent = os.getppid() if parent is None else parent
     if _prctl_death_signal():
-        if not _alive(parent):         # it died before prctl took effect
+        if not pid_alive(parent):         # it died before prctl took effect
             os._exit(1)
         return "prctl"
     threading.Thread(target=_watch_parent, args=(parent, every), daemon=True, name="evotol-parent-watch").start()
