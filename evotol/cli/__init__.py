@@ -93,8 +93,8 @@ def cmd_reproduce(args) -> int:
         t0 = time.perf_counter()
         try:
             extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
+            extra.update({"force": True} if args.force else {})    # overwrite a study file's outputs (issue 42)
             with Heartbeat(name), CtrlC() as ctrl_c:   # progress lines in a log file (no terminal, no tqdm)
-                extra.update({"force": True} if args.force else {})    # overwrite a study file's outputs (issue 42)
                 summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
         except KeyboardInterrupt:
             interrupted = (name, "stopped before its files were written (files of an earlier run, if any, are untouched)")
