@@ -6,7 +6,7 @@ folder; on a read-only install with a read-only home neither works and ``@njit(c
 serial-arm study. :func:`njit` catches that once, points numba at a private folder of the system's
 temporary directory (``NUMBA_CACHE_DIR``, also inherited by worker processes), says so on one line
 of stderr, and compiles without a cache if even that fails. The clearance engine has its own fallback
-(:mod:`robots.clearance.newton_kernel`: NumPy iterations).
+(:mod:`evotol.robots.clearance.newton_kernel`: NumPy iterations).
 """
 from __future__ import annotations
 
