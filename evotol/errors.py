@@ -189,3 +189,29 @@ def is_real(value) -> bool:
         True for an int, float or NumPy floating value that is not a bool.
     """
     return not isinstance(value, bool) and isinstance(value, (int, float, *_numpy("floating")))
+
+
+class WriteFailed(EvotolError):
+    """The system refused to write an output (disk full, read-only folder, quota): the file named
+    keeps its earlier content, and no temporary file is left (``docs/reliability.md``).
+
+    Parameters
+    ----------
+    path : str
+        The file that could not be written.
+    reason : str
+        Why, in words (the system's message and what to do).
+
+    Examples
+    --------
+    >>> from evotol.errors import WriteFailed
+    >>> print(WriteFailed("reports/a.json", "disk full ([Errno 28] No space left on device)"))
+    cannot write reports/a.json: disk full ([Errno 28] No space left on device)
+    """
+
+    def __init__(self, path: str, reason: str):
+        self.path, self.reason = path, reason
+        super().__init__(f"cannot write {path}: {reason}")
+
+    def __reduce__(self):
+        return type(self), (self.path, self.reason)

@@ -133,13 +133,95 @@ def input_file(path, field: str, expected: str = "an existing file") -> Path:
     return p
 
 
-def check_not_overwriting(out: Path, name: str, study_file, force: bool = False) -> None:
-    """Refuse to overwrite another study's files in ``out`` (issue 27 item 4).
+#: names Windows reserves for devices, with or without an extension (``CON``, ``nul.txt``, ``COM1``)
+_RESERVED = {"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in range(1, 10)), *(f"LPT{i}" for i in range(1, 10))}
 
-    ``evotol run`` writes ``NAME.json`` and ``NAME.html``; its JSON records ``study_file``, the
-    resolved path of the study file that wrote them. The same study file may write again (an
-    edited and re-run study keeps its place); files recorded by another study file, or without
-    that record (a seed study's, an earlier evotol's), are refused unless ``force``.
+
+def check_output_name(name, field: str = "name") -> str:
+    """Make sure ``name`` can only be a file name: the stem of a study's files, never a path.
+
+    A study file is input from anyone; ``name = "../escaped"`` must not write beside ``--out``
+    (issue 42).
+
+    Parameters
+    ----------
+    name : str
+        The name (e.g. a study file's ``name``).
+    field : str, optional
+        The field named in the error (default ``"name"``).
+
+    Returns
+    -------
+    str
+        ``name``.
+
+    Raises
+    ------
+    ValidationError
+        ``name`` is not a string, is empty, starts with ``.`` (``..``, hidden files), holds a path separator (``/``,
+        ``\\``), a drive colon, a control character, starts or ends with a space or ends with a dot,
+        or is a name Windows reserves (``CON``, ``NUL``, ``COM1``, ...).
+
+    Examples
+    --------
+    >>> from evotol._runtime.output_paths import check_output_name
+    >>> check_output_name("ucr3_example")
+    'ucr3_example'
+    >>> check_output_name("../escaped")
+    Traceback (most recent call last):
+        ...
+    evotol.errors.ValidationError: name = '../escaped': expected a file name, not a path (no '/', '\\', ':' or '..'; not starting with '.')
+    """
+    expected = "a file name, not a path (no '/', '\\', ':' or '..'; not starting with '.')"
+    if not isinstance(name, str) or not name.strip():
+        raise ValidationError(field, name, "a non-empty file name")
+    if name.startswith(".") or any(c in name for c in "/\\:") or ".." in name:
+        raise ValidationError(field, name, expected)
+    if any(ord(c) < 32 or ord(c) == 127 for c in name) or name != name.strip() or name.endswith("."):
+        raise ValidationError(field, name, "a file name without control characters, outer spaces or a final dot")
+    if name.split(".")[0].upper() in _RESERVED:
+        raise ValidationError(field, name, "a file name that is not a device name reserved by Windows "
+                                           "(CON, PRN, AUX, NUL, COM1-9, LPT1-9)")
+    return name
+
+
+def path_inside(out, filename) -> Path:
+    """``out / filename``, proven to stay inside ``out`` once links and ``..`` are resolved.
+
+    Parameters
+    ----------
+    out : str or Path
+        The output folder.
+    filename : str or Path
+        A file name (or a relative path) inside ``out``.
+
+    Returns
+    -------
+    Path
+        ``Path(out) / filename``.
+
+    Raises
+    ------
+    ValidationError
+        The resolved path lies outside the resolved ``out`` (an absolute ``filename``, ``..``, or
+        a link pointing elsewhere).
+    """
+    root = Path(out).resolve()
+    target = (Path(out) / filename).resolve()
+    if target == root or not target.is_relative_to(root):
+        raise ValidationError("output file", str(filename), f"a file inside --out {str(out)!r} (it resolves to {target})")
+    return Path(out) / filename
+
+
+def check_not_overwriting(out: Path, name: str, study_file, force: bool = False, *, owner: str | None = None,
+                          manifest: dict | None = None) -> None:
+    """Refuse to overwrite another owner's files in ``out`` (issue 27 item 4, issue 42).
+
+    The owner of ``NAME.*`` is the one recorded in ``NAME.manifest.json``
+    (:mod:`evotol._runtime.output_set`: written before the first file, so a killed run is still
+    its owner's), else, for folders written before manifests existed, the ``study_file`` of
+    ``NAME.json`` (a seed study's JSON records none). The same owner may write again; another
+    owner's files are refused unless ``force``.
 
     Parameters
     ----------
@@ -147,27 +229,40 @@ def check_not_overwriting(out: Path, name: str, study_file, force: bool = False)
         The output folder.
     name : str
         The study's ``name`` (the files' stem).
-    study_file : str or Path
-        The study file about to write.
+    study_file : str or Path or None
+        The study file about to write (None: a seed study).
     force : bool
-        Overwrite on purpose (``evotol run --force``).
+        Overwrite on purpose (``evotol run --force``, ``evotol reproduce --force``).
+    owner : str, optional
+        Who writes (default: ``"study file <resolved study_file>"``).
+    manifest : dict, optional
+        The folder's manifest for ``name`` (default: none).
 
     Raises
     ------
     ValidationError
-        Naming ``--out``, the files there and the study file that wrote them.
+        Naming ``--out``, the files there and who wrote them.
     """
-    existing = [p for p in (Path(out) / f"{name}.json", Path(out) / f"{name}.html") if p.exists()]
+    study_file = str(Path(study_file).resolve()) if study_file is not None else None
+    owner = owner or f"study file {study_file}"
+    names = (f"{name}.json", f"{name}.html", f"{name}.manifest.json")
+    existing = [Path(out) / n for n in names if (Path(out) / n).exists()]
     if force or not existing:
         return
-    owner = None
-    try:
-        owner = json.loads((Path(out) / f"{name}.json").read_text(encoding="utf-8")).get("study_file")
-    except (OSError, ValueError, AttributeError):
-        pass
-    if owner is not None and owner == str(Path(study_file).resolve()):
-        return
-    who = f"by the study file {owner}" if owner else "by another study (no study file recorded)"
-    raise ValidationError("--out", str(out), f"a folder without another study's files: {' and '.join(p.name for p in existing)} "
+    if manifest and manifest.get("owner"):
+        if manifest["owner"] == owner:
+            return
+        who = f"by the {manifest['owner']}"
+    else:
+        recorded = None
+        try:
+            recorded = json.loads((Path(out) / f"{name}.json").read_text(encoding="utf-8")).get("study_file")
+        except (OSError, ValueError, AttributeError):
+            pass
+        if recorded == study_file and (recorded is not None or owner.startswith("seed study")):
+            return      # the same study file; or a seed study's files (no study file), rewritten by reproduce
+        who = f"by the study file {recorded}" if recorded else "by another study (no study file recorded)"
+    shown = [p.name for p in existing if not p.name.endswith(".manifest.json")] or [existing[0].name]
+    raise ValidationError("--out", str(out), f"a folder without another study's files: {' and '.join(shown)} "
                                              f"there were written {who}; pass --force to overwrite them, or give this study "
                                              f"another name (name = {name!r}) or another --out")

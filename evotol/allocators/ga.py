@@ -46,6 +46,7 @@ from pymoo.operators.selection.tournament import TournamentSelection, compare
 from pymoo.termination import get_termination
 from scipy.stats import qmc
 
+from evotol._runtime.atomic_files import write_text
 from evotol.allocators.budget import check_budget, cheapest_design
 from evotol.measures.constraints import ConstraintRows, ExactRows, constraint_rows
 from evotol.errors import ValidationError
@@ -473,4 +474,4 @@ def _write_checkpoint(path, problem, gp, hist):
     data = {"generation": len(hist), "history": hist,
             "best": dict(zip(problem.names, gp.best[1].tolist())) if gp.best else None,
             "best_value": gp.best[0] if gp.best else None}
-    Path(path).write_text(json.dumps(data, indent=1, default=float))
+    write_text(path, json.dumps(data, indent=1, default=float))     # atomic: a kill keeps the last checkpoint

@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from evotol.errors import EvotolError
+from evotol.errors import EvotolError, WriteFailed
 
 
 def _write_index(out: Path, summaries: dict[str, dict]) -> Path:
@@ -34,9 +34,9 @@ def _write_index(out: Path, summaries: dict[str, dict]) -> Path:
             "td,th{border:1px solid #ccc;padding:.3em .6em}table{border-collapse:collapse}</style></head>"
             "<body><h1>evotol: reproduced seed studies</h1><table><tr><th>study</th><th>what</th>"
             "<th>seed paper</th><th>run time</th><th>data</th></tr>" + "".join(rows) + "</table></body></html>")
-    path = out / "index.html"
-    path.write_text(page, encoding="utf-8")
-    return path
+    from evotol._runtime.atomic_files import write_text
+
+    return write_text(out / "index.html", page)
 
 
 def cmd_reproduce(args) -> int:
@@ -93,11 +93,14 @@ def cmd_reproduce(args) -> int:
         t0 = time.perf_counter()
         try:
             extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
+            extra.update({"force": True} if args.force else {})    # overwrite a study file's outputs (issue 42)
             with Heartbeat(name), CtrlC() as ctrl_c:   # progress lines in a log file (no terminal, no tqdm)
                 summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
         except KeyboardInterrupt:
             interrupted = (name, "stopped before its files were written (files of an earlier run, if any, are untouched)")
             break
+        except WriteFailed:                # a full disk or a read-only folder stops every study alike
+            raise
         except EvotolError as exc:
             failed.append(name)
             print(f"[evotol] {name} failed: {exc}", file=sys.stderr)
@@ -141,7 +144,7 @@ def _reproduce_jobs(names, out: Path, args, jobs: int, t_all: float) -> int:
 
     titles = {n: studies.get(n).title for n in names}
     res = reproduce_concurrently(names, out, jobs=jobs, seed=args.seed, quick=args.quick, scheduler=args.scheduler,
-                                 titles=titles)
+                                 titles=titles, force=args.force)
     index = _write_index(out, res.summaries)
     print(f"[evotol] index: {index}")
     _print_time_table({n: res.seconds[n] for n in names if n in res.seconds}, res.failed,
@@ -321,6 +324,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="studies run at the same time for 'all', each in its own process with its output in "
                         "OUT/logs/NAME.log (default: 2 on a machine with 2 or more cores; 1 runs them one by one "
                         "in this process). A study's grids use every core either way.")
+    r.add_argument("--force", action="store_true",
+                   help="overwrite the files of a study file's study with the same name in the output folder (default: refuse)")
     r.set_defaults(func=cmd_reproduce)
 
     u = sub.add_parser("run", help="run a user study described in a TOML file")
@@ -372,12 +377,31 @@ def main(argv=None) -> int:
     # small matrices: one BLAS thread per process (see evotol._runtime.blas_threads); override with the usual variables
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
+    for stream in (sys.stdout, sys.stderr):     # an ASCII locale: '±', 'µ' printed as escapes, not a traceback
+        try:
+            "±µ".encode(stream.encoding or "ascii")
+        except (UnicodeEncodeError, LookupError):
+            if hasattr(stream, "reconfigure"):
+                stream.reconfigure(errors="backslashreplace")
+        except AttributeError:
+            pass
     args = build_parser().parse_args(argv)
     try:
         return int(args.func(args) or 0)
+    except WriteFailed as exc:            # disk full, read-only folder (issue 42): earlier files kept
+        print(f"evotol: error: {exc}", file=sys.stderr)
+        return 3
     except EvotolError as exc:
         print(f"evotol: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:                # a refused write outside evotol's writers (e.g. a library's cache)
+        from evotol._runtime.atomic_files import refused
+
+        failed = refused(exc, exc.filename or "a file")
+        if failed is None:
+            raise
+        print(f"evotol: error: {failed}", file=sys.stderr)
+        return 3
     except KeyboardInterrupt:
         print("evotol: interrupted; results saved so far are kept", file=sys.stderr)
         return 130

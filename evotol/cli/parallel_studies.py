@@ -16,6 +16,7 @@ started are named.
 """
 from __future__ import annotations
 
+import functools
 import json
 import os
 import signal
@@ -26,6 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from evotol._runtime.interrupt import CtrlC
+from evotol._runtime.orphans import end_with_parent
 from evotol._runtime.progress import EXPECTED_SECONDS
 
 #: exit code of a study process stopped by Ctrl-C (``evotol reproduce``)
@@ -85,8 +87,10 @@ def longest_first(names) -> list[str]:
     return sorted(names, key=lambda n: -EXPECTED_SECONDS.get(n, 0))
 
 
-def _command(name: str, out: Path, *, seed: int, quick: bool, scheduler: str | None) -> list[str]:
+def _command(name: str, out: Path, *, seed: int, quick: bool, scheduler: str | None, force: bool = False) -> list[str]:
     cmd = [sys.executable, "-m", "evotol.cli", "reproduce", name, "--out", str(out), "--seed", str(seed)]
+    if force:
+        cmd.append("--force")
     if quick:
         cmd.append("--quick")
     if scheduler:
@@ -109,7 +113,7 @@ def _written_since(out: Path, name: str, t0: float) -> bool:
 
 def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: bool = False,
                            scheduler: str | None = None, titles: dict | None = None,
-                           poll: float = 0.2, report_every: float = 30.0, stream=None) -> JobsOutcome:
+                           poll: float = 0.2, report_every: float = 30.0, stream=None, force: bool = False) -> JobsOutcome:
     """Run the studies ``names`` into ``out``, ``jobs`` at a time (see the module docstring).
 
     Parameters
@@ -135,6 +139,8 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
         Seconds between "running: ..." lines (default 30).
     stream : file, optional
         Where the progress lines go (default ``sys.stdout``; a failure's log tail goes to stderr).
+    force : bool, optional
+        Pass ``--force`` to each study (overwrite a study file's outputs of the same name).
 
     Returns
     -------
@@ -169,8 +175,9 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
                     started[name] = time.time()
                     # own session: a terminal Ctrl-C reaches only this process, which forwards one
                     # SIGINT to each study (a second one would abort a GA's clean stop)
-                    proc = subprocess.Popen(_command(name, out, seed=seed, quick=quick, scheduler=scheduler),
-                                            stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+                    proc = subprocess.Popen(_command(name, out, seed=seed, quick=quick, scheduler=scheduler, force=force),
+                                            stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True,
+                                            preexec_fn=functools.partial(end_with_parent, os.getpid()))   # issue 42
                     running[name] = (proc, time.perf_counter(), log)
                     print(f"[evotol] started {name}" + (f": {titles[name]}" if name in titles else ""), file=stream, flush=True)
                 for name in list(running):

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from evotol._runtime.atomic_files import atomic_path
 from evotol.design.factors import ERROR
 from evotol.errors import ValidationError
 
@@ -28,8 +29,10 @@ def save_entries(df: pd.DataFrame, stem: str | Path) -> dict[str, Path]:
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     pq, csv = stem.with_suffix(".parquet"), stem.with_suffix(".csv")
-    df.to_parquet(pq, index=False)
-    df.to_csv(csv, index=False)
+    with atomic_path(pq) as tmp:
+        df.to_parquet(tmp, index=False)
+    with atomic_path(csv) as tmp:
+        df.to_csv(tmp, index=False, encoding="utf-8")
     return {"parquet": pq, "csv": csv}
 
 
@@ -58,7 +61,7 @@ def load_entries(path: str | Path) -> pd.DataFrame:
     if path.suffix.lower() in (".parquet", ".pq"):
         return pd.read_parquet(path)
     if path.suffix.lower() == ".csv":
-        df = pd.read_csv(path)
+        df = pd.read_csv(path, encoding="utf-8")
         if ERROR in df:
             df[ERROR] = df[ERROR].astype(object).where(df[ERROR].notna(), "").astype(str)
         return df

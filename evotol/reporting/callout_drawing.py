@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from evotol._runtime.atomic_files import atomic_path
+
 from evotol.errors import ValidationError
 from evotol.reporting.export import chosen_method
 
@@ -195,10 +197,12 @@ def write_callout_exports(summary: dict, csv_path, xlsx_path=None) -> list[Path]
     """
     csv_path = Path(csv_path)
     csv_path.parent.mkdir(parents=True, exist_ok=True)
-    drawing_table(summary).to_csv(csv_path, index=False)
+    with atomic_path(csv_path) as tmp:
+        drawing_table(summary).to_csv(tmp, index=False, encoding="utf-8")
     out = [csv_path]
     if xlsx_path is not None:
-        with pd.ExcelWriter(xlsx_path, engine="openpyxl", mode="a", if_sheet_exists="replace") as xl:
+        with atomic_path(xlsx_path, keep_existing=True) as tmp, \
+                pd.ExcelWriter(tmp, engine="openpyxl", mode="a", if_sheet_exists="replace") as xl:
             drawing_table(summary).to_excel(xl, sheet_name="drawing", index=False)
             if summary["callouts"].get("comparison"):
                 comparison_table(summary).to_excel(xl, sheet_name="exact zones vs boxes", index=False)

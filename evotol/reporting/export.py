@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from evotol._runtime.atomic_files import atomic_path
+
 from evotol.units.display import DisplayUnits
 from evotol.errors import ValidationError
 from evotol.reporting.drawing import drawing_check_text
@@ -198,11 +200,12 @@ def write_tolerance_table(summary: dict, path, method: str | None = None) -> Pat
         raise ValidationError("export file", str(path), f"a file name ending in one of {['.' + f for f in FORMATS]}")
     path.parent.mkdir(parents=True, exist_ok=True)
     if kind == "csv":
-        tolerance_table(summary, method).to_csv(path, index=False)
+        with atomic_path(path) as tmp:
+            tolerance_table(summary, method).to_csv(tmp, index=False, encoding="utf-8")
         return path
     first = method or chosen_method(summary)
     methods = [first] if method else [first] + [m for m in summary["results"] if m != first]
-    with pd.ExcelWriter(path, engine="openpyxl") as xl:
+    with atomic_path(path) as tmp, pd.ExcelWriter(tmp, engine="openpyxl") as xl:
         about_table(summary).to_excel(xl, sheet_name="about", index=False)
         for m in methods:
             tolerance_table(summary, m).to_excel(xl, sheet_name=m[:31], index=False)

@@ -12,11 +12,12 @@ from __future__ import annotations
 import html
 import json
 import math
-import os
 from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
+
+from evotol._runtime.atomic_files import write_bytes, write_text
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2em auto;max-width:1200px;
@@ -68,9 +69,7 @@ def write_plotlyjs(folder: str | Path) -> Path:
     js = get_plotlyjs().encode("utf-8")
     if not (path.exists() and path.stat().st_size == len(js)):
         folder.mkdir(parents=True, exist_ok=True)
-        tmp = folder / f".{path.name}.{os.getpid()}.tmp"
-        tmp.write_bytes(js)
-        os.replace(tmp, path)
+        write_bytes(path, js, record=False)   # shared by every report of the folder: no output set's file
     return path
 
 
@@ -278,7 +277,7 @@ class Report:
         path.parent.mkdir(parents=True, exist_ok=True)
         if not inline_plotly:
             write_plotlyjs(path.parent)
-        path.write_text(self.render(inline_plotly), encoding="utf-8")
+        write_text(path, self.render(inline_plotly))     # the page as one string, renamed into place whole
         return path
 
 
@@ -318,5 +317,5 @@ def write_json(path: str | Path, data: dict) -> Path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(_jsonable(data), indent=1), encoding="utf-8")
+    write_text(path, json.dumps(_jsonable(data), indent=1))
     return path

@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
+from evotol._runtime.output_paths import check_output_name, path_inside
+from evotol._runtime.output_set import claim_outputs
 from evotol.design import save_entries
 from evotol.errors import ValidationError
 from evotol.reporting.html import write_json
@@ -135,7 +137,7 @@ class Study:
         from evotol.units import make_units_block
         return make_units_block(**study_units(self.name))
 
-    def run(self, out_dir, quick: bool = False, seed: int = 0, **overrides) -> dict:
+    def run(self, out_dir, quick: bool = False, seed: int = 0, force: bool = False, **overrides) -> dict:
         """Compute, render and write the study into ``out_dir``; returns the JSON summary.
 
         Parameters
@@ -147,6 +149,8 @@ class Study:
             Small run with the study's ``quick`` config.
         seed : int, optional
             Random seed, passed as the ``seed`` config key.
+        force : bool, optional
+            Overwrite another study's files of the same name in ``out_dir`` (:func:`reproduce`).
         **overrides
             Further config keys (see :meth:`make_config`).
 
@@ -158,12 +162,13 @@ class Study:
         Raises
         ------
         ValidationError
-            If an override is not a config key (from :meth:`make_config`).
+            If an override is not a config key (from :meth:`make_config`), or another study's
+            files or writer hold ``out_dir`` (:func:`reproduce`).
         """
-        return reproduce(self, out_dir, self.make_config(quick, seed=seed, **overrides)).summary
+        return reproduce(self, out_dir, self.make_config(quick, seed=seed, **overrides), force=force).summary
 
 
-def reproduce(study: Study, out_dir, config: dict) -> StudyResult:
+def reproduce(study: Study, out_dir, config: dict, force: bool = False) -> StudyResult:
     """Run ``study`` with ``config`` and write its report, JSON and tables into ``out_dir``.
 
     ``summary["seconds"]`` is set here when the study did not time itself (wall time of
@@ -179,22 +184,31 @@ def reproduce(study: Study, out_dir, config: dict) -> StudyResult:
         key ``out_dir``.
     config : dict
         The full config (usually from :meth:`Study.make_config`).
+    force : bool, optional
+        Overwrite the files of another study of the same name (a study file's) in ``out_dir``.
 
     Returns
     -------
     StudyResult
         The summary read back from ``NAME.json`` (with ``seconds`` and ``units`` filled in when
         the study did not set them) and the computed tables.
+
+    Raises
+    ------
+    ValidationError
+        Before any work: another process is writing this study into ``out_dir``, or its files
+        there belong to a study file (:func:`evotol._runtime.output_set.claim_outputs`).
     """
     out_dir = Path(out_dir)
     config = {**config, "out_dir": str(out_dir)}
-    t0 = time.perf_counter()
-    result = study.compute(config)
-    result.summary.setdefault("seconds", time.perf_counter() - t0)
-    result.summary.setdefault("units", study.units_block())
-    paths = write_outputs(study.name, out_dir, result)
-    result = StudyResult(json.loads(paths["json"].read_text(encoding="utf-8")), result.tables)
-    study.render(result).write(paths["html"])
+    with claim_outputs(out_dir, study.name, f"seed study {study.name}", force=force):   # one writer (issue 42)
+        t0 = time.perf_counter()
+        result = study.compute(config)
+        result.summary.setdefault("seconds", time.perf_counter() - t0)
+        result.summary.setdefault("units", study.units_block())
+        paths = write_outputs(study.name, out_dir, result)
+        result = StudyResult(json.loads(paths["json"].read_text(encoding="utf-8")), result.tables)
+        study.render(result).write(paths["html"])
     return result
 
 
@@ -218,15 +232,27 @@ def write_outputs(name: str, out_dir, result: StudyResult, report=None) -> dict[
     -------
     dict of str to pathlib.Path
         The paths by kind: ``json``, ``html`` and ``<table>_parquet``, ``<table>_csv`` per table.
+
+    Raises
+    ------
+    ValidationError
+        ``name`` (or a table's name) is not a file name, or a file would land outside ``out_dir``
+        (:func:`evotol._runtime.output_paths.check_output_name`, ``path_inside``).
+    evotol.errors.WriteFailed
+        The system refused a write (disk full, read-only); every file is written atomically, so the
+        earlier file of that name is kept whole.
     """
+    check_output_name(name)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = {}
     for key, table in result.tables.items():
-        for kind, path in save_entries(table, out_dir / f"{name}_{key}").items():
+        check_output_name(f"{name}_{key}", "table name")
+        for kind, path in save_entries(table, path_inside(out_dir, f"{name}_{key}")).items():
             paths[f"{key}_{kind}"] = path
-    paths["json"] = write_json(out_dir / f"{name}.json", result.summary)
-    paths["html"] = report.write(out_dir / f"{name}.html") if report is not None else out_dir / f"{name}.html"
+    paths["json"] = write_json(path_inside(out_dir, f"{name}.json"), result.summary)
+    html = path_inside(out_dir, f"{name}.html")
+    paths["html"] = report.write(html) if report is not None else html
     return paths
 
 

@@ -33,7 +33,7 @@ CITE = "Choi et al. 2000 as coded in yue-w/ToleranceAllocation"
 
 def load() -> dict:
     """The data file, as shipped (with its provenance)."""
-    return json.loads(resources.files("evotol.studies").joinpath("data/clutch_choi2000.json").read_text())
+    return json.loads(resources.files("evotol.studies").joinpath("data/clutch_choi2000.json").read_text(encoding="utf-8"))
 
 
 def contact_angle(X1, X2, X3, X4):

@@ -49,7 +49,7 @@ def handbook_data() -> dict:
     dict
         Its contents: ``source``, ``units`` (inch), ``convention``, ``dimensions``.
     """
-    return json.loads(resources.files("evotol.studies").joinpath("data/motor_assembly_handbook.json").read_text())
+    return json.loads(resources.files("evotol.studies").joinpath("data/motor_assembly_handbook.json").read_text(encoding="utf-8"))
 
 
 def motor_stack(lower_in: float | None, upper_in: float | None, distribution: str = "normal") -> Stack:

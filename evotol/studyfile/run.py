@@ -11,7 +11,8 @@ from pathlib import Path
 
 from evotol._runtime.interrupt import CtrlC
 from evotol._runtime.keyword_checks import check_keywords
-from evotol._runtime.output_paths import check_not_overwriting
+from evotol._runtime.output_paths import path_inside
+from evotol._runtime.output_set import claim_outputs
 from evotol._runtime.progress import Heartbeat
 from evotol._runtime.toml_kinds import check_kind
 from evotol.allocators import allocate_nsga2
@@ -116,9 +117,9 @@ def read_study_file(path: Path) -> dict:
     if not path.exists():
         raise ValidationError("study file", str(path), "an existing TOML file")
     try:
-        spec = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ValidationError("study file", str(path), f"valid TOML ({exc})") from None
+        spec = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValidationError("study file", str(path), f"valid TOML in UTF-8 ({exc})") from None
     check_kind(spec, "study", path)          # a mechanism description given as a study file (issue 27)
     return spec
 
@@ -168,7 +169,13 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     seed = spec.get("seed", 0) if seed is None else seed
     name = spec.get("name", path.stem)
     out = Path(out) if out else path.parent
-    check_not_overwriting(out, name, path, force)     # another study's files (issue 27); before any work
+    # the name checked, one writer, another study's files refused (issues 27, 42); before any work
+    with claim_outputs(out, name, f"study file {path.resolve()}", force=force, study_file=path):
+        return _run_claimed(spec, path, out, name, seed, t0, keep_going)
+
+
+def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: float, keep_going: bool) -> dict:
+    """The body of :func:`run_study_file`, run while it holds the output set (its Returns)."""
     if "processes" in spec:     # process selection: [processes.<dimension>] (evotol/studyfile/processes.py)
         return run_process_study(spec, path, out, seed)
     if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
@@ -249,9 +256,9 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     rep = render_user_study(summary)
     paths = write_outputs(name, out, StudyResult(summary), rep)
     for f in summary.get("exports", {}).values():
-        write_tolerance_table(summary, out / f)
+        write_tolerance_table(summary, path_inside(out, f))
     if summary.get("callouts"):     # the drawing callouts: a CSV, and two sheets of the workbook
         summary["exports"]["drawing"] = f"{name}_drawing.csv"
-        write_callout_exports(summary, out / f"{name}_drawing.csv", out / summary["exports"]["xlsx"])
+        write_callout_exports(summary, path_inside(out, f"{name}_drawing.csv"), path_inside(out, summary["exports"]["xlsx"]))
     summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary

@@ -36,7 +36,7 @@ n_marks : int
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from evotol._runtime.numba_cache import njit     # cache=True that falls back (issue 42)
 
 
 @njit(cache=True, inline="always")

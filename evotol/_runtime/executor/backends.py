@@ -18,6 +18,7 @@ import os
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Sequence
 
+from evotol._runtime.orphans import end_with_parent
 from evotol.errors import ValidationError
 
 #: ``on_done(index, result)``: called in this process for every finished item
@@ -156,7 +157,8 @@ def parallel_map(fn: Callable, items: Sequence, *, common: tuple = (), workers: 
 
 
 def _run_processes(n: int, fn, common, items, on_done: OnDone) -> None:
-    pool = ProcessPoolExecutor(max_workers=n)
+    # initargs: the parent's pid as the worker starts would be the pool's manager; this process is the parent
+    pool = ProcessPoolExecutor(max_workers=n, initializer=end_with_parent, initargs=(os.getpid(),))
     pending = {pool.submit(fn, *common, x): i for i, x in enumerate(items)}
     try:
         while pending:

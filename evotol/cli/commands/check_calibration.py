@@ -75,7 +75,7 @@ def check_calibration(path, overrides: dict | None = None) -> dict:
     from evotol.errors import ValidationError
 
     p = Path(path)
-    spec = tomllib.loads(p.read_text()) if p.is_file() else {}
+    spec = tomllib.loads(p.read_text(encoding="utf-8")) if p.is_file() else {}
     table = {**spec.get("calibration", {}), **(overrides or {})}
     if "robot" in spec:
         from evotol.studyfile import load_problem

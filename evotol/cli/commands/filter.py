@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from evotol._runtime.atomic_files import atomic_path
+
 
 def register(subparsers) -> None:
     """Add the ``filter`` sub-command to the ``evotol`` parser.
@@ -86,8 +88,9 @@ def cmd_filter(args) -> int:
             print(res.kept[[c for c in ["entry", *study.inputs, *study.objectives] if c in res.kept]].head(args.show).to_string(index=False))
     if args.out:
         out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        (res.kept.to_parquet(out, index=False) if out.suffix == ".parquet" else res.kept.to_csv(out, index=False))
+        with atomic_path(out) as tmp:          # whole or not at all (issue 42)
+            (res.kept.to_parquet(tmp, index=False) if out.suffix == ".parquet"
+             else res.kept.to_csv(tmp, index=False, encoding="utf-8"))
         print(f"[evotol] kept entries -> {out}")
     if args.json:
         write_json(args.json, {"entries": str(args.entries), **res.to_dict()})
