@@ -41,7 +41,7 @@ class _SourceTreeFinder(importlib.abc.MetaPathFinder):
 _HERE = Path(__file__).resolve().parent
 if not (_HERE / "robots").is_dir() and (_HERE.parent / "robots" / "__init__.py").is_file() \
         and (_HERE.parent / "pyproject.toml").is_file():
-    sys.meta_path.append(_SourceTreeFinder(_HERE.parent))
+    sys.meta_path.insert(0, _SourceTreeFinder(_HERE.parent))     # before an editable install of another checkout
 
 __version__ = "0.1.0"
 

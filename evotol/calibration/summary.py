@@ -118,7 +118,8 @@ def calibration_summary(problem, results: dict, uncalibrated, checks: dict | Non
     return out
 
 
-def add_to_study(summary: dict, problem, results: dict, seed: int = 0, simulate: int | None = None) -> None:
+def add_to_study(summary: dict, problem, results: dict, seed: int = 0, simulate: int | None = None,
+                 uncalibrated=None) -> None:
     """What ``evotol run`` adds to a calibrated study's JSON summary: the uncalibrated optimum, the simulated
     calibration of every design, :func:`calibration_summary` under ``"calibration"``, and the units of its
     keys (:data:`UNIT_KEYS`) in ``summary["units"]["keys"]``.
@@ -134,9 +135,12 @@ def add_to_study(summary: dict, problem, results: dict, seed: int = 0, simulate:
     simulate : int, optional
         Robots simulated per design (default ``problem.calibration.simulate``; 0: none; a model without a
         nonlinear joint-space model: none).
+    uncalibrated : evotol.core.result.AllocationResult, optional
+        The certified optimum of ``problem.uncalibrated``, as the study's loop ran it
+        (:mod:`evotol.studyfile.comparisons`); None: solved here (a call from Python).
     """
     n = problem.calibration.simulate if simulate is None else simulate
-    uncal = allocate_optimum(problem.uncalibrated)
+    uncal = allocate_optimum(problem.uncalibrated) if uncalibrated is None else uncalibrated
     checks = {}
     if n and problem.calibration.identification.joints is not None:
         for m, r in results.items():   # verify() has simulated it already (its "calibration" entry), else here

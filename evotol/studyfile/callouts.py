@@ -90,7 +90,7 @@ def _worst(problem: ToleranceProblem, t) -> dict:
     return {c: {"linear": float(lin[c][0]), "nonlinear": float(np.max(nl[c]))} for c, _ in problem.components}
 
 
-def zone_comparison(problem: ToleranceProblem, exact_result=None, **optimum) -> dict:
+def zone_comparison(problem: ToleranceProblem, exact_result=None, boxes_result=None, **optimum) -> dict:
     """Certified optimum under exact zones and under independent boxes (module docstring).
 
     Parameters
@@ -100,6 +100,9 @@ def zone_comparison(problem: ToleranceProblem, exact_result=None, **optimum) -> 
     exact_result : AllocationResult, optional
         ``allocate_optimum(problem, **optimum)`` when the caller already has it (a study's own
         optimum, same problem and options): used for the exact zones instead of solving again.
+    boxes_result : AllocationResult, optional
+        The certified optimum of :func:`twin_problem` ``(problem, "boxes")`` when the caller already has it
+        (a study runs it in its method loop, :mod:`evotol.studyfile.comparisons`).
     **optimum
         Keywords of :func:`evotol.allocators.allocate_optimum` (``refine``...).
 
@@ -126,8 +129,8 @@ def zone_comparison(problem: ToleranceProblem, exact_result=None, **optimum) -> 
     boxes = twin_problem(exact, "boxes")
     out = {}
     for key, p in (("exact", exact), ("boxes", boxes)):
-        reuse = key == "exact" and exact_result is not None and exact is problem
-        r = exact_result if reuse else allocate_optimum(p, **optimum)
+        given = {"exact": exact_result, "boxes": boxes_result}[key]
+        r = given if given is not None else allocate_optimum(p, **optimum)
         t = np.array([r.tolerances[n] for n in p.names])
         out[key] = {"cost": float(r.cost), "feasible": bool(r.feasible), "values": variable_values(p, t),
                     "worst": _worst(p, t)}
@@ -140,13 +143,13 @@ def zone_comparison(problem: ToleranceProblem, exact_result=None, **optimum) -> 
     return out
 
 
-def callout_summary(problem: ToleranceProblem, exact_result=None, **optimum) -> dict:
+def callout_summary(problem: ToleranceProblem, exact_result=None, boxes_result=None, **optimum) -> dict:
     """What a study's summary carries about its callouts: the features and the comparison.
 
     Parameters
     ----------
-    exact_result : AllocationResult, optional
-        The study's own optimum on this problem with these options (:func:`zone_comparison`).
+    exact_result, boxes_result : AllocationResult, optional
+        The optima under exact zones and under boxes when the caller has them (:func:`zone_comparison`).
     **optimum
         Keywords of :func:`evotol.allocators.allocate_optimum` for the comparison.
 
@@ -167,7 +170,7 @@ def callout_summary(problem: ToleranceProblem, exact_result=None, **optimum) -> 
     if callouts is None:
         raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
     return {"features": callouts.describe_callouts(), "zones": callouts.zones,
-            "comparison": zone_comparison(problem, exact_result, **optimum)}
+            "comparison": zone_comparison(problem, exact_result, boxes_result, **optimum)}
 
 
 def callout_warnings(problem: ToleranceProblem) -> list[str]:

@@ -27,7 +27,7 @@ from evotol.reporting.user_study import render_user_study
 from evotol.studies import StudyResult, write_outputs
 from evotol.studyfile.methods import METHODS, check_methods, method_options, study_methods
 from evotol.studyfile.callouts import callout_summary, callout_warnings
-from evotol.studyfile.poses import refine_option
+from evotol.studyfile.comparisons import comparison_runs, run_comparison
 from evotol.studyfile.given_tolerances import run_given_tolerances
 from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import run_stack_study
@@ -222,6 +222,20 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
             finally:
                 if ctrl_c.count > before:
                     stopped.append(m)
+        compared = {}       # what the sections compare with: ordinary runs under the same Ctrl-C (issue 39)
+        for c, run in (comparison_runs(spec, problem, methods) if results else {}).items():
+            if ctrl_c.count and not keep_going:
+                skipped.append(c)
+                continue
+            print(f"[evotol] {c} (comparison) ...", flush=True)
+            before = ctrl_c.count
+            try:
+                with Heartbeat(c, bar=True):
+                    compared[c] = run_comparison(run)
+            except KeyboardInterrupt:
+                ctrl_c.count = max(ctrl_c.count, before + 1)
+            if ctrl_c.count > before:
+                stopped.append(c)
         checks = {}
         for m, r in results.items():
             if ctrl_c.count and not keep_going:     # the user asked to stop: no Monte Carlo
@@ -239,15 +253,15 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(problem.robot.notes())      # e.g. a redundant arm's posture (issue 23)
-    if getattr(problem, "calibration", None) is not None and results:   # what calibration buys (docs/calibration.md)
-        add_calibration(summary, problem, results, seed)
+    if "uncalibrated" in compared:      # what calibration buys (docs/calibration.md)
+        add_calibration(summary, problem, results, seed, uncalibrated=compared["uncalibrated"])
     summary["interrupted"] = bool(stopped)
-    if problem.robot.part_of("callouts") is not None and results and not stopped:   # exact zones vs boxes (issue 35)
-        refine = refine_option(spec)
-        opts = {"refine": refine} if refine else {}
-        # the study's own optimum is the exact zones' side of the comparison when it ran with these options
-        same = "optimum" in results and method_options(spec, "optimum", methods.get("optimum", {})) == opts
-        summary["callouts"] = callout_summary(problem, results["optimum"] if same else None, **opts)
+    callouts = problem.robot.part_of("callouts")
+    if callouts is not None and not stopped:      # exact zones vs boxes (issue 35), both solved in the loop
+        side = {z: compared.get(f"callouts: {z}", results.get("optimum") if callouts.zones == z else None)
+                for z in ("exact", "boxes")}
+        if None not in side.values():
+            summary["callouts"] = callout_summary(problem, side["exact"], side["boxes"])
         summary["warnings"] = [*summary["warnings"], *callout_warnings(problem)]
     if stopped:
         summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
