@@ -6,6 +6,7 @@ import json
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from evotol.calibration import CalibrationPlan, calibrated_problem
@@ -42,6 +43,31 @@ def test_calibrated_study_json_and_report(run_json):
     assert sim["simulated"]["position"]["max"] <= 5e-4 and sim["n_fit_failures"] == 0
     assert numbers_without_unit(data, data["units"]) == []
     assert "What calibration buys" in page and "uncalibrated optimum" in page and "condition number" in page
+
+
+def test_the_page_has_the_joints_table_its_posture_note_points_to(run_json):
+    """Issue 39: a calibrated page said "the joints used are in the table 'Joints used at every pose'" without
+    the table. The table is there, one row per pose, and its joints put the UR5's tool0 at the study's poses:
+    Pinocchio's forward kinematics of the shipped URDF (independent of evotol's kinematics), to 1e-9 m."""
+    import html as html_lib
+    import pinocchio as pin
+    import re
+
+    data, page = run_json
+    text = html_lib.unescape(page)
+    assert "in the table 'Joints used at every pose'" in text and "<h2>Joints used at every pose</h2>" in text
+    table = text[text.index("Joints used at every pose</h2>"):]
+    table = table[:table.index("</table>")]
+    joints = data["joints"]
+    n = len(joints["values"][joints["variables"][0]])
+    assert table.count("<tr>") - 1 == n == len(joints["poses"])
+    model = pin.buildModelFromUrdf(str(ROOT / "robots/urdf/ur_description/urdf/ur5_robot.urdf"))
+    frame = model.getFrameId("tool0")
+    dm = model.createData()
+    for i, pose in enumerate(joints["poses"]):
+        q = np.array([joints["values"][v][i] for v in joints["variables"]])
+        pin.framesForwardKinematics(model, dm, q)
+        assert np.allclose(dm.oMf[frame].translation, pose[:3], atol=1e-9)
 
 
 @pytest.mark.parametrize("table, field, words", [

@@ -25,6 +25,7 @@ import warnings
 import numpy as np
 
 from evotol.errors import KinematicsError
+from robots.base import inner_model
 from robots.mechanism.serial import SERIAL_COMPILED, SerialChain
 
 #: relative smallest singular value of the scaled task Jacobian below which a pose counts as near a singularity
@@ -244,11 +245,14 @@ def joints_at(robot, poses) -> dict:
         variables.
     """
     poses = np.atleast_2d(np.asarray(poses, float))
+    # a wrapper that keeps the poses (a calibrated robot: robots.base.inner_model) uses the joints of its model
+    robot = inner_model(robot, lambda m: (hasattr(m, "variables") and hasattr(m, "tool_pose"))
+                        or (hasattr(m, "joint_values") and hasattr(m, "kin")))
+    if robot is None:
+        return {}
     if hasattr(robot, "variables") and hasattr(robot, "tool_pose"):
         return {v: np.asarray(poses[:, i], float) for i, v in enumerate(robot.variables)}
-    if hasattr(robot, "joint_values") and hasattr(robot, "kin"):
-        return {k: np.asarray(v, float) for k, v in robot.joint_values(poses).items()}
-    return {}
+    return {k: np.asarray(v, float) for k, v in robot.joint_values(poses).items()}
 
 
 def joint_table(robot, poses) -> dict:
