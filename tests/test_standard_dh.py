@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import ValidationError
-from robots.mechanism.description import mechanism_from_dict
-from robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.description import mechanism_from_dict
+from evotol.robots.mechanism.model import MechanismModel
 
 ROOT = Path(__file__).resolve().parents[1]
 PUMA = ROOT / "robots" / "mechanisms" / "puma560.toml"
@@ -166,7 +166,7 @@ def test_puma_with_base_and_tool_tables_as_the_docs_show_them():
                                     'theta = "15*deg"\n\n[end_effector]')
     import tomllib
     from types import SimpleNamespace
-    from robots.checks import check_sources_declared
+    from evotol.robots.checks import check_sources_declared
     model = MechanismModel(mechanism_from_dict(tomllib.loads(text)))
     ends = [f"{k}.{f}" for k in ("base", "tool") for f in ("theta", "d", "alpha", "a")]
     assert sorted(model.source_names) == sorted([f"{k}{i}" for i in range(1, 7) for k in ("a", "alpha", "d", "theta")]
@@ -191,11 +191,11 @@ def test_puma_with_base_and_tool_tables_as_the_docs_show_them():
 
 
 def test_a_duplicate_source_name_error_names_only_the_duplicates():
-    """robots.checks: the message lists the names that appear twice, not every source."""
+    """evotol.robots.checks: the message lists the names that appear twice, not every source."""
     from types import SimpleNamespace
     from evotol.errors import CheckFailed
-    from robots.base import SourceSpec
-    from robots.checks import check_sources_declared
+    from evotol.robots.base import SourceSpec
+    from evotol.robots.checks import check_sources_declared
     sources = [SourceSpec(n, 1, "m", "length", "") for n in ("a1", "d1", "a1", "theta1", "d2", "d2")]
     with pytest.raises(CheckFailed) as e:
         check_sources_declared(SimpleNamespace(robot=SimpleNamespace(name="arm", sources=sources)))

@@ -9,7 +9,7 @@ A callout is one ``[[robot.callouts]]`` table (``[[callouts]]`` in a mechanism d
     offset = "0 mm"              # centre of the feature along the axis from the joint origin
     datums = "A|B"               # as the drawing writes them (shown, not interpreted)
 
-The zones and the datum convention: :mod:`robots.mechanism.callouts` and ``docs/callouts.md``.
+The zones and the datum convention: :mod:`evotol.robots.mechanism.callouts` and ``docs/callouts.md``.
 Every mistake is a one-line :class:`evotol.errors.ValidationError` before any model is built: an
 unknown key or kind, a length without unit or not positive, an unknown joint or one without an
 axis, two callouts of the same kind (or two orientation callouts) on one joint, ``"stroke"`` on a
@@ -23,8 +23,8 @@ import numpy as np
 
 from evotol._runtime.keyword_checks import check_table_keys, did_you_mean
 from evotol.errors import ValidationError
-from robots.mechanism.callouts import KINDS, ORIENTATION_KINDS, Callout
-from robots.mechanism.expressions import Expression
+from evotol.robots.mechanism.callouts import KINDS, ORIENTATION_KINDS, Callout
+from evotol.robots.mechanism.expressions import Expression
 
 #: keys of one callout table
 CALLOUT_KEYS = ("joint", "kind", "length", "offset", "datums")
@@ -73,7 +73,7 @@ def callouts_from_tables(entries, mech, field: str = "robot.callouts") -> list[C
     ----------
     entries : list of dict
         The parsed tables (module docstring).
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description the joints belong to.
     field : str
         The array's name in error messages.
@@ -134,7 +134,7 @@ def joint_seat(mech, joint: str) -> dict:
 
     Parameters
     ----------
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description (only its frames, parameters and URDF are read).
     joint : str
         The joint's name (the placement frame's).
@@ -178,20 +178,20 @@ def dh_placement_fields(mech, uses, joint: str) -> dict:
     """The DH sources that move one placement direction of a ``[[frame]]`` joint's seat exactly.
 
     A joint row ``J`` turns on the z axis of its placement ``P_J = T_a Rot(z, gamma) Trans(z, b)
-    Rot(x, alpha) Trans(x, d)`` (:mod:`robots.mechanism.placement`), then moves by ``Rot(z, theta)
+    Rot(x, alpha) Trans(x, d)`` (:mod:`evotol.robots.mechanism.placement`), then moves by ``Rot(z, theta)
     Trans(z, r)``. Rotations and translations along one axis commute, so an error ``e`` of ``J``'s
     ``d``, ``alpha``, ``r`` or ``theta`` is exactly ``P_J exp(e·[x; 0])``, ``exp(e·[0; x])``,
     ``exp(e·[z; 0])``, ``exp(e·[0; z])``: the placement errors ``shift_x``, ``tilt_x``, ``shift_z``,
     ``tilt_z``. When ``J``'s ``gamma, b, alpha, d`` are nominally 0 and its antecedent is a fixed
     frame ending on ``Trans(x, d)`` (its ``theta``, ``r`` nominally 0), that frame's ``d`` and
     ``alpha`` are ``J``'s ``shift_x`` and ``tilt_x`` too. For a standard-DH row ``i`` (joint frame
-    ``J<i>`` after distal frame ``i-1``, :mod:`robots.mechanism.standard_dh`) this says
+    ``J<i>`` after distal frame ``i-1``, :mod:`evotol.robots.mechanism.standard_dh`) this says
     ``a_(i-1) = shift_x``, ``alpha_(i-1) = tilt_x``, ``d_i = shift_z``, ``theta_i = tilt_z`` (row 1:
     ``base.a``, ``base.alpha``).
 
     Parameters
     ----------
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description.
     uses : dict of str to list of (str, str)
         Name -> the DH entries ``(frame, field)`` whose expressions use it (``Kinematics.uses``).
@@ -248,7 +248,7 @@ def expand_callout_overrides(overrides: dict, robot) -> dict:
     ----------
     overrides : dict
         The study file's ``[sources]`` table.
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The model; its ``tied_sources`` (callout name -> member sources), if any.
 
     Returns
