@@ -75,7 +75,8 @@ def check_sources_declared(s: _Settings) -> dict:
     r = s.robot
     require(r.sources, f"{r.name}: no error sources declared")
     names = [x.name for x in r.sources]
-    require(len(set(names)) == len(names), f"{r.name}: duplicate source names {names}")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    require(not twice, f"{r.name}: duplicate source names {twice} (each appears more than once among {len(names)} sources)")
     require(all(x.dim in (1, 2, 3) for x in r.sources),
             f"{r.name}: source dimensions {[x.dim for x in r.sources]}")
     return {"n_columns": r.n_columns}

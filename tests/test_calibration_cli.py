@@ -20,12 +20,12 @@ def _args(file, **kw):
 def test_study_file_plan(capsys):
     assert cmd_check_calibration(_args(ROOT / "reports/studies/ur5_calibrated.toml")) == 0
     out = capsys.readouterr().out
-    assert "rank of every measured column: 24" in out and "condition number (unit-norm columns): 4.5" in out
+    assert "identifiable directions (rank of the seen columns): 23" in out and "condition number (unit-norm columns): 4.5" in out
     assert "wrist_3_joint: moves no measured coordinate" in out and "tolerances hold 0.4675 mm" in out
 
 
 def test_mechanism_with_options_and_a_poor_plan(capsys):
-    """The task box alone: rank 18, condition number above 1e3 -> exit 1 with the advice."""
+    """The task box alone: 17 identifiable directions, condition number above 1e3 -> exit 1 with the advice."""
     assert cmd_check_calibration(_args("ur5", noise="20 um", count=40)) == 1
     assert "spread the configurations" in capsys.readouterr().out
     out = check_calibration("ur5", {"noise": "20 um", "count": 40, "identify": ["shoulder_*_joint", "elbow_joint"]})

@@ -66,8 +66,28 @@ def test_ga_nsga_sensitivity_and_budget_on_callouts(problem, optimum):
     assert sens.feasible and sens.cost >= lb
     budget = allocate_optimum(problem, budget=optimum.cost)
     assert budget.errors.position.max() == pytest.approx(5e-4, rel=1e-4)
-    front = allocate_nsga2(problem, pop_size=20, n_gen=10, seed=0, progress=False)
-    assert len(front.cost) >= 1
+
+
+def test_nsga2_front_is_non_dominated_and_bounded_by_the_optimum(problem, optimum):
+    """The front (cost vs error / requirement), the certified optimum placed in its first population: no
+    point dominates another; each point's cost is its cost models' sum; each point that meets the
+    requirement does so in the nonlinear vertex check of its design (independent of the measure that
+    ranked it; the first-order error agrees to 0.5 %); none is cheaper than the certified optimum (a
+    proven lower bound), and the cheapest is within 5 % of it (NSGA-II's crowding may drop the seeded
+    optimum itself from a full front of pop_size points; with this seed the cheapest is 2.7 % above)."""
+    front = allocate_nsga2(problem, pop_size=20, n_gen=10, seed=0, progress=False, seeds=[optimum.tolerances])
+    tab = front.table
+    c, e = tab["cost"].to_numpy(), tab["normalised_error"].to_numpy()
+    dominated = (c[:, None] <= c[None]) & (e[:, None] <= e[None]) & ((c[:, None] < c[None]) | (e[:, None] < e[None]))
+    assert len(tab) >= 5 and not dominated.any()
+    designs = np.array([[tab[n].iloc[i] for n in problem.names] for i in range(len(tab))])
+    assert np.allclose(problem.cost(designs), c, rtol=1e-9)
+    ok = e <= 1 + 1e-9
+    assert ok.any()
+    for t, ei in zip(designs[ok], e[ok]):
+        nl = worst_vertex_errors(problem, t)["position"].max()
+        assert nl == pytest.approx(ei * 5e-4, rel=5e-3) and nl <= 5e-4 * (1 + 5e-3)
+    assert optimum.cost * (1 - 1e-6) <= c[ok].min() <= 1.05 * optimum.cost
 
 
 def test_rss_is_the_closed_form_over_the_discs(problem):
@@ -85,7 +105,9 @@ def test_yield_matches_direct_sampling_of_the_zones(kind):
     """In-zone distribution (docs/callouts.md): each end of the axis displaced independently and
     isotropically; ``normal``: components N(0, (t/2k)^2), k = 3; ``uniform``: radius uniform in
     [0, t/2], direction uniform. Sampled here from that statement, not from evotol's sampler."""
-    spec = _spec(position=1.5e-4, measure="yield", probability=0.9, model="nonlinear" if kind == "uniform" else "linear")
+    m = 20_000                                          # evotol's own samples (nonlinear model only)
+    spec = _spec(position=1.5e-4, measure="yield", probability=0.9, model="nonlinear" if kind == "uniform" else "linear",
+                 **({"mc_samples": m} if kind == "uniform" else {}))
     spec["distribution"] = kind
     P = load_problem(spec, STUDY.parent)
     x = np.array([2e-5 if v.endswith("position") else (6e-5 if v.endswith("axial") else 1e-4) for v in P.variables])
@@ -108,7 +130,11 @@ def test_yield_matches_direct_sampling_of_the_zones(kind):
     err = np.linalg.norm(np.einsum("pij,nj->pni", P.jacobian[:, :3, :], E), axis=-1)
     sampled = (err <= 1.5e-4).mean(axis=1)
     assert 0.3 < sampled.min() and sampled.max() < 0.999          # a yield that can tell them apart
-    assert np.abs(got - sampled).max() < 0.02
+    # 4 standard errors of the difference: normal sources make the first-order yield exact, so only this
+    # test's n draws vary; the uniform case is evotol's own count of m samples against these n, two
+    # independent binomial estimates (its Latin hypercube only lowers its variance)
+    var = sampled * (1 - sampled) * (1 / n + (1 / m if kind == "uniform" else 0.0))
+    assert np.all(np.abs(got - sampled) <= 4 * np.sqrt(var))
 
 
 def test_exact_zones_cost_less_than_boxes_and_boxes_hold_in_exact_zones(problem):

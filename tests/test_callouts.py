@@ -332,3 +332,40 @@ def test_bad_callout_tables_in_a_study_file(robot, field):
     with pytest.raises(ValidationError) as exc:
         load_problem(spec)
     assert str(exc.value).startswith(field) and "\n" not in str(exc.value)
+
+
+def test_callouts_replace_the_dh_entries_they_cover_on_a_standard_dh_arm():
+    """Issue 39: on the PUMA 560 (standard DH) a position callout on J<i>'s seat takes the place of
+    a_(i-1) and alpha_(i-1) (the seat's lateral shift and tilt along x), an axial one of d_i (shift
+    along the axis); theta_i (the encoder zero, a turn about the axis) stays. The callout's error in
+    each of those directions equals the replaced entry's: central differences of the textbook product
+    A_1 ... A_6 with that entry moved (tests/test_standard_dh.py)."""
+    from tests.test_standard_dh import PUMA, TABLE, textbook_fk
+
+    puma = load_mechanism(PUMA)
+    cs = [Callout("J2", "position", 0.05), Callout("J3", "position", 0.05), Callout("J3", "axial", 0.06)]
+    m = CalloutModel(puma, cs)
+    names = set(m.source_names)
+    assert not names & {"a1", "alpha1", "a2", "alpha2", "d3"}                    # replaced, not added on top
+    assert {"theta2", "theta3", "d2", "a3", "alpha3", "d4"} <= names
+    assert not any(".shift_" in n or ".tilt_" in n for n in names)
+    # 5 entries out; in: J2 and J3 position (two end discs each, tied) and J3 axial
+    assert len(m.source_names) == 24 - 5 + 2 + 2 + 1 and set(m.tied_sources) == {"J2.position", "J3.position"}
+    q = np.radians([10, 10, -100, -20, 30, -60])
+    S = m.sensitivity_at_joints(q[None])[0, :3]       # (3, n_columns): position error per unit of each column
+    base_names = list(m.base.source_names)
+    h = 1e-7
+    # entry -> (row, field in TABLE's (d, a, alpha)) and the seat's placement direction it equals
+    for entry, (row, k), (joint, field) in [("a1", (0, 1), ("J2", "shift_x")), ("alpha1", (0, 2), ("J2", "tilt_x")),
+                                           ("a2", (1, 1), ("J3", "shift_x")), ("alpha2", (1, 2), ("J3", "tilt_x")),
+                                           ("d3", (2, 0), ("J3", "shift_z"))]:
+        fields = [f for f in ("shift_x", "shift_y", "shift_z", "tilt_x", "tilt_y", "tilt_z") if f"{joint}.{f}" in base_names]
+        rows = [base_names.index(f"{joint}.{f}") for f in fields]        # the seat's placement errors the zones move
+        u = (np.array(fields) == field).astype(float)
+        e = np.linalg.lstsq(m.C[rows], u, rcond=None)[0]                          # callout errors making that motion
+        assert np.allclose(m.C[rows] @ e, u, atol=1e-12)                         # the callouts span it
+        up, dn = [list(r) for r in TABLE], [list(r) for r in TABLE]
+        up[row][k] += h
+        dn[row][k] -= h
+        fd = (textbook_fk(q, up)[:3, 3] - textbook_fk(q, dn)[:3, 3]) / (2 * h)
+        assert np.allclose(S @ e, fd, atol=1e-8), entry

@@ -119,3 +119,35 @@ def test_explorer_is_omitted_with_a_note_for_a_cost_model_it_cannot_express():
     Q = ToleranceProblem(P.robot, tols, P.requirement, P.poses)
     out = explorer_data(Q, {})
     assert set(out) == {"omitted"} and f"source {name}" in out["omitted"] and "exponential" in out["omitted"]
+
+
+def test_explorer_writes_a_one_sided_zone_as_the_page_does(tmp_path):
+    """Issue 39: the explorer's contributions table wrote a one-sided zone 0 / −787.4 µm as "±787.4 µm".
+    For every source of the study with asymmetric intervals, at the sensitivity design, the explorer's zone
+    text is the page's (evotol.reporting.drawing.zone_text of the JSON's zone, same display units); the
+    asymmetric ones are written "+hi / −lo", and the zone's ends are offset ± (minus, plus)·t."""
+    from evotol.reporting.drawing import zone_text
+    from evotol.units.display import DisplayUnits
+
+    require_chromium()
+    problem, data = _study(tmp_path, "ucr3_tolerance_specs", CASES["ucr3_tolerance_specs"])
+    u = DisplayUnits(**data["display_units"])
+    res = data["results"]["sensitivity"]
+    ex = data["explorer"]
+    asymmetric = 0
+    with HeadlessChromium() as browser:
+        page = browser.open(tmp_path / "ucr3_tolerance_specs.html")
+        page.wait_for("window.evotolExplorer && window.evotolExplorer.ready", timeout=60)
+        for j, s in enumerate(ex["sources"]):
+            t = res["tolerances"][s["name"]]
+            zone = res["zones"][s["name"]]
+            tol = problem.tolerances[s["name"]]
+            assert zone["lower"] == pytest.approx(tol.offset - tol.minus * t, rel=1e-12, abs=1e-18)
+            assert zone["upper"] == pytest.approx(tol.offset + tol.plus * t, rel=1e-12, abs=1e-18)
+            want = zone_text(zone, u, s["unit"], s["dim"])
+            got = page.evaluate(f"window.evotolExplorer.zoneText({j}, {t!r})")
+            assert got.rsplit(" ", 1)[0] == want, s["name"]
+            if tol.minus != tol.plus or tol.offset:
+                asymmetric += 1
+                assert "±" not in got and " / " in got
+    assert asymmetric >= 1

@@ -56,9 +56,26 @@ def test_terminal_and_page_show_the_same_cells(tmp_path):
     table = table[:table.index("</table>")]
     html_rows = [[html.unescape(c) for c in re.findall(r"<td>(.*?)</td>", r)] for r in table.split("<tr>")[2:]]
     rows, _ = terminal_rows(s)
-    for trow, hrow in zip(rows, html_rows):
+    # six figures (nominal, mean, worst case, RSS, modified RSS, specification): the page's gap
+    # table has exactly these rows and the terminal's first six rows are the same cells
+    assert len(html_rows) == 6 and len(rows) >= 6
+    for trow, hrow in zip(rows[:6], html_rows, strict=True):
         assert trow == hrow[:4]
-    assert "0.1570" in page and "-0.0340" in page and "C_f = 1.3255" in page
+    # and the cells are the hand formulas on the data file (inch; Drake 1999 ch. 9): zone centre
+    # c = nominal + (plus - minus)/2, half-zone h = (plus + minus)/2, worst case Σa·c ± Σ|a|h,
+    # RSS Σa·c ± sqrt(Σh²), modified RSS with C_f = 1 + 0.5 (T_wc - T_rss) / (T_rss (sqrt(n) - 1))
+    d = json.loads(DATA.read_text())["dimensions"]
+    a = np.array([x["direction"] for x in d], float)
+    nom = np.array([x["nominal"] for x in d])
+    plus, minus = np.array([x["plus"] for x in d]), np.array([x["minus"] for x in d])
+    c, h = a @ (nom + (plus - minus) / 2), (plus + minus) / 2
+    wc, rss = np.abs(a) @ h, np.sqrt(h @ h)
+    cf = 1 + 0.5 * (wc - rss) / (rss * (np.sqrt(len(h)) - 1))
+    hand = [[a @ nom], [c], [c - wc, c + wc, wc], [c - rss, c + rss, rss], [c - cf * rss, c + cf * rss, cf * rss],
+            [0.0, 0.12, 0.06]]
+    for want, hrow in zip(hand, html_rows, strict=True):
+        assert [float(v) for v in hrow[1:1 + len(want)]] == pytest.approx(want, abs=5.1e-5)   # 4 decimals shown
+    assert f"C_f = {cf:.4f}" in page
 
 
 def test_units_mm_and_inch_give_the_same_stack(tmp_path):

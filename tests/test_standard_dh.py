@@ -153,3 +153,50 @@ def test_bad_convention_and_tables():
     with pytest.raises(ValidationError) as e:
         mechanism_from_dict(mod)
     assert e.value.field == "tool"
+
+
+def test_puma_with_base_and_tool_tables_as_the_docs_show_them():
+    """Issue 39: the PUMA 560 with [base] and [tool] (docs/mechanisms.md, every entry non-zero here) has
+    32 distinct sources -- the 24 of the rows and base.theta/d/alpha/a, tool.theta/d/alpha/a once each
+    (the modified entries of the base and tool frames, whose base.d would be a_B, are not candidates) --
+    passes the robot check of unique names, its forward kinematics is the textbook product B A_1 ... A_6 E, and each base and
+    tool source moves what the textbook entry of that name moves (finite differences of the product)."""
+    text = PUMA.read_text().replace("[end_effector]", '[base]\nd = "660*mm"\na = "10*mm"\nalpha = "3*deg"\n'
+                                    'theta = "20*deg"\n[tool]\nd = "56.25*mm"\na = "5*mm"\nalpha = "-4*deg"\n'
+                                    'theta = "15*deg"\n\n[end_effector]')
+    import tomllib
+    from types import SimpleNamespace
+    from evotol.robots.checks import check_sources_declared
+    model = MechanismModel(mechanism_from_dict(tomllib.loads(text)))
+    ends = [f"{k}.{f}" for k in ("base", "tool") for f in ("theta", "d", "alpha", "a")]
+    assert sorted(model.source_names) == sorted([f"{k}{i}" for i in range(1, 7) for k in ("a", "alpha", "d", "theta")]
+                                                + ends)
+    check_sources_declared(SimpleNamespace(robot=model))        # the check that named "duplicate source names"
+    entries = {"base": [np.radians(20), 0.66, 0.01, np.radians(3)], "tool": [np.radians(15), 0.05625, 0.005, np.radians(-4)]}
+
+    def fk(q, moved=None, h=0.0):
+        e = {k: list(v) for k, v in entries.items()}
+        if moved:
+            k, f = moved.split(".")
+            e[k][("theta", "d", "a", "alpha").index(f)] += h
+        return textbook_fk(q, base=link(*e["base"]), tool=link(*e["tool"]))
+    Q = np.random.default_rng(4).uniform(-np.pi, np.pi, (50, 6))
+    assert np.abs(end_transform(model, Q) - np.array([fk(q) for q in Q])).max() < 1e-12
+    S = model.sensitivity_at_joints(Q[:3])
+    h = 1e-7
+    for p, q in enumerate(Q[:3]):
+        for name in ends:
+            dp = (fk(q, name, h)[:3, 3] - fk(q, name, -h)[:3, 3]) / (2 * h)
+            assert np.allclose(S[p, :3, model.source_names.index(name)], dp, atol=1e-7), name
+
+
+def test_a_duplicate_source_name_error_names_only_the_duplicates():
+    """evotol.robots.checks: the message lists the names that appear twice, not every source."""
+    from types import SimpleNamespace
+    from evotol.errors import CheckFailed
+    from evotol.robots.base import SourceSpec
+    from evotol.robots.checks import check_sources_declared
+    sources = [SourceSpec(n, 1, "m", "length", "") for n in ("a1", "d1", "a1", "theta1", "d2", "d2")]
+    with pytest.raises(CheckFailed) as e:
+        check_sources_declared(SimpleNamespace(robot=SimpleNamespace(name="arm", sources=sources)))
+    assert "['a1', 'd2']" in str(e.value) and "theta1" not in str(e.value)

@@ -75,16 +75,31 @@ def test_one_sided_tolerances_give_both_signed_limits():
 
 
 def test_probability_and_quantile_against_sampling():
-    problem, jm, Q = given_problem()
+    """Two-sided: the first-order yield model (docs/statistical.md: δp ~ N(0, Σ_j t_j² v_j B_j B_jᵀ),
+    v = 1/3 for a source uniform in ±t) sampled here with its own normal draws gives the reported
+    probability and the reported 0.99 quantile to within 4 standard errors of the sampling; and
+    sampling the uniform sources themselves shows the model is conservative (the normal tail is
+    heavier than the bounded sum's)."""
+    E = 3e-4                                              # a bound the design misses now and then (P ≈ 0.97-0.99)
+    problem, jm, Q = given_problem(requirement=Requirement(position=E))
     a = analyse(problem, n_samples=0, probability=0.99)
     t = np.array([GIVEN[n] for n in SOURCES])
-    e = np.random.default_rng(0).uniform(-1, 1, (400_000, len(t))) * t      # uniform inside ±t: the stated distribution
-    dp = np.linalg.norm(np.einsum("pij,nj->pni", jm.sensitivity(Q)[:, :3], e), axis=2)
-    sampled_q = np.quantile(dp, 0.99, axis=1)
-    # the yield measure is a proven lower bound of the probability: its quantile is at or above the sampled one
-    assert np.all(a.error_at_probability["position"] >= sampled_q * (1 - 2e-3))
+    B = jm.sensitivity(Q)[:, :3]
+    n = 400_000
+    rng = np.random.default_rng(1)
+    for p in range(len(Q)):
+        cov = np.einsum("ij,j,kj->ik", B[p], t ** 2 / 3, B[p])
+        r = np.linalg.norm(rng.multivariate_normal(np.zeros(3), cov, n), axis=1)
+        sampled = np.mean(r <= E)
+        assert abs(a.probability[p] - sampled) <= 4 * np.sqrt(sampled * (1 - sampled) / n)
+        # the reported bound is met with probability 0.99 (binomial standard error sqrt(0.99·0.01/n))
+        at_p = np.mean(r <= a.error_at_probability["position"][p])
+        assert abs(at_p - 0.99) <= 4 * np.sqrt(0.99 * 0.01 / n)
+    e = rng.uniform(-1, 1, (n, len(t))) * t                 # uniform inside ±t: the stated distribution
+    dp = np.linalg.norm(np.einsum("pij,nj->pni", B, e), axis=2)
+    assert np.all(a.error_at_probability["position"] >= np.quantile(dp, 0.99, axis=1))
+    assert np.all(a.probability <= np.mean(dp <= E, axis=1))
     assert np.all(a.error_at_probability["position"] <= a.worst_case["position"]["value"])
-    assert np.all(a.probability <= np.mean(dp <= 5e-4, axis=1) + 1e-3)
 
 
 def test_study_with_every_source_given_is_analysed(tmp_path):

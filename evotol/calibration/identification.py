@@ -24,7 +24,8 @@ projection on the kept ones: a QR factorisation with the pivots in that order (G
 re-orthogonalised), rank-revealing because a column is dropped exactly when it lies in the span
 of the kept ones. Each dropped source is reported with the kept columns it is a combination of
 (and its residual), or as unseen (its column is zero: it moves no measured coordinate). The rank
-reported is that of all the columns from their singular values (above 1e-9 of the largest); a
+reported is the number of identifiable directions: that of the seen columns (unit-normalised) from
+their singular values (above 1e-9 of the largest), unseen columns left out; a
 column whose residual lies between 1e-9 and ``RTOL`` counts in the rank but is not kept: its
 identified value would carry the noise amplified by more than 1e6.
 """
@@ -325,7 +326,9 @@ def identify(robot, plan) -> Identification:
     M = np.eye(A.shape[1])
     M[K] -= Pinv @ Aw
     sigma_K = Pinv @ Pinv.T if np.all(sig > 0) else np.zeros((len(K), len(K)))
-    sv = np.linalg.svd(Z / np.maximum(np.linalg.norm(Z, axis=0), 1e-300), compute_uv=False)
+    zn = np.linalg.norm(Z, axis=0)
+    Zs = Z[:, zn > 1e-12 * max(zn.max(initial=0.0), 1e-300)]    # _select's unseen test: a zero column is no direction
+    sv = np.linalg.svd(Zs / np.linalg.norm(Zs, axis=0), compute_uv=False) if Zs.size else np.zeros(0)
     rank = int((sv > 1e-9 * sv[0]).sum()) if sv.size else 0
     dropped = {}
     for j, (res, coef) in dependent.items():

@@ -43,7 +43,7 @@ def calibration_section(rep, summary: dict) -> None:
                          for c, s in plan["noise_sigma"].items())
              + f", instrument frame {plan['instrument']}; identified: {ident}. Base set kept: "
              f"{idn['n_identified']} sources" + (f" and registration {', '.join(idn['registration'])}" if idn["registration"] else "")
-             + f" (rank of every measured column {idn['rank']}); condition number {idn['condition_number']:.3g}. "
+             + f" ({idn['rank']} identifiable directions: the rank of the measured columns that move a reading); condition number {idn['condition_number']:.3g}. "
              "Tolerances are allocated on the error left after the controller compensates the identified "
              "sources, e = (J − J_K A_K⁺ A) δp (docs/calibration.md).")
     if idn["unseen"]:

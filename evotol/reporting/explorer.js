@@ -153,6 +153,16 @@
   function factor(unit) { return cfg.factors[unit] !== undefined ? cfg.factors[unit] : 1; }
   function label(unit) { return cfg.labels[unit] !== undefined ? cfg.labels[unit] : unit; }
   function show(v, unit) { return number(v * factor(unit)) + " " + label(unit); }
+  /* source j's zone at tolerance t as the page writes it (evotol.reporting.drawing.zone_text): a disc or ball
+     "r ≤ hi", a zone symmetric about the nominal "±hi", else the two deviations "+hi / −lo" ("0" for zero) */
+  function zoneText(j, t) {
+    var s = E.sources[j], z = t * s.zone_per_t, f = factor(s.unit);
+    var lo = (s.offset - s.minus * z) * f, hi = (s.offset + s.plus * z) * f, u = " " + label(s.unit);
+    if (s.dim > 1) return "r ≤ " + number(hi) + u;
+    if (Math.abs(lo + hi) <= 1e-9 * Math.max(Math.abs(lo), Math.abs(hi))) return "±" + number(hi) + u;
+    var signed = function (v) { return v === 0 ? "0" : v > 0 ? "+" + number(v) : "−" + number(-v); };
+    return signed(hi) + " / " + signed(lo) + u;
+  }
   function poseText(p) {
     var ws = cfg.workspace, pose = cfg.poses[p];
     return ws.names.map(function (n, i) {
@@ -202,7 +212,7 @@
       order.forEach(function (j, i) {
         var s = E.sources[j];
         if (i >= MAX_ROWS) { rest += r.contributions[j]; return; }
-        h += "<tr><td>" + s.name + "</td><td>±" + show(state.t[j], s.unit) + "</td><td>" + number(100 * r.contributions[j]) + "</td></tr>";
+        h += "<tr><td>" + s.name + "</td><td>" + zoneText(j, state.t[j]) + "</td><td>" + number(100 * r.contributions[j]) + "</td></tr>";
       });
       if (order.length > MAX_ROWS)
         h += "<tr><td>" + (order.length - MAX_ROWS) + " more sources</td><td></td><td>" + number(100 * rest) + "</td></tr>";
@@ -243,7 +253,8 @@
     var lo = Math.log10(V.lower), hi = Math.log10(V.upper);
     return "<tr data-var=\"" + v + "\"><td>" + V.name + "</td><td>" + show(V.lower, V.unit) + "</td><td><input type=\"range\" min=\"" + lo +
       "\" max=\"" + hi + "\" step=\"" + (hi - lo) / 1000 + "\" style=\"width:22em\"></td><td>" + show(V.upper, V.unit) +
-      "</td><td>± <input type=\"number\" step=\"any\" style=\"width:7em\"> " + label(V.unit) + "</td></tr>";
+      "</td><td>" + (V.members.every(function (j) { var s = E.sources[j]; return s.offset === 0 && s.minus === s.plus; })
+        ? "± " : "t = ") + "<input type=\"number\" step=\"any\" style=\"width:7em\"> " + label(V.unit) + "</td></tr>";
   }).join("");
   var buttons = Object.keys(E.starts).map(function (m) {
     return "<button type=\"button\" data-start=\"" + m + "\">reset to " + m + "</button>";
@@ -272,6 +283,8 @@
   window.evotolExplorer = {
     /* tolerance per free variable (SI) -> the recomputed state */
     setVariables: function (values) { return setAll(values); },
+    /* source j's zone text at tolerance t (SI), as the contributions table shows it */
+    zoneText: function (j, t) { return zoneText(j, t); },
     /* the state without redrawing: for tolerance vectors per source outside the panel's bounds */
     evaluateSources: function (t) {
       var out = {cost: cost(t), components: {}};

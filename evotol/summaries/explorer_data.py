@@ -165,7 +165,8 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
     Returns
     -------
     dict
-        ``sources`` (name, group, unit, rho, kappa, offset, width (cost width factor),
+        ``sources`` (name, group, unit, rho, kappa, offset, minus, plus, zone_per_t (the drawn zone,
+        :func:`evotol.summaries.drawing.tolerance_zone`), width (cost width factor),
         cost_weight, locked, cost), ``variables`` (name, members, lower, upper), ``components``
         (name, limit, directions, covering_angle, blocks (n_poses, 3, columns), owner (column ->
         source), sensitivity (n_poses, n_sources)), ``starts`` (method -> per-variable values),
@@ -180,6 +181,9 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
         tol = problem.tolerances[n]
         sources.append({"name": n, "group": s.group, "unit": s.unit, "dim": s.dim, "rho": float(sh.rho[j]),
                         "kappa": float(sh.kappa[j]), "offset": float(sh.offset[j]), "width": float(tol.width_factor),
+                        # the drawn zone offset - minus·t·z .. offset + plus·t·z (evotol.summaries.drawing.tolerance_zone)
+                        "minus": float(tol.minus), "plus": float(tol.plus),
+                        "zone_per_t": float(getattr(problem.robot, "zone_per_t", {}).get(n, 1.0)),
                         "cost_weight": float(problem.cost_weight[j]),
                         "locked": None if not problem.locked[j] else float(problem.locked_values[j]),
                         "cost": cost_model_spec(tol.cost)})

@@ -35,7 +35,7 @@ KEYS = {
     "rho": RELATIVE + ": half-width per unit t", "kappa": RELATIVE + ": centre shift per unit t",
     "width": RELATIVE + ": width the cost model sees per unit t", "cost_weight": RELATIVE,
     "offset": _PER_SOURCE, "nominal": _PER_SOURCE, "nominal_note": "text: what the nominal is",
-    "minus": RELATIVE + ": lower deviation per unit t",
+    "minus": RELATIVE + ": lower deviation per unit t", "zone_per_t": RELATIVE + ": a callout member's zone per unit of its t",
     "plus": RELATIVE + ": upper deviation per unit t", "locked": _PER_SOURCE, "lower": _PER_SOURCE, "upper": _PER_SOURCE, "starts": _PER_SOURCE,
     "params": "cost-model coefficients (t in units of scale)", "scale": _PER_SOURCE + ": the cost model's unit of t",
     "limit": "m or rad (the component's unit)", "directions": "1: unit direction vector", "covering_angle": "rad",

@@ -23,7 +23,7 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
-from evotol.robots.mechanism.callout_table import callouts_from_tables, joint_seat
+from evotol.robots.mechanism.callout_table import callouts_from_tables, dh_placement_fields, joint_seat
 from evotol.robots.mechanism.callouts import ORIENTATION_KINDS, ZONE_MODELS, Callout, replaced_fields, zone_members
 from evotol.robots.mechanism.description import load_mechanism
 from evotol.robots.mechanism.mechanism import Mechanism
@@ -109,8 +109,9 @@ class CalloutModel(RobotErrorModel):
                     tied[c.name] = tuple(m.name for m in ms)
             placed.add(joint)
 
+        dh = {n: (j, f) for j in by_joint for n, f in dh_placement_fields(base.mechanism, base.kin.uses, j).items()}
         for n in names:
-            j, _, f = n.partition(".")
+            j, f = dh[n] if n in dh else n.split(".", 1) if "." in n else (n, "")   # a DH entry: its seat direction
             if j in by_joint and j not in placed and (f in PLACEMENT_FIELDS or n == self.seats[j]["variable"]):
                 add_callouts(j)
             if j in by_joint and f in PLACEMENT_FIELDS:

@@ -174,6 +174,61 @@ def joint_seat(mech, joint: str) -> dict:
             "variable": str(getattr(f, f.joint_field))}
 
 
+def dh_placement_fields(mech, uses, joint: str) -> dict:
+    """The DH sources that move one placement direction of a ``[[frame]]`` joint's seat exactly.
+
+    A joint row ``J`` turns on the z axis of its placement ``P_J = T_a Rot(z, gamma) Trans(z, b)
+    Rot(x, alpha) Trans(x, d)`` (:mod:`evotol.robots.mechanism.placement`), then moves by ``Rot(z, theta)
+    Trans(z, r)``. Rotations and translations along one axis commute, so an error ``e`` of ``J``'s
+    ``d``, ``alpha``, ``r`` or ``theta`` is exactly ``P_J exp(e·[x; 0])``, ``exp(e·[0; x])``,
+    ``exp(e·[z; 0])``, ``exp(e·[0; z])``: the placement errors ``shift_x``, ``tilt_x``, ``shift_z``,
+    ``tilt_z``. When ``J``'s ``gamma, b, alpha, d`` are nominally 0 and its antecedent is a fixed
+    frame ending on ``Trans(x, d)`` (its ``theta``, ``r`` nominally 0), that frame's ``d`` and
+    ``alpha`` are ``J``'s ``shift_x`` and ``tilt_x`` too. For a standard-DH row ``i`` (joint frame
+    ``J<i>`` after distal frame ``i-1``, :mod:`evotol.robots.mechanism.standard_dh`) this says
+    ``a_(i-1) = shift_x``, ``alpha_(i-1) = tilt_x``, ``d_i = shift_z``, ``theta_i = tilt_z`` (row 1:
+    ``base.a``, ``base.alpha``).
+
+    Parameters
+    ----------
+    mech : evotol.robots.mechanism.mechanism.Mechanism
+        The description.
+    uses : dict of str to list of (str, str)
+        Name -> the DH entries ``(frame, field)`` whose expressions use it (``Kinematics.uses``).
+    joint : str
+        The joint row (the callout's seat frame).
+
+    Returns
+    -------
+    dict of str to str
+        Source name (an entry ``"<frame>.<field>"``, a design parameter used by that entry alone
+        with slope 1, or its standard-DH alias such as ``"base.a"``) -> placement field. Empty for
+        a fixed frame (a URDF joint's origin: its placement errors are the sources themselves).
+    """
+    frames = {f.name: f for f in mech.frames}
+    J = frames.get(joint)
+    if J is None or J.joint == "fixed":
+        return {}
+    vals = {**{n: 0.0 for n in uses}, **dict(mech.parameters)}          # joint variables at 0 (not read)
+
+    def value(f, k, extra=None):
+        return float(Expression.parse(getattr(f, k), f"frame {f.name}.{k}")({**vals, **(extra or {})}))
+
+    entries = {(joint, "d"): "shift_x", (joint, "alpha"): "tilt_x", (joint, "r"): "shift_z", (joint, "theta"): "tilt_z"}
+    P = frames.get(J.antecedent)
+    if (P is not None and P.joint == "fixed" and all(abs(value(J, k)) < 1e-15 for k in ("gamma", "b", "alpha", "d"))
+            and all(abs(value(P, k)) < 1e-15 for k in ("theta", "r"))):
+        entries.update({(P.name, "d"): "shift_x", (P.name, "alpha"): "tilt_x"})
+    out = {f"{fr}.{k}": f for (fr, k), f in entries.items()}
+    alias = {v: k for k, v in mech.aliases.items()}
+    for p, where in uses.items():
+        if p in mech.parameters and len(where) == 1 and where[0] in entries:
+            fr, k = where[0]
+            if abs(value(frames[fr], k, {p: vals[p] + 1.0}) - value(frames[fr], k) - 1.0) < 1e-12:    # slope 1
+                out[alias.get(p, p)] = entries[where[0]]
+    return out
+
+
 def _urdf_parent(mech, joint: str) -> str | None:
     """The URDF parent link of ``joint`` (None without a URDF or that joint)."""
     if not mech.urdf:

@@ -188,7 +188,11 @@ class Mechanism:
         """
         hidden = set(self.aliases.values())
         params = [p for p in (*self.lengths, *self.angles) if p not in hidden]
-        return params + list(self.aliases) + list(actuated) + self.entry_names()
+        # a standard-DH [base]/[tool] is named by its textbook entries (base.d = d_B); the modified
+        # entries of its frame (base.d there would be a_B) are hidden, its placement errors kept
+        aliased = {a.split(".")[0] for a in self.aliases}
+        entries = [e for e in self.entry_names() if not (e.split(".")[0] in aliased and e.split(".")[1] in DH_FIELDS)]
+        return params + list(self.aliases) + list(actuated) + entries
 
     def select_sources(self, patterns: Sequence[str] | None = None, actuated: Sequence[str] = ()) -> list[str]:
         """Source names matching ``patterns`` (fnmatch: ``"*.d"``, ``"A*.theta"``, ``"L?"``), in
@@ -225,5 +229,5 @@ class Mechanism:
                 raise ValidationError("tolerances.sources", p, f"a parameter ({sorted(self.parameters)}), an actuated joint variable {list(actuated)}, a DH entry "
                                                                 f"'<frame>.<gamma|b|alpha|d|theta|r>' or a placement error '<frame>.<shift|tilt>_<x|y|z>' "
                                                                 f"of frames {[f.name for f in self.frames]}")
-            out += [h for h in hit if h not in out]
+            out += [h for h in dict.fromkeys(hit) if h not in out]
         return out

@@ -25,6 +25,7 @@ import warnings
 import numpy as np
 
 from evotol.errors import KinematicsError
+from evotol.robots.base import RobotErrorModel
 from evotol.robots.mechanism.serial import SERIAL_COMPILED, SerialChain
 
 #: relative smallest singular value of the scaled task Jacobian below which a pose counts as near a singularity
@@ -244,11 +245,12 @@ def joints_at(robot, poses) -> dict:
         variables.
     """
     poses = np.atleast_2d(np.asarray(poses, float))
-    if hasattr(robot, "variables") and hasattr(robot, "tool_pose"):
-        return {v: np.asarray(poses[:, i], float) for i, v in enumerate(robot.variables)}
-    if hasattr(robot, "joint_values") and hasattr(robot, "kin"):
-        return {k: np.asarray(v, float) for k, v in robot.joint_values(poses).items()}
-    return {}
+    # the first part of the composition that maps joint values (a calibrated robot keeps its poses;
+    # joint-space poses are their own joint values)
+    robot = next((m for m in robot.parts() if m.joint_maps), None) if isinstance(robot, RobotErrorModel) else None
+    if robot is None:
+        return {}
+    return {k: np.asarray(v, float) for k, v in robot.joint_values(poses).items()}
 
 
 def joint_table(robot, poses) -> dict:

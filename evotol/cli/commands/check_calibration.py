@@ -122,7 +122,7 @@ def cmd_check_calibration(args) -> int:
         print(json.dumps(out, indent=2))
         return 0 if ok else 1
     print(f"{out['name']}: {idn['n_configurations']} calibration configurations, {idn['n_measurements']} measured coordinates")
-    print(f"  rank of every measured column: {idn['rank']}; base set kept: {idn['n_identified']} sources"
+    print(f"  identifiable directions (rank of the seen columns): {idn['rank']}; base set kept: {idn['n_identified']} sources"
           + (f" + registration {', '.join(idn['registration'])}" if idn["registration"] else ""))
     for n in idn["identified"]:
         print(f"    {n}")
