@@ -318,5 +318,22 @@ def write_json(path: str | Path, data: dict) -> Path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(_jsonable(data), indent=1), encoding="utf-8")
+    path.write_text(json_text(data), encoding="utf-8")
     return path
+
+
+def json_text(data: dict) -> str:
+    """``data`` as the JSON text :func:`write_json` writes (numpy values converted, non-finite
+    floats as null), for a command that prints it (``--json``).
+
+    Parameters
+    ----------
+    data : dict
+        As for :func:`write_json`.
+
+    Returns
+    -------
+    str
+        The JSON text (indent 1).
+    """
+    return json.dumps(_jsonable(data), indent=1)
