@@ -100,3 +100,19 @@ def test_pickle_drops_the_caches_and_rebuilds_them(problem):
     assert copy._coeff_cache == {} and copy._measure_cache == {}
     np.testing.assert_array_equal(copy.evaluate(t[None]).position, before)
     assert copy._coeff_cache                             # rebuilt on first use
+
+
+def test_stack_fractions_take_rng_like_the_allocators():
+    """fraction_outside / analyse_stack: rng= an int is seed=, a Generator is drawn from once (its
+    Monte Carlo runs for uniform dimensions; normal ones have the exact CDF)."""
+    from evotol.measures.stack_analysis import Stack, StackDimension, StackModel, analyse_stack, fraction_outside
+
+    stack = Stack(tuple(StackDimension(f"d{i}", 1.0, 0.1, -0.1, 1.0, "uniform") for i in range(3)), "g", 2.8, 3.2, "mm")
+    model = StackModel()
+    by_seed = fraction_outside(stack, model, n_samples=4000, seed=11)
+    assert fraction_outside(stack, model, n_samples=4000, rng=11) == by_seed
+    drawn = int(np.random.default_rng(5).integers(2**32))
+    assert (fraction_outside(stack, model, n_samples=4000, rng=np.random.default_rng(5))
+            == fraction_outside(stack, model, n_samples=4000, seed=drawn))
+    a = analyse_stack(stack, n_samples=4000, rng=11)
+    assert a.to_dict() == analyse_stack(stack, n_samples=4000, seed=11).to_dict()
