@@ -56,10 +56,10 @@ _WHERE = {
     "ConvergenceError": "evotol.errors",
     "InfeasibleError": "evotol.errors",
     # mechanisms and assemblies
-    "MechanismModel": "robots.mechanism.model",
-    "AssemblyFunction": "robots.assembly",
-    "LinearStack": "robots.assembly",
-    "RobotErrorModel": "robots.base",
+    "MechanismModel": "evotol.robots.mechanism.model",
+    "AssemblyFunction": "evotol.robots.assembly",
+    "LinearStack": "evotol.robots.assembly",
+    "RobotErrorModel": "evotol.robots.base",
 }
 
 __all__ = sorted(_WHERE)
@@ -84,9 +84,9 @@ if TYPE_CHECKING:          # what mypy and editors read: the same names, importe
         ClearanceSources as ClearanceSources)
     from evotol.measures.statistical.distributions import Distribution as Distribution
     from evotol.verification.montecarlo import MonteCarloResult as MonteCarloResult, verify as verify
-    from robots.assembly import AssemblyFunction as AssemblyFunction, LinearStack as LinearStack
-    from robots.base import RobotErrorModel as RobotErrorModel
-    from robots.mechanism.model import MechanismModel as MechanismModel
+    from evotol.robots.assembly import AssemblyFunction as AssemblyFunction, LinearStack as LinearStack
+    from evotol.robots.base import RobotErrorModel as RobotErrorModel
+    from evotol.robots.mechanism.model import MechanismModel as MechanismModel
 
 
 def __getattr__(name: str):

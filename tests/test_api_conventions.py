@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from cost_models import PowerCost
+from evotol.cost_models import PowerCost
 from evotol import (LinearStack, Tolerance, ValidationError, allocate_ga, allocate_nsga2, allocate_optimum,
                     assembly_problem, verify)
 

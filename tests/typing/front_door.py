@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from cost_models import PowerCost
+from evotol.cost_models import PowerCost
 from evotol import (AllocationResult, LinearStack, MonteCarloResult, ParetoFront, Requirement, Tolerance,
                     ToleranceProblem, ValidationError, allocate_ga, allocate_nsga2, allocate_optimum,
                     assembly_problem, verify)
