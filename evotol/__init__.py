@@ -42,6 +42,7 @@ _HERE = Path(__file__).resolve().parent
 if not (_HERE / "robots").is_dir() and (_HERE.parent / "robots" / "__init__.py").is_file() \
         and (_HERE.parent / "pyproject.toml").is_file():
     sys.meta_path.insert(0, _SourceTreeFinder(_HERE.parent))     # before an editable install of another checkout
+from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
 
@@ -93,6 +94,30 @@ _WHERE = {
 }
 
 __all__ = sorted(_WHERE)
+
+if TYPE_CHECKING:          # what mypy and editors read: the same names, imported eagerly (issue 40)
+    from evotol.allocators import (ParetoFront as ParetoFront, Process as Process,
+        ProcessProblem as ProcessProblem, ProcessResult as ProcessResult, allocate_equal as allocate_equal,
+        allocate_ga as allocate_ga, allocate_lagrange as allocate_lagrange,
+        allocate_monotone as allocate_monotone, allocate_nsga2 as allocate_nsga2,
+        allocate_optimum as allocate_optimum, allocate_process_baselines as allocate_process_baselines,
+        allocate_process_ga as allocate_process_ga, allocate_process_optimum as allocate_process_optimum,
+        allocate_proportional as allocate_proportional, allocate_sensitivity as allocate_sensitivity,
+        process_front as process_front)
+    from evotol.allocators.process import assembly_problem as assembly_problem
+    from evotol.core.problem import (Evaluation as Evaluation, Requirement as Requirement,
+        Tolerance as Tolerance, ToleranceProblem as ToleranceProblem)
+    from evotol.core.result import AllocationResult as AllocationResult
+    from evotol.errors import (ConvergenceError as ConvergenceError, EvotolError as EvotolError,
+        InfeasibleError as InfeasibleError, KinematicsError as KinematicsError,
+        ValidationError as ValidationError)
+    from evotol.measures.clearances import (ClearanceClass as ClearanceClass,
+        ClearanceSources as ClearanceSources)
+    from evotol.measures.statistical.distributions import Distribution as Distribution
+    from evotol.verification.montecarlo import MonteCarloResult as MonteCarloResult, verify as verify
+    from evotol.robots.assembly import AssemblyFunction as AssemblyFunction, LinearStack as LinearStack
+    from evotol.robots.base import RobotErrorModel as RobotErrorModel
+    from evotol.robots.mechanism.model import MechanismModel as MechanismModel
 
 
 def __getattr__(name: str):

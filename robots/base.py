@@ -345,7 +345,16 @@ class RobotErrorModel:
             model = outer.rebuilt(model)
         return model
 
+    def __repr__(self) -> str:
+        """One line: the class, the robot's name and its counts (``<... object at 0x...>`` before)."""
+        try:
+            counts = f", {len(self.sources)} sources, {self.n_columns} error columns"
+        except AttributeError:     # a half-built model (a subclass's __init__ failed): the name alone
+            counts = ""
+        return f"{type(self).__name__}(name={self.name!r}{counts})"
+
     # --- contract -----------------------------------------------------------------------
+
     def sensitivity(self, poses: np.ndarray) -> np.ndarray:
         """First-order map, shape (n_poses, 6, n_columns): [dp (m); dtheta (rad)] per unit error.
 

@@ -98,7 +98,7 @@ def test_cli_filter_prints_counts_and_ranges(tmp_path, study, capsys):
     paths = study.save(tmp_path / "entries")
     out_json, out_csv = tmp_path / "kept.json", tmp_path / "kept.csv"
     code = main(["filter", str(paths["parquet"]), "p_max <= 0.05 and r_max_deg <= 0.05",
-                 "--json", str(out_json), "--out", str(out_csv)])
+                 "--summary", str(out_json), "--out", str(out_csv)])
     text = capsys.readouterr().out
     expected = study.filter("p_max <= 0.05 and r_max_deg <= 0.05")
     assert code == 0
@@ -131,9 +131,9 @@ def test_cli_filter_keeping_nothing_says_so_and_writes_no_report(tmp_path, study
     paths = study.save(tmp_path / "entries")
     out = tmp_path / "none.html"
     assert main(["filter", str(paths["parquet"]), "p_max_mm < 0", "--html", str(out)]) == 0
-    text = capsys.readouterr().out
-    assert "0 of 512 entries kept (no entry satisfies the query" in text
-    assert "no report written" in text and not out.exists()
+    text = capsys.readouterr()
+    assert "0 of 512 entries kept (no entry satisfies the query" in text.out
+    assert "no report written" in text.err and not out.exists()      # a message: standard error
 
 
 def test_main_effects_without_inputs_is_a_validation_error():
@@ -165,3 +165,22 @@ def test_main_effects_quartiles_drop_bins_left_empty_by_ties():
     me = main_effects(pd.DataFrame({"x": x, "y": x}), ["x"], "y", log=False).iloc[0]
     assert me["levels"] == [2.0, 7.0, 12.0, 17.0] and me["level_means"] == [2.0, 7.0, 12.0, 17.0]
     assert me["effect"] == 15.0
+
+
+def test_cli_filter_json_is_a_flag_and_the_old_file_form_still_works(tmp_path, study, capsys):
+    """``--json`` prints the summary as JSON on stdout (as on describe and check-*; issue 40), its
+    count the one pandas' own query gives on the saved table; ``--json FILE`` (the old form) still
+    writes FILE, with a deprecation message on stderr."""
+    paths = study.save(tmp_path / "entries")
+    direct = len(pd.read_parquet(paths["parquet"]).query("p_max_mm <= 0.05 and r_max_deg <= 0.05"))
+    assert main(["filter", str(paths["parquet"]), "p_max <= 0.05 and r_max_deg <= 0.05", "--json"]) == 0
+    out = capsys.readouterr()
+    printed = json.loads(out.out)                 # stdout is the JSON alone
+    assert printed["count"] == direct and printed["total"] == 512 and out.err == ""
+    old = tmp_path / "old.json"
+    assert main(["filter", str(paths["parquet"]), "p_max <= 0.05 and r_max_deg <= 0.05", "--json", str(old)]) == 0
+    out = capsys.readouterr()
+    assert "deprecated" in out.err and f"--summary {old}" in out.err
+    assert json.loads(old.read_text())["count"] == direct and "entries kept" in out.out
+    assert main(["filter", str(paths["parquet"]), "p_max <= 0.05", "--json", "kept.csv"]) == 2
+    assert "--json" in capsys.readouterr().err

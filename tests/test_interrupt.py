@@ -43,12 +43,12 @@ def _interrupt_run(tmp_path: Path, *extra: str) -> tuple[int, str, dict, str]:
                             cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         seen = []
-        for line in proc.stdout:                  # wait until the GA has started
+        for line in proc.stderr:                  # wait until the GA has started (progress: standard error)
             seen.append(line)
             if line.startswith("[evotol] ga"):
                 break
         else:
-            pytest.fail(f"the GA never started: {''.join(seen)} {proc.stderr.read()}")
+            pytest.fail(f"the GA never started: {''.join(seen)} {proc.stdout.read()}")
         time.sleep(1.0)                           # let it run some generations
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=120)

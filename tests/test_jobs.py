@@ -63,7 +63,7 @@ def test_ctrl_c_stops_the_running_studies_and_names_what_was_not_run(tmp_path):
                              "--out", str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     started, t0 = 0, time.time()
     while started < 2 and time.time() - t0 < 60:
-        line = proc.stdout.readline()
+        line = proc.stderr.readline()            # progress on standard error (issue 40)
         started += line.startswith("[evotol] started")
     assert started == 2
     time.sleep(1.0)

@@ -108,7 +108,7 @@ def test_study_file_optimum_refine_with_clearances_is_one_line_before_any_method
     assert code != 0
     lines = [x for x in out.err.splitlines() if x.strip()]
     assert len(lines) == 1 and field in lines[0] and "clearance sources" in lines[0], out.err
-    assert "[evotol] ga" not in out.out and not (tmp_path / "fivebar_clearances.json").exists()
+    assert "[evotol] ga" not in out.err and not (tmp_path / "fivebar_clearances.json").exists()
 
 
 def test_refined_optimum_is_the_wrapper_around_the_optimum():

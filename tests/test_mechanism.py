@@ -243,7 +243,7 @@ def test_check_mechanism_command_prints_sources_and_fd(capsys):
 
 
 def test_study_file_with_a_description_runs_end_to_end(tmp_path):
-    """docs/mechanisms.md tutorial: a study file naming a description file, no Python."""
+    """docs/tutorial_1_3rrr.md: a study file naming a description file, no Python."""
     import json
 
     from evotol.studyfile import run_study_file

@@ -1,4 +1,4 @@
-"""The second tutorial's robot (docs/mechanisms.md, robots/mechanisms/planar3rpr.toml): a planar
+"""The second tutorial's robot (docs/tutorial_2_3rpr.md, robots/mechanisms/planar3rpr.toml): a planar
 3-RPR with in-plane prismatic joints, checked against its closed-form inverse kinematics.
 
 Leg i: base joint ``A_i = Rb (cos g_i, sin g_i)``, platform joint
@@ -88,7 +88,7 @@ def test_check_mechanism_shows_parameters_assembly_and_pose_in_display_units(cap
 
 
 def test_tutorial_study_optimum_holds_by_brute_force_over_the_box_vertices():
-    """docs/tutorial_3rpr.md step 9: the certified optimum of reports/studies/planar3rpr.toml
+    """docs/tutorial_2_3rpr.md step 9: the certified optimum of reports/studies/planar3rpr.toml
     (0.5868) meets 0.1 mm exactly at its worst pose -- checked by brute force: the worst case of
     interval sources is at a vertex of the tolerance box, so the largest in-plane position error
     is max over the 2^5 sign patterns of |sum_j s_j t_j S_j| (S equal to the closed form, see above)."""

@@ -159,19 +159,25 @@ def test_without_numba_the_numpy_iteration_runs(monkeypatch):
         solve_support(np.ones((1, 4)), np.ones((1, 4, 1)), 1, tol=1e-6, kernel=True)
 
 
-def test_first_compile_is_announced(tmp_path, capsys):
-    """A fresh install compiles the kernels on the first solve (~10 s): one line says so."""
+def test_first_compile_is_announced(tmp_path, caplog, capsys):
+    """A fresh install compiles the kernels on the first solve (~10 s): one log line says so (INFO,
+    through ``logging``, never a print: issue 40)."""
+    import logging
     from types import SimpleNamespace
 
     def fake(index):
         return SimpleNamespace(_cache=SimpleNamespace(_cache_file=SimpleNamespace(_index_path=str(index))))
 
-    newton_kernel._say_if_compiling(fake(tmp_path / "missing.nbi"))
-    assert "compiling the clearance engine's Newton kernels" in capsys.readouterr().err
-    (tmp_path / "there.nbi").write_text("")
-    newton_kernel._say_if_compiling(fake(tmp_path / "there.nbi"))
-    newton_kernel._say_if_compiling(object())          # numba internals changed: silent
-    assert capsys.readouterr().err == ""
+    with caplog.at_level(logging.INFO, logger="robots"):
+        newton_kernel._say_if_compiling(fake(tmp_path / "missing.nbi"))
+        assert [r.name for r in caplog.records] == ["evotol.robots.clearance.newton_kernel"]
+        assert "compiling the clearance engine's Newton kernels" in caplog.records[0].getMessage()
+        caplog.clear()
+        (tmp_path / "there.nbi").write_text("")
+        newton_kernel._say_if_compiling(fake(tmp_path / "there.nbi"))
+        newton_kernel._say_if_compiling(object())          # numba internals changed: silent
+        assert caplog.records == []
+    assert capsys.readouterr().out == ""
 
 
 def test_warm_up_compiles_every_signature_the_solver_uses():

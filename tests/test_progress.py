@@ -113,7 +113,10 @@ def test_run_prints_lines_for_a_method_without_a_bar(tmp_path, capsys, monkeypat
 
     monkeypatch.setitem(sf.METHODS, "sensitivity", sensitivity)
     assert main(["run", str(fast_study(tmp_path)), "--out", str(tmp_path)]) == 0
-    assert "[evotol] sensitivity: running for " in capsys.readouterr().out
+    out = capsys.readouterr()       # progress on standard error, results alone on standard output (issue 40)
+    assert "[evotol] sensitivity: running for " in out.err and "running for" not in out.out
+    assert main(["run", str(fast_study(tmp_path)), "--out", str(tmp_path), "--force", "-q"]) == 0
+    assert "running for" not in capsys.readouterr().err        # -q: no progress
 
 
 def test_heartbeat_bar_on_a_terminal_shows_the_elapsed_time():

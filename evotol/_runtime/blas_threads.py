@@ -8,8 +8,12 @@ not oversubscribe the cores.
 from __future__ import annotations
 
 import functools
+from typing import Callable, ParamSpec, TypeVar
 
 from threadpoolctl import threadpool_limits
+
+P = ParamSpec("P")
+R = TypeVar("R")
 
 
 def one_blas_thread():
@@ -24,7 +28,7 @@ def one_blas_thread():
     return threadpool_limits(limits=1, user_api="blas")
 
 
-def single_threaded_blas(func):
+def single_threaded_blas(func: Callable[P, R]) -> Callable[P, R]:
     """Decorator: run ``func`` with BLAS limited to one thread.
 
     Parameters
@@ -40,7 +44,7 @@ def single_threaded_blas(func):
     """
 
     @functools.wraps(func)
-    def wrapper(*args, **kwargs):
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
         with one_blas_thread():
             return func(*args, **kwargs)
 

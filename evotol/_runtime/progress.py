@@ -18,11 +18,14 @@ guide, not a promise: the load of the machine changes them.
 """
 from __future__ import annotations
 
+import logging
 import sys
 import threading
 import time
 
 from tqdm.auto import tqdm
+
+logger = logging.getLogger(__name__)
 
 EXPECTED_SECONDS = {
     "brahmia2023-delta": 42, "chase1990-clutch": 5, "deng2012-5bar": 21, "deng2012-clearalloc": 9,
@@ -65,7 +68,8 @@ class Heartbeat:
     every : float, optional
         Seconds between lines (default 10).
     stream : file, optional
-        Where the lines go (default: ``sys.stdout``); lines only when it is not a terminal.
+        Where the lines go (default: the ``evotol`` log at INFO level, which the command shows on
+        standard error); lines only when it (stderr by default) is not a terminal.
     force : bool, optional
         Print the lines even on a terminal.
     bar : bool, optional
@@ -77,8 +81,8 @@ class Heartbeat:
     def __init__(self, name: str, every: float = 10.0, stream=None, force: bool = False, bar: bool = False,
                  bar_stream=None):
         self.name, self.every = name, float(every)
-        self.stream = stream if stream is not None else sys.stdout
-        isatty = getattr(self.stream, "isatty", lambda: False)
+        self.stream = stream
+        isatty = getattr(sys.stderr if stream is None else stream, "isatty", lambda: False)
         self.active = force or not isatty()
         self.bar_stream = sys.stderr if bar_stream is None else bar_stream
         self.bar = bar and not self.active and getattr(self.bar_stream, "isatty", lambda: False)()
@@ -96,8 +100,11 @@ class Heartbeat:
         hint = expected(self.name)
         while not self._stop.wait(self.every):
             elapsed = time.perf_counter() - t0
-            print(f"[evotol] {self.name}: running for {elapsed:.0f} s" + (f" (a full run takes {hint})" if hint else ""),
-                  file=self.stream, flush=True)
+            line = f"{self.name}: running for {elapsed:.0f} s" + (f" (a full run takes {hint})" if hint else "")
+            if self.stream is None:
+                logger.info(line)
+            else:
+                print(f"[evotol] {line}", file=self.stream, flush=True)
 
     def __enter__(self) -> "Heartbeat":
         if self.active or self.bar:
@@ -183,7 +190,8 @@ def progress_bar(total: int, desc: str, unit: str, progress: bool | None = None,
         What runs (``"GA"``) and what a step is (``"gen"``).
     progress : bool or None
         None: a bar on a terminal, nothing otherwise; True: a bar on a terminal, a line every
-        ``every`` s otherwise; False: nothing.
+        ``every`` s otherwise; False: nothing. Nothing either when the ``evotol`` logger's level is
+        set above INFO (``evotol -q``).
     size : str
         The method's size, stated with the time estimate after the first step
         (``"60 generations x 60 designs x 75 poses"``).
@@ -201,7 +209,8 @@ def progress_bar(total: int, desc: str, unit: str, progress: bool | None = None,
     """
     stream = sys.stderr if stream is None else stream
     tty = getattr(stream, "isatty", lambda: False)()
-    if progress is False or (progress is None and not tty):
+    quiet = logging.getLogger("evotol").level > logging.INFO     # ``evotol -q`` (or a user's setLevel): no progress
+    if progress is False or (progress is None and not tty) or quiet:
         return tqdm(total=total, disable=True)
     if tty:
         bar = _Bar(total=total, desc=desc, unit=unit, leave=False, delay=delay, file=stream)

@@ -38,7 +38,7 @@ from evotol.errors import ValidationError
 from evotol.core.problem import ToleranceProblem
 from evotol.core.plausibility import issue
 from evotol.measures import feasibility
-from evotol.core.result import make_result
+from evotol.core.result import AllocationResult, make_result
 from evotol._runtime.blas_threads import single_threaded_blas
 
 
@@ -211,7 +211,7 @@ def _at_budget(problem: ToleranceProblem, name: str, budget, t0, family, log_p):
 
 
 @single_threaded_blas
-def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None):
+def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None) -> AllocationResult:
     """Equal tolerances: one common t for every free source, scaled onto the requirement.
 
     Parameters
@@ -254,7 +254,7 @@ def allocate_equal(problem: ToleranceProblem, *, budget: float | None = None):
 
 
 @single_threaded_blas
-def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = None, weights=None):
+def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = None, weights=None) -> AllocationResult:
     """Proportional scaling: t_j ∝ w_j, scaled onto the requirement.
 
     Parameters
@@ -303,7 +303,7 @@ def allocate_proportional(problem: ToleranceProblem, *, budget: float | None = N
 
 
 @single_threaded_blas
-def allocate_lagrange(problem: ToleranceProblem, *, budget: float | None = None, measure: str | None = None):
+def allocate_lagrange(problem: ToleranceProblem, *, budget: float | None = None, measure: str | None = None) -> AllocationResult:
     """Lagrange closed forms: the stationarity condition of min cost s.t. stack-up = requirement.
 
     Parameters

@@ -55,8 +55,9 @@ from evotol._runtime.progress import progress_bar
 from evotol.core.quality_loss import has_quality_loss
 from evotol.core.plausibility import issue
 from evotol.measures import feasibility
-from evotol.core.result import make_result
+from evotol.core.result import AllocationResult, make_result
 from evotol._runtime.blas_threads import single_threaded_blas
+from evotol._runtime.random_state import seed_from
 
 
 # --- the paper's operators --------------------------------------------------------------------------
@@ -304,11 +305,11 @@ def check_ga_options(*, operators: str = "pymoo", pop_size: int = 100, n_gen: in
             raise ValidationError(name, v, f"an integer >= {lo}")
 
 
-def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0,
+def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 200, seed: int = 0, rng: int | np.random.Generator | None = None,
                 operators: str = "pymoo", repair: bool | None = None, penalty: float | None = None,
                 seeds=None, seed_with_baselines: bool = True, budget: float | None = None,
                 n_elite: int = 2, n_check: int = 1, progress: bool | None = None,
-                checkpoint: str | Path | None = None, checkpoint_every: int = 20, refine: bool | dict = False):
+                checkpoint: str | Path | None = None, checkpoint_every: int = 20, refine: bool | dict = False) -> AllocationResult:
     """GA allocation: least cost under the requirement (Yao et al. 2013 eq. 15; module docstring).
 
     Parameters
@@ -319,6 +320,9 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
         Population size (>= 4) and number of generations (>= 1).
     seed : int
         Seed of the run (>= 0); the run is reproducible from it.
+    rng : int, numpy.random.Generator or None, optional
+        As SciPy's ``rng``: an integer seed, or a Generator drawn from once for the seed of the run
+        (recorded in the result); replaces ``seed`` (which keeps working, and also takes a Generator).
     operators : {"pymoo", "paper"}
         pymoo's tournament/SBX/polynomial mutation, or the paper's roulette/elitism/Wright
         crossover/uniform mutation.
@@ -380,6 +384,7 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     (True, True)
     """
     t0 = time.perf_counter()
+    seed = seed_from(rng, seed)
     check_ga_options(operators=operators, pop_size=pop_size, n_gen=n_gen, seed=seed)
     if budget is not None:           # below the cheapest design: no answer (issue 15)
         budget = check_budget(problem, budget)

@@ -36,7 +36,7 @@ from evotol.errors import ValidationError
 from evotol.core.problem import ToleranceProblem
 from evotol.core.plausibility import issue
 from evotol.measures import feasibility
-from evotol.core.result import make_result
+from evotol.core.result import AllocationResult, make_result
 
 
 def _cut(V: np.ndarray, z: np.ndarray, chunk: int = 256) -> np.ndarray:
@@ -187,7 +187,7 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
 
 
 def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None, incumbent=None, rel_gap: float = 1e-2,
-                      max_evaluations: int = 4000, batch: int = 16):
+                      max_evaluations: int = 4000, batch: int = 16) -> AllocationResult:
     """Best design found with a proven lower bound on the optimal cost, for a problem whose measure
     is monotone but not convex (clearance sources): polyblock outer approximation (Tuy 2000).
 

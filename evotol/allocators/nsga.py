@@ -24,6 +24,7 @@ from evotol.errors import ValidationError
 from evotol.core.pareto import ParetoFront, non_dominated
 from evotol.core.problem import ToleranceProblem
 from evotol._runtime.blas_threads import single_threaded_blas
+from evotol._runtime.random_state import seed_from
 
 
 class _FrontProblem(Problem):
@@ -70,7 +71,7 @@ class _CheckFront(Callback):
 
 @single_threaded_blas
 def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, pop_size: int = 100, n_gen: int = 200,
-                   seed: int = 0, seeds=(), n_check: int = 5, progress: bool | None = None,
+                   seed: int = 0, rng: int | np.random.Generator | None = None, seeds=(), n_check: int = 5, progress: bool | None = None,
                    log_scale: bool | None = None) -> ParetoFront:
     """NSGA-II cost vs. normalised error (see module docstring).
 
@@ -85,6 +86,9 @@ def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, po
         Population size (>= 4) and number of generations (>= 1).
     seed : int
         Seed of the run (>= 0); the run is reproducible from it.
+    rng : int, numpy.random.Generator or None, optional
+        As SciPy's ``rng``: an integer seed, or a Generator drawn from once for the seed of the run
+        (recorded in the result); replaces ``seed`` (which keeps working, and also takes a Generator).
     seeds : sequence of mapping or array
         Designs (SI) placed in the initial population.
     n_check : int
@@ -125,6 +129,7 @@ def allocate_nsga2(problem: ToleranceProblem, *, budget: float | None = None, po
     if budget is not None:
         raise ValidationError("budget", budget, "None for allocate_nsga2 (the front covers every budget; "
                               "allocate_ga(problem, budget=...) gives the best accuracy at one)")
+    seed = seed_from(rng, seed)
     for name, v, lo in (("pop_size", pop_size, 4), ("n_gen", n_gen, 1), ("seed", seed, 0)):
         if not isinstance(v, (int, np.integer)) or v < lo:
             raise ValidationError(name, v, f"an integer >= {lo}")

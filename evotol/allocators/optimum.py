@@ -46,7 +46,7 @@ from evotol.measures import feasibility
 from evotol.errors import ConvergenceError, ValidationError
 from evotol.core.problem import ToleranceProblem
 from evotol.core.plausibility import issue
-from evotol.core.result import make_result
+from evotol.core.result import AllocationResult, make_result
 from evotol._runtime.blas_threads import single_threaded_blas
 
 
@@ -251,7 +251,7 @@ def check_optimum(problem: ToleranceProblem, *, budget: float | None = None, ref
 
 
 def allocate_optimum(problem: ToleranceProblem, *, budget: float | None = None, tol: float = 1e-9,
-                     max_rounds: int = 60, max_rows: int = 400, refine: bool | dict = False):
+                     max_rounds: int = 60, max_rows: int = 400, refine: bool | dict = False) -> AllocationResult:
     """Certified optimum (min cost at the requirement, or best accuracy at ``budget``).
 
     SLSQP on the convex problem with cutting planes (the worst-case rows of

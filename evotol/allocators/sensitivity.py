@@ -28,7 +28,7 @@ from evotol.allocators.budget import scaled_family as _scaled
 from evotol.core.problem import ToleranceProblem
 from evotol.core.plausibility import issue
 from evotol.measures import feasibility
-from evotol.core.result import make_result
+from evotol.core.result import AllocationResult, make_result
 from evotol._runtime.blas_threads import single_threaded_blas
 
 
@@ -153,7 +153,7 @@ def sensitivity_design(problem: ToleranceProblem, measure: str | None = None, co
 
 @single_threaded_blas
 def allocate_sensitivity(problem: ToleranceProblem, *, budget: float | None = None, measure: str | None = None,
-                         collective_groups=()):
+                         collective_groups=()) -> AllocationResult:
     """Equal-effect allocation (see module docstring).
 
     Parameters

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import html
 import importlib
+import logging
 import math
 import pkgutil
 import sys
@@ -15,6 +16,9 @@ import time
 from pathlib import Path
 
 from evotol.errors import EvotolError, WriteFailed
+
+#: progress and notes of the command (standard error, see evotol.cli.logs); results are printed to stdout
+log = logging.getLogger(__name__)
 
 
 def _write_index(out: Path, summaries: dict[str, dict]) -> Path:
@@ -89,7 +93,7 @@ def cmd_reproduce(args) -> int:
         return _reproduce_jobs(names, out, args, jobs, t_all)
     for name in names:
         study = studies.get(name)
-        print(f"[evotol] reproducing {name}: {study.title}", flush=True)
+        log.info("reproducing %s: %s", name, study.title)
         t0 = time.perf_counter()
         try:
             extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
@@ -116,12 +120,12 @@ def cmd_reproduce(args) -> int:
             continue
         finally:
             seconds[name] = time.perf_counter() - t0
-        print(f"[evotol] {name} done in {time.perf_counter() - t0:.1f} s -> {out / (name + '.html')}", flush=True)
+        log.info("%s done in %.1f s -> %s", name, time.perf_counter() - t0, out / (name + '.html'))
         if ctrl_c.count:                   # a GA/NSGA-II caught Ctrl-C and returned its best design so far
             interrupted = (name, "written, but a method inside it stopped early at Ctrl-C (best design so far)")
             break
     index = _write_index(out, summaries)
-    print(f"[evotol] index: {index}")
+    log.info("index: %s", index)
     if len(names) > 1:
         _print_time_table(seconds, failed, time.perf_counter() - t_all)
     if failed:
@@ -146,7 +150,7 @@ def _reproduce_jobs(names, out: Path, args, jobs: int, t_all: float) -> int:
     res = reproduce_concurrently(names, out, jobs=jobs, seed=args.seed, quick=args.quick, scheduler=args.scheduler,
                                  titles=titles, force=args.force)
     index = _write_index(out, res.summaries)
-    print(f"[evotol] index: {index}")
+    log.info("index: %s", index)
     _print_time_table({n: res.seconds[n] for n in names if n in res.seconds}, res.failed,
                       time.perf_counter() - t_all, jobs=jobs)
     if res.failed:
@@ -210,7 +214,7 @@ def cmd_run(args) -> int:
     with reported():                    # unit slips, an inactive requirement: one line each (issue 27)
         summary = run_study_file(study_file, out=out, seed=args.seed, keep_going=args.keep_going, force=args.force)
     _print_results(summary)
-    print(f"[evotol] wrote {summary['html']} and {summary['json']}")
+    log.info("wrote %s and %s", summary['html'], summary['json'])
     if summary.get("interrupted"):
         what = summary["interruption"]
         print(f"evotol: interrupted (Ctrl-C): stopped {', '.join(what['stopped'])}"
@@ -232,8 +236,9 @@ def _print_results(summary: dict) -> None:
     from evotol.reporting.user_study import model_line, terminal_rows
 
     if summary.get("kind") == "analysis":      # every tolerance given: their analysis (issue 33)
-        from evotol.studyfile.given_tolerances import print_analysis
-        return print_analysis(summary)
+        from evotol.studyfile.given_tolerances import analysis_lines
+        print("\n".join(analysis_lines(summary)))
+        return None
     if "stack" in summary:
         rows, header = stack_report.terminal_rows(summary)
         print(f"[evotol] gap '{summary['stack']['gap']}' ({summary['display']['unit']})")
@@ -310,7 +315,12 @@ def build_parser() -> argparse.ArgumentParser:
         arguments.
     """
     from evotol.cli import argument_types as arguments
-    p = argparse.ArgumentParser(prog="evotol", description="Cost-optimal tolerance allocation for robots.")
+    from evotol.cli.plain_help import plain_parser
+    from evotol import __version__
+
+    p = argparse.ArgumentParser(prog="evotol", description="Cost-optimal tolerance allocation for robots.",
+                                epilog="Results go to standard output; progress and messages to standard error.")
+    p.add_argument("--version", action="version", version=f"evotol {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("reproduce", help="reproduce a seed study (or 'all') into HTML + JSON")
@@ -347,7 +357,18 @@ def build_parser() -> argparse.ArgumentParser:
         mod = importlib.import_module(f"evotol.cli.commands.{info.name}")
         if hasattr(mod, "register"):
             mod.register(sub)
+    for parser in (p, *sub.choices.values()):      # before or after the sub-command: evotol -q run ..., evotol run ... -q
+        _verbosity_options(parser, default=0 if parser is p else argparse.SUPPRESS)
+    plain_parser(p)                                  # help in plain words: no markup, no issue numbers
     return p
+
+
+def _verbosity_options(parser: argparse.ArgumentParser, default) -> None:
+    """``-q`` (warnings and errors only) and ``-v`` (debug lines too) on ``parser``."""
+    parser.add_argument("-q", "--quiet", action="count", default=default,
+                        help="show only warnings and errors on standard error (no progress)")
+    parser.add_argument("-v", "--verbose", action="count", default=default,
+                        help="show debug messages too")
 
 
 def main(argv=None) -> int:
@@ -385,7 +406,10 @@ def main(argv=None) -> int:
                 stream.reconfigure(errors="backslashreplace")
         except AttributeError:
             pass
+    from evotol.cli.logs import configure, level_for
+
     args = build_parser().parse_args(argv)
+    configure(level_for(args.quiet, args.verbose))
     try:
         return int(args.func(args) or 0)
     except WriteFailed as exc:            # disk full, read-only folder (issue 42): earlier files kept

@@ -138,7 +138,8 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
     report_every : float, optional
         Seconds between "running: ..." lines (default 30).
     stream : file, optional
-        Where the progress lines go (default ``sys.stdout``; a failure's log tail goes to stderr).
+        Where the progress lines go (default ``sys.stderr``: progress and messages on standard
+        error, results on standard output).
     force : bool, optional
         Pass ``--force`` to each study (overwrite a study file's outputs of the same name).
 
@@ -148,7 +149,7 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
         What ran, how long, what failed and, on Ctrl-C, what was stopped or not run. Ctrl-C does
         not propagate: each running study gets one SIGINT and is waited for (killed after 60 s).
     """
-    stream = stream or sys.stdout
+    stream = stream or sys.stderr
     out = Path(out)
     logs = out / "logs"
     logs.mkdir(parents=True, exist_ok=True)

@@ -169,6 +169,22 @@ class ParetoFront:
         if missing:
             raise ValidationError("ParetoFront.table", list(self.table.columns)[:8], f"the objective columns {missing}")
 
+    def __repr__(self) -> str:
+        """One line: the members, the objectives and their ranges (``table`` holds the designs)."""
+        ranges = ", ".join(f"{c} {self.table[c].min():.4g} .. {self.table[c].max():.4g}" for c, _, _ in self.objectives)
+        return f"ParetoFront({len(self.table)} members, {ranges}, seconds={self.seconds:.3g})"
+
+    def to_frame(self) -> pd.DataFrame:
+        """The front as a table, one row per member (a copy of ``table``: objectives, then each
+        design's tolerances in SI).
+
+        Returns
+        -------
+        pandas.DataFrame
+            The members, sorted as the front is.
+        """
+        return self.table.copy()
+
     @property
     def cost(self) -> np.ndarray:
         """The first objective of every member (for a cost-vs-accuracy front: the cost, ascending)."""

@@ -21,8 +21,8 @@ keeps the lines in ``info["warnings"]``; the allocator issues them with :func:`i
 """
 from __future__ import annotations
 
+import logging
 import math
-import sys
 import warnings
 from contextlib import contextmanager
 
@@ -209,14 +209,15 @@ def issue(result):
 
 @contextmanager
 def reported(stream=None):
-    """Within the block, each :class:`PlausibilityWarning` is printed once as one line
-    ``evotol: warning: ...`` on ``stream`` (default stderr) instead of Python's two-line format;
-    other warnings are shown as usual. Yields the list of lines printed.
+    """Within the block, each :class:`PlausibilityWarning` is shown once as one line instead of
+    Python's two-line format: logged at WARNING level on the ``evotol`` log (which the command shows
+    as ``evotol: warning: ...`` on standard error), or printed on ``stream``; other warnings are
+    shown as usual. Yields the list of lines shown.
 
     Parameters
     ----------
     stream : file, optional
-        Where the lines go (default: ``sys.stderr``).
+        Where the lines go (default: the log).
 
     Yields
     ------
@@ -233,7 +234,10 @@ def reported(stream=None):
                 return show(message, category, filename, lineno, file, line)
             if str(message) not in lines:
                 lines.append(str(message))
-                print(f"evotol: warning: {message}", file=stream or sys.stderr, flush=True)
+                if stream is None:
+                    logging.getLogger(__name__).warning("%s", message)
+                else:
+                    print(f"evotol: warning: {message}", file=stream, flush=True)
 
         warnings.showwarning = one_line
         yield lines

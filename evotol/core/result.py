@@ -173,6 +173,35 @@ class AllocationResult:
         c = getattr(self.errors, f"{component}_contrib")
         return pd.DataFrame(100 * c[0], columns=list(self.problem.names))
 
+    def __repr__(self) -> str:
+        """One line: method, cost, feasibility, size and the largest error of each component."""
+        units = {c: error_unit(self.problem, c) for c, _ in self.problem.components}     # "1": fractions of the limits
+        errors = ", ".join(f"max {c} error {self.max_error(c):.4g}" + (f" {u}" if u != "1" else " of the limit")
+                           for c, u in units.items())
+        return (f"AllocationResult(method={self.method!r}, cost={self.cost:.6g}, feasible={self.feasible}, "
+                f"{len(self.tolerances)} sources, {errors})")
+
+    def to_frame(self) -> pd.DataFrame:
+        """The design as a table, one row per source (pandas; ``to_dict`` gives the scalars).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Indexed by source name: ``tolerance`` (SI), ``unit`` (m or rad), ``lower`` and
+            ``upper`` (the allowed range, SI), ``locked`` (bool), ``cost`` (cost units,
+            :meth:`ToleranceProblem.source_costs`) and ``cost_share`` (fraction of the total).
+        """
+        p = self.problem
+        t = p.as_array(self.tolerances)
+        costs = p.source_costs(t)
+        total = float(costs.sum())
+        units = [s.unit for s in p.error_model.sources]
+        frame = pd.DataFrame({"tolerance": t, "unit": units, "lower": p.lower, "upper": p.upper,
+                              "locked": np.asarray(p.locked, dtype=bool), "cost": costs,
+                              "cost_share": costs / total if total > 0 else np.zeros_like(costs)},
+                             index=pd.Index(list(p.names), name="source"))
+        return frame
+
     def to_dict(self) -> dict:
         """The result as plain data (for JSON/YAML reports).
 

@@ -51,6 +51,7 @@ from scipy import stats
 from evotol.errors import ValidationError, is_integer
 from evotol.measures.stack_model import (DISTRIBUTIONS, SHIFT_MODELS, Stack, StackDimension, StackModel,  # noqa: F401 -- one door
                                          _finite)
+from evotol._runtime.random_state import seed_from
 
 __all__ = ["Stack", "StackDimension", "StackModel", "DISTRIBUTIONS", "SHIFT_MODELS", "worst_case",
            "rss_half_width", "mrss_factor", "gap_moments", "fraction_outside", "check_model", "sample_gap",
@@ -140,7 +141,7 @@ def _cp_interval(k: int, n: int, confidence: float) -> tuple[float, float]:
 
 
 def fraction_outside(stack: Stack, model: StackModel = StackModel(), *, n_samples: int = 200_000, seed=0,
-                     confidence: float = 0.95) -> dict:
+                     confidence: float = 0.95, rng: int | np.random.Generator | None = None) -> dict:
     """Fraction of assemblies below LSL and above USL.
 
     Exact (normal CDF) when every dimension is normal; else Monte Carlo over the dimensions'
@@ -157,6 +158,9 @@ def fraction_outside(stack: Stack, model: StackModel = StackModel(), *, n_sample
         Seed of the Monte Carlo.
     confidence : float
         Confidence level of the Clopper–Pearson interval (0 < c < 1).
+    rng : int, numpy.random.Generator or None, optional
+        As SciPy's ``rng``: an integer seed, or a Generator drawn from once for the seed of the run;
+        replaces ``seed`` (which keeps working).
 
     Returns
     -------
@@ -171,6 +175,7 @@ def fraction_outside(stack: Stack, model: StackModel = StackModel(), *, n_sample
         A stack without limits, the dynamic shift model with non-normal dimensions (it is
         defined for normal processes), ``n_samples < 1`` or a confidence outside (0, 1).
     """
+    seed = seed if rng is None else seed_from(rng, seed)       # seed= already takes a Generator as it is
     check_model(stack, model)
     if stack.lower_limit is None and stack.upper_limit is None:
         raise ValidationError("lower_limit", None, "a lower or upper limit of the gap to count assemblies outside")
@@ -323,14 +328,14 @@ class StackAnalysis:
 
 
 def analyse_stack(stack: Stack, models: dict | None = None, *, n_samples: int = 200_000, seed=0,
-                  confidence: float = 0.95) -> StackAnalysis:
+                  confidence: float = 0.95, rng: int | np.random.Generator | None = None) -> StackAnalysis:
     """The handbook's stack figures (module docstring), under one or more stated models.
 
     Parameters
     ----------
     models : dict of str to StackModel, optional
         Named statistical models (default ``{"rss": StackModel()}``, t = 3σ normal).
-    n_samples, seed, confidence
+    n_samples, seed, confidence, rng
         Monte Carlo settings of :func:`fraction_outside` (non-normal dimensions only).
 
     Returns
@@ -348,6 +353,7 @@ def analyse_stack(stack: Stack, models: dict | None = None, *, n_samples: int = 
         A model the stack does not support (:func:`check_model`), checked for every model
         before the first one is computed.
     """
+    seed = seed if rng is None else seed_from(rng, seed)
     models = {"rss": StackModel()} if models is None else dict(models)
     for mo in models.values():
         check_model(stack, mo)

@@ -317,5 +317,22 @@ def write_json(path: str | Path, data: dict) -> Path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_text(path, json.dumps(_jsonable(data), indent=1))
+    write_text(path, json_text(data))
     return path
+
+
+def json_text(data: dict) -> str:
+    """``data`` as the JSON text :func:`write_json` writes (numpy values converted, non-finite
+    floats as null), for a command that prints it (``--json``).
+
+    Parameters
+    ----------
+    data : dict
+        As for :func:`write_json`.
+
+    Returns
+    -------
+    str
+        The JSON text (indent 1).
+    """
+    return json.dumps(_jsonable(data), indent=1)

@@ -98,51 +98,57 @@ def requirement_text(summary: dict, u: DisplayUnits) -> str:
     return ", ".join(f"{c} <= {u.format(v, 'm' if c == 'position' else 'rad')}" for c, v in summary["requirement"].items())
 
 
-def print_analysis(summary: dict) -> None:
-    """The analysis in the terminal, in the study's display units (one line per pose).
+def analysis_lines(summary: dict):
+    """The analysis as terminal lines, in the study's display units (one line per pose); the
+    command prints them (the library never prints: issue 40).
 
     Parameters
     ----------
     summary : dict
         :func:`analysis_summary`.
+
+    Yields
+    ------
+    str
+        One line of the analysis, without its newline.
     """
     u = DisplayUnits(**summary["display_units"])
     a = summary["analysis"]
     L = lambda v: u.format(v, "m")          # noqa: E731
     req = requirement_text(summary, u)
     verdict = "meets" if a["meets"] else "MISSES"
-    print(f"[evotol] analysis of the given tolerances (every source given: nothing to allocate)")
-    print(f"  requirement ({summary['measure']}): {req}: the design {verdict} it (largest error / limit = "
+    yield (f"[evotol] analysis of the given tolerances (every source given: nothing to allocate)")
+    yield (f"  requirement ({summary['measure']}): {req}: the design {verdict} it (largest error / limit = "
           f"{a['violation'] + 1:.4g})")
     wc, ax = a["worst_case"]["position"], a["axes"]["base"]["position"]
     names = summary["workspace"]["names"]
-    print(f"  {'pose':>4s}  {'worst |dp|':>11s}  {'x range':>21s}  {'y range':>21s}  {'z range':>21s}  {'RSS |dp|':>10s}"
+    yield (f"  {'pose':>4s}  {'worst |dp|':>11s}  {'x range':>21s}  {'y range':>21s}  {'z range':>21s}  {'RSS |dp|':>10s}"
           + (f"  {'P(meet)':>8s}" if a.get("probability") is not None else ""))
     for i in range(len(wc["value"])):
         rng = "  ".join(f"{'[' + L(ax[k]['low'][i]).split()[0] + ', ' + L(ax[k]['high'][i]).split()[0] + ']':>21s}" for k in "xyz")
         prob = f"  {a['probability'][i]:8.5f}" if a.get("probability") is not None and len(a["probability"]) == len(wc["value"]) else ""
-        print(f"  {i:4d}  {L(wc['value'][i]):>11s}  {rng}  {L(a['rss']['position'][i]):>10s}{prob}")
+        yield (f"  {i:4d}  {L(wc['value'][i]):>11s}  {rng}  {L(a['rss']['position'][i]):>10s}{prob}")
     if "tool" in a["axes"]:
         tx = a["axes"]["tool"]["position"]
         for i in range(len(wc["value"])):
-            print(f"  {i:4d}  tool frame: " + "  ".join(f"d{k} [{L(tx[k]['low'][i]).split()[0]}, {L(tx[k]['high'][i])}]" for k in "xyz"))
+            yield (f"  {i:4d}  tool frame: " + "  ".join(f"d{k} [{L(tx[k]['low'][i]).split()[0]}, {L(tx[k]['high'][i])}]" for k in "xyz"))
     p = wc["worst_pose"]
     pose = summary["poses"][p]
     shown = ", ".join(f"{n} = {v * k:.4g}" for n, v, k in zip(names, pose, summary["workspace"]["display_scale"]))
-    print(f"  worst pose #{p} ({shown}): |dp| <= {L(wc['value'][p])} (proven bound {L(wc['bound'][p])})")
+    yield (f"  worst pose #{p} ({shown}): |dp| <= {L(wc['value'][p])} (proven bound {L(wc['bound'][p])})")
     top = sorted(wc["contributions"].items(), key=lambda kv: -kv[1])[:5]
-    print("  contributions there: " + ", ".join(f"{n} {v:.1f} %" for n, v in top))
+    yield ("  contributions there: " + ", ".join(f"{n} {v:.1f} %" for n, v in top))
     ap = a.get("error_at_probability", {})
     if ap:
-        print(f"  |dp| at probability {ap['probability']:.4g} (first-order, stated distributions): largest "
+        yield (f"  |dp| at probability {ap['probability']:.4g} (first-order, stated distributions): largest "
               f"{L(max(ap['position']))}")
     mc = a.get("monte_carlo", {})
     if mc:
-        print(f"  Monte Carlo ({mc['n_samples']} samples per pose): exceed rate {100 * mc['max_exceed_rate']:.3g} % (linear)"
+        yield (f"  Monte Carlo ({mc['n_samples']} samples per pose): exceed rate {100 * mc['max_exceed_rate']:.3g} % (linear)"
               + (f", {100 * mc['max_exceed_rate_nonlinear']:.3g} % (nonlinear)" if mc.get("max_exceed_rate_nonlinear") is not None else "")
               + (f"; {mc['linearisation_verdict']}" if mc.get("linearisation_verdict") else ""))
     for line in summary.get("notes", []):
-        print(f"  note: {line}")
+        yield (f"  note: {line}")
 
 
 def run_given_tolerances(spec: dict, path: Path, out: Path, name: str, problem, units: DisplayUnits, seed: int,

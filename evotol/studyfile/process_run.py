@@ -5,6 +5,7 @@
 """
 from __future__ import annotations
 
+import logging
 import time
 from pathlib import Path
 
@@ -18,6 +19,8 @@ from evotol.reporting import Report
 from evotol.studies import StudyResult, write_outputs
 from evotol.studyfile.processes import DEFAULT_METHODS, METHODS, load_process_problem
 from evotol.units import COST, COUNT, RELATIVE, units_block
+
+logger = logging.getLogger(__name__)
 
 def _result_dict(pp: ProcessProblem, r) -> dict:
     d = r.to_dict()
@@ -63,7 +66,7 @@ def run_process_study(spec: dict, path: Path, out, seed: int) -> dict:
         check_keywords(METHODS[m], kw, f"methods.{m}", exclude=("problem", "pp", "budget"))
     results, front, nonlinear = {}, None, None
     for m, kw in methods.items():
-        print(f"[evotol] {m} ...", flush=True)
+        logger.info("%s ...", m)
         kw = dict(kw)
         if m in ("ga", "nsga2"):
             kw.setdefault("seed", seed)

@@ -4,6 +4,7 @@ the page and the drawing table (``docs/user_reports.md``). A file with ``[proces
 """
 from __future__ import annotations
 
+import logging
 import time
 import tomllib
 from contextlib import nullcontext
@@ -25,6 +26,8 @@ from evotol.reporting.callout_drawing import write_callout_exports
 from evotol.reporting.export import write_tolerance_table
 from evotol.reporting.user_study import render_user_study
 from evotol.studies import StudyResult, write_outputs
+
+logger = logging.getLogger(__name__)
 from evotol.studyfile.methods import METHODS, check_methods, method_options, study_methods
 from evotol.studyfile.callouts import callout_summary, callout_warnings
 from evotol.studyfile.comparisons import comparison_runs, run_comparison
@@ -203,7 +206,7 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
             if ctrl_c.count and not keep_going:
                 skipped.append(m)
                 continue
-            print(f"[evotol] {m} ...", flush=True)
+            logger.info("%s ...", m)
             before = ctrl_c.count
             try:
                 if m == "nsga2":

@@ -31,6 +31,7 @@ The figures and their conventions: :mod:`evotol.measures.stack_analysis`; the pa
 """
 from __future__ import annotations
 
+import logging
 import time
 from pathlib import Path
 
@@ -45,6 +46,8 @@ from evotol.reporting.stack_report import DEFAULT_PRECISION, render_stack
 from evotol.studies import StudyResult, write_outputs
 from evotol.summaries.stack import allocation_summary, stack_summary
 from evotol.units.display import ALIASES, LENGTHS
+
+logger = logging.getLogger(__name__)
 
 STACK_KEYS = ("gap", "unit", "lower_limit", "upper_limit", "distribution", "precision", "models", "dimensions", "allocation",
               "n_samples", "confidence")
@@ -273,7 +276,7 @@ def run_stack_study(spec: dict, path, out, seed: int) -> dict:
         problem, methods = alloc
         results = {}
         for m, kw in methods.items():
-            print(f"[evotol] {m} ...", flush=True)
+            logger.info("%s ...", m)
             kw = {**({"seed": seed, "progress": False} if m == "ga" else {}), **kw}
             results[m] = STACK_METHODS[m](problem, **kw)
         summary["allocation"] = allocation_summary(stack, problem, results, models, display, seed=seed)

@@ -25,6 +25,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 
 from evotol.measures import clearances
 
@@ -37,6 +38,7 @@ from evotol.core.problem import ToleranceProblem
 from evotol._runtime.progress import progress_bar
 from evotol.measures.statistical import pose_error_nan
 from evotol._runtime.blas_threads import single_threaded_blas
+from evotol._runtime.random_state import seed_from
 
 RADIAL = distributions.RADIAL
 #: linearisation error (max |nonlinear − linear| / max |linear|) up to which the first-order model
@@ -164,6 +166,40 @@ class MonteCarloResult:
         return (f"first-order model unreliable: the nonlinear model differs by up to {pct} "
                 f"(> {100 * LINEAR_ROUGH:g} %); judge the design by the nonlinear Monte Carlo")
 
+    def __repr__(self) -> str:
+        """One line: sampling, size, seed, the largest exceed rate and the smallest yield."""
+        n_poses = len(next(iter(self.exceed_rate.values()))) if self.exceed_rate else 0
+        text = (f"MonteCarloResult(method={self.method!r}, n_samples={self.n_samples}, {n_poses} poses, "
+                f"seed={self.seed}, max exceed rate {100 * self.max_exceed_rate():.3g} %")
+        if self.nonlinear_exceed_rate:
+            text += f" (nonlinear {100 * self.max_exceed_rate(True):.3g} %)"
+        if self.yield_linear is not None:
+            text += f", min yield {float(np.min(self.yield_linear)):.4g}"
+        return text + ")"
+
+    def to_frame(self) -> pd.DataFrame:
+        """The per-pose figures as a table, one row per pose (pandas; ``to_dict`` gives the summary).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Indexed by pose index: ``exceed_rate_<component>`` and ``max_error_<component>``
+            (m or rad) of the linear model, ``exceed_rate_nonlinear_<component>`` where the
+            robot has a nonlinear model, and ``yield_linear`` / ``yield_nonlinear`` where computed.
+        """
+        cols = {}
+        for c, v in self.exceed_rate.items():
+            cols[f"exceed_rate_{c}"] = np.asarray(v, dtype=float)
+            cols[f"max_error_{c}"] = np.asarray(self.max_error[c], dtype=float)
+        for c, v in self.nonlinear_exceed_rate.items():
+            cols[f"exceed_rate_nonlinear_{c}"] = np.asarray(v, dtype=float)
+        for name in ("yield_linear", "yield_nonlinear"):
+            if getattr(self, name) is not None:
+                cols[name] = np.asarray(getattr(self, name), dtype=float)
+        frame = pd.DataFrame(cols)
+        frame.index.name = "pose"
+        return frame
+
     def to_dict(self) -> dict:
         """The summary as plain data (for JSON/YAML reports).
 
@@ -257,7 +293,7 @@ def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: 
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
            nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
            progress: bool | None = None, confidence: float = 0.95, model: str = "linear",
-           distribution=None) -> MonteCarloResult:
+           distribution=None, rng: int | np.random.Generator | None = None) -> MonteCarloResult:
     """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose.
 
     Besides exceedance rates, reports the yield (fraction of samples inside every bound) per pose,
@@ -277,6 +313,9 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
         Latin hypercube or plain Monte Carlo sampling.
     seed : int
         Seed; each pose gets its own stream (``SeedSequence(seed).spawn``).
+    rng : int, numpy.random.Generator or None, optional
+        As SciPy's ``rng``: an integer seed, or a Generator drawn from once for the seed of the run
+        (recorded in the result); replaces ``seed`` (which keeps working, and also takes a Generator).
     nonlinear : bool
         Also sample the robot's nonlinear ``pose_error`` where it has one.
     radial : str
@@ -323,6 +362,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     >>> float(mc.exceed_rate["position"][0]), bool(mc.max_error["position"][0] <= 1.0)
     (0.0, True)
     """
+    seed = seed_from(rng, seed)
     if model == "nonlinear" and problem.clearances is not None:
         raise ValidationError("model", model, "'linear' with clearance sources (the clearance model is first order)")
     if model == "nonlinear" and distribution is not None:

@@ -40,6 +40,7 @@ from evotol.errors import ValidationError, is_integer
 from evotol.core.problem import ToleranceProblem
 from evotol.measures.statistical import pose_error_nan
 from evotol._runtime.blas_threads import single_threaded_blas
+from evotol._runtime.random_state import seed_from
 
 ROWS = {"position": slice(0, 3), "orientation": slice(3, 6)}
 
@@ -203,7 +204,7 @@ def _quantile_misses(e: np.ndarray, q: float) -> float:
 
 @single_threaded_blas
 def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: int = 0,
-                     chunk_poses: int = 64) -> NonlinearCheck:
+                     chunk_poses: int = 64, rng: int | np.random.Generator | None = None) -> NonlinearCheck:
     """Worst-vertex check and Monte Carlo through ``robot.pose_error`` (module docstring).
 
     Parameters
@@ -214,6 +215,9 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
         Seed of the samples (non-negative).
     chunk_poses : int
         Poses passed to ``pose_error`` at once (memory).
+    rng : int, numpy.random.Generator or None, optional
+        As SciPy's ``rng``: an integer seed, or a Generator drawn from once for the seed of the run;
+        replaces ``seed`` (which keeps working).
 
     Returns
     -------
@@ -227,6 +231,7 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
         A robot without a nonlinear model, a bad ``seed`` or ``n_samples``, or a bad design.
     """
     t0 = time.perf_counter()
+    seed = seed_from(rng, seed)
     _check(problem, seed)
     if not is_integer(n_samples, 1):
         raise ValidationError("n_samples", n_samples, "a positive integer")

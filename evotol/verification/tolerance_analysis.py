@@ -32,6 +32,7 @@ from evotol.core.axis_limits import configurations, tool_rotation
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.montecarlo import verify
+from evotol._runtime.random_state import seed_from
 from evotol.robots.mechanism.posture import joints_at
 
 AXES = ("x", "y", "z")
@@ -215,7 +216,7 @@ def error_at_probability(problem, t: np.ndarray, probability: float, component: 
 
 
 def analyse(problem, t=None, *, probability: float = 0.9973, n_samples: int = 2000, seed: int = 0,
-            nonlinear: bool = True) -> ToleranceAnalysis:
+            nonlinear: bool = True, rng: int | np.random.Generator | None = None) -> ToleranceAnalysis:
     """Analyse given tolerances on a problem (see the module docstring).
 
     Parameters
@@ -232,6 +233,9 @@ def analyse(problem, t=None, *, probability: float = 0.9973, n_samples: int = 20
         Seed of the Monte Carlo samples.
     nonlinear : bool, optional
         Also sample the nonlinear model where the robot has one.
+    rng : int, numpy.random.Generator or None, optional
+        As SciPy's ``rng``: an integer seed, or a Generator drawn from once for the seed of the run
+        (recorded in the result); replaces ``seed`` (which keeps working, and also takes a Generator).
 
     Returns
     -------
@@ -243,6 +247,7 @@ def analyse(problem, t=None, *, probability: float = 0.9973, n_samples: int = 20
     evotol.errors.ValidationError
         Tolerances missing or invalid, or a probability outside (0, 1).
     """
+    seed = seed_from(rng, seed)
     if not (isinstance(probability, float) and 0 < probability < 1):
         raise ValidationError("probability", probability, "a probability in (0, 1)")
     t = given_tolerances(problem) if t is None else problem.as_array(t)

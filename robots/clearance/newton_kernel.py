@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import functools
 import importlib.util
+import logging
 import os
 import types
 import warnings
@@ -60,6 +61,8 @@ import numpy as np
 
 from evotol.robots.clearance.newton_kernel_bodies import (_chol_factor, _chol_solve, _newton_iterate_py, _predict_centred_py,
                                                    _project_centred_py)
+
+logger = logging.getLogger(__name__)
 
 #: False when numba is missing or EVOTOL_NO_NUMBA is set (NumPy iteration); :func:`_kernel` is None
 #: also when numba fails to compile
@@ -134,17 +137,16 @@ def group_blocks(B, grows):
 
 
 def _say_if_compiling(dispatcher) -> None:
-    """One line on stderr when numba's on-disk cache has no copy of the kernels yet (a fresh
-    install): the first solve then pauses ~10 s to compile them, and should not look hung."""
-    import sys
-
+    """One log line (INFO; standard error under the ``evotol`` command) when numba's on-disk cache has
+    no copy of the kernels yet (a fresh install): the first solve then pauses ~10 s to compile them,
+    and should not look hung."""
     try:
         index = dispatcher._cache._cache_file._index_path      # numba internals; silent if they change
     except AttributeError:
         return
     if not os.path.exists(index):
-        print("[evotol] compiling the clearance engine's Newton kernels with numba (once per install, "
-              "about 10 s; cached in " + os.path.dirname(index) + ")", file=sys.stderr, flush=True)
+        logger.info("compiling the clearance engine's Newton kernels with numba (once per install, "
+                    "about 10 s; cached in %s)", os.path.dirname(index))
 
 
 def _bound(fn, **names):

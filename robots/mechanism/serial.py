@@ -20,20 +20,24 @@ general path serves.
 """
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from evotol.robots.clearance.newton_kernel import AVAILABLE as SERIAL_COMPILED   # numba importable, EVOTOL_NO_NUMBA unset
 from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
+
+logger = logging.getLogger(__name__)
 
 
 _ANNOUNCED = []
 
 
 def _kernels():
-    """The compiled kernels; one line on stderr the first time a process finds no compiled copy in
-    numba's on-disk cache (a fresh install compiles them once, about 10 s), so it does not look hung."""
+    """The compiled kernels; one log line (INFO, standard error under the ``evotol`` command) the first
+    time a process finds no compiled copy in numba's on-disk cache (a fresh install compiles them once,
+    about 10 s), so it does not look hung."""
     import os
-    import sys
 
     from evotol.robots.mechanism import serial_kernels
 
@@ -44,8 +48,8 @@ def _kernels():
         except AttributeError:
             return serial_kernels
         if not os.path.exists(index):
-            print("[evotol] compiling the serial-arm kernels with numba (once per install, about 10 s; cached in "
-                  + os.path.dirname(index) + ")", file=sys.stderr, flush=True)
+            logger.info("compiling the serial-arm kernels with numba (once per install, about 10 s; cached in %s)",
+                        os.path.dirname(index))
     return serial_kernels
 
 

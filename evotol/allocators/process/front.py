@@ -12,6 +12,7 @@ from evotol.allocators.process.problem import check_no_budget, ProcessProblem
 from evotol.errors import ValidationError
 from evotol.core.pareto import ParetoFront
 from evotol._runtime.blas_threads import single_threaded_blas
+from evotol._runtime.random_state import seed_from
 
 
 class _ProcessFrontProblem(Problem):
@@ -43,7 +44,7 @@ THREE_SIGMA_MISS = 0.0026997960632601866
 
 
 @single_threaded_blas
-def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0, objective: str = "error",
+def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0, rng: int | np.random.Generator | None = None, objective: str = "error",
                   pop_size: int = 60, n_gen: int = 100, distribution="normal",
                   max_miss: float = THREE_SIGMA_MISS) -> ParetoFront:
     """NSGA-II front (:func:`evotol.allocators.nsga_driver.run_nsga2`) of cost vs. a second objective.
@@ -57,6 +58,9 @@ def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0
         shape; a budget is refused in one line).
     seed : int
         Seed of pymoo's random generator.
+    rng : int, numpy.random.Generator or None, optional
+        As SciPy's ``rng``: an integer seed, or a Generator drawn from once for the seed of the run
+        (recorded in the result); replaces ``seed`` (which keeps working, and also takes a Generator).
     objective : {"error", "yield"}
         ``"error"``: the normalised error (max error / bound, the problem's measure);
         ``"yield"``: the miss probability 1 − yield of the first-order statistical model
@@ -103,6 +107,7 @@ def process_front(problem: ProcessProblem, *, budget: None = None, seed: int = 0
     import time
 
     pp = check_no_budget(problem, budget, "process_front")
+    seed = seed_from(rng, seed)
 
     if objective not in FRONT_OBJECTIVES:
         raise ValidationError("objective", objective, f"one of {FRONT_OBJECTIVES}")

@@ -14,6 +14,7 @@ from evotol.allocators.process.result import ProcessResult, _result
 from evotol.measures.constraints import ConstraintRows
 from evotol.errors import ValidationError
 from evotol._runtime.blas_threads import single_threaded_blas
+from evotol._runtime.random_state import seed_from
 
 
 def _decode(pp: ProcessProblem, X: np.ndarray):
@@ -81,7 +82,7 @@ class _History(Callback):
 
 
 @single_threaded_blas
-def allocate_process_ga(problem: ProcessProblem, *, budget: None = None, seed: int = 0, pop_size: int = 60,
+def allocate_process_ga(problem: ProcessProblem, *, budget: None = None, seed: int = 0, rng: int | np.random.Generator | None = None, pop_size: int = 60,
                         n_gen: int = 100, repair: bool = True) -> ProcessResult:
     """pymoo GA over process choices and tolerances (encoding and repair: module docstring).
 
@@ -96,6 +97,9 @@ def allocate_process_ga(problem: ProcessProblem, *, budget: None = None, seed: i
         Population size and number of generations.
     seed : int
         Seed of the run; the run is reproducible from it.
+    rng : int, numpy.random.Generator or None, optional
+        As SciPy's ``rng``: an integer seed, or a Generator drawn from once for the seed of the run
+        (recorded in the result); replaces ``seed`` (which keeps working, and also takes a Generator).
     repair : bool
         Scale the tolerances of every design onto the requirement's boundary.
 
@@ -134,6 +138,7 @@ def allocate_process_ga(problem: ProcessProblem, *, budget: None = None, seed: i
     from pymoo.optimize import minimize
 
     pp = check_no_budget(problem, budget, "allocate_process_ga")
+    seed = seed_from(rng, seed)
 
     t0 = time.perf_counter()
     rows = ConstraintRows(pp.base)

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import replace
-from typing import Mapping, Sequence
+from typing import Mapping, Sequence, overload
 
 import numpy as np
 
@@ -382,8 +382,19 @@ class ProcessProblem:
     __repr__ = describe
 
 
+@overload
 def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None, measure: str = "worst_case", *,
-                     processes: Mapping[str, Sequence[Process]] | None = None, **requirement):
+                     processes: None = None, **requirement) -> ToleranceProblem: ...
+
+
+@overload
+def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None, measure: str = "worst_case", *,
+                     processes: Mapping[str, Sequence[Process]], **requirement) -> ProcessProblem: ...
+
+
+def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None, measure: str = "worst_case", *,
+                     processes: Mapping[str, Sequence[Process]] | None = None,
+                     **requirement) -> ToleranceProblem | ProcessProblem:
     """"Every response of an assembly within its limit" (see :mod:`evotol.robots.assembly`).
 
     Parameters

@@ -36,6 +36,7 @@ from evotol.measures.protocol import Evaluation
 from evotol.measures.builtin.statistical_yield import first_order_yield
 from evotol.errors import InfeasibleError, ValidationError
 from evotol._runtime.keyword_checks import did_you_mean
+from evotol.units.display import error_unit
 from evotol.core.problem.costs import ProblemCosts
 from evotol.core.problem.derived import DerivedProblems
 from evotol.core.problem.variable_mapping import VariableMapping
@@ -433,7 +434,7 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     # --- summary --------------------------------------------------------------------------------
     def describe(self) -> str:
         """A printable summary: robot, poses, measure, requirement and each source's range, cost
-        and interval shape (also the ``repr``).
+        and interval shape (also ``str(problem)``; the ``repr`` is one short line).
 
         Returns
         -------
@@ -454,4 +455,19 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
             lines.append(f"  shared {g}: {', '.join(m)} (cost per {self.shared_cost})")
         return "\n".join(lines)
 
-    __repr__ = describe
+    __str__ = describe
+
+    def __repr__(self) -> str:
+        """One line: the robot, the counts and the requirement (``print(problem)`` gives every source)."""
+        units = {c: error_unit(self, c) for c, _ in self.components}     # "1": an assembly's fractions of its limits
+        req = ", ".join(f"{c} <= {lim:g}" + (f" {units[c]}" if units[c] != "1" else " of the limits")
+                        for c, lim in self.components)
+        return (f"ToleranceProblem(robot={self.error_model.name!r}, {self.n_sources} sources, {self.n_poses} poses, "
+                f"requirement={req} ({self.requirement.measure}))")
+
+    def __getstate__(self) -> dict:
+        """The problem without its private caches (support coefficients, measures' samples): they
+        are rebuilt on first use, so a pickle sent to a worker carries the problem only."""
+        state = self.__dict__.copy()
+        state["_coeff_cache"], state["_measure_cache"] = {}, {}
+        return state

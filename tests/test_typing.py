@@ -1,0 +1,53 @@
+"""The front door is typed (issue 40): evotol ships ``py.typed``, and mypy accepts a user's script
+that imports the names of ``evotol.__all__`` and calls them (tests/typing/front_door.py) while it
+rejects a wrong call; the script also runs."""
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import evotol
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = ROOT / "tests" / "typing" / "front_door.py"
+
+
+def _mypy(*files: Path) -> subprocess.CompletedProcess:
+    pytest.importorskip("mypy", reason="mypy is in the test extra: pip install -e '.[test]'")
+    return subprocess.run([sys.executable, "-m", "mypy", "--no-incremental", *map(str, files)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_type_checking_names_are_the_front_door():
+    """The ``if TYPE_CHECKING:`` imports of evotol/__init__.py (what mypy reads) name exactly
+    ``evotol.__all__``, each from the module the lazy table names."""
+    tree = ast.parse((ROOT / "evotol" / "__init__.py").read_text(encoding="utf-8"))
+    block = next(n for n in tree.body if isinstance(n, ast.If) and getattr(n.test, "id", "") == "TYPE_CHECKING")
+    typed = {a.asname or a.name: node.module for node in block.body for a in node.names}
+    assert typed == dict(evotol._WHERE)
+
+
+def test_mypy_accepts_the_front_door_and_rejects_a_wrong_call(tmp_path):
+    done = _mypy(SCRIPT)
+    assert done.returncode == 0 and "Success" in done.stdout, done.stdout + done.stderr
+    wrong = tmp_path / "wrong.py"
+    wrong.write_text("from evotol import allocate_optimum, AllocationResult\n"
+                     "x: int = allocate_optimum(None)\n")
+    done = _mypy(wrong)
+    assert done.returncode == 1
+    assert 'Argument 1 to "allocate_optimum" has incompatible type "None"' in done.stdout, done.stdout
+    assert 'Incompatible types in assignment (expression has type "AllocationResult"' in done.stdout, done.stdout
+
+
+def test_the_front_door_script_runs():
+    sys.path.insert(0, str(SCRIPT.parent))
+    try:
+        import front_door
+    finally:
+        sys.path.remove(str(SCRIPT.parent))
+    problem, best, mc = front_door.study()
+    assert best.feasible and mc.n_samples == 100 and front_door.refused() == "rng"
