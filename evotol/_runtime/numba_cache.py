@@ -10,6 +10,8 @@ of stderr, and compiles without a cache if even that fails. The clearance engine
 """
 from __future__ import annotations
 
+import logging
+
 import os
 import sys
 import tempfile
@@ -46,8 +48,8 @@ def _say(exc: Exception, where: str) -> None:
     if len(_NOTED) > 1:
         return
     _NOTED.append(where)
-    print(f"[evotol] numba cannot write its cache beside the code or in your home ({exc}); {where} "
-          "-- set NUMBA_CACHE_DIR to a writable folder to choose", file=sys.stderr, flush=True)
+    logging.getLogger(__name__).warning("[evotol] numba cannot write its cache beside the code or in your home "
+                                        "(%s); %s -- set NUMBA_CACHE_DIR to a writable folder to choose", exc, where)
 
 
 def njit(**options):

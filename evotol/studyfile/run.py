@@ -230,7 +230,7 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
             if ctrl_c.count and not keep_going:
                 skipped.append(c)
                 continue
-            print(f"[evotol] {c} (comparison) ...", flush=True)
+            logger.info("%s (comparison) ...", c)
             before = ctrl_c.count
             try:
                 with Heartbeat(c, bar=True):
