@@ -28,6 +28,7 @@ from evotol.studyfile.methods import METHODS, check_methods, method_options, stu
 from evotol.studyfile.callouts import callout_summary, callout_warnings
 from evotol.studyfile.poses import refine_option
 from evotol.studyfile.given_tolerances import run_given_tolerances
+from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
 from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import run_stack_study
 from evotol.summaries.drawing import drawing_precision
@@ -174,6 +175,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
         return run_stack_study(spec, path, out, seed)
     problem = load_problem(spec, base_dir=path.parent)
+    iso = read_iso9283(spec, problem)       # ISO 9283 AP/RP and random sources, checked before work (issue 44)
     units = report_units(spec, problem)
     if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
         return run_given_tolerances(spec, path, out, name, problem, units, seed, t0)
@@ -234,6 +236,8 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     summary["notes"] = list(getattr(problem.robot, "notes", list)())      # e.g. a redundant arm's posture (issue 23)
     if getattr(problem, "calibration", None) is not None and results:   # what calibration buys (docs/calibration.md)
         add_calibration(summary, problem, results, seed)
+    if iso is not None and not stopped:
+        summary["iso9283"] = iso9283_block(iso, problem, results, seed)
     summary["interrupted"] = bool(stopped)
     if hasattr(problem.robot, "describe_callouts") and results and not stopped:   # exact zones vs boxes (issue 35)
         refine = refine_option(spec)
