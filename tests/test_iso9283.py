@@ -227,3 +227,46 @@ def test_allocation_to_ap_and_rp_meets_both_on_fresh_draws(ur5_joints):
     dq = rng.uniform(-0.5, 0.5, (200000, 6)) * 0.1 * b + rng.uniform(-0.5, 0.5, (200000, 6)) * c
     l = np.linalg.norm(dq @ J.T - (dq @ J.T).mean(0), axis=1)
     assert l.mean() + 3 * l.std() == pytest.approx(res["RP"][3], rel=0.02)
+
+
+def test_rp_with_every_kind_against_own_sampling(ur5):
+    """Bearing play translates everything beyond the joint: radially uniform in a disc of diameter c
+    perpendicular to the joint's world axis (Pinocchio's angular Jacobian column), axially within ±a/2
+    along it; joint errors through Pinocchio's linear Jacobian."""
+    kinds = [RandomSource("backlash", j, ARCMIN, variation=0.2) for j in JOINTS] + \
+            [RandomSource("encoder", j, encoder_count(16)) for j in JOINTS] + \
+            [RandomSource("radial_play", j, 20e-6) for j in JOINTS[:3]] + \
+            [RandomSource("axial_play", j, 15e-6) for j in JOINTS[:3]]
+    P = iso_positions(TestCube((0.4, 0.0, 0.3), 0.2))[2:3]
+    pred = predict(ur5, P, np.zeros(ur5.n_columns), kinds, n_samples=400000, seed=5)
+    q, _ = joints_and_maps(ur5, P)
+    J6 = pinocchio_position_jacobian(q)
+    rng = np.random.default_rng(99)
+    n = 400000
+    dq = rng.uniform(-0.5, 0.5, (n, 6)) * 0.2 * ARCMIN + rng.uniform(-0.5, 0.5, (n, 6)) * 2 * np.pi / 2 ** 16
+    e = dq @ J6[:3].T
+    for j in range(3):
+        a = J6[3:, j] / np.linalg.norm(J6[3:, j])
+        e1 = np.cross(a, [0.0, 0.0, 1.0] if abs(a[2]) < 0.9 else [1.0, 0.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(a, e1)
+        r, phi = 10e-6 * np.sqrt(rng.random(n)), rng.uniform(0, 2 * np.pi, n)
+        e += np.outer(r * np.cos(phi), e1) + np.outer(r * np.sin(phi), e2) + np.outer(rng.uniform(-7.5e-6, 7.5e-6, n), a)
+    l = np.linalg.norm(e - e.mean(0), axis=1)
+    assert pred["RP"][0] == pytest.approx(l.mean() + 3 * l.std(ddof=1), rel=5e-3)
+
+
+def test_shares_of_ap_and_rp_add_up_to_one(ur5_joints):
+    """AP: the terms of h_K(u*) add up to h_K(u*), which is the worst-case AP (corner enumeration above);
+    RP: variance shares, checked against each source's own variance t² |J G|² w²/12 computed here."""
+    from evotol.measures.iso9283.budget import source_shares
+    t = np.full(6, 30e-6)
+    srcs = [RandomSource("backlash", j, 2 * ARCMIN) for j in JOINTS] + [RandomSource("encoder", j, encoder_count(15))
+                                                                      for j in JOINTS]
+    P = iso_positions(TestCube((0.4, 0.0, 0.3), 0.2))
+    sh = source_shares(ur5_joints, P, t, srcs)
+    assert sum(sh["AP"].values()) == pytest.approx(1.0, rel=1e-9)
+    q, _ = joints_and_maps(ur5_joints, P[sh["RP_pose"]:sh["RP_pose"] + 1])
+    Jn = np.linalg.norm(pinocchio_position_jacobian(q)[:3], axis=0) ** 2
+    v = np.concatenate([Jn * (0.1 * 2 * ARCMIN) ** 2 / 12, Jn * encoder_count(15) ** 2 / 12])
+    assert list(sh["RP"].values()) == pytest.approx(list(v / v.sum()), rel=1e-9)

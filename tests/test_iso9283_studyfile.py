@@ -87,3 +87,6 @@ def test_the_study_json_carries_the_iso_block(tmp_path):
         assert lo <= p["RP"]["simulated"] <= hi
         assert p["AP"]["simulated"] <= p["AP"]["bound"] + p["RP"]["predicted"]
     assert len(block["random_sources"]) == 18 and block["systematic_from"] == "optimum"
+    assert sum(block["what_each_source_buys"]["RP"].values()) <= 1 + 1e-9
+    page = (tmp_path / "iso9283_example.html").read_text()
+    assert "ISO 9283 pose accuracy and repeatability" in page and "id='iso9283'" in page

@@ -28,27 +28,14 @@ import numpy as np
 from scipy.optimize import minimize
 
 from evotol.errors import ValidationError
-from evotol.measures.iso9283.budget import approach_signs, joints_and_maps, lost_motion_columns, APPROACHES
-from evotol.measures.iso9283.figures import ap_worst_case, rp_from_errors
+from evotol.measures.iso9283.budget import joints_and_maps, lost_motion_parts
+from evotol.measures.iso9283.figures import ap_worst_case, rp_from_errors, worst_direction
 from evotol.measures.linear.directions import directions_for
 from robots.mechanism.random_sources import column_loading, unit_draws
 
 #: the sampled RP is aimed this share below the requirement: about 3 standard errors of the estimate
 #: ``E l + 3 std l`` on 10 000 draws (0.4-0.6 % between two seeds on the UR5 example)
 RP_MARGIN = 0.015
-
-
-def _linear_parts(robot, S, sources, loadings):
-    """Centre C (p, m, K) and extra half-width H (p, m, K) of the column box per unit random tolerance."""
-    signs = approach_signs(robot, S, APPROACHES["-z"])
-    K, p, m = len(sources), len(S), S.shape[2]
-    C, H = np.zeros((p, m, K)), np.zeros((p, m, K))
-    for k in range(K):
-        e = np.zeros(K)
-        e[k] = 1.0
-        lm, free = lost_motion_columns(sources, loadings, e, signs)
-        C[:, :, k], H[:, :, k] = lm / 2, np.abs(lm) / 2 + np.abs(free)
-    return C, H
 
 
 def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds, AP, RP,
@@ -105,7 +92,7 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
     _, S = joints_and_maps(robot, positions)
     J = S[:, :3]
     loadings = column_loading(robot, sources)
-    C, H = _linear_parts(robot, S, sources, loadings)
+    C, H = lost_motion_parts(robot, S, sources, loadings)
     draws = unit_draws(sources, n_samples, np.random.default_rng(seed))
     E = np.stack([np.einsum("pim,nm->pni", J, d @ G.T) for G, d in zip(loadings, draws)], axis=-1) if K else \
         np.zeros((len(J), n_samples, 3, 0))                                                            # (p, n, 3, K)
@@ -128,7 +115,7 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
         out, grads = [], []
         for i in range(len(J)):
             c, h = C[i] @ tr, ts + H[i] @ tr
-            u = _direction(J[i], c, h)                  # the maximising direction; gradient by the envelope theorem
+            u = worst_direction(J[i], c, h)                  # the maximising direction; gradient by the envelope theorem
             a = u @ J[i]                                                     # (m,)
             g = np.concatenate([np.abs(a), a @ C[i] + np.abs(a) @ H[i]]) * t
             out.append(a @ c + np.abs(a) @ h)
@@ -174,16 +161,3 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
                        "RP": RP is not None and bool(rp_val.max() >= rp_aim * (1 - 1e-3))},
             "success": bool(res.success), "message": str(res.message)}
 
-
-def _direction(J, c, h, n_iter: int = 60) -> np.ndarray:
-    """The direction u* maximising ``u·J c + Σ h_i |u·J_i|`` (grid start, fixed-point ascent)."""
-    D, _ = directions_for(J[None], 600, full_sphere=True)
-    vals = D @ (J @ c) + np.abs(D @ J) @ h
-    u = D[np.argmax(vals)]
-    for _ in range(n_iter):
-        g = J @ c + J @ (h * np.sign(u @ J))
-        nu = g / max(np.linalg.norm(g), 1e-300)
-        if np.allclose(nu, u, atol=1e-13):
-            break
-        u = nu
-    return u

@@ -31,7 +31,7 @@ from scipy.stats import binom
 
 from evotol.errors import ValidationError
 from evotol.measures.iso9283.figures import (ap_at_yield, ap_worst_case, cycle_errors_linear, figures_of_test, gaussian_rp,
-                                    rp_from_errors)
+                                    rp_from_errors, worst_direction)
 from evotol.measures.iso9283.poses import full_poses
 from robots.mechanism.random_sources import backlash_offset, column_loading, cycle_errors, unit_draws
 
@@ -95,6 +95,62 @@ def lost_motion_columns(sources, loadings, t, signs) -> tuple[np.ndarray, np.nda
     free = np.array([backlash_offset(sources, loadings, t, {j: -1.0 if v == 0 else 0.0 for j, v in sg.items()})
                      for sg in signs])
     return lm, free
+
+
+def lost_motion_parts(robot, S, sources, loadings) -> tuple[np.ndarray, np.ndarray]:
+    """The lost motion's share of the column box per unit random tolerance (unidirectional test).
+
+    Returns
+    -------
+    C, H : (p, n_columns, n_random) ndarray
+        Centre and extra half-width of the box of column errors per unit of each random tolerance
+        (zero but for backlash: ``−s/4`` and ``1/4``, or ``0`` and ``1/2`` for a joint that does not move).
+    """
+    signs = approach_signs(robot, S, APPROACHES["-z"])
+    K, p, m = len(sources), len(S), S.shape[2]
+    C, H = np.zeros((p, m, K)), np.zeros((p, m, K))
+    for k in range(K):
+        e = np.zeros(K)
+        e[k] = 1.0
+        lm, free = lost_motion_columns(sources, loadings, e, signs)
+        C[:, :, k], H[:, :, k] = lm / 2, np.abs(lm) / 2 + np.abs(free)
+    return C, H
+
+
+def source_shares(robot, positions, systematic, sources, random_t=None) -> dict:
+    """What each source takes of AP and of RP at the pose where each is largest (first order).
+
+    AP: at the worst direction ``u*`` (:func:`worst_direction`), source ``i``'s term of ``h_K(u*)``
+    over ``h_K(u*)`` (systematic ``t_i |u*·J_i|``; backlash its offset and range terms). RP: each random
+    source's share of the variance ``E|e|²`` (its terms add up to 1).
+
+    Returns
+    -------
+    dict
+        ``AP`` and ``RP``: ``{source name: share}``, and ``AP_pose``/``RP_pose`` the pose indices.
+    """
+    _, S = joints_and_maps(robot, positions)
+    J = S[:, :3]
+    loadings, t = column_loading(robot, sources), _tols(sources, random_t)
+    ts = np.asarray(systematic, float)
+    C, H = lost_motion_parts(robot, S, sources, loadings)
+    h_all = []
+    for i in range(len(J)):
+        c, h = C[i] @ t, ts + H[i] @ t
+        a = worst_direction(J[i], c, h) @ J[i]
+        h_all.append((a @ c + np.abs(a) @ h, a))
+    i_ap = int(np.argmax([v for v, _ in h_all]))
+    val, a = h_all[i_ap]
+    ap = {n: float(ti * abs(ai) / val) for n, ti, ai in zip(robot.source_names, ts, a)}
+    for s, k in zip(sources, range(len(sources))):
+        if s.kind == "backlash":
+            ap[s.name] = float((a @ C[i_ap, :, k] + np.abs(a) @ H[i_ap, :, k]) * t[k] / val)
+    var = [np.full(s.dim, 1 / 16) if s.kind == "radial_play" else
+           np.array([(s.variation if s.kind == "backlash" else 1.0) ** 2 / 12]) for s in sources]
+    v = np.array([[tk * tk * np.sum((Ji @ G) ** 2 * vk) for G, tk, vk in zip(loadings, t, var)] for Ji in J])
+    i_rp = int(np.argmax(v.sum(1))) if len(sources) else 0
+    rp = {s.name: float(x) for s, x in zip(sources, v[i_rp] / max(v[i_rp].sum(), 1e-300))} if len(sources) else {}
+    return {"AP": ap, "RP": rp, "AP_pose": i_ap, "RP_pose": i_rp}
 
 
 def predict(robot, positions, systematic, sources, random_t=None, yield_=None, n_samples=200000, seed=0) -> dict:

@@ -193,3 +193,32 @@ def gaussian_rp(J, loadings, tolerances, variances, n_samples: int = 200000, see
     L = V * np.sqrt(np.maximum(w, 0.0))[:, None, :]
     z = np.random.default_rng(seed).standard_normal((n_samples, 3))
     return rp_from_errors(np.einsum("pij,nj->pni", L, z))
+
+
+def worst_direction(J, c, h, n_iter: int = 60) -> np.ndarray:
+    """The direction ``u*`` maximising ``h_K(u) = u·J c + Σ_i h_i |u·J_i|`` at one pose (grid start,
+    fixed-point ascent ``u ← ∇h/|∇h|``, which never decreases the convex ``h_K``).
+
+    Parameters
+    ----------
+    J : (3, m) ndarray
+        Position rows of the first-order map at the pose.
+    c, h : (m,) ndarray
+        Centre and half-widths of the box of column errors (m or rad).
+    n_iter : int
+        Ascent steps at most.
+
+    Returns
+    -------
+    (3,) ndarray
+        Unit direction.
+    """
+    D, _ = directions_for(J[None], 600, full_sphere=True)
+    u = D[np.argmax(D @ (J @ c) + np.abs(D @ J) @ h)]
+    for _ in range(n_iter):
+        g = J @ c + J @ (h * np.sign(u @ J))
+        nu = g / max(np.linalg.norm(g), 1e-300)
+        if np.allclose(nu, u, atol=1e-13):
+            break
+        u = nu
+    return u
