@@ -60,6 +60,10 @@ def test_ap_below_the_noise_floor_is_refused(problem):
     assert "noise floor" in refusal(spec, problem, "requirement.iso9283.AP")
 
 
+def test_too_few_calibration_configurations_are_refused(problem):
+    refusal(example(calibrate={"configurations": 5}), problem, "iso9283.calibrate")
+
+
 def test_unknown_keys_and_kinds_are_refused(problem):
     assert "yield" in refusal(example(yeild=0.9), problem, "iso9283.yeild")      # the nearest valid key
     spec = example()
@@ -70,7 +74,7 @@ def test_unknown_keys_and_kinds_are_refused(problem):
 def test_the_study_json_carries_the_iso_block(tmp_path):
     from evotol.studyfile.run import run_study_file
     text = EXAMPLE.read_text().replace("allocate = true", "allocate = false").replace(
-        "robots = 200", "robots = 20").replace('n_samples = 300', 'n_samples = 50').replace(
+        "robots = 200", "robots = 20").replace("robots = 100", "robots = 10").replace('n_samples = 300', 'n_samples = 50').replace(
         'RP = "0.05 mm"', 'RP = "0.08 mm"')        # the catalogue sources alone give 0.056 mm
     f = tmp_path / "iso.toml"
     f.write_text(text)
@@ -88,5 +92,7 @@ def test_the_study_json_carries_the_iso_block(tmp_path):
         assert p["AP"]["simulated"] <= p["AP"]["bound"] + p["RP"]["predicted"]
     assert len(block["random_sources"]) == 18 and block["systematic_from"] == "optimum"
     assert sum(block["what_each_source_buys"]["RP"].values()) <= 1 + 1e-9
+    for p in block["calibrated"]["poses"]:
+        assert p["RP_after_mean"] == pytest.approx(p["RP_before_mean"], rel=1e-3)
     page = (tmp_path / "iso9283_example.html").read_text()
     assert "ISO 9283 pose accuracy and repeatability" in page and "id='iso9283'" in page

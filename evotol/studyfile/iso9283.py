@@ -6,6 +6,7 @@ and the ``[iso9283]`` table -- the test cube, the yield, the simulated test and 
     yield = 0.99                  # AP at a yield; default: the worst case over the tolerances
     simulate = { robots = 200, cycles = 30, multidirectional = true }
     allocate = true               # allocate the random sources with the systematic ones (default false)
+    calibrate = { configurations = 40, noise = "10 um", robots = 100 }   # the same robots calibrated
 
     [iso9283.random.backlash]     # one table per kind: backlash, encoder, radial_play, axial_play
     joints = "all"                # or a list of actuated joints
@@ -38,6 +39,7 @@ import cost_models
 from evotol._runtime.keyword_checks import check_table_keys
 from evotol.errors import ValidationError
 from evotol.allocators.iso9283 import allocate_iso9283
+from evotol.calibration.iso9283 import simulate_calibrated
 from evotol.measures.iso9283.budget import source_shares
 from evotol.measures.iso9283 import TestCube, check_cube, iso_positions, largest_cube, predict, quantile_interval, simulate
 from robots.mechanism.model import MechanismModel
@@ -45,7 +47,8 @@ from robots.mechanism.random_sources import KINDS, RandomSource, encoder_count
 
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6,
          "deg": math.pi / 180, "arcmin": math.pi / 180 / 60, "arcsec": math.pi / 180 / 3600}
-TABLE_KEYS = ("cube", "yield", "simulate", "allocate", "random")
+TABLE_KEYS = ("cube", "yield", "simulate", "allocate", "random", "calibrate")
+CALIBRATE_KEYS = ("configurations", "noise", "robots")
 RANDOM_KEYS = ("joints", "tolerance", "bits", "gear_ratio", "variation", "lower", "upper", "cost")
 SIM_KEYS = ("robots", "cycles", "multidirectional")
 
@@ -108,6 +111,8 @@ class IsoStudy:
         ``robots``, ``cycles``, ``multidirectional``.
     allocate : bool
         Allocate the random sources with the systematic ones.
+    calibrate : dict or None
+        ``configurations``, ``noise`` (m), ``robots`` of a simulated calibration; None: none.
     """
 
     robot: MechanismModel
@@ -121,6 +126,7 @@ class IsoStudy:
     upper: list
     simulate: dict = field(default_factory=dict)
     allocate: bool = False
+    calibrate: dict | None = None
 
     @property
     def positions(self) -> np.ndarray:
@@ -214,7 +220,15 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
                                           quantity(c["edge"], "iso9283.cube.edge")))
     sim = {"robots": 200, "cycles": 30, "multidirectional": any(s.kind == "backlash" for s in sources),
            **table.get("simulate", {})}
-    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate)
+    cal = table.get("calibrate")
+    if cal is not None:
+        check_table_keys(cal, CALIBRATE_KEYS, "iso9283.calibrate")
+        cal = {"configurations": int(cal.get("configurations", 40)), "robots": int(cal.get("robots", 100)),
+               "noise": quantity(cal.get("noise", 10e-6), "iso9283.calibrate.noise")}
+        if cal["configurations"] * 3 < robot.n_columns or cal["noise"] < 0 or cal["robots"] < 1:
+            raise ValidationError("iso9283.calibrate", cal, f"at least {-(-robot.n_columns // 3)} configurations, "
+                                  "a noise >= 0 and at least 1 robot")
+    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal)
     _check_floor(iso, problem)
     return iso
 
@@ -301,6 +315,17 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
             entry["vAP"] = {"simulated": float(sim["vAP"][:, i].mean()), "max": float(sim["vAP"][:, i].max())}
         poses.append(entry)
     block["poses"] = poses
+    if iso.calibrate:
+        c = simulate_calibrated(iso.robot, P, t_sys, iso.sources, t_rand, n_robots=iso.calibrate["robots"],
+                                n_cycles=int(sim_opts["cycles"]), n_configurations=iso.calibrate["configurations"],
+                                noise=iso.calibrate["noise"], seed=seed)
+        block["calibrated"] = {
+            **iso.calibrate, "identified_rank": c["rank"], "n_columns": c["n_columns"],
+            "poses": [{"name": f"P{i + 1}", **{f"{k}_{s}": float(f(c[k][:, i])) for k in ("AP_before", "AP_after", "RP_before", "RP_after")
+                                               for s, f in (("mean", np.mean), ("max", np.max))}} for i in range(len(P))],
+            "meaning": "the same simulated robots before and after a simulated laser-tracker calibration (position at the "
+                       "configurations, least squares on the first-order map, joint compensation at the ISO poses), "
+                       "each run through the ISO test; lengths in m"}
     shares = source_shares(iso.robot, P, t_sys, iso.sources, t_rand)
     block["what_each_source_buys"] = {
         "AP": {k: v for k, v in sorted(shares["AP"].items(), key=lambda kv: -kv[1]) if v >= 0.01},
