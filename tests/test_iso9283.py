@@ -270,3 +270,29 @@ def test_shares_of_ap_and_rp_add_up_to_one(ur5_joints):
     Jn = np.linalg.norm(pinocchio_position_jacobian(q)[:3], axis=0) ** 2
     v = np.concatenate([Jn * (0.1 * 2 * ARCMIN) ** 2 / 12, Jn * encoder_count(15) ** 2 / 12])
     assert list(sh["RP"].values()) == pytest.approx(list(v / v.sum()), rel=1e-9)
+
+
+def test_ap_at_a_yield_against_own_sampling(ur5_joints):
+    """Robots with encoder offsets uniform in ±t and lost motion b' ~ U(0, b) taken up against the approach:
+    the 90 % quantile of |J (δ + o)| with Pinocchio's Jacobian and our own draws."""
+    t = np.array([30, 30, 30, 50, 50, 50]) * 1e-6
+    b = np.full(6, 2 * ARCMIN)
+    srcs = [RandomSource("backlash", j, bj) for j, bj in zip(JOINTS, b)]
+    P = np.array([[0.45, -0.05, 0.25]])
+    pred = predict(ur5_joints, P, t, srcs, yield_=0.9, n_samples=50000, seed=11)
+    q, _ = joints_and_maps(ur5_joints, P)
+    J6 = pinocchio_position_jacobian(q)
+    dq = np.linalg.solve(J6, [0, 0, -1.0, 0, 0, 0])
+    s = np.where(np.abs(dq) > 1e-9 * np.abs(dq).max(), np.sign(dq), 0.0)
+    rng = np.random.default_rng(4)
+    n = 400000
+    share = rng.random((n, 6))
+    o = np.where(s != 0, -s * share * b / 2, share * b / 2 * rng.uniform(-1, 1, (n, 6)))
+    x = t * rng.uniform(-1, 1, (n, 6)) + o
+    own = np.quantile(np.linalg.norm(x @ J6[:3].T, axis=1), 0.9)
+    assert pred["AP"][0] == pytest.approx(own, rel=0.01)
+
+
+def test_largest_cube_about_a_given_centre_touches_the_nearest_face(ur5):
+    cube = largest_cube(ur5, centre=(0.45, 0.05, 0.33))
+    assert cube.edge == pytest.approx(2 * min(0.5 - 0.45, 0.1 - 0.05, 0.4 - 0.33), rel=1e-9)
