@@ -184,7 +184,8 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         A bad key or quantity; a robot that is not a described arm; a cube outside the workspace or
         the joint limits; RP required without any random source; AP below what the random sources
         leave with every systematic tolerance at its lower bound (the noise floor), or RP below the
-        random sources' own at their lower bounds (when allocated) or their catalogue values.
+        random sources' own at their lower bounds (when allocated) or their catalogue values; a study whose
+        tolerances are all given (its analysis does not write the ISO block yet).
     """
     req = spec.get("requirement", {}).get("iso9283")
     table = spec.get("iso9283")
@@ -195,6 +196,9 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     check_table_keys(req or {}, ("AP", "RP"), "requirement.iso9283")
     check_table_keys(table.get("simulate", {}), SIM_KEYS, "iso9283.simulate")
     robot = problem.robot
+    if not problem.free.any():
+        raise ValidationError("iso9283", "every tolerance given", "at least one tolerance to allocate: the ISO block "
+                              "is not yet written by the given-tolerances analysis")
     if not isinstance(robot, MechanismModel) or problem.error_model is not robot:
         raise ValidationError("iso9283", type(robot).__name__, "a serial arm from a mechanism description, without "
                               "clearances, callouts, per-axis limits or joint poses")
