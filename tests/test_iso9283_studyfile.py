@@ -86,6 +86,7 @@ def test_the_study_json_carries_the_iso_block(tmp_path):
     assert [p["name"] for p in block["poses"]] == ["P1", "P2", "P3", "P4", "P5"]
     for p, w in zip(block["poses"], want):
         assert p["position"] == pytest.approx(w, abs=1e-12)
+        assert set(p["AP_quantile"]) == {"yield", "predicted", "simulated", "interval"}
         assert set(p["AP"]) >= {"predicted", "simulated", "interval"} and set(p["RP"]) >= {"predicted", "simulated", "interval"}
         lo, hi = p["RP"]["interval"]
         assert lo <= p["RP"]["simulated"] <= hi
