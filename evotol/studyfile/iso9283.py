@@ -35,15 +35,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-import cost_models
+import evotol.cost_models
 from evotol._runtime.keyword_checks import check_table_keys
 from evotol.errors import ValidationError
 from evotol.allocators.iso9283 import allocate_iso9283
 from evotol.calibration.iso9283 import simulate_calibrated
 from evotol.measures.iso9283.budget import source_shares
 from evotol.measures.iso9283 import TestCube, check_cube, iso_positions, largest_cube, predict, quantile_interval, simulate
-from robots.mechanism.model import MechanismModel
-from robots.mechanism.random_sources import KINDS, RandomSource, encoder_count
+from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.random_sources import KINDS, RandomSource, encoder_count
 
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6,
          "deg": math.pi / 180, "arcmin": math.pi / 180 / 60, "arcsec": math.pi / 180 / 3600}
@@ -95,7 +95,7 @@ class IsoStudy:
 
     Parameters
     ----------
-    robot : robots.mechanism.model.MechanismModel
+    robot : evotol.robots.mechanism.model.MechanismModel
         The arm.
     cube : evotol.measures.iso9283.TestCube
         The test cube.
@@ -161,7 +161,7 @@ def _random_sources(table: dict, robot) -> tuple[list, list, list, list]:
             raise ValidationError(f"{where}.tolerance", None, "the catalogue figure (or bits for an encoder)")
         lo = _per_joint(o.get("lower", 0.0), joints, f"{where}.lower")
         hi = _per_joint(o.get("upper", 0.0), joints, f"{where}.upper")
-        cost = cost_models.from_dict(o["cost"]) if "cost" in o else None
+        cost = evotol.cost_models.from_dict(o["cost"]) if "cost" in o else None
         for j, tj, a, b in zip(joints, t, lo, hi):
             sources.append(RandomSource(kind, j, tj, float(o.get("variation", 0.1))))
             costs.append(cost)

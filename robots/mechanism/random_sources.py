@@ -2,7 +2,7 @@
 
 A **systematic** source (a DH or placement error, an encoder offset) is fixed per robot; a **random**
 source draws anew at every cycle. Each random source acts through columns the arm's error model
-already has (:class:`robots.mechanism.model.MechanismModel`: the joint's encoder offset, the three
+already has (:class:`evotol.robots.mechanism.model.MechanismModel`: the joint's encoder offset, the three
 shifts of the joint's placement), so the first-order map and the nonlinear ``pose_error`` serve both
 kinds. The kinds, each with its tolerance ``t`` (the catalogue's figure) and its distribution:
 
@@ -25,7 +25,7 @@ URDF arm whose axes are not ``z`` is handled the same way.
 
 Parameters
 ----------
-robot : robots.mechanism.model.MechanismModel
+robot : evotol.robots.mechanism.model.MechanismModel
     The arm; every random source names one of its actuated joints and needs that joint's columns
     among the model's sources (the encoder offset ``J``; for bearing play ``J.shift_x|y|z``).
 sources : sequence of RandomSource
