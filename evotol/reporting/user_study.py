@@ -27,6 +27,7 @@ from evotol.units.display import DisplayUnits, number
 from evotol.core.pareto import ideal_point_knee
 from evotol.reporting.callout_drawing import callout_sections
 from evotol.reporting.calibration import calibration_section
+from evotol.reporting.iso9283 import iso9283_section
 from evotol.reporting.joints_section import joints_section
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
@@ -451,6 +452,8 @@ def render_user_study(summary: dict) -> Report:
         rep.text(f"Drawing, {m}: {drawing_check_text(d)}.", note=not d["meets"])
     if "calibration" in summary:    # a calibrated robot: uncalibrated vs calibrated (docs/calibration.md)
         calibration_section(rep, summary)
+    if "iso9283" in summary:        # ISO 9283 AP and RP (docs/iso9283.md)
+        iso9283_section(rep, summary)
     if summary.get("exports"):
         rep.text("The tolerance table as a drawing carries it: " + ", ".join(
             f'<a href="{html.escape(p)}">{html.escape(p)}</a>' for p in summary["exports"].values()) + ".", raw=True)

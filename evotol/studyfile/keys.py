@@ -11,14 +11,15 @@ from evotol.core.requirement import Requirement
 from evotol.errors import ValidationError
 
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
-            "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report", "calibration")
+            "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report", "calibration",
+            "iso9283")
 REPORT_KEYS = ("units", "precision")
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine", "joints", "drop_unreachable")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")
 BOUND_KEYS = ("lower", "upper", "cost_width", "distribution", "contains_nominal")
 SOURCE_KEYS = ("lower", "upper", "locked", "fixed", "cost", "distribution", "sigma_k", "mean_shift", "offset", "minus",
                "plus", "cost_width", "contains_nominal")
-REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement)) + AXIS_KEYS
+REQUIREMENT_KEYS = tuple(f.name for f in dataclasses.fields(Requirement)) + AXIS_KEYS + ("iso9283",)   # iso9283: evotol/studyfile/iso9283.py
 #: keys of [bounds.GROUP] / [bounds.SOURCE]
 GROUP_BOUND_KEYS = ("lower", "upper")
 

@@ -20,4 +20,5 @@ def read_requirement(spec: dict) -> Requirement:
     Requirement
         The requirement (validated when the problem is built).
     """
-    return Requirement(**spec.get("requirement", {}))
+    # iso9283 = { AP, RP }: read by evotol.studyfile.iso9283 beside the problem
+    return Requirement(**{k: v for k, v in spec.get("requirement", {}).items() if k != "iso9283"})

@@ -32,6 +32,7 @@ from evotol.studyfile.methods import METHODS, check_methods, method_options, stu
 from evotol.studyfile.callouts import callout_summary, callout_warnings
 from evotol.studyfile.comparisons import comparison_runs, run_comparison
 from evotol.studyfile.given_tolerances import run_given_tolerances
+from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
 from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import run_stack_study
 from evotol.summaries.drawing import drawing_precision
@@ -184,6 +185,7 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
     if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
         return run_stack_study(spec, path, out, seed)
     problem = load_problem(spec, base_dir=path.parent)
+    iso = read_iso9283(spec, problem)       # ISO 9283 AP/RP and random sources, checked before work (issue 44)
     units = report_units(spec, problem)
     if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
         return run_given_tolerances(spec, path, out, name, problem, units, seed, t0)
@@ -258,6 +260,8 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
     summary["notes"] = list(problem.robot.notes())      # e.g. a redundant arm's posture (issue 23)
     if "uncalibrated" in compared:      # what calibration buys (docs/calibration.md)
         add_calibration(summary, problem, results, seed, uncalibrated=compared["uncalibrated"])
+    if iso is not None and not stopped:
+        summary["iso9283"] = iso9283_block(iso, problem, results, seed)
     summary["interrupted"] = bool(stopped)
     callouts = problem.robot.part_of("callouts")
     if callouts is not None and not stopped:      # exact zones vs boxes (issue 35), both solved in the loop

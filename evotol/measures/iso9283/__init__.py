@@ -1,0 +1,10 @@
+"""ISO 9283 pose accuracy and repeatability of an arm with systematic and random sources (issue 44):
+the test cube and its poses (:mod:`~evotol.measures.iso9283.poses`), the standard's figures and their
+first-order prediction (:mod:`~evotol.measures.iso9283.figures`), the prediction and the simulated test of an
+arm (:mod:`~evotol.measures.iso9283.budget`). docs/iso9283.md."""
+from evotol.measures.iso9283.budget import APPROACHES, predict, quantile_interval, simulate
+from evotol.measures.iso9283.figures import ap_worst_case, figures_of_test, gaussian_rp, rp_from_errors
+from evotol.measures.iso9283.poses import TestCube, check_cube, iso_positions, largest_cube
+
+__all__ = ["APPROACHES", "TestCube", "ap_worst_case", "check_cube", "figures_of_test", "gaussian_rp", "iso_positions",
+           "largest_cube", "predict", "quantile_interval", "rp_from_errors", "simulate"]

@@ -1,0 +1,70 @@
+"""The "ISO 9283" section of a user study's report, from its JSON summary alone.
+
+Reads ``summary["iso9283"]`` (:func:`evotol.studyfile.iso9283.iso9283_block`): per pose the predicted and
+simulated AP and RP with their intervals, what each source takes of AP and of RP, the random sources and
+the allocation (docs/iso9283.md).
+"""
+from __future__ import annotations
+
+from evotol.units.display import DisplayUnits
+
+
+def iso9283_section(rep, summary: dict) -> None:
+    """Append the ISO 9283 section to a user study's report (module docstring).
+
+    Parameters
+    ----------
+    rep : evotol.reporting.html.Report
+        The page being built.
+    summary : dict
+        A user study's JSON summary with an ``iso9283`` block (SI values).
+    """
+    iso = summary["iso9283"]
+    u = DisplayUnits(**summary["display_units"])
+
+    def L(v):
+        return "–" if v is None else u.format(v, "m")
+
+    req = iso["requirement"]
+    rep.heading("ISO 9283 pose accuracy and repeatability")
+    rep.text(f"Test cube: centre ({', '.join(L(c) for c in iso['cube']['centre'])}), edge {L(iso['cube']['edge'])}; "
+             f"requirement AP ≤ {L(req['AP'])}" + ("" if req["yield"] is None else f" at yield {req['yield']:g}")
+             + f", RP ≤ {L(req['RP'])}; systematic tolerances from {iso['systematic_from']}; simulated: "
+             f"{iso['simulation']['robots']} robots × {iso['simulation']['cycles']} cycles, approaches "
+             f"{', '.join(iso['simulation']['approaches'])}, {iso['simulation']['model']}.")
+    rows = []
+    for p in iso["poses"]:
+        ap, rp, aq = p["AP"], p["RP"], p["AP_quantile"]
+        rows.append([p["name"], ", ".join(L(c) for c in p["position"]), L(ap["predicted"]), L(ap["bound"]),
+                     L(ap["simulated"]), f"{L(aq['predicted'])} / {L(aq['simulated'])} "
+                     f"({L(aq['interval'][0])} – {L(aq['interval'][1])})", L(rp["predicted"]), L(rp["gaussian_shortcut"]), L(rp["simulated"]),
+                     f"{L(rp['interval'][0])} – {L(rp['interval'][1])}", L(p.get("vAP", {}).get("simulated"))])
+    q = iso["poses"][0]["AP_quantile"]["yield"]
+    rep.table(rows, ["pose", "position", "AP predicted", "AP proven bound", "AP simulated",
+                     f"AP at yield {q:g}: predicted / simulated (95 %)", "RP predicted",
+                     "RP Gaussian shortcut", "RP simulated", "RP of one test (95 %)", "vAP simulated"],
+              table_id="iso9283")
+    for line in iso["notes"]:
+        rep.text(line, note=True)
+    buys = iso["what_each_source_buys"]
+    rep.text("What buys accuracy (share of the worst-case AP at " + buys["AP_pose"] + "): "
+             + ", ".join(f"{k} {100 * v:.1f} %" for k, v in list(buys["AP"].items())[:8])
+             + ". What buys repeatability (share of the RP variance at " + buys["RP_pose"] + "): "
+             + ", ".join(f"{k} {100 * v:.1f} %" for k, v in list(buys["RP"].items())[:8]) + ".")
+    rows = [[s["name"], s["kind"], u.format(s["tolerance"], s["unit"]), "–" if s["cost"] is None else f"{s['cost']:.4g}"]
+            for s in iso["random_sources"]]
+    rep.table(rows, ["random source", "kind", "tolerance", "cost"], table_id="iso9283-random")
+    if "calibrated" in iso:
+        c = iso["calibrated"]
+        rep.text(f"The same design calibrated ({c['robots']} simulated robots; {c['configurations']} configurations, "
+                 f"noise {L(c['noise'])} per axis; rank {c['identified_rank']} of {c['n_columns']} sources identified): "
+                 "calibration lowers AP, not RP; the lost motion's offset, the random sources and the noise remain.")
+        rep.table([[p["name"], L(p["AP_before_mean"]), L(p["AP_after_mean"]), L(p["AP_before_max"]), L(p["AP_after_max"]),
+                    L(p["RP_before_mean"]), L(p["RP_after_mean"])] for p in c["poses"]],
+                  ["pose", "AP before (mean)", "AP after (mean)", "AP before (max)", "AP after (max)", "RP before",
+                   "RP after"], table_id="iso9283-calibrated")
+    if "allocation" in iso:
+        a = iso["allocation"]
+        rep.text(f"Allocated with the systematic sources: cost {a['cost']:.4g}, "
+                 f"{'feasible' if a['feasible'] else 'NOT feasible'}, active: "
+                 + (", ".join(k for k, v in a["active"].items() if v) or "none") + ". " + a["proven"], note=not a["feasible"])
