@@ -90,3 +90,29 @@ def test_keep_going_runs_the_remaining_methods_and_exits_0(tmp_path):
     assert summary["results"]["optimum"]["feasible"] is True
     assert set(summary["monte_carlo"]) == {"sensitivity", "ga", "optimum"}
     assert summary["results"]["ga"]["interrupted"] is True
+
+
+def test_a_stack_study_keeps_what_ran_before_a_ctrl_c(tmp_path, monkeypatch):
+    """The stack path runs its allocation methods in the one step loop of every study (issue 39): a
+    Ctrl-C in the first method stops it, skips the second, and the study is still written, marked
+    interrupted, with the stack analysis (computed before the methods) intact."""
+    import evotol.studyfile.stack_table as st
+    from evotol.studyfile import run_study_file
+
+    calls = []
+
+    def interrupted(problem, **kw):
+        calls.append("optimum")
+        raise KeyboardInterrupt
+
+    monkeypatch.setitem(st.STACK_METHODS, "optimum", interrupted)
+    monkeypatch.setitem(st.STACK_METHODS, "sensitivity", lambda problem, **kw: calls.append("sensitivity"))
+    study = tmp_path / "motor.toml"
+    study.write_text((ROOT / "reports" / "studies" / "motor_stack.toml").read_text(encoding="utf-8"), encoding="utf-8")
+    summary = run_study_file(study, out=tmp_path)
+    assert calls == ["optimum"]                               # the second method never started
+    assert summary["interrupted"] is True
+    assert summary["interruption"] == {"stopped": ["optimum"], "skipped": ["sensitivity"], "keep_going": False}
+    written = json.loads(Path(summary["json"]).read_text(encoding="utf-8"))
+    assert written["interrupted"] is True and "allocation" not in written
+    assert set(written) == set(summary) - {"html", "json"}      # the analysis computed before the methods is kept

@@ -146,9 +146,12 @@ def claim_outputs(out, name: str, owner: str, *, force: bool = False, study_file
     """
     check_output_name(name, field)
     out = Path(out)
+    created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
     lock = path_inside(out, f"{name}.lock")
     _take_lock(lock, owner)
+    had_manifest = manifest_path(out, name).exists()
+    written = {}
     try:
         check_not_overwriting(out, name, study_file, force, owner=owner, manifest=read_manifest(out, name))
         remove_stale_temporaries(out)
@@ -164,5 +167,13 @@ def claim_outputs(out, name: str, owner: str, *, force: bool = False, study_file
                    if Path(p).parent == root}
         write_text(manifest_path(out, name), json.dumps({**base, "complete": True, "finished": time.time(),
                                                          "files": vouched}, indent=1), record=False)
+    except BaseException:
+        if not written:        # refused before any file (bad input, ...): leave the folder as it was
+            if not had_manifest:
+                manifest_path(out, name).unlink(missing_ok=True)
+            lock.unlink(missing_ok=True)
+            if created and not any(out.iterdir()):
+                out.rmdir()
+        raise
     finally:
         lock.unlink(missing_ok=True)

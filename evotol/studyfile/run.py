@@ -31,6 +31,7 @@ logger = logging.getLogger(__name__)
 from evotol.studyfile.methods import METHODS, check_methods, method_options, study_methods
 from evotol.studyfile.callouts import callout_summary, callout_warnings
 from evotol.studyfile.comparisons import comparison_runs, run_comparison
+from evotol.studyfile.steps import StepLog, run_steps
 from evotol.studyfile.given_tolerances import run_given_tolerances
 from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
 from evotol.studyfile.problem import load_problem
@@ -183,7 +184,7 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
     if "processes" in spec:     # process selection: [processes.<dimension>] (evotol/studyfile/processes.py)
         return run_process_study(spec, path, out, seed)
     if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
-        return run_stack_study(spec, path, out, seed)
+        return run_stack_study(spec, path, out, seed, keep_going)
     problem = load_problem(spec, base_dir=path.parent)
     iso = read_iso9283(spec, problem)       # ISO 9283 AP/RP and random sources, checked before work (issue 44)
     units = report_units(spec, problem)
@@ -202,57 +203,37 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
         vspec = {**vspec, "distribution": vmodel}
     if any("budget" not in kw for m, kw in methods.items() if m != "nsga2"):
         problem.check_feasible()            # a requirement no design meets: say so before the first method
-    results, front, stopped, skipped = {}, None, [], []
+    results, front, log = {}, {}, StepLog(keep_going)
+
+    def method(m, kw):
+        def step():
+            if m == "nsga2":
+                front["front"] = allocate_nsga2(problem, seed=seed, **{"progress": True, **kw})   # a bar, or log lines
+                return None
+            opts = method_options(spec, m, kw)
+            if m == "ga":
+                opts.setdefault("seed", seed)
+                opts.setdefault("progress", True)       # a bar on a terminal, lines in a log (issue 27)
+            if m == "monotone" and "ga" in results and results["ga"].feasible:   # the GA's design as incumbent
+                opts.setdefault("incumbent", results["ga"].t)
+            with Heartbeat(m, bar=True) if m != "ga" else nullcontext():   # a line every 10 s or a bar (a GA: its own)
+                return METHODS[m](problem, **opts)
+        return step
+
+    def comparison(c, run):
+        def step():
+            with Heartbeat(c, bar=True):
+                return run_comparison(run)
+        return step
+
     with CtrlC() as ctrl_c:
-        for m, kw in methods.items():
-            if ctrl_c.count and not keep_going:
-                skipped.append(m)
-                continue
-            logger.info("%s ...", m)
-            before = ctrl_c.count
-            try:
-                if m == "nsga2":
-                    front = allocate_nsga2(problem, seed=seed, **{"progress": True, **kw})   # a bar, or lines in a log
-                    continue
-                kw = method_options(spec, m, kw)
-                if m == "ga":
-                    kw.setdefault("seed", seed)
-                    kw.setdefault("progress", True)       # a bar on a terminal, lines in a log (issue 27)
-                if m == "monotone" and "ga" in results and results["ga"].feasible:   # the GA's design as incumbent
-                    kw.setdefault("incumbent", results["ga"].t)
-                with Heartbeat(m, bar=True) if m != "ga" else nullcontext():   # a line every 10 s or a bar (a GA: its own)
-                    results[m] = METHODS[m](problem, **kw)
-            except KeyboardInterrupt:
-                ctrl_c.count = max(ctrl_c.count, before + 1)
-            finally:
-                if ctrl_c.count > before:
-                    stopped.append(m)
-        compared = {}       # what the sections compare with: ordinary runs under the same Ctrl-C (issue 39)
-        for c, run in (comparison_runs(spec, problem, methods) if results else {}).items():
-            if ctrl_c.count and not keep_going:
-                skipped.append(c)
-                continue
-            logger.info("%s (comparison) ...", c)
-            before = ctrl_c.count
-            try:
-                with Heartbeat(c, bar=True):
-                    compared[c] = run_comparison(run)
-            except KeyboardInterrupt:
-                ctrl_c.count = max(ctrl_c.count, before + 1)
-            if ctrl_c.count > before:
-                stopped.append(c)
-        checks = {}
-        for m, r in results.items():
-            if ctrl_c.count and not keep_going:     # the user asked to stop: no Monte Carlo
-                skipped.append(f"verify {m}")
-                continue
-            before = ctrl_c.count
-            try:
-                checks[m] = verify(problem, r.t, seed=seed, progress=True, **vspec).to_dict()
-            except KeyboardInterrupt:
-                ctrl_c.count = max(ctrl_c.count, before + 1)
-            if ctrl_c.count > before:
-                stopped.append(f"verify {m}")
+        run_steps({m: method(m, kw) for m, kw in methods.items()}, ctrl_c, log, results)
+        # what the sections compare with: ordinary runs under the same Ctrl-C (issue 39)
+        compared = run_steps({c: comparison(c, run) for c, run in
+                              (comparison_runs(spec, problem, methods) if results else {}).items()}, ctrl_c, log)
+        checks = run_steps({m: (lambda r=r: verify(problem, r.t, seed=seed, progress=True, **vspec).to_dict())
+                            for m, r in results.items()}, ctrl_c, log, label="verify ", say=False)
+    front, stopped = front.get("front"), log.stopped
     summary = study_summary(name, problem, results, front, checks, seed=seed, units=units,
                             seconds=time.perf_counter() - t0, precision=precision)
     summary["study_file"] = str(path.resolve())
@@ -271,7 +252,7 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
             summary["callouts"] = callout_summary(problem, side["exact"], side["boxes"])
         summary["warnings"] = [*summary["warnings"], *callout_warnings(problem)]
     if stopped:
-        summary["interruption"] = {"stopped": stopped, "skipped": skipped, "keep_going": keep_going}
+        summary["interruption"] = log.interruption()
     if results:     # the drawing table, linked from the page (evotol/reporting/export.py)
         summary["exports"] = {k: f"{name}_tolerances.{k}" for k in EXPORT_FORMATS}
     rep = render_user_study(summary)

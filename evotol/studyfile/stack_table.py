@@ -46,6 +46,8 @@ from evotol.reporting.stack_report import DEFAULT_PRECISION, render_stack
 from evotol.studies import StudyResult, write_outputs
 from evotol.summaries.stack import allocation_summary, stack_summary
 from evotol.units.display import ALIASES, LENGTHS
+from evotol.studyfile.steps import StepLog, run_steps
+from evotol._runtime.interrupt import CtrlC
 
 logger = logging.getLogger(__name__)
 
@@ -234,7 +236,7 @@ def allocation_from_table(table: dict, stack: Stack, scale: float):
     return problem, methods
 
 
-def run_stack_study(spec: dict, path, out, seed: int) -> dict:
+def run_stack_study(spec: dict, path, out, seed: int, keep_going: bool = False) -> dict:
     """``evotol run`` of a study file with a ``[stack]`` table: analyse, write JSON and HTML.
 
     Parameters
@@ -245,6 +247,8 @@ def run_stack_study(spec: dict, path, out, seed: int) -> dict:
         The output folder.
     seed : int
         Seed of the Monte Carlo (non-normal dimensions).
+    keep_going : bool, optional
+        After a Ctrl-C, still run the remaining allocation methods (:mod:`evotol.studyfile.steps`).
 
     Returns
     -------
@@ -274,12 +278,16 @@ def run_stack_study(spec: dict, path, out, seed: int) -> dict:
     summary = stack_summary(name, stack, models, display, seed=seed)
     if alloc is not None:
         problem, methods = alloc
-        results = {}
-        for m, kw in methods.items():
-            logger.info("%s ...", m)
-            kw = {**({"seed": seed, "progress": False} if m == "ga" else {}), **kw}
-            results[m] = STACK_METHODS[m](problem, **kw)
-        summary["allocation"] = allocation_summary(stack, problem, results, models, display, seed=seed)
+        log = StepLog(keep_going)
+        with CtrlC() as ctrl_c:        # the one step loop of every study (evotol/studyfile/steps.py)
+            results = run_steps({m: (lambda m=m, kw=kw: STACK_METHODS[m](problem, **{
+                **({"seed": seed, "progress": False} if m == "ga" else {}), **kw})) for m, kw in methods.items()},
+                ctrl_c, log)
+        if results:
+            summary["allocation"] = allocation_summary(stack, problem, results, models, display, seed=seed)
+        summary["interrupted"] = bool(log.stopped)
+        if log.stopped:
+            summary["interruption"] = log.interruption()
     summary.update(study_file=str(Path(path).resolve()), seconds=time.perf_counter() - t0)
     paths = write_outputs(name, out, StudyResult(summary), render_stack(summary))
     summary.update(html=str(paths["html"]), json=str(paths["json"]))
