@@ -142,7 +142,11 @@ def test_the_drawing_table_in_page_terminal_csv_and_xlsx(tmp_path, capsys):
     d = pd.read_csv(tmp_path / "ur5_callouts_drawing.csv")
     assert len(d) == 12 and set(d["part"]) >= {"upper_arm_link", "shoulder_link", "base_link"}
     row = d[d["feature"] == "bore axis of elbow_joint"].iloc[0]
-    assert row["value (µm)"] == pytest.approx(t["elbow_joint.position.end1"] * 1e6)
+    # the drawn value: the allocation rounded inward to the 0.1 µm drawing step (issue 41)
+    import math
+    drawn = math.floor(t["elbow_joint.position.end1"] * 1e7 + 1e-9) / 10
+    assert row["value (µm)"] == pytest.approx(drawn) and drawn <= t["elbow_joint.position.end1"] * 1e6
+    assert f"⌀{drawn:.1f} µm" in row["callout"]
     assert row["length (mm)"] == pytest.approx(50.0) and row["datums"] == "A|B"
     assert "from -25 to 25 mm along the axis (0, 1, 0)" in row["zone"]
     costs = summary["results"]["optimum"]["source_costs"]

@@ -9,16 +9,57 @@ independent-box rule. The HTML page, the terminal and the CSV/XLSX export all sh
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pandas as pd
 
 from evotol.errors import ValidationError
+from evotol.reporting.drawing import drawing_check_text
 from evotol.reporting.export import chosen_method
+from evotol.units.display import DisplayUnits
 
 
 def _method(summary: dict, method: str | None) -> str:
     return method or chosen_method(summary)
+
+
+def _um(t: float, decimals: int | None) -> str:
+    """A zone in µm at the drawing's resolution (``decimals``), or 3 significant digits unrounded."""
+    return f"{t * 1e6:.{decimals}f}" if decimals is not None else f"{t * 1e6:.3g}"
+
+
+def drawn_value(summary: dict, method: str, member: str) -> tuple[float, int | None]:
+    """A callout's value as the drawing carries it: the allocation rounded inward to the drawing
+    precision and re-checked (``summary["drawing"][method]``, :func:`evotol.summaries.drawing.rounded_design`)
+    -- the one rounding the page, the terminal, the CSV and the workbook show.
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary with callouts.
+    method : str
+        A method of ``summary["results"]``.
+    member : str
+        A member source of the callout.
+
+    Returns
+    -------
+    value : float
+        The drawn value (m): the ⌀ or the face's width.
+    decimals : int or None
+        Decimals of the drawing step in µm; None when the summary has no drawn value (the
+        allocation's own value is returned, unrounded).
+    """
+    check = (summary.get("drawing") or {}).get(method) or {}
+    z = check.get("zones", {}).get(member, {})
+    if "drawing_value" not in z:
+        return float(summary["results"][method]["tolerances"][member]), None
+    u = DisplayUnits(**summary["display_units"])
+    src = next(s for s in summary["sources"] if s["name"] == member)
+    k = u.factor(src["unit"])
+    step_um = check["precision"][u.unit_for(src["unit"])] / k * 1e6
+    return z["drawing_value"] / k, max(0, -int(math.floor(math.log10(step_um) + 1e-9)))
 
 
 def drawing_table(summary: dict, method: str | None = None) -> pd.DataFrame:
@@ -34,7 +75,8 @@ def drawing_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        Columns: part, feature, callout (symbol and value), value (µm), length (mm), zone
+        Columns: part, feature, callout (symbol and value: the design rounded inward to the
+        drawing precision and re-checked, :func:`drawn_value`), value (µm), length (mm), zone
         (placement along the axis), datums, cost share (%), contribution (%) to the first
         constrained component's error at the worst pose (the members' shares summed).
 
@@ -57,20 +99,20 @@ def drawing_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     total = sum(costs.values())
     rows = []
     for f in summary["callouts"]["features"]:
-        t = r["tolerances"][f["members"][0]]
+        t, um = drawn_value(summary, method, f["members"][0])
         lo, hi = f["ends"]
         axis = "(" + ", ".join(f"{v:g}" for v in f["axis"]) + ")"
         if f["kind"] == "axial":
             feature = f"shoulder face of {f['joint']}"
-            zone = f"±{t * 1e6 / 2:.3g} µm along the axis {axis}, at the joint origin"
-            value = f"{f['symbol']} {t * 1e6:.3g} µm"
+            zone = f"±{_um(t / 2, um + 1)} µm along the axis {axis}, at the joint origin"
+            value = f"{f['symbol']} {_um(t, um)} µm"
         else:
             feature = f"{'guide' if f.get('joint_type') == 'prismatic' else 'bore'} axis of {f['joint']}"
             zone = f"from {lo * 1e3:g} to {hi * 1e3:g} mm along the axis {axis} from the joint origin"
-            value = f"{f['symbol']}{t * 1e6:.3g} µm"
+            value = f"{f['symbol']}{_um(t, um)} µm"
         contrib = [share[m] for m in f["members"] if share.get(m) is not None]
         rows.append({"part": f["part"], "feature": feature, "callout": f"{value} | {f['datums']}",
-                     "value (µm)": t * 1e6, "length (mm)": f["length"] * 1e3, "zone": zone, "datums": f["datums"],
+                     "value (µm)": t * 1e6 if um is None else round(t * 1e6, um), "length (mm)": f["length"] * 1e3, "zone": zone, "datums": f["datums"],
                      "cost share (%)": 100 * sum(costs.get(m, 0.0) for m in f["members"]) / total if total else 0.0,
                      f"contribution to the {comp} error at the worst pose (%)": sum(contrib) if contrib else None})
     return pd.DataFrame(rows).sort_values("part", kind="stable").reset_index(drop=True)
@@ -132,6 +174,9 @@ def terminal_lines(summary: dict) -> list[str]:
     for _, r in d.iterrows():
         out.append(f"  {r['part']:<22s} {r['feature']:<36s} {r['callout']:<24s} L {r['length (mm)']:g} mm  "
                    f"cost {r['cost share (%)']:.3g} %")
+    check = (summary.get("drawing") or {}).get(_method(summary, None))
+    if check:
+        out.append(f"  as drawn: {drawing_check_text(check)}")
     cmp_ = summary["callouts"].get("comparison")
     if cmp_:
         out.append(f"  exact zones cost {cmp_['exact']['cost']:.6g}, independent boxes {cmp_['boxes']['cost']:.6g}: "
@@ -156,6 +201,10 @@ def callout_sections(rep, summary: dict) -> None:
              "origin, the datum frame of docs/callouts.md), the datums, and each callout's share of the cost and of the "
              "error at the worst pose.")
     rep.table(d.values.tolist(), list(d.columns), table_id="callouts")
+    check = (summary.get("drawing") or {}).get(_method(summary, None))
+    if check:
+        rep.text(f"These values, as drawn: {drawing_check_text(check)}.", note=not (check["meets"] and
+                                                                                    check.get("meets_nonlinear", True)))
     if summary["callouts"].get("comparison"):
         c = comparison_table(summary)
         cmp_ = summary["callouts"]["comparison"]
