@@ -30,6 +30,9 @@ from evotol.errors import ValidationError
 from evotol.verification.nonlinear import worst_vertex_errors
 from robots.mechanism.callout_table import refinement_warnings
 
+#: a position or orientation callout's feature length below this (m) is probably a unit slip
+MIN_FEATURE_LENGTH = 1e-3
+
 
 def variable_values(problem: ToleranceProblem, t) -> dict:
     """One design as ``{variable name: value}`` (a callout's value, a raw source's tolerance).
@@ -168,8 +171,10 @@ def callout_summary(problem: ToleranceProblem, exact_result=None, **optimum) -> 
 
 
 def callout_warnings(problem: ToleranceProblem) -> list[str]:
-    """One line per seat whose orientation callout is always tighter than the position callout it
-    refines (it binds the tilt; the pair is modelled by its safe outer set, ``docs/callouts.md``).
+    """One line per position or orientation callout over a feature shorter than
+    :data:`MIN_FEATURE_LENGTH` (1 mm: ``"50 um"`` meant ``"50 mm"``), and per seat whose orientation
+    callout is always tighter than the position callout it refines (it binds the tilt; the pair is
+    modelled by its safe outer set, ``docs/callouts.md``).
 
     Parameters
     ----------
@@ -189,4 +194,9 @@ def callout_warnings(problem: ToleranceProblem) -> list[str]:
         j = problem.names.index(robot.tied_sources.get(c.name, (c.name,))[0])
         locked = problem.locked_values[j]
         lower[c.name], upper[c.name] = (locked, locked) if np.isfinite(locked) else (problem.lower[j], problem.upper[j])
-    return refinement_warnings(robot.callouts, lower, upper)
+    short = [f"robot.callouts {c.name}: length = {c.length * 1e3:g} mm is shorter than a bearing seat or a guide is "
+             f"(under {MIN_FEATURE_LENGTH * 1e3:g} mm); a zone ⌀t over it tilts the axis by up to t/L (the smallest "
+             f"⌀{lower[c.name] * 1e6:g} µm: {lower[c.name] / c.length:.3g} rad), so the requirement may be out of "
+             f"reach; if '{c.length * 1e6:g} um' was meant in mm, write '{c.length * 1e6:g} mm'"
+             for c in robot.callouts if c.kind != "axial" and 0 < c.length < MIN_FEATURE_LENGTH]
+    return short + refinement_warnings(robot.callouts, lower, upper)

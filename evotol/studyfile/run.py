@@ -30,9 +30,9 @@ from evotol.studyfile.poses import refine_option
 from evotol.studyfile.given_tolerances import run_given_tolerances
 from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import run_stack_study
-from evotol.summaries.drawing import drawing_precision
+from evotol.summaries.drawing import drawing_precision, precision_warnings
 from evotol.studyfile.process_run import run_process_study
-from evotol.core.plausibility import study_warnings
+from evotol.core.plausibility import study_warnings, warn as warn_plausibility
 from evotol.summaries.user_study import study_summary
 from evotol.units.display import DisplayUnits, parse_units, problem_units
 from evotol.verification.montecarlo import verify
@@ -178,6 +178,9 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
     if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
         return run_given_tolerances(spec, path, out, name, problem, units, seed, t0)
     precision = drawing_precision(spec.get("report", {}).get("precision"), units)   # [report] precision (issue 34)
+    coarse = precision_warnings(problem, units, precision)      # a step coarser than the zones (issue 41)
+    problem.warnings = [*problem.warnings, *coarse]
+    warn_plausibility(coarse)
     methods = study_methods(spec, problem)
     vspec = spec.get("verify", {"n_samples": 1000})
     check_methods(spec, problem, methods)           # every table checked before the first method runs

@@ -11,6 +11,7 @@ from evotol._runtime.keyword_checks import unknown_key_message
 from evotol.measures.statistical.distributions import Distribution
 from evotol.core.tolerance import Tolerance
 from evotol.errors import ValidationError
+from evotol.units.quantity import parse_quantity
 from evotol.measures import clearances
 from evotol.studyfile.keys import BOUND_KEYS, GROUP_BOUND_KEYS
 from robots.base import RobotErrorModel
@@ -76,6 +77,9 @@ def read_tolerances(spec: dict, sources, owner: str) -> dict[str, Tolerance]:
 
 def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict) -> Tolerance:
     """One source's :class:`Tolerance` from its ``[sources.NAME]`` table and the defaults."""
+    kind = "angle" if s.unit == "rad" else "length"
+    o = {k: parse_quantity(v, f"sources.{s.name}.{k}", kind) if k in ("fixed", "locked", "lower", "upper", "offset")
+         and isinstance(v, str) else v for k, v in o.items()}        # "50 um", "0.05*mm": docs/units.md
     shape = {k: o.get(k, bounds.get(k)) for k in ("cost_width", "contains_nominal") if k in o or k in bounds}
     shape.update({k: float(o[k]) if isinstance(o[k], (int, float)) and not isinstance(o[k], bool) else o[k]
                   for k in ("offset", "minus", "plus") if k in o})
@@ -121,7 +125,9 @@ def _bound(override: dict, bounds: dict, source, which: str, default: float) -> 
                          (f"bounds.{source.group}", bounds.get(source.group, {})), ("bounds", bounds)):
         if which in table:
             v = table[which]
+            if isinstance(v, str):
+                v = parse_quantity(v, f"{field}.{which}", "angle" if source.unit == "rad" else "length")
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ValidationError(f"{field}.{which}", v, "a positive tolerance in SI units (m or rad)")
+                raise ValidationError(f"{field}.{which}", v, "a positive tolerance in SI units (m or rad) or with its unit, e.g. '20 um'")
             return float(v)
     return default

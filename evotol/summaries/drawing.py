@@ -19,7 +19,7 @@ import numpy as np
 
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError, is_real
-from evotol.units.display import ROUND_OFF, DisplayUnits
+from evotol.units.display import ROUND_OFF, DisplayUnits, number
 from evotol.verification.nonlinear import worst_vertex_errors
 
 #: units of the keys this module adds to a study's JSON (docs/units.md)
@@ -27,8 +27,7 @@ KEYS = {"drawing_lower": "the source's display unit (display_units), rounded to 
         "drawing_upper": "the source's display unit (display_units), rounded to the drawing precision",
         "precision": "the display unit it is keyed by", "meets": "bool", "vanished": "source names",
         "drawing_value": "the source's display unit (display_units): a callout's drawn value (its ⌀ or face width)",
-        "normalised_error_nonlinear": "1 (largest nonlinear worst-vertex error / requirement)",
-        "meets_nonlinear": "bool", "over_nonlinear": "SI (m or rad): the nonlinear error beyond the requirement"}
+        "meets_nonlinear": "bool"}
 #: default drawing precision per display unit (a 0.1 µm step in every length unit, 0.1 arcsec in angles)
 DEFAULT_PRECISION = {"µm": 0.1, "mm": 1e-4, "in": 1e-5, "arcsec": 0.1, "mrad": 1e-4, "deg": 1e-5}
 
@@ -94,6 +93,42 @@ def clean(value: float, digits: int = 13) -> float:
     if not math.isfinite(v):
         return v
     return round(v, digits - 1 - int(math.floor(math.log10(abs(v))))) + 0.0
+
+
+def precision_warnings(problem: ToleranceProblem, units: DisplayUnits, precision: dict,
+                       field: str = "report.precision") -> list[str]:
+    """A stated drawing step coarser than the zones the allocation may give: a free source whose
+    zone at its lower bound is narrower than the step could be drawn as ``0 / 0`` (one line per
+    display unit, naming the key, before any work).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The study's problem (free sources, their lower bounds).
+    units : DisplayUnits
+        The study's display units.
+    precision : dict
+        Display unit -> step, as :func:`drawing_precision` gives it (only the stated steps).
+    field : str
+        The setting's name in the line.
+
+    Returns
+    -------
+    list of str
+        One line per display unit whose step exceeds the half-width of some free source's zone
+        at its lower bound; empty otherwise.
+    """
+    smallest = {}
+    for j, row in enumerate(_source_rows(problem)):
+        du = units.unit_for(row["unit"])
+        if not problem.free[j] or du not in precision:
+            continue
+        hw = tolerance_zone(row, problem.lower[j])["half_width"] * units.factor(row["unit"])
+        if hw < precision[du] and hw < smallest.get(du, (math.inf,))[0]:
+            smallest[du] = (hw, row["name"])
+    return [f"{field} = {precision[du]:g} {du} is coarser than the zones it rounds: {name}'s zone at its lower bound "
+            f"is ±{number(hw)} {du}, which the drawing would show as 0; state a step of at most {number(hw / 10)} {du}"
+            for du, (hw, name) in smallest.items()]
 
 
 def drawing_precision(spec, units: DisplayUnits, field: str = "report.precision") -> dict:

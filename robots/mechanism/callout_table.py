@@ -17,20 +17,19 @@ joint without a stroke.
 """
 from __future__ import annotations
 
-import re
 
 import numpy as np
 
 from evotol._runtime.keyword_checks import check_table_keys, did_you_mean
 from evotol.errors import ValidationError
+from evotol.units.quantity import parse_quantity, units_of
 from robots.mechanism.callouts import KINDS, ORIENTATION_KINDS, Callout
 from robots.mechanism.expressions import Expression
 
 #: keys of one callout table
 CALLOUT_KEYS = ("joint", "kind", "length", "offset", "datums")
 #: length units a callout may be written in -> metres
-LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "in": 0.0254}
-_LENGTH = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*\*?\s*([a-zµ]+)\s*$")
+LENGTH_UNITS = units_of("length")
 
 
 def parse_length(value, field: str) -> float:
@@ -56,14 +55,7 @@ def parse_length(value, field: str) -> float:
     evotol.errors.ValidationError
         A number without unit, an unknown unit, or not a length at all.
     """
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        if value == 0:
-            return 0.0
-        raise ValidationError(field, value, f"a length with its unit, e.g. '{value} mm' (units {sorted(LENGTH_UNITS)})")
-    m = _LENGTH.match(value) if isinstance(value, str) else None
-    if m is None or m.group(2) not in LENGTH_UNITS:
-        raise ValidationError(field, value, f"a length with its unit, e.g. '50 mm' (units {sorted(LENGTH_UNITS)})")
-    return float(m.group(1)) * LENGTH_UNITS[m.group(2)]
+    return parse_quantity(value, field, "length", require_unit=True)
 
 
 def callouts_from_tables(entries, mech, field: str = "robot.callouts") -> list[Callout]:
