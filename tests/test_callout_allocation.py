@@ -156,6 +156,17 @@ def test_the_drawing_table_in_page_terminal_csv_and_xlsx(tmp_path, capsys):
     assert {"drawing", "exact zones vs boxes"} <= set(sheets)
     html = (tmp_path / "ur5_callouts.html").read_text()
     assert "Drawing callouts" in html and "Exact zones against independent boxes" in html
+    # issue 41: the symbols drawn as inline SVG (no font needed), no "nan" cell, datums named as features
+    table = html[html.index("id='callouts'"):]
+    table = table[:table.index("</table>")]
+    assert "⌖" not in table and "⌀" not in table and 'aria-label="position"' in table and 'aria-label="diameter"' in table
+    assert ">nan<" not in html
+    assert "A = axis of upper_arm_link&#x27;s bore on shoulder_lift_joint" in table
+    # the tolerance CSV: one row per callout with its frame and datums, not one ± row per zone member
+    tol = pd.read_csv(tmp_path / "ur5_callouts_tolerances.csv")
+    assert not tol["source"].str.endswith((".end1", ".end2")).any()
+    row = tol[tol["source"] == "elbow_joint.position"].iloc[0]
+    assert row["callout"] == f"⌖ | ⌀{drawn:.1f} µm | A | B" and row["datums"].startswith("A|B (A = axis of upper_arm_link")
     cmp_ = summary["callouts"]["comparison"]
     assert cmp_["exact"]["cost"] == pytest.approx(summary["results"]["optimum"]["cost"], rel=1e-9)
 

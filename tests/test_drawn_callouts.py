@@ -46,9 +46,11 @@ def _printed_callouts(out):
     zones = {}
     for _, r in d.iterrows():
         joint = r["feature"].split(" of ")[-1]
-        m = re.search(r"(⌀|face )([0-9.]+) µm", r["callout"])
-        kind = "position" if m.group(1) == "⌀" else "axial"
-        zones.setdefault(joint, {})[kind] = (float(m.group(2)) * 1e-6, r["length (mm)"] * 1e-3)
+        m = re.fullmatch(r"(⌖|⌓) \| (⌀?)([0-9]+\.[0-9]) µm \| A \| B", r["callout"])   # ISO 1101 frame, 0.1 µm
+        assert m is not None, r["callout"]
+        kind = "position" if m.group(1) == "⌖" else "axial"
+        assert (m.group(2) == "⌀") == (kind == "position")
+        zones.setdefault(joint, {})[kind] = (float(m.group(3)) * 1e-6, r["length (mm)"] * 1e-3)
     return zones
 
 

@@ -28,7 +28,8 @@ from evotol.allocators import allocate_optimum
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.nonlinear import worst_vertex_errors
-from robots.mechanism.callout_table import refinement_warnings
+from robots.base import inner_model
+from robots.mechanism.callout_table import datum_features, refinement_warnings
 
 #: a position or orientation callout's feature length below this (m) is probably a unit slip
 MIN_FEATURE_LENGTH = 1e-3
@@ -166,7 +167,11 @@ def callout_summary(problem: ToleranceProblem, exact_result=None, **optimum) -> 
     """
     if not hasattr(problem.robot, "describe_callouts"):
         raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
-    return {"features": problem.robot.describe_callouts(), "zones": problem.robot.zones,
+    features = problem.robot.describe_callouts()
+    mech = inner_model(problem.robot, lambda m: hasattr(m, "mechanism")).mechanism
+    for f in features:                  # what the datum letters name on the part's drawing (issue 41)
+        f["datum_features"] = datum_features(mech, f["part"], f["datums"])
+    return {"features": features, "zones": problem.robot.zones,
             "comparison": zone_comparison(problem, exact_result, **optimum)}
 
 

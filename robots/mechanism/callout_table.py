@@ -166,6 +166,56 @@ def joint_seat(mech, joint: str) -> dict:
             "variable": str(getattr(f, f.joint_field))}
 
 
+def datum_features(mech, part: str, datums: str) -> str:
+    """The features a callout's datum letters stand for on its part's drawing (``docs/callouts.md``,
+    "Datum convention"): the part's own seat on the joint that carries it -- datum A its bore axis,
+    datum B its shoulder face -- or, for the base, its mounting face and locating bore. Letters a user
+    wrote other than ``A|B`` are kept as their own (evotol cannot know what they name).
+
+    Parameters
+    ----------
+    mech : robots.mechanism.mechanism.Mechanism
+        The description (its URDF, else its frames).
+    part : str
+        The part (link) that carries the seat.
+    datums : str
+        The datum letters as the drawing writes them.
+
+    Returns
+    -------
+    str
+        E.g. ``"A = axis of shoulder_link's bore on shoulder_pan_joint, B = its shoulder face"``.
+    """
+    if datums.replace(" ", "") != "A|B":
+        return f"{datums} as the drawing defines them (the joint's nominal placement in {part})"
+    carrier = _carrier(mech, part)
+    if carrier is None:
+        return f"A = {part}'s mounting face, B = its locating bore (the base frame)"
+    return f"A = axis of {part}'s bore on {carrier}, B = its shoulder face on {carrier}"
+
+
+def _carrier(mech, part: str) -> str | None:
+    """The moving joint that carries ``part`` (through fixed joints), or None at the base."""
+    if mech.urdf:
+        import xml.etree.ElementTree as ET
+
+        joints = {j.find("child").get("link"): j for j in ET.parse(mech.urdf[0]).getroot().iter("joint")
+                  if j.find("child") is not None and j.find("parent") is not None}
+        link, seen = part, set()
+        while link in joints and link not in seen:
+            seen.add(link)
+            j = joints[link]
+            if j.get("type") != "fixed":
+                return j.get("name")
+            link = j.find("parent").get("link")
+        return None
+    frames = {f.name: f for f in mech.frames}
+    f = frames.get(part)
+    while f is not None and f.joint == "fixed":
+        f = frames.get(f.antecedent)
+    return None if f is None else f.name.removesuffix("__q")
+
+
 def _urdf_parent(mech, joint: str) -> str | None:
     """The URDF parent link of ``joint`` (None without a URDF or that joint)."""
     if not mech.urdf:
