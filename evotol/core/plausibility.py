@@ -30,6 +30,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from evotol.core.axis_limits import AxisLimits
+from evotol.core.shop import unmeasurable
 from robots.base import inner_model
 
 #: usual range of requirements and tolerance bounds per unit (SI): (smallest, largest)
@@ -164,10 +165,14 @@ def result_warnings(problem, result) -> list[str]:
     -------
     list of str
         One line per component whose largest error is at least ``INACTIVE_FACTOR`` times below
-        its requirement while every free tolerance is at its upper bound; empty otherwise, and
-        always for the yield measure or in budget mode.
+        its requirement while every free tolerance is at its upper bound (never for the yield
+        measure or in budget mode); and, for a problem with ``measurable`` limits (a study file's
+        ``[shop]``, :func:`evotol.core.shop.apply_shop`), one line per source whose zone is below
+        them (:func:`evotol.core.shop.unmeasurable`).
     """
     out = []
+    if getattr(problem, "measurable", None) is not None:     # a study file's [shop] (issue 41): zones below it
+        out += unmeasurable(problem, result.t, problem.measurable)
     if problem.requirement.measure == "yield" or "budget" in (result.info or {}):
         return out
     if getattr(problem, "calibration", None) is not None:   # calibration removes the first-order error: the

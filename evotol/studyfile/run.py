@@ -32,6 +32,7 @@ from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import run_stack_study
 from evotol.summaries.drawing import drawing_precision, precision_warnings
 from evotol.studyfile.process_run import run_process_study
+from evotol.core.shop import apply_shop
 from evotol.core.plausibility import study_warnings, warn as warn_plausibility
 from evotol.summaries.user_study import study_summary
 from evotol.units.display import DisplayUnits, parse_units, problem_units
@@ -173,7 +174,7 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
         return run_process_study(spec, path, out, seed)
     if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
         return run_stack_study(spec, path, out, seed)
-    problem = load_problem(spec, base_dir=path.parent)
+    problem = apply_shop(spec, load_problem(spec, base_dir=path.parent))    # [shop] floors, measurable (issue 41)
     units = report_units(spec, problem)
     if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
         return run_given_tolerances(spec, path, out, name, problem, units, seed, t0)
