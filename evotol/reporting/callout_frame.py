@@ -5,6 +5,15 @@ to the drawing step, :func:`evotol.summaries.drawing.rounded_design`), and its s
 so that an offline page shows them in any browser without a font that has them. The drawing table
 (:mod:`evotol.reporting.callout_drawing`) and the tolerance CSV (:mod:`evotol.reporting.export`)
 both take the frame from here.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+summary : dict
+    A user study's JSON summary with callouts.
+method : str
+    A method of ``summary["results"]``.
 """
 from __future__ import annotations
 
@@ -55,10 +64,6 @@ def frame_text(summary: dict, method: str, feature: dict) -> str:
 
     Parameters
     ----------
-    summary : dict
-        A user study's JSON summary with callouts.
-    method : str
-        A method of ``summary["results"]``.
     feature : dict
         One entry of ``summary["callouts"]["features"]``.
 
@@ -99,10 +104,6 @@ def drawn_value(summary: dict, method: str, member: str) -> tuple[float, int | N
 
     Parameters
     ----------
-    summary : dict
-        A user study's JSON summary with callouts.
-    method : str
-        A method of ``summary["results"]``.
     member : str
         A member source of the callout.
 

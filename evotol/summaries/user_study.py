@@ -19,7 +19,7 @@ from evotol.summaries.pose_joints import pose_joints
 from evotol.summaries.yield_quantile import largest_quantile
 from evotol.core.problem import ToleranceProblem
 from evotol.summaries.drawing import KEYS as DRAWING_KEYS
-from evotol.summaries.drawing import rounded_design, tolerance_zone
+from evotol.summaries.drawing import nonlinear_check, rounded_design, tolerance_zone
 from evotol.summaries.nominals import nominal_notes, nominals_with_notes, source_nominals  # noqa: F401 (re-exported)
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
@@ -308,6 +308,10 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
     summary["explorer"] = explorer_data(problem, starts, seed)
     # the drawing: every method's zones rounded to the drawing precision, the drawn design re-checked
     summary["drawing"] = {m: rounded_design(problem, r.t, units, precision) for m, r in results.items()}
+    for m, r in results.items():    # each allocation on the nonlinear model too: a verdict names its model (issue 41)
+        check = nonlinear_check(problem, r.t)
+        if check and m in summary.get("results", {}):
+            summary["results"][m]["nonlinear_check"] = check
     summary["joints"] = pose_joints(problem)        # the posture used at every pose (issue 33)
     summary["units"] = study_units_block(problem)
     return summary
