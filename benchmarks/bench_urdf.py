@@ -47,7 +47,7 @@ def best(f, repeat: int = 3):
 def pin_setup(robot):
     import pinocchio as pin
 
-    from robots.mechanism.urdf import frame_id
+    from evotol.robots.mechanism.urdf import frame_id
 
     path, tip = robot.mechanism.urdf
     model = pin.buildModelFromUrdf(path)
@@ -105,7 +105,7 @@ def main(quick: bool = False) -> None:
     from evotol.verification.nonlinear import verify_nonlinear
     from evotol.allocators import allocate_optimum
     from evotol.studyfile import load_problem
-    from robots.mechanism import MechanismModel
+    from evotol.robots.mechanism import MechanismModel
 
     import tomllib
 

@@ -31,7 +31,7 @@ import numpy as np
 
 from evotol.core.axis_limits import AxisLimits
 from evotol.core.shop import unmeasurable
-from robots.base import inner_model
+from evotol.robots.base import inner_model
 
 #: usual range of requirements and tolerance bounds per unit (SI): (smallest, largest)
 USUAL_RANGE = {"m": (1e-8, 1e-2), "rad": (1e-8, 0.1)}
@@ -101,7 +101,7 @@ def _out_of_range(field: str, value: float, unit: str, what: str) -> str | None:
 
 def _normalised_requirement(problem) -> bool:
     """An assembly function's requirement is a ratio of its limits (robots/assembly/)."""
-    from robots.assembly import AssemblyFunction
+    from evotol.robots.assembly import AssemblyFunction
 
     return isinstance(problem.robot, AssemblyFunction)
 
