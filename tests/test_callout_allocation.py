@@ -168,7 +168,11 @@ def test_the_drawing_table_in_page_terminal_csv_and_xlsx(tmp_path, capsys):
     d = pd.read_csv(tmp_path / "ur5_callouts_drawing.csv")
     assert len(d) == 12 and set(d["part"]) >= {"upper_arm_link", "shoulder_link", "base_link"}
     row = d[d["feature"] == "bore axis of elbow_joint"].iloc[0]
-    assert row["value (µm)"] == pytest.approx(t["elbow_joint.position.end1"] * 1e6)
+    # the drawn value: the allocation rounded inward to the 0.1 µm drawing step (issue 41)
+    import math
+    drawn = math.floor(t["elbow_joint.position.end1"] * 1e7 + 1e-9) / 10
+    assert row["value (µm)"] == pytest.approx(drawn) and drawn <= t["elbow_joint.position.end1"] * 1e6
+    assert f"⌀{drawn:.1f} µm" in row["callout"]
     assert row["length (mm)"] == pytest.approx(50.0) and row["datums"] == "A|B"
     assert "from -25 to 25 mm along the axis (0, 1, 0)" in row["zone"]
     costs = summary["results"]["optimum"]["source_costs"]
@@ -178,6 +182,17 @@ def test_the_drawing_table_in_page_terminal_csv_and_xlsx(tmp_path, capsys):
     assert {"drawing", "exact zones vs boxes"} <= set(sheets)
     html = (tmp_path / "ur5_callouts.html").read_text()
     assert "Drawing callouts" in html and "Exact zones against independent boxes" in html
+    # issue 41: the symbols drawn as inline SVG (no font needed), no "nan" cell, datums named as features
+    table = html[html.index("id='callouts'"):]
+    table = table[:table.index("</table>")]
+    assert "⌖" not in table and "⌀" not in table and 'aria-label="position"' in table and 'aria-label="diameter"' in table
+    assert ">nan<" not in html
+    assert "A = axis of upper_arm_link&#x27;s bore on shoulder_lift_joint" in table
+    # the tolerance CSV: one row per callout with its frame and datums, not one ± row per zone member
+    tol = pd.read_csv(tmp_path / "ur5_callouts_tolerances.csv")
+    assert not tol["source"].str.endswith((".end1", ".end2")).any()
+    row = tol[tol["source"] == "elbow_joint.position"].iloc[0]
+    assert row["callout"] == f"⌖ | ⌀{drawn:.1f} µm | A | B" and row["datums"].startswith("A|B (A = axis of upper_arm_link")
     cmp_ = summary["callouts"]["comparison"]
     assert cmp_["exact"]["cost"] == pytest.approx(summary["results"]["optimum"]["cost"], rel=1e-9)
 

@@ -78,6 +78,28 @@ def test_terminal_and_page_show_the_same_cells(tmp_path):
     assert f"C_f = {cf:.4f}" in page
 
 
+def test_the_stack_reads_as_a_verdict(tmp_path):
+    """Issue 41 item 4: each stacking model passes or fails against LSL/USL, judged here from the
+    printed limits (worst case -0.0340 .. 0.1570 in against 0 .. 0.12 in: below and above; RSS and
+    modified RSS inside); a design whose worst case sits on a limit passes; the nominal and mean gap
+    are values, not lower limits; the specification's half-width is (USL − LSL)/2, not a ± about the mean."""
+    s = run_study_file(MOTOR, out=tmp_path)
+    rows, header = terminal_rows(s)
+    assert header[1:6] == ["gap (in)", "lower limit (in)", "upper limit (in)", "half-width (upper − lower)/2 (in)",
+                           "against LSL/USL"]
+    by = {r[0]: r for r in rows}
+    assert by["nominal gap (Σ a·nominal)"][1:3] == ["0.0640", ""] and by["mean gap (Σ a·zone centre)"][2] == ""
+    lsl, usl = 0.0, 0.12
+    for name in ("worst case", "RSS", "modified RSS"):
+        lo, hi = float(by[name][2]), float(by[name][3])
+        want = [w for w, bad in (("below LSL", lo < lsl), ("above USL", hi > usl)) if bad]
+        assert by[name][5] == ("fail: " + " and ".join(want) if want else "pass"), name
+    assert by["worst case"][5] == "fail: below LSL and above USL" and by["RSS"][5] == "pass"
+    assert by["specification (LSL, USL)"][4] == f"{(usl - lsl) / 2:.4f}"
+    opt = next(r for r in rows if r[0].startswith("optimum: cost"))
+    assert (opt[2], opt[3]) == ("0.0000", "0.1200") and opt[5].startswith("pass")       # on the limits: pass
+
+
 def test_units_mm_and_inch_give_the_same_stack(tmp_path):
     """The same stack written in mm (values × 25.4) gives the same SI figures."""
     spec = tomllib.loads(MOTOR.read_text())

@@ -12,21 +12,18 @@ Everything is SI inside (m, rad). Noise values given as text carry their unit
 """
 from __future__ import annotations
 
-import math
-import re
 from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
 
 from evotol.errors import ValidationError, is_integer
+from evotol.units.quantity import parse_quantity, units_of
 
 #: measured components and the rows of the error twist they take (position m, orientation rad)
 MEASURED = {"position": slice(0, 3), "orientation": slice(3, 6)}
 #: units accepted for a noise standard deviation, with their size in SI
-NOISE_UNITS = {"position": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9},
-               "orientation": {"rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6, "μrad": 1e-6,
-                               "deg": math.pi / 180, "arcsec": math.pi / (180 * 3600)}}
+NOISE_UNITS = {"position": units_of("length"), "orientation": units_of("angle")}
 OVER = ("workspace", "joints")
 INSTRUMENT = ("known", "unknown")
 IDENTIFIABLE = "identifiable"
@@ -43,10 +40,7 @@ def _quantity(field_name: str, text, component: str, require_unit: bool) -> floa
                                   f"(units {sorted(units)}); a bare number has none")
         value = float(text)
     else:
-        m = re.fullmatch(r"\s*([-+]?[0-9.]+(?:[eE][-+]?[0-9]+)?)\s*\*?\s*([^\s\d]+)\s*", str(text))
-        if not m or m.group(2) not in units:
-            raise ValidationError(field_name, text, f"a number and a unit, e.g. '20 um' (units {sorted(units)})")
-        value = float(m.group(1)) * units[m.group(2)]
+        value = parse_quantity(text, field_name, "length" if component == "position" else "angle")
     if not (np.isfinite(value) and value >= 0):
         raise ValidationError(field_name, text, "a standard deviation >= 0")
     return value
@@ -136,10 +130,11 @@ class CalibrationPlan:
     k : float
         Coverage factor of the noise in worst-case measures: the requirement keeps ``k`` sigma of
         the propagated noise (default 3).
-    linear_fraction : float
+    linear_fraction : float or str
         Calibrated sources' tolerances are bounded so that the second-order terms the linear
-        identification ignores stay below this fraction of the requirement (default 0.1;
-        :mod:`evotol.calibration.linear_range`).
+        identification ignores stay below this fraction of the requirement, in (0, 1) (default 0.1;
+        or a percentage ``"10 %"``; :mod:`evotol.calibration.linear_range`); in Python a value above
+        100 (e.g. 1e8) leaves the sources uncapped.
     compensation_range : mapping of str to float, optional
         Source pattern -> the largest correction the controller applies (m or rad); a calibrated
         source's tolerance never exceeds it.
@@ -151,7 +146,8 @@ class CalibrationPlan:
     evotol.errors.ValidationError
         Not exactly one of ``joints``, ``poses``, ``count``; a count below 1; an unknown
         ``over``, ``measure`` or ``instrument``; a bad noise (:func:`parse_noise`); ``k`` or
-        ``linear_fraction`` not positive; a negative compensation range; ``identify`` empty.
+        ``linear_fraction`` not positive, or ``linear_fraction`` of 1 or more (in a study file;
+        in Python from 1 to 100: a percentage written as a number); a negative compensation range; ``identify`` empty.
     """
 
     noise: object
@@ -202,10 +198,25 @@ class CalibrationPlan:
             if not ident or not all(isinstance(p, str) and p for p in ident):
                 raise ValidationError("calibration.identify", self.identify, f"source name patterns or {IDENTIFIABLE!r}")
         object.__setattr__(self, "identify", ident)
+        lf = self.linear_fraction
+        if isinstance(lf, str) and lf.strip().endswith("%"):        # "10 %": the fraction written as a percentage
+            try:
+                object.__setattr__(self, "linear_fraction", float(lf.strip()[:-1]) / 100)
+            except ValueError:
+                raise ValidationError("calibration.linear_fraction", lf, "a fraction in (0, 1) or a percentage such as "
+                                                                         "'10 %'") from None
         for name in ("k", "linear_fraction"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (np.isfinite(v) and v > 0):
                 raise ValidationError(f"calibration.{name}", v, "a positive number")
+        # a share of the requirement: 10 meant as 10 % is the slip; in Python a huge value (1e8) turns the cap off
+        if self.linear_fraction >= 1 and (self.require_units or self.linear_fraction <= 100):
+            hint = "" if isinstance(lf, str) else f" (if {lf:g} was meant in %, write {lf / 100:g} or '{lf:g} %')"
+            raise ValidationError("calibration.linear_fraction", lf, "a fraction of the requirement in (0, 1), e.g. 0.1 "
+                                  "or '10 %'" + hint)
+        object.__setattr__(self, "compensation_range", {
+            pat: parse_quantity(v, f"calibration.compensation_range.{pat}") if isinstance(v, str) else v
+            for pat, v in dict(self.compensation_range).items()})
         for pat, v in dict(self.compensation_range).items():
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (np.isfinite(v) and v > 0):
                 raise ValidationError(f"calibration.compensation_range.{pat}", v, "a positive range (m or rad)")

@@ -6,9 +6,10 @@ A study that runs to a "certified optimal" answer can still answer the wrong que
 the requirement never binds. These checks never stop a run; each gives **one line** with the
 numbers and a units hint:
 
-* **outside the usual range** (:data:`USUAL_RANGE`, SI): a position requirement above 10 mm or
-  below 10 nm, an orientation requirement above 0.1 rad (5.7°) or below 1e-8 rad; a tolerance
-  bound (lower or upper) above 10 mm or 0.1 rad (a tiny lower bound only allows more). An
+* **outside the usual range** (:data:`USUAL_RANGE`, SI): a position requirement (or a per-axis
+  limit, named by its axis: ``requirement.position.y``) above 10 mm or below 10 nm, an orientation
+  requirement above 0.1 rad (5.7°) or below 1e-8 rad; a tolerance bound (lower or upper) or a given
+  tolerance (``fixed``, ``locked``) above 10 mm or 0.1 rad (a tiny lower bound only allows more). An
   assembly function's requirement is a ratio of its limits (``position = 1``) and is not checked;
 * **inactive requirement**: every free tolerance at its upper bound while the largest error is at
   least :data:`INACTIVE_FACTOR` (10) times below the requirement -- the bounds decide the design,
@@ -27,6 +28,9 @@ import warnings
 from contextlib import contextmanager
 
 import numpy as np
+
+from evotol.core.axis_limits import AxisLimits
+from evotol.core.shop import unmeasurable
 
 #: usual range of requirements and tolerance bounds per unit (SI): (smallest, largest)
 USUAL_RANGE = {"m": (1e-8, 1e-2), "rad": (1e-8, 0.1)}
@@ -78,9 +82,9 @@ def units_hint(value: float, unit: str) -> str:
         The hint, with ``value`` read as mm (times 1e-3) or deg (in rad); ``""`` for another unit.
     """
     if unit == "m":
-        return f"if {value:g} was meant in mm, write {value * 1e-3:.6g}"
+        return f"if {value:g} was meant in mm, write {value * 1e-3:.6g} or '{value:g} mm'"
     if unit == "rad":
-        return f"if {value:g} was meant in deg, write {math.radians(value):.6g}"
+        return f"if {value:g} was meant in deg, write {math.radians(value):.6g} or '{value:g} deg'"
     return ""
 
 
@@ -115,12 +119,26 @@ def problem_warnings(problem) -> list[str]:
         One line per finding; empty when every value is in its usual range.
     """
     out = []
+    axis = problem.robot.part_of("axis_limits")
+    per_axis = {c: getattr(axis.limits, c) for c in ("position", "orientation")} if axis is not None else {}
     if not _normalised_requirement(problem):
         for comp, bound in problem.components:
+            if per_axis.get(comp):          # per-axis limits: each limit is checked under its own key
+                for ax, v in per_axis[comp].items():
+                    line = _out_of_range(f"requirement.{comp}.{ax}", float(v), _COMPONENT_UNIT[comp],
+                                         f"a per-axis {comp} limit")
+                    out += [line] if line else []
+                continue
             line = _out_of_range(f"requirement.{comp}", bound, _COMPONENT_UNIT[comp], f"a {comp} requirement")
             if line:
                 out.append(line)
     units = problem.units()
+    for name, unit, free in zip(problem.names, units, problem.free):
+        tol = problem.tolerances[name]
+        given = tol.locked if tol.locked is not None else (tol.upper if tol.is_fixed else None)
+        if not free and given is not None and unit in USUAL_RANGE and float(given) > USUAL_RANGE[unit][1]:
+            key = "fixed" if tol.is_fixed else "locked"
+            out.append(_out_of_range(f"sources.{name}.{key}", float(given), unit, f"a tolerance in {unit}"))
     for which, values in (("upper", problem.upper), ("lower", problem.lower)):
         by_value = {}
         for name, unit, v, free in zip(problem.names, units, values, problem.free):
@@ -146,10 +164,14 @@ def result_warnings(problem, result) -> list[str]:
     -------
     list of str
         One line per component whose largest error is at least ``INACTIVE_FACTOR`` times below
-        its requirement while every free tolerance is at its upper bound; empty otherwise, and
-        always for the yield measure or in budget mode.
+        its requirement while every free tolerance is at its upper bound (never for the yield
+        measure or in budget mode); and, for a problem with ``measurable`` limits (a study file's
+        ``[shop]``, :func:`evotol.core.shop.apply_shop`), one line per source whose zone is below
+        them (:func:`evotol.core.shop.unmeasurable`).
     """
     out = []
+    if getattr(problem, "measurable", None) is not None:     # a study file's [shop] (issue 41): zones below it
+        out += unmeasurable(problem, result.t, problem.measurable)
     if problem.requirement.measure == "yield" or "budget" in (result.info or {}):
         return out
     if getattr(problem, "calibration", None) is not None:   # calibration removes the first-order error: the

@@ -9,6 +9,7 @@ import numpy as np
 from evotol.measures import statistical
 from evotol.measures import registry as measure_registry
 from evotol.errors import ValidationError, is_integer, is_real
+from evotol.units.quantity import parse_quantity
 
 
 @dataclass(frozen=True)
@@ -17,10 +18,12 @@ class Requirement:
 
     Parameters
     ----------
-    position : float or None
-        Bound on the position error ``|δp|`` (m), or None.
-    orientation : float or None
-        Bound on the orientation error ``|δθ|`` (rad), or None. At least one of the two is given.
+    position : float or str or None
+        Bound on the position error ``|δp|`` (m, or a string with its unit such as ``"0.5 mm"``,
+        ``docs/units.md``), or None.
+    orientation : float or str or None
+        Bound on the orientation error ``|δθ|`` (rad, or ``"0.1 mrad"``, ``"30 arcsec"``), or None.
+        At least one of the two is given.
     measure : str
         The name of a registered measure (:mod:`evotol.measures.registry`); built in:
         ``"worst_case"`` (exact for the linear model, see :mod:`evotol.measures.linear`), ``"rss"`` (root
@@ -67,6 +70,14 @@ class Requirement:
     probability: float | None = None
     ppm: float | None = None
     model: str = "linear"
+
+    def __post_init__(self):
+        # a bound written with its unit ("0.5 mm", "0.5*mm", "0.1 mrad": the one unit grammar,
+        # evotol.units.quantity) is read to SI here, in Python as in a study file
+        for f, kind in (("position", "length"), ("orientation", "angle")):
+            v = getattr(self, f)
+            if isinstance(v, str):
+                object.__setattr__(self, f, parse_quantity(v, f"requirement.{f}", kind))
 
     @property
     def required_yield(self) -> float:

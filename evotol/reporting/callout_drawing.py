@@ -9,6 +9,7 @@ independent-box rule. The HTML page, the terminal and the CSV/XLSX export all sh
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pandas as pd
@@ -16,11 +17,19 @@ import pandas as pd
 from evotol._runtime.atomic_files import atomic_path
 
 from evotol.errors import ValidationError
+from evotol.reporting.drawing import drawing_check_text
 from evotol.reporting.export import chosen_method
+from evotol.reporting.callout_frame import AXIAL_TILT, drawn_value, frame_text, micrometres, with_svg_symbols
+from evotol.reporting.html import table_html
 
 
 def _method(summary: dict, method: str | None) -> str:
     return method or chosen_method(summary)
+
+
+def _blank_nan(rows: list) -> list:
+    """Rows with NaN cells (a missing value in a numeric column) as empty cells."""
+    return [["" if isinstance(v, float) and math.isnan(v) else v for v in r] for r in rows]
 
 
 def drawing_table(summary: dict, method: str | None = None) -> pd.DataFrame:
@@ -36,8 +45,11 @@ def drawing_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        Columns: part, feature, callout (symbol and value), value (µm), length (mm), zone
-        (placement along the axis), datums, cost share (%), contribution (%) to the first
+        Columns: part, feature, callout (the feature control frame ``⌖ | ⌀3.0 µm | A | B``, the
+        face as a profile of a surface ``⌓ | 62.3 µm | A | B``: the design rounded inward to the
+        drawing precision and re-checked, :func:`drawn_value`), value (µm), length (mm), zone
+        (placement along the axis), datums, datum features (what the letters name on the part),
+        cost share (%), contribution (%) to the first
         constrained component's error at the worst pose (the members' shares summed).
 
     Raises
@@ -59,20 +71,22 @@ def drawing_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     total = sum(costs.values())
     rows = []
     for f in summary["callouts"]["features"]:
-        t = r["tolerances"][f["members"][0]]
+        t, um = drawn_value(summary, method, f["members"][0])
         lo, hi = f["ends"]
         axis = "(" + ", ".join(f"{v:g}" for v in f["axis"]) + ")"
         if f["kind"] == "axial":
             feature = f"shoulder face of {f['joint']}"
-            zone = f"±{t * 1e6 / 2:.3g} µm along the axis {axis}, at the joint origin"
-            value = f"{f['symbol']} {t * 1e6:.3g} µm"
+            zone = (f"±{micrometres(t / 2, None if um is None else um + 1)} µm along the axis {axis}, at the joint origin "
+                    f"(profile of the face's surface; {AXIAL_TILT})")
+            frame = frame_text(summary, method, f)
         else:
             feature = f"{'guide' if f.get('joint_type') == 'prismatic' else 'bore'} axis of {f['joint']}"
             zone = f"from {lo * 1e3:g} to {hi * 1e3:g} mm along the axis {axis} from the joint origin"
-            value = f"{f['symbol']}{t * 1e6:.3g} µm"
+            frame = frame_text(summary, method, f)
         contrib = [share[m] for m in f["members"] if share.get(m) is not None]
-        rows.append({"part": f["part"], "feature": feature, "callout": f"{value} | {f['datums']}",
-                     "value (µm)": t * 1e6, "length (mm)": f["length"] * 1e3, "zone": zone, "datums": f["datums"],
+        rows.append({"part": f["part"], "feature": feature, "callout": frame,
+                     "value (µm)": t * 1e6 if um is None else round(t * 1e6, um), "length (mm)": f["length"] * 1e3,
+                     "zone": zone, "datums": f["datums"], "datum features": f.get("datum_features", ""),
                      "cost share (%)": 100 * sum(costs.get(m, 0.0) for m in f["members"]) / total if total else 0.0,
                      f"contribution to the {comp} error at the worst pose (%)": sum(contrib) if contrib else None})
     return pd.DataFrame(rows).sort_values("part", kind="stable").reset_index(drop=True)
@@ -134,6 +148,12 @@ def terminal_lines(summary: dict) -> list[str]:
     for _, r in d.iterrows():
         out.append(f"  {r['part']:<22s} {r['feature']:<36s} {r['callout']:<24s} L {r['length (mm)']:g} mm  "
                    f"cost {r['cost share (%)']:.3g} %")
+    for part, text in dict(zip(d["part"], d["datum features"])).items():
+        if text:
+            out.append(f"  datums on {part}: {text}")
+    check = (summary.get("drawing") or {}).get(_method(summary, None))
+    if check:
+        out.append(f"  as drawn: {drawing_check_text(check)}")
     cmp_ = summary["callouts"].get("comparison")
     if cmp_:
         out.append(f"  exact zones cost {cmp_['exact']['cost']:.6g}, independent boxes {cmp_['boxes']['cost']:.6g}: "
@@ -157,7 +177,11 @@ def callout_sections(rep, summary: dict) -> None:
              "the zone's value in µm, the feature length and where the zone sits on the joint axis (from the joint's "
              "origin, the datum frame of docs/callouts.md), the datums, and each callout's share of the cost and of the "
              "error at the worst pose.")
-    rep.table(d.values.tolist(), list(d.columns), table_id="callouts")
+    rep.html(with_svg_symbols(table_html(_blank_nan(d.values.tolist()), list(d.columns), table_id="callouts")))
+    check = (summary.get("drawing") or {}).get(_method(summary, None))
+    if check:
+        rep.text(f"These values, as drawn: {drawing_check_text(check)}.", note=not (check["meets"] and
+                                                                                    check.get("meets_nonlinear", True)))
     if summary["callouts"].get("comparison"):
         c = comparison_table(summary)
         cmp_ = summary["callouts"]["comparison"]
@@ -167,7 +191,7 @@ def callout_sections(rep, summary: dict) -> None:
                  f"{cmp_['boxes']['cost']:.6g}: the exact zones save {100 * cmp_['saving']:.3g} %. The boxes contain "
                  "the zone, so the box design also holds under the exact zones, with the margin shown in the last "
                  "error row; the nonlinear rows push each pose's worst-case vertex through the nonlinear model.")
-        rep.table(c.values.tolist(), list(c.columns), table_id="zones")
+        rep.table(_blank_nan(c.values.tolist()), list(c.columns), table_id="zones")
 
 
 

@@ -67,9 +67,41 @@ def drawing_check_text(check: dict) -> str:
         or "no rounding"
     if check["vanished"]:
         return f"rounded to {steps}: the zones of {', '.join(check['vanished'])} vanish; state a finer drawing precision"
-    verdict = "meets the requirement" if check["meets"] else "misses the requirement"
     return (f"rounded inward to {steps} (fixed sources outward): the drawn zones give normalised error "
-            f"{check['normalised_error']:.6g}, {verdict} (cost {check['cost']:.6g})")
+            f"{check['normalised_error']:.6g}, {verdict_text(check)} (cost {check['cost']:.6g})")
+
+
+def _excess(v: float, comp: str) -> str:
+    """An error beyond the requirement in µm or µrad (``0.07 µm``)."""
+    return f"{number(v * 1e6, 2)} {'µm' if comp == 'position' else 'µrad'}"
+
+
+def verdict_text(check: dict) -> str:
+    """A design's verdict naming the model of each verdict when the first-order and the nonlinear
+    model disagree (``"meets the requirement (first-order model); 0.07 µm over on the nonlinear
+    model"``), one verdict when they agree or when no nonlinear check was made.
+
+    Parameters
+    ----------
+    check : dict
+        ``meets`` (first-order model) and, when the nonlinear check was made, ``meets_nonlinear``
+        and ``over_nonlinear`` (component -> excess, SI), as
+        :func:`evotol.summaries.drawing.rounded_design` gives them.
+
+    Returns
+    -------
+    str
+        The verdict.
+    """
+    first = "meets the requirement" if check["meets"] else "misses the requirement"
+    if "meets_nonlinear" not in check:
+        return first
+    if check["meets_nonlinear"] == check["meets"]:
+        return f"{first} (first-order and nonlinear models)"
+    if check["meets"]:
+        over = ", ".join(f"{_excess(v, c)} over ({c})" for c, v in check["over_nonlinear"].items() if v > 0)
+        return f"{first} (first-order model); {over} on the nonlinear model"
+    return f"{first} (first-order model); meets it on the nonlinear model (worst-case vertex)"
 
 
 def tolerance_rows(summary: dict) -> tuple[list[list], list[str]]:

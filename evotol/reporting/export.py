@@ -18,6 +18,7 @@ from evotol._runtime.atomic_files import atomic_path
 
 from evotol.units.display import DisplayUnits
 from evotol.errors import ValidationError
+from evotol.reporting.callout_frame import frame_text
 from evotol.reporting.drawing import drawing_check_text
 from evotol.summaries.drawing import clean, tolerance_zone
 
@@ -74,7 +75,9 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
         process, cost share (%), contribution (%) to the first constrained component's error at
         the worst pose, effect (``"none"`` for a source that cannot move the constrained errors,
         summary ``sources[].no_effect``; its cost is in the cost share, and stated in the
-        ``about`` sheet by :func:`no_effect_cost`).
+        ``about`` sheet by :func:`no_effect_cost`), callout and datums: a drawing callout is one
+        row (named by the callout, its feature control frame with the drawn value and its datums,
+        :func:`evotol.reporting.callout_frame.frame_text`) instead of one per zone member.
 
     Raises
     ------
@@ -93,9 +96,15 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
     total = sum(costs.values())
     processes = r.get("processes", {})
     drawn = (summary.get("drawing") or {}).get(method, {}).get("zones", {})
+    callout_of = {m: f for f in (summary.get("callouts") or {}).get("features", []) for m in f["members"]}
     rows = []
     for s in summary["sources"]:
         n, k = s["name"], u.factor(s["unit"])
+        f = callout_of.get(n)
+        if f is not None:       # a drawing callout: one row with its frame and datums, not one per zone member
+            if n == f["members"][0]:
+                rows.append(_callout_row(summary, method, f, costs, total, share, comp))
+            continue
         z = tolerance_zone(s, r["tolerances"][n])          # the page's zone (one function)
         dz = drawn.get(n, {})
         pc = share.get(n)
@@ -110,8 +119,23 @@ def tolerance_table(summary: dict, method: str | None = None) -> pd.DataFrame:
                      "process": processes.get(n, "fixed (bought in)" if s.get("fixed") else ""),
                      "cost share (%)": clean(100 * costs.get(n, 0.0) / total) if total else 0.0,
                      f"contribution to the {comp} error at the worst pose (%)": None if pc is None else clean(pc),
-                     "effect": "none" if s.get("no_effect") else ""})        # issue 33: marked in every table
+                     "effect": "none" if s.get("no_effect") else "", "callout": "", "datums": ""})   # issue 33
     return pd.DataFrame(rows)
+
+
+def _callout_row(summary: dict, method: str, f: dict, costs: dict, total: float, share: dict, comp: str) -> dict:
+    """The tolerance table's row of one drawing callout: its frame (``⌖ | ⌀3.0 µm | A | B``, the drawn
+    value) and datums in place of the ± of its zone members (issue 41: a ⌀ is not a ± on a coordinate)."""
+    members = f["members"]
+    pc = [share[m] for m in members if share.get(m) is not None]
+    datums = f["datums"] + (f" ({f['datum_features']})" if f.get("datum_features") else "")
+    return {"source": f["name"], "group": "drawing callout", "unit": "µm", "nominal": None,
+            "nominal is": f"the joint's nominal placement in {f['part']}", "± tolerance": None,
+            "lower deviation": None, "upper deviation": None, "drawing lower deviation": None,
+            "drawing upper deviation": None, "process": "",
+            "cost share (%)": clean(100 * sum(costs.get(m, 0.0) for m in members) / total) if total else 0.0,
+            f"contribution to the {comp} error at the worst pose (%)": clean(sum(pc)) if pc else None,
+            "effect": "", "callout": frame_text(summary, method, f), "datums": datums}
 
 
 def no_effect_cost(summary: dict, method: str) -> tuple[list[str], float, float]:

@@ -98,8 +98,41 @@ def _formatters(summary: dict):
     return unit, (lambda v: length_text(v, unit, prec)), (lambda v: deviation_text(v, unit, prec))
 
 
+def limits_verdict(lim, spec, rtol: float = 1e-9) -> str:
+    """Pass or fail of a pair of gap limits against the specification (a limit on the spec passes).
+
+    Parameters
+    ----------
+    lim : (float, float)
+        The figure's lower and upper limit of the gap (SI).
+    spec : (float or None, float or None)
+        LSL and USL (SI; None: no such limit).
+    rtol : float
+        Relative slack of "on the limit" (round-off), of the specification's width or the limit.
+
+    Returns
+    -------
+    str
+        ``"pass"``, ``"fail: below LSL by x"`` / ``"above USL by x"`` (SI, formatted by the
+        caller's unit elsewhere: here in the figure's own numbers), or ``""`` without limits.
+    """
+    lsl, usl = spec
+    if lsl is None and usl is None:
+        return ""
+    scale = abs(usl - lsl) if lsl is not None and usl is not None else max(abs(v) for v in (lsl, usl) if v is not None)
+    slack = rtol * max(scale, 1e-300)
+    lo, hi = lim
+    bad = []
+    if lsl is not None and lo < lsl - slack:
+        bad.append("below LSL")
+    if usl is not None and hi > usl + slack:
+        bad.append("above USL")
+    return "fail: " + " and ".join(bad) if bad else "pass"
+
+
 def gap_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
-    """The gap's figures by method: nominal, mean, worst case, RSS, MRSS and the specification.
+    """The gap's figures by method: nominal, mean, worst case, RSS, MRSS and the specification,
+    each stacking model with its verdict against the specification.
 
     Parameters
     ----------
@@ -109,27 +142,32 @@ def gap_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     Returns
     -------
     rows : list of list of str
-        Per figure: its name, lower and upper value, ± about the mean (display unit, rounded to
-        the drawing precision) and its convention.
+        Per figure: its name, its value (the nominal and the mean gap), its lower and upper limit,
+        its half-width (upper − lower)/2 (the specification's: (USL − LSL)/2, display unit, rounded
+        to the drawing precision), pass/fail against LSL and USL, and its convention.
     header : list of str
         The column titles.
     """
     st = summary["stack"]
     unit, f, _ = _formatters(summary)
+    spec = tuple(st["limits"])
 
-    def limits(label, lim, note):
+    def limits(label, lim, note, judge=True):
         lo, hi = lim
         both = lo is not None and hi is not None
-        return [label, f(lo), f(hi), f(0.5 * (hi - lo)) if both else "–", note]
+        return [label, "", f(lo), f(hi), f(0.5 * (hi - lo)) if both else "–",
+                limits_verdict(lim, spec) if judge else "", note]
 
     mr = st["mrss"]
-    rows = [["nominal gap (Σ a·nominal)", f(st["nominal"]), "", "", ""],
-            ["mean gap (Σ a·zone centre)", f(st["mean"]), "", "", "one-sided and unequal tolerances enter by their zone centre"],
+    rows = [["nominal gap (Σ a·nominal)", f(st["nominal"]), "", "", "", "", ""],
+            ["mean gap (Σ a·zone centre)", f(st["mean"]), "", "", "", "",
+             "one-sided and unequal tolerances enter by their zone centre"],
             limits("worst case", st["worst_case"]["limits"], "Σ |a|·h: the extreme corners of the tolerance box"),
             limits("RSS", st["rss"]["limits"], st["rss"]["convention"]),
             limits("modified RSS", mr["limits"], f"C_f = {mr['factor']:.4f} (n = {mr['n']}): {mr['convention']}"),
-            limits("specification (LSL, USL)", st["limits"], "the gap's limits")]
-    return rows, ["", f"lower ({unit})", f"upper ({unit})", f"± about the mean ({unit})", "convention"]
+            limits("specification (LSL, USL)", st["limits"], "the gap's limits; half-width (USL − LSL)/2", judge=False)]
+    return rows, ["", f"gap ({unit})", f"lower limit ({unit})", f"upper limit ({unit})",
+                  f"half-width (upper − lower)/2 ({unit})", "against LSL/USL", "convention"]
 
 
 def capability_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
@@ -176,19 +214,22 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     -------
     rows : list of list of str
         Figure rows (:func:`gap_rows` without the convention), model rows and, for an
-        allocation, each method's cost, allocated worst-case limits and status.
+        allocation, each method's cost, allocated worst-case limits and verdict (pass/fail and
+        the method's status).
     header : list of str
         The column titles.
     """
     rows, header = gap_rows(summary)
-    out = [r[:4] for r in rows]
+    out = [r[:6] for r in rows]
     cap, _ = capability_rows(summary)
-    out += [[f"{r[0]}: Cp {r[4]}, Cpk {r[5]}", f"below {r[6]}", f"above {r[7]}", ""] for r in cap]
+    out += [[f"{r[0]}: Cp {r[4]}, Cpk {r[5]}", "", f"below {r[6]}", f"above {r[7]}", "", ""] for r in cap]
     _, f, _ = _formatters(summary)
+    spec = tuple(summary["stack"]["limits"])
     for m, r in (summary.get("allocation") or {}).get("methods", {}).items():    # the page's allocation figures
         lo, hi = r["stack"]["worst_case"]["limits"]
-        out.append([f"{m}: cost {r['cost']:.6g}, worst case of the allocated design", f(lo), f(hi), r["status"]])
-    return out, header[:4]
+        out.append([f"{m}: cost {r['cost']:.6g}, worst case of the allocated design", "", f(lo), f(hi), "",
+                    f"{limits_verdict((lo, hi), spec)} ({r['status']})"])
+    return out, header[:6]
 
 
 def allocation_rows(summary: dict) -> tuple[list[list[str]], list[str]]:

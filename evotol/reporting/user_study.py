@@ -31,7 +31,7 @@ from evotol.reporting.iso9283 import iso9283_section
 from evotol.reporting.joints_section import joints_section
 from evotol.reporting.explorer import explorer_section
 from evotol.reporting.html import Report
-from evotol.reporting.drawing import drawing_check_text, nominal_line, tolerance_rows, zone_text
+from evotol.reporting.drawing import drawing_check_text, nominal_line, tolerance_rows, verdict_text, zone_text
 from evotol.summaries.drawing import tolerance_zone
 
 #: marker of each method on the NSGA-II plot (symbol, colour)
@@ -140,7 +140,7 @@ def top_table_rows(summary: dict) -> tuple[list[list], list[str]]:
                         else "–") + (f"; Monte Carlo: {yield_cell(mc['yield'])}" if "yield" in mc else ""))
         mc = summary["monte_carlo"].get(m)
         row += [f"#{r['worst_pose'][comp0]}: {pose_cells(summary, r['worst_pose_coordinates'][comp0])}",
-                r.get("status", ""), r.get("verdict") or _certificate_cell(r),
+                status_text(r), r.get("verdict") or _certificate_cell(r),
                 f"{mc['max_exceed_rate']:.2%}" if mc else "not run"]
         rows.append(row)
     for key, label in (("cheapest_feasible", "NSGA-II cheapest feasible"), ("knee", "NSGA-II knee")):
@@ -203,7 +203,7 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
         mc = (summary.get("monte_carlo") or {}).get(m)
         rows.append([m, f"{r['cost']:.6g}"] + [number(u.convert(_shown_error(r, c), summary["error_units"][c]))
                                                for c in comps]
-                    + [f"{mc['max_exceed_rate']:.2%}" if mc else "", r.get("status", "")])
+                    + [f"{mc['max_exceed_rate']:.2%}" if mc else "", status_text(r)])
     for key, label in (("cheapest_feasible", "nsga2 cheapest feasible"), ("knee", "nsga2 knee")):
         p = summary.get("nsga2", {}).get(key)
         if p is not None:
@@ -214,6 +214,28 @@ def terminal_rows(summary: dict) -> tuple[list[list[str]], list[str]]:
     if "pareto_front" in summary and "cheapest_feasible" not in summary.get("nsga2", {}):
         rows.append(["nsga2", "", *[""] * len(comps), "", "no front member meets the requirement"])
     return rows, header
+
+
+def status_text(r: dict) -> str:
+    """A method's status, naming the model of each verdict when the first-order model and the
+    nonlinear check (``r["nonlinear_check"]``, :func:`evotol.summaries.drawing.nonlinear_check`)
+    disagree: ``"meets the requirement (first-order model); 0.070 µm over (position) on the
+    nonlinear model"``.
+
+    Parameters
+    ----------
+    r : dict
+        One method's entry of a study summary's ``results``.
+
+    Returns
+    -------
+    str
+        The status (unchanged when the models agree or no nonlinear check was made).
+    """
+    status, check = r.get("status", ""), r.get("nonlinear_check")
+    if not check or check["meets_nonlinear"] == bool(r.get("feasible")):
+        return status
+    return f"{status} (first-order model); " + verdict_text({"meets": bool(r.get("feasible")), **check}).split("; ", 1)[1]
 
 
 def _dist_text(d: dict) -> str:

@@ -28,7 +28,10 @@ from evotol.allocators import allocate_optimum
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.nonlinear import worst_vertex_errors
-from evotol.robots.mechanism.callout_table import refinement_warnings
+from evotol.robots.mechanism.callout_table import datum_features, refinement_warnings
+
+#: a position or orientation callout's feature length below this (m) is probably a unit slip
+MIN_FEATURE_LENGTH = 1e-3
 
 
 def variable_values(problem: ToleranceProblem, t) -> dict:
@@ -169,13 +172,19 @@ def callout_summary(problem: ToleranceProblem, exact_result=None, boxes_result=N
     callouts = problem.robot.part_of("callouts")
     if callouts is None:
         raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
-    return {"features": callouts.describe_callouts(), "zones": callouts.zones,
+    features = callouts.describe_callouts()
+    mech = problem.robot.described.mechanism
+    for f in features:                  # what the datum letters name on the part's drawing (issue 41)
+        f["datum_features"] = datum_features(mech, f["part"], f["datums"])
+    return {"features": features, "zones": callouts.zones,
             "comparison": zone_comparison(problem, exact_result, boxes_result, **optimum)}
 
 
 def callout_warnings(problem: ToleranceProblem) -> list[str]:
-    """One line per seat whose orientation callout is always tighter than the position callout it
-    refines (it binds the tilt; the pair is modelled by its safe outer set, ``docs/callouts.md``).
+    """One line per position or orientation callout over a feature shorter than
+    :data:`MIN_FEATURE_LENGTH` (1 mm: ``"50 um"`` meant ``"50 mm"``), and per seat whose orientation
+    callout is always tighter than the position callout it refines (it binds the tilt; the pair is
+    modelled by its safe outer set, ``docs/callouts.md``).
 
     Parameters
     ----------
@@ -195,4 +204,9 @@ def callout_warnings(problem: ToleranceProblem) -> list[str]:
         j = problem.names.index(robot.tied_sources.get(c.name, (c.name,))[0])
         locked = problem.locked_values[j]
         lower[c.name], upper[c.name] = (locked, locked) if np.isfinite(locked) else (problem.lower[j], problem.upper[j])
-    return refinement_warnings(robot.callouts, lower, upper)
+    short = [f"robot.callouts {c.name}: length = {c.length * 1e3:g} mm is shorter than a bearing seat or a guide is "
+             f"(under {MIN_FEATURE_LENGTH * 1e3:g} mm); a zone ⌀t over it tilts the axis by up to t/L (the smallest "
+             f"⌀{lower[c.name] * 1e6:g} µm: {lower[c.name] / c.length:.3g} rad), so the requirement may be out of "
+             f"reach; if '{c.length * 1e6:g} um' was meant in mm, write '{c.length * 1e6:g} mm'"
+             for c in robot.callouts if c.kind != "axial" and 0 < c.length < MIN_FEATURE_LENGTH]
+    return short + refinement_warnings(robot.callouts, lower, upper)

@@ -12,7 +12,7 @@ from evotol.errors import ValidationError
 
 TOP_KEYS = ("name", "seed", "robot", "poses", "requirement", "bounds", "cost", "sources", "shared", "shared_cost",
             "methods", "verify", "distribution", "sigma_k", "clearances", "quality_loss", "processes", "report", "calibration",
-            "iso9283")
+            "iso9283", "shop")
 REPORT_KEYS = ("units", "precision")
 POSE_KEYS = ("grid", "latin_hypercube", "list", "refine", "joints", "drop_unreachable")
 REFINE_KEYS = ("grid", "local", "add", "max_rounds", "tol", "n_final", "n_local")

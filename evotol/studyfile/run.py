@@ -36,9 +36,10 @@ from evotol.studyfile.given_tolerances import run_given_tolerances
 from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
 from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import run_stack_study
-from evotol.summaries.drawing import drawing_precision
+from evotol.summaries.drawing import drawing_precision, precision_warnings
 from evotol.studyfile.process_run import run_process_study
-from evotol.core.plausibility import study_warnings
+from evotol.core.shop import apply_shop
+from evotol.core.plausibility import study_warnings, warn as warn_plausibility
 from evotol.summaries.user_study import study_summary
 from evotol.units.display import DisplayUnits, parse_units, problem_units
 from evotol.verification.montecarlo import verify
@@ -185,12 +186,15 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
         return run_process_study(spec, path, out, seed)
     if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
         return run_stack_study(spec, path, out, seed, keep_going)
-    problem = load_problem(spec, base_dir=path.parent)
+    problem = apply_shop(spec, load_problem(spec, base_dir=path.parent))    # [shop] floors, measurable (issue 41)
     iso = read_iso9283(spec, problem)       # ISO 9283 AP/RP and random sources, checked before work (issue 44)
     units = report_units(spec, problem)
     if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
         return run_given_tolerances(spec, path, out, name, problem, units, seed, t0)
     precision = drawing_precision(spec.get("report", {}).get("precision"), units)   # [report] precision (issue 34)
+    coarse = precision_warnings(problem, units, precision)      # a step coarser than the zones (issue 41)
+    problem.warnings = [*problem.warnings, *coarse]
+    warn_plausibility(coarse)
     methods = study_methods(spec, problem)
     vspec = spec.get("verify", {"n_samples": 1000})
     check_methods(spec, problem, methods)           # every table checked before the first method runs

@@ -11,6 +11,8 @@ from evotol._runtime.keyword_checks import unknown_key_message
 from evotol.measures.statistical.distributions import Distribution
 from evotol.core.tolerance import Tolerance
 from evotol.errors import ValidationError
+from evotol.units.quantity import parse_quantity
+from evotol.core.shop import floors_of
 from evotol.measures import clearances
 from evotol.studyfile.keys import BOUND_KEYS, GROUP_BOUND_KEYS
 from evotol.robots.base import RobotErrorModel
@@ -71,11 +73,17 @@ def read_tolerances(spec: dict, sources, owner: str) -> dict[str, Tolerance]:
     if unknown:
         u = sorted(unknown)[0]
         raise ValidationError(f"sources.{u}", u, f"a source of {owner}: " + unknown_key_message(u, names))
-    return {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec) for s in sources}
+    floors = floors_of(sources, spec["shop"]["floors"]) if "floors" in spec.get("shop", {}) else {}   # issue 41
+    return {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec, floors.get(s.name, (0.0,))[0])
+            for s in sources}
 
 
-def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict) -> Tolerance:
-    """One source's :class:`Tolerance` from its ``[sources.NAME]`` table and the defaults."""
+def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict, floor: float = 0.0) -> Tolerance:
+    """One source's :class:`Tolerance` from its ``[sources.NAME]`` table and the defaults; ``floor``
+    (m or rad, ``[shop] floors``) raises its lower bound."""
+    kind = "angle" if s.unit == "rad" else "length"
+    o = {k: parse_quantity(v, f"sources.{s.name}.{k}", kind) if k in ("fixed", "locked", "lower", "upper", "offset")
+         and isinstance(v, str) else v for k, v in o.items()}        # "50 um", "0.05*mm": docs/units.md
     shape = {k: o.get(k, bounds.get(k)) for k in ("cost_width", "contains_nominal") if k in o or k in bounds}
     shape.update({k: float(o[k]) if isinstance(o[k], (int, float)) and not isinstance(o[k], bool) else o[k]
                   for k in ("offset", "minus", "plus") if k in o})
@@ -93,7 +101,7 @@ def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict) -> Tolerance:
     cspec = o.get("cost", costs.get(s.name, costs.get(s.group, costs.get("default"))))
     if cspec is None:
         raise ValidationError(f"cost.{s.group}", None, f"a cost model for source {s.name} (by name, group or 'default')")
-    return Tolerance(cost=evotol.cost_models.from_dict(cspec), lower=_bound(o, bounds, s, "lower", 1e-6),
+    return Tolerance(cost=evotol.cost_models.from_dict(cspec), lower=max(_bound(o, bounds, s, "lower", 1e-6), floor),
                      upper=_bound(o, bounds, s, "upper", 1e-3), locked=o.get("locked"),
                      distribution=dist, **shape)
 
@@ -121,7 +129,9 @@ def _bound(override: dict, bounds: dict, source, which: str, default: float) -> 
                          (f"bounds.{source.group}", bounds.get(source.group, {})), ("bounds", bounds)):
         if which in table:
             v = table[which]
+            if isinstance(v, str):
+                v = parse_quantity(v, f"{field}.{which}", "angle" if source.unit == "rad" else "length")
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ValidationError(f"{field}.{which}", v, "a positive tolerance in SI units (m or rad)")
+                raise ValidationError(f"{field}.{which}", v, "a positive tolerance in SI units (m or rad) or with its unit, e.g. '20 um'")
             return float(v)
     return default

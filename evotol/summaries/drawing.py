@@ -19,12 +19,15 @@ import numpy as np
 
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError, is_real
-from evotol.units.display import ROUND_OFF, DisplayUnits
+from evotol.units.display import ROUND_OFF, DisplayUnits, number
+from evotol.verification.nonlinear import worst_vertex_errors
 
 #: units of the keys this module adds to a study's JSON (docs/units.md)
 KEYS = {"drawing_lower": "the source's display unit (display_units), rounded to the drawing precision",
         "drawing_upper": "the source's display unit (display_units), rounded to the drawing precision",
-        "precision": "the display unit it is keyed by", "meets": "bool", "vanished": "source names"}
+        "precision": "the display unit it is keyed by", "meets": "bool", "vanished": "source names",
+        "drawing_value": "the source's display unit (display_units): a callout's drawn value (its ⌀ or face width)",
+        "meets_nonlinear": "bool"}
 #: default drawing precision per display unit (a 0.1 µm step in every length unit, 0.1 arcsec in angles)
 DEFAULT_PRECISION = {"µm": 0.1, "mm": 1e-4, "in": 1e-5, "arcsec": 0.1, "mrad": 1e-4, "deg": 1e-5}
 
@@ -57,11 +60,13 @@ def tolerance_zone(source: dict, t: float) -> dict:
 def _source_rows(problem: ToleranceProblem) -> list[dict]:
     """The rows :func:`tolerance_zone` reads, per source (SI): name, unit, dim, offset, minus, plus, fixed, locked."""
     rows = []
+    callout_of = getattr(problem.robot.part_of("callouts"), "callout_of", None)
     for n, s in zip(problem.names, problem.robot.sources):
         tol = problem.tolerances[n]
         rows.append({"name": n, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset), "minus": float(tol.minus),
                      "plus": float(tol.plus), "fixed": bool(tol.is_fixed), "locked": tol.locked,
-                     "zone_per_t": (getattr(problem.robot.part_of("callouts"), "zone_per_t", None) or {}).get(n, 1.0)})
+                     "zone_per_t": (getattr(problem.robot.part_of("callouts"), "zone_per_t", None) or {}).get(n, 1.0),
+                     "callout": callout_of(n) is not None if callout_of else False})
     return rows
 
 
@@ -88,6 +93,42 @@ def clean(value: float, digits: int = 13) -> float:
     if not math.isfinite(v):
         return v
     return round(v, digits - 1 - int(math.floor(math.log10(abs(v))))) + 0.0
+
+
+def precision_warnings(problem: ToleranceProblem, units: DisplayUnits, precision: dict,
+                       field: str = "report.precision") -> list[str]:
+    """A stated drawing step coarser than the zones the allocation may give: a free source whose
+    zone at its lower bound is narrower than the step could be drawn as ``0 / 0`` (one line per
+    display unit, naming the key, before any work).
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The study's problem (free sources, their lower bounds).
+    units : DisplayUnits
+        The study's display units.
+    precision : dict
+        Display unit -> step, as :func:`drawing_precision` gives it (only the stated steps).
+    field : str
+        The setting's name in the line.
+
+    Returns
+    -------
+    list of str
+        One line per display unit whose step exceeds the half-width of some free source's zone
+        at its lower bound; empty otherwise.
+    """
+    smallest = {}
+    for j, row in enumerate(_source_rows(problem)):
+        du = units.unit_for(row["unit"])
+        if not problem.free[j] or du not in precision:
+            continue
+        hw = tolerance_zone(row, problem.lower[j])["half_width"] * units.factor(row["unit"])
+        if hw < precision[du] and hw < smallest.get(du, (math.inf,))[0]:
+            smallest[du] = (hw, row["name"])
+    return [f"{field} = {precision[du]:g} {du} is coarser than the zones it rounds: {name}'s zone at its lower bound "
+            f"is ±{number(hw)} {du}, which the drawing would show as 0; state a step of at most {number(hw / 10)} {du}"
+            for du, (hw, name) in smallest.items()]
 
 
 def drawing_precision(spec, units: DisplayUnits, field: str = "report.precision") -> dict:
@@ -167,6 +208,17 @@ def rounded_design(problem: ToleranceProblem, t, units: DisplayUnits, precision:
             zones[row["name"]] = {"drawing_lower": clean(z["lower"] * k), "drawing_upper": clean(z["upper"] * k)}
             continue
         used[du] = p
+        if row["callout"] and not (row["fixed"] or row["locked"] is not None):
+            # a drawing callout states its value t (the ⌀ or the face's width): that value is what is
+            # rounded inward, and every member of the callout takes it (they share one variable)
+            c_r = round(math.floor(t[j] * k / p + 1e-9) * p, _decimals(p)) + 0.0
+            T[j] = c_r / k
+            zd = tolerance_zone(row, T[j])
+            zones[row["name"]] = {"drawing_lower": clean(zd["lower"] * k), "drawing_upper": clean(zd["upper"] * k),
+                                  "drawing_value": c_r}
+            if c_r <= 0:
+                vanished.append(row["name"])
+            continue
         lo_q, up_q = z["lower"] * k / p, z["upper"] * k / p
         given = row["fixed"] or row["locked"] is not None
         if given:       # outward: the drawing states at least the given zone (re-checked as given)
@@ -192,4 +244,39 @@ def rounded_design(problem: ToleranceProblem, t, units: DisplayUnits, precision:
     drawn = problem.with_tolerances(minus=minus, plus=plus)
     err = float(drawn.evaluate(T[None]).violation[0] + 1)
     out.update(normalised_error=err, meets=bool(err <= 1 + 1e-9), cost=float(drawn.cost(T[None])[0]))
+    out.update(nonlinear_check(drawn, T))
     return out
+
+
+def nonlinear_check(problem: ToleranceProblem, t) -> dict:
+    """The drawn design on the robot's nonlinear model: the error at each pose's worst-case vertex
+    (:func:`evotol.verification.nonlinear.worst_vertex_errors`) against the requirement.
+
+    Made for a worst-case requirement on a robot with a nonlinear model (the nonlinear counterpart
+    of the worst case); nothing otherwise.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        The problem of the drawn zones.
+    t : array_like, shape (n_sources,)
+        The drawn design (SI: m or rad).
+
+    Returns
+    -------
+    dict
+        ``normalised_error_nonlinear`` (1: max over components of the largest nonlinear error /
+        requirement), ``meets_nonlinear`` (bool) and ``over_nonlinear`` (component -> the error
+        beyond the requirement, SI, negative when within it); empty when not made.
+    """
+    comps = problem.components
+    if (problem.requirement.measure != "worst_case" or not comps
+            or not getattr(problem.error_model, "has_nonlinear_model", False)):
+        return {}
+    nl = worst_vertex_errors(problem, t)
+    worst = {c: float(np.max(nl[c])) for c, _ in comps if c in nl}
+    if not worst:
+        return {}
+    err = max(worst[c] / lim for c, lim in comps if c in worst)
+    return {"normalised_error_nonlinear": err, "meets_nonlinear": bool(err <= 1 + 1e-9),
+            "over_nonlinear": {c: worst[c] - lim for c, lim in comps if c in worst}}

@@ -183,7 +183,7 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
                         "kappa": float(sh.kappa[j]), "offset": float(sh.offset[j]), "width": float(tol.width_factor),
                         # the drawn zone offset - minus·t·z .. offset + plus·t·z (evotol.summaries.drawing.tolerance_zone)
                         "minus": float(tol.minus), "plus": float(tol.plus),
-                        "zone_per_t": float(getattr(problem.robot, "zone_per_t", {}).get(n, 1.0)),
+                        "zone_per_t": float((getattr(problem.robot.part_of("callouts"), "zone_per_t", None) or {}).get(n, 1.0)),
                         "cost_weight": float(problem.cost_weight[j]),
                         "locked": None if not problem.locked[j] else float(problem.locked_values[j]),
                         "cost": cost_model_spec(tol.cost)})

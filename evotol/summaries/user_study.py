@@ -19,7 +19,7 @@ from evotol.summaries.pose_joints import pose_joints
 from evotol.summaries.yield_quantile import largest_quantile
 from evotol.core.problem import ToleranceProblem
 from evotol.summaries.drawing import KEYS as DRAWING_KEYS
-from evotol.summaries.drawing import rounded_design, tolerance_zone
+from evotol.summaries.drawing import nonlinear_check, rounded_design, tolerance_zone
 from evotol.summaries.nominals import nominal_notes, nominals_with_notes, source_nominals  # noqa: F401 (re-exported)
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
@@ -53,6 +53,13 @@ KEYS = {
     "best_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
     "mean_fitness": "fitness (cost + penalty, or normalised error in budget mode)",
 }
+
+
+def _axis_labels(robot) -> dict:
+    """The labels of a per-axis requirement's slots (:attr:`AxisErrorModel.coordinate_labels
+    <evotol.core.axis_limits.AxisErrorModel.coordinate_labels>`), or {} without per-axis limits."""
+    axis = robot.part_of("axis_limits")
+    return axis.coordinate_labels if axis is not None else {}
 
 
 def study_units_block(problem: ToleranceProblem) -> dict:
@@ -270,7 +277,7 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
                "display_units": units.to_dict(),
                "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
                              "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high),
-                             "labels": getattr(problem.robot, "coordinate_labels", {})},     # per-axis slots (issue 33)
+                             "labels": _axis_labels(problem.robot)},     # per-axis slots (issue 33)
                "robot": problem.error_model.name, "n_poses": problem.n_poses, "poses": problem.poses.tolist(),
                "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
@@ -282,7 +289,7 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
         summary["pareto_front"] = front.table.to_dict(orient="list")
         summary["nsga2"] = front_summary(problem, front, results)
     continuous = tuple(ws.units) != ("1",) and any(h > lo for lo, h in zip(ws.low, ws.high))
-    if maps and results and continuous and getattr(problem.robot, "coordinate_labels", None):
+    if maps and results and continuous and _axis_labels(problem.robot):
         maps = False        # a per-axis requirement: the axis is a label, not a coordinate to map (issue 33)
         summary["figures"]["error_maps_note"] = ("no error map: with a per-axis requirement each pose is a configuration "
                                                  "and an axis; the per-pose values are in the tables")
@@ -308,6 +315,10 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
     summary["explorer"] = explorer_data(problem, starts, seed)
     # the drawing: every method's zones rounded to the drawing precision, the drawn design re-checked
     summary["drawing"] = {m: rounded_design(problem, r.t, units, precision) for m, r in results.items()}
+    for m, r in results.items():    # each allocation on the nonlinear model too: a verdict names its model (issue 41)
+        check = nonlinear_check(problem, r.t)
+        if check and m in summary.get("results", {}):
+            summary["results"][m]["nonlinear_check"] = check
     summary["joints"] = pose_joints(problem)        # the posture used at every pose (issue 33)
     summary["units"] = study_units_block(problem)
     return summary

@@ -34,6 +34,7 @@ KEYS = {
     "max_orientation_error": "rad", "max_orientation_error_bound": "rad", "orientation_error": "rad",
     "orientation": "rad",
     "normalised_error": RELATIVE + ": max error / requirement",
+    "normalised_error_nonlinear": RELATIVE + ": max nonlinear worst-vertex error / requirement",
     "gap": RELATIVE + ": (cost - lower bound) / cost",
     "kkt_residual": RELATIVE + ": KKT residual / |gradient|",
     "proven_bound_over_requirement": RELATIVE,

@@ -17,20 +17,19 @@ joint without a stroke.
 """
 from __future__ import annotations
 
-import re
 
 import numpy as np
 
 from evotol._runtime.keyword_checks import check_table_keys, did_you_mean
 from evotol.errors import ValidationError
+from evotol.units.quantity import parse_quantity, units_of
 from evotol.robots.mechanism.callouts import KINDS, ORIENTATION_KINDS, Callout
 from evotol.robots.mechanism.expressions import Expression
 
 #: keys of one callout table
 CALLOUT_KEYS = ("joint", "kind", "length", "offset", "datums")
 #: length units a callout may be written in -> metres
-LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "in": 0.0254}
-_LENGTH = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*\*?\s*([a-zµ]+)\s*$")
+LENGTH_UNITS = units_of("length")
 
 
 def parse_length(value, field: str) -> float:
@@ -56,14 +55,7 @@ def parse_length(value, field: str) -> float:
     evotol.errors.ValidationError
         A number without unit, an unknown unit, or not a length at all.
     """
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        if value == 0:
-            return 0.0
-        raise ValidationError(field, value, f"a length with its unit, e.g. '{value} mm' (units {sorted(LENGTH_UNITS)})")
-    m = _LENGTH.match(value) if isinstance(value, str) else None
-    if m is None or m.group(2) not in LENGTH_UNITS:
-        raise ValidationError(field, value, f"a length with its unit, e.g. '50 mm' (units {sorted(LENGTH_UNITS)})")
-    return float(m.group(1)) * LENGTH_UNITS[m.group(2)]
+    return parse_quantity(value, field, "length", require_unit=True)
 
 
 def callouts_from_tables(entries, mech, field: str = "robot.callouts") -> list[Callout]:
@@ -227,6 +219,56 @@ def dh_placement_fields(mech, uses, joint: str) -> dict:
             if abs(value(frames[fr], k, {p: vals[p] + 1.0}) - value(frames[fr], k) - 1.0) < 1e-12:    # slope 1
                 out[alias.get(p, p)] = entries[where[0]]
     return out
+
+
+def datum_features(mech, part: str, datums: str) -> str:
+    """The features a callout's datum letters stand for on its part's drawing (``docs/callouts.md``,
+    "Datum convention"): the part's own seat on the joint that carries it -- datum A its bore axis,
+    datum B its shoulder face -- or, for the base, its mounting face and locating bore. Letters a user
+    wrote other than ``A|B`` are kept as their own (evotol cannot know what they name).
+
+    Parameters
+    ----------
+    mech : evotol.robots.mechanism.mechanism.Mechanism
+        The description (its URDF, else its frames).
+    part : str
+        The part (link) that carries the seat.
+    datums : str
+        The datum letters as the drawing writes them.
+
+    Returns
+    -------
+    str
+        E.g. ``"A = axis of shoulder_link's bore on shoulder_pan_joint, B = its shoulder face"``.
+    """
+    if datums.replace(" ", "") != "A|B":
+        return f"{datums} as the drawing defines them (the joint's nominal placement in {part})"
+    carrier = _carrier(mech, part)
+    if carrier is None:
+        return f"A = {part}'s mounting face, B = its locating bore (the base frame)"
+    return f"A = axis of {part}'s bore on {carrier}, B = its shoulder face on {carrier}"
+
+
+def _carrier(mech, part: str) -> str | None:
+    """The moving joint that carries ``part`` (through fixed joints), or None at the base."""
+    if mech.urdf:
+        import xml.etree.ElementTree as ET
+
+        joints = {j.find("child").get("link"): j for j in ET.parse(mech.urdf[0]).getroot().iter("joint")
+                  if j.find("child") is not None and j.find("parent") is not None}
+        link, seen = part, set()
+        while link in joints and link not in seen:
+            seen.add(link)
+            j = joints[link]
+            if j.get("type") != "fixed":
+                return j.get("name")
+            link = j.find("parent").get("link")
+        return None
+    frames = {f.name: f for f in mech.frames}
+    f = frames.get(part)
+    while f is not None and f.joint == "fixed":
+        f = frames.get(f.antecedent)
+    return None if f is None else f.name.removesuffix("__q")
 
 
 def _urdf_parent(mech, joint: str) -> str | None:

@@ -5,8 +5,10 @@ An entry of a modified-DH table may be a number or a string such as ``"-L0/2"``,
 ``+ - * / **``, unary minus and the functions ``sin cos tan asin acos atan sqrt exp log`` are
 allowed (no attribute access, no calls of anything else), so a description file cannot run code.
 
-Constants available in every expression: ``pi``, ``deg`` (= pi/180, so ``"30*deg"``), ``mm``
-(= 1e-3, so ``"100*mm"``). Everything else is a name of the description: a design parameter
+Constants available in every expression: ``pi`` and the units of the one unit table
+(:data:`evotol.units.quantity.UNITS`: ``deg`` = pi/180 so ``"30*deg"``, ``mm`` = 1e-3 so ``"100*mm"``,
+``um``, ``mrad``, ``arcsec``...; ``docs/units.md``); a value with its unit alone (``"20 um"``) is read
+by the same grammar. Everything else is a name of the description: a design parameter
 (``[lengths]``/``[angles]``), a joint variable or a pose coordinate.
 
 Derivatives are taken by the complex step (Squire & Trapp 1998): ``df/dx = Im f(x + i h) / h``
@@ -21,10 +23,14 @@ from typing import Mapping
 import numpy as np
 
 from evotol.errors import ValidationError
+from evotol.units.quantity import UNITS, is_quantity_text, parse_quantity
 
 FUNCTIONS = {"sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin, "acos": np.arccos,
              "atan": np.arctan, "sqrt": np.sqrt, "exp": np.exp, "log": np.log}
-CONSTANTS = {"pi": np.pi, "deg": np.pi / 180, "mm": 1e-3}
+#: ``pi`` and the units of :data:`evotol.units.quantity.UNITS` that are names (not ``m``, ``rad``: too
+#: likely a description's own names; ``in`` is a Python keyword): ``"20*um"``, ``"0.1*mrad"``
+CONSTANTS = {"pi": np.pi, **{u: f for u, (_, f) in UNITS.items() if u.isidentifier() and u not in ("m", "rad", "in")}}
+CONSTANTS["μm"], CONSTANTS["μrad"] = CONSTANTS["um"], CONSTANTS["urad"]   # the parser reads µ (micro sign) as μ
 _ALLOWED = (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Constant, ast.Name, ast.Load, ast.Call,
             ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.USub, ast.UAdd)
 STEP = 1e-30
@@ -77,6 +83,8 @@ class Expression:
         """
         if isinstance(text, bool) or not isinstance(text, (str, int, float)):
             raise ValidationError(field, text, "a number or an expression string such as '-L0/2' or 'q1 - pi'")
+        if isinstance(text, str) and is_quantity_text(text):      # "20 um", "0.5 mm": the one unit grammar
+            text = repr(parse_quantity(text, field))
         if not isinstance(text, str):
             if not np.isfinite(text):
                 raise ValidationError(field, text, "a finite number")

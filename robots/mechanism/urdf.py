@@ -27,6 +27,7 @@ model : pinocchio.Model
 """
 from __future__ import annotations
 
+import difflib
 import re
 from pathlib import Path
 
@@ -87,8 +88,19 @@ def resolve_urdf(name: str, base_dir=None) -> Path:
         except md.PackageNotFoundError:
             have = (f"; evotol ships {', '.join(sorted(str(p.relative_to(SHIPPED_URDF_DIR)) for p in SHIPPED_URDF_DIR.rglob('*.urdf')))}"
                     if shipped is not None else "")
-            raise ValidationError("urdf", name, f"an installed package {pkg!r} (pip install {pkg}){have}") from None
-        p = Path(dist.locate_file(f"cmeel.prefix/share/{pkg}/robots/{rel}"))
+            extra = ' (pip install "evotol[urdf]", or pip install example-robot-data)' if shipped is not None \
+                else f" (pip install {pkg})"
+            raise ValidationError("urdf", name, f"an installed package {pkg!r}{extra}{have}") from None
+        share = dist.metadata["Name"] or pkg        # the package's own spelling (example_robot_data -> example-robot-data)
+        root = Path(dist.locate_file(f"cmeel.prefix/share/{share}/robots"))
+        p = root / rel
+        if not p.is_file():
+            files = [str(f.relative_to(root)) for f in root.rglob("*.urdf")] if root.is_dir() else []
+            near = difflib.get_close_matches(rel, files, 3, 0.5)
+            raise ValidationError("urdf", name, f"a URDF file of the installed package {share!r} "
+                                  + (f"(nearest: {', '.join(near)})" if near else
+                                     f"({len(files)} URDF files under {root})" if files else
+                                     f"(it has no robots folder at {root}: is it the package that ships the file?)"))
     else:
         p = Path(name)
         if base_dir and not p.is_absolute() and (Path(base_dir) / p).exists():

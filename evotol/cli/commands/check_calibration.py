@@ -65,7 +65,8 @@ def check_calibration(path, overrides: dict | None = None) -> dict:
     ------
     evotol.errors.ValidationError
         A file that does not load, a plan refused (:func:`evotol.calibration.table.plan_from_table`), or a
-        mechanism description without ``--noise`` / ``--count``.
+        mechanism description without ``--noise`` / ``--count``, or a ``[stack]`` or
+        ``[processes]`` study (no robot).
     """
     import tomllib
     from pathlib import Path
@@ -77,6 +78,11 @@ def check_calibration(path, overrides: dict | None = None) -> dict:
     p = Path(path)
     spec = tomllib.loads(p.read_text(encoding="utf-8")) if p.is_file() else {}
     table = {**spec.get("calibration", {}), **(overrides or {})}
+    for kind in ("stack", "processes"):     # no robot to calibrate: say so, never ask for a noise (issue 41)
+        if kind in spec:
+            raise ValidationError("file", str(path), f"a study with a robot ([robot]) or a mechanism description: "
+                                  f"a [{kind}] study has no robot to calibrate (calibration identifies a robot's "
+                                  "geometry from measured poses, docs/calibration.md)")
     if "robot" in spec:
         from evotol.studyfile import load_problem
 

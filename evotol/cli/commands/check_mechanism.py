@@ -103,13 +103,20 @@ def cmd_check_mechanism(args) -> int:
     ------
     ValidationError
         A description that cannot be read or checked (from
-        :func:`evotol.robots.mechanism.checks.check_mechanism`), or a URDF file without ``--tip``.
+        :func:`evotol.robots.mechanism.checks.check_mechanism`), a URDF file without ``--tip``, or a
+        description file with ``--tip``.
     KinematicsError
         The loops do not close at the assembly, or close far from the declared joints.
     """
     srcs = [s.strip() for s in args.sources.split(",")] if args.sources else None
     if str(args.file).lower().endswith(".urdf"):
         return cmd_check_urdf(args, srcs)
+    if getattr(args, "tip", None):      # never ignored in silence (issue 41): a description names its own end effector
+        from evotol.errors import ValidationError
+
+        raise ValidationError("--tip", args.tip, f"no --tip for a description file ({args.file}): its end effector is "
+                              "the description's own (the [end_effector] table, or tip = ... beside its urdf = ...); "
+                              "--tip names the end link of a .urdf file")
     # loaded here, not at import: every sub-command module is imported to build `evotol --help`,
     # which must not pay for NumPy, the clearance engine and Pinocchio (tests/test_front_door.py)
     from evotol.robots.mechanism.checks import check_mechanism
