@@ -29,7 +29,6 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from evotol.core.axis_limits import AxisLimits
 from evotol.core.shop import unmeasurable
 
 #: usual range of requirements and tolerance bounds per unit (SI): (smallest, largest)
