@@ -60,7 +60,7 @@ def test_terminal_and_page_show_the_same_cells(tmp_path):
     # table has exactly these rows and the terminal's first six rows are the same cells
     assert len(html_rows) == 6 and len(rows) >= 6
     for trow, hrow in zip(rows[:6], html_rows, strict=True):
-        assert trow == hrow[:4]
+        assert trow == hrow[:len(trow)]
     # and the cells are the hand formulas on the data file (inch; Drake 1999 ch. 9): zone centre
     # c = nominal + (plus - minus)/2, half-zone h = (plus + minus)/2, worst case Σa·c ± Σ|a|h,
     # RSS Σa·c ± sqrt(Σh²), modified RSS with C_f = 1 + 0.5 (T_wc - T_rss) / (T_rss (sqrt(n) - 1))
@@ -71,10 +71,11 @@ def test_terminal_and_page_show_the_same_cells(tmp_path):
     c, h = a @ (nom + (plus - minus) / 2), (plus + minus) / 2
     wc, rss = np.abs(a) @ h, np.sqrt(h @ h)
     cf = 1 + 0.5 * (wc - rss) / (rss * (np.sqrt(len(h)) - 1))
-    hand = [[a @ nom], [c], [c - wc, c + wc, wc], [c - rss, c + rss, rss], [c - cf * rss, c + cf * rss, cf * rss],
-            [0.0, 0.12, 0.06]]
-    for want, hrow in zip(hand, html_rows, strict=True):
-        assert [float(v) for v in hrow[1:1 + len(want)]] == pytest.approx(want, abs=5.1e-5)   # 4 decimals shown
+    # columns: label, gap, lower limit, upper limit, half-width, verdict (issue 41: gaps are not limits)
+    hand = [(1, [a @ nom]), (1, [c]), (2, [c - wc, c + wc, wc]), (2, [c - rss, c + rss, rss]),
+            (2, [c - cf * rss, c + cf * rss, cf * rss]), (2, [0.0, 0.12, 0.06])]
+    for (col, want), hrow in zip(hand, html_rows, strict=True):
+        assert [float(v) for v in hrow[col:col + len(want)]] == pytest.approx(want, abs=5.1e-5)   # 4 decimals shown
     assert f"C_f = {cf:.4f}" in page
 
 
