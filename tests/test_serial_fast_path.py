@@ -52,6 +52,22 @@ def test_fast_path_equals_general_path(which):
     assert np.abs(D - Ds).max() < 1e-13
 
 
+@pytest.mark.parametrize("n, m", [(1, 5000), (173, 29)])
+def test_parallel_monte_carlo_blocks_equal_the_general_path(n, m):
+    """The Monte Carlo kernel cuts the pose-samples into parallel blocks of 2 048 (issue 43 item 2):
+    blocks that split one pose's samples (1 x 5 000) and blocks that start mid-pose (173 x 29) give the
+    general NumPy path's errors, also for a broadcast (zero-stride) error array."""
+    fast, slow = pair(HERE / "ur5.toml")
+    poses = fast.workspace.latin_hypercube(n, seed=3) if n > 1 else fast.workspace.latin_hypercube(4, seed=3)[:1]
+    q = slow.kin.inverse_geometry(poses)
+    E = np.random.default_rng(2).uniform(-1e-3, 1e-3, (n, m, fast.n_columns))
+    D, Ds = fast.pose_error_at_joints(q, E), slow.pose_error_at_joints(q, E)
+    assert D.shape == (n, m, 6)
+    assert np.abs(D - Ds).max() < 1e-13
+    Eb = np.broadcast_to(E[:1, :3], (n, 3, fast.n_columns))
+    assert np.abs(fast.pose_error_at_joints(q, Eb) - slow.pose_error_at_joints(q, np.ascontiguousarray(Eb))).max() < 1e-13
+
+
 def test_unsupported_sources_use_the_general_path():
     """A parameter of a constant entry (the origin's x of a URDF joint) is not a fast-path source."""
     m = MechanismModel(HERE / "ur5.toml", sources=["elbow_joint_x", "elbow_joint"])
