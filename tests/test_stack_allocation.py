@@ -83,7 +83,7 @@ def test_bad_allocation_refused_before_work(tmp_path):
 
 def test_rss_of_asymmetric_zones_refused_before_the_problem_is_built(tmp_path, monkeypatch):
     """Issue 43: the refusal of the RSS optimum for asymmetric zones is read off the drawing (here a
-    5 000-dimension stack), before the allocation problem is set up; the message is the optimum's."""
+    2 000-dimension stack), before the allocation problem is set up; the message is the optimum's."""
     import evotol.studyfile.stack_table as table
 
     def never(*a, **k):
