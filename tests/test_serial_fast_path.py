@@ -68,6 +68,34 @@ def test_parallel_monte_carlo_blocks_equal_the_general_path(n, m):
     assert np.abs(fast.pose_error_at_joints(q, Eb) - slow.pose_error_at_joints(q, np.ascontiguousarray(Eb))).max() < 1e-13
 
 
+def _ur5_errors_in_a_child(args):
+    Q, E = args
+    m = MechanismModel(HERE / "ur5.toml")
+    return m._serial.pose_error(Q, E)
+
+
+def test_parallel_monte_carlo_survives_a_fork_and_threads():
+    """The parallel kernel runs in the parent, then in forked pool workers (GNU OpenMP would kill
+    them: a fork-safe threading layer is chosen) and in two threads at once (they take the serial
+    kernel): every result equals the parent's."""
+    import threading
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+
+    m = MechanismModel(HERE / "ur5.toml")
+    poses = m.workspace.latin_hypercube(6, seed=1)
+    q = m.joint_values(poses)
+    Q = np.stack([q[v] for v in m.kin.variables], 1)
+    E = np.random.default_rng(4).uniform(-1e-3, 1e-3, (6, 700, m.n_columns))   # 4 200 samples: 3 blocks
+    D = m._serial.pose_error(Q, E)
+    with ProcessPoolExecutor(2) as pool:
+        for Dc in pool.map(_ur5_errors_in_a_child, [(Q, E), (Q, E)]):
+            assert np.array_equal(Dc, D)
+    assert threading.current_thread() is threading.main_thread()
+    with ThreadPoolExecutor(2) as pool:
+        for Dt in pool.map(lambda _: m._serial.pose_error(Q, E), range(4)):
+            assert np.array_equal(Dt, D)
+
+
 def test_unsupported_sources_use_the_general_path():
     """A parameter of a constant entry (the origin's x of a URDF joint) is not a fast-path source."""
     m = MechanismModel(HERE / "ur5.toml", sources=["elbow_joint_x", "elbow_joint"])

@@ -35,8 +35,18 @@ n_marks : int
 """
 from __future__ import annotations
 
+import os
+
+import numba
 import numpy as np
 from numba import njit, prange
+
+# The parallel Monte Carlo kernel must survive a fork (evotol's process pool forks after a parent may
+# have run it; GNU OpenMP, numba's default layer where present, then kills the child): a fork-safe
+# layer (TBB if installed, else numba's workqueue), unless the user chose one. The workqueue is not
+# thread-safe, so only the main thread calls the parallel kernel (robots.mechanism.serial).
+if "NUMBA_THREADING_LAYER" not in os.environ:
+    numba.config.THREADING_LAYER = "forksafe"
 
 
 @njit(cache=True, inline="always")
@@ -264,6 +274,16 @@ def _pose_error_block(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col
         out[i, k, 3] = (R[2, 1] - R[1, 2]) * f
         out[i, k, 4] = (R[0, 2] - R[2, 0]) * f
         out[i, k, 5] = (R[1, 0] - R[0, 1]) * f
+
+
+@njit(cache=True)
+def pose_error_serial(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage, j_coef,
+                      j_var, v_col, v_var):
+    """:func:`pose_error` in the calling thread only (for threads other than the main one)."""
+    out = np.empty((errors.shape[0], errors.shape[1], 6))
+    _pose_error_block(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage,
+                      j_coef, j_var, v_col, v_var, 0, errors.shape[0] * errors.shape[1], out)
+    return out
 
 
 #: pose-samples per parallel block of :func:`pose_error` (large enough that a block's scratch and its
