@@ -14,7 +14,9 @@ Each sensitivity timing is the fastest of three calls, for evotol and for Pinocc
    damped-Newton IK in Pinocchio (from the assembly configuration, ``log6`` error in the tip frame,
    damped least squares ``J^T (J J^T + 1e-12 I)^-1``, to 1e-12, then the regressor);
 3. **nonlinear Monte Carlo**: ``evotol.verification.nonlinear.verify_nonlinear`` of the UR5 study's optimum
-   (the study's own verification) and ``pose_error`` alone, in pose-samples per second.
+   (the study's own verification) and ``pose_error`` alone, in pose-samples per second;
+4. **the Monte Carlo profile** (issue 43): the compiled kernel alone on one thread and on every thread,
+   the share of the Python wrapper, and the arithmetic per sample against the machine's scalar limit.
 
 ``python benchmarks/bench_urdf.py [--quick]``. The first call compiles the kernels (numba, cached
 on disk), so every timing below is of a second call.
