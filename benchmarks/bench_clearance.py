@@ -7,9 +7,9 @@ Prints, in one run:
 * the IRSBot-2 41 x 41 maps, distal module (78 variables) and distal + parallelograms (114
   variables, target < 2 min), with the thesis's method on two points;
 * 32 768 clearance-bound sets of the 5-bar at one pose (the tolerance-synthesis workload);
-* issue 13: the engine against its settings before issue 13 (``options=LEGACY``, :mod:`robots.clearance.options`) on the same
+* issue 13: the engine against its settings before issue 13 (``options=LEGACY``, :mod:`evotol.robots.clearance.options`) on the same
   IRSBot-2 points in one process: time and Newton-iteration ratios, agreement of the brackets;
-* the compiled Newton iteration (``robots.clearance.newton_kernel``) against the NumPy one
+* the compiled Newton iteration (``evotol.robots.clearance.newton_kernel``) against the NumPy one
   (``options=NUMPY``) on the same points in one process.
 
 Absolute times depend on the load of this shared 2-core machine (printed with ``uptime``'s load
@@ -32,10 +32,10 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=None, help="local processes for the grid maps (default: all cores)")
     args = ap.parse_args(argv)
 
-    from robots.clearance import ClearanceEvaluator, max_pose_error, multistart_max_pose_error
-    from robots.clearance.grid import grid_max_pose_error
-    from robots.fivebar import FiveBar
-    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+    from evotol.robots.clearance import ClearanceEvaluator, max_pose_error, multistart_max_pose_error
+    from evotol.robots.clearance.grid import grid_max_pose_error
+    from evotol.robots.fivebar import FiveBar
+    from evotol.robots.irsbot2 import MAP_WORKSPACE, IRSBot2
     import os
 
     print(f"load average at start: {os.getloadavg()[0]:.1f} ({os.cpu_count()} cores)")
@@ -86,7 +86,7 @@ def main(argv=None):
               f"{np.round(ms2.p_max / o2.p_max, 4).tolist()}, r: {np.round(ms2.r_max / o2.r_max, 4).tolist()}")
 
     print(f"\n== issue 13: engine vs its settings before issue 13, same points, one process ==")
-    from robots.clearance.options import LEGACY, NUMPY
+    from evotol.robots.clearance.options import LEGACY, NUMPY
     sub = grid[:: 40 if args.quick else 8]
     cases = [(robot.clearance_mechanism(parallelograms=False), sub, "IRSBot-2 distal module"),
              (robot.clearance_mechanism(parallelograms=True), sub, "IRSBot-2 distal + parallelograms"),
@@ -106,7 +106,7 @@ def main(argv=None):
               f"brackets overlap at every pose: {overlap}; max |p_now/p_before - 1| = {np.abs(rn.p_max / rl.p_max - 1).max():.1e}")
 
     print(f"\n== compiled Newton iteration (numba) vs NumPy iteration, same points, one process ==")
-    from robots.clearance import newton_kernel
+    from evotol.robots.clearance import newton_kernel
     if not newton_kernel.AVAILABLE:
         print("numba not available: skipped")
     for m2, sub, label in cases if newton_kernel.AVAILABLE else ():

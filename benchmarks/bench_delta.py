@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from evotol.studies import brahmia2023_delta as study
-from robots.delta import DeltaRobot, cylinder_poses
+from evotol.robots.delta import DeltaRobot, cylinder_poses
 
 
 def best_of(f, repeat=3):

@@ -18,8 +18,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from robots.mechanism import MechanismModel  # noqa: E402
-from robots.mechanism.model import SHIPPED  # noqa: E402
+from evotol.robots.mechanism import MechanismModel  # noqa: E402
+from evotol.robots.mechanism.model import SHIPPED  # noqa: E402
 
 SOURCES = ["Rb", "rp", "l1_*", "l2_*", "q?", "A?.gamma", "B?.gamma", "C?.gamma", "P?.gamma", "P?.theta", "A?.d", "B1.d"]
 
@@ -66,8 +66,8 @@ def main():
     print(f"  central finite differences of the closure: {t_fd:.3f} s   -> ratio FD / sensitivity {t_fd / t_cold:.1f}x "
           f"(cached: {t_fd / t_warm:.0f}x); max relative difference {rel:.2e}")
 
-    from robots.clearance import max_pose_error
-    from robots.fivebar import FiveBar
+    from evotol.robots.clearance import max_pose_error
+    from evotol.robots.fivebar import FiveBar
 
     desc = MechanismModel(SHIPPED / "fivebar.toml")
     x, y = np.linspace(-0.02, 0.02, 11), np.linspace(0.055, 0.07, 11)

@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 
-from robots.planar5r import Planar5R
-from robots.planar5r import uncertainty as U
+from evotol.robots.planar5r import Planar5R
+from evotol.robots.planar5r import uncertainty as U
 
 
 def best_of(f, repeat=5):

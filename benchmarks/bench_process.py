@@ -28,7 +28,7 @@ from evotol.allocators.process import allocate_process_ga, allocate_process_opti
 from evotol.allocators.process import assembly_problem, process_front  # noqa: E402
 from evotol.studies._process_benchmarks import MM, clutch_problem, process, stack_problem  # noqa: E402
 from evotol.studies.process_stack import enumeration_solves  # noqa: E402
-from robots.assembly import AssemblyFunction, LinearStack  # noqa: E402
+from evotol.robots.assembly import AssemblyFunction, LinearStack  # noqa: E402
 
 
 def ga_vs_optimum():

@@ -15,10 +15,10 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from cost_models import ExponentialCost  # noqa: E402
+from evotol.cost_models import ExponentialCost  # noqa: E402
 from evotol.measures.statistical.distributions import draw, uniforms  # noqa: E402
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem  # noqa: E402
-from robots.ucr3 import UCR3  # noqa: E402
+from evotol.robots.ucr3 import UCR3  # noqa: E402
 
 
 def main():

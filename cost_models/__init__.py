@@ -5,18 +5,18 @@
 >>> round(float(m.cost(4.94e-5)), 4)
 0.1607
 """
-from cost_models.base import CostModel
-from cost_models.checks import check_cost_model, cost_model_checks
-from cost_models.compound import LinearExponentialCost, SumCost
-from cost_models.exp_reciprocal import ExpReciprocalCost
-from cost_models.exponential import ExponentialCost
-from cost_models.fit import FitResult, fit
-from cost_models.polynomial import Polynomial3Cost, Polynomial4Cost
-from cost_models.power import PowerCost
-from cost_models.reciprocal import ReciprocalCost, ReciprocalPowerCost
-from cost_models.reciprocal_square import ReciprocalSquareCost
-from cost_models.registry import available, from_dict, get
-from cost_models.user import CallableCost
+from evotol.cost_models.base import CostModel
+from evotol.cost_models.checks import check_cost_model, cost_model_checks
+from evotol.cost_models.compound import LinearExponentialCost, SumCost
+from evotol.cost_models.exp_reciprocal import ExpReciprocalCost
+from evotol.cost_models.exponential import ExponentialCost
+from evotol.cost_models.fit import FitResult, fit
+from evotol.cost_models.polynomial import Polynomial3Cost, Polynomial4Cost
+from evotol.cost_models.power import PowerCost
+from evotol.cost_models.reciprocal import ReciprocalCost, ReciprocalPowerCost
+from evotol.cost_models.reciprocal_square import ReciprocalSquareCost
+from evotol.cost_models.registry import available, from_dict, get
+from evotol.cost_models.user import CallableCost
 
 __all__ = ["CostModel", "check_cost_model", "ExponentialCost", "PowerCost", "ReciprocalPowerCost", "ReciprocalCost",
            "ReciprocalSquareCost", "ExpReciprocalCost", "Polynomial3Cost", "Polynomial4Cost",

@@ -4,7 +4,7 @@ A cost model is a function of one tolerance ``t`` (SI units: m or rad). Coeffici
 quoted for tolerances in a shop unit (e.g. 1e-5 m for Yao et al. 2013, or mm); ``scale`` is that
 unit in SI, so every model evaluates ``f(t / scale)`` with ``f`` the textbook formula.
 
-Contract (see :func:`cost_models.checks.check_cost_model`): vectorised ``cost(t)`` and ``dcost(t)`` (d cost / d t,
+Contract (see :func:`evotol.cost_models.checks.check_cost_model`): vectorised ``cost(t)`` and ``dcost(t)`` (d cost / d t,
 per SI unit), ``params`` (a dict), ``name``; the cost is positive and non-increasing on the
 allowed range ``[t_min, t_max]`` (SI), which :meth:`CostModel.validate_range` checks with a clear
 message naming the model, the parameters and where it fails.
@@ -117,7 +117,7 @@ class CostModel:
 
     @classmethod
     def initial_guess(cls, tolerances, costs, *, scale: float = 1.0) -> np.ndarray:
-        """Starting coefficients for fitting the model to ``(t, cost)`` data (:func:`cost_models.fit.fit`).
+        """Starting coefficients for fitting the model to ``(t, cost)`` data (:func:`evotol.cost_models.fit.fit`).
 
         Each model carries its own guess (a log-linear or linear least-squares fit of its
         formula, in the subclass's ``_guess``); a model without one starts from ones.
@@ -284,7 +284,7 @@ class CostModel:
         return f"{type(self).__name__}({ps}, scale={self.scale:g})"
 
     def to_dict(self) -> dict:
-        """The model as a study-file table, which :func:`cost_models.registry.from_dict` rebuilds.
+        """The model as a study-file table, which :func:`evotol.cost_models.registry.from_dict` rebuilds.
 
         Returns
         -------

@@ -35,9 +35,9 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from cost_models.base import CostModel
-from cost_models.compound import SumCost
-from cost_models.registry import ALIASES, available, from_dict
+from evotol.cost_models.base import CostModel
+from evotol.cost_models.compound import SumCost
+from evotol.cost_models.registry import ALIASES, available, from_dict
 from evotol._runtime.check_suite import require, run_checks
 
 
@@ -110,7 +110,7 @@ def check_positive_and_monotone(model: CostModel, t_min: float, t_max: float) ->
     CheckFailed
         The cost is negative, not finite, or rises between two of 200 log-spaced tolerances.
     ValidationError
-        :meth:`~cost_models.base.CostModel.validate_range` rejects the range.
+        :meth:`~evotol.cost_models.base.CostModel.validate_range` rejects the range.
     """
     model.validate_range(t_min, t_max)        # raises ValidationError naming where it fails
     t = np.geomspace(t_min, t_max, 200)
@@ -164,7 +164,7 @@ def check_convexity_flag(model: CostModel, t_min: float, t_max: float) -> dict:
     ------
     CheckFailed
         The model declares ``convex = True`` but its chord slopes on 400 log-spaced tolerances
-        decrease, or :meth:`~cost_models.base.CostModel.is_convex` says False on the range.
+        decrease, or :meth:`~evotol.cost_models.base.CostModel.is_convex` says False on the range.
     """
     if not model.convex:
         return {"convex": False}
@@ -181,7 +181,7 @@ def check_convexity_flag(model: CostModel, t_min: float, t_max: float) -> dict:
 
 
 def check_dict_round_trip(model: CostModel, t_min: float, t_max: float) -> dict:
-    """``cost_models.from_dict(model.to_dict())`` rebuilds the same model (same class, same costs).
+    """``evotol.cost_models.from_dict(model.to_dict())`` rebuilds the same model (same class, same costs).
 
     Returns
     -------
@@ -234,7 +234,7 @@ def cost_model_checks(model: CostModel, t_min: float | None = None, t_max: float
     """The named checks that apply to ``model`` on ``[t_min, t_max]`` (SI); see module docstring.
 
     The dict round trip applies to models a study file can name (registered or entry points,
-    and sums of them); a :class:`~cost_models.user.CallableCost` wraps Python code and has none.
+    and sums of them); a :class:`~evotol.cost_models.user.CallableCost` wraps Python code and has none.
 
     Parameters
     ----------

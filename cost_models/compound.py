@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 
 
@@ -19,14 +19,14 @@ class LinearExponentialCost(CostModel):
         units per shop unit), ``a2 >= 0`` the exponential amplitude (cost units), ``a3 >= 0`` its
         decay rate (per shop unit).
         ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
-        :class:`~cost_models.base.CostModel`.
+        :class:`~evotol.cost_models.base.CostModel`.
 
     Raises
     ------
     ValidationError
         ``a2 < 0`` or ``a3 < 0``; ``a1 > 0`` while ``a2·a3 = 0``. Coefficients missing, unknown or
         not finite, ``scale`` not positive, or the cost negative or increasing on a given range
-        (as for every :class:`~cost_models.base.CostModel`).
+        (as for every :class:`~evotol.cost_models.base.CostModel`).
     """
 
     name = "linear_exponential"
@@ -73,7 +73,7 @@ class SumCost(CostModel):
     Raises
     ------
     ValidationError
-        No model given, or a term that is not a :class:`~cost_models.base.CostModel`.
+        No model given, or a term that is not a :class:`~evotol.cost_models.base.CostModel`.
     """
 
     name = "sum"

@@ -1,7 +1,7 @@
 """Exponential-reciprocal power model ``c = a0·x^(-a1)·exp(-a2·x)`` (Michael & Siddall 1981)."""
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 
 
@@ -17,14 +17,14 @@ class ExpReciprocalCost(CostModel):
         exponent (dimensionless), ``a2 >= 0`` the exponential rate (per shop unit); ``a1`` and
         ``a2`` not both zero.
         ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
-        :class:`~cost_models.base.CostModel`.
+        :class:`~evotol.cost_models.base.CostModel`.
 
     Raises
     ------
     ValidationError
         ``a0 <= 0``, ``a1`` or ``a2`` negative, or both zero. Coefficients missing, unknown or not
         finite, ``scale`` not positive, or the cost negative or increasing on a given range (as for
-        every :class:`~cost_models.base.CostModel`).
+        every :class:`~evotol.cost_models.base.CostModel`).
     """
 
     name = "exp_reciprocal"

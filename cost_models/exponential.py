@@ -1,7 +1,7 @@
 """Exponential ("index") cost model ``c = a0·exp(-a1·x)``, x = t/scale (Yao et al. 2013 eq. 13)."""
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 
 
@@ -16,14 +16,14 @@ class ExponentialCost(CostModel):
         ``a0, a1``: ``a0 > 0`` the cost at ``x = 0`` (cost units), ``a1 > 0`` the decay rate
         (per shop unit of tolerance).
         ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
-        :class:`~cost_models.base.CostModel`.
+        :class:`~evotol.cost_models.base.CostModel`.
 
     Raises
     ------
     ValidationError
         ``a0 <= 0`` or ``a1 <= 0``. Coefficients missing, unknown or not finite, ``scale`` not
         positive, or the cost negative or increasing on a given range (as for every
-        :class:`~cost_models.base.CostModel`).
+        :class:`~evotol.cost_models.base.CostModel`).
     """
 
     name = "exponential"

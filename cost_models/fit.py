@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 
 
@@ -56,7 +56,7 @@ def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
     Parameters
     ----------
     model : type or str
-        The :class:`~cost_models.base.CostModel` subclass, or its registered name or alias
+        The :class:`~evotol.cost_models.base.CostModel` subclass, or its registered name or alias
         (e.g. ``"exponential"``, ``"index"``).
     tolerances : array_like
         Tolerances of the data points (SI: m or rad), positive; flattened.
@@ -66,7 +66,7 @@ def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
         SI size of the tolerance unit the fitted coefficients refer to (e.g. ``1e-5`` m).
     p0 : array_like, optional
         Initial coefficients (in units of ``scale``, order of ``param_names``); by default the
-        model's own :meth:`~cost_models.base.CostModel.initial_guess` (log-linear or linear least
+        model's own :meth:`~evotol.cost_models.base.CostModel.initial_guess` (log-linear or linear least
         squares on the data for the built-in models, ones for a model that defines none).
 
     Returns
@@ -84,7 +84,7 @@ def fit(model, tolerances, costs, *, scale: float = 1.0, p0=None) -> FitResult:
         the cost negative or increasing between the smallest and largest tolerance; a ``p0``
         that is not one finite value per coefficient.
     """
-    from cost_models.registry import get
+    from evotol.cost_models.registry import get
 
     cls = get(model) if isinstance(model, str) else model
     t = np.asarray(tolerances, dtype=float).ravel()

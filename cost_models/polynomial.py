@@ -5,7 +5,7 @@ checks them (or :meth:`validate_range` is called by the problem with the source'
 """
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 
 
 class _Polynomial(CostModel):
@@ -30,7 +30,7 @@ class Polynomial3Cost(_Polynomial):
     """Cubic cost ``c = a0 + a1·x + a2·x² + a3·x³``, ``x = t / scale`` (Dong, Hu & Xue 1994).
 
     Positive and decreasing only on a range: give ``t_min``/``t_max``. Not flagged convex
-    (``convex = False``); :meth:`~cost_models.base.CostModel.is_convex` checks a range.
+    (``convex = False``); :meth:`~evotol.cost_models.base.CostModel.is_convex` checks a range.
 
     Parameters
     ----------
@@ -38,13 +38,13 @@ class Polynomial3Cost(_Polynomial):
         ``a0, a1, a2, a3``: ``a_k`` the coefficient of ``x^k`` (cost units per shop unit to the
         power k).
         ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
-        :class:`~cost_models.base.CostModel`.
+        :class:`~evotol.cost_models.base.CostModel`.
 
     Raises
     ------
     ValidationError
         Coefficients missing, unknown or not finite, ``scale`` not positive, or the cost negative
-        or increasing on a given range (as for every :class:`~cost_models.base.CostModel`).
+        or increasing on a given range (as for every :class:`~evotol.cost_models.base.CostModel`).
     """
 
     name = "polynomial3"
@@ -57,7 +57,7 @@ class Polynomial4Cost(_Polynomial):
     """Quartic cost ``c = a0 + a1·x + a2·x² + a3·x³ + a4·x⁴``, ``x = t / scale`` (Dong, Hu & Xue 1994).
 
     Positive and decreasing only on a range: give ``t_min``/``t_max``. Not flagged convex
-    (``convex = False``); :meth:`~cost_models.base.CostModel.is_convex` checks a range.
+    (``convex = False``); :meth:`~evotol.cost_models.base.CostModel.is_convex` checks a range.
 
     Parameters
     ----------
@@ -65,13 +65,13 @@ class Polynomial4Cost(_Polynomial):
         ``a0, ..., a4``: ``a_k`` the coefficient of ``x^k`` (cost units per shop unit to the
         power k).
         ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
-        :class:`~cost_models.base.CostModel`.
+        :class:`~evotol.cost_models.base.CostModel`.
 
     Raises
     ------
     ValidationError
         Coefficients missing, unknown or not finite, ``scale`` not positive, or the cost negative
-        or increasing on a given range (as for every :class:`~cost_models.base.CostModel`).
+        or increasing on a given range (as for every :class:`~evotol.cost_models.base.CostModel`).
     """
 
     name = "polynomial4"

@@ -1,7 +1,7 @@
 """Power cost model ``c = a0·x^(-a1)``, x = t/scale (Speckhart / Chase–Greenwood reciprocal power)."""
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 
 
@@ -16,14 +16,14 @@ class PowerCost(CostModel):
         ``a0, a1``: ``a0 > 0`` the cost at ``x = 1`` (cost units), ``a1 > 0`` the exponent
         (dimensionless).
         ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
-        :class:`~cost_models.base.CostModel`.
+        :class:`~evotol.cost_models.base.CostModel`.
 
     Raises
     ------
     ValidationError
         ``a0 <= 0`` or ``a1 <= 0``. Coefficients missing, unknown or not finite, ``scale`` not
         positive, or the cost negative or increasing on a given range (as for every
-        :class:`~cost_models.base.CostModel`).
+        :class:`~evotol.cost_models.base.CostModel`).
     """
 
     name = "power"

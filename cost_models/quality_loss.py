@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 
 
@@ -95,7 +95,7 @@ class QualityLossCost(CostModel):
 
     def to_dict(self) -> dict:
         """The model as ``{"model": "quality_loss", "machining": <its to_dict()>, "q": q}`` (q in cost per
-        SI unit²). :func:`cost_models.registry.from_dict` does not rebuild it: ``quality_loss`` is not a
+        SI unit²). :func:`evotol.cost_models.registry.from_dict` does not rebuild it: ``quality_loss`` is not a
         registered model name.
         """
         return {"model": self.name, "machining": self.machining.to_dict(), "q": self.q}

@@ -3,7 +3,7 @@ exponent-1 case ``c = a0 + a1/x``.
 
 One model, the exponent a parameter: :class:`ReciprocalPowerCost` fits ``k`` with the other two
 coefficients; :class:`ReciprocalCost` (``k = 1``, Chase & Greenwood 1988) and
-:class:`~cost_models.reciprocal_square.ReciprocalSquareCost` (``k = 2``, Spotts 1973) are the same
+:class:`~evotol.cost_models.reciprocal_square.ReciprocalSquareCost` (``k = 2``, Spotts 1973) are the same
 model with the exponent fixed by the class (same registry names, same coefficients ``a0, a1``).
 """
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 
 #: exponents tried by :meth:`ReciprocalPowerCost.initial_guess` when ``k`` is fitted
@@ -23,7 +23,7 @@ class ReciprocalPowerCost(CostModel):
     """Reciprocal-power cost ``c = a0 + a1/x^k``, ``x = t / scale`` (Chase & Greenwood 1988).
 
     Decreasing and convex for ``a1 > 0`` and ``k > 0``; positive where ``a0 + a1/x^k >= 0``
-    (checked on a given range). ``a0 = 0`` is :class:`~cost_models.power.PowerCost`'s formula.
+    (checked on a given range). ``a0 = 0`` is :class:`~evotol.cost_models.power.PowerCost`'s formula.
 
     Parameters
     ----------
@@ -35,7 +35,7 @@ class ReciprocalPowerCost(CostModel):
     t_min : float, optional
         Smallest tolerance used (SI). When ``t_min`` or ``t_max`` is given, the construction
         checks that the cost is non-negative and non-increasing on the range
-        (:meth:`~cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
+        (:meth:`~evotol.cost_models.base.CostModel.validate_range`); a missing ``t_min`` then means 0.
     t_max : float, optional
         Largest tolerance used (SI); missing while ``t_min`` is given means ``100 * scale``.
     **kw : float
@@ -46,7 +46,7 @@ class ReciprocalPowerCost(CostModel):
     ValidationError
         ``a1 <= 0`` or ``k <= 0``. Coefficients missing, unknown or not finite, ``scale`` not
         positive, or the cost negative or increasing on a given range (as for every
-        :class:`~cost_models.base.CostModel`).
+        :class:`~evotol.cost_models.base.CostModel`).
     """
 
     name = "reciprocal_power"
@@ -107,14 +107,14 @@ class ReciprocalCost(ReciprocalPowerCost):
         ``a0, a1``: ``a0`` the fixed cost (cost units), ``a1 > 0`` the reciprocal coefficient
         (cost units times shop units).
         ``scale``, ``t_min``, ``t_max`` and the coefficients by name: as for every
-        :class:`~cost_models.base.CostModel`.
+        :class:`~evotol.cost_models.base.CostModel`.
 
     Raises
     ------
     ValidationError
         ``a1 <= 0``. Coefficients missing, unknown or not finite, ``scale`` not positive, or the
         cost negative or increasing on a given range (as for every
-        :class:`~cost_models.base.CostModel`).
+        :class:`~evotol.cost_models.base.CostModel`).
     """
 
     name = "reciprocal"

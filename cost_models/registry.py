@@ -1,14 +1,14 @@
 """Registry of cost models by name (built-ins plus entry points), and construction from dicts/TOML."""
 from __future__ import annotations
 
-from cost_models.base import CostModel
-from cost_models.compound import LinearExponentialCost, SumCost
-from cost_models.exp_reciprocal import ExpReciprocalCost
-from cost_models.exponential import ExponentialCost
-from cost_models.polynomial import Polynomial3Cost, Polynomial4Cost
-from cost_models.power import PowerCost
-from cost_models.reciprocal import ReciprocalCost, ReciprocalPowerCost
-from cost_models.reciprocal_square import ReciprocalSquareCost
+from evotol.cost_models.base import CostModel
+from evotol.cost_models.compound import LinearExponentialCost, SumCost
+from evotol.cost_models.exp_reciprocal import ExpReciprocalCost
+from evotol.cost_models.exponential import ExponentialCost
+from evotol.cost_models.polynomial import Polynomial3Cost, Polynomial4Cost
+from evotol.cost_models.power import PowerCost
+from evotol.cost_models.reciprocal import ReciprocalCost, ReciprocalPowerCost
+from evotol.cost_models.reciprocal_square import ReciprocalSquareCost
 from evotol.errors import ValidationError
 
 BUILTIN: dict[str, type[CostModel]] = {
@@ -33,9 +33,9 @@ def available() -> dict[str, type[CostModel]]:
     ------
     ValidationError
         An entry point of the group ``evotol.cost_models`` is not a CostModel subclass (from
-        :func:`cost_models.user.entry_point_models`).
+        :func:`evotol.cost_models.user.entry_point_models`).
     """
-    from cost_models.user import entry_point_models
+    from evotol.cost_models.user import entry_point_models
 
     return {**BUILTIN, **entry_point_models()}
 
@@ -51,7 +51,7 @@ def get(name: str) -> type[CostModel]:
     Returns
     -------
     type
-        The :class:`~cost_models.base.CostModel` subclass.
+        The :class:`~evotol.cost_models.base.CostModel` subclass.
 
     Raises
     ------

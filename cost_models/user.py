@@ -11,7 +11,7 @@ from typing import Callable
 
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 
 
@@ -78,7 +78,7 @@ class CallableCost(CostModel):
     def to_dict(self):
         """A record of the model: its name, the callable's qualified name and ``scale``.
 
-        :func:`cost_models.registry.from_dict` cannot rebuild it (the code is not stored).
+        :func:`evotol.cost_models.registry.from_dict` cannot rebuild it (the code is not stored).
 
         Returns
         -------

@@ -65,8 +65,8 @@ html_title = f"evotol {release}"
 #: the API pages, in the order they claim the objects they document (docs/api/<module>.rst)
 API_PAGES = [
     "evotol.core.problem", "evotol.measures", "evotol.allocators", "evotol.core.result", "evotol.verification.montecarlo", "evotol.measures.feasibility",
-    "evotol.measures.statistical.distributions", "evotol.measures.clearances", "evotol.errors", "robots", "robots.base", "robots.checks",
-    "robots.mechanism", "robots.assembly", "cost_models",
+    "evotol.measures.statistical.distributions", "evotol.measures.clearances", "evotol.errors", "robots", "evotol.robots.base", "evotol.robots.checks",
+    "evotol.robots.mechanism", "evotol.robots.assembly", "cost_models",
 ]
 
 

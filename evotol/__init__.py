@@ -55,10 +55,10 @@ _WHERE = {
     "ConvergenceError": "evotol.errors",
     "InfeasibleError": "evotol.errors",
     # mechanisms and assemblies
-    "MechanismModel": "robots.mechanism.model",
-    "AssemblyFunction": "robots.assembly",
-    "LinearStack": "robots.assembly",
-    "RobotErrorModel": "robots.base",
+    "MechanismModel": "evotol.robots.mechanism.model",
+    "AssemblyFunction": "evotol.robots.assembly",
+    "LinearStack": "evotol.robots.assembly",
+    "RobotErrorModel": "evotol.robots.base",
 }
 
 __all__ = sorted(_WHERE)

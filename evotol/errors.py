@@ -73,7 +73,7 @@ class KinematicsError(EvotolError):
     Examples
     --------
     >>> from evotol import KinematicsError
-    >>> from robots.ucr3 import UCR3
+    >>> from evotol.robots.ucr3 import UCR3
     >>> try:
     ...     UCR3().sensitivity([[0.0, 0.0, 1.0]])              # Z_c = 1 m: outside the workspace
     ... except KinematicsError as err:

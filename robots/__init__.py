@@ -1,6 +1,6 @@
-"""Robot error models (plugins). See :mod:`robots.base` for the protocol and :mod:`robots.checks`
+"""Robot error models (plugins). See :mod:`evotol.robots.base` for the protocol and :mod:`evotol.robots.checks`
 for the conformance checks a plugin passes."""
-from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.checks import check_robot, robot_checks
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.checks import check_robot, robot_checks
 
 __all__ = ["RobotErrorModel", "SourceSpec", "Workspace", "check_robot", "robot_checks"]

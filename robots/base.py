@@ -27,7 +27,7 @@ from typing import Sequence
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError, is_integer
-from robots.checks import check_robot, robot_checks  # noqa: F401  (the one-call conformance API)
+from evotol.robots.checks import check_robot, robot_checks  # noqa: F401  (the one-call conformance API)
 from evotol.units import UNITS
 
 SHAPES = {1: "interval", 2: "disk", 3: "ball"}
@@ -220,7 +220,7 @@ class RobotErrorModel:
     Examples
     --------
     >>> from evotol import RobotErrorModel
-    >>> from robots.ucr3 import UCR3
+    >>> from evotol.robots.ucr3 import UCR3
     >>> robot = UCR3()                                          # the 3-UCR parallel robot
     >>> isinstance(robot, RobotErrorModel), robot.workspace.names
     (True, ('alpha', 'beta', 'Zc'))

@@ -1,5 +1,5 @@
 """Conformance checks for robot error models, one small named check each (scikit-learn's
-``sklearn/utils/estimator_checks.py`` style; contract in :mod:`robots.base`).
+``sklearn/utils/estimator_checks.py`` style; contract in :mod:`evotol.robots.base`).
 
 :func:`robot_checks` yields ``(name, check)`` pairs, each check a callable of no argument that
 raises :class:`evotol.errors.CheckFailed` saying what failed (not an ``assert``: the
@@ -20,7 +20,7 @@ s : _Settings
     The robot under check, its validated poses (SI units) and the finite-difference
     settings, shared by every check of one :func:`robot_checks` call.
 robot : RobotErrorModel
-    Any object following :class:`robots.base.RobotErrorModel`'s contract.
+    Any object following :class:`evotol.robots.base.RobotErrorModel`'s contract.
 poses : (n, workspace.dim) array_like, optional
     Poses to check at, in SI units (m, rad); default (None): 8 Latin-hypercube poses of the
     workspace (seed 1).
@@ -45,7 +45,7 @@ from evotol._runtime.check_suite import require, run_checks
 from evotol.errors import CheckFailed, KinematicsError
 from evotol.units import UNITS
 
-#: any object following :class:`robots.base.RobotErrorModel`'s contract (robots.base imports this
+#: any object following :class:`evotol.robots.base.RobotErrorModel`'s contract (evotol.robots.base imports this
 #: module -- ``check_robot`` is part of the protocol's API -- so the class is not imported here)
 Robot = Any
 

@@ -3,7 +3,7 @@ method part: problem (12)-(13) per posture and imposed displacement, solved with
 ``trust-constr`` (interior point, as the paper's fmincon "interior-point"; :func:`solve_displacement`),
 the tolerance-interval rule of Fig. 4 (:func:`fig4_intervals`) and the verification of Sec. 4.1
 (:func:`verification_errors`); step 2 for every posture and imposed displacement of Tables A1-A2
-is :func:`synthesis_runs`. The kinematics are :class:`robots.delta.DeltaRobot`'s; the paper's
+is :func:`synthesis_runs`. The kinematics are :class:`evotol.robots.delta.DeltaRobot`'s; the paper's
 tables and the study around them are :mod:`evotol.studies.brahmia2023_delta`.
 
 Two objectives F are available: ``"closed"`` (the platform position from the loop-closure
@@ -25,7 +25,7 @@ import numpy as np
 from scipy.optimize import Bounds, minimize
 
 from evotol.errors import ValidationError
-from robots.delta import LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot
+from evotol.robots.delta import LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot
 
 BOUND_LINEAR_MM = 0.015           # eq. (13)
 BOUND_ANGULAR_DEG = 0.015         # eq. (13)
@@ -43,7 +43,7 @@ def paper_bounds() -> np.ndarray:
     Returns
     -------
     ndarray, shape (47,)
-        Bound of each error parameter (order of :data:`robots.delta.PARAMETER_NAMES`):
+        Bound of each error parameter (order of :data:`evotol.robots.delta.PARAMETER_NAMES`):
         ``1.5e-5`` m for the linear ones, ``radians(0.015)`` rad for the angular ones.
     """
     return np.where(IS_LINEAR, BOUND_LINEAR_MM * 1e-3, np.radians(BOUND_ANGULAR_DEG))
@@ -55,7 +55,7 @@ def postures_m(names=None) -> np.ndarray:
     Parameters
     ----------
     names : iterable of str or None
-        Posture names, keys of :data:`robots.delta.POSTURES_MM` (``"P1"`` ... ``"P15"``);
+        Posture names, keys of :data:`evotol.robots.delta.POSTURES_MM` (``"P1"`` ... ``"P15"``);
         None: all 15, in order.
 
     Returns
@@ -268,10 +268,10 @@ def synthesis_runs(robot: DeltaRobot, postures=SYNTHESIS_POSTURES, tests=tuple(T
 
     Parameters
     ----------
-    robot : robots.delta.DeltaRobot
+    robot : evotol.robots.delta.DeltaRobot
         The Delta robot model.
     postures : sequence of str, optional
-        Posture names (keys of :data:`robots.delta.POSTURES_MM`); default P1, P3, P6, P9.
+        Posture names (keys of :data:`evotol.robots.delta.POSTURES_MM`); default P1, P3, P6, P9.
     tests : sequence of str, optional
         Imposed-displacement directions, keys of :data:`TEST_DIRECTIONS` (``"+x"`` ... ``"-z"``);
         default all six, in the order of tests 1..6.
@@ -290,7 +290,7 @@ def synthesis_runs(robot: DeltaRobot, postures=SYNTHESIS_POSTURES, tests=tuple(T
     -------
     list of dict
         One dict per (posture, test), postures outer: the output of
-        :func:`robots.delta_synthesis.solve_displacement` (``errors`` (47,) SI, ``F``,
+        :func:`evotol.robots.delta_synthesis.solve_displacement` (``errors`` (47,) SI, ``F``,
         ``achieved`` (3,) m, ``nit``, ``status``, ``residual_mm`` in mm) plus ``posture`` and
         ``test``.
 

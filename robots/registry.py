@@ -7,10 +7,10 @@ import importlib
 from evotol.errors import ValidationError
 
 BUILTIN = {
-    "ucr3": "robots.ucr3:UCR3",
-    "delta": "robots.delta:DeltaRobot",
-    "planar5r": "robots.planar5r.model:Planar5R",
-    "fivebar": "robots.fivebar:FiveBarGeometric",
+    "ucr3": "evotol.robots.ucr3:UCR3",
+    "delta": "evotol.robots.delta:DeltaRobot",
+    "planar5r": "evotol.robots.planar5r.model:Planar5R",
+    "fivebar": "evotol.robots.fivebar:FiveBarGeometric",
 }
 
 

@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
 
 _PHI = np.array([0.0, 2 * np.pi / 3, 4 * np.pi / 3])
 VARIANTS = ("verified", "paper")

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-import cost_models as cm
+import evotol.cost_models as cm
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_proportional, allocate_sensitivity)
 from evotol.errors import ValidationError

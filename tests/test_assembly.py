@@ -5,13 +5,13 @@ import warnings
 import numpy as np
 import pytest
 
-from cost_models import PowerCost
+from evotol.cost_models import PowerCost
 from evotol.allocators.process import assembly_problem
 from evotol.errors import ValidationError
 from evotol.core.problem import Tolerance
 from evotol.studies._process_benchmarks import CLUTCH_LIMIT_RAD, CLUTCH_NOMINAL, clutch_angle, clutch_assembly
-from robots.assembly import AssemblyFunction, LinearStack, resolve
-from robots.base import check_robot
+from evotol.robots.assembly import AssemblyFunction, LinearStack, resolve
+from evotol.robots.base import check_robot
 
 
 def clutch_gradient_closed_form(a, c, e):

@@ -198,7 +198,7 @@ def test_argparse_type_errors_are_argument_type_errors():
 def _api_problem(locked=None, measure="worst_case", position=1e-3):
     import numpy as np
 
-    import cost_models as cm
+    import evotol.cost_models as cm
     from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
     from tests.toy_robot import ToyRobot
 
@@ -212,12 +212,12 @@ def _api(name):
     """Calls that must fail; imported lazily so a collection error names the case."""
     import numpy as np
 
-    import cost_models as cm
+    import evotol.cost_models as cm
     from evotol import allocators as al
     from evotol.verification.montecarlo import verify
     from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
-    from robots import registry
-    from robots.ucr3 import UCR3
+    from evotol.robots import registry
+    from evotol.robots.ucr3 import UCR3
     from tests.toy_robot import ToyRobot
 
     P = _api_problem

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import cost_models as cm
+import evotol.cost_models as cm
 from evotol.allocators import (aggregated_sensitivity, allocate_equal, allocate_ga, allocate_lagrange,
                                allocate_optimum, allocate_proportional, allocate_sensitivity)
 from evotol.errors import ValidationError

@@ -151,7 +151,7 @@ def test_plans_by_joints_poses_and_orientation(ur5):
 
 
 def test_a_model_without_joint_maps_and_with_disk_sources():
-    """The 3-UCR (robots.ucr3: lengths plus joint-clearance disks): calibrated from workspace poses, only its
+    """The 3-UCR (evotol.robots.ucr3: lengths plus joint-clearance disks): calibrated from workspace poses, only its
     interval sources are identified; a disk named is refused; no linear range, and the report says so."""
     spec = tomllib.loads((ROOT / "reports/studies/ucr3_example.toml").read_text())
     p = load_problem(spec, base_dir=ROOT / "reports/studies")

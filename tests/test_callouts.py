@@ -4,7 +4,7 @@ Independent checks: brute-force sampling of a position zone (the axis ends on th
 independent boxes at their 16 corners) against the issue's numbers and the closed form; the
 sampled zone pushed through the nonlinear placement ``exp(delta)`` (the axis stays in its
 cylinder to second order); central finite differences of the nonlinear model
-(:func:`robots.base.check_robot`); a brute-force grid over the two end circles against the
+(:func:`evotol.robots.base.check_robot`); a brute-force grid over the two end circles against the
 worst-case measure, linear and nonlinear.
 """
 import tomllib
@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 
 from evotol.errors import ValidationError
-from robots.checks import check_robot
-from robots.mechanism.callout_model import CalloutModel
-from robots.mechanism.callout_table import callouts_from_tables, joint_seat, parse_length
-from robots.mechanism.callouts import (Callout, axis_displacement, lateral_basis, worst_axis_displacement,
+from evotol.robots.checks import check_robot
+from evotol.robots.mechanism.callout_model import CalloutModel
+from evotol.robots.mechanism.callout_table import callouts_from_tables, joint_seat, parse_length
+from evotol.robots.mechanism.callouts import (Callout, axis_displacement, lateral_basis, worst_axis_displacement,
                                        zone_members)
-from robots.mechanism.description import load_mechanism
-from robots.mechanism.placement import placement_error
+from evotol.robots.mechanism.description import load_mechanism
+from evotol.robots.mechanism.placement import placement_error
 
 UR5 = Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"
 JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
@@ -122,10 +122,10 @@ def test_worst_case_equals_brute_force_over_the_zone(ur5):
     worst-case measure equals the largest error over a 181 x 181 grid of the two end circles
     (the extreme points of the zone), linear to 2e-4 and nonlinear to 1e-4 more."""
     from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
-    import cost_models
+    import evotol.cost_models
 
     m = CalloutModel(ur5, [Callout("elbow_joint", "position", 0.05, 0.01)], sources=["elbow_joint"])
-    cost = cost_models.from_dict({"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-5})
+    cost = evotol.cost_models.from_dict({"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-5})
     tols = {n: Tolerance(cost=cost, lower=1e-6, upper=1e-3) for n in m.source_names}
     tols["elbow_joint"] = Tolerance.fixed(1e-10)
     poses = m.workspace.grid(2)[:3]
@@ -172,8 +172,8 @@ def test_bad_callouts_are_one_line_errors(ur5, entry, field):
 
 
 def test_a_planar_mechanism_has_no_axis_to_place():
-    from robots.mechanism.description import load_mechanism as load
-    from robots.mechanism.shipped import resolve_description
+    from evotol.robots.mechanism.description import load_mechanism as load
+    from evotol.robots.mechanism.shipped import resolve_description
 
     mech = load(resolve_description("planar3rrr", None))
     with pytest.raises(ValidationError, match=r"callout A1 .* spatial mechanism"):
@@ -247,9 +247,9 @@ def test_description_callouts_and_a_prismatic_guide_over_its_stroke():
     """``[[callouts]]`` in a TOML description: a guide's parallelism over its 300 mm stroke is a
     tilt disc of radius t/L about the guide's centre, on a [[frame]] joint (axis z of its
     placement); the model agrees with finite differences."""
-    from robots.mechanism.callout_model import with_callouts
-    from robots.mechanism.description import mechanism_from_dict
-    from robots.mechanism.model import MechanismModel
+    from evotol.robots.mechanism.callout_model import with_callouts
+    from evotol.robots.mechanism.description import mechanism_from_dict
+    from evotol.robots.mechanism.model import MechanismModel
 
     mech = mechanism_from_dict(RP_ARM)
     assert [c.name for c in mech.callouts] == ["J2.parallelism", "J1.position"]
@@ -280,12 +280,12 @@ def test_position_refined_by_orientation_is_a_safe_outer_set(ur5):
     their discs and |d2 - d1| <= t_o) by rejection; the model's worst case bounds every sample and
     the model's own extreme points are in the zone only when t_o -> 0."""
     from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
-    import cost_models
+    import evotol.cost_models
 
     cs = [Callout("elbow_joint", "position", 0.05), Callout("elbow_joint", "perpendicularity", 0.05)]
     m = CalloutModel(ur5, cs, sources=["elbow_joint"])
     assert m.source_names == ("elbow_joint.position", "elbow_joint.perpendicularity", "elbow_joint")
-    cost = cost_models.from_dict({"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-5})
+    cost = evotol.cost_models.from_dict({"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-5})
     tols = {n: Tolerance(cost=cost, lower=1e-7, upper=1e-3) for n in m.source_names}
     tols["elbow_joint"] = Tolerance.fixed(1e-12)
     poses = m.workspace.grid(2)[:2]

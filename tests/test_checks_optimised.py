@@ -20,8 +20,8 @@ assert False, "asserts are not stripped: this is not python -O"
 
 CASES = {
     "robot with NaN sensitivities": '''
-from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.checks import check_robot
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.checks import check_robot
 
 class NaNRobot(RobotErrorModel):
     name = "nan"
@@ -34,8 +34,8 @@ class NaNRobot(RobotErrorModel):
 check_robot(NaNRobot())
 ''',
     "cost model rising with t": '''
-from cost_models import CallableCost
-from cost_models.checks import check_cost_model
+from evotol.cost_models import CallableCost
+from evotol.cost_models.checks import check_cost_model
 
 check_cost_model(CallableCost(lambda t: 1.0 + 1e4 * t, lambda t: 1e4 + 0 * t, name="rising"), 1e-6, 1e-4)
 ''',

@@ -9,15 +9,15 @@ deng2012-clearalloc study), and the Monte Carlo inside the clearance sets.
 import numpy as np
 import pytest
 
-from cost_models import ReciprocalCost
+from evotol.cost_models import ReciprocalCost
 from evotol.allocators import allocate_nsga2, allocate_optimum
 from evotol.allocators.monotone import polyblock
 from evotol.measures.clearances import ClearanceClass, ClearanceSources, sample_twists, thesis_classes
 from evotol.errors import ValidationError
 from evotol.verification.montecarlo import verify
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
-from robots.clearance import ClearanceEvaluator
-from robots.mechanism.model import MechanismModel, resolve_description
+from evotol.robots.clearance import ClearanceEvaluator
+from evotol.robots.mechanism.model import MechanismModel, resolve_description
 
 H = 0.01                                   # joint length of eq. III.2 (m), as deng2012-tolsynth
 COST = ReciprocalCost(1.0, 1.0, scale=1e-6)
@@ -241,14 +241,14 @@ def test_clearalloc_study_quick_redraws_from_its_json(tmp_path, fivebar):
     # the engine's value at the GA's design vs the thesis's own method (QR + SLSQP multistart) on the
     # same bounds scaled x100 (all bounds, idle rotation included: W scales with them) -- at the raw
     # micrometre scale SLSQP stops at its absolute tolerance and reports ~1/3 of the maximum
-    from robots.clearance import multistart_max_pose_error
+    from evotol.robots.clearance import multistart_max_pose_error
 
     mech = fivebar[1]
     t = np.array([s["ga"]["tolerances_mm"][n] for n in s["classes"]]) * 1e-3
     b = mech.thesis_bounds(b_xy=t[:5], b_z=t[5:], h=H) * 100
     ms = multistart_max_pose_error(mech, POSE, b, n_starts=8, seed=0)
     assert s["ga"]["p_max_mm"] * (1 - 1e-3) <= ms.p_max[0] * 1e3 / 100 <= s["ga"]["p_upper_mm"] * (1 + 1e-6)
-    from robots.clearance import max_pose_error
+    from evotol.robots.clearance import max_pose_error
 
     td = np.array([s["doe"]["tolerances_mm"][n] for n in s["classes"]]) * 1e-3
     doe = max_pose_error(mech, POSE, mech.thesis_bounds(b_xy=td[:5], b_z=td[5:], h=H))
@@ -261,7 +261,7 @@ def test_two_parallel_fits_give_the_minimum_not_a_convex_function():
     between base and platform, radial plays c_1, c_2 only. The platform moves by s_1 = s_2, so
     W = min(c_1, c_2) -- the engine reproduces the closed form, and at the midpoint of
     (1, 3) -> (3, 1) µm W = 2 µm is twice the chord (1 µm): not convex, not quasi-convex."""
-    from robots.clearance import Chain, ClearanceBounds, ClearanceMechanism, DHFrame, DHTree, Joint, evaluate_cases
+    from evotol.robots.clearance import Chain, ClearanceBounds, ClearanceMechanism, DHFrame, DHTree, Joint, evaluate_cases
 
     tree = DHTree([DHFrame("J1", "0"), DHFrame("J2", "0"), DHFrame("P", "J1", sigma=2)])
     zero = ClearanceBounds(0.0, 0.0, 0.0, 0.0)

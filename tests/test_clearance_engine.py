@@ -1,4 +1,4 @@
-"""Joint-clearance engine (robots.clearance), checked on the 5-bar of Deng 2012 Ch. IV.
+"""Joint-clearance engine (evotol.robots.clearance), checked on the 5-bar of Deng 2012 Ch. IV.
 
 Every test names the equation it checks. Numbers come from finite differences, closed forms,
 an independent local solver (SLSQP) and the thesis's multistart method -- never from a stored
@@ -9,10 +9,10 @@ import pytest
 from scipy.optimize import minimize
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.clearance import (ClearanceEvaluator, max_pose_error, multistart_max_pose_error, twist_between)
-from robots.clearance.kinematics import adjoint, exp_screw, inv_transform, kk_transform, rotation_vector
-from robots.clearance.support import solve_support
-from robots.fivebar import FiveBar
+from evotol.robots.clearance import (ClearanceEvaluator, max_pose_error, multistart_max_pose_error, twist_between)
+from evotol.robots.clearance.kinematics import adjoint, exp_screw, inv_transform, kk_transform, rotation_vector
+from evotol.robots.clearance.support import solve_support
+from evotol.robots.fivebar import FiveBar
 from evotol.units import MM
 
 
@@ -201,7 +201,7 @@ def test_never_below_the_thesis_multistart_method(mech, few_poses, result):
 def test_split_and_unsplit_formulations_agree(mech, few_poses, result):
     """The exact in/out-of-plane split (p^2 = p_in^2 + p_out^2) equals the 6-D problem solved
     with the half-sphere branch and bound."""
-    from robots.clearance import evaluate_cases
+    from evotol.robots.clearance import evaluate_cases
     maps = mech.pose_maps(few_poses, split=False)
     full = evaluate_cases(mech, maps, np.arange(len(few_poses)), np.broadcast_to(mech.default_bounds(), (4, 5, 4)))
     assert np.all(full.p_max <= result.p_upper * (1 + 1e-9)) and np.all(result.p_max <= full.p_upper * (1 + 1e-9))

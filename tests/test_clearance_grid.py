@@ -2,8 +2,8 @@
 import numpy as np
 
 from evotol._runtime.executor import parallel_map
-from robots.clearance.grid import grid_max_pose_error
-from robots.fivebar import FiveBar
+from evotol.robots.clearance.grid import grid_max_pose_error
+from evotol.robots.fivebar import FiveBar
 
 
 def _square(x):

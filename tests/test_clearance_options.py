@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import ValidationError
-from robots.clearance import ClearanceEvaluator, MaxPoseError, max_pose_error
-from robots.clearance.options import DEFAULT, LEGACY, NUMPY, EngineOptions
+from evotol.robots.clearance import ClearanceEvaluator, MaxPoseError, max_pose_error
+from evotol.robots.clearance.options import DEFAULT, LEGACY, NUMPY, EngineOptions
 
 
 def test_options_are_frozen_and_validated():
@@ -27,7 +27,7 @@ def test_workers_compute_with_the_options_their_task_carries():
     settings: bit-identical to the same chunks solved with the same settings in this process
     (brackets and Newton work), and a different amount of work than the default settings -- the
     workers did not fall back to them."""
-    from robots.fivebar import FiveBar
+    from evotol.robots.fivebar import FiveBar
 
     mech = FiveBar().clearance_mechanism()
     rng = np.random.default_rng(2)
@@ -45,7 +45,7 @@ def test_workers_compute_with_the_options_their_task_carries():
 
 
 def test_work_is_returned_and_summed_over_chunks():
-    from robots.fivebar import FiveBar
+    from evotol.robots.fivebar import FiveBar
 
     mech = FiveBar().clearance_mechanism()
     poses = [[0.0, 0.07], [0.01, 0.06], [-0.01, 0.05]]
@@ -59,7 +59,7 @@ def test_concat_keeps_the_values_of_extra_sources():
     """Chunks of the 5-bar's combined clearance + geometric worst case (``extra`` sources) keep the
     extra sources' values at the maximisers when concatenated (they were dropped: None), equal to
     the same poses solved at once; mixing a part with extras and one without is refused."""
-    from robots.fivebar import FiveBar, combined_max_pose_error
+    from evotol.robots.fivebar import FiveBar, combined_max_pose_error
 
     poses = [[0.0, 0.07], [0.01, 0.06], [-0.01, 0.05]]
     geo = {"L1": 2e-5, "L2": 1e-5}

@@ -10,9 +10,9 @@
 import numpy as np
 import pytest
 
-from robots.clearance import max_pose_error
-from robots.clearance import patches as me
-from robots.clearance.options import DEFAULT, LEGACY
+from evotol.robots.clearance import max_pose_error
+from evotol.robots.clearance import patches as me
+from evotol.robots.clearance.options import DEFAULT, LEGACY
 
 
 def _brute(U, H, n=400):
@@ -75,14 +75,14 @@ def test_interpolated_dual_bound_is_valid_and_never_above_the_vertex_bound(robot
     """For patches around directions of a real error set: the dual-interpolation bound (issue 13)
     is above h at 40 directions inside the patch, each solved to 1e-10, and not above the
     sublinearity bound of the vertex values."""
-    from robots.clearance.support import solve_support, true_dual
+    from evotol.robots.clearance.support import solve_support, true_dual
 
     if robot == "fivebar":
-        from robots.fivebar import FiveBar
+        from evotol.robots.fivebar import FiveBar
 
         Ct, Bt, nd, groups = _block(FiveBar().clearance_mechanism(), [0.0, 0.07], target)
     else:
-        from robots.irsbot2 import IRSBot2
+        from evotol.robots.irsbot2 import IRSBot2
 
         Ct, Bt, nd, groups = _block(IRSBot2.thesis("VI.1").clearance_mechanism(), [0.0, -0.05], target)
     k = Ct.shape[1]
@@ -126,7 +126,7 @@ def _agree(mech, poses):
 
 
 def test_fivebar_map_agrees_with_the_engine_before_issue_13():
-    from robots.fivebar import FiveBar
+    from evotol.robots.fivebar import FiveBar
 
     fb = FiveBar()
     new, old = _agree(fb.clearance_mechanism(), fb.workspace.grid(5))
@@ -134,7 +134,7 @@ def test_fivebar_map_agrees_with_the_engine_before_issue_13():
 
 
 def test_irsbot2_distal_map_agrees_with_the_engine_before_issue_13():
-    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+    from evotol.robots.irsbot2 import MAP_WORKSPACE, IRSBot2
 
     mech = IRSBot2.thesis("VI.1").clearance_mechanism(parallelograms=False)
     new, old = _agree(mech, MAP_WORKSPACE.grid(3))
@@ -147,7 +147,7 @@ def test_path_predictor_keeps_the_certificate_with_fewer_newton_iterations():
     (counted, not timed)."""
     from dataclasses import replace
 
-    from robots.fivebar import FiveBar
+    from evotol.robots.fivebar import FiveBar
 
     fb = FiveBar()
     mech, poses = fb.clearance_mechanism(), fb.workspace.grid(4)

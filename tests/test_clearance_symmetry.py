@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.clearance import max_pose_error
-from robots.clearance.grid import grid_max_pose_error
-from robots.clearance.symmetry import grid_max_pose_error_mirrored, mirror_maxima, prove_mirror
-from robots.irsbot2 import IRSBot2, mirror_joint_map
+from evotol.robots.clearance import max_pose_error
+from evotol.robots.clearance.grid import grid_max_pose_error
+from evotol.robots.clearance.symmetry import grid_max_pose_error_mirrored, mirror_maxima, prove_mirror
+from evotol.robots.irsbot2 import IRSBot2, mirror_joint_map
 
 X_MIRROR = np.diag([-1.0, 1.0, 1.0])
 

@@ -10,12 +10,12 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-import cost_models as cm
-from cost_models.checks import cost_model_checks
+import evotol.cost_models as cm
+from evotol.cost_models.checks import cost_model_checks
 from evotol.errors import KinematicsError
-from robots import registry as robot_registry
-from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.checks import CHECKS, check_robot, robot_checks
+from evotol.robots import registry as robot_registry
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.checks import CHECKS, check_robot, robot_checks
 
 ROBOTS = sorted(robot_registry.available())
 COST_MODELS = sorted(cm.available())
@@ -39,7 +39,7 @@ def _shipped_models():
     """Robots that are not classes of the registry: every shipped mechanism description (as
     ``mechanism = NAME`` builds it) and the process-selection studies' assemblies."""
     from evotol.studies._process_benchmarks import clutch_assembly, stack_problem
-    from robots.mechanism.model import SHIPPED, MechanismModel, resolve_description
+    from evotol.robots.mechanism.model import SHIPPED, MechanismModel, resolve_description
 
     models = {f"mechanism:{p.stem}": (lambda n=p.stem: MechanismModel(resolve_description(n)))
               for p in sorted(SHIPPED.glob("*.toml"))}
@@ -159,6 +159,6 @@ def test_dict_round_trip_check_catches_a_lossy_to_dict():
     checks = dict(cost_model_checks(Lossy(1.9, 0.5, scale=1e-5), *T_RANGE))
     # a subclass is not what the registry builds: the check is not offered for it
     assert "check_dict_round_trip" not in checks
-    from cost_models.checks import check_dict_round_trip
+    from evotol.cost_models.checks import check_dict_round_trip
     with pytest.raises(AssertionError, match="from_dict"):
         check_dict_round_trip(Lossy(1.9, 0.5, scale=1e-5), *T_RANGE)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-import cost_models as cm
+import evotol.cost_models as cm
 from evotol.errors import ValidationError
 
 ALL = [cm.ExponentialCost(1.9, 0.5, scale=1e-5), cm.PowerCost(2.0, 1.3, scale=1e-5), cm.ReciprocalCost(0.2, 1.5, scale=1e-5),

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.checks import check_robot
-from robots.delta import (ANGULAR, LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot,
+from evotol.robots.checks import check_robot
+from evotol.robots.delta import (ANGULAR, LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot,
                           cylinder_poses)
 
 ROBOT = DeltaRobot()
@@ -151,7 +151,7 @@ def test_bad_input_raises_named_errors():
     with pytest.raises(ValidationError, match="errors shape"):
         ROBOT.pose_error(P15, np.zeros((15, 2, 46)))
     with pytest.raises(ValidationError, match="DeltaGeometry.La"):
-        from robots.delta import DeltaGeometry
+        from evotol.robots.delta import DeltaGeometry
         DeltaGeometry(La=-1.0)
     with pytest.raises(ValidationError, match="geometry"):
         DeltaRobot(geometry={"Lc": 0.3})

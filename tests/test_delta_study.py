@@ -6,8 +6,8 @@ import pytest
 
 from evotol import studies
 from evotol.studies import brahmia2023_delta as study
-from robots import delta_synthesis as ds
-from robots.delta import DeltaRobot, cylinder_poses
+from evotol.robots import delta_synthesis as ds
+from evotol.robots.delta import DeltaRobot, cylinder_poses
 
 
 @pytest.fixture(scope="module")

@@ -4,8 +4,8 @@ import pytest
 
 from evotol.errors import ValidationError
 from evotol.studies import brahmia2023_delta as study
-from robots import delta_synthesis as ds
-from robots.delta import PARAMETER_NAMES, DeltaRobot
+from evotol.robots import delta_synthesis as ds
+from evotol.robots.delta import PARAMETER_NAMES, DeltaRobot
 
 ROBOT = DeltaRobot()
 BOUNDS = ds.paper_bounds()

@@ -17,8 +17,8 @@ import pytest
 
 from evotol.studies import deng2012_dimsynth as ds
 from evotol.studies import deng2012_tolsynth as ts
-from robots.geometry import largest_centred_rectangle, largest_rectangle
-from robots.irsbot2 import IRSBot2, singularity_free_rectangle
+from evotol.robots.geometry import largest_centred_rectangle, largest_rectangle
+from evotol.robots.irsbot2 import IRSBot2, singularity_free_rectangle
 from evotol.units import MM
 
 TAB_VI_5 = dict(l1=50 * MM, l2=50 * MM, a1=30 * MM, a2=15 * MM, p=25 * MM)
@@ -98,7 +98,7 @@ def _largest_by_brute_force(m, centre=None) -> int:
 
 @pytest.mark.parametrize("centre", [None, 5])
 def test_largest_rectangle_matches_brute_force(centre):
-    """robots.geometry: the histogram algorithm (and its centred reduction) against every rectangle."""
+    """evotol.robots.geometry: the histogram algorithm (and its centred reduction) against every rectangle."""
     rng = np.random.default_rng(3)
     for _ in range(30):
         m = rng.random((8, 11)) < 0.8

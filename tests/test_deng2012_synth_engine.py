@@ -74,7 +74,7 @@ def test_maximum_error_grows_with_every_clearance(ev):
 
 
 def test_never_below_the_thesis_multistart_method(ev):
-    from robots.clearance import multistart_max_pose_error
+    from evotol.robots.clearance import multistart_max_pose_error
 
     X = pd.DataFrame([entry([0.1, 1e-3, 0.01, 1e-4, 0.1], [0.1, 1e-3, 1e-3, 0.1, 1e-3])])
     ours = ev(X).iloc[0]
@@ -124,7 +124,7 @@ def test_planar_geometry_agrees_with_the_inverse_geometry():
     """Two independent inverse geometries of one model: IRSBot2.planar_legs (circle intersection)
     and IRSBot2.inverse_geometry (eqs. II.5-II.8)."""
     from evotol.studies import deng2012_dimsynth as ds
-    from robots.irsbot2 import singularity_free_rectangle
+    from evotol.robots.irsbot2 import singularity_free_rectangle
 
     rng = np.random.default_rng(1)
     for d in [(50, 50, 30, 15, 25), (200, 100, 50, 15, 15), (100, 200, 10, 30, 40)]:
@@ -139,7 +139,7 @@ def test_planar_geometry_agrees_with_the_inverse_geometry():
 
 def test_batched_engine_call_equals_one_call_per_design():
     from evotol.studies import deng2012_dimsynth as ds
-    from robots.irsbot2 import singularity_free_rectangle
+    from evotol.robots.irsbot2 import singularity_free_rectangle
 
     robots = [ds.design_robot(*(np.array(d) * MM)) for d in [(50, 50, 30, 15, 25), (200, 100, 50, 5, 15)]]
     pts = [singularity_free_rectangle(r, n=81).points for r in robots]
@@ -149,7 +149,7 @@ def test_batched_engine_call_equals_one_call_per_design():
         np.testing.assert_allclose(pb, p1, rtol=2e-3)        # both within the 0.1 % certificate
         np.testing.assert_allclose(rb, r1, rtol=2e-3)
     # clearances in the parallelograms add error sources (Sec. VI.3): distal-only is never larger
-    from robots.clearance import max_pose_error
+    from evotol.robots.clearance import max_pose_error
 
     distal, _, _ = ds.clearance_bounds()
     distal_only = max_pose_error(robots[0].clearance_mechanism(parallelograms=False, distal=distal), pts[0])

@@ -31,7 +31,7 @@ built from them is checked by CI with ``sphinx -W``.
 
 Run as a script to list what a module (or package, with its submodules) lacks::
 
-    python tests/test_docstrings.py robots.delta evotol.measures
+    python tests/test_docstrings.py evotol.robots.delta evotol.measures
 """
 from __future__ import annotations
 

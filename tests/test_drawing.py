@@ -8,11 +8,11 @@ import re
 import numpy as np
 import pytest
 
-from cost_models.power import PowerCost
+from evotol.cost_models.power import PowerCost
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.summaries.drawing import clean, rounded_design
 from evotol.units.display import DisplayUnits
-from robots.assembly import LinearStack
+from evotol.robots.assembly import LinearStack
 
 LIMIT = 1e-4          # m: gap within ±100 µm of its nominal
 

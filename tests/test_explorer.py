@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cost_models import CallableCost
+from evotol.cost_models import CallableCost
 from evotol.summaries.explorer_data import explorer_data, sampled_worst_case
 from evotol.core.problem import ToleranceProblem
 from evotol.reporting.headless import HeadlessChromium

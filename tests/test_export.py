@@ -54,7 +54,7 @@ def test_run_writes_the_drawing_table_in_display_units(specs):
     assert csv.set_index("source").loc["R1", "process"] == "fixed (bought in)"
     assert csv.set_index("source").loc["R1", "cost share (%)"] == 0
     # every share from the study file's cost models (not the shares' own sum, which is 100 by construction)
-    from cost_models import ExponentialCost
+    from evotol.cost_models import ExponentialCost
 
     length, joint = ExponentialCost(1.9, 0.5, scale=1e-5), ExponentialCost(1.1, 0.6, scale=1e-5)
     cost = {n: 0.0 if s["fixed"] else float((length if s["group"] == "length" else joint).cost(

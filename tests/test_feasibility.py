@@ -157,7 +157,7 @@ def test_repair_marks_a_non_finite_ratio_failed_not_met(bad):
     """A design whose proven error is NaN or inf (an evaluation that failed) is neither "met" nor
     "no repair needed": bound_ratio is NaN / inf and repair_by_scaling returns it unchanged with
     info["failed"] and a reason naming the ratio."""
-    import cost_models as cm
+    import evotol.cost_models as cm
     from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
     from tests.toy_robot import ToyRobot
 

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import Workspace
-from robots.checks import check_robot
-from robots.clearance import max_pose_error
-from robots.fivebar import FiveBar, FiveBarGeometric, combined_max_pose_error
+from evotol.robots.base import Workspace
+from evotol.robots.checks import check_robot
+from evotol.robots.clearance import max_pose_error
+from evotol.robots.fivebar import FiveBar, FiveBarGeometric, combined_max_pose_error
 from evotol.units import MM
 
 
@@ -65,7 +65,7 @@ def test_out_of_reach_pose_is_named(fb):
 
 def test_values_at_the_singularity_are_finite(fb):
     """Sec. IV.3: the maxima are largest at the singular configuration -- finite, not NaN."""
-    from robots.clearance import multistart_max_pose_error
+    from evotol.robots.clearance import multistart_max_pose_error
 
     r = max_pose_error(fb.clearance_mechanism(), [[0.0, 0.05], [0.0, 0.06]])
     assert np.all(np.isfinite(r.p_max)) and r.p_max[0] > 2 * r.p_max[1]
@@ -90,7 +90,7 @@ def test_actuation_redundancy_rotation_is_leg1_tilts_fig_IV14(fb):
 @pytest.mark.parametrize("L5", [0.0, 0.005])
 def test_Jp_matches_finite_differences_of_the_nonlinear_model_IV43(L5):
     """Eqs. IV.27-IV.43: the vector-differentiation J_p equals central differences of the
-    re-solved loop (robots.base.check_robot), relative mismatch ~1e-9."""
+    re-solved loop (evotol.robots.base.check_robot), relative mismatch ~1e-9."""
     ws = Workspace(("x", "y"), (-0.01, 0.056), (0.01, 0.066), ("m", "m"))
     rep = check_robot(FiveBarGeometric(FiveBar(L5=L5), workspace=ws), rtol=1e-6)
     assert rep["fd_relative_mismatch"] < 1e-6
@@ -131,7 +131,7 @@ def test_core_allocates_geometric_tolerances_by_cost_and_engine_confirms(fb):
     """Sec. III.2/IV.5 exposed to the core: allocate dL0..dL5, dtheta1, dtheta3 by cost with the
     certified allocator; our own branch and bound (clearances set to zero, geometric sources as
     extra intervals) confirms the worst-case position error meets the requirement."""
-    from cost_models import ExponentialCost
+    from evotol.cost_models import ExponentialCost
     from evotol.allocators import allocate_optimum
     from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 

@@ -13,7 +13,7 @@ import pytest
 import evotol
 
 ROOT = Path(__file__).resolve().parent.parent
-# dotted names in message strings: "an evotol.Requirement", "a robots.base.RobotErrorModel"
+# dotted names in message strings: "an evotol.Requirement", "a evotol.robots.base.RobotErrorModel"
 DOTTED = re.compile(r"[\"'][^\"']*?\b((?:evotol|robots|cost_models)(?:\.[a-z_][a-z0-9_]*)*\.[A-Z][A-Za-z0-9_]*[a-z][A-Za-z0-9_]*)\b")
 
 
@@ -63,7 +63,7 @@ def _named_classes():
 
 def test_error_messages_name_importable_classes():
     named = _named_classes()
-    assert len(named) >= 4   # evotol.Requirement, evotol.Tolerance, robots.base.RobotErrorModel, ...
+    assert len(named) >= 4   # evotol.Requirement, evotol.Tolerance, evotol.robots.base.RobotErrorModel, ...
     bad = []
     for dotted, where in named:
         module, _, attr = dotted.rpartition(".")

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError
-from robots.clearance import max_pose_error, multistart_max_pose_error, twist_between
-from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+from evotol.robots.clearance import max_pose_error, multistart_max_pose_error, twist_between
+from evotol.robots.irsbot2 import MAP_WORKSPACE, IRSBot2
 
 POSES = np.array([[0.0, -0.05], [0.012, -0.031], [-0.025, -0.065]])
 

@@ -14,8 +14,8 @@ import pytest
 
 from evotol.errors import ValidationError
 from evotol.studyfile import load_problem
-from robots.mechanism.joint_space import JointSpaceModel, joint_configurations
-from robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.joint_space import JointSpaceModel, joint_configurations
+from evotol.robots.mechanism.model import MechanismModel
 from tests.test_standard_dh import PUMA, TABLE, textbook_fk
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -14,7 +14,7 @@ import pytest
 
 import evotol.allocators.monotone as monotone_module
 import evotol.allocators.optimum as optimum_module
-from cost_models import ReciprocalCost
+from evotol.cost_models import ReciprocalCost
 from evotol.allocators import allocate_optimum, allocate_sensitivity
 from evotol.allocators.workspace_refinement import allocate_on_workspace
 from evotol.cli import main
@@ -25,7 +25,7 @@ from evotol.errors import ValidationError
 from evotol.measures import feasibility
 from evotol.measures.clearances import ClearanceSources, WithClearances, thesis_classes
 from evotol.studyfile import load_problem
-from robots.mechanism.model import MechanismModel, resolve_description
+from evotol.robots.mechanism.model import MechanismModel, resolve_description
 from tests.fast_study import fast_study
 
 ROOT = Path(__file__).resolve().parents[1]

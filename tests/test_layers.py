@@ -52,7 +52,7 @@ NAMES = ["foundation", "models", "measures", "core", "allocators", "verification
 
 #: upward imports that another engineer's open issue removes: (importer, imported) -> issue
 # (issue 10 removed evotol.core.problem -> evotol.verification.montecarlo; issue 11 removed evotol.studies.mechanisms ->
-# evotol.cli.commands.check_mechanism: the checks live in robots.mechanism.checks)
+# evotol.cli.commands.check_mechanism: the checks live in evotol.robots.mechanism.checks)
 KNOWN: dict[tuple[str, str], str] = {}
 
 
@@ -202,8 +202,8 @@ def test_no_import_cycles():
 ])
 def test_the_checker_sees_upward_imports(src, upward):
     """The checker itself: an upward import in a robot module (also one hidden in a function) is found."""
-    got = imports_in(src, "robots.probe")
-    assert got and any(layer_of(t) > layer_of("robots.probe") for t in got) is upward, got
+    got = imports_in(src, "evotol.robots.probe")
+    assert got and any(layer_of(t) > layer_of("evotol.robots.probe") for t in got) is upward, got
 
 
 #: the most lines of code a module of the house may have (issue 26 item 3; issue 32 item 3 counts

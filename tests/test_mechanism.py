@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import Workspace, check_robot
-from robots.clearance import max_pose_error
-from robots.fivebar import FiveBar, FiveBarGeometric
-from robots.irsbot2 import IRSBot2, MAP_WORKSPACE
-from robots.mechanism import MechanismModel, load_mechanism, mechanism_from_dict
+from evotol.robots.base import Workspace, check_robot
+from evotol.robots.clearance import max_pose_error
+from evotol.robots.fivebar import FiveBar, FiveBarGeometric
+from evotol.robots.irsbot2 import IRSBot2, MAP_WORKSPACE
+from evotol.robots.mechanism import MechanismModel, load_mechanism, mechanism_from_dict
 from evotol.units import MM
 
 HERE = Path(__file__).resolve().parents[1] / "robots" / "mechanisms"
@@ -192,7 +192,7 @@ def test_source_patterns_and_their_errors(fivebar):
 def test_description_model_works_with_allocators_and_monte_carlo(fivebar):
     """allocate_optimum on the description-driven 5-bar equals it on the hand-written model; the
     nonlinear Monte Carlo runs through the description's pose_error."""
-    from cost_models import ExponentialCost
+    from evotol.cost_models import ExponentialCost
     from evotol.allocators import allocate_optimum
     from evotol.verification.montecarlo import verify
     from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
@@ -278,9 +278,9 @@ n_samples = 20
 # ---------------------------------------------------------------------------------- 3-UCR
 def test_ucr3_description_equals_hand_written_all_21_columns_at_50_poses():
     """Yao 2013 3-UCR ('verified' J_x of eq. 10): the description gives every column of the
-    hand-written map, column for column as :data:`robots.ucr3.DESCRIPTION_COLUMNS` pairs them (all
+    hand-written map, column for column as :data:`evotol.robots.ucr3.DESCRIPTION_COLUMNS` pairs them (all
     21 used once)."""
-    from robots.ucr3 import DESCRIPTION_COLUMNS, UCR3, columns_from_description
+    from evotol.robots.ucr3 import DESCRIPTION_COLUMNS, UCR3, columns_from_description
 
     m = MechanismModel(HERE / "ucr3.toml")
     r = UCR3()
@@ -299,7 +299,7 @@ def test_delta_description_equals_hand_written_for_all_47_parameters():
     meeting at the platform centre, eq. 3) gives the same position rows as robots/delta.py for all
     47 parameters of eq. (12) at 50 poses, and the same nonlinear closure with errors."""
     from evotol.studies.mechanisms import delta_columns
-    from robots.delta import DeltaRobot
+    from evotol.robots.delta import DeltaRobot
 
     m = MechanismModel(HERE / "delta.toml")
     r = DeltaRobot()

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from evotol.errors import ValidationError
-from robots.base import check_robot
-from robots.mechanism import MechanismModel, mechanism_from_dict
-from robots.mechanism.placement import PLACEMENT_FIELDS
-from robots.mechanism.urdf import pinocchio_tip_pose, resolve_urdf
+from evotol.robots.base import check_robot
+from evotol.robots.mechanism import MechanismModel, mechanism_from_dict
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
+from evotol.robots.mechanism.urdf import pinocchio_tip_pose, resolve_urdf
 
 HERE = Path(__file__).resolve().parents[1] / "robots" / "mechanisms"
 UR5 = "example-robot-data:ur_description/urdf/ur5_robot.urdf"
@@ -129,7 +129,7 @@ def pinocchio_placement_regressor(path, tip, Q):
 
 
 def stacked_rank(S):
-    from robots.mechanism.identifiability import stacked_rank as rank
+    from evotol.robots.mechanism.identifiability import stacked_rank as rank
 
     return rank(S)
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-import cost_models as cm
+import evotol.cost_models as cm
 from evotol.allocators import allocate_optimum
 from evotol.errors import ValidationError
 from evotol.measures.statistical.distributions import draw as _draw, uniforms as _uniforms
@@ -59,7 +59,7 @@ def test_3ucr_paper_table1_exceed_rate_and_linearisation():
 
 class _UnassembledToy(ToyRobot):
     """Linear toy with a nonlinear model that cannot assemble a sample whose source s0 error is
-    positive: raises by default, a NaN row with ``failures="nan"`` (as robots.planar5r)."""
+    positive: raises by default, a NaN row with ``failures="nan"`` (as evotol.robots.planar5r)."""
 
     def pose_error(self, poses, errors, failures="raise"):
         out = np.einsum("pij,psj->psi", self.sensitivity(poses), errors)

@@ -1,4 +1,4 @@
-"""The compiled barrier-Newton iteration (robots.clearance.newton_kernel) against the NumPy one.
+"""The compiled barrier-Newton iteration (evotol.robots.clearance.newton_kernel) against the NumPy one.
 
 The NumPy iteration is the reference: both must take the same step (Hessian, decrement, new
 iterate) on the block-sparse loop maps of the IRSBot-2 (one dense group; four overlapping
@@ -7,10 +7,10 @@ support solve must return the same certified brackets and the same Newton work."
 import numpy as np
 import pytest
 
-from robots.clearance import max_pose_error, newton_kernel
-from robots.clearance import support
-from robots.clearance.options import DEFAULT, NUMPY
-from robots.clearance.support import _merge_groups, _numpy_iteration, solve_support
+from evotol.robots.clearance import max_pose_error, newton_kernel
+from evotol.robots.clearance import support
+from evotol.robots.clearance.options import DEFAULT, NUMPY
+from evotol.robots.clearance.support import _merge_groups, _numpy_iteration, solve_support
 
 pytestmark = pytest.mark.skipif(not newton_kernel.AVAILABLE, reason="numba not importable: NumPy iteration only")
 
@@ -87,7 +87,7 @@ def test_kernel_rejects_arrays_it_cannot_update_in_place():
 
 @pytest.fixture(scope="module")
 def irsbot2_poses():
-    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+    from evotol.robots.irsbot2 import MAP_WORKSPACE, IRSBot2
     W = MAP_WORKSPACE
     rng = np.random.default_rng(3)
     pts = np.column_stack([rng.uniform(W.low[0], 0.0, 6), rng.uniform(W.low[1], W.high[1], 6)])
@@ -141,11 +141,11 @@ def test_without_numba_the_numpy_iteration_runs(monkeypatch):
     import sys
 
     from evotol.errors import ValidationError
-    from robots.fivebar import FiveBar
+    from evotol.robots.fivebar import FiveBar
 
     code = ("import json, numpy as np\n"
-            "from robots.clearance import newton_kernel, max_pose_error\n"
-            "from robots.fivebar import FiveBar\n"
+            "from evotol.robots.clearance import newton_kernel, max_pose_error\n"
+            "from evotol.robots.fivebar import FiveBar\n"
             "r = max_pose_error(FiveBar().clearance_mechanism(), [[0.0, 0.07], [0.01, 0.05]])\n"
             "import sys; print(json.dumps([newton_kernel.AVAILABLE, 'numba' in sys.modules, r.p_max.tolist(), r.p_upper.tolist()]))\n")
     env = {**os.environ, "EVOTOL_NO_NUMBA": "1"}
@@ -176,8 +176,8 @@ def test_first_compile_is_announced(tmp_path, capsys):
 
 def test_warm_up_compiles_every_signature_the_solver_uses():
     """warm_up() (run before worker pools start) leaves nothing to compile for a real solve."""
-    from robots.fivebar import FiveBar
-    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2
+    from evotol.robots.fivebar import FiveBar
+    from evotol.robots.irsbot2 import MAP_WORKSPACE, IRSBot2
 
     assert support.warm_up() is True
     before = [len(f.signatures) for f in newton_kernel._kernel()]

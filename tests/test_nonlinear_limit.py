@@ -16,7 +16,7 @@ from evotol.measures.nonlinear.interval import Dual, Interval
 from evotol.measures.nonlinear.worst_case import nonlinear_worst_case
 from evotol.studies._process_benchmarks import clutch_angle, clutch_problem
 from evotol.verification.nonlinear import verify_nonlinear
-from robots.assembly import AssemblyFunction
+from evotol.robots.assembly import AssemblyFunction
 from evotol.units import MM
 
 
@@ -170,7 +170,7 @@ def test_nonlinear_limit_on_a_tolerance_problem_and_bad_input():
     """Without process choice (allocate_optimum) the same holds; an RSS problem is refused."""
     from evotol.allocators.process import assembly_problem
     from evotol.core.problem import Tolerance
-    from cost_models import ReciprocalCost
+    from evotol.cost_models import ReciprocalCost
 
     pp = clutch_problem("worst_case")
     tol = {n: Tolerance(ReciprocalCost(2.0, 0.12, scale=MM), 2e-6, 1.5e-4) for n in pp.names}

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.planar5r import kinematics as K
-from robots.planar5r.design import CASES, FIG3_DESIGN, SQRT3, TABLE2_PRINTED, Design5R, get_case
+from evotol.robots.planar5r import kinematics as K
+from evotol.robots.planar5r.design import CASES, FIG3_DESIGN, SQRT3, TABLE2_PRINTED, Design5R, get_case
 
 ALL = list(CASES.items()) + [("fig3", FIG3_DESIGN)]
 

@@ -1,11 +1,11 @@
-"""Planar 5R as an evotol robot error model (robots.base protocol)."""
+"""Planar 5R as an evotol robot error model (evotol.robots.base protocol)."""
 import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.checks import check_robot
-from robots.planar5r import Planar5R
-from robots.planar5r import kinematics as K
+from evotol.robots.checks import check_robot
+from evotol.robots.planar5r import Planar5R
+from evotol.robots.planar5r import kinematics as K
 
 
 @pytest.mark.parametrize("case", "abcd")

@@ -6,8 +6,8 @@ import pytest
 
 from evotol import studies
 from evotol.studies import laramolina2019_5r as L
-from robots.planar5r import Planar5R
-from robots.planar5r import uncertainty as U
+from evotol.robots.planar5r import Planar5R
+from evotol.robots.planar5r import uncertainty as U
 
 
 @pytest.fixture(scope="module")
@@ -61,7 +61,7 @@ def _design(P, clearance_A, clearance_B, theta_std):
 
 def test_core_nonlinear_yield_agrees_with_the_direct_sampler():
     """The core's nonlinear yield of the study's problem (shared tolerances, fixed normal lengths,
-    contact clearances, normal actuators) against the 5R's own sampler (robots.planar5r.uncertainty,
+    contact clearances, normal actuators) against the 5R's own sampler (evotol.robots.planar5r.uncertainty,
     independent code and samples): within 4 standard errors of the difference at every pose."""
     P = L.allocation_problem("d", 2048, 3, radius=0.1e-3)
     rc, sd = 20e-6, np.deg2rad(0.02)

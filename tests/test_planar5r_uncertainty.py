@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.planar5r import Planar5R
-from robots.planar5r import kinematics as K
-from robots.planar5r import uncertainty as U
-from robots.planar5r.design import CASES
-from robots.planar5r.model import COLUMN_PARAMETERS
+from evotol.robots.planar5r import Planar5R
+from evotol.robots.planar5r import kinematics as K
+from evotol.robots.planar5r import uncertainty as U
+from evotol.robots.planar5r.design import CASES
+from evotol.robots.planar5r.model import COLUMN_PARAMETERS
 
 
 def test_table1_constants():

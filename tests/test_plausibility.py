@@ -16,7 +16,7 @@ import warnings
 import numpy as np
 import pytest
 
-import cost_models as cm
+import evotol.cost_models as cm
 from evotol.allocators import allocate_sensitivity
 from evotol.cli import main
 from evotol.core.plausibility import PlausibilityWarning, problem_warnings, result_warnings
@@ -95,7 +95,7 @@ def test_an_active_requirement_is_not_flagged():
 
 
 def test_assembly_requirement_is_a_ratio_and_not_flagged():
-    from robots.assembly import LinearStack
+    from evotol.robots.assembly import LinearStack
 
     stack = LinearStack({"x1": 1.0, "x2": -1.0}, {"gap": 1e-4})
     tol = {n: Tolerance(cm.ExponentialCost(1.0, 0.5, scale=1e-5), 1e-6, 1e-4) for n in stack.source_names}

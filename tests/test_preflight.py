@@ -57,11 +57,11 @@ def test_the_allocator_raises_the_same_refusal():
     """The preflight check is the allocator's own: allocate_optimum refuses RSS with asymmetric
     intervals with the same field and message."""
     import numpy as np
-    from cost_models.power import PowerCost
+    from evotol.cost_models.power import PowerCost
     from evotol.allocators import allocate_optimum
     from evotol.allocators.preflight import check_methods
     from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
-    from robots.assembly import LinearStack
+    from evotol.robots.assembly import LinearStack
 
     robot = LinearStack({"a": 1.0, "b": -1.0}, {"gap": 1e-4})
     tol = {"a": Tolerance(PowerCost(1.0, 1.0, scale=1e-3), 1e-6, 1e-3, minus=1.0, plus=0.0),

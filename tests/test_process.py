@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from cost_models import PowerCost, ReciprocalCost
+from evotol.cost_models import PowerCost, ReciprocalCost
 from evotol.allocators.process import (Process, ProcessProblem, allocate_process_baselines, allocate_process_ga,
                                        allocate_process_optimum, assembly_problem, cheapest_feasible_processes,
                                        process_front)
@@ -14,7 +14,7 @@ from evotol.errors import InfeasibleError, ValidationError
 from evotol.core.problem import Requirement
 from evotol.studies._process_benchmarks import clutch_problem, process, stack_problem
 from evotol.units import MM
-from robots.assembly import LinearStack
+from evotol.robots.assembly import LinearStack
 
 
 @pytest.fixture(scope="module")

@@ -4,14 +4,14 @@ against brute force."""
 import numpy as np
 import pytest
 
-from cost_models import PowerCost
-from cost_models.quality_loss import QualityLossCost
+from evotol.cost_models import PowerCost
+from evotol.cost_models.quality_loss import QualityLossCost
 from evotol.allocators import allocate_ga, allocate_optimum
 from evotol.allocators.process import assembly_problem
 from evotol.errors import ValidationError
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.core.quality_loss import expected_loss, loss_coefficients, with_quality_loss
-from robots.assembly import LinearStack
+from evotol.robots.assembly import LinearStack
 from evotol.units import MM
 from tests.toy_robot import ToyRobot
 

@@ -4,9 +4,9 @@ tolerance gets its share and the shares sum to 1. Closed form for a linear stack
 import numpy as np
 import pytest
 
-from cost_models.power import PowerCost
+from evotol.cost_models.power import PowerCost
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
-from robots.assembly import LinearStack
+from evotol.robots.assembly import LinearStack
 
 
 def test_rss_contributions_include_the_mean_shift():

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robots.mechanism import MechanismModel, mechanism_from_dict
+from evotol.robots.mechanism import MechanismModel, mechanism_from_dict
 
 HERE = Path(__file__).resolve().parents[1] / "robots" / "mechanisms"
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cost_models.power import PowerCost
+from evotol.cost_models.power import PowerCost
 from evotol.allocators import allocate_ga, allocate_optimum
 from evotol.allocators.stack_allocation import allocated_stack, stack_problem
 from evotol.errors import ValidationError

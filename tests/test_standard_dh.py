@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import ValidationError
-from robots.mechanism.description import mechanism_from_dict
-from robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.description import mechanism_from_dict
+from evotol.robots.mechanism.model import MechanismModel
 
 ROOT = Path(__file__).resolve().parents[1]
 PUMA = ROOT / "robots" / "mechanisms" / "puma560.toml"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-import cost_models as cm
+import evotol.cost_models as cm
 from evotol.measures.statistical.distributions import Distribution, draw, uniforms, unit_moments
 from evotol.errors import ValidationError
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
@@ -176,7 +176,7 @@ def test_clopper_pearson_interval_matches_scipy_binomtest():
 
 
 def _planar5r_problem(model, n=2048):
-    from robots.planar5r import Planar5R
+    from evotol.robots.planar5r import Planar5R
 
     r = Planar5R("b", D=0.2)
     tol = {}

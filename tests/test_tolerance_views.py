@@ -198,7 +198,7 @@ def test_verify_samples_the_rss_model_when_told(scale):
     """verify(distribution=normal, t = 3σ) on a linear stack: the exceed rate is the exact normal
     P(|gap| > L) within 4 binomial σ (Latin hypercube only narrows it); without the option the
     same problem samples its sources' own (uniform) distributions, another number."""
-    from cost_models import PowerCost
+    from evotol.cost_models import PowerCost
     from evotol import Distribution, LinearStack, Tolerance, assembly_problem, verify
     L = 1e-4
     stack = LinearStack({"a": 1.0, "b": -1.0, "c": 1.0}, {"gap": L})

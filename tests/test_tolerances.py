@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from cost_models import ExponentialCost, ReciprocalCost
+from evotol.cost_models import ExponentialCost, ReciprocalCost
 from evotol.measures import linear as measures
 from evotol.allocators import allocate_ga, allocate_optimum, allocate_sensitivity
 from evotol.errors import InfeasibleError, ValidationError
@@ -267,7 +267,7 @@ def test_bad_input_names_field_and_value(case, field, value):
 
 
 def _ucr3_problem(poses=None):
-    from robots.ucr3 import UCR3
+    from evotol.robots.ucr3 import UCR3
 
     robot = UCR3(variant="verified")
     tol = {s.name: Tolerance(cost=ExponentialCost(1.9, 0.5, scale=1e-5) if s.group == "length"
@@ -300,7 +300,7 @@ def test_refined_delta_optimum_holds_on_a_4x_denser_grid():
     """Delta (47 sources): the optimum refined from the 15 postures on a 3-per-axis grid of the
     workspace box (+ local maximisation) holds 0.2 mm on a 12-per-axis grid."""
     from evotol.studies import brahmia2023_delta as study
-    from robots.delta import DeltaRobot
+    from evotol.robots.delta import DeltaRobot
 
     robot = DeltaRobot()
     P = study.tolerance_problem(robot, study.postures_m(), n_directions=100)
@@ -318,7 +318,7 @@ def test_verify_nonlinear_on_the_delta_with_table3_offsets():
     case to 1 %, and a requirement below the nonlinear worst vertex is flagged."""
     from evotol.verification.montecarlo import verify
     from evotol.studies import brahmia2023_delta as study
-    from robots.delta import DeltaRobot, cylinder_poses
+    from evotol.robots.delta import DeltaRobot, cylinder_poses
 
     robot = DeltaRobot()
     P = study.tolerance_problem(robot, cylinder_poses(6, seed=3), n_directions=100)

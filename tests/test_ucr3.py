@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.checks import check_robot
-from robots.ucr3 import UCR3
+from evotol.robots.checks import check_robot
+from evotol.robots.ucr3 import UCR3
 
 
 def eq8(alpha, beta, zc, r_B=0.14):

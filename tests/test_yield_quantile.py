@@ -8,7 +8,7 @@ requirement -- the reason for the column change.
 """
 from __future__ import annotations
 
-import cost_models
+import evotol.cost_models
 import numpy as np
 import pytest
 from scipy.stats import binom
@@ -16,8 +16,8 @@ from scipy.stats import binom
 from evotol.measures.statistical.distributions import Distribution
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.summaries.yield_quantile import largest_quantile
-from robots.mechanism.joint_space import joint_configurations
-from robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.joint_space import joint_configurations
+from evotol.robots.mechanism.model import MechanismModel
 from tests.test_standard_dh import PUMA
 
 SOURCES = ["a2", "a3", "d3", "d4", "theta2", "theta3"]
@@ -26,7 +26,7 @@ CONFIGS = [[10, 10, -100, -20, 30, -60], [0, 45, 180, 0, 45, 0], [-30, 20, 150, 
 
 def problem_with(dist: str):
     jm, Q = joint_configurations(MechanismModel(PUMA, sources=SOURCES), [[f"{v}*deg" for v in c] for c in CONFIGS])
-    cost = cost_models.from_dict({"model": "exponential", "a0": 1.9, "a1": 0.5, "scale": 1e-5})
+    cost = evotol.cost_models.from_dict({"model": "exponential", "a0": 1.9, "a1": 0.5, "scale": 1e-5})
     tol = {n: Tolerance(cost=cost, lower=1e-6, upper=1e-3,
                         distribution=Distribution(dist, 3.0)) for n in SOURCES}
     return ToleranceProblem(jm, tol, Requirement(position=2e-4, measure="yield", probability=0.9973), Q), jm, Q

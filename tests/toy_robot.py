@@ -1,7 +1,7 @@
 """A linear test robot with fixed random sensitivities (not a plugin: test helper)."""
 import numpy as np
 
-from robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
 
 
 class ToyRobot(RobotErrorModel):

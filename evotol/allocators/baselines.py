@@ -29,8 +29,8 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import lambertw
 
-from cost_models.exponential import ExponentialCost
-from cost_models.power import PowerCost
+from evotol.cost_models.exponential import ExponentialCost
+from evotol.cost_models.power import PowerCost
 from evotol.allocators.budget import budget_info, check_budget, scaled_family, spend_budget
 from evotol.allocators.sensitivity import aggregated_sensitivity
 from evotol.measures.constraints import ConstraintRows

@@ -28,7 +28,7 @@ from evotol.allocators.process.problem import ProcessProblem
 from evotol.errors import ValidationError
 from evotol.measures.nonlinear.worst_case import nonlinear_worst_case
 from evotol.core.problem import ToleranceProblem
-from robots.assembly import LinearStack
+from evotol.robots.assembly import LinearStack
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 
@@ -101,7 +101,7 @@ def secant_sensitivities(asm, k: int, offsets) -> np.ndarray:
 
     Parameters
     ----------
-    asm : robots.assembly.AssemblyFunction
+    asm : evotol.robots.assembly.AssemblyFunction
         The assembly (``x0`` and ``jacobian``).
     k : int
         Index of the response.
@@ -134,7 +134,7 @@ def allocate_nonlinear_limit(problem, allocate, *, max_iter: int = 12, rtol: flo
     Parameters
     ----------
     problem : ToleranceProblem or ProcessProblem
-        On an assembly function (:class:`robots.assembly.AssemblyFunction`), worst-case measure,
+        On an assembly function (:class:`evotol.robots.assembly.AssemblyFunction`), worst-case measure,
         no shared or locked sources.
     allocate : callable
         ``allocate(problem) -> result`` (e.g. ``allocate_optimum`` or ``allocate_process_optimum``).
@@ -161,7 +161,7 @@ def allocate_nonlinear_limit(problem, allocate, *, max_iter: int = 12, rtol: flo
     """
     asm = problem.robot
     if not hasattr(asm, "dimension_names") or not hasattr(asm, "function"):
-        raise ValidationError("robot", getattr(asm, "name", asm), "an assembly function (robots.assembly.AssemblyFunction)")
+        raise ValidationError("robot", getattr(asm, "name", asm), "an assembly function (evotol.robots.assembly.AssemblyFunction)")
     if problem.requirement.measure != "worst_case":
         raise ValidationError("requirement.measure", problem.requirement.measure,
                               "'worst_case' (the nonlinear limit is a worst case over the tolerance box)")

@@ -3,7 +3,7 @@ its dimensions chosen by cost so that the gap stays within its limits [LSL, USL]
 
 Mapping onto a :class:`evotol.core.problem.ToleranceProblem` (SI, m):
 
-* the robot is a :class:`robots.assembly.LinearStack` ``gap = Σ a_i x_i`` whose limit is the half
+* the robot is a :class:`evotol.robots.assembly.LinearStack` ``gap = Σ a_i x_i`` whose limit is the half
   width of the specification ``L = (USL − LSL)/2``;
 * dimension ``i`` keeps the **shape of its drawing zone**: with the drawn half-width ``h_i`` and
   deviations ``l_i <= u_i``, its tolerance is the half-width ``t_i`` and its interval
@@ -23,11 +23,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.measures.stack_model import Stack, StackDimension
-from robots.assembly import LinearStack
+from evotol.robots.assembly import LinearStack
 
 #: name of the fixed source that carries the offset of the limits' centre from the nominal gap
 CENTRE = "limits' centre"
@@ -41,7 +41,7 @@ def stack_problem(stack: Stack, costs: dict, lower: dict, upper: dict, *, measur
     ----------
     stack : Stack
         The stack (SI: m), with both limits.
-    costs : dict of str to cost_models.CostModel
+    costs : dict of str to evotol.cost_models.CostModel
         Dimension name -> cost model of its half-width (m); every free dimension needs one.
     lower, upper : dict of str to float
         Dimension name -> smallest and largest half-width allowed (m).
@@ -84,7 +84,7 @@ def stack_problem(stack: Stack, costs: dict, lower: dict, upper: dict, *, measur
             if d.name not in table:
                 raise ValidationError(f"{f}.{k}", None, "a cost model and half-width bounds for every free dimension")
         if not isinstance(costs[d.name], CostModel):
-            raise ValidationError(f"{f}.cost", costs[d.name], "a cost_models.CostModel")
+            raise ValidationError(f"{f}.cost", costs[d.name], "a evotol.cost_models.CostModel")
         tols[d.name] = Tolerance(costs[d.name], float(lower[d.name]), float(upper[d.name]), **shape)
     if centre != 0:
         sens[CENTRE] = 1.0

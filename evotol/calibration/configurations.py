@@ -14,11 +14,11 @@ from evotol.errors import KinematicsError, ValidationError
 
 
 def is_described(robot) -> bool:
-    """True for a model with joint-space maps (:class:`robots.mechanism.model.MechanismModel`).
+    """True for a model with joint-space maps (:class:`evotol.robots.mechanism.model.MechanismModel`).
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         Any error model.
 
     Returns
@@ -42,7 +42,7 @@ def calibration_joints(robot, plan) -> np.ndarray | None:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The error model; joint values need a described mechanism (:func:`is_described`).
 
     Returns
@@ -102,7 +102,7 @@ def calibration_poses(robot, plan) -> np.ndarray:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The error model (its workspace).
     plan : evotol.calibration.plan.CalibrationPlan
         A plan with ``poses`` or ``count`` over the workspace.

@@ -2,7 +2,7 @@
 
 Measurements. At the plan's configurations ``q_c`` the instrument reads the tool's position (and
 orientation): ``y = A δp + R δr + ε``, with ``A`` (n_rows, n_columns) the measured rows of the
-model's first-order map (:meth:`~robots.base.RobotErrorModel.sensitivity`) stacked over the
+model's first-order map (:meth:`~evotol.robots.base.RobotErrorModel.sensitivity`) stacked over the
 configurations, ``R`` the registration of an unknown instrument frame (base: 3 shifts and 3
 rotations; target on the tool: 3 shifts, plus 3 rotations with orientation measured), and
 ``ε ~ N(0, diag σ²)`` the instrument noise. Rows are weighted by ``1/σ`` (weighted least squares,
@@ -58,7 +58,7 @@ def measured_map(robot, plan):
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The error model.
 
     Returns
@@ -87,7 +87,7 @@ def registration_columns(robot, plan, joints) -> tuple[np.ndarray, list[str]]:
 
     Parameters
     ----------
-    robot : robots.mechanism.model.MechanismModel
+    robot : evotol.robots.mechanism.model.MechanismModel
         A described mechanism (its tip frame at the configurations).
     plan : evotol.calibration.plan.CalibrationPlan
         The plan (``measure`` decides whether the target's rotation is registered).
@@ -242,7 +242,7 @@ def identify(robot, plan) -> Identification:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The (uncalibrated) error model.
 
     Returns

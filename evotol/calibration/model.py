@@ -32,7 +32,7 @@ import numpy as np
 from scipy.stats import chi
 
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel
 
 #: how each measure accounts for the noise: "linear" (E - k sigma), "quadrature" (sqrt(E^2 - (k sigma)^2)), "covariance"
 NOISE_RULE = {"rss": "quadrature", "yield": "covariance"}
@@ -43,7 +43,7 @@ class CalibratedRobot(RobotErrorModel):
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The uncalibrated model (its sources, workspace, sensitivities).
     identification : evotol.calibration.identification.Identification
         What the plan identifies (``M``, ``Σ_K``).

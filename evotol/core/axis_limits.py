@@ -37,8 +37,8 @@ from typing import Mapping
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel, Workspace
-from robots.mechanism.expressions import Expression
+from evotol.robots.base import RobotErrorModel, Workspace
+from evotol.robots.mechanism.expressions import Expression
 
 AXES = ("x", "y", "z")
 FRAMES = ("base", "tool")
@@ -122,9 +122,9 @@ def tool_rotation(robot, poses) -> np.ndarray:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
-        A mechanism description (:class:`robots.mechanism.model.MechanismModel`) or its
-        joint-space form (:class:`robots.mechanism.joint_space.JointSpaceModel`).
+    robot : evotol.robots.base.RobotErrorModel
+        A mechanism description (:class:`evotol.robots.mechanism.model.MechanismModel`) or its
+        joint-space form (:class:`evotol.robots.mechanism.joint_space.JointSpaceModel`).
     poses : (n, workspace.dim) array_like
         The robot's poses (SI).
 
@@ -154,7 +154,7 @@ class AxisErrorModel(RobotErrorModel):
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The robot (its poses are the configurations).
     limits : AxisLimits
         The per-axis limits and their frame.
@@ -377,7 +377,7 @@ def axis_requirement(robot: RobotErrorModel, poses, table: Mapping, clearances=N
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The study's robot.
     poses : (n, robot.workspace.dim) array_like
         The study's poses (SI).

@@ -1,5 +1,5 @@
 """Conformance checks for accuracy measures (contract in :mod:`evotol.measures.protocol`), one small
-named check each, like :mod:`robots.checks` and :mod:`cost_models.checks`. They build a
+named check each, like :mod:`evotol.robots.checks` and :mod:`evotol.cost_models.checks`. They build a
 :class:`~evotol.core.problem.ToleranceProblem`, so they sit beside the problem, not in the measures' package
 (which the problem imports).
 
@@ -30,11 +30,11 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from cost_models.reciprocal import ReciprocalCost
+from evotol.cost_models.reciprocal import ReciprocalCost
 from evotol.measures.protocol import COMPONENTS, Evaluation, Measure
 from evotol._runtime.check_suite import require, run_checks
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
-from robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
 
 #: Evaluation fields that hold (n_designs, n_poses[, ...]) arrays
 ARRAY_FIELDS = ("position", "orientation", "position_bound", "orientation_bound", "position_contrib",

@@ -96,7 +96,7 @@ def _out_of_range(field: str, value: float, unit: str, what: str) -> str | None:
 
 def _normalised_requirement(problem) -> bool:
     """An assembly function's requirement is a ratio of its limits (robots/assembly/)."""
-    from robots.assembly import AssemblyFunction
+    from evotol.robots.assembly import AssemblyFunction
 
     return isinstance(problem.robot, AssemblyFunction)
 

@@ -12,7 +12,7 @@ The sum over responses is separable in the tolerances, ``QL(t) = Σ_j q_j t_j²`
 
     q_j = Σ_k w_k (A_k / 9) (∂Y_k/∂x_j / L_k)²,
 
-so the loss is added to every source's cost model (:class:`cost_models.quality_loss.QualityLossCost`)
+so the loss is added to every source's cost model (:class:`evotol.cost_models.quality_loss.QualityLossCost`)
 and every allocator that minimises cost (``allocate_optimum``, ``allocate_ga``, ``allocate_nsga2``,
 and the process-selection allocators) minimises machining cost + expected loss.
 
@@ -20,14 +20,14 @@ and the process-selection allocators) minimises machining cost + expected loss.
 :class:`~evotol.core.problem.ToleranceProblem` and for a process-selection problem
 (:class:`~evotol.allocators.process.ProcessProblem`, whose implementation the process package
 registers; ``pp.with_quality_loss(A)`` is the same call). :func:`loss_coefficients` holds the
-equation above; :class:`~cost_models.quality_loss.QualityLossCost` is the cost term it builds.
+equation above; :class:`~evotol.cost_models.quality_loss.QualityLossCost` is the cost term it builds.
 
 A nominal off target (``Y_k(x0) ≠ Y0_k``) adds the constant ``K_k (Y_k(x0) − Y0_k)²``, which
 changes no allocation and is left out.
 
 Responses and weights ``w_k``:
 
-* an assembly function (:mod:`robots.assembly`): each response is its own quality
+* an assembly function (:mod:`evotol.robots.assembly`): each response is its own quality
   characteristic, ``w_k = 1``; ``A`` is one number or ``{response name: A_k}``;
 * a robot: the responses are the error components (x, y, z of ``position``; those of
   ``orientation``) at the problem's poses, with ``L`` the requirement of that component and
@@ -41,7 +41,7 @@ from typing import Mapping
 
 import numpy as np
 
-from cost_models.quality_loss import QualityLossCost
+from evotol.cost_models.quality_loss import QualityLossCost
 from evotol.errors import ValidationError
 from evotol.core.problem import Tolerance, ToleranceProblem
 

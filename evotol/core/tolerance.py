@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.measures.statistical import distributions
 from evotol.errors import ValidationError
 
@@ -21,7 +21,7 @@ class Tolerance:
 
     Parameters
     ----------
-    cost : cost_models.CostModel or None
+    cost : evotol.cost_models.CostModel or None
         Cost model of this tolerance, or None for a fixed source (:meth:`fixed`).
     lower, upper : float
         Allowed range of the tolerance t (m or rad, the source's unit), 0 < lower <= upper.
@@ -185,7 +185,7 @@ class Tolerance:
         """
         f0 = f"tolerances[{name!r}]"
         if self.cost is not None and not isinstance(self.cost, CostModel):
-            raise ValidationError(f"{f0}.cost", self.cost, "a cost_models.CostModel (or None with Tolerance.fixed)")
+            raise ValidationError(f"{f0}.cost", self.cost, "a evotol.cost_models.CostModel (or None with Tolerance.fixed)")
         if self.cost is None and self.locked is None:
             raise ValidationError(f"{f0}.cost", None, "a cost model; only Tolerance.fixed(t) (locked) may have none")
         for f in ("lower", "upper"):

@@ -76,7 +76,7 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         Its ``sources`` (names, units) in order.
     tolerances : mapping
         Source name -> :class:`evotol.Tolerance`, in the robot's source order.
@@ -111,7 +111,7 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
         raise ValidationError("shared", shared, "a mapping group name -> list of source names")
     seen: dict[str, str] = {}
     index = {nm: j for j, nm in enumerate(names)}
-    # a drawing callout's zone members (robots.mechanism.callout_model): one tolerance, costed once
+    # a drawing callout's zone members (evotol.robots.mechanism.callout_model): one tolerance, costed once
     tied = dict(getattr(robot, "tied_sources", None) or {})
     for g, members in {**tied, **(shared or {})}.items():
         if g in tied and all(tolerances[m].locked is not None for m in members):

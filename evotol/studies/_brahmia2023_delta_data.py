@@ -1,7 +1,7 @@
 """Data transcribed from Brahmia et al. 2023 (Appl. Sci. 13:10703): Tables A1-A2 and Table 3.
 
 Units as printed: linear parameters in mm, angular parameters in degrees. Rows follow
-:data:`robots.delta.PARAMETER_NAMES` (the order of the printed tables). Printed label slips kept
+:data:`evotol.robots.delta.PARAMETER_NAMES` (the order of the printed tables). Printed label slips kept
 out of the data: Table A2 labels the alpha_13..alpha_63 rows of leg 3 as "Δq_13, Δq_23, Δq_33,
 Δq_63"; Table A1/Table 3 write "Δα_23" for alpha3_3; Table A1 prints Δθ_3 of P1 test 1 as ".00785".
 Columns of Tables A: tests 1..6 = imposed displacement +x, +y, -x, -y, +z, -z of 0.2 mm

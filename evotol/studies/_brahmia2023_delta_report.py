@@ -6,8 +6,8 @@ import numpy as np
 
 from evotol.studies.brahmia2023_delta_allocation import MDEG, T_MAX, T_MIN, UM
 from evotol.studies.brahmia2023_delta_paper import TO_PAPER, table3_si
-from robots.delta import LINEAR, PARAMETER_NAMES, POSTURES_MM
-from robots.delta_synthesis import IS_LINEAR, REQUIRED_MM
+from evotol.robots.delta import LINEAR, PARAMETER_NAMES, POSTURES_MM
+from evotol.robots.delta_synthesis import IS_LINEAR, REQUIRED_MM
 
 
 def _paper_units(name: str) -> str:

@@ -21,9 +21,9 @@ from importlib import resources
 
 import numpy as np
 
-from cost_models.power import PowerCost
+from evotol.cost_models.power import PowerCost
 from evotol.allocators.process import Process, ProcessProblem, assembly_problem
-from robots.assembly import AssemblyFunction
+from evotol.robots.assembly import AssemblyFunction
 from evotol.units import MM
 
 KSIGMA = 3.0

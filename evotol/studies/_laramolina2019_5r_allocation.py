@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.planar5r import uncertainty as U
-from robots.planar5r.model import Planar5R
+from evotol.robots.planar5r import uncertainty as U
+from evotol.robots.planar5r.model import Planar5R
 
 #: the three design variables: shared tolerance groups of the core problem
 SHARED = {"clearance_A": ("clearance_A1", "clearance_A2"), "clearance_B": ("clearance_B1", "clearance_B2"),
@@ -40,11 +40,11 @@ def default_costs() -> dict:
     Returns
     -------
     dict of str to cost model
-        ``"clearance_A"`` and ``"clearance_B"`` (:class:`cost_models.ReciprocalCost`, clearance
-        in m) and ``"theta"`` (:class:`cost_models.PowerCost`, tolerance t = 3 std in rad); costs
+        ``"clearance_A"`` and ``"clearance_B"`` (:class:`evotol.cost_models.ReciprocalCost`, clearance
+        in m) and ``"theta"`` (:class:`evotol.cost_models.PowerCost`, tolerance t = 3 std in rad); costs
         in cost units per part.
     """
-    from cost_models import PowerCost, ReciprocalCost
+    from evotol.cost_models import PowerCost, ReciprocalCost
 
     return {"clearance_A": ReciprocalCost(1.0, 20.0, scale=1e-6), "clearance_B": ReciprocalCost(0.5, 10.0, scale=1e-6),
             "theta": PowerCost(4.0, 0.7, scale=SIGMA_K * np.deg2rad(0.01))}

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.planar5r import uncertainty as U
+from evotol.robots.planar5r import uncertainty as U
 
 POSE_LABELS = tuple("abcdefghi")
 

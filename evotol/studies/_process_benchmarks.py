@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from cost_models.power import PowerCost
+from evotol.cost_models.power import PowerCost
 from evotol.allocators.nonlinear_limit import allocate_nonlinear_limit
 from evotol.allocators.process import Process, ProcessProblem, allocate_process_optimum, assembly_problem
-from robots.assembly import AssemblyFunction, LinearStack
+from evotol.robots.assembly import AssemblyFunction, LinearStack
 from evotol.units import MM
 
 

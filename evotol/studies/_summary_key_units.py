@@ -104,7 +104,7 @@ def study_units(name: str) -> dict:
                          "n_joints": COUNT, "fk_vs_pinocchio": "m",
                          "duplicated": "1: [source, source, sign +1 or -1] (equal columns up to sign)"}}
     if name == "yao2013":
-        tol = _robot_units("robots.ucr3", "UCR3")
+        tol = _robot_units("evotol.robots.ucr3", "UCR3")
         return {"keys": {"worst_case_error": "m", "rss_error": "m", "tolerance": "m or rad (see tolerances)",
                          "ga_max_rss_error": "m", "best_fitness": COST + " + penalty",
                          "mean_fitness": COST + " + penalty", "best_feasible": COST,
@@ -112,7 +112,7 @@ def study_units(name: str) -> dict:
                          "grid": COUNT, "ga_seconds_by_variant": "s"},
                 "tolerances": tol}
     if name == "brahmia2023-delta":
-        tol = _robot_units("robots.delta", "DeltaRobot")
+        tol = _robot_units("evotol.robots.delta", "DeltaRobot")
         paper = _paper_units(tol)
         return {"keys": {"verification_error_mm_range": "mm", "paper_verification_error_mm_range": "mm",
                          "runs_reaching_displacement": COUNT, "jacobian_fd_relative_mismatch": RELATIVE,

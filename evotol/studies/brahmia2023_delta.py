@@ -2,7 +2,7 @@
 
 Part 1 reproduces the paper's three-step method (Sec. 2.3, 3.1, 4.1):
 
-1. joint variables Q_k at the postures (eq. 11) -- :meth:`robots.delta.DeltaRobot.inverse_kinematics`;
+1. joint variables Q_k at the postures (eq. 11) -- :meth:`evotol.robots.delta.DeltaRobot.inverse_kinematics`;
 2. per posture P1, P3, P6, P9 and per imposed displacement of 0.2 mm along +-x, +-y, +-z
    (Tables A1-A2), problem (12)-(13): minimise F (eq. 10) over the 47 error parameters under
    ``|ΔL| <= 0.015 mm``, ``|Δφ| <= 0.015 deg``, with scipy's ``trust-constr`` (interior point, as the
@@ -18,8 +18,8 @@ Part 2 (beyond the paper) allocates the same 47 tolerances with evotol's allocat
 model per family (linear / angular) and a 0.2 mm worst-case requirement over >= 1000 workspace
 poses, verifies them by Monte Carlo through the nonlinear model, and prices the paper's Table 3.
 
-The method (step 2 included: :func:`robots.delta_synthesis.synthesis_runs`) lives in
-:mod:`robots.delta_synthesis` (the next user of it needs it too); the paper's tables in SI in
+The method (step 2 included: :func:`evotol.robots.delta_synthesis.synthesis_runs`) lives in
+:mod:`evotol.robots.delta_synthesis` (the next user of it needs it too); the paper's tables in SI in
 :mod:`evotol.studies.brahmia2023_delta_paper`; the problem of part 2 in
 :mod:`evotol.studies.brahmia2023_delta_allocation`; the report in
 ``evotol/studies/_brahmia2023_delta_report.py``. This module holds the runs (:func:`compute`) and
@@ -38,8 +38,8 @@ from evotol.studies.brahmia2023_delta_allocation import (COST_A0, COST_A1, MDEG,
                                                          critical_poses, family_cost_models, interval_problem,
                                                          table3_problem, tolerance_problem)
 from evotol.studies.brahmia2023_delta_paper import TO_PAPER, inferred_min_magnitude, table3_si, table_a_si  # noqa: F401
-from robots.delta import ANGULAR, LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot  # noqa: F401
-from robots.delta_synthesis import (IS_LINEAR, REQUIRED_MM, SYNTHESIS_POSTURES, TEST_DIRECTIONS,  # noqa: F401
+from evotol.robots.delta import ANGULAR, LINEAR, PARAMETER_NAMES, POSTURES_MM, DeltaRobot  # noqa: F401
+from evotol.robots.delta_synthesis import (IS_LINEAR, REQUIRED_MM, SYNTHESIS_POSTURES, TEST_DIRECTIONS,  # noqa: F401
                                     fig4_intervals, paper_bounds, postures_m, solve_displacement, synthesis_runs,
                                     verification_errors)
 
@@ -47,8 +47,8 @@ NAME = "brahmia2023-delta"
 
 
 def _kinematics_checks(robot: DeltaRobot, seed: int) -> dict:
-    from robots.checks import check_robot
-    from robots.delta import cylinder_poses
+    from evotol.robots.checks import check_robot
+    from evotol.robots.delta import cylinder_poses
 
     P = np.vstack([postures_m(), cylinder_poses(200, seed=seed)])
     Q = robot.inverse_kinematics(P)
@@ -87,7 +87,7 @@ def compute(config: dict) -> StudyResult:
     from evotol.verification.nonlinear import verify_nonlinear
     from evotol.allocators.workspace_refinement import refine_poses, scale_into_requirement
     from evotol.core.result import make_result
-    from robots.delta import cylinder_poses
+    from evotol.robots.delta import cylinder_poses
 
     t_start = time.perf_counter()
     quick, seed = config["quick"], config["seed"]

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.studies.brahmia2023_delta_paper import table3_si
-from robots.delta import DeltaRobot
-from robots.delta_synthesis import REQUIRED_MM
+from evotol.robots.delta import DeltaRobot
+from evotol.robots.delta_synthesis import REQUIRED_MM
 
 UM, MDEG = 1e-6, np.radians(1e-3)      # cost-model units: micrometre, millidegree
 COST_A0, COST_A1 = 1.0, 10.0
@@ -27,11 +27,11 @@ def family_cost_models():
 
     Returns
     -------
-    dict of str to cost_models.ReciprocalCost
+    dict of str to evotol.cost_models.ReciprocalCost
         ``"linear"`` (tolerance scaled by 1 µm) and ``"angular"`` (scaled by 1 mdeg); both take
         the tolerance in SI (m or rad) and return cost units.
     """
-    from cost_models import ReciprocalCost
+    from evotol.cost_models import ReciprocalCost
 
     return {"linear": ReciprocalCost(COST_A0, COST_A1, scale=UM), "angular": ReciprocalCost(COST_A0, COST_A1, scale=MDEG)}
 
@@ -44,7 +44,7 @@ def tolerance_problem(robot: DeltaRobot, poses, position_mm: float = REQUIRED_MM
 
     Parameters
     ----------
-    robot : robots.delta.DeltaRobot
+    robot : evotol.robots.delta.DeltaRobot
         The Delta robot model (its 47 sources).
     poses : (n, 3) array_like
         Platform positions, m.

@@ -3,15 +3,15 @@
 read off Tables A1-A2.
 
 Paper units: mm for the linear parameters, degrees for the angular ones; SI: m and rad, in
-:data:`robots.delta.PARAMETER_NAMES` order.
+:data:`evotol.robots.delta.PARAMETER_NAMES` order.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from evotol.studies._brahmia2023_delta_data import TABLE_3, TABLE_A
-from robots.delta import PARAMETER_NAMES
-from robots.delta_synthesis import IS_LINEAR, SYNTHESIS_POSTURES
+from evotol.robots.delta import PARAMETER_NAMES
+from evotol.robots.delta_synthesis import IS_LINEAR, SYNTHESIS_POSTURES
 
 #: SI -> paper units (mm for linear, degrees for angular)
 TO_PAPER = np.where(IS_LINEAR, 1e3, 180 / np.pi)
@@ -27,7 +27,7 @@ def inferred_min_magnitude() -> np.ndarray:
     Returns
     -------
     (47,) ndarray
-        Lower limit of ``|Δ|`` per parameter, in :data:`robots.delta.PARAMETER_NAMES` order:
+        Lower limit of ``|Δ|`` per parameter, in :data:`evotol.robots.delta.PARAMETER_NAMES` order:
         9.5e-6 m for the linear parameters, ``radians(0.001)`` rad for the angular ones.
     """
     return np.where(IS_LINEAR, 0.0095e-3, np.radians(0.001))
@@ -39,7 +39,7 @@ def table3_si() -> tuple[np.ndarray, np.ndarray]:
     Returns
     -------
     lower, upper : (47,) ndarray
-        Interval limits per parameter in :data:`robots.delta.PARAMETER_NAMES` order, m (linear)
+        Interval limits per parameter in :data:`evotol.robots.delta.PARAMETER_NAMES` order, m (linear)
         or rad (angular).
     """
     t = np.array([TABLE_3[n] for n in PARAMETER_NAMES])

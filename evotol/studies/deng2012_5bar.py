@@ -25,7 +25,7 @@ from evotol.units import MM
 
 
 def _variants(b_mm: float):
-    from robots.fivebar import FiveBar
+    from evotol.robots.fivebar import FiveBar
 
     fb = FiveBar()
     closed = fb.clearance_mechanism(b_xy=b_mm * MM, b_z=b_mm * MM)
@@ -39,7 +39,7 @@ def _variants(b_mm: float):
 
 
 def _grid(n: int):
-    from robots.fivebar import THESIS_WORKSPACE as W
+    from evotol.robots.fivebar import THESIS_WORKSPACE as W
 
     x = np.linspace(W.low[0], W.high[0], n)
     y = np.linspace(W.low[1], W.high[1], n)
@@ -99,9 +99,9 @@ def compute(config: dict) -> StudyResult:
         singular locus, symmetry, Monte Carlo ratios (dimensionless), multistart baseline,
         thesis claims, ``figures`` and ``seconds`` (s).
     """
-    from robots.clearance import max_pose_error, multistart_max_pose_error
-    from robots.clearance.grid import grid_max_pose_error
-    from robots.clearance.sampling import sample_max_errors
+    from evotol.robots.clearance import max_pose_error, multistart_max_pose_error
+    from evotol.robots.clearance.grid import grid_max_pose_error
+    from evotol.robots.clearance.sampling import sample_max_errors
 
     t_start = time.perf_counter()
     n, quick, seed, b_mm, workers = config["n_grid"], config["quick"], config["seed"], config["b_mm"], config["workers"]

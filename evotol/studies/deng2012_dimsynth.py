@@ -10,11 +10,11 @@ design gets three objectives:
 * ``p_max_mm`` and ``r_max_deg`` -- the maximum positional and rotational error of the platform
   due to the clearances of the distal modules and the parallelograms (114-variable model of
   Ch. V-VI), the largest over the rectangle's right-down corner, centre and left-up corner
-  (Fig. VII.10), computed by the certified engine of :mod:`robots.clearance`.
+  (Fig. VII.10), computed by the certified engine of :mod:`evotol.robots.clearance`.
 
 Geometry (the equivalent planar mechanism, Sec. II.2.1, working mode elbows out, assembly mode
-distal links forming a V) and the sub-workspace search are :meth:`robots.irsbot2.IRSBot2.planar_legs`
-and :func:`robots.irsbot2.singularity_free_rectangle`: a grid point below the base is kept when
+distal links forming a V) and the sub-workspace search are :meth:`evotol.robots.irsbot2.IRSBot2.planar_legs`
+and :func:`evotol.robots.irsbot2.singularity_free_rectangle`: a grid point below the base is kept when
 both singularity sines exceed ``sin(margin)`` in magnitude (default margin 2 deg: the
 sub-workspace stays off the singular loci, where the clearance errors grow without bound).
 """
@@ -37,7 +37,7 @@ from evotol.design.filtering import DesignStudy, Preset
 from evotol.core.pareto import non_dominated
 from evotol.studies import Study, StudyResult
 from evotol.studies._design_report import parcoords_counts, parcoords_section
-from robots.irsbot2 import IRSBot2, singularity_free_rectangle
+from evotol.robots.irsbot2 import IRSBot2, singularity_free_rectangle
 from evotol.units import MM
 
 
@@ -68,13 +68,13 @@ def design_robot(l1: float, l2: float, a1: float, a2: float, p: float) -> IRSBot
 
     Returns
     -------
-    robots.irsbot2.IRSBot2
+    evotol.robots.irsbot2.IRSBot2
         The robot with the fixed parameters of Tab. VI.4.
 
     Raises
     ------
     ValidationError
-        If the dimensions are invalid (see :class:`robots.irsbot2.IRSBot2`), e.g. ``l2`` too
+        If the dimensions are invalid (see :class:`evotol.robots.irsbot2.IRSBot2`), e.g. ``l2`` too
         short for the equivalent link to exist.
     """
     return IRSBot2.thesis("VI.4", l1=l1, l2=l2, a1=a1, a2=a2, p=p)
@@ -136,11 +136,11 @@ def clearance_bounds():
 
     Returns
     -------
-    distal, actuated, passive : robots.clearance.ClearanceBounds
+    distal, actuated, passive : evotol.robots.clearance.ClearanceBounds
         Bounds (Δβ_xy, Δβ_z in rad; Δb_xy, Δb_z in m) of the distal-module joints, the actuated
         joints (Δβ_z = 0.001 rad) and the passive parallelogram joints (Δβ_z = 0.2 rad).
     """
-    from robots.clearance import ClearanceBounds
+    from evotol.robots.clearance import ClearanceBounds
 
     b, bz, bxy = CLEARANCE["b_xy"], CLEARANCE["b_z"], CLEARANCE["beta_xy"]
     return (ClearanceBounds(bxy, BETA_Z_PASSIVE, b, bz), ClearanceBounds(bxy, BETA_Z_ACTIVE, b, bz),
@@ -153,7 +153,7 @@ def engine_mechanism(robot: IRSBot2):
 
     Parameters
     ----------
-    robot : robots.irsbot2.IRSBot2
+    robot : evotol.robots.irsbot2.IRSBot2
         The design (e.g. from :func:`design_robot`).
 
     Returns
@@ -170,7 +170,7 @@ def engine_pose_errors(robot: IRSBot2, points: np.ndarray) -> tuple[np.ndarray, 
 
     Parameters
     ----------
-    robot : robots.irsbot2.IRSBot2
+    robot : evotol.robots.irsbot2.IRSBot2
         The design.
     points : (k, 2) ndarray
         Platform positions [x, z], m.
@@ -182,7 +182,7 @@ def engine_pose_errors(robot: IRSBot2, points: np.ndarray) -> tuple[np.ndarray, 
     r_max : (k,) ndarray
         Maximum rotational error, rad.
     """
-    from robots.clearance import max_pose_error
+    from evotol.robots.clearance import max_pose_error
 
     res = max_pose_error(engine_mechanism(robot), points)
     return np.asarray(res.p_max), np.asarray(res.r_max)
@@ -190,11 +190,11 @@ def engine_pose_errors(robot: IRSBot2, points: np.ndarray) -> tuple[np.ndarray, 
 
 def engine_pose_errors_batch(robots: list, points: list) -> list[tuple[np.ndarray, np.ndarray]]:
     """:func:`engine_pose_errors` for many designs in one engine call
-    (:func:`robots.clearance.stacked.max_pose_error_stacked`: the designs share joints and chains).
+    (:func:`evotol.robots.clearance.stacked.max_pose_error_stacked`: the designs share joints and chains).
 
     Parameters
     ----------
-    robots : list of robots.irsbot2.IRSBot2
+    robots : list of evotol.robots.irsbot2.IRSBot2
         The designs.
     points : list of (k_i, 2) array_like
         ``points[i]``: platform positions [x, z] of ``robots[i]``, m.
@@ -204,7 +204,7 @@ def engine_pose_errors_batch(robots: list, points: list) -> list[tuple[np.ndarra
     list of (ndarray, ndarray)
         Per design, ``(p_max (k_i,) in m, r_max (k_i,) in rad)``.
     """
-    from robots.clearance.stacked import max_pose_error_stacked
+    from evotol.robots.clearance.stacked import max_pose_error_stacked
 
     return max_pose_error_stacked([engine_mechanism(r) for r in robots], points)
 
@@ -245,7 +245,7 @@ class IRSBot2DesignEvaluator:
             rows.append({"area_mm2": w.area / MM ** 2, "x0_mm": w.x[0] / MM, "x1_mm": w.x[1] / MM,
                          "z0_mm": w.z[0] / MM, "z1_mm": w.z[1] / MM})
             if w.area > 0:
-                robots.append((len(rows) - 1, robot))
+                evotol.robots.append((len(rows) - 1, robot))
                 points.append(w.points)
         if self.pose_errors is None:
             errs = engine_pose_errors_batch([r for _, r in robots], points)

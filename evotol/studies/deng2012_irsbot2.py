@@ -3,7 +3,7 @@
 * Maps (Figs. VI.1/VI.3): Tabs. VI.1-VI.2 geometry, clearances in the distal module only
   (Tab. VI.3, 78 variables) and in distal module + parallelograms (Tabs. VI.7-VI.9, 114
   variables), on a 41 x 41 grid of a square centred on the z axis and crossed by the parallel
-  singularity (the thesis's square is not given in its text; ours is ``robots.irsbot2.MAP_WORKSPACE``).
+  singularity (the thesis's square is not given in its text; ours is ``evotol.robots.irsbot2.MAP_WORKSPACE``).
   The thesis reports ten days of computation for the distal map; every value here is a certified
   global maximum (gap <= 0.1 %).
 * 5-point comparison (Figs. VI.4-VI.5): Tabs. VI.4-VI.5 geometry (beta = pi/4), distal joints with
@@ -11,7 +11,7 @@
   centre of the largest rectangle of the workspace. The thesis does not state the rectangle's
   criterion; we take the largest rectangle symmetric about x = 0 in which the robot is at least
   ``margin`` away from both singularity types (``|sin(psi1 - psi2)|`` and ``min |sin(q_i - psi_i)|``),
-  :func:`robots.irsbot2.centred_singularity_free_rectangle`.
+  :func:`evotol.robots.irsbot2.centred_singularity_free_rectangle`.
 """
 from __future__ import annotations
 
@@ -79,9 +79,9 @@ def compute(config: dict) -> StudyResult:
         (SI), the singularity data, the five points (mm, rad), the multistart baseline, the
         mirror-reuse check, ``figures`` and ``seconds`` (s).
     """
-    from robots.clearance import ClearanceBounds, max_pose_error, multistart_max_pose_error
-    from robots.clearance.symmetry import grid_max_pose_error_mirrored
-    from robots.irsbot2 import MAP_WORKSPACE, IRSBot2, centred_singularity_free_rectangle, mirror_joint_map
+    from evotol.robots.clearance import ClearanceBounds, max_pose_error, multistart_max_pose_error
+    from evotol.robots.clearance.symmetry import grid_max_pose_error_mirrored
+    from evotol.robots.irsbot2 import MAP_WORKSPACE, IRSBot2, centred_singularity_free_rectangle, mirror_joint_map
 
     t_start = time.perf_counter()
     n, quick, seed, margin, workers = config["n_grid"], config["quick"], config["seed"], config["margin"], config["workers"]

@@ -7,11 +7,11 @@ levels (1e-4, 1e-3, 1e-2, 1e-1 mm) and the axial clearance Δb_z on two (1e-3, 1
 reproduces its largest rotational error, 1.38 deg -- the study reports the h that would match
 it exactly). Rotation about the axis: Δβ_z = 0 for the actuated A, B (locked) and 0.2 rad for
 the passive C, D, E (idle motion, Sec. IV.3). Dimensions Tab. IV.2, working mode of
-:mod:`robots.fivebar`, pose (0, 70) mm.
+:mod:`evotol.robots.fivebar`, pose (0, 70) mm.
 
 Objectives per entry: the global maximum positional error ``p_max_mm`` and rotational error
 ``r_max_deg`` of the closed-loop 5-bar (eqs. III.26-III.27), certified by the support-function
-engine of :mod:`robots.clearance` (``p_upper_mm``/``r_upper_deg`` are the certified bounds), and
+engine of :mod:`evotol.robots.clearance` (``p_upper_mm``/``r_upper_deg`` are the certified bounds), and
 the manufacturing ``cost`` of the ten clearances under a reciprocal cost-tolerance model
 (illustrative: the thesis has no cost; NSGA-II needs one).
 
@@ -93,15 +93,15 @@ def presets() -> list[Preset]:
 
 
 def default_cost_model():
-    """Reciprocal cost per clearance, c = 1 + 1/(t / 1 µm) (cost_models.ReciprocalCost):
+    """Reciprocal cost per clearance, c = 1 + 1/(t / 1 µm) (evotol.cost_models.ReciprocalCost):
     a 0.1 µm fit costs 11 units, a 100 µm one 1.01 -- an illustrative shop model.
 
     Returns
     -------
-    cost_models.ReciprocalCost
+    evotol.cost_models.ReciprocalCost
         ``ReciprocalCost(1.0, 1.0, scale=1e-6)``: takes a clearance in m, returns cost units.
     """
-    from cost_models import ReciprocalCost
+    from evotol.cost_models import ReciprocalCost
 
     return ReciprocalCost(1.0, 1.0, scale=1e-6)
 
@@ -141,8 +141,8 @@ class FiveBarToleranceEvaluator:
         """The engine's ClearanceEvaluator at the pose (maps computed once per process)."""
         key = (self.pose_mm, self.beta_z_passive, self.beta_z_active, self.tol)
         if key not in _CACHE:
-            from robots.clearance import ClearanceEvaluator
-            from robots.fivebar import FiveBar
+            from evotol.robots.clearance import ClearanceEvaluator
+            from evotol.robots.fivebar import FiveBar
 
             mech = FiveBar().clearance_mechanism(beta_z_passive=self.beta_z_passive, beta_z_active=self.beta_z_active)
             _CACHE[key] = ClearanceEvaluator(mech, [[self.pose_mm[0] * MM, self.pose_mm[1] * MM]], tol=self.tol)

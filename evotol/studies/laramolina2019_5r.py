@@ -24,10 +24,10 @@ from evotol.studies import _laramolina2019_5r_figures as F
 from evotol.studies._laramolina2019_5r_allocation import (BOUNDS, SHARED, SIGMA_K,  # noqa: F401
                                                           allocate_case, allocation_problem, default_costs,
                                                           worst_case_case)
-from robots.planar5r import kinematics as K
-from robots.planar5r import uncertainty as U
-from robots.planar5r.design import CASES, TABLE2_PRINTED
-from robots.planar5r.model import Planar5R
+from evotol.robots.planar5r import kinematics as K
+from evotol.robots.planar5r import uncertainty as U
+from evotol.robots.planar5r.design import CASES, TABLE2_PRINTED
+from evotol.robots.planar5r.model import Planar5R
 
 __all__ = ["analyse_case", "default_costs", "allocation_problem", "allocate_case", "worst_case_case",
            "compute", "render"]
@@ -60,7 +60,7 @@ def analyse_case(case: str, cfg: dict, seed: int, model: U.UncertaintyModel) -> 
         the poses) and ``cloud`` (samples kept per pose for the figures).
     seed : int
         Random seed of the samples.
-    model : robots.planar5r.uncertainty.UncertaintyModel
+    model : evotol.robots.planar5r.uncertainty.UncertaintyModel
         Distributions of the uncertain parameters (Table 1, Sec. 2.5).
 
     Returns

@@ -5,16 +5,16 @@ For each ``robots/mechanisms/*.toml``: the number of generated sources, the larg
 mismatch of the description-driven sensitivities against central finite differences of the
 nonlinear loop closure (``fd_rel_error``), the largest relative difference from the hand-written
 model where there is one (``builtin_rel_diff``: the 5-bar's sensitivities vs
-``robots.fivebar.FiveBarGeometric`` (Deng 2012 eq. IV.43) at 50 poses and its certified clearance
+``evotol.robots.fivebar.FiveBarGeometric`` (Deng 2012 eq. IV.43) at 50 poses and its certified clearance
 maxima vs ``FiveBar().clearance_mechanism()``; the IRSBot-2's inverse geometry and certified
-clearance maxima vs ``robots.irsbot2``; the 3-UCR's 21 columns vs ``robots.ucr3``; the Delta's
-position rows for all 47 parameters and its nonlinear closure vs ``robots.delta``), and the wall time. For the 5-bar, ``p_max_mm`` and
+clearance maxima vs ``evotol.robots.irsbot2``; the 3-UCR's 21 columns vs ``evotol.robots.ucr3``; the Delta's
+position rows for all 47 parameters and its nonlinear closure vs ``evotol.robots.delta``), and the wall time. For the 5-bar, ``p_max_mm`` and
 ``r_max_rad`` at pose (0, 70) mm with the thesis's clearances (all b 0.1 mm, beta_xy 0.01 rad,
 passive beta_z 0.2 rad, actuated 0), each with its certified upper bound, and the time of the
 certified clearance map from the description relative to the hand-written model.
 
 Every mechanism also reports ``rank``: the rank of its sources' sensitivities stacked over the
-workspace poses (columns at unit norm, :mod:`robots.mechanism.identifiability`), with its blind and
+workspace poses (columns at unit norm, :mod:`evotol.robots.mechanism.identifiability`), with its blind and
 duplicated sources. The URDF arms (UR5, Panda) add ``pinocchio_rank`` (Pinocchio's placement
 regressor of the chain over the same poses) and, in ``configurations``, the same ranks over random
 configurations inside the joint limits, with and without the tip's placement, and the forward
@@ -38,8 +38,8 @@ def _rel(a, b) -> float:
 
 
 def _fivebar(model, cfg) -> dict:
-    from robots.clearance import max_pose_error
-    from robots.fivebar import FiveBar, FiveBarGeometric
+    from evotol.robots.clearance import max_pose_error
+    from evotol.robots.fivebar import FiveBar, FiveBarGeometric
 
     poses = model.workspace.latin_hypercube(50, seed=cfg["seed"])
     sens = _rel(model.sensitivity(poses), FiveBarGeometric().sensitivity(poses))
@@ -58,7 +58,7 @@ def _fivebar(model, cfg) -> dict:
     t_hand = time.perf_counter() - t0
     return {"builtin_rel_diff": max(sens, _rel(a.p_max, b.p_max), _rel(a.r_max, b.r_max)),
             "builtin": {"sensitivity_rel_diff_50_poses": sens, "p_max_rel_diff": _rel(a.p_max, b.p_max),
-                        "r_max_rel_diff": _rel(a.r_max, b.r_max), "compared_with": "robots.fivebar (eq. IV.43, Ch. IV clearances)"},
+                        "r_max_rel_diff": _rel(a.r_max, b.r_max), "compared_with": "evotol.robots.fivebar (eq. IV.43, Ch. IV clearances)"},
             "p_max_mm": float(a.p_max[0] / MM), "p_upper_mm": float(a.p_upper[0] / MM),
             "r_max_rad": float(a.r_max[0]), "r_upper_rad": float(a.r_upper[0]),
             "clearance_map": {"poses": len(grid), "seconds_description": t_desc, "seconds_hand_written": t_hand,
@@ -66,8 +66,8 @@ def _fivebar(model, cfg) -> dict:
 
 
 def _irsbot2(model, cfg) -> dict:
-    from robots.clearance import max_pose_error
-    from robots.irsbot2 import IRSBot2
+    from evotol.robots.clearance import max_pose_error
+    from evotol.robots.irsbot2 import IRSBot2
 
     r = IRSBot2()
     poses = model.workspace.latin_hypercube(50, seed=cfg["seed"])
@@ -80,11 +80,11 @@ def _irsbot2(model, cfg) -> dict:
     return {"builtin_rel_diff": max(_rel(a.p_max, b.p_max), _rel(a.r_max, b.r_max)),
             "builtin": {"joint_angle_abs_diff_rad_50_poses": ig, "p_max_rel_diff": _rel(a.p_max, b.p_max),
                         "r_max_rel_diff": _rel(a.r_max, b.r_max),
-                        "compared_with": "robots.irsbot2 (eqs. II.5-II.35, Tab. VI.3 clearances) at (0, -50) mm"}}
+                        "compared_with": "evotol.robots.irsbot2 (eqs. II.5-II.35, Tab. VI.3 clearances) at (0, -50) mm"}}
 
 
 def _ucr3(model, cfg) -> dict:
-    from robots.ucr3 import UCR3, columns_from_description
+    from evotol.robots.ucr3 import UCR3, columns_from_description
 
     r = UCR3()
     poses = r.workspace.latin_hypercube(50, seed=cfg["seed"])
@@ -93,18 +93,18 @@ def _ucr3(model, cfg) -> dict:
     rel = _rel(D, H)
     return {"builtin_rel_diff": rel,
             "builtin": {"sensitivity_rel_diff_50_poses_21_columns": rel,
-                        "compared_with": "robots.ucr3 (verified eq. 10; clearance disks = pairs of DH entries)"}}
+                        "compared_with": "evotol.robots.ucr3 (verified eq. 10; clearance disks = pairs of DH entries)"}}
 
 
 def delta_columns(model, robot) -> list[int]:
-    """Column of ``robots.delta`` for every source of ``delta.toml``: the names are equal except the
+    """Column of ``evotol.robots.delta`` for every source of ``delta.toml``: the names are equal except the
     joint offsets (``dq2_i``/``dq5_i`` are parameters there, q3, q4, q6, q7 the DH entries ``<j>_i.theta``).
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         The model of ``robots/mechanisms/delta.toml``.
-    robot : robots.delta.DeltaRobot
+    robot : evotol.robots.delta.DeltaRobot
         The hand-written Delta model.
 
     Returns
@@ -132,7 +132,7 @@ def delta_columns(model, robot) -> list[int]:
 
 
 def _delta(model, cfg) -> dict:
-    from robots.delta import DeltaRobot
+    from evotol.robots.delta import DeltaRobot
 
     r = DeltaRobot()
     poses = r.workspace.latin_hypercube(50, seed=cfg["seed"])
@@ -146,15 +146,15 @@ def _delta(model, cfg) -> dict:
     return {"builtin_rel_diff": max(rel, nl),
             "builtin": {"position_rows_rel_diff_50_poses": rel, "n_compared": len(cols),
                         "nonlinear_pose_error_rel_diff_10_poses_errors_1e-3": nl,
-                        "compared_with": "robots.delta (Brahmia 2023, eq. 12's 47 parameters; legs closed at the rods' midpoint)"}}
+                        "compared_with": "evotol.robots.delta (Brahmia 2023, eq. 12's 47 parameters; legs closed at the rods' midpoint)"}}
 
 
 def _urdf_ranks(path, cfg) -> dict:
     """Ranks of the default sources and of Pinocchio's placement regressor over random configurations
     inside the joint limits (the task box holds the tool orientation fixed, which lowers both), with
-    and without the tip's placement; FK and FD agreement there (robots.mechanism.urdf_check)."""
-    from robots.mechanism.model import MechanismModel
-    from robots.mechanism.urdf_check import check_urdf_chain
+    and without the tip's placement; FK and FD agreement there (evotol.robots.mechanism.urdf_check)."""
+    from evotol.robots.mechanism.model import MechanismModel
+    from evotol.robots.mechanism.urdf_check import check_urdf_chain
 
     r = check_urdf_chain(MechanismModel(path), n=cfg["n_configurations"], seed=cfg["seed"])
     return {"n_configurations": cfg["n_configurations"], **r}
@@ -181,8 +181,8 @@ def compute(cfg: dict) -> StudyResult:
         ranks, blind and duplicated sources and ``seconds``; plus the built-in comparison blocks
         (5-bar: ``p_max_mm`` in mm, ``r_max_rad`` in rad) and the URDF ``configurations``.
     """
-    from robots.mechanism.checks import check_mechanism
-    from robots.mechanism.model import SHIPPED, MechanismModel
+    from evotol.robots.mechanism.checks import check_mechanism
+    from evotol.robots.mechanism.model import SHIPPED, MechanismModel
 
     rows = {}
     for path in sorted(SHIPPED.glob("*.toml")):

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from cost_models import ExponentialCost
+from evotol.cost_models import ExponentialCost
 from evotol.allocators import (allocate_ga, allocate_lagrange, allocate_nsga2, allocate_optimum,
                                allocate_sensitivity)
 from evotol.units.display import LENGTHS
@@ -20,7 +20,7 @@ from evotol.verification.montecarlo import verify
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.reporting import Report
 from evotol.studies import Study, StudyResult
-from robots.ucr3 import UCR3
+from evotol.robots.ucr3 import UCR3
 
 UNIT = 1e-5  # the paper's tolerance unit (m)
 E_POS = 5e-5  # allowed position error (m), Sec. 5
@@ -43,7 +43,7 @@ def yao2013_problem(variant: str, measure: str = "rss", grid=(11, 11, 6), lower=
     Parameters
     ----------
     variant : {"paper", "verified"}
-        Error model of :class:`robots.ucr3.UCR3`: eqs. 10-11 as printed or the derived one.
+        Error model of :class:`evotol.robots.ucr3.UCR3`: eqs. 10-11 as printed or the derived one.
     measure : str, optional
         Accuracy measure of the requirement (default ``"rss"``; ``"worst_case"`` for the exact
         worst case).
@@ -60,7 +60,7 @@ def yao2013_problem(variant: str, measure: str = "rss", grid=(11, 11, 6), lower=
     Raises
     ------
     ValidationError
-        If ``variant`` is unknown (from :class:`robots.ucr3.UCR3`).
+        If ``variant`` is unknown (from :class:`evotol.robots.ucr3.UCR3`).
     """
     robot = UCR3(variant=variant)
     tol = {}

@@ -41,7 +41,7 @@ spec : dict
     The parsed study file.
 problem : ToleranceProblem
     The study's problem.
-robot : robots.base.RobotErrorModel
+robot : evotol.robots.base.RobotErrorModel
     The study's robot.
 """
 from evotol.studyfile.keys import (BOUND_KEYS, GROUP_BOUND_KEYS, POSE_KEYS, REFINE_KEYS, REPORT_KEYS,

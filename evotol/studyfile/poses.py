@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel
 
 
 def read_poses(spec: dict, robot: RobotErrorModel) -> np.ndarray:
@@ -16,7 +16,7 @@ def read_poses(spec: dict, robot: RobotErrorModel) -> np.ndarray:
     ----------
     spec : dict
         The parsed study file (``seed`` seeds a Latin hypercube).
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The study's robot (its workspace makes grids and Latin hypercubes).
 
     Returns

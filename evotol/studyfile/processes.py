@@ -27,7 +27,7 @@ the outputs are the same JSON/HTML pair as every study (:mod:`evotol.studyfile.p
 """
 from __future__ import annotations
 
-import cost_models
+import evotol.cost_models
 from evotol.allocators.nonlinear_limit import allocate_process_nonlinear_limit
 from evotol.allocators.process import (Process, ProcessProblem, allocate_process_baselines, allocate_process_ga,
                                        allocate_process_optimum, process_front)
@@ -79,7 +79,7 @@ def parse_process(field: str, name: str, table) -> Process:
     if not isinstance(table["cost"], dict):
         raise ValidationError(f"{field}.cost", table["cost"], "a cost-model table, e.g. { model = \"power\", a0 = 0.5, a1 = 1 }")
     try:
-        cost = cost_models.from_dict(table["cost"])
+        cost = evotol.cost_models.from_dict(table["cost"])
     except ValidationError as exc:
         raise ValidationError(f"{field}.cost: {exc.field}", exc.value, exc.expected) from None
     return Process(str(name), cost, _number(f"{field}.lower", table["lower"], "a positive tolerance (SI)"),

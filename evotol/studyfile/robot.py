@@ -6,11 +6,11 @@ docs/process_selection.md).
 from __future__ import annotations
 
 from evotol.errors import ValidationError
-from robots import registry
-from robots.assembly import assembly_from_spec
-from robots.base import RobotErrorModel
-from robots.mechanism.callout_model import with_callouts
-from robots.mechanism.model import model_from_table
+from evotol.robots import registry
+from evotol.robots.assembly import assembly_from_spec
+from evotol.robots.base import RobotErrorModel
+from evotol.robots.mechanism.callout_model import with_callouts
+from evotol.robots.mechanism.model import model_from_table
 
 
 def read_robot(spec: dict, base_dir=None) -> tuple[RobotErrorModel, dict]:
@@ -26,7 +26,7 @@ def read_robot(spec: dict, base_dir=None) -> tuple[RobotErrorModel, dict]:
 
     Returns
     -------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The robot as the user described it.
     spec : dict
         ``spec``, with an assembly's default ``[poses]`` and ``[requirement]`` filled in (a copy;

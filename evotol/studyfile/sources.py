@@ -6,14 +6,14 @@ clearance classes, docs/clearance_allocation.md), ``[bounds]`` (with ``[bounds.G
 """
 from __future__ import annotations
 
-import cost_models
+import evotol.cost_models
 from evotol._runtime.keyword_checks import unknown_key_message
 from evotol.measures.statistical.distributions import Distribution
 from evotol.core.tolerance import Tolerance
 from evotol.errors import ValidationError
 from evotol.measures import clearances
 from evotol.studyfile.keys import BOUND_KEYS, GROUP_BOUND_KEYS
-from robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel
 
 
 def read_clearances(spec: dict, robot: RobotErrorModel) -> tuple["clearances.ClearanceSources | None", tuple]:
@@ -24,7 +24,7 @@ def read_clearances(spec: dict, robot: RobotErrorModel) -> tuple["clearances.Cle
     -------
     classes : evotol.measures.clearances.ClearanceSources or None
         The clearance classes; None without a ``[clearances]`` table.
-    sources : tuple of robots.base.SourceSpec
+    sources : tuple of evotol.robots.base.SourceSpec
         The sources the problem will have (:func:`evotol.measures.clearances.error_sources`):
         the robot's, then the classes.
 
@@ -46,7 +46,7 @@ def read_tolerances(spec: dict, sources, owner: str) -> dict[str, Tolerance]:
 
     Parameters
     ----------
-    sources : sequence of robots.base.SourceSpec
+    sources : sequence of evotol.robots.base.SourceSpec
         The problem's sources (:func:`read_clearances`).
     owner : str
         What the sources belong to, as errors name it (the robot's name, and its clearance classes).
@@ -93,7 +93,7 @@ def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict) -> Tolerance:
     cspec = o.get("cost", costs.get(s.name, costs.get(s.group, costs.get("default"))))
     if cspec is None:
         raise ValidationError(f"cost.{s.group}", None, f"a cost model for source {s.name} (by name, group or 'default')")
-    return Tolerance(cost=cost_models.from_dict(cspec), lower=_bound(o, bounds, s, "lower", 1e-6),
+    return Tolerance(cost=evotol.cost_models.from_dict(cspec), lower=_bound(o, bounds, s, "lower", 1e-6),
                      upper=_bound(o, bounds, s, "upper", 1e-3), locked=o.get("locked"),
                      distribution=dist, **shape)
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import cost_models
+import evotol.cost_models
 from evotol._runtime.keyword_checks import check_keywords, check_table_keys, unknown_key_message
 from evotol.allocators import allocate_equal, allocate_ga, allocate_lagrange, allocate_optimum, allocate_sensitivity
 from evotol.allocators.preflight import check_methods
@@ -217,7 +217,7 @@ def allocation_from_table(table: dict, stack: Stack, scale: float):
         if cspec is None:
             raise ValidationError(f"stack.dimensions.{d.name}.cost", None, "a cost-model table (or stack.allocation.cost)")
         try:
-            costs[d.name] = cost_models.from_dict(cspec)
+            costs[d.name] = evotol.cost_models.from_dict(cspec)
         except ValidationError as exc:
             raise ValidationError(f"stack.dimensions.{d.name}.cost: {exc.field}", exc.value, exc.expected) from None
         for k, tab in (("lower", lo), ("upper", up)):

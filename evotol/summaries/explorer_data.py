@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from cost_models import registry
-from cost_models.base import CostModel
-from cost_models.compound import SumCost
+from evotol.cost_models import registry
+from evotol.cost_models.base import CostModel
+from evotol.cost_models.compound import SumCost
 from evotol.core.problem import ToleranceProblem
 
 #: the cost models the page evaluates (``explorer.js``: same kind, same formula, same parameters)

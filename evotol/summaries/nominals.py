@@ -1,13 +1,13 @@
 """The nominal of each error source, where evotol knows it, and what that nominal is (issue 34
 item 5: drawing-ready tables).
 
-* an assembly's dimension (``robots.assembly``): its nominal, when the assembly was given one;
+* an assembly's dimension (``evotol.robots.assembly``): its nominal, when the assembly was given one;
 * a mechanism description's design parameter (``[lengths]``/``[angles]``): its value (for an arm
   read from a URDF: its joint origins' ``xyz``/``rpy``, ``elbow_joint_z``);
 * a DH entry ``"<frame>.<gamma|b|alpha|d|theta|r>"`` whose expression uses design parameters only:
   the entry's value in the description (e.g. ``P1.d = "rp"`` → 0.05 m); an entry holding a joint
   variable varies with the pose and has no single nominal;
-* a placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`robots.mechanism.placement`):
+* a placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`evotol.robots.mechanism.placement`):
   0 -- the deviation is a small shift along / tilt about an axis of the frame's placement as the
   description (for an arm read from a URDF: the URDF joint origin) gives it, so the nominal is the
   URDF's (description's) value and the tolerance zone is about it;
@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.base import inner_model
-from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
+from evotol.robots.base import inner_model
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
 
 
 def _nominals(robot, names) -> tuple[dict, dict]:
@@ -70,7 +70,7 @@ def nominals_with_notes(robot, names=None) -> tuple[dict[str, float], dict[str, 
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         As for :func:`source_nominals`.
     names : sequence of str, optional
         The sources asked about (default: the robot's).
@@ -90,7 +90,7 @@ def source_nominals(robot, names=None) -> dict[str, float]:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The problem's robot (an assembly function with ``dimension_names`` and ``x0``, or a model
         with a ``mechanism`` description), or a wrapper with the model in ``base``
         (:class:`evotol.measures.clearances.WithClearances`, a callout model; the clearance
@@ -103,7 +103,7 @@ def source_nominals(robot, names=None) -> dict[str, float]:
     -------
     dict of str to float
         Source name -> nominal value, m or rad; empty when the model knows none (a
-        :class:`robots.assembly.LinearStack` built without its nominals: 0 would be a made-up value).
+        :class:`evotol.robots.assembly.LinearStack` built without its nominals: 0 would be a made-up value).
     """
     return _nominals(robot, names)[0]
 
@@ -114,7 +114,7 @@ def nominal_notes(robot, names=None) -> dict[str, str]:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         As for :func:`source_nominals`.
     names : sequence of str, optional
         The sources asked about (default: the robot's).

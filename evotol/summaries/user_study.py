@@ -23,7 +23,7 @@ from evotol.summaries.drawing import rounded_design, tolerance_zone
 from evotol.summaries.nominals import nominal_notes, nominals_with_notes, source_nominals  # noqa: F401 (re-exported)
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
-from robots.base import inner_model
+from evotol.robots.base import inner_model
 
 _PER_SOURCE = "m or rad (the source's unit, see units.tolerances)"
 _COORD = "workspace coordinate, SI (see workspace.units)"

@@ -31,7 +31,7 @@ def slice_specs(workspace, anchor, n: int = DEFAULT_N) -> list[dict]:
 
     Parameters
     ----------
-    workspace : robots.base.Workspace
+    workspace : evotol.robots.base.Workspace
         The workspace box: ``low``, ``high`` (SI: m, rad) and ``dim``. Only coordinates with
         ``high > low`` are varied.
     anchor : array-like

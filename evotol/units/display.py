@@ -266,7 +266,7 @@ def problem_units(problem) -> DisplayUnits:
 
 def error_unit(problem, component: str) -> str:
     """SI unit of the ``component`` error (``"m"``, ``"rad"``; ``"1"`` for an assembly function,
-    whose errors are fractions of the limits, ``robots.assembly``).
+    whose errors are fractions of the limits, ``evotol.robots.assembly``).
 
     Parameters
     ----------
@@ -290,7 +290,7 @@ def pose_coordinates(workspace, pose) -> list[tuple[str, float, str]]:
 
     Parameters
     ----------
-    workspace : robots.base.Workspace
+    workspace : evotol.robots.base.Workspace
         Its ``names``, ``display_scale`` and ``display_units``.
     pose : array_like, shape (dim,)
         The pose in SI (m, rad).
@@ -309,7 +309,7 @@ def pose_text(workspace, pose, digits: int = 4) -> str:
 
     Parameters
     ----------
-    workspace : robots.base.Workspace
+    workspace : evotol.robots.base.Workspace
         Its coordinate names and display units.
     pose : array_like, shape (dim,)
         The pose in SI (m, rad).

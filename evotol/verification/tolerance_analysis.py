@@ -32,7 +32,7 @@ from evotol.core.axis_limits import AxisErrorModel, tool_rotation
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.montecarlo import verify
-from robots.mechanism.posture import joints_at
+from evotol.robots.mechanism.posture import joints_at
 
 AXES = ("x", "y", "z")
 COMPONENT_ROWS = {"position": slice(0, 3), "orientation": slice(3, 6)}

@@ -9,8 +9,8 @@
 
 All dimensions and tolerances are SI (m) unless a source declares ``unit="rad"``.
 """
-from robots.assembly.function import ROW, AssemblyFunction
-from robots.assembly.linear_stack import LinearStack
-from robots.assembly.study_file import assembly_from_spec, resolve
+from evotol.robots.assembly.function import ROW, AssemblyFunction
+from evotol.robots.assembly.linear_stack import LinearStack
+from evotol.robots.assembly.study_file import assembly_from_spec, resolve
 
 __all__ = ["AssemblyFunction", "LinearStack", "resolve", "assembly_from_spec", "ROW"]

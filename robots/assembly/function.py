@@ -5,7 +5,7 @@ assembly function", Chase, *Dimensioning and Tolerancing Handbook* ch. 14): the 
 ``y_k = f_k(x)`` (a gap, a contact angle...) as a Python function of the nominal dimensions ``x_j``.
 For a linear stack the function is a vector of sensitivities: ``y = Σ_j a_j x_j``.
 
-evotol turns that into a :class:`robots.base.RobotErrorModel`:
+evotol turns that into a :class:`evotol.robots.base.RobotErrorModel`:
 
 * **sources** are the dimensions (one ``dim = 1`` source each, error ``|δx_j| <= t_j``);
 * **sensitivities** ``∂f_k/∂x_j`` at the nominal come from complex-step differentiation
@@ -34,7 +34,7 @@ from typing import Callable, Mapping
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
 
 ROW = 2  # error-twist row that carries the normalised response errors (position z)
 

@@ -10,7 +10,7 @@ from typing import Mapping
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.assembly.function import AssemblyFunction
+from evotol.robots.assembly.function import AssemblyFunction
 
 
 class _LinearResponses:

@@ -1,6 +1,6 @@
 """An assembly function named in a study file: ``assembly = "module:function"`` resolved to the
 function, and the ``[robot]`` table (nominal dimensions in SI, limits) turned into an
-:class:`~robots.assembly.function.AssemblyFunction`.
+:class:`~evotol.robots.assembly.function.AssemblyFunction`.
 """
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Callable, Mapping
 
 from evotol.errors import ValidationError
-from robots.assembly.function import AssemblyFunction
+from evotol.robots.assembly.function import AssemblyFunction
 
 
 def _beside(module: str, base_dir) -> bool:

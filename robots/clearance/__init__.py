@@ -3,8 +3,8 @@
 Quick use
 ---------
 >>> import numpy as np
->>> from robots.fivebar import FiveBar
->>> from robots.clearance import max_pose_error
+>>> from evotol.robots.fivebar import FiveBar
+>>> from evotol.robots.clearance import max_pose_error
 >>> mech = FiveBar().clearance_mechanism()          # Tab. IV.1-IV.2, thesis clearances
 >>> res = max_pose_error(mech, [[0.0, 0.07]])       # poses in metres
 >>> res.p_max, res.p_upper, res.r_max, res.r_upper  # attained value and certified bound (m, rad)
@@ -18,8 +18,8 @@ matrices, loop-equation null spaces) and then evaluates any number of bound sets
 sub-problems (same pose and same bounds on a decoupled block -- for a planar robot the in-plane
 block only sees ``beta_z, b_xy``, the out-of-plane block only ``beta_xy, b_z``) are solved once::
 
-    from robots.fivebar import FiveBar
-    from robots.clearance import ClearanceEvaluator
+    from evotol.robots.fivebar import FiveBar
+    from evotol.robots.clearance import ClearanceEvaluator
     mech = FiveBar().clearance_mechanism()            # joints A, C, B, D, E (mech.joints order)
     ev = ClearanceEvaluator(mech, [[0.0, 0.070]])      # one pose (m): maps computed here
     bounds = mech.thesis_bounds(b_xy=BXY, b_z=BZ)      # BXY, BZ: (n_sets, 5) in metres
@@ -43,7 +43,7 @@ poses; the cost is dominated by the number of (pose, bound-set) cases.
 Other entry points: ``grid.grid_max_pose_error(mech, poses, workers=None, scheduler=None)``
 (local processes or a Dask cluster), ``sample_max_errors`` (what plain Monte Carlo of the
 clearances would report -- it falls short of the worst case), ``max_pose_error(...,
-extra=(J, t))`` (clearances plus other interval sources, e.g. ``robots.fivebar.combined_max_pose_error``).
+extra=(J, t))`` (clearances plus other interval sources, e.g. ``evotol.robots.fivebar.combined_max_pose_error``).
 
 Modules: :mod:`.kinematics` (modified DH / Khalil-Kleinfinger frames, adjoints),
 :mod:`.model` (the mechanism: bodies, error mapping matrices, loop equations; its plain values
@@ -67,7 +67,7 @@ Parameters
 poses : (n, d) or (d,) array_like
     Poses in the mechanism's pose coordinates (m).
 options : EngineOptions, optional
-    The engine's settings (default :data:`robots.clearance.options.DEFAULT`).
+    The engine's settings (default :data:`evotol.robots.clearance.options.DEFAULT`).
 nd : int
     Number of disk cones.
 mech : ClearanceMechanism
@@ -79,13 +79,13 @@ n_solves : int, optional
 gram_inv : (K, m, m) ndarray or None, optional
     Precomputed ``pinv(B^T B)`` (None: computed here).
 """
-from robots.clearance.kinematics import DHFrame, DHTree, adjoint, kk_transform
-from robots.clearance.maxerror import ClearanceEvaluator, MaxPoseError, evaluate_cases, max_pose_error
-from robots.clearance.options import EngineOptions
-from robots.clearance.sampling import sample_max_errors
-from robots.clearance.model import BOUND_NAMES, Chain, ClearanceBounds, ClearanceMechanism, Joint, PoseMaps
-from robots.clearance.multistart import MultistartResult, multistart_max_pose_error
-from robots.clearance.nonlinear import twist_between
+from evotol.robots.clearance.kinematics import DHFrame, DHTree, adjoint, kk_transform
+from evotol.robots.clearance.maxerror import ClearanceEvaluator, MaxPoseError, evaluate_cases, max_pose_error
+from evotol.robots.clearance.options import EngineOptions
+from evotol.robots.clearance.sampling import sample_max_errors
+from evotol.robots.clearance.model import BOUND_NAMES, Chain, ClearanceBounds, ClearanceMechanism, Joint, PoseMaps
+from evotol.robots.clearance.multistart import MultistartResult, multistart_max_pose_error
+from evotol.robots.clearance.nonlinear import twist_between
 
 __all__ = ["BOUND_NAMES", "Chain", "ClearanceBounds", "ClearanceEvaluator", "ClearanceMechanism", "DHFrame", "DHTree",
            "EngineOptions",

@@ -1,8 +1,8 @@
 """Branch and bound over unit directions: the largest norm of the consistent error twists of one
 decoupled block (Deng 2012 eqs. III.26-III.27), max_|u|=1 h(u) with h the support function solved
-per direction by :mod:`robots.clearance.support`, patches bounded by :mod:`robots.clearance.patches`
-(method in :mod:`robots.clearance.maxerror`). Settings come in one
-:class:`~robots.clearance.options.EngineOptions`; the work done is returned with the result.
+per direction by :mod:`evotol.robots.clearance.support`, patches bounded by :mod:`evotol.robots.clearance.patches`
+(method in :mod:`evotol.robots.clearance.maxerror`). Settings come in one
+:class:`~evotol.robots.clearance.options.EngineOptions`; the work done is returned with the result.
 
 The parameters several definitions of this module share are described once, here.
 
@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robots.clearance.certificate import true_dual
-from robots.clearance.options import DEFAULT, EngineOptions
-from robots.clearance.patches import children, initial_patches, interpolated_bound, normalise, patch_bound
-from robots.clearance.support import solve_support
+from evotol.robots.clearance.certificate import true_dual
+from evotol.robots.clearance.options import DEFAULT, EngineOptions
+from evotol.robots.clearance.patches import children, initial_patches, interpolated_bound, normalise, patch_bound
+from evotol.robots.clearance.support import solve_support
 
 
 @dataclass
@@ -71,7 +71,7 @@ class SupportEvaluator:
     tol_solve : float
         Default relative precision of each support solve.
     groups : tuple or None, optional
-        Block sparsity of ``Bt`` (:attr:`robots.clearance.model.PoseMaps.groups`); None: dense.
+        Block sparsity of ``Bt`` (:attr:`evotol.robots.clearance.model.PoseMaps.groups`); None: dense.
     """
 
     def __init__(self, Ct, Bt, gi, nd, tol_solve, groups=None, options: EngineOptions = DEFAULT):
@@ -201,9 +201,9 @@ def maximise_norm(Ct, Bt, gi, nd, *, tol=1e-3, tol_solve=1e-5, max_rounds=40, gr
         Most patch-splitting rounds (default 40); patches still alive then enter the upper
         bound with their patch bounds.
     groups : tuple or None
-        Block sparsity of ``Bt`` (:attr:`robots.clearance.model.PoseMaps.groups`); None: dense.
+        Block sparsity of ``Bt`` (:attr:`evotol.robots.clearance.model.PoseMaps.groups`); None: dense.
     options : EngineOptions
-        The engine's settings (:mod:`robots.clearance.options`).
+        The engine's settings (:mod:`evotol.robots.clearance.options`).
 
     Returns
     -------

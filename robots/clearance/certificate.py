@@ -7,7 +7,7 @@ For a dual point ``mu`` the vectors ``y = a + Bt mu`` give the **upper bound**
 (:func:`recover_primal`) or the barrier point, with the loop residual ``Bt^T sigma`` projected
 out and ``sigma`` scaled back into the unit cones, optionally after the complementary-slackness
 repair (cones on their boundary fixed to ``y_c / ||y_c||``). Rows: ``nd`` disk cones as pairs
-first, then interval rows. Used by :func:`robots.clearance.support.solve_support` and its
+first, then interval rows. Used by :func:`evotol.robots.clearance.support.solve_support` and its
 compiled steps.
 """
 from __future__ import annotations

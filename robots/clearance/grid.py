@@ -1,7 +1,7 @@
 """Grid studies on all local cores, or on a Dask cluster when given a scheduler address.
 
 The poses are cut into fixed-size chunks (``chunk_size``, independent of the number of workers),
-each chunk is solved by :func:`robots.clearance.max_pose_error` in a worker, and the chunks are
+each chunk is solved by :func:`evotol.robots.clearance.max_pose_error` in a worker, and the chunks are
 put back in order. Because the chunks do not depend on where they run, a local run and a Dask
 run return identical arrays.
 
@@ -20,10 +20,10 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol._runtime.executor import parallel_map
-from robots.clearance.maxerror import MaxPoseError, max_pose_error
-from robots.clearance.model import ClearanceMechanism
-from robots.clearance.options import DEFAULT, EngineOptions
-from robots.clearance.support import warm_up
+from evotol.robots.clearance.maxerror import MaxPoseError, max_pose_error
+from evotol.robots.clearance.model import ClearanceMechanism
+from evotol.robots.clearance.options import DEFAULT, EngineOptions
+from evotol.robots.clearance.support import warm_up
 
 
 def _solve_chunk(args):

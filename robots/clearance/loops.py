@@ -2,27 +2,27 @@
 decoupled block (Deng 2012 eqs. III.13, III.22-III.24, V.1-V.4, V.28).
 
 All chains stacked give ``E_s s + E_d delta = 0``
-(:meth:`~robots.clearance.model.ClearanceMechanism.linear_system`). Per block of components this
+(:meth:`~evotol.robots.clearance.model.ClearanceMechanism.linear_system`). Per block of components this
 module lays out the clearance cones (disks first, then intervals), computes the end-effector rows
 ``C = -(E_d^+ E_s)_P`` and the loop-equation map ``B = E_s^T N`` with ``N`` a basis of
 ``null(E_d^T)``: a *sparse* one when it can be built -- one block of columns per independent loop
 (2-chain loops between chains joining the same bodies, loops closed through the base for chains
 reaching a body from different bodies) -- else the SVD basis, and the row groups of ``B`` (its
 block sparsity, used by the Newton systems). The result, one
-:class:`~robots.clearance.pose_maps.PoseMaps` per block, is what
-:meth:`robots.clearance.model.ClearanceMechanism.pose_maps` returns.
+:class:`~evotol.robots.clearance.pose_maps.PoseMaps` per block, is what
+:meth:`evotol.robots.clearance.model.ClearanceMechanism.pose_maps` returns.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.clearance.parts import CONE_COMPONENTS, FULL, POS, ROT
-from robots.clearance.pose_maps import PoseMaps
+from evotol.robots.clearance.parts import CONE_COMPONENTS, FULL, POS, ROT
+from evotol.robots.clearance.pose_maps import PoseMaps
 
 
 def _block_maps(mech, poses: np.ndarray, split: bool = True) -> list[PoseMaps]:
-    """The work of :meth:`robots.clearance.model.ClearanceMechanism.pose_maps` (see it)."""
+    """The work of :meth:`evotol.robots.clearance.model.ClearanceMechanism.pose_maps` (see it)."""
     poses = np.atleast_2d(np.asarray(poses, float))
     Es, Ed = mech.linear_system(poses)
     nb = Ed.shape[2] // 6

@@ -8,7 +8,7 @@ disk x interval x disk x interval sets), so::
     p_max = max_{x in P} ||x_pos|| = max_{|u| = 1} h_P(u),      h_P = support function of P.
 
 Each ``h_P(u)`` is a small convex problem solved with a two-sided certificate
-(:mod:`robots.clearance.support`). The maximum over unit directions ``u`` is found by
+(:mod:`evotol.robots.clearance.support`). The maximum over unit directions ``u`` is found by
 branch and bound on the circle (2 target components) or the half sphere (3 components;
 ``h(u) = h(-u)`` by symmetry): for a patch spanned by unit vectors ``u_1..u_q``,
 ``max_patch h <= max_i h(u_i) / d`` where ``d`` is the distance from the origin to the flat
@@ -26,7 +26,7 @@ and likewise for the rotation. Their relative gap is at most ``tol`` (default 1e
 
 Modules: :mod:`.branch_bound` (the branch and bound of one block), :mod:`.patches` (patches of
 directions and their bounds), :mod:`.options` (the settings, one frozen value passed down),
-:mod:`~robots.clearance.result` (:class:`MaxPoseError`), :mod:`.sampling` (random clearance states, for comparison).
+:mod:`~evotol.robots.clearance.result` (:class:`MaxPoseError`), :mod:`.sampling` (random clearance states, for comparison).
 """
 from __future__ import annotations
 
@@ -37,12 +37,12 @@ import numpy as np
 from evotol.errors import ValidationError
 from evotol._runtime.executor import parallel_map
 from evotol._runtime.blas_threads import one_blas_thread
-from robots.clearance.branch_bound import maximise_norm
-from robots.clearance.certificate import _gram_pinv
-from robots.clearance.model import ClearanceMechanism, PoseMaps
-from robots.clearance.options import DEFAULT, EngineOptions
-from robots.clearance.result import MaxPoseError
-from robots.clearance.support import warm_up
+from evotol.robots.clearance.branch_bound import maximise_norm
+from evotol.robots.clearance.certificate import _gram_pinv
+from evotol.robots.clearance.model import ClearanceMechanism, PoseMaps
+from evotol.robots.clearance.options import DEFAULT, EngineOptions
+from evotol.robots.clearance.result import MaxPoseError
+from evotol.robots.clearance.support import warm_up
 
 __all__ = ["ClearanceEvaluator", "MaxPoseError", "as_bounds", "evaluate_cases", "max_pose_error"]
 
@@ -86,7 +86,7 @@ def evaluate_cases(mech: ClearanceMechanism, maps: list[PoseMaps], pose_index: n
                    tol: float = 1e-3, tol_solve: float = 2e-5, extra=None,
                    options: EngineOptions = DEFAULT) -> MaxPoseError:
     """Maximum pose errors of the cases ``(pose_index[i], bounds[i])`` (see :func:`_evaluate_cases`)
-    with the engine's settings ``options`` (:mod:`robots.clearance.options`).
+    with the engine's settings ``options`` (:mod:`evotol.robots.clearance.options`).
 
     Identical sub-problems (same pose and same bounds on a decoupled block) are solved once; the
     BLAS runs on one thread during the call.
@@ -230,7 +230,7 @@ def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float =
     tol: relative gap between the attained value and the certified bound (default 0.1 %).
     extra: optional ``(J, t)`` of other interval error sources added to the clearances (see
     :func:`evaluate_cases`), e.g. geometric tolerances through the 5-bar's J_p.
-    options: the engine's settings (:data:`robots.clearance.options.DEFAULT`; ``LEGACY``: before
+    options: the engine's settings (:data:`evotol.robots.clearance.options.DEFAULT`; ``LEGACY``: before
     issue 13; ``NUMPY``: the NumPy Newton iteration).
 
     Parameters
@@ -255,7 +255,7 @@ def max_pose_error(mech: ClearanceMechanism, poses, bounds=None, *, tol: float =
         :func:`evaluate_cases`).
     KinematicsError
         The chains do not determine every body's error twist at a pose
-        (:meth:`~robots.clearance.model.ClearanceMechanism.pose_maps`).
+        (:meth:`~evotol.robots.clearance.model.ClearanceMechanism.pose_maps`).
     """
     poses = np.atleast_2d(np.asarray(poses, float))
     b = as_bounds(mech, bounds, len(poses))

@@ -33,11 +33,11 @@ in-plane block (``dr_z, dt_x, dt_y`` -> ``dtheta_z, dp_x, dp_y``) and an out-of-
 (``dr_x, dr_y, dt_z`` -> ``dtheta_x, dtheta_y, dp_z``); the clearance set is a product over the two
 blocks, so each maximum is computed per block and combined exactly (``p_max^2 = p_in^2 + p_out^2``).
 
-The plain values (bounds, joints, chains, blocks) live in :mod:`robots.clearance.parts`, the
-per-pose maps in :mod:`robots.clearance.pose_maps`; both are importable from here too. The
+The plain values (bounds, joints, chains, blocks) live in :mod:`evotol.robots.clearance.parts`, the
+per-pose maps in :mod:`evotol.robots.clearance.pose_maps`; both are importable from here too. The
 reduction of the chain equations to those maps (the sparse loop basis) is
-:mod:`robots.clearance.loops`; the nonlinear chain model that checks the error mapping
-(:func:`twist_between`, also importable from here) is :mod:`robots.clearance.nonlinear`.
+:mod:`evotol.robots.clearance.loops`; the nonlinear chain model that checks the error mapping
+(:func:`twist_between`, also importable from here) is :mod:`evotol.robots.clearance.nonlinear`.
 
 The parameters several definitions of this module share are described once, here.
 
@@ -54,12 +54,12 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.clearance import loops, nonlinear
-from robots.clearance.kinematics import DHTree, skew
-from robots.clearance.nonlinear import twist_between  # noqa: F401
-from robots.clearance.parts import (BOUND_NAMES, BOUND_UNITS, CONE_COMPONENTS, FULL, PLANAR, Block, Chain,
+from evotol.robots.clearance import loops, nonlinear
+from evotol.robots.clearance.kinematics import DHTree, skew
+from evotol.robots.clearance.nonlinear import twist_between  # noqa: F401
+from evotol.robots.clearance.parts import (BOUND_NAMES, BOUND_UNITS, CONE_COMPONENTS, FULL, PLANAR, Block, Chain,
                                     ClearanceBounds, Joint)
-from robots.clearance.pose_maps import PoseMaps
+from evotol.robots.clearance.pose_maps import PoseMaps
 
 __all__ = ["BOUND_NAMES", "BOUND_UNITS", "CONE_COMPONENTS", "FULL", "PLANAR", "Block", "Chain", "ClearanceBounds",
            "ClearanceMechanism", "Joint", "PoseMaps", "twist_between"]

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robots.clearance.model import ClearanceMechanism, PoseMaps
+from evotol.robots.clearance.model import ClearanceMechanism, PoseMaps
 
 
 @dataclass
@@ -57,7 +57,7 @@ def _spatial_maps(mech: ClearanceMechanism, poses) -> PoseMaps:
 
 def _local_problem(C: np.ndarray, B: np.ndarray, D: np.ndarray, nd: int):
     """Scaled, equality-free form: returns (Ct, Z, cone index lists)."""
-    from scipy.linalg import qr      # imported here: scipy costs ~1-2 s at import of robots.clearance (issue 13)
+    from scipy.linalg import qr      # imported here: scipy costs ~1-2 s at import of evotol.robots.clearance (issue 13)
 
     Bt = B * D[:, None]
     keep = D > 0                      # zero bounds: the component is fixed at 0

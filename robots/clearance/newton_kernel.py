@@ -1,6 +1,6 @@
 """One barrier-Newton iteration of the support-function solver, compiled per problem (numba).
 
-:func:`robots.clearance.support.solve_support` minimises, for every problem of a batch, the
+:func:`evotol.robots.clearance.support.solve_support` minimises, for every problem of a batch, the
 reduced log barrier ``F(mu) = sum_c q_c - log(1 + q_c)``, ``q_c = sqrt(1 + tau^2 ||y_c||^2)``,
 ``y = a + B mu`` (its module docstring has the derivation). One iteration is
 
@@ -22,7 +22,7 @@ set's index, so nothing of size ``K x R x m`` is copied when the working set shr
 iteration reads each column group's block of ``B`` from one contiguous array
 (:func:`group_blocks`, built once per solve).
 
-The kernel bodies, plain Python loops, are in :mod:`robots.clearance.newton_kernel_bodies`; this
+The kernel bodies, plain Python loops, are in :mod:`evotol.robots.clearance.newton_kernel_bodies`; this
 module lays out the column groups for them (:func:`group_arrays`, :func:`group_blocks`), compiles
 them and calls them (:func:`newton_iterate`, :func:`project_centred`, :func:`predict_centred`).
 
@@ -58,7 +58,7 @@ import warnings
 
 import numpy as np
 
-from robots.clearance.newton_kernel_bodies import (_chol_factor, _chol_solve, _newton_iterate_py, _predict_centred_py,
+from evotol.robots.clearance.newton_kernel_bodies import (_chol_factor, _chol_solve, _newton_iterate_py, _predict_centred_py,
                                                    _project_centred_py)
 
 #: False when numba is missing or EVOTOL_NO_NUMBA is set (NumPy iteration); :func:`_kernel` is None
@@ -80,7 +80,7 @@ def group_arrays(grows, nd: int):
     ----------
     grows : sequence of tuple
         Per group ``(disk-row slice, interval-row slice, columns, disk-cone slice)`` of the
-        permuted problem (as built in :func:`robots.clearance.support.solve_support`).
+        permuted problem (as built in :func:`evotol.robots.clearance.support.solve_support`).
     nd : int
         Number of disk cones (not used by the layout).
 
@@ -171,7 +171,7 @@ def _compiled():
         _say_if_compiling(compiled[0])
         return compiled
     except Exception as exc:        # pragma: no cover - depends on the platform
-        warnings.warn(f"robots.clearance.newton_kernel: numba unavailable ({exc!r}); the clearance engine "
+        warnings.warn(f"evotol.robots.clearance.newton_kernel: numba unavailable ({exc!r}); the clearance engine "
                       "uses its NumPy iteration (same results, slower)", RuntimeWarning, stacklevel=3)
         return None
 

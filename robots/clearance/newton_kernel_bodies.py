@@ -1,14 +1,14 @@
 """The kernel bodies of the compiled barrier-Newton iteration: plain Python loops over the problems
-of a batch, which :mod:`robots.clearance.newton_kernel` compiles with numba (``cache=True``) and
+of a batch, which :mod:`evotol.robots.clearance.newton_kernel` compiles with numba (``cache=True``) and
 calls.
 
-:func:`_newton_iterate_py` is one iteration of :func:`robots.clearance.support.solve_support`
+:func:`_newton_iterate_py` is one iteration of :func:`evotol.robots.clearance.support.solve_support`
 (barrier pieces per cone, gradient and Hessian assembled per column group of ``B``, Newton step by
 Cholesky -- :func:`_chol_factor`, :func:`_chol_solve` -- or LU, backtracking line search, update
 and the certified dual value); at a centred point :func:`_project_centred_py` gives the feasible
 primal point (the certified lower bound) and :func:`_predict_centred_py` the path predictor. The
-steps are numbered and derived in :mod:`robots.clearance.newton_kernel`; the NumPy iteration
-(:mod:`robots.clearance.newton_numpy`) is the reference. Run uncompiled (the Python functions
+steps are numbered and derived in :mod:`evotol.robots.clearance.newton_kernel`; the NumPy iteration
+(:mod:`evotol.robots.clearance.newton_numpy`) is the reference. Run uncompiled (the Python functions
 themselves) they give the same results, slowly.
 """
 from __future__ import annotations
@@ -48,7 +48,7 @@ def _chol_solve(L, rhs, out, m):
 
 
 def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, want_dual, H_out, lam2_out, dual_out, fail_out):
-    """Kernel body (compiled by numba when available; see :mod:`robots.clearance.newton_kernel`).
+    """Kernel body (compiled by numba when available; see :mod:`evotol.robots.clearance.newton_kernel`).
 
     In place: ``Y`` (k, R), ``mu`` (k, m) updated by the accepted step; ``H_out`` (k, m, m) the
     Hessian at the start point (for the path predictor); ``lam2_out`` (k,) the squared Newton

@@ -1,8 +1,8 @@
 """One barrier-Newton iteration and the path predictor of the support-function solver, with
-batched NumPy operations: the reference of the compiled kernels (:mod:`robots.clearance.newton_kernel`)
+batched NumPy operations: the reference of the compiled kernels (:mod:`evotol.robots.clearance.newton_kernel`)
 and the iteration used without numba (``EngineOptions(kernel=False)``).
 
-:func:`robots.clearance.support.solve_support` (its docstring has the method) minimises per
+:func:`evotol.robots.clearance.support.solve_support` (its docstring has the method) minimises per
 problem the reduced log barrier ``F(mu) = sum_c q_c - log(1 + q_c)``,
 ``q_c = sqrt(1 + tau^2 ||y_c||^2)``, ``y = a + B mu``: gradient ``tau B^T sigma`` and Hessian
 ``B^T W B - sum_disks G_c G_c^T`` assembled per column group of ``B``, the damped Newton step
@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.clearance.certificate import true_dual
-from robots.clearance.newton_kernel import LINE_SEARCH
+from evotol.robots.clearance.certificate import true_dual
+from evotol.robots.clearance.newton_kernel import LINE_SEARCH
 
 
 def _barrier_terms(Y: np.ndarray, nd: int, tau: np.ndarray):
@@ -57,7 +57,7 @@ def _barrier_value(Y: np.ndarray, nd: int, tau: np.ndarray) -> np.ndarray:
 
 def _numpy_iteration(wY, wmu, wtau, nd, R, m, grows, gB, dense, want_dual):
     """One barrier-Newton iteration with batched NumPy operations (the reference for
-    :mod:`robots.clearance.newton_kernel`, used when numba is unavailable); returns
+    :mod:`evotol.robots.clearance.newton_kernel`, used when numba is unavailable); returns
     ``(H, lam2, mu, Y, dual)``."""
     k = len(wY)
     diag = np.arange(m)

@@ -4,10 +4,10 @@
 A joint's error screw is applied as ``T_j -> T_j exp([s_j])`` (``s_j`` in frame ``j``) and the
 chain's end pose compared with the nominal one by :func:`twist_between`: central finite
 differences of the chain's end pose
-(:meth:`~robots.clearance.model.ClearanceMechanism.chain_end_pose`) must equal the mapping matrices of
-:meth:`~robots.clearance.model.ClearanceMechanism.error_mapping` (tested to 1e-11). The thesis's
+(:meth:`~evotol.robots.clearance.model.ClearanceMechanism.chain_end_pose`) must equal the mapping matrices of
+:meth:`~evotol.robots.clearance.model.ClearanceMechanism.error_mapping` (tested to 1e-11). The thesis's
 literal eq. III.24 (products of inverse adjoints of the DH transforms,
-:meth:`~robots.clearance.model.ClearanceMechanism.error_mapping_thesis`) is kept to check the same
+:meth:`~evotol.robots.clearance.model.ClearanceMechanism.error_mapping_thesis`) is kept to check the same
 matrices against the thesis (1e-15). Those two methods are documented on the mechanism and do
 their work here.
 """
@@ -17,8 +17,8 @@ from typing import Mapping
 
 import numpy as np
 
-from robots.clearance.kinematics import adjoint, exp_screw, inv_transform, rotation_vector
-from robots.clearance.parts import Chain
+from evotol.robots.clearance.kinematics import adjoint, exp_screw, inv_transform, rotation_vector
+from evotol.robots.clearance.parts import Chain
 
 __all__ = ["twist_between"]
 
@@ -33,7 +33,7 @@ def _chain_transforms(mech, poses: np.ndarray, chain: str | Chain):
 
 
 def _error_mapping_thesis(mech, poses: np.ndarray, chain: str | Chain) -> np.ndarray:
-    """The work of :meth:`robots.clearance.model.ClearanceMechanism.error_mapping_thesis` (eq. III.24; see it)."""
+    """The work of :meth:`evotol.robots.clearance.model.ClearanceMechanism.error_mapping_thesis` (eq. III.24; see it)."""
     c, n, local, W = _chain_transforms(mech, poses, chain)
     end_frame = c.path_end or mech.bodies[c.end]
     path = mech.tree.path(end_frame)
@@ -55,7 +55,7 @@ def _error_mapping_thesis(mech, poses: np.ndarray, chain: str | Chain) -> np.nda
 
 def _chain_end_pose(mech, poses: np.ndarray, chain: str | Chain, screws: Mapping[str, np.ndarray] | None = None,
                     start_twist: np.ndarray | None = None) -> np.ndarray:
-    """The work of :meth:`robots.clearance.model.ClearanceMechanism.chain_end_pose` (see it)."""
+    """The work of :meth:`evotol.robots.clearance.model.ClearanceMechanism.chain_end_pose` (see it)."""
     c, n, local, W = _chain_transforms(mech, poses, chain)
     start_frame = mech.bodies[c.start]
     end_frame = c.path_end or mech.bodies[c.end]

@@ -1,12 +1,12 @@
 """Settings of the certified clearance engine: one frozen value passed down from the public calls
-(:func:`robots.clearance.max_pose_error`, :class:`~robots.clearance.ClearanceEvaluator`, ...) to the
-branch and bound (:mod:`robots.clearance.branch_bound`) and the convex solver
-(:mod:`robots.clearance.support`). A worker process receives the options with its task, never
+(:func:`evotol.robots.clearance.max_pose_error`, :class:`~evotol.robots.clearance.ClearanceEvaluator`, ...) to the
+branch and bound (:mod:`evotol.robots.clearance.branch_bound`) and the convex solver
+(:mod:`evotol.robots.clearance.support`). A worker process receives the options with its task, never
 through module state (``docs/clearance.md``, issue 13 for what each setting changed).
 
 ``DEFAULT`` is the engine; ``LEGACY`` its settings before issue 13 (the agreement tests and the
 benchmark compare the two); ``NUMPY`` the default with the NumPy Newton iteration instead of the
-compiled one (the reference of :mod:`robots.clearance.newton_kernel`).
+compiled one (the reference of :mod:`evotol.robots.clearance.newton_kernel`).
 """
 from __future__ import annotations
 

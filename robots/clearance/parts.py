@@ -1,6 +1,6 @@
 """Plain values of the clearance model (Deng 2012 Ch. III): the four clearance bounds of a joint
 (eqs. III.3-III.6), joints, serial chains between bodies, and the decoupled blocks of screw/twist
-components. The mechanism that assembles them is :class:`robots.clearance.model.ClearanceMechanism`."""
+components. The mechanism that assembles them is :class:`evotol.robots.clearance.model.ClearanceMechanism`."""
 from __future__ import annotations
 
 from dataclasses import dataclass

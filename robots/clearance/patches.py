@@ -1,5 +1,5 @@
 """Patches of unit directions and their certified bounds, for the branch and bound over directions
-(:mod:`robots.clearance.branch_bound`; Deng 2012 eqs. III.26-III.27 maximised as max_|u|=1 h(u)).
+(:mod:`evotol.robots.clearance.branch_bound`; Deng 2012 eqs. III.26-III.27 maximised as max_|u|=1 h(u)).
 
 A patch is the cone spanned by q unit vectors (an arc of the circle, q = 2, for 2-component
 targets; a spherical triangle of the half sphere, q = 3, for 3-component targets). Given certified
@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.clearance.certificate import true_dual
-from robots.clearance.options import DEFAULT, EngineOptions
+from evotol.robots.clearance.certificate import true_dual
+from evotol.robots.clearance.options import DEFAULT, EngineOptions
 
 
 def octa_hemisphere(levels: int = 2):
@@ -297,7 +297,7 @@ def initial_patches(k: int, options: EngineOptions = DEFAULT):
         Number of target components (2: half circle of arcs; otherwise 3: half sphere of triangles).
     options : EngineOptions, optional
         The engine's settings: ``n_circle0``, ``level0``, ``dedup_antipodes`` (default
-        :data:`robots.clearance.options.DEFAULT`).
+        :data:`evotol.robots.clearance.options.DEFAULT`).
 
     Returns
     -------

@@ -1,6 +1,6 @@
 """Per-pose linear maps of one decoupled block of a clearance mechanism: the target rows ``C`` and
 the loop-equation map ``B`` (Deng 2012 eqs. III.22-III.24, V.1-V.4; ``B^T s = 0`` for consistent
-screws ``s``), computed once by :meth:`robots.clearance.model.ClearanceMechanism.pose_maps` and
+screws ``s``), computed once by :meth:`evotol.robots.clearance.model.ClearanceMechanism.pose_maps` and
 reused for any clearance bounds."""
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from robots.clearance.parts import Block
+from evotol.robots.clearance.parts import Block
 
 
 @dataclass

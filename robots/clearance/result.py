@@ -1,5 +1,5 @@
 """The result of the certified clearance engine: maximum pose errors with their certificates,
-maximising screws and twists (Deng 2012 eqs. III.26-III.27; :func:`robots.clearance.max_pose_error`)."""
+maximising screws and twists (Deng 2012 eqs. III.26-III.27; :func:`evotol.robots.clearance.max_pose_error`)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace

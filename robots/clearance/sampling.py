@@ -1,12 +1,12 @@
 """Random feasible clearance states: the largest pose error plain Monte Carlo would report at one
-pose -- it falls short of the certified worst case of :func:`robots.clearance.max_pose_error`."""
+pose -- it falls short of the certified worst case of :func:`evotol.robots.clearance.max_pose_error`."""
 from __future__ import annotations
 
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.clearance.maxerror import as_bounds
-from robots.clearance.model import ClearanceMechanism
+from evotol.robots.clearance.maxerror import as_bounds
+from evotol.robots.clearance.model import ClearanceMechanism
 
 
 def sample_max_errors(mech: ClearanceMechanism, pose, bounds=None, *, n_samples: int = 10 ** 6, seed: int = 0,

@@ -1,11 +1,11 @@
 """Certified maximum pose errors of many mechanisms of one family in one engine call.
 
 A dimension sweep (e.g. the IRSBot-2 designs of Deng 2012 Sec. VII.2) builds one
-:class:`~robots.clearance.model.ClearanceMechanism` per design; designs of one family share joints,
+:class:`~evotol.robots.clearance.model.ClearanceMechanism` per design; designs of one family share joints,
 chains and clearance bounds, only their dimensions differ. Their per-pose maps
-(``mech.pose_maps``) then stack along the pose axis and :func:`robots.clearance.evaluate_cases`
+(``mech.pose_maps``) then stack along the pose axis and :func:`evotol.robots.clearance.evaluate_cases`
 solves every (design, pose) case in one vectorised call -- the numbers of one
-:func:`robots.clearance.max_pose_error` call per design (within the 0.1 % certificate), at a
+:func:`evotol.robots.clearance.max_pose_error` call per design (within the 0.1 % certificate), at a
 lower cost per case.
 """
 from __future__ import annotations
@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from robots.clearance.maxerror import evaluate_cases, max_pose_error
+from evotol.robots.clearance.maxerror import evaluate_cases, max_pose_error
 
 
 def _same_layout(a, b) -> bool:
@@ -28,7 +28,7 @@ def max_pose_error_stacked(mechanisms: list, points: list) -> list[tuple[np.ndar
     """``[(p_max (m), r_max (rad)) at points[k]]`` for every ``mechanisms[k]`` (poses in metres).
 
     One vectorised engine call when the mechanisms' pose maps and default bounds stack; one
-    :func:`~robots.clearance.max_pose_error` call per mechanism otherwise.
+    :func:`~evotol.robots.clearance.max_pose_error` call per mechanism otherwise.
 
     Parameters
     ----------

@@ -22,8 +22,8 @@ With no loop equation (``m = 0``, an open serial chain) the support function is 
 ``h(w) = sum_c ||a_c||`` (Minkowski sum of the joints' sets).
 
 This module drives the path following (:func:`solve_support`); the certificate's bounds
-(dual value, feasible screws) are :mod:`robots.clearance.certificate`, one Newton iteration is
-:mod:`robots.clearance.newton_kernel` (compiled) or :mod:`robots.clearance.newton_numpy`.
+(dual value, feasible screws) are :mod:`evotol.robots.clearance.certificate`, one Newton iteration is
+:mod:`evotol.robots.clearance.newton_kernel` (compiled) or :mod:`evotol.robots.clearance.newton_numpy`.
 """
 from __future__ import annotations
 
@@ -32,10 +32,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.clearance import newton_kernel
-from robots.clearance.certificate import _gram_pinv, _project, _project_free, recover_primal, true_dual
-from robots.clearance.newton_numpy import _barrier_terms, _numpy_iteration, _numpy_predictor
-from robots.clearance.options import DEFAULT, EngineOptions
+from evotol.robots.clearance import newton_kernel
+from evotol.robots.clearance.certificate import _gram_pinv, _project, _project_free, recover_primal, true_dual
+from evotol.robots.clearance.newton_numpy import _barrier_terms, _numpy_iteration, _numpy_predictor
+from evotol.robots.clearance.options import DEFAULT, EngineOptions
 
 #: predictor scales tried by ``EngineOptions(predictor="legacy")``
 _PRED_LEGACY = np.array([1.0, 0.75, 0.5, 0.25, 0.0])
@@ -102,14 +102,14 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     then intervals); tol: absolute duality-gap target per problem (K,) or scalar; mu0: warm
     start (K, m); rtol: also stop when the gap is below ``rtol * upper``; gap0: barrier gap to start the path from (default 10 % of f(mu0));
     gram_inv: optional precomputed ``pinv(B^T B)`` (K, m, m); groups: optional block sparsity
-    of B (:attr:`robots.clearance.model.PoseMaps.groups`): the Newton systems are then
+    of B (:attr:`evotol.robots.clearance.model.PoseMaps.groups`): the Newton systems are then
     assembled group by group; stop_below: (K,) stop as soon as the certified upper bound is below
     this value (enough for a branch-and-bound vertex far from the maximum); kernel: run each
-    Newton iteration compiled (:mod:`robots.clearance.newton_kernel`, default when numba is
+    Newton iteration compiled (:mod:`evotol.robots.clearance.newton_kernel`, default when numba is
     available) or with batched NumPy (``False``; the reference, equal to round-off). A problem
     whose Hessian is exactly singular takes no step in the compiled iteration (its decrement is
     reported as 0, so the path moves on) where NumPy falls back to a pseudo-inverse. options: the
-    engine's settings (:class:`robots.clearance.options.EngineOptions`: centring threshold,
+    engine's settings (:class:`evotol.robots.clearance.options.EngineOptions`: centring threshold,
     ``growth``, predictor, ``kernel``); the arguments ``growth`` and ``kernel`` override them.
 
     Method: the dual ``min_mu sum_c ||y_c||`` (``y = a + B mu``) is written as the SOCP
@@ -140,7 +140,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     rtol : float, optional
         Also stop when the gap is below ``rtol * upper`` (default 0).
     groups : tuple or None, optional
-        Block sparsity of ``B`` (:attr:`robots.clearance.model.PoseMaps.groups`); None: dense.
+        Block sparsity of ``B`` (:attr:`evotol.robots.clearance.model.PoseMaps.groups`); None: dense.
     stop_below : float or (K,) ndarray or None, optional
         Stop a problem once its certified upper bound is below this value.
     kernel : bool or None, optional
@@ -203,7 +203,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     kernel = options.kernel if kernel is None else kernel
     use_kernel = (kernel is None or bool(kernel)) and newton_kernel._kernel() is not None
     if kernel and not use_kernel:
-        raise ValidationError("kernel", kernel, "False or None: numba is not available (see robots.clearance.newton_kernel)")
+        raise ValidationError("kernel", kernel, "False or None: numba is not available (see evotol.robots.clearance.newton_kernel)")
     if use_kernel:
         # the kernels read B, a and pinv(B^T B) of the original problems through ``idx`` (no copies
         # when the working set shrinks) and each group's block of B from one contiguous array
@@ -234,7 +234,7 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
         # certified upper bound (weak duality), enough to drop a vertex certified below
         # ``stop_below`` before the path is centred
         if use_kernel:
-            # the compiled iteration (robots.clearance.newton_kernel): same steps as the branch below
+            # the compiled iteration (evotol.robots.clearance.newton_kernel): same steps as the branch below
             H, lam2, up_it, fail = newton_kernel.newton_iterate(wY, wmu, GB, idx, wtau, nd, kgroups, stop_below is not None)
             if stop_below is None:
                 up_it = None

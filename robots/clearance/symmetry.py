@@ -119,7 +119,7 @@ def prove_mirror(mech, poses, mirrored, joint_map, reflection, rtol: float = 1e-
 
 def mirror_maxima(result, proof: dict):
     """The certified maxima at the mirrored poses of :func:`prove_mirror`, from ``result`` (a
-    :class:`~robots.clearance.maxerror.MaxPoseError` at the original poses, in the same order):
+    :class:`~evotol.robots.clearance.maxerror.MaxPoseError` at the original poses, in the same order):
     equal values and bounds, maximising screws renamed and sign-changed, twists reflected.
 
     Parameters
@@ -155,7 +155,7 @@ def mirror_maxima(result, proof: dict):
 
 
 def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflection, **grid_kw):
-    """:func:`~robots.clearance.grid.grid_max_pose_error` over ``poses`` solving only one pose of
+    """:func:`~evotol.robots.clearance.grid.grid_max_pose_error` over ``poses`` solving only one pose of
     every mirror pair: pose ``j`` is the mirror of pose ``i`` when ``poses[j] = pose_reflection *
     poses[i]`` (element-wise, e.g. ``(-1, 1)`` for x -> -x in the x-z plane). The symmetry is proven
     for every pair (:func:`prove_mirror`) before the maxima are reused. Returns the result in the
@@ -175,7 +175,7 @@ def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflec
     pose_reflection : (d,) array_like
         Element-wise factors mapping a pose to its mirror (e.g. ``(-1, 1)``).
     **grid_kw
-        Passed to :func:`~robots.clearance.grid.grid_max_pose_error` (``tol``, ``workers``,
+        Passed to :func:`~evotol.robots.clearance.grid.grid_max_pose_error` (``tol``, ``workers``,
         ``scheduler``, ``options``, ...); without ``chunk_size`` and ``scheduler`` the chunk size
         is chosen to give equal chunks on the local processes. The proof uses the joints' own
         bounds, so ``bounds`` is refused here.
@@ -199,8 +199,8 @@ def grid_max_pose_error_mirrored(mech, poses, joint_map, reflection, pose_reflec
     """
     import time
 
-    from robots.clearance.grid import grid_max_pose_error
-    from robots.clearance.maxerror import MaxPoseError
+    from evotol.robots.clearance.grid import grid_max_pose_error
+    from evotol.robots.clearance.maxerror import MaxPoseError
 
     if grid_kw.get("bounds") is not None:
         raise ValidationError("bounds", "given", "no bounds: the mirror proof holds for the joints' own bounds only "

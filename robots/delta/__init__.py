@@ -7,11 +7,11 @@
   from the printed paper;
 * :mod:`.kinematics` -- nominal inverse and forward kinematics (eqs. 3, 11);
 * :mod:`.closure` -- forward kinematics with errors (loop closure, eq. 3 with eq. 5);
-* :mod:`.model` -- :class:`DeltaRobot`, the :class:`robots.base.RobotErrorModel` plugin.
+* :mod:`.model` -- :class:`DeltaRobot`, the :class:`evotol.robots.base.RobotErrorModel` plugin.
 """
-from robots.delta.geometry import POSTURES_MM, DeltaGeometry, cylinder_poses
-from robots.delta.model import DeltaRobot
-from robots.delta.parameters import ANGULAR, LINEAR, PARAMETER_NAMES
+from evotol.robots.delta.geometry import POSTURES_MM, DeltaGeometry, cylinder_poses
+from evotol.robots.delta.model import DeltaRobot
+from evotol.robots.delta.parameters import ANGULAR, LINEAR, PARAMETER_NAMES
 
 __all__ = ["DeltaGeometry", "DeltaRobot", "POSTURES_MM", "PARAMETER_NAMES", "LINEAR", "ANGULAR",
            "cylinder_poses"]

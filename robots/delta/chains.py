@@ -27,14 +27,14 @@ What differs from the printed paper, and why (see ``docs/delta.md``):
   holds for the actual rotations of joints 1 and 2, so ``Δq1`` is a pure actuator offset and
   ``Δq2`` (an offset of a free passive joint) has no effect (see :meth:`DeltaRobot.branch_points`).
 
-:class:`DeltaChains` is a mixin of :class:`robots.delta.model.DeltaRobot`, which supplies the
+:class:`DeltaChains` is a mixin of :class:`evotol.robots.delta.model.DeltaRobot`, which supplies the
 nominal ``geometry`` and the inverse kinematics. Units: metres and radians.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from robots.delta.parameters import _INDEX, _LEG_COL
+from evotol.robots.delta.parameters import _INDEX, _LEG_COL
 
 
 # --- elementary KK operations on points (components kept apart for broadcasting) -----------------
@@ -59,7 +59,7 @@ def _kk(p, alpha, dx, q, r, b=None):
 
 
 class DeltaChains:
-    """The KK chains of the Delta's legs with errors (mixin of :class:`robots.delta.model.DeltaRobot`)."""
+    """The KK chains of the Delta's legs with errors (mixin of :class:`evotol.robots.delta.model.DeltaRobot`)."""
 
     def _unpack(self, errors):
         """errors (..., 47) -> common (..., ) and per-leg (..., 3) error arrays."""

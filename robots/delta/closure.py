@@ -7,8 +7,8 @@ closure of the three legs solved for the platform position and the free passive 
   The forward kinematics with errors then solves the 9 equations "leg end point i = P" (eq. 3)
   for ``P`` and the free passive joints ``q2_i, q3_i``, given the commanded actuated angles.
 
-:class:`DeltaClosure` is a mixin of :class:`robots.delta.model.DeltaRobot`, which supplies the
-leg end points (:class:`robots.delta.chains.DeltaChains`), the nominal inverse kinematics and the
+:class:`DeltaClosure` is a mixin of :class:`evotol.robots.delta.model.DeltaRobot`, which supplies the
+leg end points (:class:`evotol.robots.delta.chains.DeltaChains`), the nominal inverse kinematics and the
 iteration settings ``newton_tol`` and ``max_iter``. Units: metres and radians.
 
 The parameters several definitions of this module share are described once, here.
@@ -23,12 +23,12 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import ConvergenceError, KinematicsError, ValidationError
-from robots.delta.parameters import PARAMETER_NAMES
+from evotol.robots.delta.parameters import PARAMETER_NAMES
 
 
 class DeltaClosure:
     """Loop closure with errors: forward kinematics, residual, exact Jacobians (mixin of
-    :class:`robots.delta.model.DeltaRobot`)."""
+    :class:`evotol.robots.delta.model.DeltaRobot`)."""
 
     def _residual(self, X, q1, errors):
         """Loop-closure residual: leg end point i minus P, (..., 9). X = (P, q2_1, q3_1, ..., q3_3)."""

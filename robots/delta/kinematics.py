@@ -2,7 +2,7 @@
 kinematics (joint variables ``Q_k``) and the closed-form forward kinematics of the error-free robot
 (intersection of three spheres), an independent check of the former.
 
-:class:`DeltaNominalKinematics` is a mixin of :class:`robots.delta.model.DeltaRobot`, which
+:class:`DeltaNominalKinematics` is a mixin of :class:`evotol.robots.delta.model.DeltaRobot`, which
 supplies the nominal ``geometry`` and ``check_poses``. Units: metres and radians.
 """
 from __future__ import annotations
@@ -13,7 +13,7 @@ from evotol.errors import KinematicsError
 
 
 class DeltaNominalKinematics:
-    """Nominal inverse and forward kinematics (mixin of :class:`robots.delta.model.DeltaRobot`)."""
+    """Nominal inverse and forward kinematics (mixin of :class:`evotol.robots.delta.model.DeltaRobot`)."""
 
     def inverse_kinematics(self, poses) -> np.ndarray:
         """Joint variables Q_k (eq. 11) of the nominal robot, shape (n, 3 legs, 7) rad.

@@ -1,9 +1,9 @@
 """Delta parallel robot with Khalil–Kleinfinger geometric errors (Brahmia et al. 2023) as a
-:class:`robots.base.RobotErrorModel`: its sources, first-order sensitivity and nonlinear pose error.
+:class:`evotol.robots.base.RobotErrorModel`: its sources, first-order sensitivity and nonlinear pose error.
 
 Model (Brahmia, Kerboua, Kelaiaia, Latreche, *Appl. Sci.* 13:10703, 2023, Sec. 2): the KK chains
-of the legs are :mod:`robots.delta.chains`, the nominal kinematics :mod:`robots.delta.kinematics`,
-the forward kinematics with errors :mod:`robots.delta.closure`; :class:`DeltaRobot` joins them.
+of the legs are :mod:`evotol.robots.delta.chains`, the nominal kinematics :mod:`evotol.robots.delta.kinematics`,
+the forward kinematics with errors :mod:`evotol.robots.delta.closure`; :class:`DeltaRobot` joins them.
 
 The position-only model leaves rows 3-5 (orientation) of the error twist at zero, as the paper
 does (eq. 3 constrains positions only).
@@ -13,16 +13,16 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.delta.chains import DeltaChains
-from robots.delta.closure import DeltaClosure
-from robots.delta.geometry import DeltaGeometry
-from robots.delta.kinematics import DeltaNominalKinematics
-from robots.delta.parameters import _DESCRIPTIONS, LINEAR, PARAMETER_NAMES
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.delta.chains import DeltaChains
+from evotol.robots.delta.closure import DeltaClosure
+from evotol.robots.delta.geometry import DeltaGeometry
+from evotol.robots.delta.kinematics import DeltaNominalKinematics
+from evotol.robots.delta.parameters import _DESCRIPTIONS, LINEAR, PARAMETER_NAMES
 
 
 class DeltaRobot(DeltaChains, DeltaNominalKinematics, DeltaClosure, RobotErrorModel):
-    """Delta robot error model (Brahmia et al. 2023) as a :class:`robots.base.RobotErrorModel`.
+    """Delta robot error model (Brahmia et al. 2023) as a :class:`evotol.robots.base.RobotErrorModel`.
 
     Pose coordinates: platform centre ``(x, y, z)`` in metres, base frame (``z`` towards the
     platform). Sources: the 47 geometric error parameters (:data:`PARAMETER_NAMES`), each an
@@ -49,10 +49,10 @@ class DeltaRobot(DeltaChains, DeltaNominalKinematics, DeltaClosure, RobotErrorMo
     Notes
     -----
     The KK chains (``branch_points``, ``leg_points``, ``open_chain_points``) come from
-    :class:`~robots.delta.chains.DeltaChains`, the nominal kinematics (``inverse_kinematics``,
-    ``forward_kinematics_nominal``) from :class:`~robots.delta.kinematics.DeltaNominalKinematics`,
+    :class:`~evotol.robots.delta.chains.DeltaChains`, the nominal kinematics (``inverse_kinematics``,
+    ``forward_kinematics_nominal``) from :class:`~evotol.robots.delta.kinematics.DeltaNominalKinematics`,
     the kinematics with errors (``forward_kinematics``, ``closure_residual``,
-    ``position_and_jacobian``) from :class:`~robots.delta.closure.DeltaClosure`.
+    ``position_and_jacobian``) from :class:`~evotol.robots.delta.closure.DeltaClosure`.
     """
 
     name = "delta"

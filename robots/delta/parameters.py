@@ -3,7 +3,7 @@
 Error parameters (eq. 5 / Table 2; the 47 of eq. 12): ``Ra``, ``Rb`` and per leg ``d_i``,
 ``La_i``, ``Lb_i``, ``alpha1_i``, ``alpha3_i``, ``alpha5_i``, ``alpha6_i``, ``q1_i`` ... ``q7_i``,
 ``theta_i``, all entering the KK transforms as ``nominal + error`` exactly as in Table 2
-(:mod:`robots.delta.chains`). Lengths in m, angles in rad.
+(:mod:`evotol.robots.delta.chains`). Lengths in m, angles in rad.
 """
 from __future__ import annotations
 

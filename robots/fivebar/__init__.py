@@ -6,9 +6,9 @@
   errors (eqs. IV.27-IV.43), and :func:`combined_max_pose_error` (clearances and geometric
   variations together, Sec. VIII.2).
 """
-from robots.fivebar.geometric import GEOMETRIC_SOURCES, GEOMETRIC_WORKSPACE  # noqa: F401
-from robots.fivebar.geometric import FiveBarGeometric, combined_max_pose_error
-from robots.fivebar.linkage import JOINT_NAMES, MM  # noqa: F401
-from robots.fivebar.linkage import THESIS_LENGTHS, THESIS_WORKSPACE, FiveBar
+from evotol.robots.fivebar.geometric import GEOMETRIC_SOURCES, GEOMETRIC_WORKSPACE  # noqa: F401
+from evotol.robots.fivebar.geometric import FiveBarGeometric, combined_max_pose_error
+from evotol.robots.fivebar.linkage import JOINT_NAMES, MM  # noqa: F401
+from evotol.robots.fivebar.linkage import THESIS_LENGTHS, THESIS_WORKSPACE, FiveBar
 
 __all__ = ["FiveBar", "FiveBarGeometric", "combined_max_pose_error", "THESIS_LENGTHS", "THESIS_WORKSPACE"]

@@ -1,7 +1,7 @@
 """Sensitivity of the Deng 2012 5-bar to its geometric parameters (Sec. III.2, IV.5, eqs. IV.27-IV.43).
 
-:class:`FiveBarGeometric`, the :class:`robots.base.RobotErrorModel` plugin of the link-length and
-actuated-joint errors of :class:`~robots.fivebar.linkage.FiveBar`, and the worst case of joint
+:class:`FiveBarGeometric`, the :class:`evotol.robots.base.RobotErrorModel` plugin of the link-length and
+actuated-joint errors of :class:`~evotol.robots.fivebar.linkage.FiveBar`, and the worst case of joint
 clearances and geometric variations together (:func:`combined_max_pose_error`, Sec. VIII.2).
 
 Units: metres and radians inside; poses are ``(x, y)`` in metres.
@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.fivebar.linkage import MM, FiveBar
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.fivebar.linkage import MM, FiveBar
 
 GEOMETRIC_SOURCES = (
     SourceSpec("L0", 1, "m", "length", "base length A-B (A and B move by -+dL0/2 along x)"),
@@ -51,7 +51,7 @@ class FiveBarGeometric(RobotErrorModel):
     Parameters
     ----------
     fivebar : FiveBar or None
-        The linkage; None: :class:`~robots.fivebar.linkage.FiveBar` () (thesis lengths, modes ``(1, -1)``).
+        The linkage; None: :class:`~evotol.robots.fivebar.linkage.FiveBar` () (thesis lengths, modes ``(1, -1)``).
     workspace : Workspace or None
         Pose box, m; None: ``GEOMETRIC_WORKSPACE`` (``x`` in [-20, 20] mm, ``y`` in [55, 70] mm).
     singular_tol : float
@@ -194,7 +194,7 @@ def combined_max_pose_error(fivebar: FiveBar, poses, *, clearance=None, geometri
     -------
     MaxPoseError
         Certified worst-case end-effector error at each pose (see
-        :func:`robots.clearance.max_pose_error`).
+        :func:`evotol.robots.clearance.max_pose_error`).
 
     Raises
     ------
@@ -212,7 +212,7 @@ def combined_max_pose_error(fivebar: FiveBar, poses, *, clearance=None, geometri
         if k not in names:
             raise ValidationError("geometric tolerance", k, f"one of {names}")
         t[names.index(k)] = float(v)
-    Jb = geo.sensitivity(poses)                         # [dp; dtheta] (robots.base order)
+    Jb = geo.sensitivity(poses)                         # [dp; dtheta] (evotol.robots.base order)
     J = np.concatenate([Jb[:, 3:], Jb[:, :3]], axis=1)  # -> thesis order [dtheta; dp]
-    from robots.clearance import max_pose_error
+    from evotol.robots.clearance import max_pose_error
     return max_pose_error(mech, poses, tol=tol, extra=(J, t))

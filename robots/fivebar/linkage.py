@@ -1,7 +1,7 @@
 """The planar 5-bar linkage of Deng 2012, Ch. IV: inverse geometry, modified DH table, clearance model.
 
 :class:`FiveBar`, its geometry (eqs. IV.1-IV.19) and its joint-clearance mechanism (Tab. IV.1,
-Sec. IV.3); the sensitivity to geometric errors is :mod:`robots.fivebar.geometric`.
+Sec. IV.3); the sensitivity to geometric errors is :mod:`evotol.robots.fivebar.geometric`.
 
 Geometry (Fig. IV.1, Tab. IV.1-IV.2): base joints ``A = (-L0/2, 0)`` and ``B = (L0/2, 0)``
 (actuated, angles ``theta1``, ``theta3``); leg 1 ``A-C-E`` (links ``L1``, ``L2``), leg 2
@@ -31,9 +31,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import Workspace
-from robots.clearance.kinematics import DHFrame, DHTree
-from robots.clearance.model import Chain, ClearanceBounds, ClearanceMechanism, Joint
+from evotol.robots.base import Workspace
+from evotol.robots.clearance.kinematics import DHFrame, DHTree
+from evotol.robots.clearance.model import Chain, ClearanceBounds, ClearanceMechanism, Joint
 from evotol.units import MM
 
 #: Tab. IV.2 (m)

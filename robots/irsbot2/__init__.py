@@ -20,11 +20,11 @@ Parameters
 poses : array_like, shape (n, 2) or (2,)
     Platform points ``(x, z)``, m.
 """
-from robots.irsbot2.clearance import MAP_WORKSPACE, IRSBot2Clearances, mirror_joint_map
-from robots.irsbot2.dh_tables import IRSBot2DHTables
-from robots.irsbot2.model import IRSBot2
-from robots.irsbot2.parameters import MM, PI, THESIS_VI1, THESIS_VI4
-from robots.irsbot2.subworkspace import SubWorkspace, centred_singularity_free_rectangle, singularity_free_rectangle
+from evotol.robots.irsbot2.clearance import MAP_WORKSPACE, IRSBot2Clearances, mirror_joint_map
+from evotol.robots.irsbot2.dh_tables import IRSBot2DHTables
+from evotol.robots.irsbot2.model import IRSBot2
+from evotol.robots.irsbot2.parameters import MM, PI, THESIS_VI1, THESIS_VI4
+from evotol.robots.irsbot2.subworkspace import SubWorkspace, centred_singularity_free_rectangle, singularity_free_rectangle
 
 __all__ = ["IRSBot2", "IRSBot2DHTables", "IRSBot2Clearances", "mirror_joint_map", "MAP_WORKSPACE", "SubWorkspace",
            "singularity_free_rectangle", "centred_singularity_free_rectangle", "THESIS_VI1", "THESIS_VI4", "MM", "PI"]

@@ -1,21 +1,21 @@
 """The IRSBot-2 with joint clearances (Deng 2012, Ch. V-VI): the clearance mechanism on the DH
 tree, the leg-swap symmetry of its joints, and the square of the error maps (Figs. VI.1/VI.3).
 
-:class:`IRSBot2Clearances` is a mixin of :class:`robots.irsbot2.model.IRSBot2`: it reads the
-robot's :meth:`~robots.irsbot2.dh_tables.IRSBot2DHTables.dh_tree` and
-:meth:`~robots.irsbot2.dh_tables.IRSBot2DHTables.dh_values`.
+:class:`IRSBot2Clearances` is a mixin of :class:`evotol.robots.irsbot2.model.IRSBot2`: it reads the
+robot's :meth:`~evotol.robots.irsbot2.dh_tables.IRSBot2DHTables.dh_tree` and
+:meth:`~evotol.robots.irsbot2.dh_tables.IRSBot2DHTables.dh_values`.
 
 Units: metres and radians; poses are ``(x, z)`` in metres.
 """
 from __future__ import annotations
 
-from robots.base import Workspace
-from robots.clearance.model import Chain, ClearanceBounds, ClearanceMechanism, Joint
-from robots.irsbot2.parameters import MM
+from evotol.robots.base import Workspace
+from evotol.robots.clearance.model import Chain, ClearanceBounds, ClearanceMechanism, Joint
+from evotol.robots.irsbot2.parameters import MM
 
 
 class IRSBot2Clearances:
-    """The IRSBot-2's clearance model (mixin of :class:`robots.irsbot2.model.IRSBot2`, which
+    """The IRSBot-2's clearance model (mixin of :class:`evotol.robots.irsbot2.model.IRSBot2`, which
     supplies the DH tree and its joint values).
     """
 
@@ -81,7 +81,7 @@ class IRSBot2Clearances:
 def mirror_joint_map(mech: ClearanceMechanism) -> list[int]:
     """Joint ``k`` -> its mirror image under x -> -x: leg 1 <-> leg 2. :meth:`IRSBot2.clearance_mechanism`
     lists leg 2's joints in the same order as leg 1's, so the map swaps the two halves of the list;
-    :func:`robots.clearance.symmetry.prove_mirror` proves (per pose pair) that it is a symmetry.
+    :func:`evotol.robots.clearance.symmetry.prove_mirror` proves (per pose pair) that it is a symmetry.
 
     Parameters
     ----------

@@ -1,9 +1,9 @@
 """The IRSBot-2's modified DH tables II.1-II.2 (Deng 2012, Ch. II): the tree, the values of its
 joint variables at a pose, and the closure check of every loop on it.
 
-:class:`IRSBot2DHTables` is a mixin of :class:`robots.irsbot2.model.IRSBot2`: it reads the
+:class:`IRSBot2DHTables` is a mixin of :class:`evotol.robots.irsbot2.model.IRSBot2`: it reads the
 robot's dimensions (``alpha_d, beta, a1, a2, p, l1, l2, d, b, e``) and its
-:meth:`~robots.irsbot2.model.IRSBot2.inverse_geometry`.
+:meth:`~evotol.robots.irsbot2.model.IRSBot2.inverse_geometry`.
 
 Correction to the printed tables (checked by closing all loops in
 :meth:`IRSBot2DHTables.loop_residual`): row 28 has ``alpha = -alpha_d`` (see :meth:`IRSBot2DHTables.dh_tree`).
@@ -15,13 +15,13 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.clearance.kinematics import DHFrame, DHTree
-from robots.irsbot2.parameters import PI
+from evotol.robots.clearance.kinematics import DHFrame, DHTree
+from evotol.robots.irsbot2.parameters import PI
 
 
 class IRSBot2DHTables:
     """Modified DH tables II.1-II.2 of the IRSBot-2 and their loop closure (mixin of
-    :class:`robots.irsbot2.model.IRSBot2`, which supplies the dimensions and the inverse geometry).
+    :class:`evotol.robots.irsbot2.model.IRSBot2`, which supplies the dimensions and the inverse geometry).
     """
 
     def dh_values(self, poses, variant: str = "corrected") -> dict[str, np.ndarray]:
@@ -57,7 +57,7 @@ class IRSBot2DHTables:
             If a pose is out of reach, or a distal link of the DH tree does not have length ``l2``
             (``l2eq`` inconsistent with the tree, e.g. ``l2eq_variant="printed"``).
         """
-        from robots.clearance.kinematics import rot_x, rot_z, trans
+        from evotol.robots.clearance.kinematics import rot_x, rot_z, trans
 
         if variant not in ("corrected", "thesis"):
             raise ValidationError("dh_values variant", variant, "'corrected' or 'thesis'")
@@ -189,7 +189,7 @@ class IRSBot2DHTables:
         KinematicsError
             As :meth:`inverse_geometry`.
         """
-        from robots.clearance.kinematics import rotation_vector
+        from evotol.robots.clearance.kinematics import rotation_vector
 
         P = np.atleast_2d(np.asarray(poses, float))
         tree = self.dh_tree(variant)

@@ -1,7 +1,7 @@
 """The IRSBot-2 robot (Deng 2012, Ch. II): geometry, inverse geometry (eqs. II.1-II.35), singularity
 measures (eqs. II.37-II.38) and reachability; the DH tables come from
-:class:`robots.irsbot2.dh_tables.IRSBot2DHTables`, the clearance model from
-:class:`robots.irsbot2.clearance.IRSBot2Clearances`.
+:class:`evotol.robots.irsbot2.dh_tables.IRSBot2DHTables`, the clearance model from
+:class:`evotol.robots.irsbot2.clearance.IRSBot2Clearances`.
 
 A 2-DOF translational spatial robot: two hybrid legs, each a parallelogram (proximal module,
 actuated crank ``A_iB_i`` and passive crank ``D_iC_i``, coupler ``C_iB_i`` carrying the elbow
@@ -31,9 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.irsbot2.clearance import IRSBot2Clearances
-from robots.irsbot2.dh_tables import IRSBot2DHTables
-from robots.irsbot2.parameters import PI, THESIS_VI1, THESIS_VI4
+from evotol.robots.irsbot2.clearance import IRSBot2Clearances
+from evotol.robots.irsbot2.dh_tables import IRSBot2DHTables
+from evotol.robots.irsbot2.parameters import PI, THESIS_VI1, THESIS_VI4
 
 
 @dataclass(frozen=True)
@@ -83,8 +83,8 @@ class IRSBot2(IRSBot2DHTables, IRSBot2Clearances):
     Notes
     -----
     The DH tables (``dh_tree``, ``dh_values``, ``loop_residual``) come from
-    :class:`~robots.irsbot2.dh_tables.IRSBot2DHTables`, the clearance model
-    (``clearance_mechanism``) from :class:`~robots.irsbot2.clearance.IRSBot2Clearances`.
+    :class:`~evotol.robots.irsbot2.dh_tables.IRSBot2DHTables`, the clearance model
+    (``clearance_mechanism``) from :class:`~evotol.robots.irsbot2.clearance.IRSBot2Clearances`.
     """
 
     b: float = THESIS_VI1["b"]

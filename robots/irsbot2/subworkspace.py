@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import KinematicsError
-from robots.geometry import largest_centred_rectangle, largest_rectangle
-from robots.irsbot2.model import IRSBot2
+from evotol.robots.geometry import largest_centred_rectangle, largest_rectangle
+from evotol.robots.irsbot2.model import IRSBot2
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,9 @@
 """Your own mechanism from a description file: modified-DH frames, loops, end-effector, sources.
 
->>> from robots.mechanism import MechanismModel
+>>> from evotol.robots.mechanism import MechanismModel
 >>> robot = MechanismModel("robots/mechanisms/fivebar.toml")    # a RobotErrorModel
 >>> robot.sensitivity(robot.workspace.grid(5)).shape            # (25, 6, n_sources)
->>> robot.clearance_mechanism()                                 # for robots.clearance.max_pose_error
+>>> robot.clearance_mechanism()                                 # for evotol.robots.clearance.max_pose_error
 
 Modules: :mod:`.expressions` (safe entry expressions, complex-step derivatives), :mod:`.parts`
 (frames, loops, points, coordinates, clearances), :mod:`.mechanism` (the whole description, its
@@ -24,7 +24,7 @@ Parameters
 ----------
 n : int
     Number of configurations.
-model : robots.mechanism.model.MechanismModel
+model : evotol.robots.mechanism.model.MechanismModel
     The mechanism's error model.
 path : str or Path
     The URDF file.
@@ -36,11 +36,11 @@ max_step : float, optional
 zones : {"exact", "boxes"}
     The zone model.
 """
-from robots.mechanism.description import load_mechanism, mechanism_from_dict
-from robots.mechanism.kinematics import Kinematics
-from robots.mechanism.mechanism import Mechanism
-from robots.mechanism.model import MechanismModel
-from robots.mechanism.parts import ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point
+from evotol.robots.mechanism.description import load_mechanism, mechanism_from_dict
+from evotol.robots.mechanism.kinematics import Kinematics
+from evotol.robots.mechanism.mechanism import Mechanism
+from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.parts import ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point
 
 __all__ = ["ClearanceChain", "ClearanceSpec", "Coordinate", "Frame", "Kinematics", "Loop", "Mechanism", "MechanismModel",
            "Point", "load_mechanism", "mechanism_from_dict"]

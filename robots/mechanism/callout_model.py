@@ -1,8 +1,8 @@
 """A described mechanism whose joint seats carry drawing callouts (issue 35, ``docs/callouts.md``).
 
-:class:`CalloutModel` is the error model of :class:`robots.mechanism.model.MechanismModel` with
+:class:`CalloutModel` is the error model of :class:`evotol.robots.mechanism.model.MechanismModel` with
 each callout's zone in place of the raw placement errors it covers: the zone's member sources
-(:func:`robots.mechanism.callouts.zone_members`) are linear maps ``C`` onto the placement errors,
+(:func:`evotol.robots.mechanism.callouts.zone_members`) are linear maps ``C`` onto the placement errors,
 so the first-order map is ``S_base C`` and the nonlinear error is the base model's at the
 placement errors ``C e`` (``placement * exp(C e)``, exact to first order; the axis lands off the
 sampled zone point by a second-order ``~ t^2/L``, ``tests/test_callouts.py``). A callout with
@@ -22,13 +22,13 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.mechanism.callout_table import callouts_from_tables, joint_seat
-from robots.mechanism.callouts import ORIENTATION_KINDS, ZONE_MODELS, Callout, replaced_fields, zone_members
-from robots.mechanism.description import load_mechanism
-from robots.mechanism.mechanism import Mechanism
-from robots.mechanism.model import MechanismModel
-from robots.mechanism.placement import PLACEMENT_FIELDS
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.mechanism.callout_table import callouts_from_tables, joint_seat
+from evotol.robots.mechanism.callouts import ORIENTATION_KINDS, ZONE_MODELS, Callout, replaced_fields, zone_members
+from evotol.robots.mechanism.description import load_mechanism
+from evotol.robots.mechanism.mechanism import Mechanism
+from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
 
 
 class CalloutModel(RobotErrorModel):
@@ -38,14 +38,14 @@ class CalloutModel(RobotErrorModel):
     ----------
     mechanism : Mechanism or str or Path
         The description or its TOML file.
-    callouts : sequence of robots.mechanism.callouts.Callout
-        The callouts (checked by :func:`robots.mechanism.callout_table.callouts_from_tables`).
+    callouts : sequence of evotol.robots.mechanism.callouts.Callout
+        The callouts (checked by :func:`evotol.robots.mechanism.callout_table.callouts_from_tables`).
     sources : sequence of str or None
         Raw source names/patterns as for :class:`MechanismModel`; the placement errors a callout
         covers are dropped from them.
     zones : {"exact", "boxes"}
         Exact zones (default) or the independent-box rule (the comparison of ``docs/callouts.md``).
-    workspace : robots.base.Workspace or None
+    workspace : evotol.robots.base.Workspace or None
         Override of the description's box.
 
     Raises
@@ -273,10 +273,10 @@ def with_callouts(model: MechanismModel, entries=None, zones: str = "exact", sou
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         The model of the description (its ``[[callouts]]``, if any, are in ``mechanism.callouts``).
     entries : list of dict or None, optional
-        A study file's ``[[robot.callouts]]`` tables (:mod:`robots.mechanism.callout_table`); when
+        A study file's ``[[robot.callouts]]`` tables (:mod:`evotol.robots.mechanism.callout_table`); when
         given they replace the description's callouts.
     sources : sequence of str or None, optional
         Raw source names/patterns, as given to the model.

@@ -9,7 +9,7 @@ A callout is one ``[[robot.callouts]]`` table (``[[callouts]]`` in a mechanism d
     offset = "0 mm"              # centre of the feature along the axis from the joint origin
     datums = "A|B"               # as the drawing writes them (shown, not interpreted)
 
-The zones and the datum convention: :mod:`robots.mechanism.callouts` and ``docs/callouts.md``.
+The zones and the datum convention: :mod:`evotol.robots.mechanism.callouts` and ``docs/callouts.md``.
 Every mistake is a one-line :class:`evotol.errors.ValidationError` before any model is built: an
 unknown key or kind, a length without unit or not positive, an unknown joint or one without an
 axis, two callouts of the same kind (or two orientation callouts) on one joint, ``"stroke"`` on a
@@ -23,8 +23,8 @@ import numpy as np
 
 from evotol._runtime.keyword_checks import check_table_keys, did_you_mean
 from evotol.errors import ValidationError
-from robots.mechanism.callouts import KINDS, ORIENTATION_KINDS, Callout
-from robots.mechanism.expressions import Expression
+from evotol.robots.mechanism.callouts import KINDS, ORIENTATION_KINDS, Callout
+from evotol.robots.mechanism.expressions import Expression
 
 #: keys of one callout table
 CALLOUT_KEYS = ("joint", "kind", "length", "offset", "datums")
@@ -73,7 +73,7 @@ def callouts_from_tables(entries, mech, field: str = "robot.callouts") -> list[C
     ----------
     entries : list of dict
         The parsed tables (module docstring).
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description the joints belong to.
     field : str
         The array's name in error messages.
@@ -134,7 +134,7 @@ def joint_seat(mech, joint: str) -> dict:
 
     Parameters
     ----------
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description (only its frames, parameters and URDF are read).
     joint : str
         The joint's name (the placement frame's).
@@ -193,7 +193,7 @@ def expand_callout_overrides(overrides: dict, robot) -> dict:
     ----------
     overrides : dict
         The study file's ``[sources]`` table.
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The model; its ``tied_sources`` (callout name -> member sources), if any.
 
     Returns

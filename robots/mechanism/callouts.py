@@ -3,7 +3,7 @@
 A shop tolerances a bearing bore by a **callout** on the link's drawing, not by "tilt_z ± 41 µrad".
 This module states the geometry of four callouts on the axis of a revolute or prismatic joint and
 maps each zone exactly onto the placement errors ``[shift; tilt]`` of the joint's placement
-(:mod:`robots.mechanism.placement`, ``placement * exp(delta)``); ``docs/callouts.md`` derives it.
+(:mod:`evotol.robots.mechanism.placement`, ``placement * exp(delta)``); ``docs/callouts.md`` derives it.
 
 Datum convention. The datum reference frame of a callout (the drawing's ``A|B``) is the joint's
 *nominal placement*: for a URDF arm the joint's ``<origin>`` in its parent link (the part that

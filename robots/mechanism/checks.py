@@ -5,7 +5,7 @@ The model as understood (design parameters, the assembly joints as declared and 
 Newton, the end-effector pose there), joint variables, generated error sources, the largest
 loop-closure residual of the Newton inverse geometry over Latin-hypercube poses, the agreement of
 the first-order sensitivities with central finite differences of the nonlinear closure
-(:func:`robots.base.check_robot`) and, with a ``[clearance]`` table, the certified maximum pose
+(:func:`evotol.robots.base.check_robot`) and, with a ``[clearance]`` table, the certified maximum pose
 error at the assembly pose.
 """
 from __future__ import annotations
@@ -21,7 +21,7 @@ def end_effector_pose(model, q: dict) -> dict:
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         The mechanism's error model (its kinematics and description).
     q : dict of str to float
         Every joint variable -> its value (rad, or m for a prismatic joint), in the base frame
@@ -59,7 +59,7 @@ def understood(model) -> dict:
     evotol.errors.KinematicsError
         The loops do not close at the assembly pose, the solved joints are far from the
         declared ones (other working mode), or a joint is outside its limits
-        (:meth:`robots.mechanism.inverse_geometry.InverseGeometry.assembly`).
+        (:meth:`evotol.robots.mechanism.inverse_geometry.InverseGeometry.assembly`).
     evotol.errors.ValidationError
         An ``[assembly] joints`` key that is not a joint variable.
     """
@@ -100,10 +100,10 @@ def check_mechanism(file, n_poses: int = 20, sources=None) -> dict:
     KinematicsError
         The loops do not close at the assembly, or close far from the declared joints.
     """
-    from robots.base import check_robot
-    from robots.mechanism.inspection import model_report
-    from robots.mechanism.callout_model import with_callouts
-    from robots.mechanism.model import MechanismModel, resolve_description
+    from evotol.robots.base import check_robot
+    from evotol.robots.mechanism.inspection import model_report
+    from evotol.robots.mechanism.callout_model import with_callouts
+    from evotol.robots.mechanism.model import MechanismModel, resolve_description
 
     t0 = time.perf_counter()
     model = with_callouts(MechanismModel(resolve_description(file), sources=sources), sources=sources)   # [[callouts]]: issue 35
@@ -120,7 +120,7 @@ def check_mechanism(file, n_poses: int = 20, sources=None) -> dict:
         out["callouts"] = model.describe_callouts()
     out.update(model_report(model, poses))     # issue 23: nominal values, box and limits, rank (robots/mechanism/inspection.py)
     if model.mechanism.clearance is not None:
-        from robots.clearance import max_pose_error
+        from evotol.robots.clearance import max_pose_error
 
         x0, _ = model.kin.assembly()
         res = max_pose_error(model.clearance_mechanism(), x0[None])

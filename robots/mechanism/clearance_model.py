@@ -1,10 +1,10 @@
 """A described mechanism's joint clearances as a clearance model for the certified engine (Deng 2012 Ch. III-V).
 
-The ``[clearance]`` table of a description (:class:`robots.mechanism.parts.ClearanceSpec`: bodies,
-chains of joints with clearance, bounds) becomes a :class:`robots.clearance.model.ClearanceMechanism`
+The ``[clearance]`` table of a description (:class:`evotol.robots.mechanism.parts.ClearanceSpec`: bodies,
+chains of joints with clearance, bounds) becomes a :class:`evotol.robots.clearance.model.ClearanceMechanism`
 whose DH tree is the description's and whose joint values come from the Newton inverse geometry
-(:mod:`robots.mechanism.inverse_geometry`); ``robots.clearance.max_pose_error`` computes its
-certified largest end-effector error. :meth:`robots.mechanism.model.MechanismModel.clearance_mechanism`
+(:mod:`evotol.robots.mechanism.inverse_geometry`); ``evotol.robots.clearance.max_pose_error`` computes its
+certified largest end-effector error. :meth:`evotol.robots.mechanism.model.MechanismModel.clearance_mechanism`
 calls it.
 """
 from __future__ import annotations
@@ -14,15 +14,15 @@ from typing import Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree
-from robots.clearance.model import ClearanceMechanism, Joint
-from robots.mechanism.kinematics import Kinematics
-from robots.mechanism.mechanism import Mechanism
+from evotol.robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree
+from evotol.robots.clearance.model import ClearanceMechanism, Joint
+from evotol.robots.mechanism.kinematics import Kinematics
+from evotol.robots.mechanism.mechanism import Mechanism
 
 
 def clearance_mechanism(mech: Mechanism, kin: Kinematics, name: str, pose_names: Sequence[str]) -> ClearanceMechanism:
     """The description's joint clearances as a :class:`ClearanceMechanism
-    <robots.clearance.model.ClearanceMechanism>` (Deng 2012 Ch. III-V); joint values come from the
+    <evotol.robots.clearance.model.ClearanceMechanism>` (Deng 2012 Ch. III-V); joint values come from the
     Newton inverse geometry.
 
     DH entries that use a joint variable become named variables ``"<frame>.<field>"`` of the
@@ -31,9 +31,9 @@ def clearance_mechanism(mech: Mechanism, kin: Kinematics, name: str, pose_names:
 
     Parameters
     ----------
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description, with its ``[clearance]`` table.
-    kin : robots.mechanism.kinematics.Kinematics
+    kin : evotol.robots.mechanism.kinematics.Kinematics
         Its kinematics (parsed DH entries, joint variables, inverse geometry).
     name : str
         Name of the clearance model (the error model's name).
@@ -42,7 +42,7 @@ def clearance_mechanism(mech: Mechanism, kin: Kinematics, name: str, pose_names:
 
     Returns
     -------
-    robots.clearance.model.ClearanceMechanism
+    evotol.robots.clearance.model.ClearanceMechanism
         The clearance model (bounds: ``beta_xy``, ``beta_z`` in rad, ``b_xy``, ``b_z`` in m).
 
     Raises

@@ -2,13 +2,13 @@
 
 :func:`load_mechanism` reads a file, :func:`mechanism_from_dict` a parsed document; errors name the
 field (``docs/mechanisms.md`` is the reference and the tutorial). Every number is SI (m, rad); an
-entry may also be an expression (:mod:`robots.mechanism.expressions`) such as ``"-L0/2"``,
+entry may also be an expression (:mod:`evotol.robots.mechanism.expressions`) such as ``"-L0/2"``,
 ``"100*mm"``, ``"q1 - pi"``. A description may take its frames from a URDF (``urdf`` + ``tip``,
-:mod:`robots.mechanism.urdf`). Written values are checked for plausibility
-(:mod:`robots.mechanism.plausibility`).
+:mod:`evotol.robots.mechanism.urdf`). Written values are checked for plausibility
+(:mod:`evotol.robots.mechanism.plausibility`).
 
-The description itself is :class:`robots.mechanism.mechanism.Mechanism` and its parts
-(:mod:`robots.mechanism.parts`: frames, loops, points, coordinates, clearances); they are
+The description itself is :class:`evotol.robots.mechanism.mechanism.Mechanism` and its parts
+(:mod:`evotol.robots.mechanism.parts`: frames, loops, points, coordinates, clearances); they are
 importable from here too.
 """
 from __future__ import annotations
@@ -21,16 +21,16 @@ from typing import Mapping
 from evotol.errors import ValidationError
 from evotol._runtime.toml_kinds import check_kind
 from evotol._runtime.keyword_checks import check_table_keys
-from robots.clearance.kinematics import DH_FIELDS
-from robots.clearance.parts import BOUND_NAMES, ClearanceBounds
-from robots.mechanism.callout_table import callouts_from_tables
-from robots.mechanism.expressions import Expression
-from robots.mechanism.mechanism import Mechanism
-from robots.mechanism.parts import AXES, ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point, joint_units
-from robots.mechanism.parts import ANGLE_FIELDS, JOINT_TYPES, LENGTH_FIELDS, LOOP_COMPONENTS, UNIT_SCALE  # noqa: F401  (re-exported)
-from robots.mechanism.plausibility import check_written_values
-from robots.mechanism.standard_dh import STANDARD_TOP_KEYS, convention_of, standard_to_modified
-from robots.mechanism.urdf import resolve_urdf, urdf_frames
+from evotol.robots.clearance.kinematics import DH_FIELDS
+from evotol.robots.clearance.parts import BOUND_NAMES, ClearanceBounds
+from evotol.robots.mechanism.callout_table import callouts_from_tables
+from evotol.robots.mechanism.expressions import Expression
+from evotol.robots.mechanism.mechanism import Mechanism
+from evotol.robots.mechanism.parts import AXES, ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point, joint_units
+from evotol.robots.mechanism.parts import ANGLE_FIELDS, JOINT_TYPES, LENGTH_FIELDS, LOOP_COMPONENTS, UNIT_SCALE  # noqa: F401  (re-exported)
+from evotol.robots.mechanism.plausibility import check_written_values
+from evotol.robots.mechanism.standard_dh import STANDARD_TOP_KEYS, convention_of, standard_to_modified
+from evotol.robots.mechanism.urdf import resolve_urdf, urdf_frames
 
 TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "point", "loop", "end_effector", "assembly",
             "tolerances", "clearance", "urdf", "tip", "checks", "limits", "callouts") + STANDARD_TOP_KEYS
@@ -49,12 +49,12 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     """Build a :class:`Mechanism` from a parsed TOML document (dict); errors name the field.
 
     With ``convention = "standard"`` the rows are a textbook's standard-DH table, rewritten
-    exactly in the modified convention (:mod:`robots.mechanism.standard_dh`).
+    exactly in the modified convention (:mod:`evotol.robots.mechanism.standard_dh`).
 
     With a ``urdf`` key the frames, lengths, angles, default sources and joint limits come from
-    the URDF chain to ``tip`` (:func:`robots.mechanism.urdf.urdf_frames`); the table's own
+    the URDF chain to ``tip`` (:func:`evotol.robots.mechanism.urdf.urdf_frames`); the table's own
     ``[lengths]``, ``[angles]``, ``[limits]`` override them. Written values are checked for
-    plausibility (:mod:`robots.mechanism.plausibility`).
+    plausibility (:mod:`evotol.robots.mechanism.plausibility`).
 
     Parameters
     ----------

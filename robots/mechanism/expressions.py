@@ -101,7 +101,7 @@ class Expression:
 
     def __reduce__(self):
         # compiled code does not pickle; robots travel to worker processes and Dask, so an
-        # expression is sent as its text and parsed again (robots.checks.check_pickle_round_trip)
+        # expression is sent as its text and parsed again (evotol.robots.checks.check_pickle_round_trip)
         return (Expression.parse, (self.text, "expression"))
 
     @property

@@ -11,7 +11,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.mechanism.joint_space import joint_configurations
+from evotol.robots.mechanism.joint_space import joint_configurations
 
 
 def forward_at(model, text: str) -> dict:
@@ -19,7 +19,7 @@ def forward_at(model, text: str) -> dict:
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         A serial arm.
     text : str
         Comma-separated joint values in the mechanism's joint order, each a number (SI: rad or m)

@@ -1,14 +1,14 @@
 """What ``evotol check-mechanism`` shows about the error model of a described arm (issue 23 item 6):
 the sources with their nominal values, the workspace box and the joint limits, and the rank of
 the sources' sensitivities stacked over the workspace with the blind and duplicated directions
-(:mod:`robots.mechanism.identifiability`); for a URDF, the same against Pinocchio's placement
-regressor. :func:`robots.mechanism.urdf_check.check_urdf_file` checks a bare URDF (``evotol check-mechanism
+(:mod:`evotol.robots.mechanism.identifiability`); for a URDF, the same against Pinocchio's placement
+regressor. :func:`evotol.robots.mechanism.urdf_check.check_urdf_file` checks a bare URDF (``evotol check-mechanism
 arm.urdf --tip tool0``) with these parts.
 """
 from __future__ import annotations
 
-from robots.mechanism.identifiability import analyse
-from robots.mechanism.placement import PLACEMENT_FIELDS
+from evotol.robots.mechanism.identifiability import analyse
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
 
 
 def sources_with_nominal(model) -> list[dict]:
@@ -33,7 +33,7 @@ def _mimic_joints(model) -> list[str]:
     """Mimic joints of a URDF description (their ``J_multiplier`` parameters are ratios)."""
     if not model.mechanism.urdf:
         return []
-    from robots.mechanism.urdf import urdf_joints, _ident
+    from evotol.robots.mechanism.urdf import urdf_joints, _ident
 
     return [_ident(n) for n, w in urdf_joints(model.mechanism.urdf[0]).items() if w["mimic"]]
 
@@ -71,7 +71,7 @@ def rank_report(model, q: dict, where: str) -> dict:
     -------
     dict
         ``"over"``, ``"n_configurations"`` and the result of
-        :func:`robots.mechanism.identifiability.analyse` (``rank``, ``blind``, ``duplicated``,
+        :func:`evotol.robots.mechanism.identifiability.analyse` (``rank``, ``blind``, ``duplicated``,
         ``dependent``...); for a URDF arm also ``pinocchio_rank``, ``combined_rank``,
         ``rank_without_multipliers``, ``missing`` (placement directions no source reproduces)
         and ``pinocchio_reference``.
@@ -81,7 +81,7 @@ def rank_report(model, q: dict, where: str) -> dict:
     columns = [s.name if s.dim == 1 else f"{s.name}[{k}]" for s in model.sources for k in range(s.dim)]
     out = {"over": where, "n_configurations": int(len(next(iter(q.values())))), **analyse(S, columns)}
     if model.mechanism.urdf:
-        from robots.mechanism.urdf import chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
+        from evotol.robots.mechanism.urdf import chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
 
         info = urdf_frames(*model.mechanism.urdf)[3]
         mdl, fid = info["model"], info["tip_frame_id"]
@@ -99,7 +99,7 @@ def rank_report(model, q: dict, where: str) -> dict:
 
 def model_report(model, poses) -> dict:
     """The sources with nominal values, box and limits, and the rank over the workspace ``poses``
-    (joint values from the inverse geometry), for :func:`robots.mechanism.checks.check_mechanism`.
+    (joint values from the inverse geometry), for :func:`evotol.robots.mechanism.checks.check_mechanism`.
 
     Parameters
     ----------
@@ -112,7 +112,7 @@ def model_report(model, poses) -> dict:
         ``"sources"`` (:func:`sources_with_nominal`), ``"workspace"`` and ``"limits"``
         (:func:`limits_and_box`), ``"urdf"`` (the description's URDF path and tip, or empty),
         ``"redundancy"`` (:attr:`MechanismModel.redundancy
-        <robots.mechanism.model.MechanismModel.redundancy>`) and ``"identifiability"``
+        <evotol.robots.mechanism.model.MechanismModel.redundancy>`) and ``"identifiability"``
         (:func:`rank_report` over ``poses``).
 
     Raises

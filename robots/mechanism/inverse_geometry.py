@@ -6,7 +6,7 @@ the description's assembly configuration and continued along straight paths from
 pose to every target pose in steps, so the working mode does not jump. With the actuated joints
 held, the same Newton closes the loops on the passive joints (forward geometry with errors).
 
-:class:`InverseGeometry` is a mixin of :class:`robots.mechanism.kinematics.Kinematics`: it uses
+:class:`InverseGeometry` is a mixin of :class:`evotol.robots.mechanism.kinematics.Kinematics`: it uses
 the kinematics' forward state, frame and loop Jacobians and its joint variables.
 """
 from __future__ import annotations
@@ -14,19 +14,19 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.clearance.kinematics import rotation_vector
-from robots.mechanism import working_mode
-from robots.mechanism.limits import check_joint_limits, unreachable_message
-from robots.mechanism.rotations import AXIS_ROT
+from evotol.robots.clearance.kinematics import rotation_vector
+from evotol.robots.mechanism import working_mode
+from evotol.robots.mechanism.limits import check_joint_limits, unreachable_message
+from evotol.robots.mechanism.rotations import AXIS_ROT
 
 
 class InverseGeometry:
     """Inverse geometry, assembly and passive-joint closure of a :class:`Kinematics
-    <robots.mechanism.kinematics.Kinematics>` (see the module docstring).
+    <evotol.robots.mechanism.kinematics.Kinematics>` (see the module docstring).
 
     A mixin: the methods use ``self.state``, ``self.loop_residual``, ``self.loop_jacobian``,
     ``self.frame_jacobian``, ``self.loop_row_is_length`` and the joint variables, orientation
-    entries and length scale that :class:`~robots.mechanism.kinematics.Kinematics` sets up.
+    entries and length scale that :class:`~evotol.robots.mechanism.kinematics.Kinematics` sets up.
     """
 
     def _target_orientation(self, poses: np.ndarray) -> np.ndarray | None:
@@ -122,7 +122,7 @@ class InverseGeometry:
         evotol.errors.KinematicsError
             The loops do not close there (scaled residual above 1e-9), the solution is far from
             the declared joints (another working mode, :func:`working_mode.check_reached
-            <robots.mechanism.working_mode.check_reached>`), or a joint is outside its limits.
+            <evotol.robots.mechanism.working_mode.check_reached>`), or a joint is outside its limits.
         """
         if self._assembly is None:
             m = self.mech

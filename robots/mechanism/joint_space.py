@@ -6,7 +6,7 @@ find them again from the tool pose, and may land on another elbow or wrist branc
 :class:`JointSpaceModel` avoids that: its poses *are* the joint values (in the mechanism's joint
 order, rad or m), its ``sensitivity`` and ``pose_error`` are the mechanism's at those joints
 (:meth:`MechanismModel.sensitivity_at_joints
-<robots.mechanism.model.MechanismModel.sensitivity_at_joints>`), and no inverse geometry runs, so
+<evotol.robots.mechanism.model.MechanismModel.sensitivity_at_joints>`), and no inverse geometry runs, so
 the requirement holds at exactly the configurations given.
 
 :func:`joint_configurations` reads them as a study file writes them (``[poses] joints = [[...],
@@ -21,19 +21,19 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel, Workspace
-from robots.mechanism.expressions import Expression
+from evotol.robots.base import RobotErrorModel, Workspace
+from evotol.robots.mechanism.expressions import Expression
 
 #: the reach of a revolute joint without limits in the joint-space box (rad): one turn each way
 FREE_REVOLUTE = 2 * np.pi
 
 
 class JointSpaceModel(RobotErrorModel):
-    """A serial :class:`~robots.mechanism.model.MechanismModel` evaluated at joint configurations.
+    """A serial :class:`~evotol.robots.mechanism.model.MechanismModel` evaluated at joint configurations.
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         The serial arm (no loops).
     span : (n_variables, 2) array_like or None, optional
         Range of each joint variable for the box (rad or m) where the description has no limit;
@@ -168,7 +168,7 @@ def joint_configurations(model, joints, where: str = "poses.joints") -> tuple[Jo
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         A serial arm.
     joints : sequence of sequence or sequence of Mapping
         One entry per configuration: the joint values in the mechanism's joint order, or a table

@@ -1,4 +1,4 @@
-"""Kinematics computed from a :class:`~robots.mechanism.mechanism.Mechanism`.
+"""Kinematics computed from a :class:`~evotol.robots.mechanism.mechanism.Mechanism`.
 
 * **Forward kinematics** of the frame tree: ``^0T_j = ^0T_{a(j)} Rot(z,gamma) Trans(z,b) Rot(x,alpha)
   Trans(x,d) Rot(z,theta) Trans(z,r)`` (Khalil & Kleinfinger 1986), vectorised over poses.
@@ -11,10 +11,10 @@
   ``"-L0/2"``) come from the complex step, so every Jacobian here is exact to rounding --
   nothing is derived by hand.
 * **Inverse geometry**: Gauss-Newton continued from the assembly configuration
-  (:mod:`robots.mechanism.inverse_geometry`, whose :class:`InverseGeometry
-  <robots.mechanism.inverse_geometry.InverseGeometry>` :class:`Kinematics` inherits).
+  (:mod:`evotol.robots.mechanism.inverse_geometry`, whose :class:`InverseGeometry
+  <evotol.robots.mechanism.inverse_geometry.InverseGeometry>` :class:`Kinematics` inherits).
 
-Twists here are ordered ``[translation; rotation]`` like :mod:`robots.base` (the clearance engine
+Twists here are ordered ``[translation; rotation]`` like :mod:`evotol.robots.base` (the clearance engine
 uses the thesis's ``[rotation; translation]``).
 
 The parameters several definitions of this module share are described once, here.
@@ -31,15 +31,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, inv_transform, rotation_vector
-from robots.mechanism import working_mode
-from robots.mechanism.expressions import Expression
-from robots.mechanism.inverse_geometry import InverseGeometry
-from robots.mechanism.limits import check_limit_names
-from robots.mechanism.mechanism import Mechanism
-from robots.mechanism.parts import AXES, joint_units
-from robots.mechanism.placement import PLACEMENT_FIELDS, placement_error, placement_twists
-from robots.mechanism.rotations import cross_rows, rot_z_inverse
+from evotol.robots.clearance.kinematics import DH_FIELDS, DHFrame, DHTree, inv_transform, rotation_vector
+from evotol.robots.mechanism import working_mode
+from evotol.robots.mechanism.expressions import Expression
+from evotol.robots.mechanism.inverse_geometry import InverseGeometry
+from evotol.robots.mechanism.limits import check_limit_names
+from evotol.robots.mechanism.mechanism import Mechanism
+from evotol.robots.mechanism.parts import AXES, joint_units
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS, placement_error, placement_twists
+from evotol.robots.mechanism.rotations import cross_rows, rot_z_inverse
 
 IN_PLANE = (0, 1, 5)            # x, y, rotation about z
 @dataclass
@@ -70,11 +70,11 @@ class State:
 class Kinematics(InverseGeometry):
     """Kinematics of a described mechanism (see the module docstring); the inverse geometry
     (:meth:`assembly`, :meth:`inverse_geometry`, :meth:`solve_passive`) is inherited from
-    :class:`~robots.mechanism.inverse_geometry.InverseGeometry`.
+    :class:`~evotol.robots.mechanism.inverse_geometry.InverseGeometry`.
 
     Parameters
     ----------
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description; its DH entries are parsed here and its joint variables (names in the
         entries that are not design parameters) found.
 
@@ -86,7 +86,7 @@ class Kinematics(InverseGeometry):
         joint whose entry has not exactly one joint variable, an orientation entry with an
         unknown name, a loop whose two frames are on one branch, a loop group without an
         actuated joint, a ``[limits]`` key that is not a joint variable, or a closed-loop
-        mechanism without a usable ``[assembly]`` (:mod:`robots.mechanism.working_mode`).
+        mechanism without a usable ``[assembly]`` (:mod:`evotol.robots.mechanism.working_mode`).
     """
 
     def __init__(self, mech: Mechanism):
@@ -211,7 +211,7 @@ class Kinematics(InverseGeometry):
         """Evaluate the tree at ``n`` configurations. q: joint variables (n,) arrays; params:
         overrides of design parameters (scalars or (n,) arrays); offsets: additive errors of DH
         entries ``{(frame, field): (n,) array}`` and placement errors ``{(frame, "tilt_x"): ...}``
-        (:mod:`robots.mechanism.placement`); wrt: names whose derivatives are wanted; placement:
+        (:mod:`evotol.robots.mechanism.placement`); wrt: names whose derivatives are wanted; placement:
         frames whose placement twists are wanted (``twists[(frame, "shift_x")]`` ...).
 
         Parameters
@@ -363,7 +363,7 @@ class Kinematics(InverseGeometry):
 
         Parameters
         ----------
-        lp : robots.mechanism.parts.Loop
+        lp : evotol.robots.mechanism.parts.Loop
             The loop.
 
         Returns

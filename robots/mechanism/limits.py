@@ -1,6 +1,6 @@
 """Joint limits of a described mechanism: the range of each joint variable (rad or m).
 
-They come from a URDF's ``<limit lower upper>`` (:func:`robots.mechanism.urdf.urdf_joints`; a
+They come from a URDF's ``<limit lower upper>`` (:func:`evotol.robots.mechanism.urdf.urdf_joints`; a
 continuous joint has none, a mimic joint's range becomes one of its leader) and from a
 description's ``[limits]`` table (``q1 = ["-170*deg", "170*deg"]``), which overrides the URDF. The
 assembly configuration and every pose the inverse geometry solves are checked: a joint outside its
@@ -80,7 +80,7 @@ def unreachable_message(mech, poses: np.ndarray, bad: np.ndarray, residual: np.n
 
     Parameters
     ----------
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description (name, coordinates, loops).
     poses : (n, n_coordinates) ndarray
         The poses (SI).

@@ -1,12 +1,12 @@
 """A whole mechanism description: the tree of frames, its loops, end-effector, parameters and sources.
 
-:class:`Mechanism` holds the parts (:mod:`robots.mechanism.parts`) and checks that they fit
+:class:`Mechanism` holds the parts (:mod:`evotol.robots.mechanism.parts`) and checks that they fit
 together. A closed mechanism is a tree of frames plus **loops**: pairs of frames that must coincide
 (the cut joints). The **end-effector** is a frame or a point; its pose coordinates (a subset of
 ``x, y, z`` of its origin in the base frame, optionally a target orientation) define the workspace
 box. The names a tolerance may be put on (design parameters, actuator offsets, DH entries,
 placement errors) are listed and selected here (:meth:`Mechanism.select_sources`).
-A TOML file with the same fields is read by :func:`robots.mechanism.description.load_mechanism`
+A TOML file with the same fields is read by :func:`evotol.robots.mechanism.description.load_mechanism`
 (``docs/mechanisms.md`` is the reference and the tutorial); every number is SI (m, rad).
 """
 from __future__ import annotations
@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 from evotol.errors import ValidationError
-from robots.clearance.kinematics import DH_FIELDS
-from robots.mechanism.expressions import CONSTANTS, FUNCTIONS
-from robots.mechanism.parts import AXES, ClearanceSpec, Coordinate, Frame, Loop, Point
-from robots.mechanism.placement import PLACEMENT_FIELDS
-from robots.mechanism.plausibility import check_workspace
+from evotol.robots.clearance.kinematics import DH_FIELDS
+from evotol.robots.mechanism.expressions import CONSTANTS, FUNCTIONS
+from evotol.robots.mechanism.parts import AXES, ClearanceSpec, Coordinate, Frame, Loop, Point
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
+from evotol.robots.mechanism.plausibility import check_workspace
 
 
 @dataclass(frozen=True)
@@ -68,12 +68,12 @@ class Mechanism:
         Joint variable -> (lower, upper), SI (rad or m).
     urdf : tuple of str, optional
         ``(resolved URDF path, tip frame)`` of a description read from a URDF; empty otherwise.
-    callouts : tuple of robots.mechanism.callouts.Callout, optional
+    callouts : tuple of evotol.robots.mechanism.callouts.Callout, optional
         Drawing callouts on joint seats (``[[callouts]]``, ``docs/callouts.md``); the error model
-        with them is :class:`robots.mechanism.callout_model.CalloutModel`.
+        with them is :class:`evotol.robots.mechanism.callout_model.CalloutModel`.
     aliases : Mapping[str, str], optional
         Source name -> design parameter it tolerances, for names a parameter cannot have (a
-        standard-DH description's ``base.d`` -> ``base_d``, :mod:`robots.mechanism.standard_dh`);
+        standard-DH description's ``base.d`` -> ``base_d``, :mod:`evotol.robots.mechanism.standard_dh`);
         the parameter is then listed under its alias only.
 
     Raises
@@ -84,7 +84,7 @@ class Mechanism:
         end-effector or an orientation for a point end-effector, no x/y/z coordinate, a
         parameter name that clashes with a constant, a function or the other table, an
         ``assembly_pose`` of the wrong length, or a workspace coordinate that moves nothing
-        (:func:`robots.mechanism.plausibility.check_workspace`).
+        (:func:`evotol.robots.mechanism.plausibility.check_workspace`).
     """
 
     name: str
@@ -105,7 +105,7 @@ class Mechanism:
     points: tuple[Point, ...] = ()
     limits: Mapping[str, tuple[float, float]] = field(default_factory=dict)   # joint variable -> (lower, upper), SI
     urdf: tuple[str, ...] = ()        # (resolved URDF path, tip frame) of a description read from a URDF
-    callouts: tuple = ()              # drawing callouts on joint seats (robots.mechanism.callouts, issue 35)
+    callouts: tuple = ()              # drawing callouts on joint seats (evotol.robots.mechanism.callouts, issue 35)
     aliases: Mapping[str, str] = field(default_factory=dict)    # source name -> parameter (standard DH: base.d)
 
     def __post_init__(self):
@@ -161,7 +161,7 @@ class Mechanism:
 
     def entry_names(self) -> list[str]:
         """Every DH entry as ``"<frame>.<entry>"`` (e.g. ``"A.theta"``, ``"C.d"``), then every
-        placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`robots.mechanism.placement`).
+        placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`evotol.robots.mechanism.placement`).
 
         Returns
         -------

@@ -1,7 +1,7 @@
-"""The error model of a described mechanism: a :class:`robots.base.RobotErrorModel` built from data.
+"""The error model of a described mechanism: a :class:`evotol.robots.base.RobotErrorModel` built from data.
 
 Sources (intervals) are generated from the description by name or pattern
-(:mod:`robots.mechanism.sources`): design parameters, actuator offsets, DH entries and placement
+(:mod:`evotol.robots.mechanism.sources`): design parameters, actuator offsets, DH entries and placement
 errors.
 
 Sensitivity (first order, loop constraints eliminated): with the actuated joints held, the loop
@@ -11,7 +11,7 @@ equations ``h(q_p, e) = 0`` give ``dq_p = -H_p^+ H_e de`` and the end-effector m
 not determine the end-effector (a type-2 / parallel singularity) or a source would open a loop
 that no passive joint can close (an over-constrained loop), a :class:`KinematicsError` names the
 pose. ``pose_error`` re-solves the loops with the perturbed description (Newton on the passive
-joints, actuated joints held), so :func:`robots.base.check_robot` compares the two.
+joints, actuated joints held), so :func:`evotol.robots.base.check_robot` compares the two.
 """
 from __future__ import annotations
 
@@ -20,20 +20,20 @@ from pathlib import Path
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import RobotErrorModel, Workspace
-from robots.clearance.kinematics import rotation_vector
-from robots.clearance.model import ClearanceMechanism
-from robots.mechanism.clearance_model import clearance_mechanism
-from robots.mechanism.description import load_mechanism, mechanism_from_dict
-from robots.mechanism.kinematics import IN_PLANE, Kinematics
-from robots.mechanism.mechanism import Mechanism
-from robots.mechanism.parts import UNIT_SCALE
-from robots.mechanism.placement import PLACEMENT_FIELDS
-from robots.mechanism.posture import check_posture, posture_notes
-from robots.mechanism.serial import SERIAL_COMPILED, SerialChain, serial_inverse_geometry
-from robots.mechanism.shipped import resolve_description
-from robots.mechanism.shipped import SHIPPED  # noqa: F401  (re-exported: robots.mechanism.model.SHIPPED)
-from robots.mechanism.sources import OUT_OF_PLANE_FIELDS, source_columns  # noqa: F401  (OUT_OF_PLANE_FIELDS re-exported)
+from evotol.robots.base import RobotErrorModel, Workspace
+from evotol.robots.clearance.kinematics import rotation_vector
+from evotol.robots.clearance.model import ClearanceMechanism
+from evotol.robots.mechanism.clearance_model import clearance_mechanism
+from evotol.robots.mechanism.description import load_mechanism, mechanism_from_dict
+from evotol.robots.mechanism.kinematics import IN_PLANE, Kinematics
+from evotol.robots.mechanism.mechanism import Mechanism
+from evotol.robots.mechanism.parts import UNIT_SCALE
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
+from evotol.robots.mechanism.posture import check_posture, posture_notes
+from evotol.robots.mechanism.serial import SERIAL_COMPILED, SerialChain, serial_inverse_geometry
+from evotol.robots.mechanism.shipped import resolve_description
+from evotol.robots.mechanism.shipped import SHIPPED  # noqa: F401  (re-exported: evotol.robots.mechanism.model.SHIPPED)
+from evotol.robots.mechanism.sources import OUT_OF_PLANE_FIELDS, source_columns  # noqa: F401  (OUT_OF_PLANE_FIELDS re-exported)
 
 
 class MechanismModel(RobotErrorModel):
@@ -46,7 +46,7 @@ class MechanismModel(RobotErrorModel):
     sources : sequence of str or None
         Source names/patterns (default: the description's ``[tolerances] sources``, else every
         design parameter and every actuator offset).
-    workspace : robots.base.Workspace or None
+    workspace : evotol.robots.base.Workspace or None
         Override of the description's box (SI: m, rad).
 
     Raises
@@ -57,7 +57,7 @@ class MechanismModel(RobotErrorModel):
     Examples
     --------
     >>> from evotol import MechanismModel
-    >>> from robots.mechanism.model import resolve_description
+    >>> from evotol.robots.mechanism.model import resolve_description
     >>> robot = MechanismModel(resolve_description("planar3rpr"))   # a shipped description
     >>> robot.source_names
     ('Rb', 'rp', 'l1', 'l2', 'l3')
@@ -99,7 +99,7 @@ class MechanismModel(RobotErrorModel):
         evotol.errors.KinematicsError
             A pose out of reach or singular, or a joint outside its limits
             (:meth:`Kinematics.inverse_geometry
-            <robots.mechanism.inverse_geometry.InverseGeometry.inverse_geometry>`).
+            <evotol.robots.mechanism.inverse_geometry.InverseGeometry.inverse_geometry>`).
         """
         return self._inverse_geometry(np.atleast_2d(np.asarray(poses, float)))
 
@@ -108,7 +108,7 @@ class MechanismModel(RobotErrorModel):
         """For a redundant mechanism (more joint variables than loop and task equations, e.g. the
         7-joint Panda on a 6-D task): the counts and how the inverse geometry resolves the
         self-motion (:meth:`InverseGeometry._newton
-        <robots.mechanism.inverse_geometry.InverseGeometry._newton>`, ``docs/mechanisms.md`` "Redundant arms"); else None."""
+        <evotol.robots.mechanism.inverse_geometry.InverseGeometry._newton>`, ``docs/mechanisms.md`` "Redundant arms"); else None."""
         kin = self.kin
         n_eq = sum(len(kin.loop_rows(lp)) for lp in self.mechanism.loops) + len(kin.coord_axes) + (3 if kin.orientation else 0)
         n_var = len(kin.variables)
@@ -136,7 +136,7 @@ class MechanismModel(RobotErrorModel):
 
     def _inverse_geometry(self, poses) -> dict:
         """:meth:`Kinematics.inverse_geometry`, compiled for a serial chain (same steps, per pose);
-        a serial arm's posture is then held (:func:`robots.mechanism.posture.check_posture`)."""
+        a serial arm's posture is then held (:func:`evotol.robots.mechanism.posture.check_posture`)."""
         if self._serial is None:
             q = self.kin.inverse_geometry(poses)
         else:
@@ -380,7 +380,7 @@ class MechanismModel(RobotErrorModel):
 
     def clearance_mechanism(self) -> ClearanceMechanism:
         """The description's joint clearances as a :class:`ClearanceMechanism` (Deng 2012 Ch. III-V)
-        for the certified engine (``robots.clearance.max_pose_error``); joint values come from the
+        for the certified engine (``evotol.robots.clearance.max_pose_error``); joint values come from the
         Newton inverse geometry.
 
         DH entries that use a joint variable become named variables ``"<frame>.<field>"`` of the
@@ -389,7 +389,7 @@ class MechanismModel(RobotErrorModel):
 
         Returns
         -------
-        robots.clearance.model.ClearanceMechanism
+        evotol.robots.clearance.model.ClearanceMechanism
             The clearance model (bounds: ``beta_xy``, ``beta_z`` in rad, ``b_xy``, ``b_z`` in m).
 
         Raises

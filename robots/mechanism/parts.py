@@ -2,9 +2,9 @@
 clearances.
 
 Plain frozen dataclasses that check themselves; the whole description that holds them is
-:class:`robots.mechanism.mechanism.Mechanism`, read from TOML by :mod:`robots.mechanism.description`
+:class:`evotol.robots.mechanism.mechanism.Mechanism`, read from TOML by :mod:`evotol.robots.mechanism.description`
 (``docs/mechanisms.md`` is the reference). Every number is SI (m, rad); an entry may also be an
-expression (:mod:`robots.mechanism.expressions`) such as ``"-L0/2"``, ``"100*mm"``, ``"q1 - pi"``.
+expression (:mod:`evotol.robots.mechanism.expressions`) such as ``"-L0/2"``, ``"100*mm"``, ``"q1 - pi"``.
 
 Frames follow Khalil & Kleinfinger (1986), the convention of Deng 2012 Tabs. II.1, IV.1 and of
 Brahmia 2023 Tab. 1: frame ``j`` with antecedent ``a(j)`` is placed by
@@ -35,8 +35,8 @@ from typing import Mapping
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.clearance.parts import Chain, ClearanceBounds
-from robots.mechanism.expressions import Expression
+from evotol.robots.clearance.parts import Chain, ClearanceBounds
+from evotol.robots.mechanism.expressions import Expression
 
 JOINT_TYPES = ("revolute", "prismatic", "fixed")
 LENGTH_FIELDS = ("b", "d", "r")
@@ -206,7 +206,7 @@ class Coordinate:
 
 
 #: a serial chain of joints with clearance between two bodies (Deng 2012 Ch. III, V): the engine's
-#: own :class:`robots.clearance.parts.Chain`, built directly from the description
+#: own :class:`evotol.robots.clearance.parts.Chain`, built directly from the description
 ClearanceChain = Chain
 
 
@@ -219,11 +219,11 @@ class ClearanceSpec:
     ----------
     bodies : Mapping[str, str]
         Body name -> the DH frame it is attached to.
-    chains : tuple of robots.clearance.parts.Chain
+    chains : tuple of evotol.robots.clearance.parts.Chain
         Serial chains of joints with clearance between bodies (Deng 2012 Ch. III, V).
     end_effector : str
         Name of the end-effector body.
-    bounds : Mapping[str, robots.clearance.parts.ClearanceBounds]
+    bounds : Mapping[str, evotol.robots.clearance.parts.ClearanceBounds]
         Joint frame name, or ``default`` / ``actuated`` / ``passive`` -> clearance bounds
         (``beta_xy``, ``beta_z`` in rad; ``b_xy``, ``b_z`` in m).
     """
@@ -254,7 +254,7 @@ def joint_units(frames, params) -> dict[str, str]:
     ------
     evotol.errors.ValidationError
         A joint entry that does not parse (:meth:`Expression.parse
-        <robots.mechanism.expressions.Expression.parse>`).
+        <evotol.robots.mechanism.expressions.Expression.parse>`).
     """
     out = {}
     for f in frames:

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.clearance.kinematics import exp_screw
+from evotol.robots.clearance.kinematics import exp_screw
 
 SHIFT_FIELDS = ("shift_x", "shift_y", "shift_z")
 TILT_FIELDS = ("tilt_x", "tilt_y", "tilt_z")

@@ -25,7 +25,7 @@ from typing import Mapping
 
 from evotol.errors import ValidationError
 from evotol._runtime.keyword_checks import check_table_keys
-from robots.mechanism.expressions import Expression
+from evotol.robots.mechanism.expressions import Expression
 
 #: largest plausible length of a description (m), unless ``[checks] max_length`` says otherwise
 MAX_LENGTH = 10.0

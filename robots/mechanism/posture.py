@@ -25,7 +25,7 @@ import warnings
 import numpy as np
 
 from evotol.errors import KinematicsError
-from robots.mechanism.serial import SERIAL_COMPILED, SerialChain
+from evotol.robots.mechanism.serial import SERIAL_COMPILED, SerialChain
 
 #: relative smallest singular value of the scaled task Jacobian below which a pose counts as near a singularity
 NEAR_SINGULAR = 1e-3
@@ -38,7 +38,7 @@ def wrapped(kin, q: dict) -> dict:
 
     Parameters
     ----------
-    kin : robots.mechanism.kinematics.Kinematics
+    kin : evotol.robots.mechanism.kinematics.Kinematics
         The kinematics (``joint_unit``: rad or m per joint variable).
     q : dict of str to array_like
         Joint variable -> values (rad or m).
@@ -58,7 +58,7 @@ def wrapped(kin, q: dict) -> dict:
 def _task_jacobian(kin, q: dict, poses: np.ndarray, chain=None) -> np.ndarray | None:
     """Scaled square task Jacobian (n, m, m), or None when the system is not square (redundant).
 
-    ``chain``: the compiled serial chain (:class:`robots.mechanism.serial.SerialChain`) built with
+    ``chain``: the compiled serial chain (:class:`evotol.robots.mechanism.serial.SerialChain`) built with
     the joint variables as columns: its end-effector Jacobian gives the same rows, faster."""
     if chain is None or kin.mech.loops:
         Rt = kin._target_orientation(poses)
@@ -85,7 +85,7 @@ def check_branch(kin, poses: np.ndarray, q: dict, names, chain=None) -> np.ndarr
 
     Parameters
     ----------
-    kin : robots.mechanism.kinematics.Kinematics
+    kin : evotol.robots.mechanism.kinematics.Kinematics
         The kinematics of a mechanism without loops.
     poses : (n, n_coordinates) ndarray
         The poses (SI).
@@ -93,7 +93,7 @@ def check_branch(kin, poses: np.ndarray, q: dict, names, chain=None) -> np.ndarr
         The joint values the inverse geometry found there (rad or m).
     names : sequence of str
         The pose coordinates' names (for the message).
-    chain : robots.mechanism.serial.SerialChain or None, optional
+    chain : evotol.robots.mechanism.serial.SerialChain or None, optional
         The compiled chain with the joint variables as columns (faster Jacobians), or None.
 
     Returns
@@ -155,7 +155,7 @@ def check_posture(model, poses: np.ndarray, q: dict) -> None:
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         The model (its ``kin`` and ``workspace``); the poses near a singularity are remembered on
         it (``_near_singular``).
     poses : (n, n_coordinates) ndarray
@@ -194,7 +194,7 @@ def posture_notes(model) -> list[str]:
 
     Parameters
     ----------
-    model : robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.MechanismModel
         The model (after its inverse geometry ran).
 
     Returns
@@ -230,9 +230,9 @@ def joints_at(robot, poses) -> dict:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
-        A :class:`~robots.mechanism.joint_space.JointSpaceModel` (the poses are the joints), a
-        :class:`~robots.mechanism.model.MechanismModel` (its inverse geometry, posture held) or
+    robot : evotol.robots.base.RobotErrorModel
+        A :class:`~evotol.robots.mechanism.joint_space.JointSpaceModel` (the poses are the joints), a
+        :class:`~evotol.robots.mechanism.model.MechanismModel` (its inverse geometry, posture held) or
         another robot.
     poses : (n, workspace.dim) ndarray
         The robot's poses (SI).
@@ -256,7 +256,7 @@ def joint_table(robot, poses) -> dict:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         As :func:`joints_at`.
     poses : (n, workspace.dim) ndarray
         The robot's poses (SI).

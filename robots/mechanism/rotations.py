@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.clearance.kinematics import rot_x, rot_y, rot_z
+from evotol.robots.clearance.kinematics import rot_x, rot_y, rot_z
 
-#: the elementary rotation (..., 4, 4) about each axis (the one definition: robots.clearance.kinematics)
+#: the elementary rotation (..., 4, 4) about each axis (the one definition: evotol.robots.clearance.kinematics)
 AXIS_ROT = {"x": rot_x, "y": rot_y, "z": rot_z}
 
 

@@ -1,6 +1,6 @@
 """The fast path of a serial chain (a URDF arm, or any description without loops): the frames from
 the base to the end-effector folded into stages, and the sources into terms, for the compiled
-kernels of :mod:`robots.mechanism.serial_kernels`.
+kernels of :mod:`evotol.robots.mechanism.serial_kernels`.
 
 Why: the general description machinery evaluates every DH entry as an expression and builds every
 frame's twists with NumPy over all poses; for a 6-joint arm that is about 35 frames of small array
@@ -8,7 +8,7 @@ operations per call, 7-80x slower than Pinocchio's C++ regressor loop (issue 23)
 needs none of it: each stage is a constant 4x4 and one joint value ``a q + c``, and one compiled
 loop over poses does forward kinematics, sensitivities, perturbed forward kinematics (Monte Carlo)
 and the continued Newton inverse geometry, with the same equations as
-:class:`robots.mechanism.kinematics.Kinematics` (``tests/test_serial_fast_path.py`` compares them).
+:class:`evotol.robots.mechanism.kinematics.Kinematics` (``tests/test_serial_fast_path.py`` compares them).
 
 A chain qualifies when the mechanism has no loops and no points, is not planar, its end-effector
 is a frame, and on the path every DH entry is a constant except the joint field of a joint row,
@@ -24,8 +24,8 @@ import threading
 
 import numpy as np
 
-from robots.clearance.newton_kernel import AVAILABLE as SERIAL_COMPILED   # numba importable, EVOTOL_NO_NUMBA unset
-from robots.mechanism.placement import PLACEMENT_FIELDS
+from evotol.robots.clearance.newton_kernel import AVAILABLE as SERIAL_COMPILED   # numba importable, EVOTOL_NO_NUMBA unset
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
 
 
 _ANNOUNCED = []
@@ -37,7 +37,7 @@ def _kernels():
     import os
     import sys
 
-    from robots.mechanism import serial_kernels
+    from evotol.robots.mechanism import serial_kernels
 
     if not _ANNOUNCED:
         _ANNOUNCED.append(True)
@@ -77,12 +77,12 @@ class SerialChain:
 
         Parameters
         ----------
-        kin : robots.mechanism.kinematics.Kinematics
+        kin : evotol.robots.mechanism.kinematics.Kinematics
             Kinematics of the description.
         columns : sequence of str or (str, str)
             The model's source columns: a parameter or actuated joint variable name, or a DH
             entry / placement error ``(frame, field)``
-            (:class:`~robots.mechanism.model.MechanismModel` ``.columns``).
+            (:class:`~evotol.robots.mechanism.model.MechanismModel` ``.columns``).
 
         Returns
         -------
@@ -257,7 +257,7 @@ class SerialChain:
         (n, 6, n_cols) ndarray
             ``[dp (m); dphi (rad)]`` of the tip in the base frame per unit of each source column
             (m or rad), as :meth:`MechanismModel.sensitivity
-            <robots.mechanism.model.MechanismModel.sensitivity>`.
+            <evotol.robots.mechanism.model.MechanismModel.sensitivity>`.
         """
         K = _kernels()
 
@@ -344,7 +344,7 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
 
     Parameters
     ----------
-    kin : robots.mechanism.kinematics.Kinematics
+    kin : evotol.robots.mechanism.kinematics.Kinematics
         Kinematics of the description (its assembly, coordinates and orientation targets).
     chain : SerialChain
         The fast path built from ``kin``.
@@ -359,12 +359,12 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
     evotol.errors.KinematicsError
         A pose out of reach or singular (scaled residual not below 1e-9), or a joint outside its
         limits, naming the first such pose; or a failed assembly
-        (:meth:`Kinematics.assembly <robots.mechanism.inverse_geometry.InverseGeometry.assembly>`).
+        (:meth:`Kinematics.assembly <evotol.robots.mechanism.inverse_geometry.InverseGeometry.assembly>`).
     evotol.errors.ValidationError
         From the assembly (an ``[assembly] joints`` key that is not a joint variable).
     """
     from evotol.errors import KinematicsError
-    from robots.mechanism.limits import check_joint_limits, unreachable_message
+    from evotol.robots.mechanism.limits import check_joint_limits, unreachable_message
 
     poses = np.atleast_2d(np.asarray(poses, float))
     key = poses.tobytes()

@@ -1,18 +1,18 @@
 """Compiled (numba) kernels of a serial chain: forward kinematics, sensitivity, perturbed forward
 kinematics and the continued Newton inverse geometry, one pose per loop iteration.
 
-The chain is a list of **stages** (:class:`robots.mechanism.serial.SerialChain`): ``T <- T P_s``
+The chain is a list of **stages** (:class:`evotol.robots.mechanism.serial.SerialChain`): ``T <- T P_s``
 (a constant 4x4, the fixed rows and the joint row's ``Rot(z,gamma) Trans(z,b) Rot(x,alpha)
 Trans(x,d)``), then, for a joint stage, ``T <- T Rot(z, theta)`` or ``T <- T Trans(z, r)`` with the
 joint value ``a_s q[var_s] + c_s``. ``mark_s >= 0`` records the frame after ``P_s`` (the stage's
-placement, :mod:`robots.mechanism.placement`). Errors enter as **terms**:
+placement, :mod:`evotol.robots.mechanism.placement`). Errors enter as **terms**:
 
 * placement terms ``(column, mark, field)``: ``P_s exp(delta)`` with ``delta[field] += e[column]``;
 * joint terms ``(column, stage, coef, var)``: the stage's joint value moves by
   ``e[column] * coef * (q[var] if var >= 0 else 1)``.
 
-Sensitivities are ``[dp; dphi]`` of the tip (``robots.base`` order); the placement twists and the
-joint twists are those of :mod:`robots.mechanism.kinematics` (same equations, per pose).
+Sensitivities are ``[dp; dphi]`` of the tip (``evotol.robots.base`` order); the placement twists and the
+joint twists are those of :mod:`evotol.robots.mechanism.kinematics` (same equations, per pose).
 
 The parameters several definitions of this module share are described once, here.
 
@@ -44,7 +44,7 @@ from numba import njit, prange
 # The parallel Monte Carlo kernel must survive a fork (evotol's process pool forks after a parent may
 # have run it; GNU OpenMP, numba's default layer where present, then kills the child): a fork-safe
 # layer (TBB if installed, else numba's workqueue), unless the user chose one. The workqueue is not
-# thread-safe, so only the main thread calls the parallel kernel (robots.mechanism.serial).
+# thread-safe, so only the main thread calls the parallel kernel (evotol.robots.mechanism.serial).
 if "NUMBA_THREADING_LAYER" not in os.environ:
     numba.config.THREADING_LAYER = "forksafe"
 

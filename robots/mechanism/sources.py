@@ -1,24 +1,24 @@
 """The error sources of a described mechanism: which toleranced names it has, and what each one moves.
 
 Sources (intervals) are generated from the description by name or pattern
-(:meth:`Mechanism.select_sources <robots.mechanism.mechanism.Mechanism.select_sources>`): a
+(:meth:`Mechanism.select_sources <evotol.robots.mechanism.mechanism.Mechanism.select_sources>`): a
 **design parameter** of ``[lengths]``/``[angles]`` (its error enters every DH entry that uses it --
 one shared tolerance, e.g. ``L0`` moves both base joints of the 5-bar), an **actuator offset** (an
 actuated joint variable), a **DH entry** ``"<frame>.<gamma|b|alpha|d|theta|r>"`` (``"A.theta"`` of
 an actuated frame is the actuator offset / encoder error), or a **placement error**
-``"<frame>.<shift|tilt>_<x|y|z>"`` (:mod:`robots.mechanism.placement`). Each becomes a column of
+``"<frame>.<shift|tilt>_<x|y|z>"`` (:mod:`evotol.robots.mechanism.placement`). Each becomes a column of
 the first-order maps (:meth:`Kinematics.frame_jacobian
-<robots.mechanism.kinematics.Kinematics.frame_jacobian>`) and a :class:`robots.base.SourceSpec`
-(unit, group, description) of :class:`robots.mechanism.model.MechanismModel`.
+<evotol.robots.mechanism.kinematics.Kinematics.frame_jacobian>`) and a :class:`evotol.robots.base.SourceSpec`
+(unit, group, description) of :class:`evotol.robots.mechanism.model.MechanismModel`.
 """
 from __future__ import annotations
 
 from evotol.errors import ValidationError
-from robots.base import SourceSpec
-from robots.mechanism.kinematics import Kinematics
-from robots.mechanism.mechanism import Mechanism
-from robots.mechanism.parts import LENGTH_FIELDS
-from robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
+from evotol.robots.base import SourceSpec
+from evotol.robots.mechanism.kinematics import Kinematics
+from evotol.robots.mechanism.mechanism import Mechanism
+from evotol.robots.mechanism.parts import LENGTH_FIELDS
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
 
 OUT_OF_PLANE_FIELDS = ("b", "alpha", "r")
 
@@ -28,9 +28,9 @@ def source_columns(mech: Mechanism, kin: Kinematics, sources=None) -> tuple[list
 
     Parameters
     ----------
-    mech : robots.mechanism.mechanism.Mechanism
+    mech : evotol.robots.mechanism.mechanism.Mechanism
         The description.
-    kin : robots.mechanism.kinematics.Kinematics
+    kin : evotol.robots.mechanism.kinematics.Kinematics
         Its kinematics (joint variables, actuated ones, which DH entries use each name).
     sources : sequence of str or None, optional
         Source names/patterns (default: the description's ``[tolerances] sources``, else every
@@ -41,7 +41,7 @@ def source_columns(mech: Mechanism, kin: Kinematics, sources=None) -> tuple[list
     columns : list of str or (str, str)
         Per source, in order: the name (a design parameter or an actuated joint variable) or the
         DH entry / placement error ``(frame, field)``.
-    specs : list of robots.base.SourceSpec
+    specs : list of evotol.robots.base.SourceSpec
         Per source: name, unit (m or rad), group (``"actuator"``, ``"length"``, ``"angle"``) and a
         one-line description.
 

@@ -20,8 +20,8 @@ tool. Without ``[tolerances] sources`` every one of them is a source. The row in
 from 1; a row may have a ``name`` (the name of its distal frame ``i``, default ``"<i>"``).
 
 **How it is computed.** The table is rewritten, exactly, in the modified (Khalil-Kleinfinger)
-convention the rest of :mod:`robots.mechanism` uses (``Rot(z, gamma) Trans(z, b) Rot(x, alpha)
-Trans(x, d) Rot(z, theta) Trans(z, r)``, :mod:`robots.mechanism.kinematics`):
+convention the rest of :mod:`evotol.robots.mechanism` uses (``Rot(z, gamma) Trans(z, b) Rot(x, alpha)
+Trans(x, d) Rot(z, theta) Trans(z, r)``, :mod:`evotol.robots.mechanism.kinematics`):
 
 * joint frame ``J<i>`` (on joint ``i``'s axis) from distal frame ``i-1``: ``theta = theta_i``,
   ``r = d_i`` (``Rot(z, theta_i) Trans(z, d_i)``);
@@ -45,8 +45,8 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol._runtime.keyword_checks import check_table_keys
-from robots.mechanism.expressions import CONSTANTS, FUNCTIONS, Expression
-from robots.mechanism.plausibility import MAX_LENGTH, _check_angle, _check_length, _constant
+from evotol.robots.mechanism.expressions import CONSTANTS, FUNCTIONS, Expression
+from evotol.robots.mechanism.plausibility import MAX_LENGTH, _check_angle, _check_length, _constant
 
 #: entries of a standard-DH row, of ``[base]`` and of ``[tool]``
 STANDARD_FIELDS = ("a", "alpha", "d", "theta")

@@ -11,7 +11,7 @@ as a translation ``Tz(J_z) Tx(J_x) Ty(J_y)`` and a rotation ``Rz(J_yaw) Ry(J_pit
 (URDF's ``xyz``/``rpy``, design parameters in ``[lengths]``/``[angles]``) ending in a fixed frame
 ``J`` (the joint frame before its motion), then the joint about (along) its axis, any direction,
 with the variable ``J``. The error sources by default are each origin's placement errors
-``J.shift_x ... J.tilt_z`` (:mod:`robots.mechanism.placement`, Pinocchio's placement-regressor
+``J.shift_x ... J.tilt_z`` (:mod:`evotol.robots.mechanism.placement`, Pinocchio's placement-regressor
 convention) and the joint offsets ``J``; ``docs/mechanisms.md`` states the conventions.
 
 In a description file: ``urdf = "arm.urdf"`` (relative to the file) or
@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from evotol.errors import ValidationError
-from robots.mechanism.placement import PLACEMENT_FIELDS
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
 
 AXIS_NAMES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
 
@@ -106,7 +106,7 @@ def _ident(name: str) -> str:
 def _origin_rows(prefix: str, antecedent: str, M, lengths: dict, angles: dict, pin) -> list[dict]:
     """Rows Tz(z) Tx(x) Ty(y) Rz(yaw) Ry(pitch) Rx(roll) for a placement M (pinocchio SE3); the
     last row, a fixed frame named ``prefix``, is the placement itself (its errors:
-    :mod:`robots.mechanism.placement`)."""
+    :mod:`evotol.robots.mechanism.placement`)."""
     x, y, z = (float(v) for v in M.translation)
     roll, pitch, yaw = (float(v) for v in pin.rpy.matrixToRpy(M.rotation))
     for k, v in zip("xyz", (x, y, z)):

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from robots.mechanism.identifiability import stacked_rank
-from robots.mechanism.placement import PLACEMENT_FIELDS
-from robots.mechanism.urdf import _pin, chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
+from evotol.robots.mechanism.identifiability import stacked_rank
+from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
+from evotol.robots.mechanism.urdf import _pin, chain_joints, pinocchio_configuration, pinocchio_placement_regressor, urdf_frames
 
 #: half range (m) of the random values of a prismatic joint without limits
 UNLIMITED_PRISMATIC = 0.1
@@ -145,10 +145,10 @@ def check_urdf_file(path, tip: str, n_poses: int = 20, sources=None) -> dict:
     ValidationError
         Not a URDF Pinocchio reads, an unknown tip, a floating or planar joint on the chain.
     """
-    from robots.mechanism.checks import end_effector_pose
-    from robots.mechanism.description import mechanism_from_dict
-    from robots.mechanism.inspection import limits_and_box, rank_report, sources_with_nominal
-    from robots.mechanism.model import MechanismModel
+    from evotol.robots.mechanism.checks import end_effector_pose
+    from evotol.robots.mechanism.description import mechanism_from_dict
+    from evotol.robots.mechanism.inspection import limits_and_box, rank_report, sources_with_nominal
+    from evotol.robots.mechanism.model import MechanismModel
 
     t0 = time.perf_counter()
     box = {"coordinates": [{"name": a, "axis": a, "low": -1.0, "high": 1.0} for a in "xyz"]}

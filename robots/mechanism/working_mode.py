@@ -17,7 +17,7 @@ back): Newton may move a declared revolute joint by at most :data:`SERIAL_MAX_AN
 prismatic one by :data:`SERIAL_MAX_LENGTH_FRACTION` of the length scale (round-off of joints
 typed to a few decimals); farther is an error naming both (:func:`check_reached`). With only some
 joints, or only the pose, the joints seed the inverse geometry, whose postures and limits are
-:mod:`robots.mechanism.kinematics`' (issue 23) and :mod:`robots.mechanism.posture`'s.
+:mod:`evotol.robots.mechanism.kinematics`' (issue 23) and :mod:`evotol.robots.mechanism.posture`'s.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The planar 5R symmetrical mechanism as an evotol robot error model (:mod:`robots.base`).
+"""The planar 5R symmetrical mechanism as an evotol robot error model (:mod:`evotol.robots.base`).
 
 Error sources (SI units; a design of Table 2 scaled by ``D`` metres):
 
@@ -32,9 +32,9 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.base import RobotErrorModel, SourceSpec, Workspace
-from robots.planar5r import kinematics as K
-from robots.planar5r.design import Design5R, get_case
+from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
+from evotol.robots.planar5r import kinematics as K
+from evotol.robots.planar5r.design import Design5R, get_case
 
 #: the error sources of the 5R model (Lara-Molina 2019 Sec. 2): link lengths (m), actuator angles
 #: (rad) and radial joint clearances (m, two components each)
@@ -62,7 +62,7 @@ class Planar5R(RobotErrorModel):
     """5R symmetrical parallel mechanism of design ``case`` (Table 2 letter or :class:`Design5R`)
     scaled by ``D`` metres (eq. 1: physical length = non-dimensional length x D).
 
-    working_mode: elbow signs (``"+-"``: both elbows outward, see :mod:`robots.planar5r.kinematics`).
+    working_mode: elbow signs (``"+-"``: both elbows outward, see :mod:`evotol.robots.planar5r.kinematics`).
     assembly: sigma of eq. 15 (+1 = the paper's choice).
     lci_min: poses with a smaller local conditioning index are refused (KinematicsError).
 
@@ -73,7 +73,7 @@ class Planar5R(RobotErrorModel):
     D : float
         Scale, m: physical lengths are the design's times ``D``.
     working_mode : str or tuple of int
-        Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
+        Elbow signs (see :func:`evotol.robots.planar5r.kinematics.conventions.working_mode_signs`).
     assembly : {1, -1}
         Assembly mode sigma of eq. 15.
     lci_min : float

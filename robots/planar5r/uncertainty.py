@@ -37,7 +37,7 @@ r1, r2, r3 : float
 poses : array_like, shape (n_poses, 2) or (2,)
     Nominal end-effector positions, length unit.
 working_mode : str or tuple of int
-    Elbow signs (see :func:`robots.planar5r.kinematics.conventions.working_mode_signs`).
+    Elbow signs (see :func:`evotol.robots.planar5r.kinematics.conventions.working_mode_signs`).
 assembly : {1, -1}
     Assembly mode sigma of eq. 15.
 """
@@ -50,7 +50,7 @@ from scipy import special
 from scipy.stats import qmc
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.planar5r import kinematics as K
+from evotol.robots.planar5r import kinematics as K
 
 #: Table 1: 0.004 % of the link length (standard deviation of eq. 7).
 DELTA_R = 0.004e-2
@@ -126,7 +126,7 @@ class UncertaintyModel:
 
     def errors_from_unit(self, u: np.ndarray, r1: float, r2: float, r3: float) -> dict:
         """Map unit-hypercube rows ``u`` (n, n_dims) to the error parameters of
-        :func:`robots.planar5r.kinematics.perturbed.perturbed_position` (arrays of shape (n,)).
+        :func:`evotol.robots.planar5r.kinematics.perturbed.perturbed_position` (arrays of shape (n,)).
 
         Parameters
         ----------

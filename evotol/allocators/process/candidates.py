@@ -15,10 +15,10 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from cost_models.base import CostModel
+from evotol.cost_models.base import CostModel
 from evotol.errors import ValidationError
 from evotol.core.problem import Tolerance
-from robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,7 @@ class Process:
     ----------
     name : str
         E.g. ``"turn"``, ``"grind"``.
-    cost : cost_models.CostModel
+    cost : evotol.cost_models.CostModel
         Cost model of the tolerance (SI t), valid (positive, non-increasing) on the range.
     lower, upper : float
         Tolerances this process holds (SI: m or rad), 0 < lower <= upper.
@@ -87,7 +87,7 @@ def checked_processes(robot: RobotErrorModel, processes: Mapping[str, Sequence[P
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The error model whose sources need processes.
     processes : Mapping[str, Sequence[Process]]
         Source name -> non-empty list of :class:`Process`.

@@ -21,14 +21,14 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from cost_models.power import PowerCost
-from cost_models.quality_loss import QualityLossCost
+from evotol.cost_models.power import PowerCost
+from evotol.cost_models.quality_loss import QualityLossCost
 from evotol.allocators.process.candidates import Process, checked_processes
 from evotol.allocators.process.result import FEAS_TOL, ProcessResult  # noqa: F401  (re-exported)
 from evotol.errors import ValidationError
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.core.quality_loss import loss_coefficients, with_quality_loss
-from robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel
 
 
 
@@ -37,8 +37,8 @@ class ProcessProblem:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
-        Any error model (e.g. :class:`robots.assembly.AssemblyFunction`).
+    robot : evotol.robots.base.RobotErrorModel
+        Any error model (e.g. :class:`evotol.robots.assembly.AssemblyFunction`).
     processes : Mapping[str, Sequence[Process]]
         Source name -> non-empty list of :class:`Process`.
     requirement : evotol.core.problem.Requirement
@@ -77,7 +77,7 @@ class ProcessProblem:
     def __init__(self, robot: RobotErrorModel, processes: Mapping[str, Sequence[Process]], requirement: Requirement,
                  poses, *, n_directions: int = 600, check_dominance: bool = True):
         if not isinstance(robot, RobotErrorModel):
-            raise ValidationError("robot", robot, "a robots.base.RobotErrorModel")
+            raise ValidationError("robot", robot, "a evotol.robots.base.RobotErrorModel")
         self.processes: dict[str, tuple[Process, ...]] = checked_processes(robot, processes, check_dominance=check_dominance)
         names = self.names = robot.source_names
         self.n_processes = np.array([len(self.processes[n]) for n in names])
@@ -111,7 +111,7 @@ class ProcessProblem:
         Returns
         -------
         ProcessProblem
-            Processes' costs wrapped in :class:`cost_models.quality_loss.QualityLossCost`;
+            Processes' costs wrapped in :class:`evotol.cost_models.quality_loss.QualityLossCost`;
             ``loss_coefficients`` holds q_j. ``A = 0`` gives the same optimum as this problem.
 
         Raises
@@ -384,11 +384,11 @@ class ProcessProblem:
 
 def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None, measure: str = "worst_case", *,
                      processes: Mapping[str, Sequence[Process]] | None = None, **requirement):
-    """"Every response of an assembly within its limit" (see :mod:`robots.assembly`).
+    """"Every response of an assembly within its limit" (see :mod:`evotol.robots.assembly`).
 
     Parameters
     ----------
-    assembly : robots.assembly.AssemblyFunction
+    assembly : evotol.robots.assembly.AssemblyFunction
         The assembly (its responses are the "poses"; each response's limit is its bound).
     tolerances : Mapping[str, evotol.core.problem.Tolerance] or None
         Dimension name -> tolerance (SI), for a tolerance problem; or

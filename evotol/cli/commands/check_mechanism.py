@@ -6,7 +6,7 @@ there -- so a unit slip (``Rb = 250`` meaning mm) is visible before it becomes a
 joint variables (actuated and passive), the error sources it generated (name, group,
 unit), the largest loop-closure residual of the Newton inverse geometry over Latin-hypercube poses
 of the workspace, and the agreement of the first-order sensitivities with central finite
-differences of the nonlinear closure (``robots.base.check_robot``). With a ``[clearance]`` table it
+differences of the nonlinear closure (``evotol.robots.base.check_robot``). With a ``[clearance]`` table it
 also prints the certified maximum pose error at the assembly pose. Exit status 1 when the
 finite-difference agreement is worse than ``--rtol``.
 """
@@ -60,7 +60,7 @@ def _fd_text(fd_rel_error, ok: bool, rtol: float) -> str:
 
 def print_understood(out: dict) -> None:
     """The parameters, the assembly (declared and solved joints) and the end-effector pose, in mm
-    and deg (:func:`robots.mechanism.checks.understood`).
+    and deg (:func:`evotol.robots.mechanism.checks.understood`).
 
     Parameters
     ----------
@@ -103,7 +103,7 @@ def cmd_check_mechanism(args) -> int:
     ------
     ValidationError
         A description that cannot be read or checked (from
-        :func:`robots.mechanism.checks.check_mechanism`), or a URDF file without ``--tip``.
+        :func:`evotol.robots.mechanism.checks.check_mechanism`), or a URDF file without ``--tip``.
     KinematicsError
         The loops do not close at the assembly, or close far from the declared joints.
     """
@@ -112,7 +112,7 @@ def cmd_check_mechanism(args) -> int:
         return cmd_check_urdf(args, srcs)
     # loaded here, not at import: every sub-command module is imported to build `evotol --help`,
     # which must not pay for NumPy, the clearance engine and Pinocchio (tests/test_front_door.py)
-    from robots.mechanism.checks import check_mechanism
+    from evotol.robots.mechanism.checks import check_mechanism
 
     if args.at is not None:          # the forward kinematics at given joints (issue 33)
         return print_forward_at(args)
@@ -157,11 +157,11 @@ def print_forward_at(args) -> int:
     ------
     ValidationError
         A description that cannot be read, or joint values it refuses
-        (:func:`robots.mechanism.forward_at.forward_at`).
+        (:func:`evotol.robots.mechanism.forward_at.forward_at`).
     """
-    from robots.mechanism.forward_at import forward_at
-    from robots.mechanism.model import MechanismModel
-    from robots.mechanism.shipped import resolve_description
+    from evotol.robots.mechanism.forward_at import forward_at
+    from evotol.robots.mechanism.model import MechanismModel
+    from evotol.robots.mechanism.shipped import resolve_description
 
     model = MechanismModel(resolve_description(args.file, None))
     out = forward_at(model, args.at)
@@ -184,7 +184,7 @@ def print_callouts(out: dict) -> None:
     Parameters
     ----------
     out : dict
-        :func:`robots.mechanism.checks.check_mechanism`'s report; nothing is printed without
+        :func:`evotol.robots.mechanism.checks.check_mechanism`'s report; nothing is printed without
         ``callouts``.
     """
     cs = out.get("callouts") or []
@@ -209,7 +209,7 @@ def print_callouts(out: dict) -> None:
 
 def print_limits_and_rank(out: dict) -> None:
     """Workspace box, joint limits and the rank of the sources over the workspace, in mm and deg,
-    naming blind and duplicated sources (:mod:`robots.mechanism.inspection`).
+    naming blind and duplicated sources (:mod:`evotol.robots.mechanism.inspection`).
 
     Parameters
     ----------
@@ -269,10 +269,10 @@ def cmd_check_urdf(args, srcs) -> int:
         No ``--tip`` given.
     """
     from evotol.errors import ValidationError
-    from robots.mechanism.urdf_check import check_urdf_file
+    from evotol.robots.mechanism.urdf_check import check_urdf_file
 
     if not args.tip:
-        from robots.mechanism.forward_at import urdf_end_links
+        from evotol.robots.mechanism.forward_at import urdf_end_links
         ends = urdf_end_links(args.file)
         raise ValidationError("--tip", None, "the URDF link or frame that is the end-effector; its end links: "
                                              + (", ".join(ends) if ends else "none found"))

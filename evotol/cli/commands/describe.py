@@ -57,7 +57,7 @@ def describe(robot) -> dict:
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The robot or mechanism model.
 
     Returns
@@ -95,8 +95,8 @@ def robot_for(name: str, settings: list[str]):
 
     Returns
     -------
-    robots.base.RobotErrorModel
-        The robot, or a :class:`robots.mechanism.model.MechanismModel` of the description.
+    evotol.robots.base.RobotErrorModel
+        The robot, or a :class:`evotol.robots.mechanism.model.MechanismModel` of the description.
 
     Raises
     ------
@@ -107,8 +107,8 @@ def robot_for(name: str, settings: list[str]):
     from pathlib import Path
 
     from evotol.errors import ValidationError
-    from robots import registry
-    from robots.mechanism.model import SHIPPED, MechanismModel, resolve_description
+    from evotol.robots import registry
+    from evotol.robots.mechanism.model import SHIPPED, MechanismModel, resolve_description
 
     path = Path(name)
     description = path.is_file() or (":" not in name and (SHIPPED / f"{name}.toml").is_file())

@@ -42,7 +42,7 @@ from evotol.core.problem.variable_mapping import VariableMapping
 from evotol.core.requirement import Requirement
 from evotol.core.tolerance import Tolerance
 from evotol.core.variables import tolerance_variables
-from robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel
 
 __all__ = ["ToleranceProblem"]
 
@@ -52,7 +52,7 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
 
     Parameters
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The error model (sources, sensitivities at poses).
     tolerances : Mapping[str, Tolerance]
         Source name -> :class:`Tolerance`, one entry per robot source.
@@ -77,11 +77,11 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
 
     Attributes
     ----------
-    robot : robots.base.RobotErrorModel
+    robot : evotol.robots.base.RobotErrorModel
         The robot passed in, unchanged.
     clearances : evotol.measures.clearances.ClearanceSources or None
         The joint-clearance classes passed in, held beside the robot.
-    error_model : robots.base.RobotErrorModel
+    error_model : evotol.robots.base.RobotErrorModel
         The one place the problem's sources and sensitivities come from: ``robot`` itself, or
         with clearance classes :class:`evotol.measures.clearances.WithClearances` (the robot's
         interval sources, unless none has a tolerance, followed by the classes, which have zero
@@ -112,7 +112,7 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     --------
     >>> from cost_models import PowerCost
     >>> from evotol import Requirement, Tolerance, ToleranceProblem
-    >>> from robots.ucr3 import UCR3
+    >>> from evotol.robots.ucr3 import UCR3
     >>> robot = UCR3()
     >>> tol = {s.name: Tolerance(PowerCost(1.0, 1.0, scale=1e-5), lower=1e-6, upper=1e-4)
     ...        for s in robot.sources}
@@ -129,7 +129,7 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
                  shared_cost: str = "part", clearances: "clearance_measure.ClearanceSources | None" = None,
                  all_given: bool = False):
         if not isinstance(robot, RobotErrorModel):
-            raise ValidationError("robot", robot, "a robots.base.RobotErrorModel")
+            raise ValidationError("robot", robot, "a evotol.robots.base.RobotErrorModel")
         if not isinstance(requirement, Requirement):
             raise ValidationError("requirement", requirement, "an evotol.Requirement")
         requirement.validate()

@@ -7,7 +7,7 @@ Measure. At pose p, the geometric sources (intervals ``|δ_j| <= t_j`` through t
 and the clearance screws s (each joint's s_k in its set C_k(c), consistent with the loops,
 ``B^T s = 0``) move the end-effector by ``J_g δ + C s``. The reachable set is the Minkowski sum
 ``P_g(t) + P_c(c)``, and the worst case ``W(t, c) = max |J_g δ + C s|`` is computed by the
-certified engine of :mod:`robots.clearance` (``evaluate_cases(..., extra=(J_g, t))``): a value
+certified engine of :mod:`evotol.robots.clearance` (``evaluate_cases(..., extra=(J_g, t))``): a value
 **attained** by explicit screws and source errors, and a **proven upper bound** (relative gap
 <= ``tol``, default 1e-3).
 
@@ -43,7 +43,7 @@ import numpy as np
 
 from evotol.measures.clearances.classes import ClearanceSources
 from evotol.errors import ValidationError
-from robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel
 
 #: screw component (row of a joint's [dr; dt] in its frame) -> bound component index
 _SCREW_KIND = (0, 0, 1, 2, 2, 3)
@@ -66,7 +66,7 @@ def error_sources(robot: RobotErrorModel, clearances: ClearanceSources, geometri
 
     Returns
     -------
-    tuple of robots.base.SourceSpec
+    tuple of evotol.robots.base.SourceSpec
         The geometric sources (if any), then ``clearances.sources``.
 
     Raises
@@ -182,7 +182,7 @@ def worst_case(robot: WithClearances, poses: np.ndarray, jacobian: np.ndarray, T
     """Certified worst-case position (m) and orientation (rad) error of designs T (n, n_sources)
     at every pose: the geometric intervals through ``jacobian`` (n_poses, 6, n_sources; the
     clearance columns are ignored) plus the consistent clearance screws inside the classes' bounds
-    (Minkowski sum; :func:`robots.clearance.evaluate_cases` with ``extra``). Only the listed
+    (Minkowski sum; :func:`evotol.robots.clearance.evaluate_cases` with ``extra``). Only the listed
     ``components`` are computed.
 
     Parameters
@@ -199,7 +199,7 @@ def worst_case(robot: WithClearances, poses: np.ndarray, jacobian: np.ndarray, T
     ClearanceWorstCase
         Attained values, proven bounds, worst directions and shares per component.
     """
-    from robots.clearance import evaluate_cases
+    from evotol.robots.clearance import evaluate_cases
 
     cl = robot.clearances
     T = np.atleast_2d(np.asarray(T, float))
@@ -246,7 +246,7 @@ def sample_twists(robot: WithClearances, poses: np.ndarray, c: np.ndarray, n_sam
     states for class tolerances c (n_classes,): every joint's screw drawn uniformly inside (or, with
     ``mode="boundary"``, on the boundary of) its disks and intervals, projected onto the loop
     equations ``B^T s = 0`` and scaled back into the set -- the sampling of
-    :func:`robots.clearance.sample_max_errors`, per sample instead of its maximum.
+    :func:`evotol.robots.clearance.sample_max_errors`, per sample instead of its maximum.
 
     Parameters
     ----------

@@ -18,7 +18,7 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol._runtime.keyword_checks import check_table_keys
-from robots.base import SourceSpec
+from evotol.robots.base import SourceSpec
 
 #: clearance bound components, in the engine's column order (Deng 2012 eqs. III.3-III.6)
 COMPONENTS = ("beta_xy", "beta_z", "b_xy", "b_z")
@@ -129,11 +129,11 @@ def thesis_classes(joints: Sequence[str], h: float, axial: bool = True) -> list[
 
 @dataclass
 class ClearanceSources:
-    """Clearance classes of a clearance mechanism (:class:`robots.clearance.ClearanceMechanism`).
+    """Clearance classes of a clearance mechanism (:class:`evotol.robots.clearance.ClearanceMechanism`).
 
     Parameters
     ----------
-    mechanism : robots.clearance.ClearanceMechanism
+    mechanism : evotol.robots.clearance.ClearanceMechanism
         The engine's mechanism (e.g. ``MechanismModel(...).clearance_mechanism()``, whose pose
         coordinates are the robot's).
     classes : sequence of ClearanceClass
@@ -156,7 +156,7 @@ class ClearanceSources:
     Examples
     --------
     >>> from evotol import ClearanceClass, ClearanceSources, MechanismModel
-    >>> from robots.mechanism.model import resolve_description
+    >>> from evotol.robots.mechanism.model import resolve_description
     >>> robot = MechanismModel(resolve_description("fivebar"))
     >>> mech = robot.clearance_mechanism()
     >>> [j.name for j in mech.joints]
@@ -175,7 +175,7 @@ class ClearanceSources:
     def __post_init__(self):
         mech = self.mechanism
         if not hasattr(mech, "pose_maps") or not hasattr(mech, "joints"):
-            raise ValidationError("clearances.mechanism", mech, "a robots.clearance.ClearanceMechanism")
+            raise ValidationError("clearances.mechanism", mech, "a evotol.robots.clearance.ClearanceMechanism")
         self.classes = tuple(self.classes)
         if not self.classes:
             raise ValidationError("clearances.classes", [], "at least one clearance class")
@@ -268,8 +268,8 @@ class ClearanceSources:
 
         Returns
         -------
-        list of robots.clearance.PoseMaps
-            One per decoupled block (:meth:`robots.clearance.ClearanceMechanism.pose_maps`).
+        list of evotol.robots.clearance.PoseMaps
+            One per decoupled block (:meth:`evotol.robots.clearance.ClearanceMechanism.pose_maps`).
         """
         key = np.ascontiguousarray(poses, float).tobytes()
         if key not in self._maps:

@@ -1,6 +1,6 @@
 """Worst case of an assembly's **nonlinear** response over the tolerance box, with a proof.
 
-For an assembly function ``y_k = f_k(x)`` (:class:`robots.assembly.AssemblyFunction`) and
+For an assembly function ``y_k = f_k(x)`` (:class:`evotol.robots.assembly.AssemblyFunction`) and
 tolerances ``t`` the box is ``x0 ± t``; the quantity is ``W_k = max_box |f_k(x) − f_k(x0)| / L_k``
 (the nonlinear counterpart of the arithmetic stack ``Σ_j |∂f_k/∂x_j| t_j / L_k``). Two routes, and
 the result says which one applied:
@@ -25,7 +25,7 @@ import numpy as np
 
 from evotol.errors import ValidationError, is_integer, is_real
 from evotol.measures.nonlinear.interval import Dual, Interval
-from robots.assembly import LinearStack
+from evotol.robots.assembly import LinearStack
 
 
 def _responses(asm, X):
@@ -38,7 +38,7 @@ def _responses(asm, X):
 
 def _check(asm, t) -> np.ndarray:
     if not hasattr(asm, "function") or not hasattr(asm, "dimension_names"):
-        raise ValidationError("robot", getattr(asm, "name", asm), "an assembly function (robots.assembly.AssemblyFunction)")
+        raise ValidationError("robot", getattr(asm, "name", asm), "an assembly function (evotol.robots.assembly.AssemblyFunction)")
     t = np.asarray(t, dtype=float)
     if t.shape != (len(asm.dimension_names),) or not np.all(np.isfinite(t)) or np.any(t < 0):
         raise ValidationError("tolerances", t.tolist(), f"{len(asm.dimension_names)} finite tolerances >= 0 (SI)")
@@ -67,7 +67,7 @@ def nonlinear_worst_case(asm, t, *, rtol: float = 1e-6, max_boxes: int = 200_000
 
     Parameters
     ----------
-    asm : robots.assembly.AssemblyFunction
+    asm : evotol.robots.assembly.AssemblyFunction
         The assembly (its function is evaluated on intervals: write it with numpy ufuncs).
     t : array_like
         Tolerances (SI), one per dimension.

@@ -7,7 +7,7 @@ The parameters several definitions of this module share are described once, here
 
 Parameters
 ----------
-robot : robots.base.RobotErrorModel
+robot : evotol.robots.base.RobotErrorModel
     A robot with a nonlinear ``pose_error``.
 """
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Conventions of the planar 5R kinematics (Lara-Molina et al. 2019, Secs. 2.3-2.4): frame, branches, inputs.
 
-The frame and the branch signs every solver of :mod:`robots.planar5r.kinematics` uses, the
+The frame and the branch signs every solver of :mod:`evotol.robots.planar5r.kinematics` uses, the
 working-mode table, and the input checks they share (points, assembly mode, floating dtype).
 
 Frame and labels (those of the paper's eqs. 11-12, 16-19): ``O`` is the midpoint of the base,

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.planar5r.kinematics.conventions import DEFAULT_WORKING_MODE, _as_points, cross2
-from robots.planar5r.kinematics.position import crank_points, inverse_kinematics
+from evotol.robots.planar5r.kinematics.conventions import DEFAULT_WORKING_MODE, _as_points, cross2
+from evotol.robots.planar5r.kinematics.position import crank_points, inverse_kinematics
 
 
 def jacobians(p, theta, r1, r3):
@@ -106,7 +106,7 @@ def local_conditioning_index(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -
     Raises
     ------
     ValidationError, KinematicsError
-        As :func:`~robots.planar5r.kinematics.position.inverse_kinematics`.
+        As :func:`~evotol.robots.planar5r.kinematics.position.inverse_kinematics`.
     """
     p = _as_points(p)
     theta = inverse_kinematics(p, r1, r2, r3, working_mode)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.planar5r.kinematics.position import circle_intersection
+from evotol.robots.planar5r.kinematics.position import circle_intersection
 
 #: Names of the scalar error parameters understood by :func:`perturbed_position` (lengths in the
 #: unit of r1..r3, angles in rad). ``c*x, c*y`` are clearance displacement vectors.
@@ -45,7 +45,7 @@ def perturbed_position(theta, r1, r2, r3, errors: dict, assembly=1):
     px, py : ndarray
         Perturbed end-effector position, length unit, of the broadcast shape.
     h2 : ndarray
-        ``(h / d)^2`` of :func:`~robots.planar5r.kinematics.position.circle_intersection`, dimensionless (``< 0``: no assembly).
+        ``(h / d)^2`` of :func:`~evotol.robots.planar5r.kinematics.position.circle_intersection`, dimensionless (``< 0``: no assembly).
     """
     g = errors.get
     theta = np.asarray(theta, dtype=float)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import KinematicsError
-from robots.planar5r.kinematics.conventions import (
+from evotol.robots.planar5r.kinematics.conventions import (
     DEFAULT_WORKING_MODE, _as_float, _as_points, _check_assembly, _common_float, working_mode_signs)
 
 
@@ -73,7 +73,7 @@ def inverse_kinematics(p, r1, r2, r3, working_mode=DEFAULT_WORKING_MODE) -> np.n
         End-effector positions ``(x, y)``, length unit.
     r1, r2, r3 : float or array_like
         Crank ``A_iB_i``, coupler ``B_iP`` and half base ``OA_i`` lengths, in one length unit
-        (dimensionless in the paper, m in :class:`~robots.planar5r.model.Planar5R`); arrays
+        (dimensionless in the paper, m in :class:`~evotol.robots.planar5r.model.Planar5R`); arrays
         broadcast with ``p[..., 0]`` (one set of lengths per pose).
 
     Returns

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robots.planar5r.kinematics.conventions import DEFAULT_WORKING_MODE, cross2, working_mode_signs
-from robots.planar5r.kinematics.position import circle_intersection
+from evotol.robots.planar5r.kinematics.conventions import DEFAULT_WORKING_MODE, cross2, working_mode_signs
+from evotol.robots.planar5r.kinematics.position import circle_intersection
 
 
 def type1_circles(r1, r2, r3) -> list[dict]:

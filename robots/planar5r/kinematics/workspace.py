@@ -10,10 +10,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from robots.planar5r.kinematics.conventions import DEFAULT_WORKING_MODE
-from robots.planar5r.kinematics.jacobians import inverse_condition_number, jacobians, type2_determinant
-from robots.planar5r.kinematics.position import inverse_kinematics_raw
-from robots.planar5r.kinematics.singularities import distance_to_singular_loci, type2_locus
+from evotol.robots.planar5r.kinematics.conventions import DEFAULT_WORKING_MODE
+from evotol.robots.planar5r.kinematics.jacobians import inverse_condition_number, jacobians, type2_determinant
+from evotol.robots.planar5r.kinematics.position import inverse_kinematics_raw
+from evotol.robots.planar5r.kinematics.singularities import distance_to_singular_loci, type2_locus
 
 
 def mic_closed_form(r1, r2, r3) -> dict:
