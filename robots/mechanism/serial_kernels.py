@@ -35,8 +35,20 @@ n_marks : int
 """
 from __future__ import annotations
 
+import os
+
+import numba
 import numpy as np
+from numba import prange
+
 from evotol._runtime.numba_cache import njit     # cache=True that falls back (issue 42)
+
+# The parallel Monte Carlo kernel must survive a fork (evotol's process pool forks after a parent may
+# have run it; GNU OpenMP, numba's default layer where present, then kills the child): a fork-safe
+# layer (TBB if installed, else numba's workqueue), unless the user chose one. The workqueue is not
+# thread-safe, so only the main thread calls the parallel kernel (evotol.robots.mechanism.serial).
+if "NUMBA_THREADING_LAYER" not in os.environ:
+    numba.config.THREADING_LAYER = "forksafe"
 
 
 @njit(cache=True, inline="always")
@@ -214,6 +226,74 @@ def _rotvec(R):
 
 
 @njit(cache=True)
+def _pose_error_block(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage,
+                      j_coef, j_var, v_col, v_var, lo, hi, out):
+    """Pose-samples ``lo <= i m + k < hi`` of :func:`pose_error` into ``out`` (one scratch set)."""
+    m = errors.shape[1]
+    marks = np.empty((n_marks, 3, 4))
+    T0 = np.empty((4, 4))
+    T = np.empty((4, 4))
+    ns = P.shape[0]
+    dq0 = np.zeros(ns)
+    E = np.empty((n_marks, 4, 4))
+    none = np.zeros(n_marks, np.bool_)
+    has_E = np.zeros(n_marks, np.bool_)
+    delta = np.zeros((n_marks, 6))
+    for mm in range(p_mark.shape[0]):
+        has_E[p_mark[mm]] = True
+    R = np.empty((3, 3))
+    tmp = np.empty((4, 4))
+    qe = np.empty(Q.shape[1])
+    dq = np.zeros(ns)
+    nomarks = np.empty((0, 3, 4))
+    i_done = -1
+    for flat in range(lo, hi):
+        i, k = flat // m, flat % m
+        if i != i_done:                                  # the nominal tip of pose i, once per block
+            _chain(P, ident, kind, var, a, c, mark, Q[i], dq0, E, none, marks, T0, tmp)
+            i_done = i
+        e = errors[i, k]
+        delta[:, :] = 0.0
+        for t in range(p_col.shape[0]):
+            delta[p_mark[t], p_field[t]] += e[p_col[t]]
+        for mk in range(n_marks):
+            if has_E[mk]:
+                _exp6(delta[mk], E[mk])
+        qe[:] = Q[i]
+        for t in range(v_col.shape[0]):
+            qe[v_var[t]] += e[v_col[t]]
+        dq[:] = 0.0
+        for t in range(j_col.shape[0]):
+            dq[j_stage[t]] += e[j_col[t]] * j_coef[t] * (qe[j_var[t]] if j_var[t] >= 0 else 1.0)
+        _chain(P, ident, kind, var, a, c, mark, qe, dq, E, has_E, nomarks, T, tmp)
+        for r in range(3):
+            out[i, k, r] = T[r, 3] - T0[r, 3]
+            for s in range(3):
+                R[r, s] = T[r, 0] * T0[s, 0] + T[r, 1] * T0[s, 1] + T[r, 2] * T0[s, 2]
+        cs = min(1.0, max(-1.0, (R[0, 0] + R[1, 1] + R[2, 2] - 1.0) / 2.0))
+        th = np.arccos(cs)
+        f = 0.5 + th * th / 12.0 if th < 1e-8 else th / (2.0 * np.sin(th))
+        out[i, k, 3] = (R[2, 1] - R[1, 2]) * f
+        out[i, k, 4] = (R[0, 2] - R[2, 0]) * f
+        out[i, k, 5] = (R[1, 0] - R[0, 1]) * f
+
+
+@njit(cache=True)
+def pose_error_serial(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage, j_coef,
+                      j_var, v_col, v_var):
+    """:func:`pose_error` in the calling thread only (for threads other than the main one)."""
+    out = np.empty((errors.shape[0], errors.shape[1], 6))
+    _pose_error_block(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage,
+                      j_coef, j_var, v_col, v_var, 0, errors.shape[0] * errors.shape[1], out)
+    return out
+
+
+#: pose-samples per parallel block of :func:`pose_error` (large enough that a block's scratch and its
+#: nominal chains are negligible, small enough that two threads share the work evenly)
+BLOCK = 2048
+
+
+@njit(cache=True, parallel=True)
 def pose_error(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage, j_coef, j_var, v_col, v_var):
     """(n, m, 6) nonlinear tip error for errors (n, m, n_cols): placement terms (column, mark, field),
     joint terms (column, stage, coefficient, variable: times the *perturbed* q[var]), joint offsets
@@ -243,52 +323,20 @@ def pose_error(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mar
     (n, m, 6) ndarray
         ``[dp (m); rotation vector of R R0^T (rad)]`` of the perturbed tip relative to the
         nominal, base frame.
+
+    Notes
+    -----
+    The pose-samples are cut into blocks of consecutive flat indices ``i m + k``, run in parallel
+    (``numba.prange``, one scratch set per block, nothing allocated per sample); each sample's
+    arithmetic is the serial one, so the result does not depend on the number of threads.
     """
     n, m = errors.shape[0], errors.shape[1]
     out = np.empty((n, m, 6))
-    marks = np.empty((n_marks, 3, 4))
-    T0 = np.empty((4, 4))
-    T = np.empty((4, 4))
-    ns = P.shape[0]
-    dq0 = np.zeros(ns)
-    E = np.empty((n_marks, 4, 4))
-    none = np.zeros(n_marks, np.bool_)
-    has_E = np.zeros(n_marks, np.bool_)
-    delta = np.zeros((n_marks, 6))
-    for mm in range(p_mark.shape[0]):
-        has_E[p_mark[mm]] = True
-    R = np.empty((3, 3))
-    tmp = np.empty((4, 4))
-    qe = np.empty(Q.shape[1])
-    dq = np.zeros(ns)
-    nomarks = np.empty((0, 3, 4))
-    for i in range(n):
-        _chain(P, ident, kind, var, a, c, mark, Q[i], dq0, E, none, marks, T0, tmp)
-        for k in range(m):
-            e = errors[i, k]
-            delta[:, :] = 0.0
-            for t in range(p_col.shape[0]):
-                delta[p_mark[t], p_field[t]] += e[p_col[t]]
-            for mk in range(n_marks):
-                if has_E[mk]:
-                    _exp6(delta[mk], E[mk])
-            qe[:] = Q[i]
-            for t in range(v_col.shape[0]):
-                qe[v_var[t]] += e[v_col[t]]
-            dq[:] = 0.0
-            for t in range(j_col.shape[0]):
-                dq[j_stage[t]] += e[j_col[t]] * j_coef[t] * (qe[j_var[t]] if j_var[t] >= 0 else 1.0)
-            _chain(P, ident, kind, var, a, c, mark, qe, dq, E, has_E, nomarks, T, tmp)
-            for r in range(3):
-                out[i, k, r] = T[r, 3] - T0[r, 3]
-                for s in range(3):
-                    R[r, s] = T[r, 0] * T0[s, 0] + T[r, 1] * T0[s, 1] + T[r, 2] * T0[s, 2]
-            cs = min(1.0, max(-1.0, (R[0, 0] + R[1, 1] + R[2, 2] - 1.0) / 2.0))
-            th = np.arccos(cs)
-            f = 0.5 + th * th / 12.0 if th < 1e-8 else th / (2.0 * np.sin(th))
-            out[i, k, 3] = (R[2, 1] - R[1, 2]) * f
-            out[i, k, 4] = (R[0, 2] - R[2, 0]) * f
-            out[i, k, 5] = (R[1, 0] - R[0, 1]) * f
+    total = n * m
+    n_blocks = (total + BLOCK - 1) // BLOCK
+    for b in prange(n_blocks):
+        _pose_error_block(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage,
+                          j_coef, j_var, v_col, v_var, b * BLOCK, min(total, (b + 1) * BLOCK), out)
     return out
 
 
