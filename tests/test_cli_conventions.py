@@ -119,7 +119,7 @@ def test_the_library_never_prints():
 
 
 def test_library_messages_go_through_logging(tmp_path, caplog, capsys):
-    """A study run from Python says what it runs through ``logging`` (logger evotol.studyfile.run),
+    """A study run from Python says what it runs through ``logging`` (logger evotol.studyfile.steps, the one step loop of every study),
     and prints nothing."""
     import logging
 
@@ -127,5 +127,5 @@ def test_library_messages_go_through_logging(tmp_path, caplog, capsys):
 
     with caplog.at_level(logging.INFO, logger="evotol"):
         run_study_file(fast_study(tmp_path), out=tmp_path)
-    assert ("evotol.studyfile.run", logging.INFO, "sensitivity ...") in caplog.record_tuples
+    assert ("evotol.studyfile.steps", logging.INFO, "sensitivity ...") in caplog.record_tuples   # the one step loop
     assert capsys.readouterr().out == ""

@@ -245,7 +245,7 @@ class IRSBot2DesignEvaluator:
             rows.append({"area_mm2": w.area / MM ** 2, "x0_mm": w.x[0] / MM, "x1_mm": w.x[1] / MM,
                          "z0_mm": w.z[0] / MM, "z1_mm": w.z[1] / MM})
             if w.area > 0:
-                evotol.robots.append((len(rows) - 1, robot))
+                robots.append((len(rows) - 1, robot))
                 points.append(w.points)
         if self.pose_errors is None:
             errs = engine_pose_errors_batch([r for _, r in robots], points)

@@ -321,4 +321,7 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
             summary["results"][m]["nonlinear_check"] = check
     summary["joints"] = pose_joints(problem)        # the posture used at every pose (issue 33)
     summary["units"] = study_units_block(problem)
+    if summary["joints"]:       # joints/values/<joint>/i: each joint variable in its own unit (rad or m)
+        j = summary["joints"]
+        summary["units"].setdefault("tables", {})["values"] = dict(zip(j["variables"], j["units"]))
     return summary
