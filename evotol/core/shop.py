@@ -44,7 +44,7 @@ def floors_of(sources, floors: dict, field: str = "shop.floors") -> dict:
 
     Parameters
     ----------
-    sources : sequence of evotol.robots.base.Source
+    sources : sequence of evotol.robots.base.SourceSpec
         The model's sources (name, group, unit).
     floors : dict
         Key (source, callout, group or feature name) -> the smallest zone (a number in SI or a
