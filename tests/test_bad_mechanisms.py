@@ -205,3 +205,19 @@ def test_robot_table_without_mechanism_or_urdf_names_the_field(table):
     assert exc.value.field == "robot.mechanism" and exc.value.value is None
     assert "mechanism = \"file.toml\"" in exc.value.expected and "urdf = \"arm.urdf\"" in exc.value.expected
     assert len(str(exc.value).splitlines()) == 1
+
+
+def test_a_serial_arm_out_of_reach_is_told_so_in_serial_words(tmp_path, capsys):
+    """Issue 39: a serial arm (no loops) whose assembly pose is beyond its reach heard "the loops do not
+    close". The PUMA 560 (reach about 0.86 m) asked for x = 1.4 m: the message says the arm does not reach."""
+    src = (Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "puma560.toml").read_text(encoding="utf-8")
+    far = src.replace('high = "700*mm"', 'high = "1500*mm"').replace(
+        'pose = ["596.3*mm", "-150.05*mm", "-14.4*mm"]', 'pose = ["1400*mm", "-150.05*mm", "-14.4*mm"]')
+    assert far != src
+    f = tmp_path / "puma_far.toml"
+    f.write_text(far, encoding="utf-8")
+    from evotol.cli import main
+
+    assert main(["check-mechanism", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert "the arm does not reach the assembly pose [1.4" in err and "loops" not in err

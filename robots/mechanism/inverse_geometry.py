@@ -134,9 +134,10 @@ class InverseGeometry:
             Rt = self._target_orientation(pose)
             q, res = self._newton(q0, self.variables, lambda q: self._ig_system(q, pose, Rt), 1, 100)
             if res[0] > 1e-9:
-                raise KinematicsError(f"{m.name}: the loops do not close at the assembly pose {pose[0].tolist()} from the "
-                                      f"declared assembly joints (scaled residual {res[0]:.2g}); check the frames, the loops "
-                                      "and [assembly]", poses=pose)
+                what = "the loops do not close at" if m.loops else "the arm does not reach"   # serial: no loops
+                check = "the frames, the loops and [assembly]" if m.loops else "the frames and [assembly] (pose and joints)"
+                raise KinematicsError(f"{m.name}: {what} the assembly pose {pose[0].tolist()} from the declared assembly "
+                                      f"joints (scaled residual {res[0]:.2g}); check {check}", poses=pose)
             working_mode.check_reached(self, pose, q0, q)
             check_joint_limits(m.name, m.limits, q, pose, [c.name for c in m.coordinates], "assembly pose")
             self._assembly = (pose[0], {k: float(v[0]) for k, v in q.items()})
