@@ -192,3 +192,50 @@ def test_refused_pairs_name_both_capabilities_before_any_work(caps, other, monke
     with pytest.raises(ValidationError, match=rf"^calibration = '{other}': expected .*") as exc:
         build(*caps)
     assert "\n" not in str(exc.value)
+
+
+# --- ISO 9283 figures and shop floors with the other parts ----------------------------------------
+ISO = {"AP": "0.5 mm", "RP": "0.05 mm"}
+
+
+@pytest.mark.parametrize("cap, other", [("joints", r"\[poses\] joints"), ("callouts", r"\[\[robot\.callouts\]\]"),
+                                        ("per-axis", "requirement per axis"), ("calibration", r"\[calibration\]")])
+def test_iso9283_with_a_part_it_does_not_compose_with_is_refused_before_any_work(cap, other, monkeypatch):
+    """[requirement] iso9283 beside joint configurations, callouts, per-axis limits or [calibration]: one line
+    naming both, before the robot is even read (the spy fails on any description read)."""
+    import evotol.studyfile.problem as sp
+
+    monkeypatch.setattr(sp, "read_robot", lambda *a, **k: (_ for _ in ()).throw(AssertionError("robot read")))
+    spec = CAPABILITIES[cap](ur5())
+    spec["requirement"]["iso9283"] = dict(ISO)
+    with pytest.raises(ValidationError, match=rf"^iso9283 = '{other}': expected a study without it") as exc:
+        load_problem(spec, base_dir=STUDIES)
+    assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("caps, floors, binds", [(("joints", "callouts"), {"position": "10 um", "axial": "20 um"}, True),
+                                                 (("joints", "calibration"), {"length": "20 um"}, False)],
+                         ids=["joints+callouts+shop", "joints+calibration+shop"])
+def test_shop_floors_compose_as_lower_bounds(caps, floors, binds):
+    """[shop] floors beside joint configurations with callouts, and beside calibration (where the first-order
+    map is ~0, so the floors hold but never bind): the floors are the
+    allocation's lower bounds, so the optimum equals the one of the same study with those lower bounds
+    written per source in [sources] instead (an independent route through the reader), and no tolerance
+    of the optimum is below its floor."""
+    spec = ur5()
+    for c in caps:
+        spec = CAPABILITIES[c](spec)
+    with_shop = {**copy.deepcopy(spec), "shop": {"floors": floors}}
+    from evotol.core.shop import apply_shop
+
+    p = apply_shop(with_shop, load_problem(copy.deepcopy(with_shop), base_dir=STUDIES))    # as evotol run does
+    r = allocate_optimum(p)
+    assert p.shop_floors and r.feasible
+    for n, (floor, _) in p.shop_floors.items():            # (floor in m, the [shop] key that set it)
+        assert r.tolerances[n] >= floor * (1 - 1e-12), n
+    # with callouts 4 of the 5 members sit at their floor; calibrated, every source runs to its upper bound
+    assert any(r.tolerances[n] <= f * (1 + 1e-6) for n, (f, _) in p.shop_floors.items()) is binds
+    by_source = copy.deepcopy(spec)
+    by_source["sources"] = {n: {"lower": f} for n, (f, _) in p.shop_floors.items()}
+    q = load_problem(by_source, base_dir=STUDIES)
+    assert allocate_optimum(q).cost == pytest.approx(r.cost, rel=1e-9)

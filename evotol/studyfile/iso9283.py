@@ -170,6 +170,39 @@ def _random_sources(table: dict, robot) -> tuple[list, list, list, list]:
     return sources, costs, lower, upper
 
 
+#: how a study file writes each part of the composed model (evotol.robots.base.PARTS)
+PART_WORDS = {"callouts": "[[robot.callouts]]", "joint_space": "[poses] joints", "calibration": "[calibration]",
+              "axis_limits": "requirement per axis", "clearances": "[clearances]"}
+
+
+def check_composable(spec: dict) -> None:
+    """Refuse, from the study file alone and so before any work, the parts ISO 9283 figures do not compose with.
+
+    Parameters
+    ----------
+    spec : dict
+        The parsed study file.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        One line naming ``iso9283`` and the other part: ``[calibration]`` (the ISO block has its own
+        ``[iso9283] calibrate``), ``[[robot.callouts]]``, ``[poses] joints`` (the ISO poses are the test
+        cube's), ``[clearances]``, a requirement per axis.
+    """
+    req = spec.get("requirement", {})
+    if "iso9283" not in spec and "iso9283" not in req:
+        return
+    other = [("calibration" in spec, "calibration"), ("callouts" in spec.get("robot", {}), "callouts"),
+             ("joints" in spec.get("poses", {}), "joint_space"), ("clearances" in spec, "clearances"),
+             (any(isinstance(req.get(c), dict) for c in ("position", "orientation")), "axis_limits")]
+    for present, part in other:
+        if present:
+            raise ValidationError("iso9283", PART_WORDS[part], "a study without it: the ISO 9283 figures are not yet "
+                                  "composed with it (docs/combinations.md)" + (
+                                      "; [iso9283] calibrate simulates a calibration" if part == "calibration" else ""))
+
+
 def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     """The study's ISO 9283 request, checked before any work; None when the file asks none.
 
@@ -196,12 +229,16 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     check_table_keys(req or {}, ("AP", "RP"), "requirement.iso9283")
     check_table_keys(table.get("simulate", {}), SIM_KEYS, "iso9283.simulate")
     robot = problem.robot
+    check_composable(spec)
     if not problem.free.any():
         raise ValidationError("iso9283", "every tolerance given", "at least one tolerance to allocate: the ISO block "
                               "is not yet written by the given-tolerances analysis")
-    if not isinstance(robot, MechanismModel) or problem.error_model is not robot:
-        raise ValidationError("iso9283", type(robot).__name__, "a serial arm from a mechanism description, without "
-                              "clearances, callouts, per-axis limits or joint poses")
+    part = next((m.part for m in problem.error_model.parts() if m.part), None)   # e.g. a description's own callouts
+    if part is not None:
+        raise ValidationError("iso9283", PART_WORDS[part], "a serial arm without it: the ISO 9283 figures are not yet "
+                              "composed with it (docs/combinations.md)")
+    if not isinstance(robot, MechanismModel):
+        raise ValidationError("iso9283", type(robot).__name__, "a serial arm from a mechanism description")
     ap = quantity(req["AP"], "requirement.iso9283.AP") if req and "AP" in req else None
     rp = quantity(req["RP"], "requirement.iso9283.RP") if req and "RP" in req else None
     y = table.get("yield")

@@ -10,6 +10,7 @@ from evotol.core.problem import ToleranceProblem
 from evotol.core.quality_loss import with_quality_loss
 from evotol.errors import ValidationError
 from evotol.studyfile.callouts import callout_warnings
+from evotol.studyfile.iso9283 import check_composable as check_iso_composable
 from evotol.studyfile.joint_poses import drop_unreachable, joint_poses
 from evotol.studyfile.keys import check_study_keys
 from evotol.studyfile.poses import read_poses
@@ -47,6 +48,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
         cost, a source without a cost model; and what the problem's own checks refuse.
     """
     check_study_keys(spec)
+    check_iso_composable(spec)              # ISO 9283 with a part it does not compose with: before any work
     if "processes" in spec:
         raise ValidationError("processes", sorted(spec["processes"]), "no [processes.*] here: a process-selection study "
                               "is read by evotol.studyfile.processes.load_process_problem (evotol run does so)")
