@@ -207,13 +207,12 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
         vspec = {**vspec, "distribution": vmodel}
     if any("budget" not in kw for m, kw in methods.items() if m != "nsga2"):
         problem.check_feasible()            # a requirement no design meets: say so before the first method
-    results, front, log = {}, {}, StepLog(keep_going)
+    results, log = {}, StepLog(keep_going)
 
     def method(m, kw):
         def step():
-            if m == "nsga2":
-                front["front"] = allocate_nsga2(problem, seed=seed, **{"progress": True, **kw})   # a bar, or log lines
-                return None
+            if m == "nsga2":        # a front, not a design: taken out of the results below
+                return allocate_nsga2(problem, seed=seed, **{"progress": True, **kw})   # a bar, or log lines
             opts = method_options(spec, m, kw)
             if m == "ga":
                 opts.setdefault("seed", seed)
@@ -232,12 +231,13 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
 
     with CtrlC() as ctrl_c:
         run_steps({m: method(m, kw) for m, kw in methods.items()}, ctrl_c, log, results)
+        front = results.pop("nsga2", None)
         # what the sections compare with: ordinary runs under the same Ctrl-C (issue 39)
         compared = run_steps({c: comparison(c, run) for c, run in
                               (comparison_runs(spec, problem, methods) if results else {}).items()}, ctrl_c, log)
         checks = run_steps({m: (lambda r=r: verify(problem, r.t, seed=seed, progress=True, **vspec).to_dict())
                             for m, r in results.items()}, ctrl_c, log, label="verify ", say=False)
-    front, stopped = front.get("front"), log.stopped
+    stopped = log.stopped
     summary = study_summary(name, problem, results, front, checks, seed=seed, units=units,
                             seconds=time.perf_counter() - t0, precision=precision)
     summary["study_file"] = str(path.resolve())

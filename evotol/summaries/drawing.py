@@ -21,6 +21,7 @@ from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError, is_real
 from evotol.units.display import ROUND_OFF, DisplayUnits, number
 from evotol.verification.nonlinear import worst_vertex_errors
+from evotol.robots.mechanism.callout_model import zone_per_t
 
 #: units of the keys this module adds to a study's JSON (docs/units.md)
 KEYS = {"drawing_lower": "the source's display unit (display_units), rounded to the drawing precision",
@@ -60,13 +61,14 @@ def tolerance_zone(source: dict, t: float) -> dict:
 def _source_rows(problem: ToleranceProblem) -> list[dict]:
     """The rows :func:`tolerance_zone` reads, per source (SI): name, unit, dim, offset, minus, plus, fixed, locked."""
     rows = []
-    callout_of = getattr(problem.robot.part_of("callouts"), "callout_of", None)
+    callouts = problem.robot.part_of("callouts")
+    per_t = zone_per_t(problem.robot)
     for n, s in zip(problem.names, problem.robot.sources):
         tol = problem.tolerances[n]
         rows.append({"name": n, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset), "minus": float(tol.minus),
                      "plus": float(tol.plus), "fixed": bool(tol.is_fixed), "locked": tol.locked,
-                     "zone_per_t": (getattr(problem.robot.part_of("callouts"), "zone_per_t", None) or {}).get(n, 1.0),
-                     "callout": callout_of(n) is not None if callout_of else False})
+                     "zone_per_t": per_t.get(n, 1.0),
+                     "callout": callouts is not None and callouts.callout_of(n) is not None})
     return rows
 
 

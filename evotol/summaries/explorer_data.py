@@ -26,6 +26,7 @@ from evotol.cost_models import registry
 from evotol.cost_models.base import CostModel
 from evotol.cost_models.compound import SumCost
 from evotol.core.problem import ToleranceProblem
+from evotol.robots.mechanism.callout_model import zone_per_t
 
 #: the cost models the page evaluates (``explorer.js``: same kind, same formula, same parameters)
 JS_COST_MODELS = ("exponential", "power", "reciprocal_power", "reciprocal", "reciprocal_square", "exp_reciprocal",
@@ -176,14 +177,14 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
     if reason is not None:
         return {"omitted": reason}
     sh = problem.shape
-    sources = []
+    sources, per_t = [], zone_per_t(problem.robot)
     for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
         tol = problem.tolerances[n]
         sources.append({"name": n, "group": s.group, "unit": s.unit, "dim": s.dim, "rho": float(sh.rho[j]),
                         "kappa": float(sh.kappa[j]), "offset": float(sh.offset[j]), "width": float(tol.width_factor),
                         # the drawn zone offset - minus·t·z .. offset + plus·t·z (evotol.summaries.drawing.tolerance_zone)
                         "minus": float(tol.minus), "plus": float(tol.plus),
-                        "zone_per_t": float((getattr(problem.robot.part_of("callouts"), "zone_per_t", None) or {}).get(n, 1.0)),
+                        "zone_per_t": float(per_t.get(n, 1.0)),
                         "cost_weight": float(problem.cost_weight[j]),
                         "locked": None if not problem.locked[j] else float(problem.locked_values[j]),
                         "cost": cost_model_spec(tol.cost)})

@@ -24,6 +24,7 @@ from evotol.summaries.nominals import nominal_notes, nominals_with_notes, source
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
 from evotol.robots.assembly import AssemblyFunction
+from evotol.robots.mechanism.callout_model import zone_per_t
 
 _PER_SOURCE = "m or rad (the source's unit, see units.tolerances)"
 _COORD = "workspace coordinate, SI (see workspace.units)"
@@ -94,7 +95,7 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         (:func:`sources_without_effect`).
     """
     nominal, notes = nominals_with_notes(problem.robot, problem.names)
-    zone_per_t = (getattr(problem.robot.part_of("callouts"), "zone_per_t", None) or {})
+    per_t = zone_per_t(problem.robot)
     no_effect = sources_without_effect(problem)
     out = []
     for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
@@ -104,8 +105,8 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
                "locked": None if tol.locked is None else float(tol.locked)}
         dist = as_distribution(tol.distribution)
         row["distribution"] = {"kind": dist.kind, "sigma_k": float(dist.sigma_k), "mean_shift": float(dist.mean_shift)}
-        if n in zone_per_t:      # a callout member: its zone per unit of the drawing's value (docs/callouts.md)
-            row["zone_per_t"] = zone_per_t[n]
+        if n in per_t:      # a callout member: its zone per unit of the drawing's value (docs/callouts.md)
+            row["zone_per_t"] = per_t[n]
         if n in nominal:
             row["nominal"] = nominal[n]
         if no_effect[j]:

@@ -31,6 +31,24 @@ from evotol.robots.mechanism.model import MechanismModel
 from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
 
 
+def zone_per_t(robot: RobotErrorModel) -> dict:
+    """Member source -> its zone per unit of its callout's value (:attr:`CalloutModel.zone_per_t`) in a
+    composed model; empty without callouts.
+
+    Parameters
+    ----------
+    robot : evotol.robots.base.RobotErrorModel
+        A composed model (:data:`evotol.robots.base.PARTS`).
+
+    Returns
+    -------
+    dict of str to float
+        Source name -> zone per unit t (0.5 for a position zone's end discs and a face).
+    """
+    callouts = robot.part_of("callouts")
+    return callouts.zone_per_t if callouts is not None else {}
+
+
 class CalloutModel(RobotErrorModel):
     """A mechanism's error model with drawing callouts as sources (module docstring).
 
