@@ -128,7 +128,7 @@ def cmd_reproduce(args) -> int:
     log.info("index: %s", index)
     if len(names) > 1:
         _print_time_table(seconds, failed, time.perf_counter() - t_all)
-    if failed:
+    if failed and len(names) > 1:          # one study: its own line said it
         print(f"[evotol] failed: {', '.join(failed)}", file=sys.stderr)
     if interrupted is not None:
         name, what = interrupted
