@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from tests.fast_study import fast_study
+from tests.test_faults import _no_seconds
 from tests.test_study_outputs import _run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -95,10 +96,3 @@ def test_a_real_full_disk_is_one_line_and_keeps_the_earlier_files(tmp_path, caps
     rerun = json.loads((res / "rerun.json").read_text(encoding="utf-8"))
     assert _no_seconds(rerun) == _no_seconds(json.loads(earlier["ucr3_example.json"]))
 
-
-def _no_seconds(obj):
-    if isinstance(obj, dict):
-        return {k: _no_seconds(v) for k, v in obj.items() if k != "seconds"}
-    if isinstance(obj, list):
-        return [_no_seconds(v) for v in obj]
-    return obj
