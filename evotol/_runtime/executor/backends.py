@@ -219,7 +219,7 @@ def _run_dask(scheduler, fn, common, items, on_done: OnDone) -> None:
         try:
             client = Client(scheduler, set_as_default=False) if own else scheduler
         except (OSError, TimeoutError) as exc:       # nothing answers there (distributed's connect timeout)
-            raise SchedulerLost(address, f"no answer at the start: {str(exc).splitlines()[0]}") from exc
+            raise SchedulerLost(address, f"no answer at the start: {(str(exc).splitlines() or [type(exc).__name__])[0]}") from exc
         futures: dict = {}
         done = 0
         try:
