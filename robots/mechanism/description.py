@@ -31,6 +31,7 @@ from evotol.robots.mechanism.parts import ANGLE_FIELDS, JOINT_TYPES, LENGTH_FIEL
 from evotol.robots.mechanism.plausibility import check_written_values
 from evotol.robots.mechanism.standard_dh import STANDARD_TOP_KEYS, convention_of, standard_to_modified
 from evotol.robots.mechanism.urdf import resolve_urdf, urdf_frames
+from evotol.robots.mechanism.working_mode import expand_joint_patterns
 
 TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "point", "loop", "end_effector", "assembly",
             "tolerances", "clearance", "urdf", "tip", "checks", "limits", "callouts") + STANDARD_TOP_KEYS
@@ -148,6 +149,9 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
         orient.append((o[0], str(o[1])))
     asm = spec.get("assembly", {})
     check_table_keys(asm, ("pose", "joints"), "assembly")
+    if isinstance(asm.get("joints"), Mapping):      # "l?" = "650*mm": a rough guess by pattern (issue 41)
+        asm = {**asm, "joints": expand_joint_patterns(asm["joints"], joint_units(frames, set(lengths) | set(angles)))}
+        spec = {**spec, "assembly": asm}
     pose = tuple(_number(v, "assembly.pose") for v in asm.get("pose", ()))
     joints = {k: _number(v, f"assembly.joints.{k}") for k, v in dict(asm.get("joints", {})).items()}
     tol = spec.get("tolerances", {})

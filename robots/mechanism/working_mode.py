@@ -21,6 +21,8 @@ joints, or only the pose, the joints seed the inverse geometry, whose postures a
 """
 from __future__ import annotations
 
+import fnmatch
+
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
@@ -34,6 +36,87 @@ ASSEMBLY_MAX_LENGTH_FRACTION = 0.2
 #: 0.5 deg (rad) for a revolute joint, 0.1 % of the length scale for a prismatic one.
 SERIAL_MAX_ANGLE = np.radians(0.5)
 SERIAL_MAX_LENGTH_FRACTION = 1e-3
+
+
+def expand_joint_patterns(joints: dict, variables) -> dict:
+    """``[assembly] joints`` with fnmatch patterns as keys (``"l?" = "650*mm"``, ``"s??" = 0``): a
+    rough guess for every joint a pattern matches; a joint named exactly keeps its own value.
+
+    Parameters
+    ----------
+    joints : dict
+        The ``[assembly] joints`` table as written (names or patterns -> values as written).
+    variables : iterable of str
+        The joint variables of the description, in order.
+
+    Returns
+    -------
+    dict
+        Joint variable -> its value as written, exact names first, then the patterns' matches.
+
+    Raises
+    ------
+    ValidationError
+        ``assembly.joints.<pattern>`` when a pattern matches no joint variable, or when two
+        patterns match the same joint (its value would depend on their order).
+    """
+    variables = list(variables)
+    out = {k: v for k, v in joints.items() if not _is_pattern(k)}
+    claimed = {}
+    for pat, v in joints.items():
+        if not _is_pattern(pat):
+            continue
+        hit = [x for x in variables if fnmatch.fnmatchcase(x, pat)]
+        if not hit:
+            raise ValidationError(f"assembly.joints.{pat}", v, f"a pattern matching some joint variable of {variables}")
+        for x in hit:
+            if x in claimed:
+                raise ValidationError(f"assembly.joints.{pat}", v, f"patterns that do not overlap: {claimed[x]!r} "
+                                      f"already matches {x} (name it exactly to override both)")
+            claimed[x] = pat
+            out.setdefault(x, v)
+    return out
+
+
+def _is_pattern(key: str) -> bool:
+    return any(c in str(key) for c in "*?[")
+
+
+def check_task_fixes_platform(kin) -> None:
+    """A closed-loop mechanism's task fixes every freedom of its platform (issue 41 item 7).
+
+    With loops, ``n_var`` joint variables and ``n_eq`` equations (loop rows, one per position
+    coordinate, three for a stated orientation), ``n_var > n_eq`` means the poses leave the
+    platform free to move -- a 6-UPS given x, y, z only would be solved "nearest the assembly" and
+    tilt by degrees at the box corners. That is refused, naming the key to set; a serial arm with
+    more joints than its task (the 7-joint Panda) stays a redundant arm (``docs/mechanisms.md``).
+
+    Parameters
+    ----------
+    kin : Kinematics
+        The mechanism's kinematics (``mech``, ``variables``, ``coord_axes``, ``orientation``).
+
+    Raises
+    ------
+    ValidationError
+        ``end_effector.orientation`` when none is stated (hold it: ``[['z', '0']]`` keeps the
+        platform at R = I), else ``end_effector.coordinates``.
+    """
+    m = kin.mech
+    if not m.loops:
+        return
+    n_eq = sum(len(kin.loop_rows(lp)) for lp in m.loops) + len(kin.coord_axes) + (3 if kin.orientation else 0)
+    free = len(kin.variables) - n_eq
+    if free <= 0:
+        return
+    held = ", ".join(c.name for c in m.coordinates) or "nothing"
+    if not kin.orientation:
+        raise ValidationError("end_effector.orientation", [], f"the platform orientation of {m.name}: the poses fix only "
+                              f"{held} and leave {free} freedom(s) of the platform, which would tilt unseen; hold it "
+                              "with orientation = [['z', '0']] (R = I) or name angle coordinates (orientation = "
+                              "[['z', 'yaw'], ['y', 'pitch'], ['x', 'roll']])")
+    raise ValidationError("end_effector.coordinates", held, f"coordinates that fix every freedom of {m.name}'s platform: "
+                          f"{free} more are left free")
 
 
 def check_declared(kin) -> None:
