@@ -216,9 +216,10 @@ def test_an_exact_joint_overrides_its_pattern():
     ({"q?": {"fixed": 1e-5}}, ["sources.q?", "a pattern matching some source"]),
 ])
 def test_source_patterns_that_overlap_or_match_nothing(table, names):
-    from evotol.studyfile.sources import expand_source_patterns
+    from evotol._runtime.keyword_checks import expand_patterns
     with pytest.raises(ValidationError) as info:
-        expand_source_patterns(table, ["l1", "l2", "l3"])
+        expand_patterns(table, ["l1", "l2", "l3"], "sources", "source")
     for n in names:
         assert n in str(info.value)
-    assert expand_source_patterns({"l?": {"fixed": 1}, "l2": {"fixed": 2}}, ["l1", "l2"]) == {"l2": {"fixed": 2}, "l1": {"fixed": 1}}
+    assert expand_patterns({"l?": {"fixed": 1}, "l2": {"fixed": 2}}, ["l1", "l2"], "sources", "source") == \
+        {"l2": {"fixed": 2}, "l1": {"fixed": 1}}

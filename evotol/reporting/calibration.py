@@ -5,7 +5,14 @@ and its identification (base set, condition number, unseen sources, why sources 
 the noise's share of the requirement, the uncalibrated optimum's cost beside each calibrated
 design's, the tolerances side by side per source (identified, freed, still driving the error,
 capped by the linear or compensation range), and the simulated calibration beside the first-order
-prediction (``docs/calibration.md``).
+prediction (``docs/calibration.md``). :func:`terminal_lines` states the same for the terminal.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+summary : dict
+    A user study's JSON summary with a ``calibration`` block (SI values).
 """
 from __future__ import annotations
 
@@ -24,11 +31,6 @@ def _fmt(summary: dict, value, unit: str) -> str:
 
 def plan_text(summary: dict) -> str:
     """The calibration plan and its identification in one sentence (the page's and the terminal's).
-
-    Parameters
-    ----------
-    summary : dict
-        A user study's JSON summary with a ``calibration`` block (SI values).
 
     Returns
     -------
@@ -50,11 +52,6 @@ def plan_text(summary: dict) -> str:
 
 def noise_texts(summary: dict) -> list[str]:
     """The noise's share of each requirement component, one sentence each.
-
-    Parameters
-    ----------
-    summary : dict
-        A user study's JSON summary with a ``calibration`` block (SI values).
 
     Returns
     -------
@@ -122,8 +119,6 @@ def calibration_section(rep, summary: dict) -> None:
     ----------
     rep : evotol.reporting.html.Report
         The page being built.
-    summary : dict
-        A user study's JSON summary with a ``calibration`` block (SI values).
     """
     cal = summary["calibration"]
     plan = cal["plan"]

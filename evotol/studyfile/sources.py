@@ -6,10 +6,8 @@ clearance classes, docs/clearance_allocation.md), ``[bounds]`` (with ``[bounds.G
 """
 from __future__ import annotations
 
-import fnmatch
-
 import evotol.cost_models
-from evotol._runtime.keyword_checks import unknown_key_message
+from evotol._runtime.keyword_checks import expand_patterns, unknown_key_message
 from evotol.measures.statistical.distributions import Distribution
 from evotol.core.tolerance import Tolerance
 from evotol.errors import ValidationError
@@ -70,7 +68,7 @@ def read_tolerances(spec: dict, sources, owner: str) -> dict[str, Tolerance]:
     names = [s.name for s in sources]
     _check_bounds_table(bounds, sources)
     costs = spec.get("cost", {})
-    overrides = expand_source_patterns(spec.get("sources", {}), names)
+    overrides = expand_patterns(spec.get("sources", {}), names, "sources", "source")     # [sources."l?"] (issue 41)
     unknown = set(overrides) - set(names)
     if unknown:
         u = sorted(unknown)[0]
@@ -78,47 +76,6 @@ def read_tolerances(spec: dict, sources, owner: str) -> dict[str, Tolerance]:
     floors = floors_of(sources, spec["shop"]["floors"]) if "floors" in spec.get("shop", {}) else {}   # issue 41
     return {s.name: _tolerance(s, overrides.get(s.name, {}), bounds, costs, spec, floors.get(s.name, (0.0,))[0])
             for s in sources}
-
-
-def expand_source_patterns(overrides: dict, names) -> dict:
-    """``[sources."l?"]``, ``[sources."P?.shift_*"]``: one table for every source an fnmatch
-    pattern matches (issue 41: one table per source is no way to give 42 tolerances); a source
-    named exactly keeps its own table, whole (no merging with a pattern's).
-
-    Parameters
-    ----------
-    overrides : dict
-        The study file's ``[sources]`` table: source names or patterns -> settings.
-    names : sequence of str
-        The problem's source names.
-
-    Returns
-    -------
-    dict
-        Source name (or an unknown name, left for the caller to refuse) -> its settings.
-
-    Raises
-    ------
-    ValidationError
-        ``sources.<pattern>`` when a pattern matches no source, or when two patterns match the
-        same source (its settings would depend on their order).
-    """
-    names = list(names)
-    out = {k: v for k, v in overrides.items() if not any(c in k for c in "*?[")}
-    claimed = {}
-    for pat, v in overrides.items():
-        if pat in out:
-            continue
-        hit = [n for n in names if fnmatch.fnmatchcase(n, pat)]
-        if not hit:
-            raise ValidationError(f"sources.{pat}", pat, "a pattern matching some source: " + unknown_key_message(pat, names))
-        for n in hit:
-            if n in claimed:
-                raise ValidationError(f"sources.{pat}", pat, f"patterns that do not overlap: {claimed[n]!r} already "
-                                      f"matches {n} (give {n} its own [sources.{n}] table to override both)")
-            claimed[n] = pat
-            out.setdefault(n, v)
-    return out
 
 
 def _tolerance(s, o: dict, bounds: dict, costs: dict, spec: dict, floor: float = 0.0) -> Tolerance:

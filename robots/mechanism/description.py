@@ -20,7 +20,7 @@ from typing import Mapping
 
 from evotol.errors import ValidationError
 from evotol._runtime.toml_kinds import check_kind
-from evotol._runtime.keyword_checks import check_table_keys
+from evotol._runtime.keyword_checks import check_table_keys, expand_patterns
 from evotol.robots.clearance.kinematics import DH_FIELDS
 from evotol.robots.clearance.parts import BOUND_NAMES, ClearanceBounds
 from evotol.robots.mechanism.callout_table import callouts_from_tables
@@ -31,7 +31,6 @@ from evotol.robots.mechanism.parts import ANGLE_FIELDS, JOINT_TYPES, LENGTH_FIEL
 from evotol.robots.mechanism.plausibility import check_written_values
 from evotol.robots.mechanism.standard_dh import STANDARD_TOP_KEYS, convention_of, standard_to_modified
 from evotol.robots.mechanism.urdf import resolve_urdf, urdf_frames
-from evotol.robots.mechanism.working_mode import expand_joint_patterns
 
 TOP_KEYS = ("name", "description", "planar", "lengths", "angles", "frame", "point", "loop", "end_effector", "assembly",
             "tolerances", "clearance", "urdf", "tip", "checks", "limits", "callouts") + STANDARD_TOP_KEYS
@@ -150,7 +149,8 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     asm = spec.get("assembly", {})
     check_table_keys(asm, ("pose", "joints"), "assembly")
     if isinstance(asm.get("joints"), Mapping):      # "l?" = "650*mm": a rough guess by pattern (issue 41)
-        asm = {**asm, "joints": expand_joint_patterns(asm["joints"], joint_units(frames, set(lengths) | set(angles)))}
+        asm = {**asm, "joints": expand_patterns(asm["joints"], joint_units(frames, set(lengths) | set(angles)),
+                                                "assembly.joints", "joint variable")}
         spec = {**spec, "assembly": asm}
     pose = tuple(_number(v, "assembly.pose") for v in asm.get("pose", ()))
     joints = {k: _number(v, f"assembly.joints.{k}") for k, v in dict(asm.get("joints", {})).items()}

@@ -21,8 +21,6 @@ joints, or only the pose, the joints seed the inverse geometry, whose postures a
 """
 from __future__ import annotations
 
-import fnmatch
-
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
@@ -36,50 +34,6 @@ ASSEMBLY_MAX_LENGTH_FRACTION = 0.2
 #: 0.5 deg (rad) for a revolute joint, 0.1 % of the length scale for a prismatic one.
 SERIAL_MAX_ANGLE = np.radians(0.5)
 SERIAL_MAX_LENGTH_FRACTION = 1e-3
-
-
-def expand_joint_patterns(joints: dict, variables) -> dict:
-    """``[assembly] joints`` with fnmatch patterns as keys (``"l?" = "650*mm"``, ``"s??" = 0``): a
-    rough guess for every joint a pattern matches; a joint named exactly keeps its own value.
-
-    Parameters
-    ----------
-    joints : dict
-        The ``[assembly] joints`` table as written (names or patterns -> values as written).
-    variables : iterable of str
-        The joint variables of the description, in order.
-
-    Returns
-    -------
-    dict
-        Joint variable -> its value as written, exact names first, then the patterns' matches.
-
-    Raises
-    ------
-    ValidationError
-        ``assembly.joints.<pattern>`` when a pattern matches no joint variable, or when two
-        patterns match the same joint (its value would depend on their order).
-    """
-    variables = list(variables)
-    out = {k: v for k, v in joints.items() if not _is_pattern(k)}
-    claimed = {}
-    for pat, v in joints.items():
-        if not _is_pattern(pat):
-            continue
-        hit = [x for x in variables if fnmatch.fnmatchcase(x, pat)]
-        if not hit:
-            raise ValidationError(f"assembly.joints.{pat}", v, f"a pattern matching some joint variable of {variables}")
-        for x in hit:
-            if x in claimed:
-                raise ValidationError(f"assembly.joints.{pat}", v, f"patterns that do not overlap: {claimed[x]!r} "
-                                      f"already matches {x} (name it exactly to override both)")
-            claimed[x] = pat
-            out.setdefault(x, v)
-    return out
-
-
-def _is_pattern(key: str) -> bool:
-    return any(c in str(key) for c in "*?[")
 
 
 def check_task_fixes_platform(kin) -> None:
