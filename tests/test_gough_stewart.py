@@ -23,7 +23,7 @@ from evotol import MechanismModel, Requirement, Tolerance, ToleranceProblem, all
 from evotol.cli import main
 from evotol.cost_models import ExponentialCost
 from evotol.errors import ValidationError
-from evotol.robots.mechanism.description import mechanism_from_dict
+from evotol.robots.mechanism.description.reader import mechanism_from_dict
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
 DESCRIPTION = EXAMPLES / "gough_stewart_6ups.toml"

@@ -14,7 +14,7 @@ from evotol.errors import KinematicsError, ValidationError
 
 
 def is_described(robot) -> bool:
-    """True for a model with joint-space maps (:class:`evotol.robots.mechanism.model.MechanismModel`).
+    """True for a model with joint-space maps (:class:`evotol.robots.mechanism.model.error_model.MechanismModel`).
 
     Parameters
     ----------
