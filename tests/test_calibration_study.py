@@ -128,3 +128,24 @@ def test_compensation_range_caps_an_identified_source():
     j = pc.names.index("elbow_joint")
     assert pc.upper[j] == pytest.approx(2e-4)
     assert pc.calibration.bounds["elbow_joint"]["compensation_range"] == 2e-4
+
+
+def test_the_terminal_prints_the_calibration_the_page_shows(run_json, capsys):
+    """Issue 41: a calibrated study printed nothing of its calibration in the terminal. The lines name
+    the plan as the page does (the same sentence), the costs, and a saving recomputed here from them."""
+    import html as html_lib
+    from evotol.cli import _print_results
+    data, page = run_json
+    _print_results(data)
+    out = capsys.readouterr().out
+    lines = out[out.index("[evotol] calibration"):].splitlines()
+    plan = lines[1].strip()
+    assert plan.startswith("Calibration plan: ") and plan in html_lib.unescape(page)
+    cal = data["calibration"]
+    assert f"condition number {cal['plan']['identification']['condition_number']:.3g}" in plan
+    cost = next(x for x in lines if "uncalibrated optimum cost" in x)
+    unc, opt = cal["uncalibrated"]["cost"], cal["methods"]["optimum"]["cost"]
+    assert f"uncalibrated optimum cost {unc:.6g}" in cost
+    assert f"calibrated optimum {opt:.6g} ({100 * (1 - opt / unc):.1f} % saved" in cost
+    sim = next(x for x in lines if x.strip().startswith("optimum: simulated calibration"))
+    assert "20 robots" in sim and "0 fit failures" in sim

@@ -83,3 +83,34 @@ def test_a_zone_below_the_measurability_limit_is_named():
     want = sorted({n.rpartition(".")[0] for n, t in zip(p.names, r.t) if ".position." in n and t < 1.2e-5})
     assert named == want and len(want) >= 1
     assert unmeasurable(p, r.t, {"m": 1e-6}) == []          # every zone at least ⌀10 µm: measurable at 1 µm
+
+
+def test_a_feasible_design_names_the_sources_at_their_floor(tmp_path, capsys):
+    """Issue 41: when feasible, the terminal and the page say which sources sit at their floor. The
+    list is checked against the allocated tolerances compared here with the floors this test states
+    (⌀10 µm bores, 20 µm faces): exactly the callouts whose every member is within 1e-6 of its floor."""
+    from evotol.cli import main
+    text = STUDY.read_text().replace("grid = [3, 3, 3]", "grid = [2, 2, 2]")
+    text = text.replace('ga = { pop_size = 80, n_gen = 150 }', '').replace("n_samples = 300", "n_samples = 20")
+    f = tmp_path / "shop.toml"
+    f.write_text(text)
+    assert main(["run", str(f), "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    import json
+    d = json.loads((tmp_path / "ur5_callouts_shop.json").read_text())
+    r = d["results"]["optimum"]
+    assert r["feasible"]
+    floor = {"position": 1e-5, "axial": 2e-5}
+    by_callout = {}
+    for name, t in r["tolerances"].items():
+        kind = next((k for k in floor if f".{k}" in name), None)
+        if kind:
+            callout = name.split(f".{kind}")[0] + f".{kind}"
+            by_callout.setdefault(callout, []).append(abs(t - floor[kind]) <= 1e-6 * floor[kind])
+    expected = [c for c, at in by_callout.items() if all(at)]
+    assert expected and [row["source"] for row in r["at_floor"]] == expected
+    line = next(x for x in out.splitlines() if "sit at their [shop] floor" in x)
+    assert line.strip().startswith("optimum:") and all(c in line for c in expected) and "bore position >= 10 µm" in line
+    html = (tmp_path / "ur5_callouts_shop.html").read_text()
+    import html as html_module
+    assert html_module.escape(line.strip() + ".", quote=False) in html

@@ -15,6 +15,7 @@ valid : iterable of str
 from __future__ import annotations
 
 import difflib
+import fnmatch
 import inspect
 from typing import Callable, Iterable, Mapping
 
@@ -155,3 +156,48 @@ def check_keywords(func: Callable, kwargs: Mapping, field: str, exclude: Iterabl
     for key, value in kwargs.items():
         if key not in valid:
             raise ValidationError(f"{field}.{key}", value, unknown_key_message(key, valid))
+
+
+def expand_patterns(table: Mapping, valid: Iterable[str], where: str, what: str) -> dict:
+    """A table whose keys may be fnmatch patterns (``"l?"``, ``"P?.shift_*"``), one entry per name.
+
+    A name written exactly keeps its own value; a pattern gives its value to every valid name it
+    matches (issue 41: one entry per source or joint is no way to write 42 of them).
+
+    Parameters
+    ----------
+    table : Mapping
+        Names or patterns -> values, as written.
+    where : str
+        The table's field in errors (``"sources"``, ``"assembly.joints"``).
+    what : str
+        What the names are, in errors (``"source"``, ``"joint variable"``).
+
+    Returns
+    -------
+    dict
+        Exact keys as written (unknown ones too: the caller refuses them), then each pattern's
+        matches in the order of ``valid``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        ``<where>.<pattern>`` when a pattern matches no valid name, or when two patterns match the
+        same name (its value would depend on their order).
+    """
+    valid = list(valid)
+    out = {k: v for k, v in table.items() if not any(c in str(k) for c in "*?[")}
+    claimed = {}
+    for pat, v in table.items():
+        if pat in out:
+            continue
+        hit = [n for n in valid if fnmatch.fnmatchcase(n, pat)]
+        if not hit:
+            raise ValidationError(f"{where}.{pat}", v, f"a pattern matching some {what}: " + unknown_key_message(pat, valid))
+        for n in hit:
+            if n in claimed:
+                raise ValidationError(f"{where}.{pat}", v, f"patterns that do not overlap: {claimed[n]!r} already matches "
+                                      f"{n} (give {n} its own entry to override both)")
+            claimed[n] = pat
+            out.setdefault(n, v)
+    return out

@@ -233,6 +233,8 @@ def _print_results(summary: dict) -> None:
     from evotol.reporting import stack_report
     from evotol.reporting.callout_drawing import terminal_lines
     from evotol.reporting.drawing import terminal_tolerance_rows
+    from evotol.reporting.calibration import terminal_lines as calibration_lines
+    from evotol.reporting.shop_floors import floor_lines
     from evotol.reporting.user_study import model_line, terminal_rows
 
     if summary.get("kind") == "analysis":      # every tolerance given: their analysis (issue 33)
@@ -270,6 +272,10 @@ def _print_results(summary: dict) -> None:
                      title="[evotol] tolerances: the zone a drawing states (display units; ±t, or +upper / −lower "
                            "from the nominal; as on the page and in the CSV), (cost share)")
     for line in terminal_lines(summary):     # drawing callouts and exact zones vs boxes (issue 35)
+        print(line)
+    for line in floor_lines(summary):        # sources held at the [shop] floors, as on the page (issue 41)
+        print(f"  {line}")
+    for line in calibration_lines(summary):  # a calibrated study: the page's calibration section (issue 41)
         print(line)
 
 

@@ -164,6 +164,39 @@ def check_floors_feasible(problem) -> None:
             "docs/calibration.md), or with processes that hold smaller zones (lower [shop] floors)") from None
 
 
+def at_floors(problem, t, rtol: float = 1e-6) -> list[dict]:
+    """The free sources a design holds at their ``[shop]`` floor (one per callout), for a feasible
+    design as :func:`check_floors_feasible` names them for an infeasible one.
+
+    Parameters
+    ----------
+    problem : ToleranceProblem
+        A problem with ``shop_floors`` (:func:`apply_shop`, :func:`with_floors`); others: none.
+    t : array_like, shape (n_sources,)
+        A design (SI).
+    rtol : float, optional
+        A tolerance within ``rtol`` of its floor sits there (the allocators stop at the bound
+        to round-off).
+
+    Returns
+    -------
+    list of dict
+        ``{"source": source or callout name, "floor": m or rad, "key": the [shop] floors key}``,
+        in source order.
+    """
+    floors = getattr(problem, "shop_floors", None) or {}
+    t = problem.as_array(t)
+    out, seen = [], set()
+    for n, (v, key) in floors.items():
+        j = problem.names.index(n)
+        name = _callout(n)
+        if not problem.free[j] or name in seen or t[j] > v * (1 + rtol):
+            continue
+        seen.add(name)
+        out.append({"source": name, "floor": float(v), "key": key})
+    return out
+
+
 def floors_key_value(floors: dict, key: str) -> str:
     """A floor as the table stated it, in µm or arcsec (``"10 µm"``).
 

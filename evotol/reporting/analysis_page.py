@@ -54,17 +54,23 @@ def render_analysis(summary: dict) -> Report:
     rep.heading("Position error per pose")
     rep.text("Worst case of |δp| (exact for the linear model, attained by a vertex of the tolerance box) and of each "
              "component along the base axes, with both signed limits; RSS of |δp| and per axis; the first-order "
-             "probability of meeting the requirement under the stated distributions.")
+             "probability of meeting the requirement under the stated distributions (with per-axis limits: per axis, "
+             "P(|δa| ≤ La) for each axis a, not jointly).")
     wc, ax, rss = a["worst_case"]["position"], a["axes"]["base"]["position"], a["rss"]["position"]
     prob = a.get("probability")
+    per_axis = a.get("probability_axes") or {}          # per-axis limits: P(meet) per axis (issue 41)
     header = ["pose", "worst |δp|"] + [f"δ{k} range" for k in AXES] + ["RSS |δp|"] + [f"RSS δ{k}" for k in AXES]
-    if prob is not None and len(prob) == len(wc["value"]):
+    if per_axis:
+        header += [f"P(meet) {k}" for k in per_axis]
+    elif prob is not None and len(prob) == len(wc["value"]):
         header.append("P(meet)")
     rows = []
     for i in range(len(wc["value"])):
         row = [str(i), L(wc["value"][i])] + [f"[{L(ax[k]['low'][i])}, {L(ax[k]['high'][i])}]" for k in AXES]
         row += [L(rss[i])] + [L(ax[k]["rss"][i]) for k in AXES]
-        if len(header) > len(row):
+        if per_axis:
+            row += [f"{v[i]:.6f}" for v in per_axis.values()]
+        elif len(header) > len(row):
             row.append(f"{prob[i]:.6f}")
         rows.append(row)
     rep.table(rows, header, table_id="per-pose")

@@ -5,7 +5,14 @@ and its identification (base set, condition number, unseen sources, why sources 
 the noise's share of the requirement, the uncalibrated optimum's cost beside each calibrated
 design's, the tolerances side by side per source (identified, freed, still driving the error,
 capped by the linear or compensation range), and the simulated calibration beside the first-order
-prediction (``docs/calibration.md``).
+prediction (``docs/calibration.md``). :func:`terminal_lines` states the same for the terminal.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+summary : dict
+    A user study's JSON summary with a ``calibration`` block (SI values).
 """
 from __future__ import annotations
 
@@ -22,6 +29,89 @@ def _fmt(summary: dict, value, unit: str) -> str:
     return DisplayUnits(**summary["display_units"]).format(value, unit)
 
 
+def plan_text(summary: dict) -> str:
+    """The calibration plan and its identification in one sentence (the page's and the terminal's).
+
+    Returns
+    -------
+    str
+        Configurations, what is measured, the noise, the base set and its condition number.
+    """
+    plan = summary["calibration"]["plan"]
+    idn = plan["identification"]
+    ident = ("every identifiable source" if plan["identify"] == "identifiable" else ", ".join(plan["identify"]))
+    return (f"Calibration plan: {idn['n_configurations']} configurations, {' and '.join(plan['measure'])} measured "
+            f"({idn['n_measurements']} coordinates), noise sigma "
+            + "; ".join(f"{c} " + ", ".join(_fmt(summary, v, 'm' if c == 'position' else 'rad') for v in s)
+                        for c, s in plan["noise_sigma"].items())
+            + f", instrument frame {plan['instrument']}; identified: {ident}. Base set kept: "
+            f"{idn['n_identified']} sources" + (f" and registration {', '.join(idn['registration'])}" if idn["registration"] else "")
+            + f" ({idn['rank']} identifiable directions: the rank of the measured columns that move a reading); "
+            f"condition number {idn['condition_number']:.3g}.")
+
+
+def noise_texts(summary: dict) -> list[str]:
+    """The noise's share of each requirement component, one sentence each.
+
+    Returns
+    -------
+    list of str
+        The propagated sigma, the k-sigma allowance, the second-order term and the geometric share.
+    """
+    plan = summary["calibration"]["plan"]
+    out = []
+    for comp, n in plan["noise"].items():
+        if not isinstance(n, dict):
+            continue
+        u = "m" if comp == "position" else "rad"
+        out.append(f"Noise share of the {comp} requirement {_fmt(summary, n['bound'], u)}: largest propagated sigma "
+                   f"{_fmt(summary, n['sigma'], u)}, {plan['k']:g} sigma = {_fmt(summary, n['allowance'], u)}, "
+                   f"second-order term of the noise-driven corrections {_fmt(summary, n['second_order'], u)}; "
+                   f"{_RULES[plan['noise']['rule']]} (the 3-D noise stays inside the {plan['k']:g}-sigma ball with "
+                   f"probability at least {100 * n['coverage']:.1f} %). The tolerances hold the geometric share "
+                   f"{_fmt(summary, n['geometric_bound'], u)} (the requirement shown in the results table).")
+    return out
+
+
+def terminal_lines(summary: dict) -> list[str]:
+    """What the page's calibration section states, as terminal lines (issue 41: a calibrated study
+    printed nothing of its calibration).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary; no lines without a ``calibration`` block.
+
+    Returns
+    -------
+    list of str
+        The plan, the noise share, the costs beside the uncalibrated optimum, the sources still
+        driving the error and the simulated calibration, each line indented by two spaces after
+        the first.
+    """
+    cal = summary.get("calibration")
+    if not cal:
+        return []
+    out = ["[evotol] calibration (docs/calibration.md)", "  " + plan_text(summary)]
+    if cal["plan"]["identification"]["unseen"]:
+        out.append("  unseen by the instrument: " + ", ".join(cal["plan"]["identification"]["unseen"]))
+    out += ["  " + line for line in noise_texts(summary)]
+    out.append(f"  uncalibrated optimum cost {cal['uncalibrated']['cost']:.6g}; " + "; ".join(
+        f"calibrated {m} {e['cost']:.6g}" + (f" ({100 * e['saving']:.1f} % saved" if e["saving"] is not None else " (")
+        + f", {e['n_freed']} sources freed)" for m, e in cal["methods"].items()))
+    for m, e in cal["methods"].items():
+        top = sorted(((n, v) for n, v in e["effect_share_percent"].items() if v > 0), key=lambda kv: -kv[1])[:5]
+        if top:
+            out.append(f"  {m}: still driving the error after calibration: " + ", ".join(f"{n} {v:.1f} %" for n, v in top))
+        c = e.get("simulation")
+        for comp in (c or {}).get("simulated", {}):
+            u = "m" if comp == "position" else "rad"
+            out.append(f"  {m}: simulated calibration ({c['n_samples']} robots, nonlinear): max {comp} error "
+                       f"{_fmt(summary, c['simulated'][comp]['max'], u)} (first-order {_fmt(summary, c['predicted'][comp]['max'], u)}), "
+                       f"exceed rate {c['exceed_rate_' + comp]:.2%}, {c['n_fit_failures']} fit failures")
+    return out
+
+
 def calibration_section(rep, summary: dict) -> None:
     """Append the calibration section to a user study's report (module docstring).
 
@@ -29,36 +119,18 @@ def calibration_section(rep, summary: dict) -> None:
     ----------
     rep : evotol.reporting.html.Report
         The page being built.
-    summary : dict
-        A user study's JSON summary with a ``calibration`` block (SI values).
     """
     cal = summary["calibration"]
     plan = cal["plan"]
     idn = plan["identification"]
     rep.heading("What calibration buys")
-    ident = ("every identifiable source" if plan["identify"] == "identifiable" else ", ".join(plan["identify"]))
-    rep.text(f"Calibration plan: {idn['n_configurations']} configurations, {' and '.join(plan['measure'])} measured "
-             f"({idn['n_measurements']} coordinates), noise sigma "
-             + "; ".join(f"{c} " + ", ".join(_fmt(summary, v, 'm' if c == 'position' else 'rad') for v in s)
-                         for c, s in plan["noise_sigma"].items())
-             + f", instrument frame {plan['instrument']}; identified: {ident}. Base set kept: "
-             f"{idn['n_identified']} sources" + (f" and registration {', '.join(idn['registration'])}" if idn["registration"] else "")
-             + f" ({idn['rank']} identifiable directions: the rank of the measured columns that move a reading); condition number {idn['condition_number']:.3g}. "
-             "Tolerances are allocated on the error left after the controller compensates the identified "
-             "sources, e = (J − J_K A_K⁺ A) δp (docs/calibration.md).")
+    rep.text(plan_text(summary) + " Tolerances are allocated on the error left after the controller compensates the "
+             "identified sources, e = (J − J_K A_K⁺ A) δp (docs/calibration.md).")
     if idn["unseen"]:
         rep.text("Sources the instrument cannot see (they move no measured coordinate at any configuration): "
                  + ", ".join(idn["unseen"]) + ".", note=True)
-    for comp, n in plan["noise"].items():
-        if not isinstance(n, dict):
-            continue
-        u = "m" if comp == "position" else "rad"
-        rep.text(f"Noise share of the {comp} requirement {_fmt(summary, n['bound'], u)}: largest propagated sigma "
-                 f"{_fmt(summary, n['sigma'], u)}, {plan['k']:g} sigma = {_fmt(summary, n['allowance'], u)}, "
-                 f"second-order term of the noise-driven corrections {_fmt(summary, n['second_order'], u)}; "
-                 f"{_RULES[plan['noise']['rule']]} (the 3-D noise stays inside the {plan['k']:g}-sigma ball with "
-                 f"probability at least {100 * n['coverage']:.1f} %). The tolerances hold the geometric share "
-                 f"{_fmt(summary, n['geometric_bound'], u)} (the requirement shown in the results table).")
+    for line in noise_texts(summary):
+        rep.text(line)
     rows = [["uncalibrated optimum", cal["uncalibrated"]["cost"], "–", "–"]]
     for m, e in cal["methods"].items():
         rows.append([f"calibrated {m}", e["cost"], f"{100 * e['saving']:.1f} %" if e["saving"] is not None else "–",

@@ -177,7 +177,11 @@ def callout_sections(rep, summary: dict) -> None:
              "the zone's value in µm, the feature length and where the zone sits on the joint axis (from the joint's "
              "origin, the datum frame of docs/callouts.md), the datums, and each callout's share of the cost and of the "
              "error at the worst pose.")
-    rep.html(with_svg_symbols(table_html(_blank_nan(d.values.tolist()), list(d.columns), table_id="callouts")))
+    # a feature control frame reads as one row of compartments: never wrapped inside "⌖ | ⌀10.0 µm | A | B"
+    # (issue 41, seen in headless Chromium: the narrow column broke it after the ⌀)
+    col = list(d.columns).index("callout") + 1
+    rep.html(f"<style>#callouts td:nth-child({col}) {{ white-space: nowrap; }}</style>"
+             + with_svg_symbols(table_html(_blank_nan(d.values.tolist()), list(d.columns), table_id="callouts")))
     check = (summary.get("drawing") or {}).get(_method(summary, None))
     if check:
         rep.text(f"These values, as drawn: {drawing_check_text(check)}.", note=not (check["meets"] and

@@ -27,6 +27,7 @@ from evotol.units.display import DisplayUnits, number
 from evotol.core.pareto import ideal_point_knee
 from evotol.reporting.callout_drawing import callout_sections
 from evotol.reporting.calibration import calibration_section
+from evotol.reporting.shop_floors import floor_lines
 from evotol.reporting.iso9283 import iso9283_section
 from evotol.reporting.joints_section import joints_section
 from evotol.reporting.explorer import explorer_section
@@ -472,6 +473,8 @@ def render_user_study(summary: dict) -> Report:
         rep.text(nominal_line(summary))
     for m, d in (summary.get("drawing") or {}).items():
         rep.text(f"Drawing, {m}: {drawing_check_text(d)}.", note=not d["meets"])
+    for line in floor_lines(summary):       # feasible at the shop's floors: which sources sit there (issue 41)
+        rep.text(line + ".")
     if "calibration" in summary:    # a calibrated robot: uncalibrated vs calibrated (docs/calibration.md)
         calibration_section(rep, summary)
     if "iso9283" in summary:        # ISO 9283 AP and RP (docs/iso9283.md)

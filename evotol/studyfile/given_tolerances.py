@@ -122,12 +122,16 @@ def analysis_lines(summary: dict):
           f"{a['violation'] + 1:.4g})")
     wc, ax = a["worst_case"]["position"], a["axes"]["base"]["position"]
     names = summary["workspace"]["names"]
+    per_axis = a.get("probability_axes") or {}          # per-axis limits: P(meet) per axis (issue 41)
+    p_heads = [f"P({k})" for k in per_axis] if per_axis else (["P(meet)"] if a.get("probability") is not None else [])
     yield (f"  {'pose':>4s}  {'worst |dp|':>11s}  {'x range':>21s}  {'y range':>21s}  {'z range':>21s}  {'RSS |dp|':>10s}"
-          + (f"  {'P(meet)':>8s}" if a.get("probability") is not None else ""))
+           + "".join(f"  {h:>8s}" for h in p_heads))
     for i in range(len(wc["value"])):
         rng = "  ".join(f"{'[' + L(ax[k]['low'][i]).split()[0] + ', ' + L(ax[k]['high'][i]).split()[0] + ']':>21s}" for k in "xyz")
-        prob = f"  {a['probability'][i]:8.5f}" if a.get("probability") is not None and len(a["probability"]) == len(wc["value"]) else ""
-        yield (f"  {i:4d}  {L(wc['value'][i]):>11s}  {rng}  {L(a['rss']['position'][i]):>10s}{prob}")
+        probs = [v[i] for v in per_axis.values()] if per_axis else (
+            [a["probability"][i]] if p_heads and len(a["probability"]) == len(wc["value"]) else [])
+        yield (f"  {i:4d}  {L(wc['value'][i]):>11s}  {rng}  {L(a['rss']['position'][i]):>10s}"
+               + "".join(f"  {v:8.5f}" for v in probs))
     if "tool" in a["axes"]:
         tx = a["axes"]["tool"]["position"]
         for i in range(len(wc["value"])):

@@ -2,12 +2,12 @@
 clearance classes, docs/clearance_allocation.md), ``[bounds]`` (with ``[bounds.GROUP]`` /
 ``[bounds.SOURCE]`` sub-tables), ``[cost.*]``, ``[sources.NAME]`` (``offset``/``minus``/``plus``,
 ``cost_width``, ``contains_nominal``, ``fixed``, ``locked``, ``distribution``, ``sigma_k``,
-``mean_shift``; docs/tolerances.md) and the top-level ``distribution``/``sigma_k`` defaults.
+``mean_shift``; docs/tolerances.md; NAME may be an fnmatch pattern such as ``"l?"``) and the top-level ``distribution``/``sigma_k`` defaults.
 """
 from __future__ import annotations
 
 import evotol.cost_models
-from evotol._runtime.keyword_checks import unknown_key_message
+from evotol._runtime.keyword_checks import expand_patterns, unknown_key_message
 from evotol.measures.statistical.distributions import Distribution
 from evotol.core.tolerance import Tolerance
 from evotol.errors import ValidationError
@@ -68,7 +68,7 @@ def read_tolerances(spec: dict, sources, owner: str) -> dict[str, Tolerance]:
     names = [s.name for s in sources]
     _check_bounds_table(bounds, sources)
     costs = spec.get("cost", {})
-    overrides = spec.get("sources", {})
+    overrides = expand_patterns(spec.get("sources", {}), names, "sources", "source")     # [sources."l?"] (issue 41)
     unknown = set(overrides) - set(names)
     if unknown:
         u = sorted(unknown)[0]

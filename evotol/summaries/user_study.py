@@ -18,6 +18,7 @@ from evotol.measures.statistical.distributions import as_distribution
 from evotol.summaries.pose_joints import pose_joints
 from evotol.summaries.yield_quantile import largest_quantile
 from evotol.core.problem import ToleranceProblem
+from evotol.core.shop import at_floors
 from evotol.summaries.drawing import KEYS as DRAWING_KEYS
 from evotol.summaries.drawing import nonlinear_check, rounded_design, tolerance_zone
 from evotol.summaries.nominals import nominal_notes, nominals_with_notes, source_nominals  # noqa: F401 (re-exported)
@@ -167,7 +168,8 @@ def result_details(problem: ToleranceProblem, r) -> dict:
         per component), ``worst_pose_coordinates`` (SI), ``errors_per_pose`` (m or rad),
         ``contributions`` (``source``, ``percent``), ``source_costs`` (cost units), ``zones``
         (per source, :func:`tolerance_zone`); a GA's ``history`` and, for a yield design, ``yield_at_worst_pose`` and ``required_yield``
-        (probabilities).
+        (probabilities); with ``[shop]`` floors, ``at_floor``, the sources the design holds at
+        their floor (:func:`evotol.core.shop.at_floors`).
     """
     d = {"normalised_error": float(r.errors.violation[0] + 1), "worst_pose": {}, "worst_pose_coordinates": {},
          "errors_per_pose": {}, "contributions": {},
@@ -181,6 +183,8 @@ def result_details(problem: ToleranceProblem, r) -> dict:
         if getattr(r.errors, f"{comp}_contrib") is not None:
             c = r.contributions(comp)
             d["contributions"][comp] = {"source": c["source"].tolist(), "percent": c["percent"].tolist()}
+    if getattr(problem, "shop_floors", None):      # feasible, and held by the shop's floors (issue 41)
+        d["at_floor"] = at_floors(problem, r.t)
     if r.history is not None and len(r.history) and {"best_fitness", "mean_fitness"} <= set(r.history):
         d["history"] = {k: r.history[k].tolist() for k in ("generation", "best_fitness", "mean_fitness")}
     if r.errors.probability is not None:

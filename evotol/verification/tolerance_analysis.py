@@ -15,7 +15,8 @@ every tolerance is fixed (``[sources.NAME] fixed = t`` for every source, or
 * the **RSS** of the norm (the ``rss`` measure) and per axis (``sqrt(Σ_j (J_aj ρ_j t_j)²)`` around
   the mean shift);
 * the **probability** that the requirement is met (the ``yield`` measure, under the stated
-  distributions, first-order model) and the **position error at a stated probability** (the
+  distributions, first-order model; per axis with per-axis limits) and the **position error at a
+  stated probability** (the
   bound at which that probability is reached, by bisection on the same model);
 * the **Monte Carlo** check on the nonlinear model (:func:`evotol.verification.montecarlo.verify`), and the
   verdict of the requirement's own measure with the worst pose.
@@ -126,6 +127,10 @@ class ToleranceAnalysis:
         First-order probability of meeting the requirement per pose (yield measure).
     error_at_probability : dict
         ``{"probability": p, "position": (n_poses,)}``: the position bound met with probability p.
+    probability_axes : dict
+        With per-axis limits (:mod:`evotol.core.axis_limits`): axis label (``"x"``, ...) ->
+        (n_poses,) first-order ``P(|δ_a| <= L_a)`` at each configuration -- per axis, not jointly
+        (issue 41); empty otherwise.
     monte_carlo : dict
         :meth:`evotol.verification.montecarlo.MonteCarloResult.to_dict` on the nonlinear model.
     joints : dict
@@ -143,6 +148,7 @@ class ToleranceAnalysis:
     rss: dict
     probability: np.ndarray | None = None
     error_at_probability: dict = field(default_factory=dict)
+    probability_axes: dict = field(default_factory=dict)
     monte_carlo: dict = field(default_factory=dict)
     joints: dict = field(default_factory=dict)
 
@@ -292,11 +298,16 @@ def analyse(problem, t=None, *, probability: float = 0.9973, n_samples: int = 20
         yp = problem.with_requirement(measure="yield", probability=probability, ppm=None, model="linear")
         prob = yp.evaluate(t[None]).probability[0]
         at_p = {"probability": probability, "position": error_at_probability(bp, t, probability)}
+    prob_axes = {}
+    if prob is not None and axis is not None:   # one yield per (configuration, axis slot): P(meet) per axis
+        P = np.asarray(prob).reshape(len(configs), axis.slots)
+        prob_axes = {label: P[:, k] for k, label in enumerate(axis.coordinate_labels["axis"])}
     mc = {}
     if n_samples:
         mc = verify(problem, t, n_samples=int(n_samples), seed=seed, nonlinear=nonlinear).to_dict()
     joints = joints_at(robot, configs)
     return ToleranceAnalysis(names=tuple(problem.names), t=t, poses=configs, requirement=req,
                              meets=bool(ev.violation[0] <= 1e-9), violation=float(ev.violation[0]), worst_case=worst,
-                             axes=axes, rss=rss, probability=prob, error_at_probability=at_p, monte_carlo=mc,
+                             axes=axes, rss=rss, probability=prob, error_at_probability=at_p,
+                             probability_axes=prob_axes, monte_carlo=mc,
                              joints=joints)

@@ -20,7 +20,7 @@ from typing import Mapping
 
 from evotol.errors import ValidationError
 from evotol._runtime.toml_kinds import check_kind
-from evotol._runtime.keyword_checks import check_table_keys
+from evotol._runtime.keyword_checks import check_table_keys, expand_patterns
 from evotol.robots.clearance.kinematics import DH_FIELDS
 from evotol.robots.clearance.parts import BOUND_NAMES, ClearanceBounds
 from evotol.robots.mechanism.callouts.table import callouts_from_tables
@@ -148,6 +148,10 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
         orient.append((o[0], str(o[1])))
     asm = spec.get("assembly", {})
     check_table_keys(asm, ("pose", "joints"), "assembly")
+    if isinstance(asm.get("joints"), Mapping):      # "l?" = "650*mm": a rough guess by pattern (issue 41)
+        asm = {**asm, "joints": expand_patterns(asm["joints"], joint_units(frames, set(lengths) | set(angles)),
+                                                "assembly.joints", "joint variable")}
+        spec = {**spec, "assembly": asm}
     pose = tuple(_number(v, "assembly.pose") for v in asm.get("pose", ()))
     joints = {k: _number(v, f"assembly.joints.{k}") for k, v in dict(asm.get("joints", {})).items()}
     tol = spec.get("tolerances", {})

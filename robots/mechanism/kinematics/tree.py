@@ -143,6 +143,7 @@ class Kinematics(InverseGeometry):
         self._check_loops_actuated()
         check_limit_names(mech.limits, self.variables)
         self.joint_unit = {x: u for x, u in joint_units(mech.frames, set(params)).items() if x in self.variables}
+        working_mode.check_task_fixes_platform(self)    # a platform the poses leave free is refused (issue 41)
         working_mode.check_declared(self)           # a closed-loop mechanism declares its assembly (issue 27)
         self._assembly = None
         self._cache = {}

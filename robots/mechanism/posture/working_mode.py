@@ -36,6 +36,43 @@ SERIAL_MAX_ANGLE = np.radians(0.5)
 SERIAL_MAX_LENGTH_FRACTION = 1e-3
 
 
+def check_task_fixes_platform(kin) -> None:
+    """A closed-loop mechanism's task fixes every freedom of its platform (issue 41 item 7).
+
+    With loops, ``n_var`` joint variables and ``n_eq`` equations (loop rows, one per position
+    coordinate, three for a stated orientation), ``n_var > n_eq`` means the poses leave the
+    platform free to move -- a 6-UPS given x, y, z only would be solved "nearest the assembly" and
+    tilt by degrees at the box corners. That is refused, naming the key to set; a serial arm with
+    more joints than its task (the 7-joint Panda) stays a redundant arm (``docs/mechanisms.md``).
+
+    Parameters
+    ----------
+    kin : Kinematics
+        The mechanism's kinematics (``mech``, ``variables``, ``coord_axes``, ``orientation``).
+
+    Raises
+    ------
+    ValidationError
+        ``end_effector.orientation`` when none is stated (hold it: ``[['z', '0']]`` keeps the
+        platform at R = I), else ``end_effector.coordinates``.
+    """
+    m = kin.mech
+    if not m.loops:
+        return
+    n_eq = sum(len(kin.loop_rows(lp)) for lp in m.loops) + len(kin.coord_axes) + (3 if kin.orientation else 0)
+    free = len(kin.variables) - n_eq
+    if free <= 0:
+        return
+    held = ", ".join(c.name for c in m.coordinates) or "nothing"
+    if not kin.orientation:
+        raise ValidationError("end_effector.orientation", [], f"the platform orientation of {m.name}: the poses fix only "
+                              f"{held} and leave {free} freedom(s) of the platform, which would tilt unseen; hold it "
+                              "with orientation = [['z', '0']] (R = I) or name angle coordinates (orientation = "
+                              "[['z', 'yaw'], ['y', 'pitch'], ['x', 'roll']])")
+    raise ValidationError("end_effector.coordinates", held, f"coordinates that fix every freedom of {m.name}'s platform: "
+                          f"{free} more are left free")
+
+
 def check_declared(kin) -> None:
     """Every joint variable of a closed-loop mechanism is declared in ``[assembly] joints``.
 
