@@ -127,8 +127,9 @@ def iterated_fit(robot, idn, plan, Y, fit=None) -> tuple[np.ndarray, np.ndarray]
 
     The simplified Gauss-Newton (chord) iteration ``z ← z + B⁺ (Y − f(z))`` from the linear fit
     ``z = B⁺ Y``, ``f`` the nonlinear model's whitened readings (plus ``R δr``), until the largest
-    update is below ``FIT_STOP`` (round-off) of the largest value, at most ``FIT_ITERATIONS`` times; a
-    fit whose last update is above ``FIT_TOL`` has not converged. Its fixed point
+    update is below ``FIT_STOP`` of the largest value, or below ``FIT_TOL`` and no longer shrinking
+    tenfold (round-off), at most ``FIT_ITERATIONS`` times; a fit whose last update is above ``FIT_TOL``
+    has not converged. Its fixed point
     satisfies ``B⁺ (Y − f(ẑ)) = 0``: where the identified model can reproduce the readings it does
     (``ẑ`` the exact least-squares solution), otherwise it differs from the nonlinear least-squares
     solution by third-order terms only (``A(ẑ) − A(0)`` and the misfit are both ``O(|x|)``, resp.
@@ -160,13 +161,15 @@ def iterated_fit(robot, idn, plan, Y, fit=None) -> tuple[np.ndarray, np.ndarray]
         return f + (z[:, :n_reg] @ R.T if n_reg else 0.0)
 
     z = Y @ Bp.T
-    done = np.zeros(len(Y), bool)
+    last = np.inf
     for _ in range(FIT_ITERATIONS):
         dz = (Y - readings(z)) @ Bp.T
         z = z + dz
         step = np.abs(dz).max(axis=1, initial=0.0) / np.maximum(np.abs(z).max(axis=1, initial=0.0), 1e-300)
-        if np.all(step <= FIT_STOP):
+        worst = step.max(initial=0.0)
+        if worst <= FIT_STOP or (worst <= FIT_TOL and worst > 0.1 * last):     # converged, or stalled at round-off
             break
+        last = worst
     Ehat[:, K] = z[:, n_reg:]
     return Ehat, (step <= FIT_TOL) & np.all(np.isfinite(z), axis=1)
 
