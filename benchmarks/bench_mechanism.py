@@ -19,7 +19,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 from evotol.robots.mechanism import MechanismModel  # noqa: E402
-from evotol.robots.mechanism.model import SHIPPED  # noqa: E402
+from evotol.robots.mechanism.model.error_model import SHIPPED  # noqa: E402
 
 SOURCES = ["Rb", "rp", "l1_*", "l2_*", "q?", "A?.gamma", "B?.gamma", "C?.gamma", "P?.gamma", "P?.theta", "A?.d", "B1.d"]
 

@@ -49,7 +49,7 @@ def best(f, repeat: int = 3):
 def pin_setup(robot):
     import pinocchio as pin
 
-    from evotol.robots.mechanism.urdf import frame_id
+    from evotol.robots.mechanism.urdf.reader import frame_id
 
     path, tip = robot.mechanism.urdf
     model = pin.buildModelFromUrdf(path)
@@ -121,7 +121,7 @@ def mc_profile(robot, poses, E) -> None:
     wrapper around it, and the arithmetic it does against the machine's scalar limit."""
     import numba
 
-    from evotol.robots.mechanism.serial import _kernels
+    from evotol.robots.mechanism.kinematics.serial import _kernels
 
     ch = robot._serial
     q = robot.joint_values(poses)

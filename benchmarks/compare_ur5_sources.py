@@ -17,7 +17,7 @@ import numpy as np
 
 from evotol.allocators import allocate_optimum
 from evotol.studyfile import load_problem
-from evotol.robots.mechanism.identifiability import analyse
+from evotol.robots.mechanism.model.identifiability import analyse
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "reports" / "studies" / "ur5_urdf.toml"

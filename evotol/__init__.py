@@ -87,7 +87,7 @@ _WHERE = {
     "ConvergenceError": "evotol.errors",
     "InfeasibleError": "evotol.errors",
     # mechanisms and assemblies
-    "MechanismModel": "evotol.robots.mechanism.model",
+    "MechanismModel": "evotol.robots.mechanism.model.error_model",
     "AssemblyFunction": "evotol.robots.assembly",
     "LinearStack": "evotol.robots.assembly",
     "RobotErrorModel": "evotol.robots.base",
@@ -117,7 +117,7 @@ if TYPE_CHECKING:          # what mypy and editors read: the same names, importe
     from evotol.verification.montecarlo import MonteCarloResult as MonteCarloResult, verify as verify
     from evotol.robots.assembly import AssemblyFunction as AssemblyFunction, LinearStack as LinearStack
     from evotol.robots.base import RobotErrorModel as RobotErrorModel
-    from evotol.robots.mechanism.model import MechanismModel as MechanismModel
+    from evotol.robots.mechanism.model.error_model import MechanismModel as MechanismModel
 
 
 def __getattr__(name: str):

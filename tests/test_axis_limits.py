@@ -14,7 +14,7 @@ import pytest
 from evotol.core.axis_limits import AxisErrorModel, AxisLimits
 from evotol.errors import ValidationError
 from evotol.studyfile import load_problem
-from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.model.error_model import MechanismModel
 from tests.test_joint_poses import CONFIGS_DEG, study
 from tests.test_standard_dh import PUMA
 

@@ -198,7 +198,7 @@ def test_robot_table_without_mechanism_or_urdf_names_the_field(table):
     is a one-line ValidationError naming ``robot.mechanism`` (value None) and saying what is
     expected -- not a bare KeyError."""
     from evotol.errors import ValidationError
-    from evotol.robots.mechanism.model import model_from_table
+    from evotol.robots.mechanism.model.error_model import model_from_table
 
     with pytest.raises(ValidationError) as exc:
         model_from_table(table)

@@ -16,7 +16,7 @@ from evotol.calibration import CalibrationPlan
 from evotol.calibration.configurations import calibration_joints
 from evotol.calibration.table import plan_from_table
 from evotol.errors import ValidationError
-from evotol.robots.mechanism.urdf import resolve_urdf
+from evotol.robots.mechanism.urdf.reader import resolve_urdf
 from evotol.studyfile import load_problem
 
 pin = pytest.importorskip("pinocchio")

@@ -15,12 +15,12 @@ import pytest
 
 from evotol.errors import ValidationError
 from evotol.robots.checks import check_robot
-from evotol.robots.mechanism.callout_model import CalloutModel
-from evotol.robots.mechanism.callout_table import callouts_from_tables, joint_seat, parse_length
-from evotol.robots.mechanism.callouts import (Callout, axis_displacement, lateral_basis, worst_axis_displacement,
+from evotol.robots.mechanism.callouts.model import CalloutModel
+from evotol.robots.mechanism.callouts.table import callouts_from_tables, joint_seat, parse_length
+from evotol.robots.mechanism.callouts.zones import (Callout, axis_displacement, lateral_basis, worst_axis_displacement,
                                        zone_members)
-from evotol.robots.mechanism.description import load_mechanism
-from evotol.robots.mechanism.placement import placement_error
+from evotol.robots.mechanism.description.reader import load_mechanism
+from evotol.robots.mechanism.kinematics.placement import placement_error
 
 UR5 = Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"
 JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
@@ -172,8 +172,8 @@ def test_bad_callouts_are_one_line_errors(ur5, entry, field):
 
 
 def test_a_planar_mechanism_has_no_axis_to_place():
-    from evotol.robots.mechanism.description import load_mechanism as load
-    from evotol.robots.mechanism.shipped import resolve_description
+    from evotol.robots.mechanism.description.reader import load_mechanism as load
+    from evotol.robots.mechanism.description.shipped import resolve_description
 
     mech = load(resolve_description("planar3rrr", None))
     with pytest.raises(ValidationError, match=r"callout A1 .* spatial mechanism"):
@@ -247,9 +247,9 @@ def test_description_callouts_and_a_prismatic_guide_over_its_stroke():
     """``[[callouts]]`` in a TOML description: a guide's parallelism over its 300 mm stroke is a
     tilt disc of radius t/L about the guide's centre, on a [[frame]] joint (axis z of its
     placement); the model agrees with finite differences."""
-    from evotol.robots.mechanism.callout_model import with_callouts
-    from evotol.robots.mechanism.description import mechanism_from_dict
-    from evotol.robots.mechanism.model import MechanismModel
+    from evotol.robots.mechanism.callouts.model import with_callouts
+    from evotol.robots.mechanism.description.reader import mechanism_from_dict
+    from evotol.robots.mechanism.model.error_model import MechanismModel
 
     mech = mechanism_from_dict(RP_ARM)
     assert [c.name for c in mech.callouts] == ["J2.parallelism", "J1.position"]

@@ -72,8 +72,8 @@ def test_fd_not_computed_is_said_not_a_traceback(capsys, monkeypatch):
     """``fd_rel_error`` None (no nonlinear model to difference): the text output of a description and
     of a URDF file says "not computed" on the finite-difference line and exits 0 (was a TypeError
     formatting None, and for a URDF a TypeError comparing None with --rtol)."""
-    import evotol.robots.mechanism.checks as checks
-    import evotol.robots.mechanism.urdf_check as urdf_check
+    import evotol.robots.mechanism.checks.description as checks
+    import evotol.robots.mechanism.urdf.check as urdf_check
 
     monkeypatch.setattr(checks, "check_mechanism", lambda *a, **k: _no_fd_check())
     monkeypatch.setattr(urdf_check, "check_urdf_file", lambda *a, **k: _no_fd_check(tip="tool0", fk_vs_pinocchio=0.0))

@@ -17,7 +17,7 @@ from evotol.errors import ValidationError
 from evotol.verification.montecarlo import verify
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.robots.clearance import ClearanceEvaluator
-from evotol.robots.mechanism.model import MechanismModel, resolve_description
+from evotol.robots.mechanism.model.error_model import MechanismModel, resolve_description
 
 H = 0.01                                   # joint length of eq. III.2 (m), as deng2012-tolsynth
 COST = ReciprocalCost(1.0, 1.0, scale=1e-6)

@@ -39,7 +39,7 @@ def _shipped_models():
     """Robots that are not classes of the registry: every shipped mechanism description (as
     ``mechanism = NAME`` builds it) and the process-selection studies' assemblies."""
     from evotol.studies._process_benchmarks import clutch_assembly, stack_problem
-    from evotol.robots.mechanism.model import SHIPPED, MechanismModel, resolve_description
+    from evotol.robots.mechanism.model.error_model import SHIPPED, MechanismModel, resolve_description
 
     models = {f"mechanism:{p.stem}": (lambda n=p.stem: MechanismModel(resolve_description(n)))
               for p in sorted(SHIPPED.glob("*.toml"))}

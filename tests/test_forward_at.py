@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import ValidationError
-from evotol.robots.mechanism.forward_at import forward_at, urdf_end_links
-from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.kinematics.forward_at import forward_at, urdf_end_links
+from evotol.robots.mechanism.model.error_model import MechanismModel
 from tests.test_standard_dh import PUMA, textbook_fk
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -16,7 +16,7 @@ from evotol.measures.iso9283 import (TestCube, check_cube, figures_of_test, gaus
                             quantile_interval, simulate)
 from evotol.measures.iso9283.budget import joints_and_maps
 from evotol.robots.mechanism import MechanismModel
-from evotol.robots.mechanism.random_sources import RandomSource, column_loading, encoder_count, unit_draws
+from evotol.robots.mechanism.model.random_sources import RandomSource, column_loading, encoder_count, unit_draws
 
 UR5 = Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"
 JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
@@ -37,7 +37,7 @@ def pinocchio_position_jacobian(q: dict) -> np.ndarray:
     """(6, 6) Jacobian of tool0 (linear rows in base axes, then angular) per joint, by Pinocchio."""
     import pinocchio as pin
 
-    from evotol.robots.mechanism.urdf import resolve_urdf
+    from evotol.robots.mechanism.urdf.reader import resolve_urdf
     model = pin.buildModelFromUrdf(str(resolve_urdf("example-robot-data:ur_description/urdf/ur5_robot.urdf")))
     data = model.createData()
     qv = pin.neutral(model)
@@ -157,7 +157,7 @@ def test_bearing_play_moves_the_axis_across_and_along_itself(ur5):
     """The joint's axis in its origin frame from Pinocchio's joint type (JointModelRX/RY/RZ)."""
     import pinocchio as pin
 
-    from evotol.robots.mechanism.urdf import resolve_urdf
+    from evotol.robots.mechanism.urdf.reader import resolve_urdf
     model = pin.buildModelFromUrdf(str(resolve_urdf("example-robot-data:ur_description/urdf/ur5_robot.urdf")))
     axis = np.eye(3)["XYZ".index(model.joints[model.getJointId("elbow_joint")].shortname()[-1])]
     G_rad, G_ax = column_loading(ur5, [RandomSource("radial_play", "elbow_joint", 1e-5),

@@ -13,7 +13,7 @@ from evotol.calibration.iso9283 import simulate_calibrated
 from evotol.errors import ValidationError
 from evotol.measures.iso9283 import TestCube, iso_positions
 from evotol.robots.mechanism import MechanismModel
-from evotol.robots.mechanism.random_sources import RandomSource, encoder_count
+from evotol.robots.mechanism.model.random_sources import RandomSource, encoder_count
 
 UR5 = Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"
 ARCMIN = np.pi / 180 / 60

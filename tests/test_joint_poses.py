@@ -1,4 +1,4 @@
-"""Poses as joint configurations (issue 33 item 1): robots/mechanism/joint_space.py and ``[poses] joints``.
+"""Poses as joint configurations (issue 33 item 1): robots/mechanism/model/joint_space.py and ``[poses] joints``.
 
 The requirement must hold at exactly the configurations given: the sensitivities are compared with
 finite differences of the textbook forward kinematics at those joints, and the study file's
@@ -14,8 +14,8 @@ import pytest
 
 from evotol.errors import ValidationError
 from evotol.studyfile import load_problem
-from evotol.robots.mechanism.joint_space import JointSpaceModel, joint_configurations
-from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.model.joint_space import JointSpaceModel, joint_configurations
+from evotol.robots.mechanism.model.error_model import MechanismModel
 from tests.test_standard_dh import PUMA, TABLE, textbook_fk
 
 ROOT = Path(__file__).resolve().parents[1]

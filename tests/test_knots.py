@@ -25,7 +25,7 @@ from evotol.errors import ValidationError
 from evotol.measures import feasibility
 from evotol.measures.clearances import ClearanceSources, WithClearances, thesis_classes
 from evotol.studyfile import load_problem
-from evotol.robots.mechanism.model import MechanismModel, resolve_description
+from evotol.robots.mechanism.model.error_model import MechanismModel, resolve_description
 from tests.fast_study import fast_study
 
 ROOT = Path(__file__).resolve().parents[1]

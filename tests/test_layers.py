@@ -52,7 +52,7 @@ NAMES = ["foundation", "models", "measures", "core", "allocators", "verification
 
 #: upward imports that another engineer's open issue removes: (importer, imported) -> issue
 # (issue 10 removed evotol.core.problem -> evotol.verification.montecarlo; issue 11 removed evotol.studies.mechanisms ->
-# evotol.cli.commands.check_mechanism: the checks live in evotol.robots.mechanism.checks)
+# evotol.cli.commands.check_mechanism: the checks live in evotol.robots.mechanism.checks.description)
 KNOWN: dict[tuple[str, str], str] = {}
 
 

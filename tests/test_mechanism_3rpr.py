@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from evotol.robots.mechanism.model import MechanismModel, resolve_description
+from evotol.robots.mechanism.model.error_model import MechanismModel, resolve_description
 
 RB, RP, OFFSET = 0.2, 0.05, np.radians(40)
 G = np.radians([90.0, 210.0, 330.0])

@@ -11,8 +11,8 @@ import pytest
 from evotol.errors import ValidationError
 from evotol.robots.base import check_robot
 from evotol.robots.mechanism import MechanismModel, mechanism_from_dict
-from evotol.robots.mechanism.placement import PLACEMENT_FIELDS
-from evotol.robots.mechanism.urdf import pinocchio_tip_pose, resolve_urdf
+from evotol.robots.mechanism.kinematics.placement import PLACEMENT_FIELDS
+from evotol.robots.mechanism.urdf.reader import pinocchio_tip_pose, resolve_urdf
 
 HERE = Path(__file__).resolve().parents[1] / "robots" / "mechanisms"
 UR5 = "example-robot-data:ur_description/urdf/ur5_robot.urdf"
@@ -129,7 +129,7 @@ def pinocchio_placement_regressor(path, tip, Q):
 
 
 def stacked_rank(S):
-    from evotol.robots.mechanism.identifiability import stacked_rank as rank
+    from evotol.robots.mechanism.model.identifiability import stacked_rank as rank
 
     return rank(S)
 

@@ -97,7 +97,7 @@ def _urdf_origins(path) -> dict:
 
 
 def test_urdf_placements_have_nominal_zero_about_the_urdf_origin():
-    from evotol.robots.mechanism.urdf import resolve_urdf
+    from evotol.robots.mechanism.urdf.reader import resolve_urdf
     root = Path(__file__).resolve().parents[1] / "reports" / "studies"
     spec = tomllib.loads((root / "ur5_urdf.toml").read_text())
     rows = {r["name"]: r for r in source_table(load_problem(spec, base_dir=root))}

@@ -1,4 +1,4 @@
-"""One posture, stated and held (issue 33 item 2): robots/mechanism/posture.py.
+"""One posture, stated and held (issue 33 item 2): robots/mechanism/posture/held.py.
 
 The PUMA 560's inverse-geometry branches are told apart by three independent factors of its
 Jacobian determinant (derived here from the textbook product and checked numerically below):
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import KinematicsError
-from evotol.robots.mechanism.model import MechanismModel
-from evotol.robots.mechanism.posture import PostureWarning, wrapped
+from evotol.robots.mechanism.model.error_model import MechanismModel
+from evotol.robots.mechanism.posture.held import PostureWarning, wrapped
 from tests.test_standard_dh import textbook_fk
 
 FIXTURE = Path(__file__).resolve().parent / "data" / "puma560_rpy.toml"
@@ -164,8 +164,8 @@ def test_unreachable_poses_are_reported_together_or_dropped(tmp_path):
 
 
 def test_compiled_task_jacobian_equals_the_general_one():
-    from evotol.robots.mechanism.posture import _task_jacobian
-    from evotol.robots.mechanism.serial import SERIAL_COMPILED, SerialChain
+    from evotol.robots.mechanism.posture.held import _task_jacobian
+    from evotol.robots.mechanism.kinematics.serial import SERIAL_COMPILED, SerialChain
     if not SERIAL_COMPILED:
         pytest.skip("numba not available: the general path is the only one")
     for f in (FIXTURE, Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"):

@@ -1,5 +1,5 @@
-"""The compiled serial-chain path (robots/mechanism/serial.py) equals the general description path
-(robots/mechanism/kinematics.py) it replaces for serial arms (issue 23 item 5): sensitivities at
+"""The compiled serial-chain path (robots/mechanism/kinematics/serial.py) equals the general description path
+(robots/mechanism/kinematics/tree.py) it replaces for serial arms (issue 23 item 5): sensitivities at
 joint values, nonlinear pose errors (Monte Carlo) and the continued inverse geometry, on the UR5,
 the redundant Panda (posture nearest the assembly), a mimic chain and a TOML serial arm with
 constant offsets after its joints and parameters in its joint entries."""

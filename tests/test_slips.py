@@ -12,7 +12,7 @@ from evotol.cli import main
 from evotol.core.plausibility import PlausibilityWarning
 from evotol.errors import ValidationError
 from evotol.studyfile import load_problem
-from evotol.robots.mechanism.urdf import resolve_urdf
+from evotol.robots.mechanism.urdf.reader import resolve_urdf
 from tests.fast_study import EXAMPLE, fast_study
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,4 +1,4 @@
-"""Standard-DH descriptions (issue 33 item 5): robots/mechanism/standard_dh.py.
+"""Standard-DH descriptions (issue 33 item 5): robots/mechanism/description/standard_dh.py.
 
 Checked against an independent forward kinematics written here from the textbook formula
 ``A_i = Rot(z, theta_i) Trans(z, d_i) Trans(x, a_i) Rot(x, alpha_i)`` (Spong et al., *Robot Modeling
@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from evotol.errors import ValidationError
-from evotol.robots.mechanism.description import mechanism_from_dict
-from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.description.reader import mechanism_from_dict
+from evotol.robots.mechanism.model.error_model import MechanismModel
 
 ROOT = Path(__file__).resolve().parents[1]
 PUMA = ROOT / "robots" / "mechanisms" / "puma560.toml"

@@ -91,7 +91,7 @@ def test_source_table_keeps_the_nominals_of_a_robot_with_clearances():
     from evotol.measures.clearances import ClearanceSources, WithClearances
     from evotol.summaries.user_study import source_nominals, source_table
     from evotol.studyfile import load_problem
-    from evotol.robots.mechanism.model import MechanismModel
+    from evotol.robots.mechanism.model.error_model import MechanismModel
 
     path = Path(__file__).resolve().parents[1] / "reports" / "studies" / "fivebar_clearances.toml"
     pr = load_problem(tomllib.loads(path.read_text()), base_dir=path.parent)

@@ -17,8 +17,8 @@ import pytest
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studyfile import run_study_file
 from evotol.verification.tolerance_analysis import analyse
-from evotol.robots.mechanism.joint_space import joint_configurations
-from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.model.joint_space import joint_configurations
+from evotol.robots.mechanism.model.error_model import MechanismModel
 from tests.test_standard_dh import PUMA
 
 SOURCES = ["a2", "a3", "d3", "d4", "theta2", "theta3"]

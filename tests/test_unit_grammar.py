@@ -14,8 +14,8 @@ from evotol.core.requirement import Requirement
 from evotol.errors import ValidationError
 from evotol.studyfile import load_problem
 from evotol.units.quantity import parse_quantity
-from evotol.robots.mechanism.callout_table import parse_length
-from evotol.robots.mechanism.expressions import Expression
+from evotol.robots.mechanism.callouts.table import parse_length
+from evotol.robots.mechanism.description.expressions import Expression
 from tests.fast_study import EXAMPLE
 
 LENGTHS = {"0.5 mm": 5e-4, "0.5*mm": 5e-4, "0.5mm": 5e-4, "20 um": 2e-5, "20*um": 2e-5, "20 µm": 2e-5,

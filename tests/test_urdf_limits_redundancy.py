@@ -25,7 +25,7 @@ def ur5_spec(**changes):
 def test_limits_are_read_from_the_urdf():
     import pinocchio as pin
 
-    from evotol.robots.mechanism.urdf import resolve_urdf
+    from evotol.robots.mechanism.urdf.reader import resolve_urdf
 
     robot = MechanismModel(HERE / "panda.toml")
     model = pin.buildModelFromUrdf(str(resolve_urdf("example-robot-data:panda_description/urdf/panda.urdf")))
@@ -73,8 +73,8 @@ def test_redundant_panda_posture_is_the_one_nearest_the_assembly_posture(panda):
     import pinocchio as pin
     from scipy.optimize import minimize
 
-    from evotol.robots.mechanism.urdf import frame_id, resolve_urdf
-    from evotol.robots.mechanism.urdf import pinocchio_placement_regressor
+    from evotol.robots.mechanism.urdf.reader import frame_id, resolve_urdf
+    from evotol.robots.mechanism.urdf.reader import pinocchio_placement_regressor
 
     poses = panda.workspace.latin_hypercube(5, seed=3)
     q = panda.joint_values(poses)
@@ -113,7 +113,7 @@ def test_redundant_panda_posture_is_the_one_nearest_the_assembly_posture(panda):
 
 def test_panda_sources_match_fd_and_span_pinocchio(panda):
     from evotol.robots.base import check_robot
-    from evotol.robots.mechanism.urdf_check import check_urdf_chain
+    from evotol.robots.mechanism.urdf.check import check_urdf_chain
 
     rep = check_robot(panda, panda.workspace.latin_hypercube(4, seed=1))
     assert rep["fd_relative_mismatch"] < 1e-6
@@ -158,7 +158,7 @@ def test_random_joint_values_keep_each_joint_in_its_own_units():
     """The configurations of the URDF check: a revolute joint without limits is drawn from
     [-pi, pi] rad, one with limits from its limits within [-pi, pi]; a prismatic joint without
     limits from [-0.1, 0.1] m (it was drawn from [-pi, pi] *metres*), one with limits from them."""
-    from evotol.robots.mechanism.urdf_check import UNLIMITED_PRISMATIC, random_joints
+    from evotol.robots.mechanism.urdf.check import UNLIMITED_PRISMATIC, random_joints
 
     limits = {"r_lim": (-0.5, 4.0), "p_lim": (0.0, 0.5)}
     units = {"p_free": "m", "p_lim": "m"}

@@ -3,7 +3,7 @@
 For each ``.urdf`` file of the installed ``example-robot-data`` (a test extra): the chain from the root
 to its deepest link, and to each end effector its SRDF names (``<end_effector parent_link=...>``).
 Each accepted chain is checked at random configurations inside its joint limits
-(:func:`evotol.robots.mechanism.urdf_check.check_urdf_chain`): forward kinematics against Pinocchio's,
+(:func:`evotol.robots.mechanism.urdf.check.check_urdf_chain`): forward kinematics against Pinocchio's,
 every sensitivity column against central finite differences, and the default sources' span against
 Pinocchio's placement regressor of the same chain (equal ranks, also together; with the tip's
 placement too). The table (accepted/total, FD agreement of each) is printed (``pytest -s``).
@@ -19,7 +19,7 @@ import pytest
 
 from evotol.errors import ValidationError
 from evotol.robots.mechanism import MechanismModel, mechanism_from_dict
-from evotol.robots.mechanism.urdf import chain_joints, joint_axis
+from evotol.robots.mechanism.urdf.reader import chain_joints, joint_axis
 
 
 
@@ -56,7 +56,7 @@ def _targets(path: Path, pin) -> list[str]:
 def walk() -> tuple[list[dict], int]:
     import pinocchio as pin
 
-    from evotol.robots.mechanism.urdf_check import check_urdf_chain
+    from evotol.robots.mechanism.urdf.check import check_urdf_chain
 
     rows, n_files = [], 0
     for path in FILES:
@@ -112,7 +112,7 @@ def test_walk_covers_continuous_unaligned_prismatic_and_mimic_joints():
     """The collection exercises every joint kind the loader handles (so the walk above tests them)."""
     import pinocchio as pin
 
-    from evotol.robots.mechanism.urdf import urdf_joints
+    from evotol.robots.mechanism.urdf.reader import urdf_joints
 
     if not FILES:
         pytest.skip("example-robot-data is not installed")
@@ -159,7 +159,7 @@ def test_mimic_joint_is_coupled_with_multiplier_and_offset_errors(tmp_path):
     value times the offset's (closed form of d(m q + o)); FK and FD agree with Pinocchio."""
     import pinocchio as pin
 
-    from evotol.robots.mechanism.urdf_check import check_urdf_chain
+    from evotol.robots.mechanism.urdf.check import check_urdf_chain
 
     p = tmp_path / "m.urdf"
     p.write_text(MIMIC)

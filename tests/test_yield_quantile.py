@@ -16,8 +16,8 @@ from scipy.stats import binom
 from evotol.measures.statistical.distributions import Distribution
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.summaries.yield_quantile import largest_quantile
-from evotol.robots.mechanism.joint_space import joint_configurations
-from evotol.robots.mechanism.model import MechanismModel
+from evotol.robots.mechanism.model.joint_space import joint_configurations
+from evotol.robots.mechanism.model.error_model import MechanismModel
 from tests.test_standard_dh import PUMA
 
 SOURCES = ["a2", "a3", "d3", "d4", "theta2", "theta3"]

@@ -17,7 +17,7 @@ sources' tolerances ``τ`` (log-space SLSQP, analytic gradients) subject to, at 
 
 Parameters
 ----------
-robot : evotol.robots.mechanism.model.MechanismModel
+robot : evotol.robots.mechanism.model.error_model.MechanismModel
     The arm.
 positions : (p, 3) array_like
     The ISO poses (m).
@@ -31,7 +31,7 @@ from evotol.errors import ValidationError
 from evotol.measures.iso9283.budget import joints_and_maps, lost_motion_parts
 from evotol.measures.iso9283.figures import ap_worst_case, rp_from_errors, worst_direction
 from evotol.measures.linear.directions import directions_for
-from evotol.robots.mechanism.random_sources import column_loading, unit_draws
+from evotol.robots.mechanism.model.random_sources import column_loading, unit_draws
 
 #: the sampled RP is aimed this share below the requirement: about 3 standard errors of the estimate
 #: ``E l + 3 std l`` on 10 000 draws (0.4-0.6 % between two seeds on the UR5 example)
@@ -50,7 +50,7 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
         Lower and upper bounds of the systematic tolerances (SI); a column not free keeps its lower.
     free : (n_columns,) array_like of bool
         Which systematic tolerances the allocation may change.
-    sources : sequence of evotol.robots.mechanism.random_sources.RandomSource
+    sources : sequence of evotol.robots.mechanism.model.random_sources.RandomSource
         The random sources.
     rand_costs : list of evotol.cost_models.base.CostModel
         Per random source its cost model.

@@ -14,7 +14,7 @@ Parameters
 ----------
 plan : evotol.calibration.plan.CalibrationPlan
     The plan.
-robot : evotol.robots.mechanism.model.MechanismModel
+robot : evotol.robots.mechanism.model.error_model.MechanismModel
     The uncalibrated model.
 """
 from evotol.calibration.identification import Identification, identify

@@ -21,7 +21,7 @@ def controller_rows(robot) -> list[int]:
 
     Parameters
     ----------
-    robot : evotol.robots.mechanism.model.MechanismModel
+    robot : evotol.robots.mechanism.model.error_model.MechanismModel
         The model (its actuated joints; planar or not).
 
     Returns
@@ -51,7 +51,7 @@ class Compensation:
         missing = [a for a in robot.kin.actuated if a not in names]
         model = robot
         if missing:
-            from evotol.robots.mechanism.model import MechanismModel
+            from evotol.robots.mechanism.model.error_model import MechanismModel
 
             model = MechanismModel(robot.mechanism, sources=names + missing, workspace=robot.workspace)
         cols = list(model.source_names)

@@ -27,7 +27,7 @@ def cell_violations(robot, joints, plan) -> list:
 
     Parameters
     ----------
-    robot : evotol.robots.mechanism.model.MechanismModel
+    robot : evotol.robots.mechanism.model.error_model.MechanismModel
         A described mechanism (its joint frames and tool frame).
     joints : (n, n_variables) ndarray
         Joint values (rad, m).
@@ -76,7 +76,7 @@ def _draw_inside(robot, plan, draw) -> np.ndarray:
 
 
 def is_described(robot) -> bool:
-    """True for a model with joint-space maps (:class:`evotol.robots.mechanism.model.MechanismModel`).
+    """True for a model with joint-space maps (:class:`evotol.robots.mechanism.model.error_model.MechanismModel`).
 
     Parameters
     ----------

@@ -88,7 +88,7 @@ def registration_columns(robot, plan, joints) -> tuple[np.ndarray, list[str]]:
 
     Parameters
     ----------
-    robot : evotol.robots.mechanism.model.MechanismModel
+    robot : evotol.robots.mechanism.model.error_model.MechanismModel
         A described mechanism (its tip frame at the configurations).
     plan : evotol.calibration.plan.CalibrationPlan
         The plan (``measure`` decides whether the target's rotation is registered).

@@ -20,13 +20,13 @@ sources and the noise stay: the calibrated AP is never 0, and RP does not change
 
 Parameters
 ----------
-robot : evotol.robots.mechanism.model.MechanismModel
+robot : evotol.robots.mechanism.model.error_model.MechanismModel
     The arm.
 positions : (p, 3) array_like
     The ISO poses (m).
 systematic : (n_columns,) array_like
     Systematic tolerances (uniform in ±t).
-sources : sequence of evotol.robots.mechanism.random_sources.RandomSource
+sources : sequence of evotol.robots.mechanism.model.random_sources.RandomSource
     The random sources.
 random_t : (n_random,) array_like
     Their tolerances (SI).
@@ -39,7 +39,7 @@ from evotol.errors import ValidationError
 from evotol.measures.iso9283.budget import APPROACHES, approach_signs, joints_and_maps, lost_motion_columns
 from evotol.measures.iso9283.figures import figures_of_test
 from evotol.measures.iso9283.poses import full_poses
-from evotol.robots.mechanism.random_sources import column_loading, cycle_errors, unit_draws
+from evotol.robots.mechanism.model.random_sources import column_loading, cycle_errors, unit_draws
 
 
 def _actuator_columns(robot) -> list[int]:

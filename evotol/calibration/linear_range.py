@@ -191,7 +191,7 @@ def second_order(robot, idn, plan, task_joints, step: float = STEP) -> np.ndarra
 
     Parameters
     ----------
-    robot : evotol.robots.mechanism.model.MechanismModel
+    robot : evotol.robots.mechanism.model.error_model.MechanismModel
         The uncalibrated model (nonlinear ``pose_error_at_joints``).
     idn : evotol.calibration.identification.Identification
         The identification (a described mechanism's, with joint values).

@@ -38,7 +38,7 @@ import numpy as np
 
 from evotol.errors import ValidationError
 from evotol.robots.base import RobotErrorModel, Workspace
-from evotol.robots.mechanism.expressions import Expression
+from evotol.robots.mechanism.description.expressions import Expression
 
 AXES = ("x", "y", "z")
 FRAMES = ("base", "tool")
@@ -123,8 +123,8 @@ def tool_rotation(robot, poses) -> np.ndarray:
     Parameters
     ----------
     robot : evotol.robots.base.RobotErrorModel
-        A mechanism description (:class:`evotol.robots.mechanism.model.MechanismModel`) or its
-        joint-space form (:class:`evotol.robots.mechanism.joint_space.JointSpaceModel`).
+        A mechanism description (:class:`evotol.robots.mechanism.model.error_model.MechanismModel`) or its
+        joint-space form (:class:`evotol.robots.mechanism.model.joint_space.JointSpaceModel`).
     poses : (n, workspace.dim) array_like
         The robot's poses (SI).
 

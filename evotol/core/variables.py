@@ -112,7 +112,7 @@ def tolerance_variables(robot, tolerances: Mapping, lower: np.ndarray, upper: np
         raise ValidationError("shared", shared, "a mapping group name -> list of source names")
     seen: dict[str, str] = {}
     index = {nm: j for j, nm in enumerate(names)}
-    # a drawing callout's zone members (evotol.robots.mechanism.callout_model): one tolerance, costed once
+    # a drawing callout's zone members (evotol.robots.mechanism.callouts.model): one tolerance, costed once
     tied = dict(robot.tied_sources) if isinstance(robot, RobotErrorModel) else {}
     for g, members in {**tied, **(shared or {})}.items():
         if g in tied and all(tolerances[m].locked is not None for m in members):

@@ -27,7 +27,7 @@ from evotol.verification.montecarlo import verify
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.studies import Study, StudyResult
 from evotol.studies.deng2012_tolsynth import H_MM, JOINTS, LEVELS_XY_MM, LEVELS_Z_MM, POSE_MM, default_cost_model
-from evotol.robots.mechanism.model import MechanismModel, resolve_description
+from evotol.robots.mechanism.model.error_model import MechanismModel, resolve_description
 from evotol.units import MM
 
 NAME = "deng2012-clearalloc"

@@ -14,7 +14,7 @@ passive beta_z 0.2 rad, actuated 0), each with its certified upper bound, and th
 certified clearance map from the description relative to the hand-written model.
 
 Every mechanism also reports ``rank``: the rank of its sources' sensitivities stacked over the
-workspace poses (columns at unit norm, :mod:`evotol.robots.mechanism.identifiability`), with its blind and
+workspace poses (columns at unit norm, :mod:`evotol.robots.mechanism.model.identifiability`), with its blind and
 duplicated sources. The URDF arms (UR5, Panda) add ``pinocchio_rank`` (Pinocchio's placement
 regressor of the chain over the same poses) and, in ``configurations``, the same ranks over random
 configurations inside the joint limits, with and without the tip's placement, and the forward
@@ -102,7 +102,7 @@ def delta_columns(model, robot) -> list[int]:
 
     Parameters
     ----------
-    model : evotol.robots.mechanism.model.MechanismModel
+    model : evotol.robots.mechanism.model.error_model.MechanismModel
         The model of ``robots/mechanisms/delta.toml``.
     robot : evotol.robots.delta.DeltaRobot
         The hand-written Delta model.
@@ -152,9 +152,9 @@ def _delta(model, cfg) -> dict:
 def _urdf_ranks(path, cfg) -> dict:
     """Ranks of the default sources and of Pinocchio's placement regressor over random configurations
     inside the joint limits (the task box holds the tool orientation fixed, which lowers both), with
-    and without the tip's placement; FK and FD agreement there (evotol.robots.mechanism.urdf_check)."""
-    from evotol.robots.mechanism.model import MechanismModel
-    from evotol.robots.mechanism.urdf_check import check_urdf_chain
+    and without the tip's placement; FK and FD agreement there (evotol.robots.mechanism.urdf.check)."""
+    from evotol.robots.mechanism.model.error_model import MechanismModel
+    from evotol.robots.mechanism.urdf.check import check_urdf_chain
 
     r = check_urdf_chain(MechanismModel(path), n=cfg["n_configurations"], seed=cfg["seed"])
     return {"n_configurations": cfg["n_configurations"], **r}
@@ -181,8 +181,8 @@ def compute(cfg: dict) -> StudyResult:
         ranks, blind and duplicated sources and ``seconds``; plus the built-in comparison blocks
         (5-bar: ``p_max_mm`` in mm, ``r_max_rad`` in rad) and the URDF ``configurations``.
     """
-    from evotol.robots.mechanism.checks import check_mechanism
-    from evotol.robots.mechanism.model import SHIPPED, MechanismModel
+    from evotol.robots.mechanism.checks.description import check_mechanism
+    from evotol.robots.mechanism.model.error_model import SHIPPED, MechanismModel
 
     rows = {}
     for path in sorted(SHIPPED.glob("*.toml")):

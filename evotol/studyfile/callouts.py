@@ -1,7 +1,7 @@
 """What a study does with drawing callouts (issue 35): exact zones against independent boxes, and
 the warnings about refinements.
 
-For a problem whose robot is a :class:`evotol.robots.mechanism.callout_model.CalloutModel`, the twin
+For a problem whose robot is a :class:`evotol.robots.mechanism.callouts.model.CalloutModel`, the twin
 problem takes the same callouts, tolerances, requirement and poses under the independent-box rule
 (``zones = "boxes"``: each position callout's translations ±t/2 and tilts ±t/L as independent
 intervals sharing its value). Both are allocated by the certified optimum and checked on the
@@ -28,7 +28,7 @@ from evotol.allocators import allocate_optimum
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.nonlinear import worst_vertex_errors
-from evotol.robots.mechanism.callout_table import datum_features, refinement_warnings
+from evotol.robots.mechanism.callouts.table import datum_features, refinement_warnings
 
 #: a position or orientation callout's feature length below this (m) is probably a unit slip
 MIN_FEATURE_LENGTH = 1e-3

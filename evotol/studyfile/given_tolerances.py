@@ -24,7 +24,7 @@ from evotol.studies import StudyResult, write_outputs
 from evotol.summaries.user_study import source_table, study_units_block
 from evotol.units.display import DisplayUnits
 from evotol.verification.tolerance_analysis import analyse
-from evotol.robots.mechanism.posture import joint_table
+from evotol.robots.mechanism.posture.held import joint_table
 
 #: the ``[verify]`` keys an analysis reads (the others belong to allocation studies)
 VERIFY_KEYS = ("n_samples", "nonlinear")

@@ -42,8 +42,8 @@ from evotol.allocators.iso9283 import allocate_iso9283
 from evotol.calibration.iso9283 import simulate_calibrated
 from evotol.measures.iso9283.budget import source_shares
 from evotol.measures.iso9283 import TestCube, check_cube, iso_positions, largest_cube, predict, quantile_interval, simulate
-from evotol.robots.mechanism.model import MechanismModel
-from evotol.robots.mechanism.random_sources import KINDS, RandomSource, encoder_count
+from evotol.robots.mechanism.model.error_model import MechanismModel
+from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, encoder_count
 
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6,
          "deg": math.pi / 180, "arcmin": math.pi / 180 / 60, "arcsec": math.pi / 180 / 3600}
@@ -95,7 +95,7 @@ class IsoStudy:
 
     Parameters
     ----------
-    robot : evotol.robots.mechanism.model.MechanismModel
+    robot : evotol.robots.mechanism.model.error_model.MechanismModel
         The arm.
     cube : evotol.measures.iso9283.TestCube
         The test cube.

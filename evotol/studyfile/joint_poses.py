@@ -1,7 +1,7 @@
 """``[poses] joints`` and ``[poses] drop_unreachable``: a serial arm's poses as the designer means them (issue 33).
 
 The hooks the study-file reader calls: joint configurations, read and checked by
-:func:`evotol.robots.mechanism.joint_space.joint_configurations`; and the option to drop the poses of a
+:func:`evotol.robots.mechanism.model.joint_space.joint_configurations`; and the option to drop the poses of a
 grid or list that the arm cannot reach (out of reach, singular, outside the joint limits, on
 another branch), reported together instead of stopping at the first.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
-from evotol.robots.mechanism.joint_space import joint_configurations
+from evotol.robots.mechanism.model.joint_space import joint_configurations
 
 
 def joint_poses(robot, poses_table: dict):
@@ -26,7 +26,7 @@ def joint_poses(robot, poses_table: dict):
 
     Returns
     -------
-    model : evotol.robots.mechanism.joint_space.JointSpaceModel
+    model : evotol.robots.mechanism.model.joint_space.JointSpaceModel
         The arm, evaluated at joint configurations.
     poses : (n, n_joints) ndarray
         The configurations (rad, m).
@@ -35,7 +35,7 @@ def joint_poses(robot, poses_table: dict):
     ------
     evotol.errors.ValidationError
         ``joints`` next to ``grid``, ``latin_hypercube``, ``list`` or ``refine``, and everything
-        :func:`~evotol.robots.mechanism.joint_space.joint_configurations` refuses.
+        :func:`~evotol.robots.mechanism.model.joint_space.joint_configurations` refuses.
     """
     other = [k for k in ("grid", "latin_hypercube", "list", "refine", "drop_unreachable") if k in poses_table]
     if other:

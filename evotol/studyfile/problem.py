@@ -17,7 +17,7 @@ from evotol.studyfile.poses import read_poses
 from evotol.studyfile.requirement import read_requirement
 from evotol.studyfile.robot import read_robot
 from evotol.studyfile.sources import read_clearances, read_tolerances
-from evotol.robots.mechanism.callout_table import expand_callout_overrides
+from evotol.robots.mechanism.callouts.table import expand_callout_overrides
 
 
 def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:

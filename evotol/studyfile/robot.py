@@ -9,8 +9,8 @@ from evotol.errors import ValidationError
 from evotol.robots import registry
 from evotol.robots.assembly import assembly_from_spec
 from evotol.robots.base import RobotErrorModel
-from evotol.robots.mechanism.callout_model import with_callouts
-from evotol.robots.mechanism.model import model_from_table
+from evotol.robots.mechanism.callouts.model import with_callouts
+from evotol.robots.mechanism.model.error_model import model_from_table
 
 
 def read_robot(spec: dict, base_dir=None) -> tuple[RobotErrorModel, dict]:

@@ -21,7 +21,7 @@ from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError, is_real
 from evotol.units.display import ROUND_OFF, DisplayUnits, number
 from evotol.verification.nonlinear import worst_vertex_errors
-from evotol.robots.mechanism.callout_model import zone_per_t
+from evotol.robots.mechanism.callouts.model import zone_per_t
 
 #: units of the keys this module adds to a study's JSON (docs/units.md)
 KEYS = {"drawing_lower": "the source's display unit (display_units), rounded to the drawing precision",

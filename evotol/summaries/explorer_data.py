@@ -26,7 +26,7 @@ from evotol.cost_models import registry
 from evotol.cost_models.base import CostModel
 from evotol.cost_models.compound import SumCost
 from evotol.core.problem import ToleranceProblem
-from evotol.robots.mechanism.callout_model import zone_per_t
+from evotol.robots.mechanism.callouts.model import zone_per_t
 
 #: the cost models the page evaluates (``explorer.js``: same kind, same formula, same parameters)
 JS_COST_MODELS = ("exponential", "power", "reciprocal_power", "reciprocal", "reciprocal_square", "exp_reciprocal",

@@ -7,7 +7,7 @@ item 5: drawing-ready tables).
 * a DH entry ``"<frame>.<gamma|b|alpha|d|theta|r>"`` whose expression uses design parameters only:
   the entry's value in the description (e.g. ``P1.d = "rp"`` → 0.05 m); an entry holding a joint
   variable varies with the pose and has no single nominal;
-* a placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`evotol.robots.mechanism.placement`):
+* a placement error ``"<frame>.shift_x"`` ... ``"<frame>.tilt_z"`` (:mod:`evotol.robots.mechanism.kinematics.placement`):
   0 -- the deviation is a small shift along / tilt about an axis of the frame's placement as the
   description (for an arm read from a URDF: the URDF joint origin) gives it, so the nominal is the
   URDF's (description's) value and the tolerance zone is about it;
@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.robots.base import RobotErrorModel
-from evotol.robots.mechanism.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
+from evotol.robots.mechanism.kinematics.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
 
 
 def _nominals(robot, names) -> tuple[dict, dict]:
@@ -42,7 +42,7 @@ def _nominals(robot, names) -> tuple[dict, dict]:
     kin = getattr(inner, "kin", None)
     urdf = bool(getattr(mech, "urdf", ()))
     origin = "URDF joint origin" if urdf else "description's placement"
-    for n in params:            # a URDF arm's parameters are its joint origins' xyz/rpy (robots/mechanism/urdf.py)
+    for n in params:            # a URDF arm's parameters are its joint origins' xyz/rpy (robots/mechanism/urdf/reader.py)
         joint, _, k = n.rpartition("_")
         if urdf and k in ("x", "y", "z", "roll", "pitch", "yaw"):
             notes[n] = f"the URDF joint origin's {'xyz' if len(k) == 1 else 'rpy'} {k} of {joint}"

@@ -1,7 +1,7 @@
 """The joints a study's arm uses at every pose, for its JSON and page (issue 33 item 2).
 
 Where the poses are tool poses, the inverse geometry chose the joints (holding the assembly's
-branch, :mod:`evotol.robots.mechanism.posture`); where they are joint configurations, they are the poses
+branch, :mod:`evotol.robots.mechanism.posture.held`); where they are joint configurations, they are the poses
 themselves. Either way the report shows them, revolute joints wrapped to (-180°, 180°].
 """
 from __future__ import annotations
@@ -10,7 +10,7 @@ import numpy as np
 
 from evotol.core.axis_limits import configurations
 from evotol.errors import EvotolError
-from evotol.robots.mechanism.posture import joint_table
+from evotol.robots.mechanism.posture.held import joint_table
 
 
 def pose_joints(problem) -> dict:
@@ -26,7 +26,7 @@ def pose_joints(problem) -> dict:
     Returns
     -------
     dict
-        :func:`evotol.robots.mechanism.posture.joint_table` plus ``poses`` (the configurations, SI);
+        :func:`evotol.robots.mechanism.posture.held.joint_table` plus ``poses`` (the configurations, SI);
         empty for a robot without joint variables or when the joints cannot be solved.
     """
     robot, poses = configurations(problem.robot, problem.poses)

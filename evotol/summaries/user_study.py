@@ -24,7 +24,7 @@ from evotol.summaries.nominals import nominal_notes, nominals_with_notes, source
 from evotol.units import COST, COUNT, RELATIVE, make_units_block
 from evotol.summaries.workspace_map import DEFAULT_N, error_map_slices
 from evotol.robots.assembly import AssemblyFunction
-from evotol.robots.mechanism.callout_model import zone_per_t
+from evotol.robots.mechanism.callouts.model import zone_per_t
 
 _PER_SOURCE = "m or rad (the source's unit, see units.tolerances)"
 _COORD = "workspace coordinate, SI (see workspace.units)"

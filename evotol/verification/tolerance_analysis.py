@@ -33,7 +33,7 @@ from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.verification.montecarlo import verify
 from evotol._runtime.random_state import seed_from
-from evotol.robots.mechanism.posture import joints_at
+from evotol.robots.mechanism.posture.held import joints_at
 
 AXES = ("x", "y", "z")
 COMPONENT_ROWS = {"position": slice(0, 3), "orientation": slice(3, 6)}

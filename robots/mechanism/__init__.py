@@ -24,7 +24,7 @@ Parameters
 ----------
 n : int
     Number of configurations.
-model : evotol.robots.mechanism.model.MechanismModel
+model : evotol.robots.mechanism.model.error_model.MechanismModel
     The mechanism's error model.
 path : str or Path
     The URDF file.
@@ -36,11 +36,11 @@ max_step : float, optional
 zones : {"exact", "boxes"}
     The zone model.
 """
-from evotol.robots.mechanism.description import load_mechanism, mechanism_from_dict
-from evotol.robots.mechanism.kinematics import Kinematics
-from evotol.robots.mechanism.mechanism import Mechanism
-from evotol.robots.mechanism.model import MechanismModel
-from evotol.robots.mechanism.parts import ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point
+from evotol.robots.mechanism.description.reader import load_mechanism, mechanism_from_dict
+from evotol.robots.mechanism.kinematics.tree import Kinematics
+from evotol.robots.mechanism.description.mechanism import Mechanism
+from evotol.robots.mechanism.model.error_model import MechanismModel
+from evotol.robots.mechanism.description.parts import ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point
 
 __all__ = ["ClearanceChain", "ClearanceSpec", "Coordinate", "Frame", "Kinematics", "Loop", "Mechanism", "MechanismModel",
            "Point", "load_mechanism", "mechanism_from_dict"]

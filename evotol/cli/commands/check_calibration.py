@@ -93,8 +93,8 @@ def check_calibration(path, overrides: dict | None = None) -> dict:
         capped = {n: b["upper"] for n, b in info.bounds.items() if b["upper"] < b["upper_before"]}
         return {"name": spec.get("name", p.stem), "identification": info.identification.to_dict(),
                 "noise": info.noise, "capped": capped}
-    from evotol.robots.mechanism.model import MechanismModel
-    from evotol.robots.mechanism.shipped import resolve_description
+    from evotol.robots.mechanism.model.error_model import MechanismModel
+    from evotol.robots.mechanism.description.shipped import resolve_description
 
     if "noise" not in table:
         raise ValidationError("--noise", None, "the instrument noise with its unit (a mechanism file has no [calibration])")

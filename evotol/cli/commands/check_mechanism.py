@@ -60,7 +60,7 @@ def _fd_text(fd_rel_error, ok: bool, rtol: float) -> str:
 
 def print_understood(out: dict) -> None:
     """The parameters, the assembly (declared and solved joints) and the end-effector pose, in mm
-    and deg (:func:`evotol.robots.mechanism.checks.understood`).
+    and deg (:func:`evotol.robots.mechanism.checks.description.understood`).
 
     Parameters
     ----------
@@ -103,7 +103,7 @@ def cmd_check_mechanism(args) -> int:
     ------
     ValidationError
         A description that cannot be read or checked (from
-        :func:`evotol.robots.mechanism.checks.check_mechanism`), a URDF file without ``--tip``, or a
+        :func:`evotol.robots.mechanism.checks.description.check_mechanism`), a URDF file without ``--tip``, or a
         description file with ``--tip``.
     KinematicsError
         The loops do not close at the assembly, or close far from the declared joints.
@@ -119,7 +119,7 @@ def cmd_check_mechanism(args) -> int:
                               "--tip names the end link of a .urdf file")
     # loaded here, not at import: every sub-command module is imported to build `evotol --help`,
     # which must not pay for NumPy, the clearance engine and Pinocchio (tests/test_front_door.py)
-    from evotol.robots.mechanism.checks import check_mechanism
+    from evotol.robots.mechanism.checks.description import check_mechanism
 
     if args.at is not None:          # the forward kinematics at given joints (issue 33)
         return print_forward_at(args)
@@ -164,11 +164,11 @@ def print_forward_at(args) -> int:
     ------
     ValidationError
         A description that cannot be read, or joint values it refuses
-        (:func:`evotol.robots.mechanism.forward_at.forward_at`).
+        (:func:`evotol.robots.mechanism.kinematics.forward_at.forward_at`).
     """
-    from evotol.robots.mechanism.forward_at import forward_at
-    from evotol.robots.mechanism.model import MechanismModel
-    from evotol.robots.mechanism.shipped import resolve_description
+    from evotol.robots.mechanism.kinematics.forward_at import forward_at
+    from evotol.robots.mechanism.model.error_model import MechanismModel
+    from evotol.robots.mechanism.description.shipped import resolve_description
 
     model = MechanismModel(resolve_description(args.file, None))
     out = forward_at(model, args.at)
@@ -191,7 +191,7 @@ def print_callouts(out: dict) -> None:
     Parameters
     ----------
     out : dict
-        :func:`evotol.robots.mechanism.checks.check_mechanism`'s report; nothing is printed without
+        :func:`evotol.robots.mechanism.checks.description.check_mechanism`'s report; nothing is printed without
         ``callouts``.
     """
     cs = out.get("callouts") or []
@@ -216,7 +216,7 @@ def print_callouts(out: dict) -> None:
 
 def print_limits_and_rank(out: dict) -> None:
     """Workspace box, joint limits and the rank of the sources over the workspace, in mm and deg,
-    naming blind and duplicated sources (:mod:`evotol.robots.mechanism.inspection`).
+    naming blind and duplicated sources (:mod:`evotol.robots.mechanism.checks.inspection`).
 
     Parameters
     ----------
@@ -276,10 +276,10 @@ def cmd_check_urdf(args, srcs) -> int:
         No ``--tip`` given.
     """
     from evotol.errors import ValidationError
-    from evotol.robots.mechanism.urdf_check import check_urdf_file
+    from evotol.robots.mechanism.urdf.check import check_urdf_file
 
     if not args.tip:
-        from evotol.robots.mechanism.forward_at import urdf_end_links
+        from evotol.robots.mechanism.kinematics.forward_at import urdf_end_links
         ends = urdf_end_links(args.file)
         raise ValidationError("--tip", None, "the URDF link or frame that is the end-effector; its end links: "
                                              + (", ".join(ends) if ends else "none found"))

@@ -96,7 +96,7 @@ def robot_for(name: str, settings: list[str]):
     Returns
     -------
     evotol.robots.base.RobotErrorModel
-        The robot, or a :class:`evotol.robots.mechanism.model.MechanismModel` of the description.
+        The robot, or a :class:`evotol.robots.mechanism.model.error_model.MechanismModel` of the description.
 
     Raises
     ------
@@ -108,7 +108,7 @@ def robot_for(name: str, settings: list[str]):
 
     from evotol.errors import ValidationError
     from evotol.robots import registry
-    from evotol.robots.mechanism.model import SHIPPED, MechanismModel, resolve_description
+    from evotol.robots.mechanism.model.error_model import SHIPPED, MechanismModel, resolve_description
 
     path = Path(name)
     description = path.is_file() or (":" not in name and (SHIPPED / f"{name}.toml").is_file())

@@ -156,7 +156,7 @@ class ClearanceSources:
     Examples
     --------
     >>> from evotol import ClearanceClass, ClearanceSources, MechanismModel
-    >>> from evotol.robots.mechanism.model import resolve_description
+    >>> from evotol.robots.mechanism.model.error_model import resolve_description
     >>> robot = MechanismModel(resolve_description("fivebar"))
     >>> mech = robot.clearance_mechanism()
     >>> [j.name for j in mech.joints]

@@ -3,13 +3,13 @@ simulated ISO 9283 test on the nonlinear model (docs/iso9283.md).
 
 Parameters
 ----------
-robot : evotol.robots.mechanism.model.MechanismModel
+robot : evotol.robots.mechanism.model.error_model.MechanismModel
     The arm (its workspace has coordinates x, y, z; its sources are the systematic columns).
 positions : (p, 3) array_like
     Commanded positions (m), e.g. :func:`evotol.measures.iso9283.poses.iso_positions`.
 systematic : (n_columns,) array_like
     Tolerance ``t_i`` of each column of the model (m or rad; errors uniform in ``±t_i``; 0: none).
-sources : sequence of evotol.robots.mechanism.random_sources.RandomSource
+sources : sequence of evotol.robots.mechanism.model.random_sources.RandomSource
     The random sources (their ``tolerance`` is used unless ``random_t`` is given).
 random_t : (n_random,) array_like or None
     Tolerances of the random sources overriding theirs (SI).
@@ -18,7 +18,7 @@ S : (p, 6, n_columns) ndarray
 direction : (3,) array_like
     A unit approach motion of the tool (base frame).
 loadings : list of ndarray
-    :func:`evotol.robots.mechanism.random_sources.column_loading` of the sources.
+    :func:`evotol.robots.mechanism.model.random_sources.column_loading` of the sources.
 t : (n_random,) ndarray
     Tolerances of the random sources (SI).
 signs : list of dict
@@ -33,7 +33,7 @@ from evotol.errors import ValidationError
 from evotol.measures.iso9283.figures import (ap_at_yield, ap_worst_case, cycle_errors_linear, figures_of_test, gaussian_rp,
                                     rp_from_errors, worst_direction)
 from evotol.measures.iso9283.poses import full_poses
-from evotol.robots.mechanism.random_sources import backlash_offset, column_loading, cycle_errors, unit_draws
+from evotol.robots.mechanism.model.random_sources import backlash_offset, column_loading, cycle_errors, unit_draws
 
 #: approach motions (unit, base frame): the unidirectional test approaches moving down; the
 #: multi-directional test adds motions along +x and +y (ISO 9283 approaches parallel to the base axes)

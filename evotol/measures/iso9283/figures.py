@@ -18,7 +18,7 @@ Prediction (first order, position rows ``J`` of the sensitivity at a pose, colum
 * **AP at a yield.** Robots drawn uniformly within the tolerances (``b'_J ~ U(0, b_J)``), the yield
   quantile of ``|J (δ + o)|`` (sampled).
 * **RP.** Cycle errors ``e = J Σ_k t_k G_k d_k`` (unit draws ``d_k`` of each random source,
-  :mod:`evotol.robots.mechanism.random_sources`); ``RP = E l + 3 std l`` with ``l = |e − E e|``, the limit of the
+  :mod:`evotol.robots.mechanism.model.random_sources`); ``RP = E l + 3 std l`` with ``l = |e − E e|``, the limit of the
   standard's estimate for many cycles -- **sampled** (``n_samples`` draws), not a Gaussian: bounded errors
   have lighter tails, and :func:`gaussian_rp` (the same covariance, a normal law) over-predicts RP (by
   ~10 % when one uniform joint error dominates: ``1.505 a`` against ``1.366 a``).
@@ -30,11 +30,11 @@ Parameters
 J : (p, 3, n_columns) ndarray
     Position rows of the first-order map per pose (m per m or rad).
 loadings : list of (n_columns, dim) ndarray
-    Per random source its column loading (:func:`evotol.robots.mechanism.random_sources.column_loading`).
+    Per random source its column loading (:func:`evotol.robots.mechanism.model.random_sources.column_loading`).
 tolerances : (n_random,) array_like
     Tolerances of the random sources (SI).
 draws : list of (n, dim) ndarray
-    Unit draws per source (:func:`evotol.robots.mechanism.random_sources.unit_draws`).
+    Unit draws per source (:func:`evotol.robots.mechanism.model.random_sources.unit_draws`).
 n_samples : int
     Number of draws.
 seed : int or None

@@ -1,0 +1,1 @@
+"""What ``evotol check-mechanism`` checks and shows about a description."""

@@ -1,0 +1,1 @@
+"""Kinematics of a described mechanism: the frame tree, placements, the compiled serial chain."""

@@ -1,0 +1,1 @@
+"""The error model of a described mechanism: its sources, joint configurations, clearances, random sources, identifiability."""

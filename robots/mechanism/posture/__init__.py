@@ -1,0 +1,1 @@
+"""The posture a mechanism holds: inverse geometry, the declared working mode, the posture over a task."""

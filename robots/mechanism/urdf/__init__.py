@@ -1,0 +1,1 @@
+"""Serial arms from URDF, read with Pinocchio, and their agreement with Pinocchio."""
