@@ -5,12 +5,74 @@ joint limits), workspace poses (solved by the model's inverse geometry), or a co
 Latin hypercube over the workspace box or over the joint limits (serial arms). What is returned
 is always joint values, so the identification and the simulated calibration use the same robot
 configurations.
+
+The cell. A configuration that puts a joint origin or the tool below the plan's floor (``z < floor``
+in the base frame; by default the mounting plane ``z = 0``) or inside one of its obstacle boxes is
+not in the plan: given joints or poses are refused naming the configuration and the frame; a drawn
+plan keeps the admissible configurations of its Latin hypercube and draws further hypercubes
+(seeds ``seed + 1``, ``seed + 2``, ...) until it has ``count`` of them (at most ``MAX_DRAWS``).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from evotol.errors import KinematicsError, ValidationError
+
+#: Latin hypercubes drawn at most to find ``count`` configurations inside the cell
+MAX_DRAWS = 50
+
+
+def cell_violations(robot, joints, plan) -> list:
+    """For each configuration, the first frame below the floor or inside an obstacle, else None.
+
+    Parameters
+    ----------
+    robot : evotol.robots.mechanism.model.error_model.MechanismModel
+        A described mechanism (its joint frames and tool frame).
+    joints : (n, n_variables) ndarray
+        Joint values (rad, m).
+    plan : evotol.calibration.plan.CalibrationPlan
+        The plan (``floor`` in m or None, ``obstacles``: (min, max) boxes in m).
+
+    Returns
+    -------
+    list of (str, ndarray) or None
+        Per configuration: ``(frame name, its origin (3,) m)`` of the first offending frame, or None.
+    """
+    Q = np.asarray(joints, float)
+    n = len(Q)
+    if plan.floor is None and not plan.obstacles:
+        return [None] * n
+    kin = robot.kin
+    st = kin.state({v: Q[:, i] for i, v in enumerate(kin.variables)}, n, twists=False)
+    frames = [f for f in list(kin.variables) + [robot.mechanism.end_effector] if f in st.world]
+    P = np.stack([np.asarray(st.world[f], float).reshape(n, 4, 4)[:, :3, 3] for f in frames], 1)   # (n, F, 3)
+    bad = P[..., 2] < plan.floor - 1e-9 if plan.floor is not None else np.zeros(P.shape[:2], bool)
+    for lo, hi in plan.obstacles:
+        bad |= np.all((P >= lo) & (P <= hi), axis=2)
+    return [(frames[int(np.argmax(b))], P[i, int(np.argmax(b))]) if b.any() else None for i, b in enumerate(bad)]
+
+
+def _refuse_outside_cell(robot, Q, plan, field: str) -> None:
+    """One line naming the first given configuration outside the cell."""
+    for i, v in enumerate(cell_violations(robot, Q, plan)):
+        if v is not None:
+            where = f"below the floor z = {plan.floor:g} m" if plan.floor is not None and v[1][2] < plan.floor - 1e-9 \
+                else "inside an obstacle"
+            raise ValidationError(f"calibration.{field}[{i}]", np.round(Q[i], 6).tolist(), f"a configuration inside the "
+                                  f"cell ({v[0]} at z = {v[1][2]:.4g} m is {where})")
+
+
+def _draw_inside(robot, plan, draw) -> np.ndarray:
+    """``plan.count`` joint configurations of successive draws ``draw(seed)`` that stay inside the cell."""
+    kept = []
+    for d in range(MAX_DRAWS):
+        Q = draw(plan.seed + d)
+        kept += [q for q, v in zip(Q, cell_violations(robot, Q, plan)) if v is None]
+        if len(kept) >= plan.count:
+            return np.asarray(kept[:plan.count], float)
+    raise ValidationError("calibration.floor", plan.floor, f"a cell in which {plan.count} configurations can be drawn "
+                          f"({len(kept)} of {MAX_DRAWS} Latin hypercubes stay above the floor and out of the obstacles)")
 
 
 def is_described(robot) -> bool:
@@ -81,20 +143,29 @@ def calibration_joints(robot, plan) -> np.ndarray | None:
                                       "add them under [limits], or draw over the workspace")
             from scipy.stats import qmc
 
-            Q = lo + qmc.LatinHypercube(d=len(lo), seed=plan.seed).random(int(plan.count)) * (hi - lo)
+            return _draw_inside(robot, plan, lambda s: lo + qmc.LatinHypercube(d=len(lo), seed=s).random(int(plan.count)) * (hi - lo))
         out = (Q < lo - 1e-9) | (Q > hi + 1e-9)
         if out.any():
             i, j = (int(a[0]) for a in np.nonzero(out))
             raise ValidationError(f"calibration.joints[{i}]", Q[i].tolist(),
                                   f"joint values inside the limits ({kin.variables[j]} = {Q[i, j]:.6g} outside "
                                   f"[{lo[j]:.6g}, {hi[j]:.6g}])")
+        _refuse_outside_cell(robot, Q, plan, "joints")
         return np.asarray(Q, float)
-    P = calibration_poses(robot, plan)
+    if plan.poses is not None:
+        Q = _joints_of(robot, calibration_poses(robot, plan))
+        _refuse_outside_cell(robot, Q, plan, "poses")
+        return Q
+    return _draw_inside(robot, plan, lambda s: _joints_of(robot, robot.workspace.latin_hypercube(int(plan.count), seed=s)))
+
+
+def _joints_of(robot, P) -> np.ndarray:
+    """Joint values (n, n_variables) of workspace poses P, or one line naming the poses."""
     try:
         q = robot.joint_values(P)
     except KinematicsError as exc:
         raise ValidationError("calibration.poses", P.tolist()[:3], f"poses the robot reaches inside its joint limits ({exc})") from None
-    return np.stack([np.asarray(q[v], float) for v in kin.variables], axis=1)
+    return np.stack([np.asarray(q[v], float) for v in robot.kin.variables], axis=1)
 
 
 def calibration_poses(robot, plan) -> np.ndarray:

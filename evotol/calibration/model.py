@@ -7,12 +7,11 @@ it unchanged. The instrument noise, propagated through the fit to a task pose, i
 ``C = J_K Σ_K J_Kᵀ`` (:meth:`CalibratedRobot.noise_covariance`); it enters the requirement
 (:func:`noise_allowance`):
 
-* worst-case measures (``worst_case``, ``mc_quantile`` and the other bounds) keep ``k`` sigma of it:
-  the geometric error must stay below ``E − k max_poses sqrt(λ_max(C))`` (the triangle inequality).
-  ``k`` sigma bounds the noise's component along every direction with the 1-D probability (99.73 %
-  at ``k = 3``); its 3-D norm stays inside the ball with probability at least ``P(χ₃ ≤ k)``
-  (97.1 % at ``k = 3``), stated in the report as the coverage;
-* ``rss`` adds it in quadrature: ``sqrt(E² − (k σ)²)``;
+* worst-case measures (``worst_case``, ``mc_quantile`` and the other bounds) keep the quantile ``q`` of
+  the noise's norm at the level ``P(|z| ≤ k)`` (99.73 % at ``k = 3``; :mod:`evotol.calibration.noise_share`):
+  the geometric error must stay below ``E − max_poses q`` (the triangle inequality), so that at a pose
+  the residual meets ``E`` with at least that probability;
+* ``rss`` adds it in quadrature: ``sqrt(E² − q²)``;
 * ``yield`` adds ``C`` to the first-order covariance at every pose (exact for normal sources: the
   noise is normal and independent of the geometric errors).
 
@@ -29,8 +28,8 @@ poses : (n, workspace.dim) array_like
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import chi
 
+from evotol.calibration.noise_share import level_of, norm_quantile
 from evotol.errors import ValidationError
 from evotol.robots.base import RobotErrorModel
 
@@ -146,8 +145,14 @@ class CalibratedRobot(RobotErrorModel):
              "their upper bounds only (no linear-range check, no simulated calibration)."])
 
 
-def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: dict | None = None) -> dict:
+def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: dict | None = None,
+                    remainder: dict | None = None) -> dict:
     """How much of the requirement the instrument noise takes, per constrained component (module docstring).
+
+    The noise's share is the quantile ``q`` of the propagated noise's norm at the level
+    ``P(|z| ≤ k)`` (99.73 % at ``k = 3``), the largest over the poses
+    (:func:`evotol.calibration.noise_share.norm_quantile`): at any one pose the noise's norm stays
+    below it with that probability. ``k σ_max`` is kept beside it for comparison.
 
     Parameters
     ----------
@@ -161,35 +166,41 @@ def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: di
         Component -> second-order effect of the noise-driven identified values (m, rad;
         :func:`evotol.calibration.linear_range.noise_second_order`), taken off the bound first
         under every rule.
+    remainder : dict, optional
+        Component -> the second-order allowance of the sources within their final upper bounds (m,
+        rad; :func:`evotol.calibration.linear_range.remainder_allowance`), taken off the bound too.
 
     Returns
     -------
     dict
         ``rule`` (``"linear"``, ``"quadrature"`` or ``"covariance"``), ``k``, and per constrained
-        component: ``{component: {"sigma": largest propagated sigma (m or rad), "allowance": k sigma,
-        "second_order": the noise's second-order term, "bound": the user's bound,
+        component: ``{component: {"sigma": largest propagated sigma (m or rad), "k_sigma": k sigma,
+        "allowance": the noise's quantile q, "level": its probability, "second_order": the noise's
+        second-order term, "remainder": the sources' second-order allowance, "bound": the user's bound,
         "geometric_bound": what is left for the tolerances, "coverage": the probability that the
-        3-D noise stays inside the ball of radius k sigma_max, at least ``P(chi_3 <= k)``}}``.
+        3-D noise stays inside the ball of radius q at a pose (= level)}}``.
 
     Raises
     ------
     evotol.errors.ValidationError
-        The noise alone takes the whole requirement (names the component and the k sigma).
+        The noise alone takes the whole requirement (names the component and its share).
     """
     rule = NOISE_RULE.get(requirement.measure, "linear")
     k = float(robot.plan.k)
+    level = level_of(k)
     sig = robot.noise_sigma(poses)
+    cov = robot.noise_covariance(poses)
     out = {"rule": rule, "k": k}
-    for comp in ("position", "orientation"):
+    for comp, o in (("position", 0), ("orientation", 3)):
         E = getattr(requirement, comp)
         if E is None:
             continue
         s = float(sig[comp].max())
-        d = float((second_order or {}).get(comp, 0.0))
-        a = k * s
+        d = float((second_order or {}).get(comp, 0.0)) + float((remainder or {}).get(comp, 0.0))
+        a = float(norm_quantile(cov[:, o:o + 3, o:o + 3], level).max(initial=0.0))
         if a + d >= E or (rule == "covariance" and d >= E):
             u = "m" if comp == "position" else "rad"
-            raise ValidationError("calibration.noise", f"{k:g} sigma = {a:.3g} {u} + second order {d:.3g} {u}",
+            raise ValidationError("calibration.noise", f"{100 * level:.2f} % quantile {a:.3g} {u} + second order {d:.3g} {u}",
                                   f"an instrument noise whose {comp} effect after calibration stays below the requirement "
                                   f"{E:g} {u} (condition number {robot.identification.condition:.3g}: spread the "
                                   "configurations, e.g. over = 'joints', or identify fewer sources)")
@@ -197,6 +208,8 @@ def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: di
             geo = float(E - d)
         else:
             geo = float(E - d - a) if rule == "linear" else float(np.sqrt((E - d) ** 2 - a * a))
-        out[comp] = {"sigma": s, "allowance": a, "second_order": d, "bound": float(E), "geometric_bound": geo,
-                     "coverage": float(chi(df=3).cdf(k))}
+        out[comp] = {"sigma": s, "k_sigma": k * s, "allowance": a, "level": level,
+                     "second_order": float((second_order or {}).get(comp, 0.0)),
+                     "remainder": float((remainder or {}).get(comp, 0.0)), "bound": float(E), "geometric_bound": geo,
+                     "coverage": level}
     return out

@@ -138,6 +138,13 @@ class CalibrationPlan:
     compensation_range : mapping of str to float, optional
         Source pattern -> the largest correction the controller applies (m or rad); a calibrated
         source's tolerance never exceeds it.
+    floor : float or str or None
+        Height of the cell's floor (the mounting plane) in the base frame (m, or text with its unit,
+        ``"0 mm"``); a configuration that puts a joint origin or the tool below it is not in the plan
+        (:mod:`evotol.calibration.configurations`). Default 0: the mounting plane. None (``"none"``): no floor.
+    obstacles : sequence of mapping, optional
+        Axis-aligned boxes ``{"min": [x, y, z], "max": [x, y, z]}`` (m) in the base frame that no
+        joint origin and no tool may enter.
     require_units : bool
         Refuse noise values without a unit (a study file's table); False (Python) takes numbers as SI.
 
@@ -162,6 +169,8 @@ class CalibrationPlan:
     k: float = 3.0
     linear_fraction: float = 0.1
     compensation_range: Mapping = field(default_factory=dict)
+    floor: object = 0.0
+    obstacles: tuple = ()
     require_units: bool = False
 
     def __post_init__(self):
@@ -220,6 +229,25 @@ class CalibrationPlan:
         for pat, v in dict(self.compensation_range).items():
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (np.isfinite(v) and v > 0):
                 raise ValidationError(f"calibration.compensation_range.{pat}", v, "a positive range (m or rad)")
+        fl = self.floor
+        if isinstance(fl, str) and fl.strip().lower() == "none":
+            fl = None
+        if isinstance(fl, str):
+            fl = parse_quantity(fl, "calibration.floor", "length")
+        if fl is not None and (isinstance(fl, bool) or not isinstance(fl, (int, float)) or not np.isfinite(fl)):
+            raise ValidationError("calibration.floor", self.floor, "a height in the base frame (m, or '0 mm'), or none")
+        object.__setattr__(self, "floor", None if fl is None else float(fl))
+        boxes = []
+        for i, box in enumerate(self.obstacles if isinstance(self.obstacles, (list, tuple)) else [self.obstacles]):
+            try:
+                lo, hi = (np.asarray(box[k], float) for k in ("min", "max"))
+            except (TypeError, KeyError, ValueError):
+                raise ValidationError(f"calibration.obstacles[{i}]", box, "a box {min = [x, y, z], max = [x, y, z]} (m)") from None
+            if lo.shape != (3,) or hi.shape != (3,) or not np.all(np.isfinite(lo) & np.isfinite(hi)) or np.any(hi <= lo):
+                raise ValidationError(f"calibration.obstacles[{i}]", box, "a box {min = [x, y, z], max = [x, y, z]} (m) "
+                                      "with min < max on every axis")
+            boxes.append((lo, hi))
+        object.__setattr__(self, "obstacles", tuple(boxes))
 
     @property
     def rows_per_configuration(self) -> int:

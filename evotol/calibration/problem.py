@@ -23,7 +23,8 @@ import numpy as np
 
 from evotol.calibration.configurations import is_described
 from evotol.calibration.identification import Identification, identify
-from evotol.calibration.linear_range import calibrated_upper_bounds, noise_second_order
+from evotol.calibration.linear_range import (calibrated_upper_bounds, checked_range, noise_second_order,
+                                             remainder_allowance, second_order_norms)
 from evotol.calibration.model import CalibratedRobot, noise_allowance
 from evotol.calibration.plan import CalibrationPlan
 from evotol.core.problem import ToleranceProblem
@@ -68,7 +69,7 @@ class CalibrationInfo:
             ``measure``, ``instrument``, ``k``, ``linear_fraction`` and noise sigmas.
         """
         p = self.plan
-        fields = ("linear_range", "compensation_range", "upper_before", "upper")
+        fields = ("linear_range", "compensation_range", "checked_range", "upper_before", "upper")
         bounds = {f: {n: b[f] for n, b in self.bounds.items() if b.get(f) is not None} for f in fields}
         return {"identification": self.identification.to_dict(), "noise": self.noise, "tolerance_bounds": bounds,
                 "measure": list(p.measure), "instrument": p.instrument, "k": float(p.k),
@@ -117,6 +118,26 @@ def check_composable(problem) -> None:
                               "joint maps give the linear-range bounds and the simulated calibration")
 
 
+def _checked(robot, idn, plan, task_joints, req, norms, tolerances, bounds):
+    """The upper bounds after the iterated fit's check (:func:`checked_range`), and the second-order allowance.
+
+    Every free source's upper bound is scaled by the check's ``c`` when below 1 (``checked_range`` in
+    ``bounds``); the allowance is the larger of the proven second-order term at the final bounds and
+    the largest residual beyond first order the check saw (m, rad).
+    """
+    cols = [n.split("[")[0] for n in idn.source_names]
+    b = np.array([tolerances[n].upper for n in cols], float)
+    c, seen = checked_range(robot, idn, plan, task_joints, np.where(np.isfinite(b), b, 0.0), req)
+    if c < 1:
+        for n, tol in list(tolerances.items()):
+            if tol.locked is None and n in bounds:
+                tolerances[n] = dataclasses.replace(tol, upper=max(c * tol.upper, tol.lower))
+                bounds[n]["checked_range"] = float(c * tol.upper)
+        b = np.array([tolerances[n].upper for n in cols], float)
+    proven = remainder_allowance(norms, np.where(np.isfinite(b), b, 0.0))
+    return tolerances, {k: max(v, seen.get(k, 0.0)) for k, v in proven.items()}
+
+
 def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
     """The problem of the same robot after the plan's calibration (module docstring).
 
@@ -149,21 +170,26 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
     idn = identify(robot, plan)
     cal = CalibratedRobot(robot, idn, plan)
     req = problem.requirement
-    task_joints, second = None, None
+    task_joints, second, norms = None, None, None
     if is_described(robot):
         q = robot.joint_values(problem.poses)
         task_joints = np.stack([np.asarray(q[v], float) for v in robot.kin.variables], axis=1)
         second = noise_second_order(robot, idn, plan, task_joints)
+        norms = second_order_norms(robot, idn, plan, task_joints)
     cal.linear_range_checked = task_joints is not None
-    noise = noise_allowance(cal, problem.poses, req, second)
-    bounds = calibrated_upper_bounds(robot, idn, plan, task_joints, req)
+    bounds = calibrated_upper_bounds(robot, idn, plan, task_joints, req, norms)
     tolerances = dict(problem.tolerances)
     for n, b in bounds.items():
         tol = tolerances[n]
         b["upper_before"] = float(tol.upper)
         if b["bound"] is not None and b["bound"] < tol.upper and tol.locked is None:
             tolerances[n] = dataclasses.replace(tol, upper=max(b["bound"], tol.lower))
+    remainder = None
+    if task_joints is not None and plan.linear_fraction < 1:          # >= 1 (Python only): first order, no cap
+        tolerances, remainder = _checked(robot, idn, plan, task_joints, req, norms, tolerances, bounds)
+    for n, b in bounds.items():
         b["upper"] = float(tolerances[n].upper)
+    noise = noise_allowance(cal, problem.poses, req, second, remainder)
     changes = {c: v["geometric_bound"] for c, v in noise.items() if isinstance(v, dict)}
     new_req = dataclasses.replace(req, **changes) if noise["rule"] != "covariance" else req
     shared = problem.shared or None

@@ -198,7 +198,7 @@ def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 
         out["predicted"][comp] = {"max": float(nl.max()), "quantile": float(np.quantile(nl, quantile))}
         out["difference"][comp] = float(np.abs(sim[:, :, ROWS[comp]] - lin[:, :, ROWS[comp]]).max())
         nz = info.noise.get(comp, {})
-        allow = nz.get("allowance", 0.0) + nz.get("second_order", 0.0)
+        allow = nz.get("allowance", 0.0) + nz.get("second_order", 0.0) + nz.get("remainder", 0.0)
         out["worst_case"][comp] = float(np.max(getattr(wc, comp)[0])) + float(allow)
         out["requirement"][comp] = float(E_req)
         out["exceed_rate"][comp] = float(np.mean(ns > E_req))

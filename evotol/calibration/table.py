@@ -12,6 +12,8 @@
     k = 3                      # noise coverage in worst-case measures
     linear_fraction = 0.1      # second-order terms below this fraction of the requirement
     compensation_range = { "*_joint" = 0.05 }   # rad or m: the controller's largest correction
+    floor = "0 mm"             # the cell's floor in the base frame (default: the mounting plane, z = 0)
+    obstacles = [{ min = [0.3, -0.2, 0.0], max = [0.6, 0.2, 0.1] }]   # boxes (m) no joint or tool enters
     simulate = 200             # robots in the simulated calibration of each design (0: none)
 
 Every key is checked before any work; the noise must carry its unit.
@@ -23,7 +25,7 @@ from evotol._runtime.keyword_checks import unknown_key_message
 from evotol.errors import ValidationError, is_integer
 
 KEYS = ("joints", "poses", "count", "over", "seed", "measure", "noise", "identify", "instrument", "k",
-        "linear_fraction", "compensation_range", "simulate")
+        "linear_fraction", "compensation_range", "floor", "obstacles", "simulate")
 
 
 def plan_from_table(table, seed: int = 0) -> tuple[CalibrationPlan, int]:

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 from evotol.units.display import DisplayUnits
 
-_RULES = {"linear": "k sigma taken off the bound (worst-case measures)",
-          "quadrature": "k sigma added in quadrature (rss)",
+_RULES = {"linear": "the quantile and the second-order terms taken off the bound (worst-case measures)",
+          "quadrature": "the quantile added in quadrature, the second-order terms taken off (rss)",
           "covariance": "its covariance added to the yield model (exact for normal sources)"}
 
 
@@ -56,7 +56,8 @@ def noise_texts(summary: dict) -> list[str]:
     Returns
     -------
     list of str
-        The propagated sigma, the k-sigma allowance, the second-order term and the geometric share.
+        The propagated sigma, the noise's quantile at the plan's level, the second-order terms and the
+        geometric share.
     """
     plan = summary["calibration"]["plan"]
     out = []
@@ -65,10 +66,12 @@ def noise_texts(summary: dict) -> list[str]:
             continue
         u = "m" if comp == "position" else "rad"
         out.append(f"Noise share of the {comp} requirement {_fmt(summary, n['bound'], u)}: largest propagated sigma "
-                   f"{_fmt(summary, n['sigma'], u)}, {plan['k']:g} sigma = {_fmt(summary, n['allowance'], u)}, "
-                   f"second-order term of the noise-driven corrections {_fmt(summary, n['second_order'], u)}; "
-                   f"{_RULES[plan['noise']['rule']]} (the 3-D noise stays inside the {plan['k']:g}-sigma ball with "
-                   f"probability at least {100 * n['coverage']:.1f} %). The tolerances hold the geometric share "
+                   f"{_fmt(summary, n['sigma'], u)} ({plan['k']:g} sigma = {_fmt(summary, n.get('k_sigma', 0.0), u)}); "
+                   f"the noise's norm at a pose stays below {_fmt(summary, n['allowance'], u)} with probability "
+                   f"{100 * n['coverage']:.2f} % (its quantile from the propagated covariance); second-order terms: "
+                   f"{_fmt(summary, n['second_order'], u)} of the noise-driven corrections and "
+                   f"{_fmt(summary, n.get('remainder', 0.0), u)} of the sources within their upper bounds; "
+                   f"{_RULES[plan['noise']['rule']]}. The tolerances hold the geometric share "
                    f"{_fmt(summary, n['geometric_bound'], u)} (the requirement shown in the results table).")
     return out
 
@@ -176,4 +179,4 @@ def calibration_section(rep, summary: dict) -> None:
         rep.table(crow, ["design", "component", "robots", "simulated max", "first-order max",
                          f"simulated q{round(100 * next(iter(checks.values()))['quantile_level'])}",
                          f"first-order q{round(100 * next(iter(checks.values()))['quantile_level'])}", "largest difference",
-                         "first-order worst case + noise", "exceed rate", "fit failures"], table_id="calibration-check")
+                         "first-order worst case + noise quantile + second order", "exceed rate", "fit failures"], table_id="calibration-check")

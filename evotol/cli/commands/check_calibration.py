@@ -141,8 +141,9 @@ def cmd_check_calibration(args) -> int:
     for comp, n in (out.get("noise") or {}).items():
         if isinstance(n, dict):
             u, k = ("mm", 1e3) if comp == "position" else ("mrad", 1e3)
-            print(f"  noise at the task poses ({comp}): sigma {n['sigma'] * k:.4g} {u}, {out['noise']['k']:g} sigma "
-                  f"{n['allowance'] * k:.4g} {u}, second order {n['second_order'] * k:.3g} {u}; requirement "
+            print(f"  noise at the task poses ({comp}): sigma {n['sigma'] * k:.4g} {u}, {100 * n['level']:.2f} % quantile "
+                  f"{n['allowance'] * k:.4g} {u}, second order {n['second_order'] * k:.3g} {u} (noise) + "
+                  f"{n['remainder'] * k:.3g} {u} (sources); requirement "
                   f"{n['bound'] * k:.4g} {u} -> tolerances hold {n['geometric_bound'] * k:.4g} {u}")
     if out.get("capped"):
         print(f"  upper bounds capped by the linear range / compensation range: {len(out['capped'])} sources")
