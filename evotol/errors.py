@@ -215,3 +215,36 @@ class WriteFailed(EvotolError):
 
     def __reduce__(self):
         return type(self), (self.path, self.reason)
+
+
+class SchedulerLost(EvotolError):
+    """The Dask scheduler of a run was lost (killed, or not answering at the start): the chunks
+    finished before it are kept, and a rerun resumes them (``docs/reliability.md``).
+
+    Parameters
+    ----------
+    address : str
+        The scheduler's address (``tcp://host:port``).
+    reason : str
+        What was seen, in words (``"the connection closed after 3 of 16 chunks"``).
+    resumable : int, optional
+        The chunks written and verified in a chunk store, which a rerun resumes (default 0).
+    store : str, optional
+        That chunk store's folder (default None: the run stored no chunks).
+
+    Examples
+    --------
+    >>> from evotol.errors import SchedulerLost
+    >>> print(SchedulerLost("tcp://10.0.0.5:8786", "the connection closed", 3, "out/s_store"))
+    the Dask scheduler at tcp://10.0.0.5:8786 was lost (the connection closed); the chunks finished before are in out/s_store: a rerun resumes 3 chunks
+    """
+
+    def __init__(self, address: str, reason: str, resumable: int = 0, store: str | None = None):
+        self.address, self.reason, self.resumable, self.store = address, reason, int(resumable), store
+        where = (f"the chunks finished before are in {store}" if store is not None
+                 else "no chunk store was given, so nothing was kept")
+        super().__init__(f"the Dask scheduler at {address} was lost ({reason}); {where}: "
+                         f"a rerun resumes {self.resumable} chunks")
+
+    def __reduce__(self):
+        return type(self), (self.address, self.reason, self.resumable, self.store)

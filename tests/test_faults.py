@@ -220,6 +220,51 @@ def test_reproduce_refuses_a_study_files_outputs(tmp_path, capsys):
     assert json.loads((out / "yao2013.json").read_text(encoding="utf-8")) == {"mine": 1}
 
 
+def test_reproduce_quick_over_a_full_run_is_refused_and_a_full_run_replaces_a_quick_one(tmp_path, capsys, monkeypatch):
+    """`reproduce NAME --quick` over the files of NAME's full run: refused before any work, one line
+    naming --out, the full run and --force, the files unchanged; with --force it replaces them. A full
+    run over a quick run's files replaces them. A folder written before manifests recorded the flag is
+    judged by NAME.json's ``quick``."""
+    import dataclasses
+
+    import evotol.studies as studies
+
+    runs = []
+
+    def compute(config):
+        runs.append(config["quick"])
+        return StudyResult({"quick": config["quick"], "n": 16 if config["quick"] else 32768, "seconds": 0.0})
+
+    fake = dataclasses.replace(studies.get("yao2013"), compute=compute, render=lambda result: Report("r", "a page"))
+    monkeypatch.setattr(studies, "get", lambda name: fake)
+    monkeypatch.setattr(studies, "available", lambda: {fake.name: fake})
+    out = tmp_path / "out"
+    reproduce = ["reproduce", "yao2013", "-q", "--out", str(out)]
+
+    def files():
+        return {n: b for n, b in _tree(out).items() if n != "index.html"}      # the index is every run's
+
+    def n_written():
+        return json.loads((out / "yao2013.json").read_text(encoding="utf-8"))["n"]
+
+    assert _run(reproduce, capsys)[0] == 0 and runs == [False] and n_written() == 32768
+    full = files()
+    for manifest in (True, False):                  # as written today; a folder from before the flag
+        if not manifest:
+            (out / "yao2013.manifest.json").unlink()
+            full = files()
+        code, err = _run(reproduce + ["--quick"], capsys)
+        assert code == 1 and runs == [False] and files() == full, (code, err)   # no work, nothing changed
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in err, err
+        for words in (f"--out = '{out}'", "a full run's", "--force", "--quick"):
+            assert words in lines[0], (words, lines[0])
+    assert _run(reproduce + ["--quick", "--force"], capsys)[0] == 0 and runs == [False, True] and n_written() == 16
+    assert _run(reproduce + ["--quick"], capsys)[0] == 0 and n_written() == 16     # quick over quick
+    assert _run(reproduce, capsys)[0] == 0 and runs == [False, True, True, False] and n_written() == 32768
+    assert read_manifest(out, "yao2013")["quick"] is False
+
+
 # --- 4. checked chunks ----------------------------------------------------------------------------
 
 class _Square:

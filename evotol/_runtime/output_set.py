@@ -9,7 +9,9 @@ tables and exports, all named from ``NAME``. :func:`claim_outputs` is held aroun
    the owner); a lock whose process has ended on this host is stale and taken over; a live one is a
    one-line :class:`~evotol.errors.ValidationError`. It is removed on every exit Python sees;
 3. refuses another owner's files (:func:`~evotol._runtime.output_paths.check_not_overwriting`);
-4. removes temporary files left by killed writers, and records the owner in ``NAME.manifest.json``
+4. refuses a seed study's ``--quick`` run over the files of its full run (:func:`holds_full_run`;
+   ``--force`` replaces them); a full run replaces a quick run's files;
+5. removes temporary files left by killed writers, and records the owner in ``NAME.manifest.json``
    (``"complete": false``, keeping the earlier run's file hashes) before the first file is written,
    so that a run killed at any moment is recognised as the same owner's on the rerun.
 
@@ -112,9 +114,39 @@ def _take_lock(lock: Path, owner: str) -> None:
     raise ValidationError("--out", str(lock.parent), f"a lock file {lock.name} that can be taken (it keeps changing)")
 
 
+def holds_full_run(out, name: str, manifest: dict) -> bool:
+    """Whether ``out/NAME.*`` are the files of a full (not ``--quick``) run of a seed study.
+
+    The manifest records ``quick`` for the files it vouches for (kept through an interrupted run's
+    manifest); a folder written before manifests recorded it is judged by ``NAME.json``'s
+    ``quick`` key, when the study writes one. Unknown: False.
+
+    Parameters
+    ----------
+    out : str or Path
+        The output folder.
+    name : str
+        The output set's name.
+    manifest : dict
+        The folder's manifest for ``name`` (:func:`read_manifest`).
+
+    Returns
+    -------
+    bool
+        True when the files there are known to be a full run's.
+    """
+    if "quick" in manifest:
+        return manifest["quick"] is False and bool(manifest.get("files"))
+    try:
+        summary = json.loads((Path(out) / f"{name}.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(summary, dict) and summary.get("quick") is False
+
+
 @contextmanager
 def claim_outputs(out, name: str, owner: str, *, force: bool = False, study_file=None,
-                  field: str = "name") -> Iterator[dict]:
+                  field: str = "name", quick: bool | None = None) -> Iterator[dict]:
     """Hold the output set ``out/NAME.*`` for one run: lock, ownership, manifest (module docstring).
 
     Parameters
@@ -132,6 +164,10 @@ def claim_outputs(out, name: str, owner: str, *, force: bool = False, study_file
         ``study_file``).
     field : str, optional
         The field named when ``name`` is not a file name (default ``"name"``).
+    quick : bool, optional
+        A seed study's ``--quick`` flag, recorded in the manifest; a quick run over a full run's
+        files (:func:`holds_full_run`) is refused unless ``force`` (default None: not a seed
+        study, nothing recorded or checked).
 
     Yields
     ------
@@ -141,8 +177,8 @@ def claim_outputs(out, name: str, owner: str, *, force: bool = False, study_file
     Raises
     ------
     ValidationError
-        ``name`` is not a file name, another live process holds the lock, or the files belong to
-        another owner.
+        ``name`` is not a file name, another live process holds the lock, the files belong to
+        another owner, or a quick run would replace a full run's files.
     """
     check_output_name(name, field)
     out = Path(out)
@@ -153,19 +189,25 @@ def claim_outputs(out, name: str, owner: str, *, force: bool = False, study_file
     had_manifest = manifest_path(out, name).exists()
     written = {}
     try:
-        check_not_overwriting(out, name, study_file, force, owner=owner, manifest=read_manifest(out, name))
-        remove_stale_temporaries(out)
         earlier = read_manifest(out, name)
+        check_not_overwriting(out, name, study_file, force, owner=owner, manifest=earlier)
+        if quick and not force and holds_full_run(out, name, earlier):
+            raise ValidationError("--out", str(out), f"a folder without a full run of {name}: its files there "
+                                  f"({name}.json, {name}.html, ...) are a full run's, which this --quick run would "
+                                  "replace; pass --force to replace them, or give another --out")
+        remove_stale_temporaries(out)
         base = {"name": name, "owner": owner, "pid": os.getpid(), "host": socket.gethostname(), "started": time.time()}
         files = earlier.get("files", {}) if earlier.get("owner") == owner else {}
-        write_text(manifest_path(out, name), json.dumps({**base, "complete": False, "files": files}, indent=1),
-                   record=False)
+        kept = {"quick": earlier["quick"]} if files and "quick" in earlier else {}    # what `files` are
+        write_text(manifest_path(out, name), json.dumps({**base, **kept, "complete": False, "files": files},
+                                                        indent=1), record=False)
         with recording() as written:
             yield written
         root = out.resolve()
         vouched = {str(Path(p).relative_to(root)): h for p, h in sorted(written.items())
                    if Path(p).parent == root}
-        write_text(manifest_path(out, name), json.dumps({**base, "complete": True, "finished": time.time(),
+        mine = {"quick": bool(quick)} if quick is not None else {}
+        write_text(manifest_path(out, name), json.dumps({**base, **mine, "complete": True, "finished": time.time(),
                                                          "files": vouched}, indent=1), record=False)
     except BaseException:
         if not written:        # refused before any file (bad input, ...): leave the folder as it was

@@ -15,7 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from evotol.errors import EvotolError, WriteFailed
+from evotol.errors import EvotolError, SchedulerLost, WriteFailed
 
 #: progress and notes of the command (standard error, see evotol.cli.logs); results are printed to stdout
 log = logging.getLogger(__name__)
@@ -103,7 +103,7 @@ def cmd_reproduce(args) -> int:
         except KeyboardInterrupt:
             interrupted = (name, "stopped before its files were written (files of an earlier run, if any, are untouched)")
             break
-        except WriteFailed:                # a full disk or a read-only folder stops every study alike
+        except (WriteFailed, SchedulerLost):   # a full disk, a read-only folder, a lost scheduler stop every study alike
             raise
         except EvotolError as exc:
             failed.append(name)
@@ -128,7 +128,7 @@ def cmd_reproduce(args) -> int:
     log.info("index: %s", index)
     if len(names) > 1:
         _print_time_table(seconds, failed, time.perf_counter() - t_all)
-    if failed:
+    if failed and len(names) > 1:          # one study: its own line said it
         print(f"[evotol] failed: {', '.join(failed)}", file=sys.stderr)
     if interrupted is not None:
         name, what = interrupted
@@ -385,8 +385,8 @@ def main(argv=None) -> int:
     Returns
     -------
     int
-        Exit status: the sub-command's; 2 after an evotol error; 130 after Ctrl-C; 0 on a
-        broken pipe.
+        Exit status: the sub-command's; 2 after an evotol error; 3 after a fault (a write the
+        system refused, a lost Dask scheduler); 130 after Ctrl-C; 0 on a broken pipe.
 
     Raises
     ------
@@ -412,7 +412,7 @@ def main(argv=None) -> int:
     configure(level_for(args.quiet, args.verbose))
     try:
         return int(args.func(args) or 0)
-    except WriteFailed as exc:            # disk full, read-only folder (issue 42): earlier files kept
+    except (WriteFailed, SchedulerLost) as exc:   # disk full, read-only folder, lost scheduler (issue 42)
         print(f"evotol: error: {exc}", file=sys.stderr)
         return 3
     except EvotolError as exc:

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from evotol.design.factors import ERROR, FEASIBLE
-from evotol.errors import EvotolError, ValidationError
+from evotol.errors import EvotolError, SchedulerLost, ValidationError
 from evotol._runtime.executor import ChunkStore, run_chunks, worker_count
 
 #: an entry evaluator: a DataFrame of factor columns in, one row per entry of objective columns out
@@ -171,6 +171,9 @@ def evaluate(entries: pd.DataFrame, evaluator: Evaluator, *, store: str | Path |
         or ``workers`` is not a positive integer, or the evaluator's columns repeat input column
         names, or the evaluator's output is not a DataFrame or dict of arrays with one row per
         entry (a programming error, raised, not recorded in ``error``).
+    evotol.errors.SchedulerLost
+        The Dask ``scheduler`` did not answer or was lost: names the number of chunks written and
+        verified in ``store``, which a rerun resumes (``docs/reliability.md``).
     """
     from tqdm.auto import tqdm
 
@@ -212,8 +215,12 @@ def evaluate(entries: pd.DataFrame, evaluator: Evaluator, *, store: str | Path |
         if not todo:
             log.backend = "store"
         else:
-            log.backend = run_chunks(_evaluate_chunk, [entries.iloc[bounds[i][0]:bounds[i][1]] for i in todo], _done,
-                                     common=(evaluator,), workers=workers, scheduler=scheduler)
+            try:
+                log.backend = run_chunks(_evaluate_chunk, [entries.iloc[bounds[i][0]:bounds[i][1]] for i in todo],
+                                         _done, common=(evaluator,), workers=workers, scheduler=scheduler)
+            except SchedulerLost as lost:     # the chunks saved so far are verified in the store's manifest
+                kept = len(chunks.chunks) if chunks is not None else 0
+                raise SchedulerLost(lost.address, lost.reason, kept, None if store is None else str(store)) from lost
 
     out = pd.concat([results[i] for i in range(len(bounds))], ignore_index=True)
     out.index = entries.index

@@ -196,12 +196,14 @@ def reproduce(study: Study, out_dir, config: dict, force: bool = False) -> Study
     Raises
     ------
     ValidationError
-        Before any work: another process is writing this study into ``out_dir``, or its files
-        there belong to a study file (:func:`evotol._runtime.output_set.claim_outputs`).
+        Before any work: another process is writing this study into ``out_dir``, its files
+        there belong to a study file, or a quick run (``config["quick"]``) would replace a full
+        run's files without ``force`` (:func:`evotol._runtime.output_set.claim_outputs`).
     """
     out_dir = Path(out_dir)
     config = {**config, "out_dir": str(out_dir)}
-    with claim_outputs(out_dir, study.name, f"seed study {study.name}", force=force):   # one writer (issue 42)
+    with claim_outputs(out_dir, study.name, f"seed study {study.name}", force=force,   # one writer (issue 42)
+                       quick=bool(config.get("quick"))):                                 # no quick over full
         t0 = time.perf_counter()
         result = study.compute(config)
         result.summary.setdefault("seconds", time.perf_counter() - t0)

@@ -14,12 +14,14 @@ items : sequence
 """
 from __future__ import annotations
 
+import asyncio
+import logging
 import os
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, CancelledError, ProcessPoolExecutor, wait
 from typing import Any, Callable, Sequence
 
 from evotol._runtime.orphans import end_with_parent
-from evotol.errors import ValidationError
+from evotol.errors import EvotolError, SchedulerLost, ValidationError
 
 #: ``on_done(index, result)``: called in this process for every finished item
 OnDone = Callable[[int, Any], None]
@@ -107,6 +109,10 @@ def run_chunks(fn: Callable, items: Sequence, on_done: OnDone, *, common: tuple 
     ValidationError
         ``workers`` below 1 (:func:`worker_count`), or a ``scheduler`` without
         ``dask.distributed`` installed.
+    evotol.errors.SchedulerLost
+        The Dask scheduler did not answer at the start, or was lost during the run (its connection
+        closed; distributed's reconnection tracebacks are not logged); the items finished before
+        have been handed to ``on_done``.
     """
     items = list(items)
     if not items:
@@ -177,22 +183,59 @@ def _run_processes(n: int, fn, common, items, on_done: OnDone) -> None:
     pool.shutdown(wait=True)
 
 
+class _QuietReconnect(logging.Filter):
+    """Drops what distributed's client logs while it tries to reach a lost scheduler again (the
+    tracebacks of a reconnection given up): the run ends with one :class:`SchedulerLost` line."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        exc = record.exc_info[1] if record.exc_info else None
+        return not (isinstance(exc, (asyncio.CancelledError, CancelledError, OSError))
+                    or record.getMessage().startswith("Failed to reconnect"))
+
+
+def _lost(client, exc: BaseException) -> bool:
+    """Whether ``exc`` means the scheduler is gone: its futures were cancelled for a lost
+    connection, or a cancellation or a comm error while the client is no longer running (an
+    OSError raised by ``fn`` itself, with the scheduler there, is not)."""
+    if isinstance(exc, EvotolError):
+        return False
+    if getattr(exc, "reason", None) == "scheduler-connection-lost":
+        return True
+    return (isinstance(exc, (asyncio.CancelledError, CancelledError, OSError, TimeoutError))
+            and getattr(client, "status", "running") != "running")
+
+
 def _run_dask(scheduler, fn, common, items, on_done: OnDone) -> None:
     try:
         from distributed import Client, as_completed
     except ImportError as exc:   # pragma: no cover - dask is an optional dependency
         raise ValidationError("scheduler", scheduler, "dask[distributed] installed (pip install evotol[dask])") from exc
     own = not isinstance(scheduler, Client)
-    client = Client(scheduler, set_as_default=False) if own else scheduler
+    address = str(scheduler) if own else str(getattr(scheduler.scheduler, "address", scheduler))
+    quiet, client_log = _QuietReconnect(), logging.getLogger("distributed.client")
+    client_log.addFilter(quiet)
+    client = None
     try:
-        shared = client.scatter(list(common), broadcast=True) if common else []
-        futures = {client.submit(fn, *shared, x, pure=False): i for i, x in enumerate(items)}
         try:
+            client = Client(scheduler, set_as_default=False) if own else scheduler
+        except (OSError, TimeoutError) as exc:       # nothing answers there (distributed's connect timeout)
+            raise SchedulerLost(address, f"no answer at the start: {(str(exc).splitlines() or [type(exc).__name__])[0]}") from exc
+        futures: dict = {}
+        done = 0
+        try:
+            shared = client.scatter(list(common), broadcast=True) if common else []
+            futures = {client.submit(fn, *shared, x, pure=False): i for i, x in enumerate(items)}
             for fut in as_completed(list(futures), loop=client.loop):
-                on_done(futures[fut], fut.result())
-        except BaseException:
+                result = fut.result()
+                on_done(futures[fut], result)
+                done += 1
+        except BaseException as exc:
+            if _lost(client, exc):
+                raise SchedulerLost(address, f"the connection closed after {done} of the {len(items)} chunks "
+                                             "sent to it") from exc
             client.cancel(list(futures))
             raise
     finally:
-        if own:
+        if own and client is not None:
             client.close()
+        client_log.removeFilter(quiet)
