@@ -96,6 +96,10 @@ class Workspace:
     display_scale : tuple of float, optional
         Factor from the SI value to the displayed value, per coordinate (e.g. ``1000`` for m ->
         mm); empty (default): all 1.
+    stated : bool, optional
+        True (default) when the ranges are a task box the user stated; False when they only bound
+        what the robot reaches (a serial arm described without ``[end_effector]`` coordinates,
+        :mod:`evotol.robots.mechanism.description.reach`): grids and samples over it are refused.
 
     Raises
     ------
@@ -110,6 +114,7 @@ class Workspace:
     units: tuple[str, ...]
     display_units: tuple[str, ...] = ()
     display_scale: tuple[float, ...] = ()
+    stated: bool = True
 
     def __post_init__(self):
         n = len(self.names)

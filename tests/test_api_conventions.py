@@ -57,7 +57,7 @@ def test_bad_rng_is_a_named_validation_error(problem, kw, field):
 def test_reprs_are_one_short_line(problem):
     res = allocate_optimum(problem)
     mc = verify(problem, res.tolerances, n_samples=50)
-    for obj, start in ((problem, "ToleranceProblem(robot="), (problem.robot, "LinearStack("),
+    for obj, start in ((problem, "ToleranceProblem(robot="), (problem.model, "LinearStack("),
                        (res, "AllocationResult(method='optimum'"), (mc, "MonteCarloResult(method='lhs'")):
         text = repr(obj)
         assert text.startswith(start) and "\n" not in text and len(text) < 200 and " at 0x" not in text, text

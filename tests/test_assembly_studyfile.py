@@ -16,10 +16,10 @@ def test_clutch_study_file_builds_the_normalised_problem_and_runs(tmp_path):
     spec = tomllib.loads(EXAMPLE.read_text())
     p = load_problem(spec)
     assert p.requirement.position == 1.0 and p.n_poses == 1
-    assert p.robot.derivative_method == "complex step"
+    assert p.model.derivative_method == "complex step"
     # worst case of the arithmetic stack, by hand: Σ |∂φ/∂x_j| t_j / L
     t = np.array([1e-5, 2e-5, 3e-5])
-    expected = float(np.abs(p.robot.gradient[0]) @ t / np.radians(2.0))
+    expected = float(np.abs(p.model.gradient[0]) @ t / np.radians(2.0))
     assert p.evaluate(t[None]).position[0, 0] == pytest.approx(expected, rel=1e-5)
     summary = run_study_file(EXAMPLE, out=tmp_path)
     assert summary["results"]["optimum"]["feasible"]

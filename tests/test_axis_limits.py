@@ -38,7 +38,7 @@ def per_axis_study(position, frame=None, **extra):
 def test_certified_optimum_per_axis_equals_corner_enumeration():
     from evotol.allocators import allocate_optimum
     problem = load_problem(per_axis_study({"x": "0.5*mm", "y": "0.5*mm", "z": "0.5*mm"}))
-    assert isinstance(problem.robot, AxisErrorModel) and problem.n_poses == 15
+    assert isinstance(problem.model, AxisErrorModel) and problem.n_poses == 15
     r = allocate_optimum(problem)
     assert r.verdict.startswith("certified optimal")
     J = MechanismModel(PUMA, sources=SOURCES).sensitivity_at_joints(np.radians(CONFIGS_DEG))
@@ -54,7 +54,7 @@ def test_unequal_limits_tool_frame_and_the_evaluation():
     model = MechanismModel(PUMA, sources=SOURCES)
     Q = np.radians(CONFIGS_DEG)
     J = model.sensitivity_at_joints(Q)
-    R = problem.robot.base.tool_pose(Q)[:, :3, :3]
+    R = problem.model.base.tool_pose(Q)[:, :3, :3]
     Jt = np.swapaxes(R, 1, 2) @ J[:, :3]                         # the error in the nominal tool frame
     t = np.array([3e-5, 2e-5, 1e-5, 4e-5, 2e-5, 1e-5])
     ev = problem.evaluate(t[None])
@@ -115,10 +115,10 @@ def test_axis_limits_value_checks():
 def test_reports_name_the_axis():
     from evotol.reporting.user_study import pose_cells
     problem = load_problem(per_axis_study({"x": "0.5*mm", "z": "0.5*mm"}))
-    assert problem.robot.coordinate_labels == {"axis": ["x", "z"]}
-    ws = problem.robot.workspace
+    assert problem.model.coordinate_labels == {"axis": ["x", "z"]}
+    ws = problem.model.workspace
     summary = {"workspace": {"names": list(ws.names), "display_scale": list(ws.display_scale),
-                             "display_units": list(ws.display_units), "labels": problem.robot.coordinate_labels}}
+                             "display_units": list(ws.display_units), "labels": problem.model.coordinate_labels}}
     assert pose_cells(summary, problem.poses[3]).endswith("axis = z")       # configuration 1, slot 1
     assert "q1 = 0" in pose_cells(summary, problem.poses[3])
 

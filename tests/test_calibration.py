@@ -67,18 +67,18 @@ def test_issue_numbers_rank_and_offsets_only_optimum(ur5):
     range switched off) takes the certified optimum from 15.12 to 1.81. Rank: scipy's pivoted QR of the readings'
     map; optima: an independent SLSQP on the direction-grid relaxation (lower bound within 0.5 %), the calibrated
     map built by numpy.linalg.lstsq (J − J_K A_K⁺ A), not by the module."""
-    idn = identify(ur5.robot, CalibrationPlan(noise=0.0, count=40, seed=0))
-    S = ur5.robot.sensitivity_at_joints(idn.joints)
+    idn = identify(ur5.model, CalibrationPlan(noise=0.0, count=40, seed=0))
+    S = ur5.model.sensitivity_at_joints(idn.joints)
     A = S[:, :3].reshape(-1, S.shape[-1])
     assert idn.rank == qr_rank(A) == 17 and idn.n_measurements == A.shape[0] == 120
     assert "wrist_3_joint" in idn.unseen
-    J = ur5.robot.sensitivity(ur5.poses)[:, :3]
+    J = ur5.model.sensitivity(ur5.poses)[:, :3]
     E = ur5.requirement.position
     own, ref = allocate_optimum(ur5).cost, slsqp_optimum(ur5, J, E)
     assert 0.995 * own <= ref <= own * (1 + 1e-9)
     assert own == pytest.approx(15.12, abs=0.005)                   # the number issue 36 quotes
     pc = calibrated_problem(ur5, CalibrationPlan(noise=0.0, identify=OFFSETS, count=40, seed=0, linear_fraction=1e8))
-    Sc = ur5.robot.sensitivity_at_joints(pc.calibration.identification.joints)
+    Sc = ur5.model.sensitivity_at_joints(pc.calibration.identification.joints)
     Ac = Sc[:, :3].reshape(-1, Sc.shape[-1])
     K = [ur5.names.index(n) for n in OFFSETS]
     G = J - J[:, :, K] @ np.linalg.lstsq(Ac[:, K], Ac, rcond=None)[0]
@@ -90,13 +90,13 @@ def test_issue_numbers_rank_and_offsets_only_optimum(ur5):
 def test_post_calibration_map_against_a_least_squares_fit(ur5):
     """J M dp equals J dp - J_K x, x the lstsq fit of the readings A dp by the identified columns."""
     plan = CalibrationPlan(noise="20 um", identify=OFFSETS, count=40, seed=0)
-    idn = identify(ur5.robot, plan)
-    S = ur5.robot.sensitivity_at_joints(idn.joints)
+    idn = identify(ur5.model, plan)
+    S = ur5.model.sensitivity_at_joints(idn.joints)
     A = S[:, :3].reshape(-1, S.shape[-1])
     K = [ur5.names.index(n) for n in OFFSETS]
-    dp = np.random.default_rng(3).uniform(-1e-3, 1e-3, (ur5.robot.n_columns, 5))
+    dp = np.random.default_rng(3).uniform(-1e-3, 1e-3, (ur5.model.n_columns, 5))
     x = np.linalg.lstsq(A[:, K], A @ dp, rcond=None)[0]
-    J = ur5.robot.sensitivity(ur5.poses)
+    J = ur5.model.sensitivity(ur5.poses)
     expected = J @ dp - J[:, :, K] @ x
     assert np.allclose(J @ idn.M @ dp, expected, rtol=0, atol=1e-12)
 
@@ -104,7 +104,7 @@ def test_post_calibration_map_against_a_least_squares_fit(ur5):
 def test_every_identifiable_source_leaves_no_first_order_error_in_the_box(ur5):
     """Issue 36: calibrating the base set the box configurations see leaves J M = 0 at the task poses (position)."""
     pc = calibrated_problem(ur5, CalibrationPlan(noise="2 um", count=40, seed=0))
-    J = ur5.robot.sensitivity(ur5.poses)[:, :3]
+    J = ur5.model.sensitivity(ur5.poses)[:, :3]
     assert np.abs(pc.jacobian[:, :3]).max() < 1e-9 * np.abs(J).max()
     info = pc.calibration.identification
     assert len(info.identified) + len(info.registration) <= info.rank
@@ -115,9 +115,9 @@ def test_every_identifiable_source_leaves_no_first_order_error_in_the_box(ur5):
 def test_joint_space_plan_is_better_conditioned_and_registers_the_instrument(ur5):
     """Drawing over the joint limits sees more (23 identifiable directions > 17, by pivoted QR) with a condition number near 5; with an unknown
     instrument frame the base registration absorbs the base placement errors (they are dropped, with reason)."""
-    known = identify(ur5.robot, CalibrationPlan(noise="20 um", count=40, over="joints", seed=0))
-    unknown = identify(ur5.robot, CalibrationPlan(noise="20 um", count=40, over="joints", seed=0, instrument="unknown"))
-    S = ur5.robot.sensitivity_at_joints(known.joints)
+    known = identify(ur5.model, CalibrationPlan(noise="20 um", count=40, over="joints", seed=0))
+    unknown = identify(ur5.model, CalibrationPlan(noise="20 um", count=40, over="joints", seed=0, instrument="unknown"))
+    S = ur5.model.sensitivity_at_joints(known.joints)
     assert known.rank == qr_rank(S[:, :3].reshape(-1, S.shape[-1])) == 23 and known.condition < 10
     assert unknown.registration[:6] == ["base.shift_x", "base.shift_y", "base.shift_z", "base.tilt_x", "base.tilt_y",
                                         "base.tilt_z"]
@@ -133,10 +133,10 @@ def test_noise_covariance_against_sampled_noise(ur5):
     idn = pc.calibration.identification
     eps = np.random.default_rng(0).standard_normal((20000, idn.n_measurements)) * plan.sigma_rows(40)
     xhat = (eps * idn.weights) @ idn.estimator.T
-    J = ur5.robot.sensitivity(ur5.poses)[:, :3][:, :, idn.identified]
+    J = ur5.model.sensitivity(ur5.poses)[:, :3][:, :, idn.identified]
     e = -np.einsum("pik,sk->psi", J, xhat)
     C = np.einsum("psi,psj->pij", e, e) / len(eps)
-    model = pc.robot.noise_covariance(ur5.poses)[:, :3, :3]
+    model = pc.model.noise_covariance(ur5.poses)[:, :3, :3]
     assert np.allclose(C, model, rtol=0.05, atol=0.05 * np.abs(model).max())
 
 
@@ -147,7 +147,7 @@ def test_noise_share_of_the_requirement(ur5):
     plan = CalibrationPlan(noise="20 um", identify=OFFSETS, count=40, seed=0, k=3)
     pc = calibrated_problem(ur5, plan)
     n = pc.calibration.noise["position"]
-    sig = np.sqrt(np.linalg.eigvalsh(pc.robot.noise_covariance(ur5.poses)[:, :3, :3])[:, -1]).max()
+    sig = np.sqrt(np.linalg.eigvalsh(pc.model.noise_covariance(ur5.poses)[:, :3, :3])[:, -1]).max()
     q = n["allowance"]
     assert n["sigma"] == pytest.approx(sig) and 3 * sig < q < 3.7625 * sig
     d = n["second_order"] + n["remainder"]
@@ -164,7 +164,7 @@ def test_yield_with_noise_against_monte_carlo(ur5):
     import dataclasses
 
     tol = {n: dataclasses.replace(t, distribution="normal") for n, t in ur5.tolerances.items()}
-    base = type(ur5)(ur5.robot, tol, ur5.requirement.__class__(position=5e-4, measure="yield", probability=0.99),
+    base = type(ur5)(ur5.model, tol, ur5.requirement.__class__(position=5e-4, measure="yield", probability=0.99),
                      ur5.poses)
     plan = CalibrationPlan(noise="40 um", identify=OFFSETS, count=40, seed=0)
     pc = calibrated_problem(base, plan)
@@ -178,7 +178,7 @@ def test_yield_with_noise_against_monte_carlo(ur5):
     dp = rng.standard_normal((n, len(t))) * t * k
     idn = pc.calibration.identification
     eps = rng.standard_normal((n, idn.n_measurements)) * plan.sigma_rows(40)
-    J = pc.robot.base.sensitivity(pc.poses[p:p + 1])[0, :3]
+    J = pc.model.base.sensitivity(pc.poses[p:p + 1])[0, :3]
     e = dp @ (J @ idn.M).T - ((eps * idn.weights) @ idn.estimator.T) @ J[:, idn.identified].T
     inside = np.mean(np.linalg.norm(e, axis=1) <= pc.requirement.position)
     assert inside == pytest.approx(res.probability[0, p], abs=4 * np.sqrt(0.01 / n) + 2e-3)
@@ -188,14 +188,14 @@ def test_yield_with_noise_against_monte_carlo(ur5):
 def test_plans_by_joints_poses_and_orientation(ur5):
     """Joint values of the same configurations give the same map as the count they came from; workspace poses work;
     measuring the orientation too makes wrist_3_joint (unseen by a position reading at tool0) identifiable."""
-    a = identify(ur5.robot, CalibrationPlan(noise="20 um", identify=OFFSETS, count=40, seed=0))
-    b = identify(ur5.robot, CalibrationPlan(noise="20 um", identify=OFFSETS, joints=a.joints))
+    a = identify(ur5.model, CalibrationPlan(noise="20 um", identify=OFFSETS, count=40, seed=0))
+    b = identify(ur5.model, CalibrationPlan(noise="20 um", identify=OFFSETS, joints=a.joints))
     assert np.allclose(a.M, b.M, atol=1e-12)
-    c = identify(ur5.robot, CalibrationPlan(noise="20 um", identify=OFFSETS, poses=ur5.poses))
+    c = identify(ur5.model, CalibrationPlan(noise="20 um", identify=OFFSETS, poses=ur5.poses))
     assert c.n_measurements == 3 * ur5.n_poses and c.condition < 100
     with pytest.raises(ValidationError, match="wrist_3_joint"):
-        identify(ur5.robot, CalibrationPlan(noise="20 um", identify=["*_joint"], count=40))
-    d = identify(ur5.robot, CalibrationPlan(noise={"position": "20 um", "orientation": "10 urad"}, identify=["*_joint"],
+        identify(ur5.model, CalibrationPlan(noise="20 um", identify=["*_joint"], count=40))
+    d = identify(ur5.model, CalibrationPlan(noise={"position": "20 um", "orientation": "10 urad"}, identify=["*_joint"],
                                             count=40, measure=["position", "orientation"]))
     assert "wrist_3_joint" in d.identified_names and d.n_measurements == 240
 
@@ -210,14 +210,14 @@ def test_a_model_without_joint_maps_and_with_disk_sources():
 
     spec = tomllib.loads((ROOT / "reports/studies/ucr3_example.toml").read_text())
     p = load_problem(spec, base_dir=ROOT / "reports/studies")
-    idn = identify(p.robot, CalibrationPlan(noise=1e-6, count=30))
+    idn = identify(p.model, CalibrationPlan(noise=1e-6, count=30))
     assert idn.identified_names == ["l1", "l2", "l3"]
-    J = p.robot.sensitivity(p.poses)
+    J = p.model.sensitivity(p.poses)
     assert np.abs((J @ idn.M)[:, :, :3]).max() < 1e-9 * np.abs(J).max()
     with pytest.raises(ValidationError, match="U1a"):
-        identify(p.robot, CalibrationPlan(noise=1e-6, count=30, identify=["U1a"]))
+        identify(p.model, CalibrationPlan(noise=1e-6, count=30, identify=["U1a"]))
     with pytest.raises(ValidationError, match="calibration.joints"):
-        identify(p.robot, CalibrationPlan(noise=1e-6, count=30, over="joints"))
+        identify(p.model, CalibrationPlan(noise=1e-6, count=30, over="joints"))
     with pytest.raises(ValidationError, match="^calibration = '3-UCR.*joint maps give the linear-range bounds"):
         calibrated_problem(p, CalibrationPlan(noise=1e-6, count=30))
 
@@ -232,7 +232,7 @@ def test_no_source_of_a_calibrated_robot_is_marked_without_effect(ur5):
     from evotol.summaries.user_study import sources_without_effect
 
     pc = calibrated_problem(ur5, CalibrationPlan(noise="2 um", count=40, seed=0))
-    J = ur5.robot.sensitivity(ur5.poses)[:, :3]            # position: the requirement's component
+    J = ur5.model.sensitivity(ur5.poses)[:, :3]            # position: the requirement's component
     assert np.abs(pc.jacobian[:, :3]).max() < 1e-9 * np.abs(J).max()   # the first-order map is gone ...
     assert not sources_without_effect(pc).any()            # ... but no source is called without effect
     assert sources_without_effect(ur5).sum() < ur5.n_sources

@@ -29,7 +29,7 @@ def pc():
 def _vertex_worst(pc, t, n_dir=4000):
     """Largest |J M e| over the vertices e = t * sign((J M)^T u) of the tolerance box for 4000 directions u, at every
     pose: attained errors, so a lower bound of the worst case that approaches it as the directions fill the sphere."""
-    JM = pc.robot.base.sensitivity(pc.poses)[:, :3] @ pc.calibration.identification.M        # (p, 3, n)
+    JM = pc.model.base.sensitivity(pc.poses)[:, :3] @ pc.calibration.identification.M        # (p, 3, n)
     U = np.random.default_rng(0).standard_normal((n_dir, 3))
     U /= np.linalg.norm(U, axis=1, keepdims=True)
     E = np.sign(np.einsum("pin,di->pdn", JM, U)) * t                                         # vertices
@@ -76,12 +76,12 @@ def test_rss_and_yield_measures_on_the_calibrated_error(pc):
     t = allocate_optimum(pc).t
     rss = pc.evaluate(t, "rss").position[0]
     wc = pc.evaluate(t, "worst_case").position[0]
-    J = pc.robot.base.sensitivity(pc.poses)
+    J = pc.model.base.sensitivity(pc.poses)
     idn = pc.calibration.identification
     JM = J[:, :3] @ idn.M
     assert np.allclose(rss, np.sqrt(((t * np.linalg.norm(JM, axis=1)) ** 2).sum(axis=1)), rtol=1e-9)
     assert np.all(rss <= wc * (1 + 1e-9))
-    S = pc.robot.base.sensitivity_at_joints(idn.joints)
+    S = pc.model.base.sensitivity_at_joints(idn.joints)
     AK = S[:, :3][:, :, idn.identified].reshape(-1, len(idn.identified))
     cov = 2e-5 ** 2 * np.linalg.inv(AK.T @ AK)
     C = np.einsum("pik,kl,pjl->pij", J[:, :3, idn.identified], cov, J[:, :3, idn.identified])

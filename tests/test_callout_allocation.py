@@ -46,7 +46,7 @@ def test_a_callout_is_one_variable_costed_once(problem):
     x = np.linspace(5e-6, 5e-5, problem.n_variables)
     T = problem.full(x[None])
     by_var = dict(zip(problem.variables, x))
-    want = sum(float(problem.tolerances[problem.robot.tied_sources.get(v, (v,))[0]].cost_of(np.array([by_var[v]]))[0])
+    want = sum(float(problem.tolerances[problem.model.tied_sources.get(v, (v,))[0]].cost_of(np.array([by_var[v]]))[0])
                for v in problem.variables)
     assert problem.cost(T)[0] == pytest.approx(want, rel=1e-12)
 
@@ -96,7 +96,7 @@ def test_rss_is_the_closed_form_over_the_discs(problem):
     got = problem.evaluate(T, "rss").position[0]
     S = problem.jacobian[:, :3, :]
     want = np.sqrt(sum((T[0, j] * np.linalg.norm(S[:, :, sl], ord=2, axis=(1, 2))) ** 2
-                       for j, sl in enumerate(problem.robot.column_slices)))
+                       for j, sl in enumerate(problem.model.column_slices)))
     assert np.allclose(got, want, rtol=1e-12)
 
 
@@ -116,7 +116,7 @@ def test_yield_matches_direct_sampling_of_the_zones(kind):
     rng = np.random.default_rng(5)
     n, k = 60_000, 3.0
     cols = []
-    for s, t in zip(P.robot.sources, T[0]):
+    for s, t in zip(P.model.sources, T[0]):
         if s.dim == 2:
             if kind == "normal":
                 d = rng.normal(0, t / (2 * k), (n, 2))

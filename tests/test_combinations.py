@@ -73,7 +73,7 @@ def with_calibration(spec):
 
 def with_given(spec):
     p = load_problem({k: v for k, v in copy.deepcopy(spec).items() if k != "calibration"}, base_dir=STUDIES)
-    spec["sources"] = {n: {"fixed": 2e-5} for n in p.robot.source_names}
+    spec["sources"] = {n: {"fixed": 2e-5} for n in p.model.source_names}
     return spec
 
 
@@ -91,7 +91,7 @@ def build(*caps):
 def fd_check(problem, h=1e-7, n_dirs=3, seed=0):
     """Largest relative difference between the composed first-order map and central differences of the
     composed nonlinear model, over a few random source-error directions at the problem's poses."""
-    robot, poses = problem.robot, problem.poses[:4]
+    robot, poses = problem.model, problem.poses[:4]
     J = robot.sensitivity(poses)
     rng = np.random.default_rng(seed)
     worst = 0.0
@@ -111,9 +111,13 @@ def fd_check(problem, h=1e-7, n_dirs=3, seed=0):
                          ids=lambda c: "+".join(c))
 def test_composed_first_order_map_equals_finite_differences_of_the_composed_nonlinear_model(caps):
     problem = build(*caps)
-    assert problem.robot.described.part is None
+    assert problem.model.described.part is None
+    # problem.robot is the robot the user described: the URDF arm read alone, its own sources
+    assert problem.robot is problem.model.described and problem.robot.part is None
+    if "callouts" not in caps:      # (callouts read the seats' tilts too: the zones cover them)
+        assert problem.robot.source_names == build().model.source_names      # the arm with no part composed
     for c, part in (("callouts", "callouts"), ("joints", "joint_space"), ("per-axis", "axis_limits")):
-        assert (problem.robot.part_of(part) is not None) == (c in caps), (c, [m.part for m in problem.robot.parts()])
+        assert (problem.model.part_of(part) is not None) == (c in caps), (c, [m.part for m in problem.model.parts()])
     assert fd_check(problem) < 1e-5
 
 
@@ -126,11 +130,11 @@ def test_callouts_on_joint_configurations_keep_their_ties_and_equal_the_task_pos
     if extra:
         spec = with_axes(spec)
     pt = load_problem(copy.deepcopy(spec), base_dir=STUDIES)            # task poses (inverse geometry)
-    arm = pt.robot.described
+    arm = pt.model.described
     q = arm.joint_values(ur5()["poses"]["list"])                         # the posture the task study holds
     spec["poses"] = {"joints": np.stack([q[v] for v in arm.kin.variables], axis=1).tolist()}
     pj = load_problem(spec, base_dir=STUDIES)                             # the same arm on those configurations
-    callouts = pj.robot.part_of("callouts")
+    callouts = pj.model.part_of("callouts")
     ties = callouts.tied_sources
     assert set(ties) == {"shoulder_lift_joint.position", "elbow_joint.position"}
     assert pj.n_variables == pj.n_sources - sum(len(m) - 1 for m in ties.values())
@@ -151,7 +155,7 @@ def test_exact_zones_vs_boxes_comparison_kept_under_joint_configurations():
 
     pj = build("joints", "callouts")
     boxes = twin_problem(pj, "boxes")
-    assert boxes.robot.part_of("joint_space") is not None and boxes.robot.part_of("callouts").zones == "boxes"
+    assert boxes.model.part_of("joint_space") is not None and boxes.model.part_of("callouts").zones == "boxes"
     assert np.array_equal(boxes.poses, pj.poses)
     cmp = zone_comparison(pj)
     assert cmp["exact"]["feasible"] and cmp["boxes"]["feasible"]

@@ -44,7 +44,7 @@ def _shipped_models():
     models = {f"mechanism:{p.stem}": (lambda n=p.stem: MechanismModel(resolve_description(n)))
               for p in sorted(SHIPPED.glob("*.toml"))}
     models["assembly:clutch"] = clutch_assembly
-    models["assembly:linear-stack"] = lambda: stack_problem().robot
+    models["assembly:linear-stack"] = lambda: stack_problem().model
     return models
 
 

@@ -116,5 +116,5 @@ def test_linearisation_check_has_a_verdict():
 
 def test_pose_text_uses_the_workspace_display_scale():
     spec, P = _problem("ucr3_example")
-    assert pose_text(P.robot.workspace, [math.radians(5), -math.radians(2.5), 0.3]) == \
+    assert pose_text(P.model.workspace, [math.radians(5), -math.radians(2.5), 0.3]) == \
         "alpha = 5.000 deg, beta = -2.500 deg, Zc = 0.3000 m"

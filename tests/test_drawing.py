@@ -75,7 +75,7 @@ def test_nominal_blank_when_not_known_and_filled_when_given():
     them, the nominal column carries them in display units."""
     from evotol.summaries.user_study import source_nominals
 
-    assert source_nominals(stack_problem().robot) == {}
+    assert source_nominals(stack_problem().model) == {}
     robot = LinearStack({"a": 1.0, "b": -1.0}, {"gap": LIMIT}, nominal={"a": 0.05, "b": 0.02})
     assert source_nominals(robot) == {"a": 0.05, "b": 0.02}
 

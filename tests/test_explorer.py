@@ -116,7 +116,7 @@ def test_explorer_is_omitted_with_a_note_for_a_cost_model_it_cannot_express():
     tols = dict(P.tolerances)
     name = P.names[0]
     tols[name] = dataclasses.replace(tols[name], cost=CallableCost(lambda x: 1 + 1 / x, scale=1e-5))
-    Q = ToleranceProblem(P.robot, tols, P.requirement, P.poses)
+    Q = ToleranceProblem(P.model, tols, P.requirement, P.poses)
     out = explorer_data(Q, {})
     assert set(out) == {"omitted"} and f"source {name}" in out["omitted"] and "exponential" in out["omitted"]
 

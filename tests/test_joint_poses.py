@@ -54,7 +54,7 @@ def test_study_file_optimum_holds_at_the_configurations():
     from evotol.allocators import allocate_optimum
     spec = study(joints=[[f"{v}*deg" for v in c] for c in CONFIGS_DEG])
     problem = load_problem(spec)
-    assert isinstance(problem.robot, JointSpaceModel) and problem.n_poses == 5
+    assert isinstance(problem.model, JointSpaceModel) and problem.n_poses == 5
     r = allocate_optimum(problem)
     assert r.verdict.startswith("certified optimal")
     # corners of the tolerance box at each configuration: the largest |dp| is the requirement

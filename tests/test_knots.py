@@ -49,14 +49,14 @@ def _problem(robot, cl, names):
 def test_problem_keeps_the_users_robot_and_one_combined_error_model(fivebar):
     robot, cl = fivebar
     p = _problem(robot, cl, (*robot.source_names, *cl.names))
-    assert p.robot is robot and p.clearances is cl
+    assert p.model is robot and p.clearances is cl
     assert isinstance(p.error_model, WithClearances) and p.error_model.base is robot and p.error_model.geometric
     assert p.names == (*robot.source_names, *cl.names)
     # derived copies keep the same three objects (nothing rebuilt, nothing replaced)
     q = p.with_requirement(position=2e-4)
-    assert q.robot is robot and q.clearances is cl and q.error_model is p.error_model
+    assert q.model is robot and q.clearances is cl and q.error_model is p.error_model
     # a problem rebuilt from the first one's parts is the same problem (the robot is not the wrapper)
-    r = ToleranceProblem(p.robot, p.tolerances, p.requirement, p.poses, clearances=p.clearances)
+    r = ToleranceProblem(p.model, p.tolerances, p.requirement, p.poses, clearances=p.clearances)
     T = np.full((1, p.n_sources), 3e-6)
     assert r.evaluate(T).position == pytest.approx(p.evaluate(T).position, rel=1e-12)
 
@@ -64,13 +64,13 @@ def test_problem_keeps_the_users_robot_and_one_combined_error_model(fivebar):
 def test_clearance_only_problem_has_the_classes_as_its_only_sources(fivebar):
     robot, cl = fivebar
     p = _problem(robot, cl, cl.names)
-    assert p.robot is robot and not p.error_model.geometric and p.names == tuple(cl.names)
+    assert p.model is robot and not p.error_model.geometric and p.names == tuple(cl.names)
 
 
 def test_study_file_problem_holds_the_robot_it_describes():
     p = load_problem(tomllib.loads(FIVEBAR_STUDY.read_text()), base_dir=FIVEBAR_STUDY.parent)
-    assert isinstance(p.robot, MechanismModel) and p.error_model.base is p.robot
-    assert p.names == (*p.robot.source_names, *p.clearances.names)
+    assert isinstance(p.model, MechanismModel) and p.error_model.base is p.model
+    assert p.names == (*p.model.source_names, *p.clearances.names)
 
 
 # --- knot 3: refinement is a wrapper; the optimum refuses refine with clearances -----------------

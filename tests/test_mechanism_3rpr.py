@@ -103,7 +103,7 @@ def test_tutorial_study_optimum_holds_by_brute_force_over_the_box_vertices():
     p = load_problem(tomllib.loads(f.read_text()), base_dir=f.parent)
     r = allocate_optimum(p)
     assert r.cost == pytest.approx(0.5868, abs=5e-4) and r.verdict.startswith("certified optimal")
-    S = p.robot.sensitivity(p.poses)[:, :2]                          # x, y rows, columns Rb rp l1 l2 l3
+    S = p.model.sensitivity(p.poses)[:, :2]                          # x, y rows, columns Rb rp l1 l2 l3
     t = r.t
     worst = max(np.linalg.norm(S @ (np.array(s) * t), axis=1).max() for s in itertools.product((-1, 1), repeat=5))
     assert worst == pytest.approx(1e-4, rel=1e-6)

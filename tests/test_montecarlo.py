@@ -165,7 +165,7 @@ def test_calibrate_scale_samples_asymmetric_intervals_as_the_yield_measure():
     P = _asymmetric_yield_problem()
     cal = calibrate_scale(P, np.full(3, 2e-4), 2000, seed=11)
     assert cal["certified"]
-    model = SampledYield(P.robot, P.poses, P.distributions, dict(P.components), 2000, 11,
+    model = SampledYield(P.model, P.poses, P.distributions, dict(P.components), 2000, 11,
                          shift=(P.shape.rho, P.shape.kappa, P.shape.offset))
 
     def upper(T):

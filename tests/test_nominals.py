@@ -155,7 +155,7 @@ def test_nominals_reach_through_joint_space_and_per_axis_wrappers():
 
     path = ROOT / "reports" / "studies" / "puma560_axes.toml"
     problem = load_problem(tomllib.loads(path.read_text()), base_dir=path.parent)
-    nominal = source_nominals(problem.robot, problem.names)
+    nominal = source_nominals(problem.model, problem.names)
     text = (ROOT / "robots" / "mechanisms" / "puma560.toml").read_text()
     assert text.count('"431.8*mm"') == 2            # a2 and d4 as the description writes them
     assert nominal["a2"] == pytest.approx(0.4318, abs=1e-12)

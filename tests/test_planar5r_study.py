@@ -67,7 +67,7 @@ def test_core_nonlinear_yield_agrees_with_the_direct_sampler():
     rc, sd = 20e-6, np.deg2rad(0.02)
     T = _design(P, rc, rc, sd)
     q = 1 - P.evaluate(T).probability[0]
-    robot = P.robot
+    robot = P.model
     m = U.UncertaintyModel(theta_std=sd, clearance=rc, shared_lengths=False, renormalise=False)
     dp, ok = U.position_deviations(P.poses, robot.r1, robot.r2, robot.r3, m,
                                    U.unit_samples(8192, m.n_dims, "mc", 5), failures="mask")

@@ -76,7 +76,7 @@ def test_python_api_warns_at_the_problem_and_at_the_allocator():
 def test_inactive_requirement_names_the_factor_of_the_closed_form():
     p = _problem(position=0.05, upper=1e-3)
     r = allocate_sensitivity(p)
-    J = p.robot.sensitivity(p.poses)[:, :3, :]                 # position rows, one column per source
+    J = p.model.sensitivity(p.poses)[:, :3, :]                 # position rows, one column per source
     rss = np.sqrt(((np.linalg.norm(J, axis=1) * 1e-3) ** 2).sum(axis=1)).max()
     assert r.max_error() == pytest.approx(rss, rel=1e-9)
     (line,) = result_warnings(p, r)

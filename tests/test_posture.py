@@ -155,9 +155,9 @@ def test_unreachable_poses_are_reported_together_or_dropped(tmp_path):
     spec["poses"]["drop_unreachable"] = True
     problem = load_problem(spec)
     assert problem.n_poses == 20 - n_bad
-    assert any(f"{n_bad} of 20 poses dropped" in line for line in problem.robot.notes())
+    assert any(f"{n_bad} of 20 poses dropped" in line for line in problem.model.notes())
     # what is kept is reached: the model's joints reproduce those poses (textbook forward kinematics)
-    q = problem.robot.joint_values(problem.poses)
+    q = problem.model.joint_values(problem.poses)
     for i, p in enumerate(problem.poses):
         T = textbook_fk([q[f"q{k}"][i] for k in range(1, 7)])
         assert np.allclose(T[:3, 3], p, atol=1e-9)

@@ -169,6 +169,6 @@ def test_module_function_assembly_beside_the_study_file(tmp_path):
     spec = {"robot": {"assembly": f"{mod}:gap", "nominal": {"a": 0.05, "b": 0.01}, "limits": {"gap": 1e-4}},
             "cost": {"default": {"model": "power", "a0": 1.0, "a1": 1.0, "scale": 1e-3}}}
     problem = load_problem(spec, base_dir=tmp_path)
-    assert np.allclose(problem.robot.gradient, [[1.0, -2.0]])
+    assert np.allclose(problem.model.gradient, [[1.0, -2.0]])
     with pytest.raises(ValidationError, match="beside the study file"):
         load_problem({**spec, "robot": {**spec["robot"], "assembly": "h34_not_there:gap"}}, base_dir=tmp_path)

@@ -48,7 +48,7 @@ def _toy_problem(dists, E=2.5e-3, p=0.9973, orientation=None, planar=False):
 
 def _mc_miss(problem, t, n=1_000_000, seed=3):
     """Plain Monte Carlo of the same first-order model: miss rate per pose and component."""
-    dims = [s.dim for s in problem.robot.sources]
+    dims = [s.dim for s in problem.model.sources]
     Z = draw(uniforms(n, sum(dims), "mc", seed), dims, problem.distributions)
     E = np.concatenate([z * tj for z, tj in zip(Z, t)], axis=1)
     out = {}
@@ -248,7 +248,7 @@ def test_calibrate_scale_gives_the_largest_certified_factor():
     cal = calibrate_scale(P, t, 2000, seed=11)
     assert cal["certified"] and 0.3 < cal["scale"] < 3
     np.testing.assert_allclose(cal["tolerances"][:6], 3e-5)          # locked lengths keep their value
-    model = SampledYield(P.robot, P.poses, P.distributions, dict(P.components), 2000, 11)
+    model = SampledYield(P.model, P.poses, P.distributions, dict(P.components), 2000, 11)
 
     def upper(T):
         k = np.rint((1 - model.evaluate(T[None], 0.99).probability[0]) * 2000)

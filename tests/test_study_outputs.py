@@ -81,7 +81,7 @@ def test_a_process_study_records_its_file_too(tmp_path, capsys):
 
 
 def test_source_table_keeps_the_nominals_of_a_robot_with_clearances():
-    """With a ``[clearances]`` table the problem keeps the description as ``problem.robot`` and
+    """With a ``[clearances]`` table the problem keeps the description as ``problem.model`` and
     the classes beside it (``problem.clearances``); its ``error_model`` is the one
     ``WithClearances`` around the description (issue 32: built once, by the problem). The source
     table gives the description's nominal lengths (m) of L0..L5, and none for the clearance classes."""
@@ -95,11 +95,11 @@ def test_source_table_keeps_the_nominals_of_a_robot_with_clearances():
 
     path = Path(__file__).resolve().parents[1] / "reports" / "studies" / "fivebar_clearances.toml"
     pr = load_problem(tomllib.loads(path.read_text()), base_dir=path.parent)
-    assert isinstance(pr.robot, MechanismModel) and isinstance(pr.clearances, ClearanceSources)
-    assert isinstance(pr.error_model, WithClearances) and pr.error_model.base is pr.robot
+    assert isinstance(pr.model, MechanismModel) and isinstance(pr.clearances, ClearanceSources)
+    assert isinstance(pr.error_model, WithClearances) and pr.error_model.base is pr.model
     assert pr.error_model.clearances is pr.clearances
-    assert pr.names == (*pr.robot.source_names, *pr.clearances.names)
-    assert source_nominals(pr.robot) == {"L0": 0.1, "L1": 0.05, "L2": 0.05, "L3": 0.05, "L4": 0.05, "L5": 0.0}
+    assert pr.names == (*pr.model.source_names, *pr.clearances.names)
+    assert source_nominals(pr.model) == {"L0": 0.1, "L1": 0.05, "L2": 0.05, "L3": 0.05, "L4": 0.05, "L5": 0.0}
     rows = {r["name"]: r for r in source_table(pr)}
     assert [rows[f"L{i}"]["nominal"] for i in range(6)] == [0.1, 0.05, 0.05, 0.05, 0.05, 0.0]
     classes = [c.name for c in pr.clearances.sources]

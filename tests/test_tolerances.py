@@ -186,12 +186,12 @@ def test_with_poses_reuses_sensitivities():
     """problem.with_poses(idx) evaluates like a problem built on those poses, without calling the robot."""
     P = _asym_problem(n_poses=6)
     calls = []
-    orig = P.robot.sensitivity
-    P.robot.sensitivity = lambda poses: calls.append(1) or orig(poses)
+    orig = P.model.sensitivity
+    P.model.sensitivity = lambda poses: calls.append(1) or orig(poses)
     sub = P.with_poses([1, 4])
     assert not calls
-    P.robot.sensitivity = orig
-    fresh = ToleranceProblem(P.robot, P.tolerances, P.requirement, P.poses[[1, 4]])
+    P.model.sensitivity = orig
+    fresh = ToleranceProblem(P.model, P.tolerances, P.requirement, P.poses[[1, 4]])
     t = np.linspace(1e-6, 4e-6, N)
     np.testing.assert_allclose(sub.evaluate(t).position, fresh.evaluate(t).position, rtol=1e-12)
     P.coefficients("position")
@@ -282,7 +282,7 @@ def test_refined_3ucr_optimum_and_ga_hold_on_a_4x_denser_grid():
     3-per-axis grid (+ local maximisation) holds 5e-5 m on a 12-per-axis grid, which the
     unrefined one misses; the GA's final check does the same for its design."""
     P = _ucr3_problem()
-    dense4 = P.at_poses(P.robot.workspace.grid(12))
+    dense4 = P.at_poses(P.model.workspace.grid(12))
     coarse = allocate_optimum(P)
     assert dense4.evaluate(coarse.t[None], top_only=True).violation[0] > 0.01
     ref = allocate_optimum(P, refine={"grid": 3})

@@ -55,7 +55,7 @@ def test_a_study_file_takes_units_in_requirement_bounds_and_given_tolerances():
     j1, j2 = p.names.index("R1"), p.names.index("R2")
     assert p.tolerances["R1"].locked == pytest.approx(2e-5, rel=1e-12)
     assert p.upper[j2] == pytest.approx(1.5e-5, rel=1e-12)
-    free = [j for j in range(p.n_sources) if j not in (j1, j2) and p.robot.sources[j].unit == "m"]
+    free = [j for j in range(p.n_sources) if j not in (j1, j2) and p.model.sources[j].unit == "m"]
     assert p.upper[free[0]] == pytest.approx(2e-4, rel=1e-12) and p.lower[free[0]] == pytest.approx(1e-6, rel=1e-12)
 
 

@@ -159,7 +159,7 @@ def allocate_nonlinear_limit(problem, allocate, *, max_iter: int = 12, rtol: flo
     ValidationError
         Not an assembly, not the worst-case measure, shared/locked sources.
     """
-    asm = problem.robot
+    asm = problem.model
     if not hasattr(asm, "dimension_names") or not hasattr(asm, "function"):
         raise ValidationError("robot", getattr(asm, "name", asm), "an assembly function (evotol.robots.assembly.AssemblyFunction)")
     if problem.requirement.measure != "worst_case":

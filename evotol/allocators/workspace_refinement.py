@@ -107,8 +107,8 @@ def dense_problem(problem: ToleranceProblem, candidates=None, grid: int | list |
     """
     if candidates is not None:
         return problem.at_poses(candidates)
-    counts = grid if grid is not None else 4 * max(2, round(problem.n_poses ** (1 / problem.robot.workspace.dim)))
-    return problem.at_poses(problem.robot.workspace.grid(counts))
+    counts = grid if grid is not None else 4 * max(2, round(problem.n_poses ** (1 / problem.model.workspace.dim)))
+    return problem.at_poses(problem.model.workspace.grid(counts))
 
 
 def worst_pose(problem: ToleranceProblem, t, dense: ToleranceProblem, local: bool = True, n_local: int = 3,
@@ -144,7 +144,7 @@ def worst_pose(problem: ToleranceProblem, t, dense: ToleranceProblem, local: boo
     k = int(np.argmax(ne))
     best_pose, best = dense.poses[k].copy(), float(ne[k])
     if local:
-        ws = problem.robot.workspace
+        ws = problem.model.workspace
         lo, hi = np.asarray(ws.low, float), np.asarray(ws.high, float)
         d = lo.size
         starts = dense.poses[np.argsort(-ne)[:n_local]]

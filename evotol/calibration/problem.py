@@ -97,7 +97,7 @@ def check_composable(problem) -> None:
         design does not model the calibration); a model without joint maps (no linear-range bound
         and no simulated calibration could be derived).
     """
-    robot = problem.robot
+    robot = problem.model
     if problem.clearances is not None:
         raise ValidationError("calibration", "clearances", "a problem without clearance sources (a clearance is not "
                               "identified by a geometric calibration)")
@@ -166,7 +166,7 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
     if not isinstance(plan, CalibrationPlan):
         raise ValidationError("calibration", plan, "an evotol.calibration.CalibrationPlan")
     check_composable(problem)
-    robot = problem.robot
+    robot = problem.model
     idn = identify(robot, plan)
     cal = CalibratedRobot(robot, idn, plan)
     req = problem.requirement

@@ -131,12 +131,12 @@ def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 
     t0 = time.perf_counter()
     info = getattr(problem, "calibration", None)
     if info is None:
-        raise ValidationError("problem", problem.robot.name, "a calibrated problem (evotol.calibration.calibrated_problem)")
+        raise ValidationError("problem", problem.model.name, "a calibrated problem (evotol.calibration.calibrated_problem)")
     if not is_integer(n_samples, 1):
         raise ValidationError("n_samples", n_samples, "a positive integer")
     if not (0 < quantile < 1):
         raise ValidationError("quantile", quantile, "a number in (0, 1)")
-    cal = problem.robot
+    cal = problem.model
     robot, idn, plan = cal.base, info.identification, info.plan
     if idn.joints is None:
         raise ValidationError("calibration", robot.name, "a described mechanism (the simulation needs its nonlinear joint-space model)")

@@ -54,7 +54,7 @@ def comparison(problem, t_calibrated, t_uncalibrated) -> list[dict]:
     total = eff.sum()
     ident = set(info.identification.identified_names)
     out = []
-    for j, (n, s) in enumerate(zip(problem.names, problem.robot.sources)):
+    for j, (n, s) in enumerate(zip(problem.names, problem.model.sources)):
         b = info.bounds.get(n, {})
         cap = ""
         if b.get("bound") is not None and b["bound"] < b.get("upper_before", np.inf):

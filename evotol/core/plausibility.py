@@ -101,7 +101,7 @@ def _normalised_requirement(problem) -> bool:
     """An assembly function's requirement is a ratio of its limits (robots/assembly/)."""
     from evotol.robots.assembly import AssemblyFunction
 
-    return isinstance(problem.robot, AssemblyFunction)
+    return isinstance(problem.model, AssemblyFunction)
 
 
 def problem_warnings(problem) -> list[str]:
@@ -118,7 +118,7 @@ def problem_warnings(problem) -> list[str]:
         One line per finding; empty when every value is in its usual range.
     """
     out = []
-    axis = problem.robot.part_of("axis_limits")
+    axis = problem.model.part_of("axis_limits")
     per_axis = {c: getattr(axis.limits, c) for c in ("position", "orientation")} if axis is not None else {}
     if not _normalised_requirement(problem):
         for comp, bound in problem.components:

@@ -310,7 +310,7 @@ class AllocationResult:
             eu = error_unit(self.problem, comp)
             p = self.worst_pose(comp)
             lines.append(f"  max {comp} error {u.format(self.max_error(comp), eu)} (requirement {u.format(lim, eu)}) "
-                         f"at pose {p}: {pose_text(self.problem.robot.workspace, self.problem.poses[p])}")
+                         f"at pose {p}: {pose_text(self.problem.model.workspace, self.problem.poses[p])}")
         if self.errors.probability is not None:
             y = self.errors.probability[0]
             lines.append(f"  yield (first-order, lower bound) at the worst pose {float(np.min(y)):.6g} "

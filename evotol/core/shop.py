@@ -127,7 +127,7 @@ def with_floors(problem, floors: dict):
         if v > t.upper:
             raise ValidationError(f"shop.floors.{key}", v, f"a floor at most the upper bound of {n} ({t.upper:g})")
         tols[n] = dataclasses.replace(t, lower=max(float(t.lower), v))
-    new = type(problem)(problem.robot, tols, problem.requirement, problem.poses, n_directions=problem.n_directions,
+    new = type(problem)(problem.model, tols, problem.requirement, problem.poses, n_directions=problem.n_directions,
                         shared=problem.shared or None, shared_cost=problem.shared_cost)
     new.shop_floors = {n: fv for n, fv in table.items() if n in tols and tols[n].cost is not None}
     return new

@@ -72,7 +72,7 @@ def yao2013_problem(variant: str, measure: str = "rss", grid=(11, 11, 6), lower=
 
 def _plane(problem: ToleranceProblem, zc: float) -> ToleranceProblem:
     idx = np.flatnonzero(np.isclose(problem.poses[:, 2], zc))
-    return ToleranceProblem(problem.robot, problem.tolerances, problem.requirement, problem.poses[idx])
+    return ToleranceProblem(problem.model, problem.tolerances, problem.requirement, problem.poses[idx])
 
 
 CONFIG = {"seed": 0, "grid": (11, 11, 6), "pop_size": 100, "n_gen": 200, "n_mc": 1000}

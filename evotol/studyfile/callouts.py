@@ -72,7 +72,7 @@ def twin_problem(problem: ToleranceProblem, zones: str) -> ToleranceProblem:
     evotol.errors.ValidationError
         The robot has no callouts.
     """
-    robot = problem.robot
+    robot = problem.model
     callouts = robot.part_of("callouts")
     if callouts is None:
         raise ValidationError("robot", robot.name, "a model with drawing callouts ([[robot.callouts]], docs/callouts.md)")
@@ -125,9 +125,9 @@ def zone_comparison(problem: ToleranceProblem, exact_result=None, boxes_result=N
     evotol.errors.InfeasibleError
         No design meets the requirement.
     """
-    callouts = problem.robot.part_of("callouts")
+    callouts = problem.model.part_of("callouts")
     if callouts is None:
-        raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
+        raise ValidationError("robot", problem.model.name, "a model with drawing callouts ([[robot.callouts]])")
     exact = problem if callouts.zones == "exact" else twin_problem(problem, "exact")
     boxes = twin_problem(exact, "boxes")
     out = {}
@@ -169,11 +169,11 @@ def callout_summary(problem: ToleranceProblem, exact_result=None, boxes_result=N
     evotol.errors.InfeasibleError
         No design meets the requirement.
     """
-    callouts = problem.robot.part_of("callouts")
+    callouts = problem.model.part_of("callouts")
     if callouts is None:
-        raise ValidationError("robot", problem.robot.name, "a model with drawing callouts ([[robot.callouts]])")
+        raise ValidationError("robot", problem.model.name, "a model with drawing callouts ([[robot.callouts]])")
     features = callouts.describe_callouts()
-    mech = problem.robot.described.mechanism
+    mech = problem.robot.mechanism
     for f in features:                  # what the datum letters name on the part's drawing (issue 41)
         f["datum_features"] = datum_features(mech, f["part"], f["datums"])
     return {"features": features, "zones": callouts.zones,
@@ -196,7 +196,7 @@ def callout_warnings(problem: ToleranceProblem) -> list[str]:
     list of str
         Warning lines (empty without callouts or refinements).
     """
-    robot = problem.robot.part_of("callouts")
+    robot = problem.model.part_of("callouts")
     if robot is None:
         return []
     lower, upper = {}, {}

@@ -34,7 +34,7 @@ def comparison_runs(spec: dict, problem, methods: dict) -> dict:
         calibrated problem.
     """
     runs = {}
-    callouts = problem.robot.part_of("callouts")
+    callouts = problem.model.part_of("callouts")
     if callouts is not None:
         refine = refine_option(spec)
         opts = {"refine": refine} if refine else {}

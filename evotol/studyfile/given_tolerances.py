@@ -55,8 +55,8 @@ def analysis_summary(name: str, problem, analysis, *, seed: int, units: DisplayU
         ``analysis`` (:meth:`ToleranceAnalysis.to_dict`), ``joints`` (wrapped to (-π, π] for
         revolute joints) and the ``units`` block.
     """
-    axis = problem.robot.part_of("axis_limits")
-    robot = configurations(problem.robot, problem.poses)[0] if axis is not None else problem.robot
+    axis = problem.model.part_of("axis_limits")
+    robot = configurations(problem.model, problem.poses)[0] if axis is not None else problem.model
     ws = robot.workspace
     d = analysis.to_dict()
     joints = joint_table(robot, analysis.poses)
@@ -65,14 +65,14 @@ def analysis_summary(name: str, problem, analysis, *, seed: int, units: DisplayU
     sources = source_table(problem)
     for row, t in zip(sources, analysis.t):
         row["tolerance"] = float(t)
-    return {"name": name, "kind": "analysis", "problem": problem.describe(), "seed": seed, "robot": problem.robot.name,
+    return {"name": name, "kind": "analysis", "problem": problem.describe(), "seed": seed, "robot": problem.model.name,
             "measure": problem.requirement.measure, "requirement": {c: v for c, v in problem.components},
             "axis_limits": axis_limits,
             "display_units": units.to_dict(),
             "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
                           "display_scale": list(ws.display_scale)},
             "poses": np.asarray(analysis.poses).tolist(), "sources": sources, "analysis": d, "joints": joints,
-            "notes": list(problem.robot.notes()), "seconds": seconds, "units": study_units_block(problem)}
+            "notes": list(problem.model.notes()), "seconds": seconds, "units": study_units_block(problem)}
 
 
 def requirement_text(summary: dict, u: DisplayUnits) -> str:

@@ -228,7 +228,7 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     check_table_keys(table, TABLE_KEYS, "iso9283")
     check_table_keys(req or {}, ("AP", "RP"), "requirement.iso9283")
     check_table_keys(table.get("simulate", {}), SIM_KEYS, "iso9283.simulate")
-    robot = problem.robot
+    robot = problem.model
     check_composable(spec)
     if not problem.free.any():
         raise ValidationError("iso9283", "every tolerance given", "at least one tolerance to allocate: the ISO block "

@@ -27,9 +27,16 @@ def read_poses(spec: dict, robot: RobotErrorModel) -> np.ndarray:
     Raises
     ------
     ValidationError
-        A ``[poses]`` table with none of ``grid``, ``latin_hypercube``, ``list``.
+        A ``[poses]`` table with none of ``grid``, ``latin_hypercube``, ``list``; a grid, a Latin
+        hypercube or ``refine`` over a workspace the description does not state
+        (:attr:`evotol.robots.base.Workspace.stated`).
     """
     ps = spec.get("poses", {"grid": 5})
+    box = [k for k in ("grid", "latin_hypercube", "refine") if k in ps]
+    if box and not robot.workspace.stated:      # a box the description does not state (issue 39 item 4)
+        raise ValidationError(f"poses.{box[0]}", ps[box[0]], f"poses a stated task box gives: {robot.name}'s "
+                              f"description has no [end_effector] coordinates (state them, or give the poses as "
+                              f"[poses] joints = [...] or [poses] list = [...])")
     if "grid" in ps:
         return robot.workspace.grid(ps["grid"])
     if "latin_hypercube" in ps:

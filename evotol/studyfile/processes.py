@@ -172,7 +172,7 @@ def load_process_problem(spec: dict, base_dir=None) -> ProcessProblem:
     base = load_problem(geo, base_dir)
     if procs is None:
         procs = parse_processes(procs_raw, base.names)
-    pp = ProcessProblem(base.robot, procs, base.requirement, base.poses)
+    pp = ProcessProblem(base.model, procs, base.requirement, base.poses)
     if "quality_loss" in spec:
         pp = pp.with_quality_loss(spec["quality_loss"])
     return pp

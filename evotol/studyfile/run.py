@@ -242,13 +242,13 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
                             seconds=time.perf_counter() - t0, precision=precision)
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
-    summary["notes"] = list(problem.robot.notes())      # e.g. a redundant arm's posture (issue 23)
+    summary["notes"] = list(problem.model.notes())      # e.g. a redundant arm's posture (issue 23)
     if "uncalibrated" in compared:      # what calibration buys (docs/calibration.md)
         add_calibration(summary, problem, results, seed, uncalibrated=compared["uncalibrated"])
     if iso is not None and not stopped:
         summary["iso9283"] = iso9283_block(iso, problem, results, seed)
     summary["interrupted"] = bool(stopped)
-    callouts = problem.robot.part_of("callouts")
+    callouts = problem.model.part_of("callouts")
     if callouts is not None and not stopped:      # exact zones vs boxes (issue 35), both solved in the loop
         side = {z: compared.get(f"callouts: {z}", results.get("optimum") if callouts.zones == z else None)
                 for z in ("exact", "boxes")}

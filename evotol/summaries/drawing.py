@@ -61,9 +61,9 @@ def tolerance_zone(source: dict, t: float) -> dict:
 def _source_rows(problem: ToleranceProblem) -> list[dict]:
     """The rows :func:`tolerance_zone` reads, per source (SI): name, unit, dim, offset, minus, plus, fixed, locked."""
     rows = []
-    callouts = problem.robot.part_of("callouts")
-    per_t = zone_per_t(problem.robot)
-    for n, s in zip(problem.names, problem.robot.sources):
+    callouts = problem.model.part_of("callouts")
+    per_t = zone_per_t(problem.model)
+    for n, s in zip(problem.names, problem.model.sources):
         tol = problem.tolerances[n]
         rows.append({"name": n, "unit": s.unit, "dim": s.dim, "offset": float(tol.offset), "minus": float(tol.minus),
                      "plus": float(tol.plus), "fixed": bool(tol.is_fixed), "locked": tol.locked,

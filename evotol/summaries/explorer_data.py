@@ -177,7 +177,7 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
     if reason is not None:
         return {"omitted": reason}
     sh = problem.shape
-    sources, per_t = [], zone_per_t(problem.robot)
+    sources, per_t = [], zone_per_t(problem.model)
     for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
         tol = problem.tolerances[n]
         sources.append({"name": n, "group": s.group, "unit": s.unit, "dim": s.dim, "rho": float(sh.rho[j]),

@@ -29,7 +29,7 @@ def pose_joints(problem) -> dict:
         :func:`evotol.robots.mechanism.posture.held.joint_table` plus ``poses`` (the configurations, SI);
         empty for a robot without joint variables or when the joints cannot be solved.
     """
-    robot, poses = configurations(problem.robot, problem.poses)
+    robot, poses = configurations(problem.model, problem.poses)
     try:
         table = joint_table(robot, poses)
     except EvotolError:          # a pose the model refuses was already refused when the problem was built

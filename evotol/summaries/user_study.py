@@ -95,8 +95,8 @@ def source_table(problem: ToleranceProblem) -> list[dict]:
         and ``no_effect = True`` for a source that cannot move the constrained errors
         (:func:`sources_without_effect`).
     """
-    nominal, notes = nominals_with_notes(problem.robot, problem.names)
-    per_t = zone_per_t(problem.robot)
+    nominal, notes = nominals_with_notes(problem.model, problem.names)
+    per_t = zone_per_t(problem.model)
     no_effect = sources_without_effect(problem)
     out = []
     for j, (n, s) in enumerate(zip(problem.names, problem.error_model.sources)):
@@ -275,26 +275,26 @@ def study_summary(name: str, problem: ToleranceProblem, results: dict, front, ch
         :func:`result_details`, the Monte Carlo checks, the NSGA-II front and
         :func:`front_summary`, ``figures`` (error maps), ``explorer`` and the ``units`` block.
     """
-    ws = problem.robot.workspace
+    ws = problem.model.workspace
     summary = {"name": name, "problem": problem.describe(), "seed": seed, "measure": problem.requirement.measure,
                "requirement": {c: lim for c, lim in problem.components},
                "error_units": {c: error_unit(problem, c) for c, _ in problem.components},
                "display_units": units.to_dict(),
                "workspace": {"names": list(ws.names), "units": list(ws.units), "display_units": list(ws.display_units),
                              "display_scale": list(ws.display_scale), "low": list(ws.low), "high": list(ws.high),
-                             "labels": _axis_labels(problem.robot)},     # per-axis slots (issue 33)
+                             "labels": _axis_labels(problem.model)},     # per-axis slots (issue 33)
                "robot": problem.error_model.name, "n_poses": problem.n_poses, "poses": problem.poses.tolist(),
                "sources": source_table(problem),
                "results": {m: {**r.to_dict(), **result_details(r.problem, r)} for m, r in results.items()},
                "monte_carlo": checks, "seconds": seconds, "figures": {}}
-    inner = problem.robot.described
+    inner = problem.robot
     if isinstance(inner, AssemblyFunction):   # an assembly: responses, not poses
         summary["assembly"] = {"responses": list(inner.response_names), "limits": [float(v) for v in inner.limits]}
     if front is not None:
         summary["pareto_front"] = front.table.to_dict(orient="list")
         summary["nsga2"] = front_summary(problem, front, results)
     continuous = tuple(ws.units) != ("1",) and any(h > lo for lo, h in zip(ws.low, ws.high))
-    if maps and results and continuous and _axis_labels(problem.robot):
+    if maps and results and continuous and _axis_labels(problem.model):
         maps = False        # a per-axis requirement: the axis is a label, not a coordinate to map (issue 33)
         summary["figures"]["error_maps_note"] = ("no error map: with a per-axis requirement each pose is a configuration "
                                                  "and an axis; the per-pose values are in the tables")

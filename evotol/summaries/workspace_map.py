@@ -121,7 +121,7 @@ def error_map_slices(problem: ToleranceProblem, T, anchor, n: int = DEFAULT_N) -
         out of reach), ``unreachable`` (count).
     """
     T = np.atleast_2d(np.asarray(T, dtype=float))
-    ws = problem.robot.workspace
+    ws = problem.model.workspace
     out = []
     for spec in slice_specs(ws, anchor, n):
         sub, keep = _reachable_problem(problem, spec["grid"])

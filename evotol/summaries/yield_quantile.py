@@ -52,7 +52,7 @@ def yield_quantiles(problem, t, probability: float, n: int = 100_000, seed: int 
         ``"probability"``.
     """
     t = problem.as_array(t)
-    Z = distributions.unit_samples([s.dim for s in problem.robot.sources], problem.distributions, int(n),
+    Z = distributions.unit_samples([s.dim for s in problem.model.sources], problem.distributions, int(n),
                                    method="mc", seed=seed)
     E = np.concatenate(problem.source_errors(Z, t), axis=1)          # (n, n_columns), SI
     k = int(np.ceil(probability * n)) - 1                             # the order statistic of the quantile

@@ -261,7 +261,7 @@ def problem_units(problem) -> DisplayUnits:
     DisplayUnits
         As :func:`default_units` gives them.
     """
-    return default_units(problem.robot.workspace.display_units)
+    return default_units(problem.model.workspace.display_units)
 
 
 def error_unit(problem, component: str) -> str:
@@ -280,7 +280,7 @@ def error_unit(problem, component: str) -> str:
     str
         ``"m"`` for position, ``"rad"`` otherwise, ``"1"`` for an assembly function.
     """
-    if tuple(problem.robot.workspace.units) == ("1",):
+    if tuple(problem.model.workspace.units) == ("1",):
         return "1"
     return "m" if component == "position" else "rad"
 

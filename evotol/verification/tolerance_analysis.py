@@ -175,7 +175,7 @@ class ToleranceAnalysis:
 
 def _base(problem):
     """The robot and configurations behind a per-axis problem (evotol.core.axis_limits), else the problem's."""
-    return configurations(problem.robot, problem.poses)
+    return configurations(problem.model, problem.poses)
 
 
 def error_at_probability(problem, t: np.ndarray, probability: float, component: str = "position",
@@ -261,7 +261,7 @@ def analyse(problem, t=None, *, probability: float = 0.9973, n_samples: int = 20
     req = {c: lim for c, lim in problem.components}
     req["measure"] = problem.requirement.measure
     robot, configs = _base(problem)
-    if robot is problem.robot:
+    if robot is problem.model:
         bp = problem
     else:       # the norm quantities on the configurations themselves
         r = problem.requirement
@@ -278,16 +278,16 @@ def analyse(problem, t=None, *, probability: float = 0.9973, n_samples: int = 20
     ends = bp.intervals(t)
     J = bp.jacobian
     frames = {"base": J}
-    axis = problem.robot.part_of("axis_limits")
+    axis = problem.model.part_of("axis_limits")
     if axis is not None and axis.limits.frame == "tool":
         Rt = np.swapaxes(tool_rotation(robot, configs), 1, 2)
         frames["tool"] = np.concatenate([Rt @ J[:, 0:3], Rt @ J[:, 3:6]], axis=1)
     axes = {}
     rho_t = np.array([bp.shape.rho[j] * t[j] for j in range(len(t))])
     for frame, Jf in frames.items():
-        low, high = axis_ranges(Jf, bp.robot.column_slices, ends, t)
+        low, high = axis_ranges(Jf, bp.model.column_slices, ends, t)
         rss_axis = np.sqrt(sum((np.linalg.norm(Jf[:, :, sl], axis=2) * rho_t[j]) ** 2
-                               for j, sl in enumerate(bp.robot.column_slices)))
+                               for j, sl in enumerate(bp.model.column_slices)))
         axes[frame] = {comp: {ax: {"low": low[:, rows.start + i], "high": high[:, rows.start + i],
                                    "rss": rss_axis[:, rows.start + i]} for i, ax in enumerate(AXES)}
                        for comp, rows in COMPONENT_ROWS.items()}

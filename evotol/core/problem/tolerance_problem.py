@@ -79,7 +79,11 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     Attributes
     ----------
     robot : evotol.robots.base.RobotErrorModel
-        The robot passed in, unchanged.
+        The robot as the user described it: the innermost model of ``model``'s composition
+        (:attr:`evotol.robots.base.RobotErrorModel.described`), without the parts a study adds.
+    model : evotol.robots.base.RobotErrorModel
+        The error model passed in, unchanged: the described robot with the parts composed around it
+        (joint configurations, per-axis limits, drawing callouts, calibration; ``docs/architecture.md``).
     clearances : evotol.measures.clearances.ClearanceSources or None
         The joint-clearance classes passed in, held beside the robot.
     error_model : evotol.robots.base.RobotErrorModel
@@ -143,7 +147,7 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
             self._check_clearance_measure(requirement)
         else:
             model = robot
-        self.robot, self.clearances, self.error_model = robot, clearances, model
+        self.model, self.clearances, self.error_model = robot, clearances, model
         names = model.source_names
         if not isinstance(tolerances, Mapping):
             raise ValidationError("tolerances", tolerances, "a mapping source name -> Tolerance")
@@ -184,6 +188,11 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         self._measure_cache: dict[str, object] = {}
         self.warnings = plausibility.problem_warnings(self)        # unit slips (issue 27): one line each,
         plausibility.warn(self.warnings)                            # computed once, issued once
+
+    @property
+    def robot(self) -> RobotErrorModel:
+        """The robot as the user described it (the innermost part of :attr:`model`)."""
+        return self.model.described
 
     def __copy__(self) -> "ToleranceProblem":
         """A shallow copy whose measures' caches start empty (the ``with_*`` copies change what

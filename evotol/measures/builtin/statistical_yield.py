@@ -34,7 +34,7 @@ def first_order_yield(problem) -> "statistical.FirstOrderYield | statistical.Sam
             return statistical.SampledYield(problem.error_model, problem.poses, problem.distributions,
                                             dict(problem.components), r.mc_samples, r.seed, shift=shift)
         # a calibrated robot (evotol.calibration.model) adds its propagated instrument noise to the covariance
-        cal = problem.robot.part_of("calibration")
+        cal = problem.model.part_of("calibration")
         noise = cal.noise_cov6(problem.poses) if cal is not None else None
         return statistical.FirstOrderYield(problem.blocks, problem.distributions, dict(problem.components), shift=shift,
                                            noise=noise)

@@ -75,6 +75,10 @@ class Mechanism:
         Source name -> design parameter it tolerances, for names a parameter cannot have (a
         standard-DH description's ``base.d`` -> ``base_d``, :mod:`evotol.robots.mechanism.description.standard_dh`);
         the parameter is then listed under its alias only.
+    task_box : bool, optional
+        True (default) when ``coordinates`` are a task box the file states; False for a serial arm
+        described without one (x, y, z over its reach,
+        :mod:`evotol.robots.mechanism.description.reach`).
 
     Raises
     ------
@@ -107,6 +111,7 @@ class Mechanism:
     urdf: tuple[str, ...] = ()        # (resolved URDF path, tip frame) of a description read from a URDF
     callouts: tuple = ()              # drawing callouts on joint seats (evotol.robots.mechanism.callouts.zones, issue 35)
     aliases: Mapping[str, str] = field(default_factory=dict)    # source name -> parameter (standard DH: base.d)
+    task_box: bool = True             # False: no [end_effector] coordinates; x, y, z over the reach (description/reach.py)
 
     def __post_init__(self):
         names = [f.name for f in self.frames]

@@ -29,6 +29,7 @@ from evotol.robots.mechanism.description.mechanism import Mechanism
 from evotol.robots.mechanism.description.parts import AXES, ClearanceChain, ClearanceSpec, Coordinate, Frame, Loop, Point, joint_units
 from evotol.robots.mechanism.description.parts import ANGLE_FIELDS, JOINT_TYPES, LENGTH_FIELDS, LOOP_COMPONENTS, UNIT_SCALE  # noqa: F401  (re-exported)
 from evotol.robots.mechanism.description.plausibility import check_written_values
+from evotol.robots.mechanism.description.reach import reach_coordinates
 from evotol.robots.mechanism.description.standard_dh import STANDARD_TOP_KEYS, convention_of, standard_to_modified
 from evotol.robots.mechanism.urdf.reader import resolve_urdf, urdf_frames
 
@@ -129,9 +130,9 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
         if not isinstance(fr, list) or len(fr) != 2:
             raise ValidationError(f"loop[{i}].frames", fr, "two frame names that coincide (the cut joint)")
         loops.append(Loop(str(fr[0]), str(fr[1]), lp.get("components", "all")))
-    ee = spec.get("end_effector")
-    if ee is None:
-        raise ValidationError("end_effector", None, "a table with frame and coordinates")
+    ee = spec.get("end_effector", {})
+    if not isinstance(ee, Mapping):
+        raise ValidationError("end_effector", ee, "a table with frame and coordinates")
     check_table_keys(ee, ("frame", "coordinates", "orientation"), "end_effector")
     coords = []
     for i, c in enumerate(ee.get("coordinates", [])):
@@ -158,12 +159,19 @@ def mechanism_from_dict(spec: Mapping, path: str = "") -> Mechanism:
     check_table_keys(tol, ("sources",), "tolerances")
     clearance = _clearance_from_dict(spec["clearance"]) if "clearance" in spec else None
     check_written_values(spec, joint_units(frames, set(lengths) | set(angles)))    # issue 27: units as written
+    limits = {**limits, **_limits(spec.get("limits", {}))}
+    task_box = bool(coords)
+    if not coords:      # a serial arm posed by its joints: x, y, z over its reach (issue 39 item 4)
+        if loops:
+            raise ValidationError("end_effector.coordinates", [], "the task coordinates of a closed-loop mechanism "
+                                  "(its poses are task poses: [end_effector] coordinates = [...])")
+        coords = list(reach_coordinates(frames, {**lengths, **angles}, limits))
     mech = Mechanism(name=str(name), frames=tuple(frames), end_effector=str(ee.get("frame", ee_default or "")), coordinates=tuple(coords),
                      loops=tuple(loops), lengths=lengths, angles=angles, orientation=tuple(orient),
                      planar=bool(spec.get("planar", False)), assembly_pose=pose, assembly_joints=joints,
                      sources=tuple(tol.get("sources", sources_default)), clearance=clearance, description=spec.get("description", ""),
-                     path=str(path), points=tuple(points), limits={**limits, **_limits(spec.get("limits", {}))}, urdf=urdf,
-                     aliases=aliases)
+                     path=str(path), points=tuple(points), limits=limits, urdf=urdf,
+                     aliases=aliases, task_box=task_box)
     if "callouts" in spec:          # [[callouts]] on joint seats (docs/callouts.md, issue 35)
         mech = dataclasses.replace(mech, callouts=tuple(callouts_from_tables(spec["callouts"], mech, "callouts")))
     return mech

@@ -74,7 +74,7 @@ class MechanismModel(RobotErrorModel):
         self.workspace = workspace or Workspace(
             names=tuple(c.name for c in cs), low=tuple(c.low for c in cs), high=tuple(c.high for c in cs),
             units=tuple(c.unit for c in cs), display_units=tuple(c.display or c.unit for c in cs),
-            display_scale=tuple(1.0 / UNIT_SCALE[c.display or c.unit] for c in cs))
+            display_scale=tuple(1.0 / UNIT_SCALE[c.display or c.unit] for c in cs), stated=mech.task_box)
         self.columns, specs = source_columns(mech, self.kin, sources)
         self.sources = tuple(specs)
         self._placement_frames = frozenset(c[0] for c in self.columns if isinstance(c, tuple) and c[1] in PLACEMENT_FIELDS)
