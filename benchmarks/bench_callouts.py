@@ -61,7 +61,7 @@ def main(argv=None):
     for key, spec in (("callouts", spec_c), ("placement sources", spec_p)):
         probs[key] = best(lambda: load_problem(spec, studies), repeat)
     Pc, Pp = probs["callouts"][0], probs["placement sources"][0]
-    print(f"callouts: {Pc.n_sources} sources ({Pc.robot.n_columns} columns), {Pc.n_variables} variables; "
+    print(f"callouts: {Pc.n_sources} sources ({Pc.model.n_columns} columns), {Pc.n_variables} variables; "
           f"placement sources: {Pp.n_sources} sources, {Pp.n_variables} variables")
     study = [("build the problem (27 poses)", probs["callouts"][1:], probs["placement sources"][1:])]
     study.append(("sensitivity rule", best(lambda: allocate_sensitivity(Pc), repeat)[1:],
@@ -74,12 +74,12 @@ def main(argv=None):
     study.append(("Monte Carlo check, 300 samples (nonlinear)",
                   best(lambda: verify(Pc, oc[0].tolerances, n_samples=300, seed=0), repeat)[1:],
                   best(lambda: verify(Pp, op[0].tolerances, n_samples=300, seed=0), repeat)[1:]))
-    poses = Pc.robot.workspace.latin_hypercube(1000, seed=0)
+    poses = Pc.model.workspace.latin_hypercube(1000, seed=0)
     rng = np.random.default_rng(0)
     Xc = Pc.full(rng.uniform(5e-6, 5e-5, (2000, Pc.n_variables)))
     Xp = Pp.full(rng.uniform(5e-6, 5e-5, (2000, Pp.n_variables)))
-    parts = [("sensitivities at 1000 poses", best(lambda: Pc.robot.sensitivity(poses), repeat)[1:],
-              best(lambda: Pp.robot.sensitivity(poses), repeat)[1:]),
+    parts = [("sensitivities at 1000 poses", best(lambda: Pc.model.sensitivity(poses), repeat)[1:],
+              best(lambda: Pp.model.sensitivity(poses), repeat)[1:]),
              ("worst case at every pose, 2000 designs", best(lambda: Pc.evaluate(Xc), repeat)[1:],
               best(lambda: Pp.evaluate(Xp), repeat)[1:]),
              ("worst case, poses that can hold the max", best(lambda: Pc.evaluate(Xc, top_only=True), repeat)[1:],

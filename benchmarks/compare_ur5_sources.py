@@ -36,12 +36,12 @@ def main() -> None:
     t0 = time.perf_counter()
     old = problem(OLD)
     r_old = allocate_optimum(old)
-    print(f"old sources ({old.robot.n_columns}): optimum cost {r_old.cost:.4f}, "
+    print(f"old sources ({old.model.n_columns}): optimum cost {r_old.cost:.4f}, "
           f"max position error {r_old.max_error() * 1e3:.4f} mm")
     full = problem(TWISTS)
     Q = np.random.default_rng(0).uniform(-np.pi, np.pi, (200, 6))
-    a = analyse(old.robot.sensitivity_at_joints(Q), old.robot.source_names,
-                full.robot.sensitivity_at_joints(Q), full.robot.source_names)
+    a = analyse(old.model.sensitivity_at_joints(Q), old.model.source_names,
+                full.model.sensitivity_at_joints(Q), full.model.source_names)
     missing = [n for n, _ in a["missing"]]
     print(f"old rank {a['rank']}, placement-twist rank {a['reference_rank']}; duplicated {len(a['duplicated'])} pairs "
           f"(e.g. {a['duplicated'][0]}); missing: {a['missing']}")
@@ -57,7 +57,7 @@ def main() -> None:
     print(f"old sources + those tilts re-allocated: cost {r_aug.cost:.4f} ({(r_aug.cost / r_old.cost - 1) * 100:+.2f} %)")
     new = problem(None)
     r_new = allocate_optimum(new)
-    print(f"new default sources ({new.robot.n_columns}): optimum cost {r_new.cost:.4f} ({(r_new.cost / r_old.cost - 1) * 100:+.2f} % "
+    print(f"new default sources ({new.model.n_columns}): optimum cost {r_new.cost:.4f} ({(r_new.cost / r_old.cost - 1) * 100:+.2f} % "
           f"vs old), max position error {r_new.max_error() * 1e3:.4f} mm; {time.perf_counter() - t0:.1f} s")
 
 

@@ -75,7 +75,7 @@ def test_iterated_fit_cap_holds_at_the_cap_and_is_second_order(offsets):
     first-order prediction J M x by at most phi E (here 50 um); at twice the bounds by about 4x as much (the
     term the cap limits is second order). The caps bind: shifts the offsets absorb are capped below 1 mm."""
     info = offsets.calibration
-    robot, idn = offsets.robot.base, info.identification
+    robot, idn = offsets.model.base, info.identification
     capped = [n for n, b in info.bounds.items() if b["linear_range"] is not None and b["upper"] < b["upper_before"]]
     assert len(capped) >= 20 and "wrist_2_joint.shift_y" in capped
     b = np.array([info.bounds[n.split("[")[0]]["upper"] for n in idn.source_names])
@@ -109,7 +109,7 @@ def test_full_identification_keeps_the_users_bounds():
     spec = tomllib.loads((ROOT / "reports/studies/ur5_calibrated.toml").read_text())
     pc = load_problem(spec, base_dir=ROOT / "reports/studies")
     info = pc.calibration
-    robot, idn = pc.robot.base, info.identification
+    robot, idn = pc.model.base, info.identification
     assert all(b["linear_range"] is None and b["upper"] == b["upper_before"] for b in info.bounds.values())
     x = np.random.default_rng(3).choice([-1.0, 1.0], size=robot.n_columns) * 1e-3
     xk = _lm_fit(robot, idn.joints, idn.identified, _readings(robot, idn.joints, x))
@@ -138,7 +138,7 @@ def test_noise_share_is_a_quantile_of_sampled_noise(offsets):
     the identified columns and pushed to the pose with the largest share: the norm exceeds the stated
     allowance at the stated rate 1 - 0.9973 (within 4 binomial standard deviations of 400 000 draws)."""
     info = offsets.calibration
-    robot, idn = offsets.robot.base, info.identification
+    robot, idn = offsets.model.base, info.identification
     nz = info.noise["position"]
     q = robot.joint_values(offsets.poses)
     Qt = np.stack([np.asarray(q[v], float) for v in robot.kin.variables], axis=1)
