@@ -19,6 +19,7 @@ import numpy as np
 from evotol._runtime.keyword_checks import check_table_keys
 from evotol.core import plausibility
 from evotol.core.axis_limits import configurations
+from evotol.errors import ValidationError
 from evotol.reporting.analysis_page import render_analysis
 from evotol.studies import StudyResult, write_outputs
 from evotol.summaries.user_study import source_table, study_units_block
@@ -187,10 +188,15 @@ def run_given_tolerances(spec: dict, path: Path, out: Path, name: str, problem, 
     Raises
     ------
     evotol.errors.ValidationError
-        A ``[verify]`` key other than ``n_samples`` and ``nonlinear``.
+        A ``[verify]`` key other than ``n_samples`` and ``nonlinear``; ``[poses] refine`` (the
+        analysis checks the poses listed; refinement belongs to an allocation, issue 39).
     """
     vspec = dict(spec.get("verify", {}))
     check_table_keys(vspec, VERIFY_KEYS, "verify")
+    if spec.get("poses", {}).get("refine"):
+        raise ValidationError("poses.refine", spec["poses"]["refine"], "no refine when every tolerance is given: the "
+                              "analysis of given tolerances checks the poses listed and does not search the workspace "
+                              "for a worse one (give a finer grid or a Latin hypercube)")
     prob = problem.requirement.required_yield
     analysis = analyse(problem, probability=float(prob), n_samples=int(vspec.get("n_samples", 1000)), seed=seed,
                        nonlinear=bool(vspec.get("nonlinear", True)))

@@ -251,8 +251,14 @@ def analyse(problem, t=None, *, probability: float = 0.9973, n_samples: int = 20
     Raises
     ------
     evotol.errors.ValidationError
-        Tolerances missing or invalid, or a probability outside (0, 1).
+        Tolerances missing or invalid, a probability outside (0, 1), or a problem with
+        joint-clearance classes (not analysed here, issue 39).
     """
+    if problem.clearances is not None:      # a pair refused before any work: its worst case is the certified engine's
+        raise ValidationError("clearances", list(problem.clearances.names), "no joint-clearance classes in an analysis of "
+                              "given tolerances: the analysis samples and splits the linear worst case, the clearance "
+                              "classes have the certified engine's (check the design with problem.evaluate(t), or "
+                              "leave a tolerance free to allocate)")
     seed = seed_from(rng, seed)
     if not (isinstance(probability, float) and 0 < probability < 1):
         raise ValidationError("probability", probability, "a probability in (0, 1)")
