@@ -1,6 +1,6 @@
 """Cost–tolerance models (plugins): one model per module, one protocol, one registry.
 
->>> from cost_models import ExponentialCost
+>>> from evotol.cost_models import ExponentialCost
 >>> m = ExponentialCost(1.9, 0.5, scale=1e-5)   # Yao et al. 2013: tolerances in units of 1e-5 m
 >>> round(float(m.cost(4.94e-5)), 4)
 0.1607

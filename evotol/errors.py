@@ -10,7 +10,7 @@ class EvotolError(Exception):
 
     Examples
     --------
-    >>> from cost_models import PowerCost
+    >>> from evotol.cost_models import PowerCost
     >>> from evotol import EvotolError, Tolerance
     >>> try:
     ...     Tolerance(PowerCost(1.0, 1.0), lower=2e-5, upper=1e-5).validate("x1")
@@ -120,7 +120,7 @@ class InfeasibleError(EvotolError):
 
     Examples
     --------
-    >>> from cost_models import PowerCost
+    >>> from evotol.cost_models import PowerCost
     >>> from evotol import InfeasibleError, LinearStack, Tolerance, assembly_problem, allocate_optimum
     >>> stack = LinearStack({"x1": 1.0, "x2": 1.0}, {"gap": 1e-5})
     >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-5, upper=1e-4)

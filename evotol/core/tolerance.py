@@ -55,7 +55,7 @@ class Tolerance:
 
     Examples
     --------
-    >>> from cost_models import PowerCost
+    >>> from evotol.cost_models import PowerCost
     >>> from evotol import Tolerance
     >>> tol = Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-6, upper=1e-4)  # m; cost 1e-3 / t
     >>> float(tol.cost_of(2e-5))

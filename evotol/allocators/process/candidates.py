@@ -43,7 +43,7 @@ class Process:
 
     Examples
     --------
-    >>> from cost_models import PowerCost
+    >>> from evotol.cost_models import PowerCost
     >>> from evotol import Process
     >>> grind = Process("grinding", PowerCost(3.0, 1.0, scale=1e-3), lower=2e-6, upper=2e-5)
     >>> grind.name, grind.lower, grind.upper                   # tolerance range (m)

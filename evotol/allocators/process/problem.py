@@ -60,7 +60,7 @@ class ProcessProblem:
 
     Examples
     --------
-    >>> from cost_models import PowerCost
+    >>> from evotol.cost_models import PowerCost
     >>> from evotol import LinearStack, Tolerance, assembly_problem
     >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
     >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)
@@ -86,7 +86,7 @@ class ProcessProblem:
         # geometry-only base problem: costs are placeholders, replaced in every subproblem
         placeholder = {n: Tolerance(PowerCost(1.0, 1.0, scale=hi[n]), lo[n], hi[n]) for n in names}
         self.base = ToleranceProblem(robot, placeholder, requirement, poses, n_directions=n_directions)
-        self.robot, self.requirement = robot, requirement
+        self.model, self.requirement = robot, requirement     # as ToleranceProblem: model passed in, robot described
         P = int(self.n_processes.max())
         self.lo = np.full((len(names), P), np.nan)
         self.hi = np.full((len(names), P), np.nan)
@@ -98,6 +98,11 @@ class ProcessProblem:
         self.loss_coefficients = np.zeros(len(names))
         self.quality_loss_A = None
 
+
+    @property
+    def robot(self) -> RobotErrorModel:
+        """The robot as the user described it (the innermost part of :attr:`model`; an assembly is its own)."""
+        return self.model.described
     def with_quality_loss(self, A) -> "ProcessProblem":
         """The same problem with every process's cost = machining cost + expected Taguchi loss:
         :func:`evotol.core.quality_loss.with_quality_loss` ``(self, A)``, the one entry point.
@@ -425,7 +430,7 @@ def assembly_problem(assembly, tolerances: Mapping[str, Tolerance] | None = None
 
     Examples
     --------
-    >>> from cost_models import PowerCost
+    >>> from evotol.cost_models import PowerCost
     >>> from evotol import LinearStack, Tolerance, assembly_problem
     >>> stack = LinearStack({"x1": 1.0, "x2": -2.0, "x3": 0.5}, {"gap": 1e-4})  # gap = x1 - 2 x2 + x3 / 2
     >>> tol = {n: Tolerance(PowerCost(1.0, 1.0, scale=1e-3), lower=1e-7, upper=1e-4)

@@ -115,7 +115,7 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
 
     Examples
     --------
-    >>> from cost_models import PowerCost
+    >>> from evotol.cost_models import PowerCost
     >>> from evotol import Requirement, Tolerance, ToleranceProblem
     >>> from evotol.robots.ucr3 import UCR3
     >>> robot = UCR3()
