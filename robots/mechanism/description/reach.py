@@ -3,7 +3,7 @@
 A designer who gives poses as joint configurations (``[poses] joints``) or checks a chain at joint
 values (``evotol check-mechanism FILE --at ...``) need not state a task box: for a description with
 no loops and no ``[end_effector]`` coordinates the end-effector's x, y, z range over the cube of
-half-width ``R``, the arm's reach,
+half-width ``R``, the arm's reach::
 
     R = sum over frames of |b| + |d| + |r|   (m; a prismatic joint's variable at its larger limit),
 
