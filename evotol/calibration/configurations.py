@@ -88,7 +88,7 @@ def is_described(robot) -> bool:
     bool
         The model has ``sensitivity_at_joints``, ``pose_error_at_joints`` and ``joint_values``.
     """
-    return bool(getattr(robot, "joint_maps", False))
+    return bool(robot.joint_maps)
 
 
 def _joint_limits(robot) -> tuple[np.ndarray, np.ndarray]:

@@ -129,7 +129,7 @@ def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 
         ``n_samples`` / ``quantile``.
     """
     t0 = time.perf_counter()
-    info = getattr(problem, "calibration", None)
+    info = problem.calibration
     if info is None:
         raise ValidationError("problem", problem.model.name, "a calibrated problem (evotol.calibration.calibrated_problem)")
     if not is_integer(n_samples, 1):

@@ -173,7 +173,7 @@ def result_warnings(problem, result) -> list[str]:
         out += unmeasurable(problem, result.t, problem.measurable)
     if problem.requirement.measure == "yield" or "budget" in (result.info or {}):
         return out
-    if getattr(problem, "calibration", None) is not None:   # calibration removes the first-order error: the
+    if problem.calibration is not None:   # calibration removes the first-order error: the
         return out                                          # linear-range bounds decide (docs/calibration.md)
     t = result.t
     f = problem.free

@@ -43,7 +43,7 @@ def comparison_runs(spec: dict, problem, methods: dict) -> dict:
         for zones in ("exact", "boxes"):
             if not (own and callouts.zones == zones):
                 runs[f"callouts: {zones}"] = (problem if callouts.zones == zones else twin_problem(problem, zones), opts)
-    if getattr(problem, "calibration", None) is not None:
+    if problem.calibration is not None:
         runs["uncalibrated"] = (problem.uncalibrated, {})
     return runs
 

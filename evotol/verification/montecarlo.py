@@ -439,7 +439,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     ev = problem.evaluate(t[None], "worst_case")
     for c, _ in comps:
         res.max_error_over_worst_case[c] = float(np.max(maxerr[c] / np.maximum(getattr(ev, c)[0], 1e-300)))
-    info = getattr(problem, "calibration", None)     # a calibrated robot: simulate its calibration (docs/calibration.md)
+    info = problem.calibration     # a calibrated robot: simulate its calibration (docs/calibration.md)
     if nonlinear and info is not None and info.simulate and info.identification.joints is not None:
         res.calibration = simulate_calibration(problem, t, n_samples=info.simulate, seed=seed)
     res.seconds = time.perf_counter() - t0

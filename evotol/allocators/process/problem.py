@@ -74,6 +74,9 @@ class ProcessProblem:
     (3, 8)
     """
 
+    #: a process problem is never calibrated (as ToleranceProblem.calibration)
+    calibration = None
+
     def __init__(self, robot: RobotErrorModel, processes: Mapping[str, Sequence[Process]], requirement: Requirement,
                  poses, *, n_directions: int = 600, check_dominance: bool = True):
         if not isinstance(robot, RobotErrorModel):

@@ -95,6 +95,11 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     warnings : list of str
         The problem's plausibility lines (:func:`evotol.core.plausibility.problem_warnings`:
         probable unit slips), computed once when it is built and issued then.
+    calibration : evotol.calibration.problem.CalibrationInfo or None
+        The calibration the problem assumes (plan, identification, noise share, linear-range bounds),
+        set by :func:`evotol.calibration.calibrated_problem`; None for a robot that is not calibrated.
+    uncalibrated : ToleranceProblem or None
+        With ``calibration``: the same problem without it (what calibration buys is compared with it).
 
     Raises
     ------
@@ -128,6 +133,10 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     >>> problem.evaluate([[1e-5] * 12]).position.shape         # RSS error (m) per design and pose
     (1, 8)
     """
+
+    #: set by evotol.calibration.calibrated_problem (Attributes); declared here, never looked up with getattr
+    calibration = None
+    uncalibrated = None
 
     def __init__(self, robot: RobotErrorModel, tolerances: Mapping[str, Tolerance], requirement: Requirement,
                  poses, n_directions: int = 600, shared: Mapping[str, Sequence[str]] | None = None,
