@@ -17,23 +17,21 @@ from evotol._runtime.output_set import claim_outputs
 from evotol._runtime.progress import Heartbeat
 from evotol._runtime.toml_kinds import check_kind
 from evotol.allocators import allocate_nsga2
-from evotol.calibration.summary import add_to_study as add_calibration
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.measures.statistical.distributions import Distribution, as_distribution
 from evotol.reporting.export import FORMATS as EXPORT_FORMATS
-from evotol.reporting.callout_drawing import write_callout_exports
 from evotol.reporting.export import write_tolerance_table
 from evotol.reporting.user_study import render_user_study
 from evotol.studies import StudyResult, write_outputs
 
 logger = logging.getLogger(__name__)
 from evotol.studyfile.methods import METHODS, check_methods, method_options, study_methods
-from evotol.studyfile.callouts import callout_summary, callout_warnings
+from evotol.studyfile.sections import SECTIONS, StudyRun
 from evotol.studyfile.comparisons import comparison_runs, run_comparison
 from evotol.studyfile.steps import StepLog, run_steps
 from evotol.studyfile.given_tolerances import run_given_tolerances
-from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
+from evotol.studyfile.iso9283 import read_iso9283
 from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import run_stack_study
 from evotol.summaries.drawing import drawing_precision, precision_warnings
@@ -243,18 +241,11 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(problem.model.notes())      # e.g. a redundant arm's posture (issue 23)
-    if "uncalibrated" in compared:      # what calibration buys (docs/calibration.md)
-        add_calibration(summary, problem, results, seed, uncalibrated=compared["uncalibrated"])
-    if iso is not None and not stopped:
-        summary["iso9283"] = iso9283_block(iso, problem, results, seed)
+    run = StudyRun(problem, results, compared, seed, bool(stopped), iso)
+    present = [s for s in SECTIONS if s.present(run)]      # callouts, calibration, ISO 9283 (sections.py)
+    for section in present:
+        section.summarise(summary, run)
     summary["interrupted"] = bool(stopped)
-    callouts = problem.model.part_of("callouts")
-    if callouts is not None and not stopped:      # exact zones vs boxes (issue 35), both solved in the loop
-        side = {z: compared.get(f"callouts: {z}", results.get("optimum") if callouts.zones == z else None)
-                for z in ("exact", "boxes")}
-        if None not in side.values():
-            summary["callouts"] = callout_summary(problem, side["exact"], side["boxes"])
-        summary["warnings"] = [*summary["warnings"], *callout_warnings(problem)]
     if stopped:
         summary["interruption"] = log.interruption()
     if results:     # the drawing table, linked from the page (evotol/reporting/export.py)
@@ -263,8 +254,8 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
     paths = write_outputs(name, out, StudyResult(summary), rep)
     for f in summary.get("exports", {}).values():
         write_tolerance_table(summary, path_inside(out, f))
-    if summary.get("callouts"):     # the drawing callouts: a CSV, and two sheets of the workbook
-        summary["exports"]["drawing"] = f"{name}_drawing.csv"
-        write_callout_exports(summary, path_inside(out, f"{name}_drawing.csv"), path_inside(out, summary["exports"]["xlsx"]))
+    for section in present:
+        if section.export is not None:
+            section.export(summary, out, name)
     summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
     return summary
