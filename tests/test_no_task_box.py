@@ -111,3 +111,43 @@ def test_a_closed_loop_mechanism_still_needs_its_task_coordinates(tmp_path):
     f.write_text(text[:start] + text[end:].replace('pose = ["0*mm", "70*mm"]\n', ""), encoding="utf-8")
     with pytest.raises(ValidationError, match=r"^end_effector.coordinates = \[\]: expected the task coordinates of a closed-loop"):
         MechanismModel(f)
+
+
+@pytest.fixture(scope="module")
+def nobox_held(tmp_path_factory):
+    """The same, with the tool orientation the shipped description holds ([end_effector] orientation only)."""
+    text = PUMA.read_text(encoding="utf-8")
+    text = text[:text.index("[end_effector]")] + '[end_effector]\norientation = [["y", "pi/2"]]\n\n' + text[text.index("[assembly]"):]
+    text = "\n".join(line for line in text.splitlines() if not line.startswith("pose = "))
+    f = tmp_path_factory.mktemp("nobox_held") / "puma_nobox_held.toml"
+    f.write_text(text, encoding="utf-8")
+    return f
+
+
+COST = {"model": "exponential", "a0": 1.9, "a1": 0.5, "scale": 1e-5}
+PAIRS = {
+    "callouts": lambda s: s["robot"].update(callouts=[{"joint": "J3", "kind": "position", "length": "50 mm"}]),
+    "norm": lambda s: s["requirement"].update(position="0.5 mm"),
+    "rss": lambda s: s["requirement"].update(position="0.5 mm", measure="rss"),
+    "calibration": lambda s: (s["requirement"].update(position="0.5 mm"),
+                              s.update(calibration={"count": 24, "over": "workspace", "noise": "20 um", "simulate": 0})),
+    "task poses": lambda s: s.update(poses={"list": [[0.6, -0.15, 0.0], [0.55, -0.1, 0.05]]}),
+}
+
+
+@pytest.mark.parametrize("pair", list(PAIRS))
+def test_without_a_task_box_each_capability_equals_the_boxed_description(nobox_held, pair):
+    """Joint configurations with callouts, a norm, RSS, calibration, and task poses given as a list
+    (the assembly pose then where the declared assembly joints put the flange): the same optimum as the
+    shipped description with its box, to 1e-9."""
+    def problem(mechanism):
+        s = _study(mechanism)
+        s["cost"].update({"position": COST, "axial": COST})
+        PAIRS[pair](s)
+        return load_problem(s, base_dir=ROOT / "reports" / "studies")
+    a, b = problem(nobox_held), problem("puma560")
+    assert [m.part for m in a.model.parts()] == [m.part for m in b.model.parts()]
+    ra, rb = allocate_optimum(a), allocate_optimum(b)
+    assert ra.feasible and rb.feasible
+    assert ra.cost == pytest.approx(rb.cost, rel=1e-9)      # (t itself: sources of no effect sit anywhere near their bound)
+    np.testing.assert_allclose(a.model.sensitivity(a.poses), b.model.sensitivity(b.poses), rtol=0, atol=1e-9)

@@ -106,7 +106,8 @@ class InverseGeometry:
         """The declared assembly configuration, closed by Newton at the assembly pose.
 
         Newton starts from ``[assembly] joints`` (0 for a joint not given) at ``assembly_pose``
-        (default: the middle of the box); the result is cached.
+        (default: the middle of the box; a serial arm described without a task box: the pose its
+        assembly joints reach); the result is cached.
 
         Returns
         -------
@@ -126,8 +127,14 @@ class InverseGeometry:
         """
         if self._assembly is None:
             m = self.mech
-            pose = np.array(m.assembly_pose if m.assembly_pose else [(c.low + c.high) / 2 for c in m.coordinates], float)[None]
             q0 = {x: np.array([float(m.assembly_joints.get(x, 0.0))]) for x in self.variables}
+            if m.assembly_pose:
+                pose = np.array(m.assembly_pose, float)[None]
+            elif not m.task_box:    # a serial arm without a task box: where its declared assembly joints put it
+                p = self.state(q0, 1).world[m.end_effector][:, :3, 3]
+                pose = np.array([[p[0, ax] for _, ax in self.coord_axes]], float)
+            else:
+                pose = np.array([(c.low + c.high) / 2 for c in m.coordinates], float)[None]
             unknown = set(m.assembly_joints) - set(self.variables)
             if unknown:
                 raise ValidationError("assembly.joints", sorted(unknown)[0], f"a joint variable: {self.variables}")
