@@ -14,6 +14,8 @@ would ask for poses the arm does not reach, so the study file refuses one
 """
 from __future__ import annotations
 
+import itertools
+
 from evotol.errors import ValidationError
 from evotol.robots.mechanism.description.expressions import Expression
 from evotol.robots.mechanism.description.parts import Coordinate
@@ -57,12 +59,8 @@ def reach(frames, parameters: dict, limits: dict) -> float:
             if missing:
                 raise ValidationError("end_effector", None, f"a table with the task coordinates: the reach of frame "
                                       f"{f.name!r} ({key} = {value!r}) needs a limit of {missing[0]} ([limits])")
-            env = dict(parameters)
-            best = 0.0
-            for n in free:      # a length linear in the prismatic variable: largest at a limit
-                for v in limits[n]:
-                    best = max(best, abs(float(e({**env, **{m: v for m in free}}))))
-            total += best if free else abs(float(e(env)))
+            corners = itertools.product(*(limits[n] for n in free))     # a row's length is largest at a corner of its joints' limits
+            total += max(abs(float(e({**parameters, **dict(zip(free, c))}))) for c in corners)
     return max(total, 1e-3)
 
 
