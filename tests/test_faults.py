@@ -382,7 +382,9 @@ POOL = """
     import os, time
     from evotol._runtime.executor import run_chunks
     def work(x):
-        print(os.getpid(), flush=True)
+        # one write() of under PIPE_BUF bytes: the two workers' lines cannot interleave
+        # (print() writes the number and the newline separately; CI once read "\\n")
+        os.write(1, f"{os.getpid()}\\n".encode())
         time.sleep(60)
     run_chunks(work, [1, 2], lambda i, r: None, workers=2)
 """
