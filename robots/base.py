@@ -350,6 +350,26 @@ class RobotErrorModel:
             model = outer.rebuilt(model)
         return model
 
+    def clearance_mechanism(self):
+        """The robot's joints with their clearances (:class:`evotol.robots.clearance.ClearanceMechanism`).
+
+        A part keeps its base's; a robot without joint clearances refuses in one line.
+
+        Returns
+        -------
+        evotol.robots.clearance.ClearanceMechanism
+            The clearance model of the described robot.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            A robot whose plugin declares no joint clearances.
+        """
+        if self.base is not None:
+            return self.base.clearance_mechanism()
+        raise ValidationError("clearances", self.name, "a robot with joint clearances (its plugin defines "
+                              "clearance_mechanism())")
+
     def __repr__(self) -> str:
         """One line: the class, the robot's name and its counts (``<... object at 0x...>`` before)."""
         try:

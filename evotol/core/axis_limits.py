@@ -139,13 +139,15 @@ def tool_rotation(robot, poses) -> np.ndarray:
         A robot whose tool orientation evotol does not know (not a mechanism description).
     """
     P = np.atleast_2d(np.asarray(poses, float))
-    if hasattr(robot, "tool_pose"):
-        return robot.tool_pose(P)[:, :3, :3]
-    kin, mech = getattr(robot, "kin", None), getattr(robot, "mechanism", None)
-    if kin is None or mech is None:
+    joints = robot.part_of("joint_space")            # poses are joint configurations: its own tool pose
+    if joints is not None:
+        return joints.tool_pose(P)[:, :3, :3]
+    described = robot.described                      # task poses of the arm as described (parts keep them)
+    if not described.joint_maps:
         raise ValidationError("requirement.frame", "tool", f"'base' for {robot.name} (the tool frame is known for a "
                                                            "mechanism description only)")
-    q = robot.joint_values(P)
+    kin, mech = described.kin, described.mechanism
+    q = described.joint_values(P)
     return np.array(kin.state(q, len(P), twists=False).world[mech.end_effector][:, :3, :3])
 
 

@@ -169,7 +169,7 @@ def result_warnings(problem, result) -> list[str]:
         them (:func:`evotol.core.shop.unmeasurable`).
     """
     out = []
-    if getattr(problem, "measurable", None) is not None:     # a study file's [shop] (issue 41): zones below it
+    if problem.measurable is not None:     # a study file's [shop] (issue 41): zones below it
         out += unmeasurable(problem, result.t, problem.measurable)
     if problem.requirement.measure == "yield" or "budget" in (result.info or {}):
         return out

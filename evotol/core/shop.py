@@ -147,7 +147,7 @@ def check_floors_feasible(problem) -> None:
     evotol.errors.InfeasibleError
         Naming the floored sources, the error at the floors and the remedies.
     """
-    floors = getattr(problem, "shop_floors", None)
+    floors = problem.shop_floors
     if not floors:
         return
     try:
@@ -184,7 +184,7 @@ def at_floors(problem, t, rtol: float = 1e-6) -> list[dict]:
         ``{"source": source or callout name, "floor": m or rad, "key": the [shop] floors key}``,
         in source order.
     """
-    floors = getattr(problem, "shop_floors", None) or {}
+    floors = problem.shop_floors or {}
     t = problem.as_array(t)
     out, seen = [], set()
     for n, (v, key) in floors.items():

@@ -273,7 +273,7 @@ def nonlinear_check(problem: ToleranceProblem, t) -> dict:
     """
     comps = problem.components
     if (problem.requirement.measure != "worst_case" or not comps
-            or not getattr(problem.error_model, "has_nonlinear_model", False)):
+            or not problem.error_model.has_nonlinear_model):
         return {}
     nl = worst_vertex_errors(problem, t)
     worst = {c: float(np.max(nl[c])) for c, _ in comps if c in nl}

@@ -137,7 +137,7 @@ def sources_without_effect(problem: ToleranceProblem) -> np.ndarray:
         True where ``max over poses ||B_j|| x upper_j < NO_EFFECT_FRACTION x limit`` for every
         constrained component; never for a joint clearance class, whose effect the certified
         clearance measure computes outside the first-order map (its columns there are 0), nor for
-        a source the error model lists in ``effect_beyond_first_order`` (a calibrated robot's).
+        a source the calibration part lists in ``effect_beyond_first_order``.
     """
     out = np.ones(problem.n_sources, bool)
     for comp, lim in problem.components:
@@ -145,7 +145,9 @@ def sources_without_effect(problem: ToleranceProblem) -> np.ndarray:
         out &= s * np.asarray(problem.upper, float) < NO_EFFECT_FRACTION * lim
     if problem.clearances is not None:
         out &= ~np.isin(list(problem.names), list(problem.clearances.names))
-    out &= ~np.isin(list(problem.names), list(getattr(problem.error_model, "effect_beyond_first_order", ())))
+    calibrated = problem.error_model.part_of("calibration")
+    if calibrated is not None:
+        out &= ~np.isin(list(problem.names), list(calibrated.effect_beyond_first_order))
     return out
 
 
@@ -183,7 +185,7 @@ def result_details(problem: ToleranceProblem, r) -> dict:
         if getattr(r.errors, f"{comp}_contrib") is not None:
             c = r.contributions(comp)
             d["contributions"][comp] = {"source": c["source"].tolist(), "percent": c["percent"].tolist()}
-    if getattr(problem, "shop_floors", None):      # feasible, and held by the shop's floors (issue 41)
+    if problem.shop_floors:      # feasible, and held by the shop's floors (issue 41)
         d["at_floor"] = at_floors(problem, r.t)
     if r.history is not None and len(r.history) and {"best_fitness", "mean_fitness"} <= set(r.history):
         d["history"] = {k: r.history[k].tolist() for k in ("generation", "best_fitness", "mean_fitness")}

@@ -137,6 +137,9 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
     #: set by evotol.calibration.calibrated_problem (Attributes); declared here, never looked up with getattr
     calibration = None
     uncalibrated = None
+    #: set by evotol.core.shop (a study file's [shop]): source -> (floor, key) and the smallest measurable zones
+    shop_floors: dict | None = None
+    measurable: dict | None = None
 
     def __init__(self, robot: RobotErrorModel, tolerances: Mapping[str, Tolerance], requirement: Requirement,
                  poses, n_directions: int = 600, shared: Mapping[str, Sequence[str]] | None = None,

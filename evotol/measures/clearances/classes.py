@@ -19,6 +19,7 @@ import numpy as np
 from evotol.errors import ValidationError
 from evotol._runtime.keyword_checks import check_table_keys
 from evotol.robots.base import SourceSpec
+from evotol.robots.clearance.model import ClearanceMechanism
 
 #: clearance bound components, in the engine's column order (Deng 2012 eqs. III.3-III.6)
 COMPONENTS = ("beta_xy", "beta_z", "b_xy", "b_z")
@@ -174,7 +175,7 @@ class ClearanceSources:
 
     def __post_init__(self):
         mech = self.mechanism
-        if not hasattr(mech, "pose_maps") or not hasattr(mech, "joints"):
+        if not isinstance(mech, ClearanceMechanism):
             raise ValidationError("clearances.mechanism", mech, "a evotol.robots.clearance.ClearanceMechanism")
         self.classes = tuple(self.classes)
         if not self.classes:
@@ -310,9 +311,7 @@ def from_table(table: dict, robot) -> ClearanceSources:
         class set (:class:`ClearanceClass`, :class:`ClearanceSources`).
     """
     check_table_keys(table, TABLE_KEYS, "clearances")
-    if not hasattr(robot, "clearance_mechanism"):
-        raise ValidationError("clearances", robot.name, "a robot with joint clearances (clearance_mechanism())")
-    mech = robot.clearance_mechanism()
+    mech = robot.clearance_mechanism()         # refused in one line by a robot without joint clearances
     classes = []
     if "h" in table:
         joints = table.get("joints", [j.name for j in mech.joints])

@@ -159,11 +159,43 @@ class CalloutModel(RobotErrorModel):
         """Callout name -> its member sources (a position zone's two end discs, ...): one tolerance each."""
         return self._ties
 
-    def __getattr__(self, item):
-        # everything else (joint_values, notes, redundancy, mechanism, kin, ...) is the base model's
-        if item in ("base", "C", "_ties"):
-            raise AttributeError(item)
-        return getattr(self.base, item)
+    # --- the joint maps of the arm the callouts are drawn on (joint_maps = True), declared, not forwarded
+    @property
+    def mechanism(self):
+        """The arm's description (:class:`evotol.robots.mechanism.description.mechanism.Mechanism`)."""
+        return self.base.mechanism
+
+    @property
+    def kin(self):
+        """The arm's kinematics (:class:`evotol.robots.mechanism.kinematics.tree.Kinematics`)."""
+        return self.base.kin
+
+    @property
+    def redundancy(self) -> dict | None:
+        """The arm's redundancy (:attr:`MechanismModel.redundancy
+        <evotol.robots.mechanism.model.error_model.MechanismModel.redundancy>`): callouts do not change it."""
+        return self.base.redundancy
+
+    def joint_values(self, poses) -> dict:
+        """All joint variables at task poses (SI): the arm's inverse geometry (callouts do not move nominal joints).
+
+        Returns
+        -------
+        dict of str to (n,) ndarray
+            Every joint variable (rad, or m for a prismatic joint).
+        """
+        return self.base.joint_values(poses)
+
+    def closure_residual(self, poses=None) -> float:
+        """The arm's loop-closure residual (m) at poses (:meth:`MechanismModel.closure_residual
+        <evotol.robots.mechanism.model.error_model.MechanismModel.closure_residual>`).
+
+        Returns
+        -------
+        float
+            The largest residual (m).
+        """
+        return self.base.closure_residual(poses)
 
     def with_zones(self, zones: str) -> "CalloutModel":
         """The same mechanism and callouts under another zone model (``"exact"`` or ``"boxes"``).

@@ -203,6 +203,18 @@ class JointSpaceModel(RobotErrorModel):
         """
         return self.base.pose_error_at_joints(self.check_poses(poses), errors)
 
+    def clearance_mechanism(self):
+        """Refused: the clearance engine solves the mechanism at task poses, not at joint configurations.
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            Always, in one line naming ``[clearances]`` and ``[poses] joints``.
+        """
+        raise ValidationError("clearances", self.name, "a robot with joint clearances posed by task poses: the "
+                              "clearance engine solves the mechanism at task poses, and [poses] joints gives joint "
+                              "configurations (docs/combinations.md)")
+
     def tool_pose(self, poses) -> np.ndarray:
         """The nominal end-effector transform at joint configurations (forward kinematics).
 
