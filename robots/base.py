@@ -350,6 +350,29 @@ class RobotErrorModel:
             model = outer.rebuilt(model)
         return model
 
+    def nonlinear_checks(self, problem, t, seed: int = 0) -> dict:
+        """The checks the parts of the composition add to a Monte Carlo verification on the nonlinear model.
+
+        :func:`evotol.verification.verify` calls this on the problem's model and stores the result as
+        ``MonteCarloResult.part_checks``; it knows no part by name. A part adds its own entries to its
+        base's (the calibration part: ``"calibration"``, the simulated calibration of the design).
+
+        Parameters
+        ----------
+        problem : evotol.core.problem.ToleranceProblem
+            The problem being verified.
+        t : (n_sources,) ndarray
+            The design (SI).
+        seed : int
+            The verification's seed.
+
+        Returns
+        -------
+        dict
+            Check name -> a result with ``to_dict()``; empty for a robot as described.
+        """
+        return self.base.nonlinear_checks(problem, t, seed) if self.base is not None else {}
+
     def clearance_mechanism(self):
         """The robot's joints with their clearances (:class:`evotol.robots.clearance.ClearanceMechanism`).
 

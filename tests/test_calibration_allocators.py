@@ -89,5 +89,5 @@ def test_rss_and_yield_measures_on_the_calibrated_error(pc):
     noise = pc.with_requirement(measure="yield", probability=0.99).first_order_yield().noise["position"]
     assert np.allclose(noise, np.stack([C[:, a, b] for a, b in pairs], -1), rtol=1e-8, atol=1e-20)
     mc = verify(pc, t, n_samples=100, seed=0)
-    assert mc.calibration is not None and mc.calibration.n_samples == 20
+    assert mc.part_checks["calibration"].n_samples == 20
     assert mc.to_dict()["calibration"]["simulated"]["position"]["max"] <= 5e-4

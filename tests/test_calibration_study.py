@@ -16,7 +16,7 @@ from evotol.errors import ValidationError
 from evotol.studyfile import load_problem, run_study_file
 from evotol.studyfile import methods as studyfile_methods
 from evotol.studyfile import run as studyfile_run
-from evotol.verification import montecarlo
+from evotol.calibration import simulation as calibration_simulation
 from evotol.units import numbers_without_unit
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -100,7 +100,7 @@ def test_bad_plans_one_line_before_work(table, field, words, tmp_path, monkeypat
         return called
     for m in list(studyfile_methods.METHODS):
         monkeypatch.setitem(studyfile_methods.METHODS, m, spy(m))
-    for module in (calibration_summary, montecarlo):           # where the simulated calibration is called
+    for module in (calibration_summary, calibration_simulation):   # where the simulated calibration is called
         monkeypatch.setattr(module, "simulate_calibration", spy("simulate_calibration"))
     monkeypatch.setattr(studyfile_run, "verify", spy("verify"))
     with pytest.raises(ValidationError) as exc:

@@ -127,6 +127,27 @@ class CalibratedRobot(RobotErrorModel):
         return {c: np.sqrt(np.maximum(np.linalg.eigvalsh(C[:, o:o + 3, o:o + 3])[:, -1], 0.0))
                 for c, o in (("position", 0), ("orientation", 3))}
 
+    def nonlinear_checks(self, problem, t, seed: int = 0) -> dict:
+        """The base's checks and the calibration simulated on the nonlinear model (``"calibration"``).
+
+        :func:`evotol.calibration.simulation.simulate_calibration` with ``problem.calibration.simulate``
+        robots; none when that is 0 or the plan has no joint configurations (a model without a
+        nonlinear joint-space model).
+
+        Returns
+        -------
+        dict
+            The base model's checks, and ``"calibration"``: a
+            :class:`evotol.calibration.simulation.CalibrationCheck`.
+        """
+        from evotol.calibration.simulation import simulate_calibration    # simulation reads this module
+
+        out = super().nonlinear_checks(problem, t, seed)
+        info = problem.calibration
+        if info is not None and info.simulate and info.identification.joints is not None:
+            out["calibration"] = simulate_calibration(problem, t, n_samples=info.simulate, seed=seed)
+        return out
+
     def notes(self) -> list[str]:
         """Report lines of the wrapped model plus one stating the calibration.
 

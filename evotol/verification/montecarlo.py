@@ -29,7 +29,6 @@ import pandas as pd
 
 from evotol.measures import clearances
 
-from evotol.calibration.simulation import simulate_calibration
 from evotol.measures.statistical import distributions
 from evotol.measures.statistical.distributions import METHODS
 from evotol.errors import ValidationError, is_integer, is_real
@@ -84,9 +83,11 @@ class MonteCarloResult:
         The same on the nonlinear model (unassembled = miss).
     yield_check : dict
         :func:`yield_check` of the nonlinear yield where there is one, else the linear.
-    calibration : evotol.calibration.simulation.CalibrationCheck, optional
-        For a calibrated problem (:func:`evotol.calibration.calibrated_problem`): the calibration
-        simulated on the nonlinear model beside the first-order prediction; None otherwise.
+    part_checks : dict
+        The checks the parts of the composed model add on the nonlinear model
+        (:meth:`evotol.robots.base.RobotErrorModel.nonlinear_checks`): ``"calibration"`` for a
+        calibrated problem (:func:`evotol.calibration.calibrated_problem`: the calibration simulated
+        beside the first-order prediction); empty otherwise.
     sampled : evotol.measures.statistical.distributions.Distribution, optional
         The distribution every source was sampled from (``verify(distribution=...)``); None: each
         source's own.
@@ -120,7 +121,7 @@ class MonteCarloResult:
     yield_linear: np.ndarray | None = None        # (n_poses,) fraction of samples inside every bound
     yield_nonlinear: np.ndarray | None = None     # the same on robot.pose_error (unassembled = miss)
     yield_check: dict = field(default_factory=dict)
-    calibration: object = None    # a calibrated problem's simulated calibration (evotol.calibration.simulation)
+    part_checks: dict = field(default_factory=dict)   # name -> a part's own nonlinear check (to_dict())
     sampled: object = None        # verify(distribution=...): the one distribution every source was sampled from
 
     @property
@@ -209,8 +210,8 @@ class MonteCarloResult:
             ``method``, ``n_samples``, ``seed``, ``seconds``, ``max_exceed_rate``,
             ``linearisation_error``, ``max_error_over_worst_case`` and, where available,
             ``linearisation_verdict``, ``max_exceed_rate_nonlinear``, ``yield``
-            (:func:`yield_check`'s entries), ``calibration`` (the simulated calibration of a
-            calibrated problem) and ``sampled_distribution`` (``kind``, ``sigma_k``,
+            (:func:`yield_check`'s entries), each of ``part_checks`` under its name (``calibration``:
+            the simulated calibration of a calibrated problem) and ``sampled_distribution`` (``kind``, ``sigma_k``,
             ``mean_shift``: the one distribution every source was sampled from, when
             ``verify`` was given one); no per-pose arrays.
         """
@@ -223,8 +224,8 @@ class MonteCarloResult:
             d["max_exceed_rate_nonlinear"] = self.max_exceed_rate(True)
         if self.yield_check:
             d["yield"] = dict(self.yield_check)
-        if self.calibration is not None:
-            d["calibration"] = self.calibration.to_dict()
+        for name, check in self.part_checks.items():     # e.g. "calibration": the simulated calibration
+            d[name] = check.to_dict()
         if self.sampled is not None:
             d["sampled_distribution"] = {"kind": self.sampled.kind, "sigma_k": float(self.sampled.sigma_k),
                                          "mean_shift": float(self.sampled.mean_shift)}
@@ -439,9 +440,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     ev = problem.evaluate(t[None], "worst_case")
     for c, _ in comps:
         res.max_error_over_worst_case[c] = float(np.max(maxerr[c] / np.maximum(getattr(ev, c)[0], 1e-300)))
-    info = problem.calibration     # a calibrated robot: simulate its calibration (docs/calibration.md)
-    if nonlinear and info is not None and info.simulate and info.identification.joints is not None:
-        res.calibration = simulate_calibration(problem, t, n_samples=info.simulate, seed=seed)
+    if nonlinear:       # each part's own check on the nonlinear model (a calibration: simulated)
+        res.part_checks = problem.error_model.nonlinear_checks(problem, t, seed)
     res.seconds = time.perf_counter() - t0
     return res
 
