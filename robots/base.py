@@ -244,6 +244,10 @@ class RobotErrorModel:
     #: ``joint_values``, ``kin``, ``mechanism``): a described mechanism and the parts that keep its joints
     joint_maps: bool = False
 
+    #: (dropped, total, the first five dropped poses) set on the robot as described by ``[poses]
+    #: drop_unreachable`` (evotol/studyfile/joint_poses.py); None: none dropped. Not a field: set after reading.
+    dropped_poses = None
+
     # --- composition (docs/architecture.md, "The error model, composed") ----------------------
     @property
     def tied_sources(self) -> Mapping[str, tuple[str, ...]]:
@@ -292,9 +296,12 @@ class RobotErrorModel:
         Returns
         -------
         list of str
-            The base model's notes for a part; none for a described robot that states none.
+            The base model's notes for a part; for a described robot, the poses dropped as unreachable
+            (:attr:`dropped_poses`), if any.
         """
-        return list(self.base.notes()) if self.base is not None else []
+        if self.base is not None:
+            return list(self.base.notes())
+        return [dropped_line(self.dropped_poses)] if self.dropped_poses else []
 
     @property
     def described(self) -> "RobotErrorModel":
@@ -515,4 +522,22 @@ class RobotErrorModel:
 #: the parts a model can be composed of, in the order they are composed (docs/architecture.md):
 #: source transforms of the described robot (callouts), the pose set (joint configurations), the
 #: calibration projection, the requirement's components (per-axis limits), joint clearances
+def dropped_line(dropped: tuple) -> str:
+    """The report line on poses dropped as unreachable (``RobotErrorModel.dropped_poses``).
+
+    Parameters
+    ----------
+    dropped : tuple
+        ``(dropped, total, first five dropped poses (SI))``.
+
+    Returns
+    -------
+    str
+        One sentence.
+    """
+    n, total, first = dropped
+    return (f"{n} of {total} poses dropped ([poses] drop_unreachable): out of reach, singular, outside the joint "
+            f"limits or on another branch; the first (SI): {first}.")
+
+
 PARTS = ("callouts", "joint_space", "calibration", "axis_limits", "clearances")

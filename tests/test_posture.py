@@ -176,3 +176,22 @@ def test_compiled_task_jacobian_equals_the_general_one():
         q = {v: Q[:, i] for i, v in enumerate(kin.variables)}
         P = m.workspace.latin_hypercube(20)
         assert np.abs(_task_jacobian(kin, q, P, chain) - _task_jacobian(kin, q, P)).max() < 1e-12
+
+
+def test_dropped_poses_are_stated_with_callouts_too(tmp_path):
+    """``[poses] drop_unreachable`` on an arm with drawing callouts: the report's notes still say how many
+    poses were dropped (the count was set on the callout part and read from the arm: lost, before)."""
+    from evotol.studyfile import load_problem
+    from tests.test_standard_dh import PUMA
+    f = tmp_path / "puma_far.toml"
+    f.write_text(PUMA.read_text().replace('high = "700*mm"', 'high = "1100*mm"'))
+    spec = {"robot": {"mechanism": str(f)}, "poses": {"grid": [5, 2, 2]}, "requirement": {"position": 5e-4},
+            "cost": {"default": {"model": "exponential", "a0": 1.9, "a1": 0.5, "scale": 1e-5}}}
+    with pytest.raises(KinematicsError) as e:
+        load_problem(spec)
+    n_bad = len(e.value.poses)
+    spec["poses"]["drop_unreachable"] = True
+    spec["robot"]["callouts"] = [{"joint": "J3", "kind": "position", "length": "50 mm"}]
+    problem = load_problem(spec)
+    assert problem.model.part_of("callouts") is not None and problem.n_poses == 20 - n_bad
+    assert [line for line in problem.model.notes() if f"{n_bad} of 20 poses dropped" in line]

@@ -88,5 +88,5 @@ def drop_unreachable(robot, poses, poses_table: dict):
                                       "(drop_unreachable dropped them all)") from None
     dropped = int((~keep).sum())
     if dropped:
-        robot.dropped_poses = (dropped, len(poses), poses[~keep][:5].tolist())
+        robot.described.dropped_poses = (dropped, len(poses), poses[~keep][:5].tolist())   # its notes say so
     return poses[keep]

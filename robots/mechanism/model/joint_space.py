@@ -34,7 +34,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from evotol.errors import ValidationError
-from evotol.robots.base import RobotErrorModel, Workspace
+from evotol.robots.base import RobotErrorModel, Workspace, dropped_line
 from evotol.robots.mechanism.description.expressions import Expression
 
 #: the reach of a revolute joint without limits in the joint-space box (rad): one turn each way
@@ -110,16 +110,6 @@ class JointSpaceModel(RobotErrorModel):
     def mechanism(self):
         """The arm's description (:class:`evotol.robots.mechanism.description.mechanism.Mechanism`)."""
         return self.base.mechanism
-
-    def notes(self) -> list[str]:
-        """The arm's notes (:meth:`MechanismModel.notes <evotol.robots.mechanism.model.error_model.MechanismModel.notes>`).
-
-        Returns
-        -------
-        list of str
-            One sentence each.
-        """
-        return list(self.base.notes())
 
     def joint_values(self, poses) -> dict:
         """The joint values of joint-space poses: the poses themselves, by joint variable.
@@ -239,10 +229,12 @@ class JointSpaceModel(RobotErrorModel):
         Returns
         -------
         list of str
-            One line: the poses are joint configurations, held exactly (no inverse geometry).
+            The poses are joint configurations, held exactly (no inverse geometry: the arm's posture and
+            redundancy notes do not apply); and the configurations dropped as unreachable, if any.
         """
+        dropped = self.described.dropped_poses
         return [f"Poses are joint configurations ({', '.join(self.variables)}): the requirement holds at exactly "
-                "these configurations; no inverse geometry is solved."]
+                "these configurations; no inverse geometry is solved."] + ([dropped_line(dropped)] if dropped else [])
 
 
 def _value(raw, where: str, unit: str) -> float:

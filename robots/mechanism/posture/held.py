@@ -25,7 +25,7 @@ import warnings
 import numpy as np
 
 from evotol.errors import KinematicsError
-from evotol.robots.base import RobotErrorModel
+from evotol.robots.base import RobotErrorModel, dropped_line
 from evotol.robots.mechanism.kinematics.serial import SERIAL_COMPILED, SerialChain
 
 #: relative smallest singular value of the scaled task Jacobian below which a pose counts as near a singularity
@@ -206,19 +206,16 @@ def posture_notes(model) -> list[str]:
     """
     out = []
     kin = model.kin
-    if not kin.mech.loops and getattr(model, "_posture_checked", None):
+    if not kin.mech.loops and model.__dict__.get("_posture_checked"):     # a cache the posture check fills
         x0, q0 = kin.assembly()
         J0 = _task_jacobian(kin, {k: np.array([v]) for k, v in q0.items()}, x0[None])
         if J0 is not None:
             out.append("Posture held: every pose is solved on the branch of the assembly configuration ("
                        + _shown(kin, wrapped(kin, q0)) + "); a pose on another elbow, shoulder or wrist branch is "
                        "refused (robots/mechanism/posture/held.py); the joints used are in the table 'Joints used at every pose'.")
-    dropped = getattr(model, "dropped_poses", None)
-    if dropped:
-        n, total, first = dropped
-        out.append(f"{n} of {total} poses dropped ([poses] drop_unreachable): out of reach, singular, outside the joint "
-                   f"limits or on another branch; the first (SI): {first}.")
-    near = getattr(model, "_near_singular", {})
+    if model.dropped_poses:
+        out.append(dropped_line(model.dropped_poses))
+    near = model.__dict__.get("_near_singular", {})
     if not near:
         return out
     shown = "; ".join(str(list(np.round(p, 6))) for p in list(near)[:5])
@@ -270,7 +267,8 @@ def joint_table(robot, poses) -> dict:
         (SI, wrapped); empty for a robot without joint variables.
     """
     q = joints_at(robot, poses)
-    kin = getattr(getattr(robot, "base", robot), "kin", None)
+    described = robot.described
+    kin = described.kin if described.joint_maps else None
     if not q or kin is None:
         return {}
     return {"variables": list(q), "units": [kin.joint_unit.get(v, "rad") for v in q],
