@@ -28,7 +28,7 @@ from evotol.allocators.process.problem import ProcessProblem
 from evotol.errors import ValidationError
 from evotol.measures.nonlinear.worst_case import nonlinear_worst_case
 from evotol.core.problem import ToleranceProblem
-from evotol.robots.assembly import LinearStack
+from evotol.robots.assembly import AssemblyFunction, LinearStack
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 
@@ -160,7 +160,7 @@ def allocate_nonlinear_limit(problem, allocate, *, max_iter: int = 12, rtol: flo
         Not an assembly, not the worst-case measure, shared/locked sources.
     """
     asm = problem.model
-    if not hasattr(asm, "dimension_names") or not hasattr(asm, "function"):
+    if not isinstance(asm, AssemblyFunction):
         raise ValidationError("robot", getattr(asm, "name", asm), "an assembly function (evotol.robots.assembly.AssemblyFunction)")
     if problem.requirement.measure != "worst_case":
         raise ValidationError("requirement.measure", problem.requirement.measure,

@@ -32,7 +32,7 @@ def controller_rows(robot) -> list[int]:
     n_act = len(robot.kin.actuated)
     if n_act >= 6:
         return [0, 1, 2, 3, 4, 5]
-    if getattr(robot.mechanism, "planar", False) and n_act >= 3:
+    if robot.mechanism.planar and n_act >= 3:
         return [0, 1, 5]
     return [0, 1, 2]
 

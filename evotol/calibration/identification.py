@@ -124,7 +124,7 @@ def registration_columns(robot, plan, joints) -> tuple[np.ndarray, list[str]]:
         cols.append(np.concatenate([zero, Rt], 1))
         names += list(REG_TOOL[3:])
     R = np.concatenate(cols, 2)
-    if getattr(robot.mechanism, "planar", False):
+    if robot.mechanism.planar:
         R = robot._planar(R)
     return R, names
 

@@ -42,6 +42,7 @@ from typing import Mapping
 import numpy as np
 
 from evotol.cost_models.quality_loss import QualityLossCost
+from evotol.robots.assembly import AssemblyFunction
 from evotol.errors import ValidationError
 from evotol.core.problem import Tolerance, ToleranceProblem
 
@@ -92,7 +93,7 @@ def loss_coefficients(problem: ToleranceProblem, A) -> np.ndarray:
     """
     robot = problem.error_model
     q = np.zeros(problem.n_sources)
-    if hasattr(robot, "response_names") and hasattr(robot, "gradient"):
+    if isinstance(robot, AssemblyFunction):       # an assembly: per response, its gradient at the nominal
         a = _per_key(A, robot.response_names, "response name")
         w = np.array([a[n] for n in robot.response_names])
         # gradient (K, n_dims) in the response's unit per SI; limits (K,)

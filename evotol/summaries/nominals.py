@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from evotol.robots.assembly import AssemblyFunction
 from evotol.robots.base import RobotErrorModel
 from evotol.robots.mechanism.kinematics.placement import PLACEMENT_FIELDS, SHIFT_FIELDS
 
@@ -28,19 +29,19 @@ def _nominals(robot, names) -> tuple[dict, dict]:
     """(values, notes) by source name (module docstring); ``names`` None: the robot's sources."""
     inner = robot.described if isinstance(robot, RobotErrorModel) else robot     # the robot as described
     names = list(getattr(robot, "source_names", ())) if names is None else list(names)
-    if hasattr(inner, "dimension_names") and hasattr(inner, "x0"):
-        if not getattr(inner, "nominal_given", True):
+    if isinstance(inner, AssemblyFunction):
+        if not inner.nominal_given:
             return {}, {}
         values = {n: float(v) for n, v in zip(inner.dimension_names, np.ravel(inner.x0))}
         return values, {n: "the assembly's nominal dimension" for n in values}
-    mech = getattr(inner, "mechanism", None)
-    if mech is None:
+    if not isinstance(inner, RobotErrorModel) or not inner.joint_maps:     # no description to read nominals from
         return {}, {}
-    params = {n: float(v) for table in (getattr(mech, "lengths", {}), getattr(mech, "angles", {}))
+    mech = inner.mechanism
+    params = {n: float(v) for table in (mech.lengths, mech.angles)
               for n, v in table.items() if np.isscalar(v)}
     values, notes = dict(params), {n: f"design parameter {n} of the description" for n in params}
-    kin = getattr(inner, "kin", None)
-    urdf = bool(getattr(mech, "urdf", ()))
+    kin = inner.kin
+    urdf = bool(mech.urdf)
     origin = "URDF joint origin" if urdf else "description's placement"
     for n in params:            # a URDF arm's parameters are its joint origins' xyz/rpy (robots/mechanism/urdf/reader.py)
         joint, _, k = n.rpartition("_")
@@ -48,13 +49,13 @@ def _nominals(robot, names) -> tuple[dict, dict]:
             notes[n] = f"the URDF joint origin's {'xyz' if len(k) == 1 else 'rpy'} {k} of {joint}"
     for n in names:
         frame, _, field = n.partition(".")
-        if n in getattr(kin, "actuated", ()):
+        if n in kin.actuated:
             notes[n] = "actuator offset: deviation of the joint's zero (its value varies with the pose)"
         elif field in PLACEMENT_FIELDS:
             values[n] = 0.0
             what = "shift along" if field in SHIFT_FIELDS else "tilt about"
             notes[n] = f"0 = the {origin} of {frame}; the deviation is a {what} its {field[-1]} axis"
-        elif kin is not None and (frame, field) in getattr(kin, "expr", {}):
+        elif (frame, field) in kin.expr:
             e = kin.expr[(frame, field)]
             if e.names <= set(params):
                 values[n] = float(e(params))

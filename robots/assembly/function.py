@@ -92,6 +92,9 @@ class AssemblyFunction(RobotErrorModel):
     array([ 1., -1.])
     """
 
+    #: False when the nominal was not given (a linear stack of sensitivities only): reports leave it blank
+    nominal_given = True
+
     def __init__(self, function: Callable, nominal: Mapping[str, float], limits: Mapping[str, float], *,
                  name: str = "assembly", units: Mapping[str, str] | None = None,
                  groups: Mapping[str, str] | None = None, step: float = 1e-20, fd_rtol: float = 1e-5):

@@ -25,7 +25,7 @@ import numpy as np
 
 from evotol.errors import ValidationError, is_integer, is_real
 from evotol.measures.nonlinear.interval import Dual, Interval
-from evotol.robots.assembly import LinearStack
+from evotol.robots.assembly import AssemblyFunction, LinearStack
 
 
 def _responses(asm, X):
@@ -37,7 +37,7 @@ def _responses(asm, X):
 
 
 def _check(asm, t) -> np.ndarray:
-    if not hasattr(asm, "function") or not hasattr(asm, "dimension_names"):
+    if not isinstance(asm, AssemblyFunction):
         raise ValidationError("robot", getattr(asm, "name", asm), "an assembly function (evotol.robots.assembly.AssemblyFunction)")
     t = np.asarray(t, dtype=float)
     if t.shape != (len(asm.dimension_names),) or not np.all(np.isfinite(t)) or np.any(t < 0):

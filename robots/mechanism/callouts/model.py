@@ -353,7 +353,7 @@ def with_callouts(model: MechanismModel, entries=None, zones: str = "exact", sou
     if zones not in ZONE_MODELS:
         raise ValidationError("robot.zones", zones, f"one of {ZONE_MODELS}")
     mech = model.mechanism
-    callouts = callouts_from_tables(entries, mech) if entries is not None else list(getattr(mech, "callouts", ()))
+    callouts = callouts_from_tables(entries, mech) if entries is not None else list(mech.callouts)
     if not callouts:
         return model
     return CalloutModel(mech, callouts, sources, zones, model.workspace)

@@ -116,8 +116,9 @@ def check_mechanism(file, n_poses: int = 20, sources=None) -> dict:
            "sources": [{"name": s.name, "group": s.group, "unit": s.unit, "description": s.description} for s in model.sources],
            "n_sources": len(model.sources), "n_poses": len(poses), "closure_residual": residual,
            "fd_rel_error": rep.get("fd_relative_mismatch"), "max_sensitivity": float(np.abs(model.sensitivity(poses)).max())}
-    if hasattr(model, "describe_callouts"):
-        out["callouts"] = model.describe_callouts()
+    callouts = model.part_of("callouts")        # a description with its own drawing callouts
+    if callouts is not None:
+        out["callouts"] = callouts.describe_callouts()
     out.update(model_report(model, poses))     # issue 23: nominal values, box and limits, rank (robots/mechanism/checks/inspection.py)
     if model.mechanism.clearance is not None:
         from evotol.robots.clearance import max_pose_error
