@@ -1,0 +1,364 @@
+"""The serial-arm Monte Carlo kernel (issue 43 item 2): the perturbed tip of a block of poses times a
+block of samples in one compiled pass, eight samples at a time in SIMD lanes.
+
+The chain of :mod:`evotol.robots.mechanism.kinematics.serial_kernels` (stages ``P_s``, placement
+errors ``E_m = exp(delta_m)`` after ``P_s``, joint motions ``J_s(theta_s + delta_s)``) is rewritten,
+with ``J(theta + delta) = J(delta) J(theta)`` (rotations about, or translations along, one ``z``), as
+
+    T = C_0 . O_1 . C_1 . O_2 ... O_K . C_K,
+
+where the **operations** ``O_k = E_m J_s(delta_s)`` hold everything that varies by sample and the
+**constants** ``C_k`` (products of the ``P_s`` and the nominal joint motions ``J_s(theta_s)``) depend on
+the pose only: they are computed once per pose and shared by all its samples. The nominal tip is
+``C_0 C_1 ... C_K`` (the same products, so an error vector of zeros gives exactly zero). Per sample
+the work is then one 3x4 product per operation and per constant, the placement exponentials and the
+final rotation vector, with no call to a transcendental function for the small angles tolerances
+give: the Rodrigues coefficients ``sin t/t``, ``(1 - cos t)/t^2``, ``(t - sin t)/t^3``, ``sin d`` and
+``cos d`` of a joint error and ``asin(s)/s`` of the result are their Taylor series in ``t^2``
+(terms to ``t^10``: truncation below 1e-21 relative for ``t < 0.1`` rad; the rotation vector's
+series for ``s < 0.01``); a lane beyond those ranges takes the closed forms. The lanes are the
+innermost loops, so LLVM vectorises them (AVX2/AVX-512); a task is one pose and up to
+:data:`TASK` of its samples, and tasks run in parallel (``numba.prange``).
+
+``tests/test_serial_montecarlo.py`` compares it with the general description path
+(:class:`evotol.robots.mechanism.kinematics.tree.Kinematics`), the scalar kernel it replaces
+(:func:`evotol.robots.mechanism.kinematics.serial_kernels.pose_error`) and an independent product of
+4x4 matrices written in the test.
+
+The parameters several definitions of this module share are described once, here.
+
+Parameters
+----------
+P : (ns, 4, 4) ndarray
+    Constant transform of each stage (m).
+kind : (ns,) ndarray of int64
+    0 fixed, 1 revolute, 2 prismatic.
+var : (ns,) ndarray of int64
+    Joint variable index of each joint stage.
+a, c : (ns,) ndarray
+    Nominal joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
+seg_start, fac_kind, fac_stage : ndarray of int64
+    The constants: factors ``seg_start[k] <= f < seg_start[k + 1]`` of ``C_k``, each ``P_s``
+    (``fac_kind`` 0) or ``J_s(theta_s)`` (1) of stage ``fac_stage``.
+op_stage : (K,) ndarray of int64
+    Joint stage whose error ``delta_s`` the operation applies, -1 for none.
+op_p, p_col, p_field : ndarray of int64
+    Placement terms ``op_p[k] <= t < op_p[k + 1]`` of operation ``k``: ``delta[p_field] +=
+    e[p_col]`` (fields 0-5: ``shift_x`` ... ``tilt_z``); none: no ``E_m``.
+op_j, j_col, j_var : ndarray of int64; j_coef : ndarray
+    Joint terms of operation ``k``'s stage: ``delta_s += e[j_col] j_coef (q[j_var] + offset)``
+    (1 for ``j_var`` -1).
+v_col, v_var : ndarray of int64
+    Joint offsets: ``offset[v_var] += e[v_col]``; ``delta_s`` also gets ``a_s offset[var_s]``.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import prange
+
+from evotol._runtime.numba_cache import njit
+from evotol.robots.mechanism.kinematics import serial_kernels  # noqa: F401  (its threading layer choice)
+
+#: samples per SIMD group (eight float64 lanes: one AVX-512 register, two AVX2 ones)
+W = 32
+#: samples of one pose per parallel task
+TASK = 512
+#: t^2 below which the Rodrigues and joint series serve (t < 0.1 rad)
+SMALL = 1e-2
+#: s^2 below which the series of asin(s)/s serves (rotation < 0.01 rad)
+SMALL_ROT = 1e-4
+
+
+def program(chain) -> tuple:
+    """The constants and operations of ``chain`` (module docstring) as the kernel's arrays.
+
+    Parameters
+    ----------
+    chain : evotol.robots.mechanism.kinematics.serial.SerialChain
+        The stages and error terms of a serial arm.
+
+    Returns
+    -------
+    tuple of ndarray
+        ``seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
+        j_var`` (see the module docstring).
+    """
+    ns = len(chain.P)
+    has_e = set(chain.p_terms[:, 1].tolist())
+    moved = set(chain.j_stage.tolist()) | {s for s in range(ns) if chain.kind[s] > 0 and chain.a[s] != 0.0
+                                           and chain.var[s] in set(chain.v_var.tolist())}
+    segs, ops, pending = [[]], [], None
+
+    def close():
+        ops.append(pending)
+        segs.append([])
+
+    for s in range(ns):
+        if not chain.ident[s]:
+            if pending is not None:
+                close()
+                pending = None
+            segs[-1].append((0, s))
+        m = chain.mark[s]
+        if m >= 0 and m in has_e:
+            if pending is not None:
+                close()
+            pending = [m, -1]
+        if chain.kind[s] > 0:
+            if s in moved:
+                if pending is None:
+                    pending = [-1, s]
+                else:
+                    pending[1] = s
+            if pending is not None:
+                close()
+                pending = None
+            segs[-1].append((1, s))
+    if pending is not None:
+        close()
+    seg_start = np.cumsum([0] + [len(g) for g in segs]).astype(np.int64)
+    fac = np.array([f for g in segs for f in g], np.int64).reshape(-1, 2)
+    p = chain.p_terms
+    pt = [[t for t in range(len(p)) if p[t, 1] == o[0]] for o in ops]
+    jt = [[t for t in range(len(chain.j_col)) if chain.j_stage[t] == o[1]] for o in ops]
+    pi, ji = [t for g in pt for t in g], [t for g in jt for t in g]
+    i64 = np.int64
+    return (seg_start, fac[:, 0].copy(), fac[:, 1].copy(), np.array([o[1] for o in ops], i64),
+            np.cumsum([0] + [len(g) for g in pt]).astype(i64), p[pi, 0].astype(i64), p[pi, 2].astype(i64),
+            np.cumsum([0] + [len(g) for g in jt]).astype(i64), chain.j_col[ji].astype(i64),
+            chain.j_coef[ji].astype(float), chain.j_var[ji].astype(i64))
+
+
+@njit(cache=True, error_model="numpy")
+def _mul34(A, B, out):
+    """out = A B for 3x4 affine transforms (the last row 0 0 0 1 implied)."""
+    for i in range(3):
+        for j in range(4):
+            s = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+            out[i, j] = s + A[i, 3] if j == 3 else s
+
+
+@njit(cache=True, error_model="numpy")
+def _constants(P, kind, var, a, c, q, seg_start, fac_kind, fac_stage, C, T0):
+    """The constants C (K+1, 3, 4) of one pose and its nominal tip T0 = C_0 ... C_K (3x4)."""
+    tmp = np.empty((3, 4))
+    for i in range(3):
+        for j in range(4):
+            T0[i, j] = 1.0 if i == j else 0.0
+    for k in range(seg_start.shape[0] - 1):
+        for i in range(3):
+            for j in range(4):
+                C[k, i, j] = 1.0 if i == j else 0.0
+        for f in range(seg_start[k], seg_start[k + 1]):
+            s = fac_stage[f]
+            if fac_kind[f] == 0:
+                _mul34(C[k], P[s], tmp)
+                C[k] = tmp
+            else:
+                v = a[s] * q[var[s]] + c[s]
+                if kind[s] == 1:
+                    cs, sn = np.cos(v), np.sin(v)
+                    for i in range(3):
+                        x, y = C[k, i, 0], C[k, i, 1]
+                        C[k, i, 0] = cs * x + sn * y
+                        C[k, i, 1] = -sn * x + cs * y
+                else:
+                    for i in range(3):
+                        C[k, i, 3] += v * C[k, i, 2]
+        _mul34(T0, C[k], tmp)
+        T0[:, :] = tmp
+
+
+@njit(cache=True, error_model="numpy")
+def _lanes_times_constant(T, C, out):
+    """out[:, l] = T[:, l] C for every lane (T, out: (12, W) rows ``4 i + j`` of the 3x4)."""
+    for i in range(3):
+        for j in range(4):
+            c0, c1, c2 = C[0, j], C[1, j], C[2, j]
+            t3 = 1.0 if j == 3 else 0.0
+            for l in range(W):
+                out[4 * i + j, l] = T[4 * i, l] * c0 + T[4 * i + 1, l] * c1 + T[4 * i + 2, l] * c2 + t3 * T[4 * i + 3, l]
+
+
+@njit(cache=True, error_model="numpy")
+def _lanes_times_lanes(T, E, out):
+    """out[:, l] = T[:, l] E[:, l] for every lane (3x4 affine, rows ``4 i + j``)."""
+    for i in range(3):
+        for j in range(4):
+            for l in range(W):
+                s = T[4 * i, l] * E[j, l] + T[4 * i + 1, l] * E[4 + j, l] + T[4 * i + 2, l] * E[8 + j, l]
+                out[4 * i + j, l] = s + T[4 * i + 3, l] if j == 3 else s
+
+
+@njit(cache=True, error_model="numpy")
+def _exp6_lanes(d, E, co):
+    """E[:, l] = exp(d[:, l]) (3x4 rows) for the local twists d (6, W) = [shift; tilt]: Rodrigues with
+    the coefficients' Taylor series in t^2 (the closed forms for a lane with t^2 >= SMALL); co: a
+    (4, W) scratch for t^2 and the coefficients. Separate loops, so that each one vectorises."""
+    for l in range(W):
+        x = d[3, l] * d[3, l] + d[4, l] * d[4, l] + d[5, l] * d[5, l]
+        co[0, l] = x
+        # sin t/t, (1 - cos t)/t^2, (t - sin t)/t^3 to x^5 (Horner)
+        co[1, l] = 1.0 - x * (1.0 / 6.0) * (1.0 - x * (1.0 / 20.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0)))))
+        co[2, l] = 0.5 - x * (1.0 / 24.0) * (1.0 - x * (1.0 / 30.0) * (1.0 - x * (1.0 / 56.0) * (1.0 - x * (1.0 / 90.0) * (1.0 - x * (1.0 / 132.0)))))
+        co[3, l] = 1.0 / 6.0 - x * (1.0 / 120.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0) * (1.0 - x * (1.0 / 156.0)))))
+    big = 0.0
+    for l in range(W):
+        big = max(big, co[0, l])
+    if not big < SMALL:                           # also NaN: the closed forms say what they say
+        for l in range(W):
+            x = co[0, l]
+            if not x < SMALL:
+                t = np.sqrt(x)
+                sn, cs = np.sin(t), np.cos(t)
+                co[1, l], co[2, l], co[3, l] = sn / t, (1.0 - cs) / x, (t - sn) / (x * t)
+    for l in range(W):
+        wx, wy, wz, x, A, B, Cc = d[3, l], d[4, l], d[5, l], co[0, l], co[1, l], co[2, l], co[3, l]
+        xx, yy, zz, xy, xz, yz = wx * wx - x, wy * wy - x, wz * wz - x, wx * wy, wx * wz, wy * wz
+        E[0, l], E[1, l], E[2, l] = 1.0 + B * xx, -A * wz + B * xy, A * wy + B * xz
+        E[4, l], E[5, l], E[6, l] = A * wz + B * xy, 1.0 + B * yy, -A * wx + B * yz
+        E[8, l], E[9, l], E[10, l] = -A * wy + B * xz, A * wx + B * yz, 1.0 + B * zz
+        v0, v1, v2 = d[0, l], d[1, l], d[2, l]
+        E[3, l] = (1.0 + Cc * xx) * v0 + (-B * wz + Cc * xy) * v1 + (B * wy + Cc * xz) * v2
+        E[7, l] = (B * wz + Cc * xy) * v0 + (1.0 + Cc * yy) * v1 + (-B * wx + Cc * yz) * v2
+        E[11, l] = (-B * wy + Cc * xz) * v0 + (B * wx + Cc * yz) * v1 + (1.0 + Cc * zz) * v2
+
+
+@njit(cache=True, error_model="numpy")
+def _joint_lanes(T, kind, dl):
+    """T[:, l] <- T[:, l] J(dl[l]): a rotation about z (kind 1, sin/cos by their series below
+    SMALL) or a translation along z (kind 2)."""
+    if kind == 2:
+        for i in range(3):
+            for l in range(W):
+                T[4 * i + 3, l] += dl[l] * T[4 * i + 2, l]
+        return
+    big = False
+    cs, sn = np.empty(W), np.empty(W)
+    for l in range(W):
+        u = dl[l]
+        x = u * u
+        big |= x >= SMALL
+        sn[l] = u * (1.0 - x * (1.0 / 6.0) * (1.0 - x * (1.0 / 20.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0))))))
+        cs[l] = 1.0 - x * (1.0 / 2.0) * (1.0 - x * (1.0 / 12.0) * (1.0 - x * (1.0 / 30.0) * (1.0 - x * (1.0 / 56.0) * (1.0 - x * (1.0 / 90.0) * (1.0 - x * (1.0 / 132.0))))))
+    if big:
+        for l in range(W):
+            if dl[l] * dl[l] >= SMALL:
+                cs[l], sn[l] = np.cos(dl[l]), np.sin(dl[l])
+    for i in range(3):
+        for l in range(W):
+            x, y = T[4 * i, l], T[4 * i + 1, l]
+            T[4 * i, l] = cs[l] * x + sn[l] * y
+            T[4 * i + 1, l] = -sn[l] * x + cs[l] * y
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _rotation_lane(T, T0, l):
+    """R R0^T of lane l, row-major as a 9-tuple."""
+    def row(u, v):
+        return T[4 * u, l] * T0[v, 0] + T[4 * u + 1, l] * T0[v, 1] + T[4 * u + 2, l] * T0[v, 2]
+    return (row(0, 0), row(0, 1), row(0, 2), row(1, 0), row(1, 1), row(1, 2), row(2, 0), row(2, 1), row(2, 2))
+
+
+@njit(cache=True, error_model="numpy")
+def _tip_error(T, T0, i, k0, nk, out):
+    """out[i, k0 + l] = [p - p0; rotation vector of R R0^T] for the lanes l < nk."""
+    for l in range(nk):
+        for u in range(3):
+            out[i, k0 + l, u] = T[4 * u + 3, l] - T0[u, 3]
+        r = _rotation_lane(T, T0, l)
+        vx, vy, vz = 0.5 * (r[7] - r[5]), 0.5 * (r[2] - r[6]), 0.5 * (r[3] - r[1])
+        s2 = vx * vx + vy * vy + vz * vz
+        cs = (r[0] + r[4] + r[8] - 1.0) / 2.0
+        if s2 < SMALL_ROT and cs > 0.0:           # asin(s)/s, rotation below 0.01 rad
+            f = 1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * 35.0 / 1152.0)))
+        else:                                     # the closed form of serial_kernels._rotvec
+            th = np.arccos(min(1.0, max(-1.0, cs)))
+            f = 1.0 + th * th / 6.0 if th < 1e-8 else th / np.sin(th)
+        out[i, k0 + l, 3], out[i, k0 + l, 4], out[i, k0 + l, 5] = vx * f, vy * f, vz * f
+
+
+@njit(cache=True, error_model="numpy")
+def _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
+          j_var, v_col, v_var, Q, errors, i, lo, hi, out):
+    """Samples lo <= k < hi of pose i into out (one scratch set, W samples at a time)."""
+    K = op_stage.shape[0]
+    nv = Q.shape[1]
+    C = np.empty((K + 1, 3, 4))
+    T0 = np.empty((3, 4))
+    _constants(P, kind, var, a, c, Q[i], seg_start, fac_kind, fac_stage, C, T0)
+    T, T2, E, d = np.empty((12, W)), np.empty((12, W)), np.empty((12, W)), np.empty((6, W))
+    off, dl, co = np.empty((nv, W)), np.empty(W), np.empty((4, W))
+    for k0 in range(lo, hi, W):
+        nk = min(W, hi - k0)
+        off[:, :] = 0.0
+        for t in range(v_col.shape[0]):
+            for l in range(nk):
+                off[v_var[t], l] += errors[i, k0 + l, v_col[t]]
+        for r in range(3):
+            for j in range(4):
+                for l in range(W):
+                    T[4 * r + j, l] = C[0, r, j]
+        for k in range(K):
+            if op_p[k + 1] > op_p[k]:             # E_m: the placement error's exponential
+                d[:, :] = 0.0
+                for t in range(op_p[k], op_p[k + 1]):
+                    for l in range(nk):
+                        d[p_field[t], l] += errors[i, k0 + l, p_col[t]]
+                _exp6_lanes(d, E, co)
+                _lanes_times_lanes(T, E, T2)
+                T, T2 = T2, T
+            s = op_stage[k]
+            if s >= 0:                            # J_s(delta_s): offsets and joint terms
+                for l in range(W):
+                    dl[l] = a[s] * off[var[s], l]
+                for t in range(op_j[k], op_j[k + 1]):
+                    for l in range(nk):
+                        g = j_coef[t] * (Q[i, j_var[t]] + off[j_var[t], l] if j_var[t] >= 0 else 1.0)
+                        dl[l] += errors[i, k0 + l, j_col[t]] * g
+                _joint_lanes(T, kind[s], dl)
+            if seg_start[k + 2] > seg_start[k + 1]:
+                _lanes_times_constant(T, C[k + 1], T2)
+                T, T2 = T2, T
+        _tip_error(T, T0, i, k0, nk, out)
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def pose_error(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
+               j_var, v_col, v_var, Q, errors):
+    """(n, m, 6) ``[dp (m); rotation vector of R R0^T (rad)]`` of the perturbed tip for errors
+    (n, m, n_cols) at joint values Q (n, n_vars): tasks of one pose and up to :data:`TASK` samples
+    in parallel; each sample's arithmetic does not depend on the number of threads.
+
+    Parameters
+    ----------
+    Q : (n, n_vars) ndarray
+        Nominal joint values (rad or m).
+    errors : (n, m, n_cols) ndarray
+        Source errors (m or rad); any strides (a broadcast array is read as it is).
+
+    Returns
+    -------
+    (n, m, 6) ndarray
+        The tip's error relative to the nominal, base frame.
+    """
+    n, m = errors.shape[0], errors.shape[1]
+    out = np.empty((n, m, 6))
+    per = (m + TASK - 1) // TASK
+    for b in prange(n * per):
+        i, lo = b // per, (b % per) * TASK
+        _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
+              j_var, v_col, v_var, Q, errors, i, lo, min(m, lo + TASK), out)
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def pose_error_serial(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col,
+                      j_coef, j_var, v_col, v_var, Q, errors):
+    """:func:`pose_error` in the calling thread only (for threads other than the main one)."""
+    n, m = errors.shape[0], errors.shape[1]
+    out = np.empty((n, m, 6))
+    for i in range(n):
+        _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
+              j_var, v_col, v_var, Q, errors, i, 0, m, out)
+    return out
