@@ -47,7 +47,7 @@ def test_equals_the_general_path_and_the_scalar_kernel(which):
         E = rng.uniform(-scale, scale, (13, 37, fast.n_columns))
         D, Ds = fast.pose_error_at_joints(q, E), slow.pose_error_at_joints(q, E)
         assert np.abs(D - Ds).max() < 1e-12, (which, scale)
-        assert np.abs(D - fast._serial.pose_error_scalar(Q, E)).max() < 1e-12
+        assert np.abs(D - fast._serial._pose_error_scalar(Q, E)).max() < 1e-12
     assert np.array_equal(fast.pose_error_at_joints(q, np.zeros((13, 5, fast.n_columns))), np.zeros((13, 5, 6)))
 
 

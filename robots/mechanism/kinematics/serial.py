@@ -304,22 +304,9 @@ class SerialChain:
         return kernel(self.P, self.kind, self.var, self.a, self.c, *self._mc, self.v_col, self.v_var,
                       np.ascontiguousarray(Q, float), np.asarray(errors, float))    # broadcast views as they are
 
-    def pose_error_scalar(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
-        """:meth:`pose_error` by the scalar kernel it replaced (issue 43: one sample at a time, the
-        whole chain and ``sin``/``cos`` per sample), kept for ``benchmarks/bench_urdf.py``'s before/after.
-
-        Parameters
-        ----------
-        Q : (n, n_vars) ndarray
-            Nominal joint values (rad or m), columns in the order of ``variables``.
-        errors : (n, m, n_cols) array_like
-            Source errors (m or rad).
-
-        Returns
-        -------
-        (n, m, 6) ndarray
-            As :meth:`pose_error`.
-        """
+    def _pose_error_scalar(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
+        """:meth:`pose_error` by the scalar kernel it replaced (issue 43: one sample at a time, the whole
+        chain and ``sin``/``cos`` per sample), kept for ``benchmarks/bench_urdf.py``'s before/after."""
         K = _kernels()
         kernel = K.pose_error if threading.current_thread() is threading.main_thread() else K.pose_error_serial
         p = self.p_terms

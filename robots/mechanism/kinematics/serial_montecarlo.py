@@ -30,11 +30,11 @@ The parameters several definitions of this module share are described once, here
 Parameters
 ----------
 P : (ns, 4, 4) ndarray
-    Constant transform of each stage (m).
+    The stages' constant transforms ``P_s`` (lengths in m).
 kind : (ns,) ndarray of int64
     0 fixed, 1 revolute, 2 prismatic.
 var : (ns,) ndarray of int64
-    Joint variable index of each joint stage.
+    Index of the joint variable that drives each joint stage.
 a, c : (ns,) ndarray
     Nominal joint value ``a_s q[var_s] + c_s`` (rad or m) of each joint stage.
 seg_start, fac_kind, fac_stage : ndarray of int64
@@ -333,7 +333,7 @@ def pose_error(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_
     Parameters
     ----------
     Q : (n, n_vars) ndarray
-        Nominal joint values (rad or m).
+        The poses' joint values (rad or m), one row per pose.
     errors : (n, m, n_cols) ndarray
         Source errors (m or rad); any strides (a broadcast array is read as it is).
 
