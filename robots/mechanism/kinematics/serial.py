@@ -299,10 +299,14 @@ class SerialChain:
         _kernels()
         if self._mc is None:
             self._mc = mc.program(self)
-        # the parallel kernel from the main thread only: its fork-safe threading layer is not thread-safe
-        kernel = mc.pose_error if threading.current_thread() is threading.main_thread() else mc.pose_error_serial
-        return kernel(self.P, self.kind, self.var, self.a, self.c, *self._mc, self.v_col, self.v_var,
-                      np.ascontiguousarray(Q, float), np.asarray(errors, float))    # broadcast views as they are
+        errors = np.asarray(errors, float)                     # broadcast views as they are
+        args = (self.P, self.kind, self.var, self.a, self.c, *self._mc, self.v_col, self.v_var, np.ascontiguousarray(Q, float))
+        # the parallel kernels from the main thread only: their fork-safe threading layer is not thread-safe
+        if threading.current_thread() is not threading.main_thread():
+            return mc.pose_error_serial(*args, errors)
+        if errors.shape[0] > 1 and errors.strides[0] == 0 and not (self.j_var >= 0).any():
+            return mc.pose_error_shared(*args, errors[0])      # the same samples at every pose (verify_nonlinear)
+        return mc.pose_error(*args, errors)
 
     def _pose_error_scalar(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
         """:meth:`pose_error` by the scalar kernel it replaced (issue 43: one sample at a time, the whole

@@ -225,31 +225,84 @@ def _exp6_lanes(d, E, co):
 
 
 @njit(cache=True, error_model="numpy")
-def _joint_lanes(T, kind, dl):
-    """T[:, l] <- T[:, l] J(dl[l]): a rotation about z (kind 1, sin/cos by their series below
-    SMALL) or a translation along z (kind 2)."""
+def _joint_coefficients(kind, dl, J):
+    """J (2, W): cos and sin of the joint errors dl (kind 1; series below SMALL), or dl itself (kind 2)."""
     if kind == 2:
-        for i in range(3):
-            for l in range(W):
-                T[4 * i + 3, l] += dl[l] * T[4 * i + 2, l]
+        J[0, :] = dl
         return
-    big = False
-    cs, sn = np.empty(W), np.empty(W)
     for l in range(W):
         u = dl[l]
         x = u * u
-        big |= x >= SMALL
-        sn[l] = u * (1.0 - x * (1.0 / 6.0) * (1.0 - x * (1.0 / 20.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0))))))
-        cs[l] = 1.0 - x * (1.0 / 2.0) * (1.0 - x * (1.0 / 12.0) * (1.0 - x * (1.0 / 30.0) * (1.0 - x * (1.0 / 56.0) * (1.0 - x * (1.0 / 90.0) * (1.0 - x * (1.0 / 132.0))))))
-    if big:
+        J[1, l] = u * (1.0 - x * (1.0 / 6.0) * (1.0 - x * (1.0 / 20.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0))))))
+        J[0, l] = 1.0 - x * (1.0 / 2.0) * (1.0 - x * (1.0 / 12.0) * (1.0 - x * (1.0 / 30.0) * (1.0 - x * (1.0 / 56.0) * (1.0 - x * (1.0 / 90.0) * (1.0 - x * (1.0 / 132.0))))))
+    big = 0.0
+    for l in range(W):
+        big = max(big, dl[l] * dl[l])
+    if not big < SMALL:
         for l in range(W):
-            if dl[l] * dl[l] >= SMALL:
-                cs[l], sn[l] = np.cos(dl[l]), np.sin(dl[l])
+            if not dl[l] * dl[l] < SMALL:
+                J[0, l], J[1, l] = np.cos(dl[l]), np.sin(dl[l])
+
+
+@njit(cache=True, error_model="numpy")
+def _joint_apply(T, kind, J):
+    """T[:, l] <- T[:, l] Rot(z) (kind 1, J = cos, sin) or T[:, l] Trans(z, J[0]) (kind 2)."""
+    if kind == 2:
+        for i in range(3):
+            for l in range(W):
+                T[4 * i + 3, l] += J[0, l] * T[4 * i + 2, l]
+        return
     for i in range(3):
         for l in range(W):
             x, y = T[4 * i, l], T[4 * i + 1, l]
-            T[4 * i, l] = cs[l] * x + sn[l] * y
-            T[4 * i + 1, l] = -sn[l] * x + cs[l] * y
+            T[4 * i, l] = J[0, l] * x + J[1, l] * y
+            T[4 * i + 1, l] = -J[1, l] * x + J[0, l] * y
+
+
+@njit(cache=True, error_model="numpy")
+def _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, e, q, k0, nk,
+                EK, JK, d, co, off, dl):
+    """The operations of samples k0 <= k < k0 + nk (rows of e (m, n_cols)) at joint values q:
+    EK (K, 12, W) the placement exponentials, JK (K, 2, W) the joint errors' coefficients."""
+    off[:, :] = 0.0
+    for t in range(v_col.shape[0]):
+        for l in range(nk):
+            off[v_var[t], l] += e[k0 + l, v_col[t]]
+    for k in range(op_stage.shape[0]):
+        if op_p[k + 1] > op_p[k]:
+            d[:, :] = 0.0
+            for t in range(op_p[k], op_p[k + 1]):
+                for l in range(nk):
+                    d[p_field[t], l] += e[k0 + l, p_col[t]]
+            _exp6_lanes(d, EK[k], co)
+        s = op_stage[k]
+        if s >= 0:                                # offsets and joint terms
+            for l in range(W):
+                dl[l] = a[s] * off[var[s], l]
+            for t in range(op_j[k], op_j[k + 1]):
+                for l in range(nk):
+                    g = j_coef[t] * (q[j_var[t]] + off[j_var[t], l] if j_var[t] >= 0 else 1.0)
+                    dl[l] += e[k0 + l, j_col[t]] * g
+            _joint_coefficients(kind[s], dl, JK[k])
+
+
+@njit(cache=True, error_model="numpy")
+def _apply_ops(T, T2, C, EK, JK, kind, op_stage, op_p, seg_start):
+    """The perturbed tips C_0 O_1 C_1 ... O_K C_K of a group (module docstring); returns T or T2."""
+    for r in range(3):
+        for j in range(4):
+            for l in range(W):
+                T[4 * r + j, l] = C[0, r, j]
+    for k in range(op_stage.shape[0]):
+        if op_p[k + 1] > op_p[k]:
+            _lanes_times_lanes(T, EK[k], T2)
+            T, T2 = T2, T
+        if op_stage[k] >= 0:
+            _joint_apply(T, kind[op_stage[k]], JK[k])
+        if seg_start[k + 2] > seg_start[k + 1]:
+            _lanes_times_constant(T, C[k + 1], T2)
+            T, T2 = T2, T
+    return T
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -261,21 +314,23 @@ def _rotation_lane(T, T0, l):
 
 
 @njit(cache=True, error_model="numpy")
-def _tip_error(T, T0, i, k0, nk, out):
-    """out[i, k0 + l] = [p - p0; rotation vector of R R0^T] for the lanes l < nk."""
-    for l in range(nk):
-        for u in range(3):
-            out[i, k0 + l, u] = T[4 * u + 3, l] - T0[u, 3]
+def _tip_error(T, T0, res, i, k0, nk, out):
+    """out[i, k0 + l] = [p - p0; rotation vector of R R0^T] for the lanes l < nk (res: (8, W) scratch)."""
+    for l in range(W):
         r = _rotation_lane(T, T0, l)
         vx, vy, vz = 0.5 * (r[7] - r[5]), 0.5 * (r[2] - r[6]), 0.5 * (r[3] - r[1])
         s2 = vx * vx + vy * vy + vz * vz
-        cs = (r[0] + r[4] + r[8] - 1.0) / 2.0
-        if s2 < SMALL_ROT and cs > 0.0:           # asin(s)/s, rotation below 0.01 rad
-            f = 1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * 35.0 / 1152.0)))
-        else:                                     # the closed form of serial_kernels._rotvec
-            th = np.arccos(min(1.0, max(-1.0, cs)))
+        f = 1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * (35.0 / 1152.0))))   # asin(s)/s
+        res[0, l], res[1, l], res[2, l] = vx, vy, vz
+        res[3, l], res[4, l], res[5, l] = s2, 0.5 * (r[0] + r[4] + r[8] - 1.0), f
+    for l in range(nk):
+        f = res[5, l]
+        if not (res[3, l] < SMALL_ROT and res[4, l] > 0.0):   # beyond 0.01 rad: serial_kernels._rotvec's closed form
+            th = np.arccos(min(1.0, max(-1.0, res[4, l])))
             f = 1.0 + th * th / 6.0 if th < 1e-8 else th / np.sin(th)
-        out[i, k0 + l, 3], out[i, k0 + l, 4], out[i, k0 + l, 5] = vx * f, vy * f, vz * f
+        for u in range(3):
+            out[i, k0 + l, u] = T[4 * u + 3, l] - T0[u, 3]
+            out[i, k0 + l, 3 + u] = res[u, l] * f
 
 
 @njit(cache=True, error_model="numpy")
@@ -283,44 +338,19 @@ def _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_
           j_var, v_col, v_var, Q, errors, i, lo, hi, out):
     """Samples lo <= k < hi of pose i into out (one scratch set, W samples at a time)."""
     K = op_stage.shape[0]
-    nv = Q.shape[1]
     C = np.empty((K + 1, 3, 4))
     T0 = np.empty((3, 4))
     _constants(P, kind, var, a, c, Q[i], seg_start, fac_kind, fac_stage, C, T0)
-    T, T2, E, d = np.empty((12, W)), np.empty((12, W)), np.empty((12, W)), np.empty((6, W))
-    off, dl, co = np.empty((nv, W)), np.empty(W), np.empty((4, W))
+    EK, JK = np.empty((K, 12, W)), np.empty((K, 2, W))
+    T, T2, d, co, res = np.empty((12, W)), np.empty((12, W)), np.empty((6, W)), np.empty((4, W)), np.empty((8, W))
+    off, dl = np.empty((Q.shape[1], W)), np.empty(W)
+    e = errors[i]
     for k0 in range(lo, hi, W):
         nk = min(W, hi - k0)
-        off[:, :] = 0.0
-        for t in range(v_col.shape[0]):
-            for l in range(nk):
-                off[v_var[t], l] += errors[i, k0 + l, v_col[t]]
-        for r in range(3):
-            for j in range(4):
-                for l in range(W):
-                    T[4 * r + j, l] = C[0, r, j]
-        for k in range(K):
-            if op_p[k + 1] > op_p[k]:             # E_m: the placement error's exponential
-                d[:, :] = 0.0
-                for t in range(op_p[k], op_p[k + 1]):
-                    for l in range(nk):
-                        d[p_field[t], l] += errors[i, k0 + l, p_col[t]]
-                _exp6_lanes(d, E, co)
-                _lanes_times_lanes(T, E, T2)
-                T, T2 = T2, T
-            s = op_stage[k]
-            if s >= 0:                            # J_s(delta_s): offsets and joint terms
-                for l in range(W):
-                    dl[l] = a[s] * off[var[s], l]
-                for t in range(op_j[k], op_j[k + 1]):
-                    for l in range(nk):
-                        g = j_coef[t] * (Q[i, j_var[t]] + off[j_var[t], l] if j_var[t] >= 0 else 1.0)
-                        dl[l] += errors[i, k0 + l, j_col[t]] * g
-                _joint_lanes(T, kind[s], dl)
-            if seg_start[k + 2] > seg_start[k + 1]:
-                _lanes_times_constant(T, C[k + 1], T2)
-                T, T2 = T2, T
-        _tip_error(T, T0, i, k0, nk, out)
+        _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, e, Q[i], k0,
+                    nk, EK, JK, d, co, off, dl)
+        Tt = _apply_ops(T, T2, C, EK, JK, kind, op_stage, op_p, seg_start)
+        _tip_error(Tt, T0, res, i, k0, nk, out)
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
@@ -349,6 +379,47 @@ def pose_error(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_
         i, lo = b // per, (b % per) * TASK
         _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
               j_var, v_col, v_var, Q, errors, i, lo, min(m, lo + TASK), out)
+    return out
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def pose_error_shared(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col,
+                      j_coef, j_var, v_col, v_var, Q, errors):
+    """:func:`pose_error` for the same samples errors (m, n_cols) at every pose (no joint term
+    scaled by a joint value, ``j_var`` all -1): the operations of :data:`TASK` samples at a time are
+    computed once, in parallel, then applied at every pose, in parallel.
+
+    Parameters
+    ----------
+    Q : (n, n_vars) ndarray
+        The poses' joint values (rad or m), one row per pose.
+    errors : (m, n_cols) ndarray
+        Source errors (m or rad), shared by every pose.
+
+    Returns
+    -------
+    (n, m, 6) ndarray
+        The tip's error relative to the nominal, base frame.
+    """
+    n, m, K = Q.shape[0], errors.shape[0], op_stage.shape[0]
+    out = np.empty((n, m, 6))
+    G, CH = (m + W - 1) // W, TASK // W
+    EK, JK = np.empty((CH, K, 12, W)), np.empty((CH, K, 2, W))
+    for g0 in range(0, G, CH):
+        ng = min(CH, G - g0)
+        for g in prange(ng):
+            k0 = (g0 + g) * W
+            _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, errors,
+                        Q[0], k0, min(W, m - k0), EK[g], JK[g], np.empty((6, W)), np.empty((4, W)),
+                        np.empty((Q.shape[1], W)), np.empty(W))
+        for i in prange(n):
+            C, T0 = np.empty((K + 1, 3, 4)), np.empty((3, 4))
+            _constants(P, kind, var, a, c, Q[i], seg_start, fac_kind, fac_stage, C, T0)
+            T, T2, res = np.empty((12, W)), np.empty((12, W)), np.empty((8, W))
+            for g in range(ng):
+                k0 = (g0 + g) * W
+                Tt = _apply_ops(T, T2, C, EK[g], JK[g], kind, op_stage, op_p, seg_start)
+                _tip_error(Tt, T0, res, i, k0, min(W, m - k0), out)
     return out
 
 
