@@ -18,9 +18,12 @@ Each sensitivity timing is the fastest of three calls, for evotol and for Pinocc
 4. **the Monte Carlo kernel before and after** (issue 43 item 2): the scalar kernel
    (``SerialChain._pose_error_scalar``) and the batched one (``serial_montecarlo``) on the same poses and
    samples, their ratio (less noisy than either rate on a shared machine) and the load average; the
-   batched kernel alone on one thread and on every thread, the share of the Python wrapper, a cProfile
-   of ``pose_error`` and the arithmetic per pose-sample against the machine's SIMD peak; the UR5
-   study's ``verify_nonlinear`` with each kernel.
+   batched kernel alone on one thread and on every thread, the share of the Python wrapper, the
+   arithmetic per pose-sample against the machine's SIMD peak, the samples shared by every pose
+   (``pose_error_shared``); the UR5 study's ``verify_nonlinear`` with each kernel and a cProfile of it.
+
+Run it from the repository root with ``PYTHONPATH=.`` to measure this checkout (``python benchmarks/...``
+puts ``benchmarks/`` first on ``sys.path``, so an installed evotol would be imported instead).
 
 ``python benchmarks/bench_urdf.py [--quick]``. The first call compiles the kernels (numba, cached
 on disk), so every timing below is of a second call.
@@ -143,11 +146,8 @@ def machine_peak() -> tuple[float, int, float]:
 
 def mc_profile(robot, poses, E) -> None:
     """Where the Monte Carlo time goes: the batched kernel alone on 1 and on every thread (CPU and wall),
-    the Python wrapper around it, the arithmetic per pose-sample against the machine's SIMD peak, and
-    cProfile of the public pose_error."""
-    import cProfile
-    import pstats
-
+    the Python wrapper around it, and the arithmetic per pose-sample against the machine's SIMD peak;
+    the samples shared by every pose (verify_nonlinear's broadcast array) on their own line."""
     import numba
 
     from evotol.robots.mechanism.kinematics import serial_montecarlo as mc
@@ -164,6 +164,10 @@ def mc_profile(robot, poses, E) -> None:
         c, w = best(lambda: mc.pose_error(*args))
         rates[k] = (n / c, n / w)
     numba.set_num_threads(threads)
+    Eb = np.broadcast_to(E[0], E.shape)                   # the same samples at every pose
+    mc.pose_error_shared(*args[:-1], E[0])
+    c_sh, w_sh = best(lambda: mc.pose_error_shared(*args[:-1], E[0]))
+    c_sc, w_sc = best(lambda: ch._pose_error_scalar(Q, Eb))
     _, w_pub = best(lambda: robot.pose_error(poses, E))
     ops = flops_per_sample(ch)
     ghz, lanes, peak = machine_peak()
@@ -174,15 +178,9 @@ def mc_profile(robot, poses, E) -> None:
     print(f"    per pose-sample ~{ops} operations: {r1 * ops / 1e9:.2f} Gflop/s per core achieved; peak of "
           f"{os.cpu_count()} cores at {ghz:.1f} GHz with {lanes} float64 lanes x 2 FMA {peak / 1e9:.0f} Gflop/s = "
           f"{peak / ops:.3g} pose-samples/s; reached {os.cpu_count() * r1 / (peak / ops):.0%} (CPU-time rate x cores)")
-    pr = cProfile.Profile()
-    pr.enable()
-    robot.pose_error(poses, E)
-    pr.disable()
-    st = pstats.Stats(pr)
-    tot = st.total_tt
-    top = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[:4]
-    print("    cProfile of pose_error (own time): " + ", ".join(
-        f"{fn[2]} {100 * v[2] / tot:.0f} %" for fn, v in top))
+    print(f"    samples shared by every pose (pose_error_shared, verify_nonlinear's case): {n / c_sh:.3g} per CPU second "
+          f"({n / w_sh:.3g} wall) vs scalar kernel {n / c_sc:.3g} ({n / w_sc:.3g} wall): after/before x{c_sc / c_sh:.2f} CPU, "
+          f"x{w_sc / w_sh:.2f} wall")
 
 
 def main(quick: bool = False) -> None:
@@ -255,6 +253,17 @@ def main(quick: bool = False) -> None:
               f"({w_v:.2f} wall), {rates[label][0]:.3g} pose-samples/s CPU ({rates[label][1]:.3g} wall)")
     print(f"  after/before x{rates['after'][0] / rates['before'][0]:.2f} CPU, x{rates['after'][1] / rates['before'][1]:.2f} wall; "
           f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    import cProfile
+    import pstats
+
+    pr = cProfile.Profile()
+    pr.enable()
+    verify_nonlinear(problem, t, n_samples=300)
+    pr.disable()
+    st = pstats.Stats(pr)
+    top = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[:5]
+    print("  where verify_nonlinear's time goes (cProfile, own time): " + ", ".join(
+        f"{Path(fn[0]).stem}.{fn[2]} {100 * v[2] / st.total_tt:.0f} %" for fn, v in top))
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
