@@ -17,7 +17,8 @@ give: the Rodrigues coefficients ``sin t/t``, ``(1 - cos t)/t^2``, ``(t - sin t)
 ``cos d`` of a joint error and ``asin(s)/s`` of the result are their Taylor series in ``t^2``
 (terms to ``t^10``: truncation below 1e-21 relative for ``t < 0.1`` rad; the rotation vector's
 series for ``s < 0.01``); a lane beyond those ranges takes the closed forms. The lanes are the
-innermost loops, so LLVM vectorises them (AVX2/AVX-512); a task is one pose and up to
+innermost loops over flat rows of W lanes (a row stride LLVM knows, so its alias checks stay
+few and it vectorises them: AVX2/AVX-512); a task is one pose and up to
 :data:`TASK` of its samples, and tasks run in parallel (``numba.prange``).
 
 ``tests/test_serial_montecarlo.py`` compares it with the general description path
@@ -171,118 +172,123 @@ def _constants(P, kind, var, a, c, q, seg_start, fac_kind, fac_stage, C, T0):
 
 @njit(cache=True, error_model="numpy")
 def _lanes_times_constant(T, C, out):
-    """out[:, l] = T[:, l] C for every lane (T, out: (12, W) rows ``4 i + j`` of the 3x4)."""
+    """out = T C for every lane (T, out: 12 rows ``4 i + j`` of the 3x4 by W lanes, flat)."""
     for i in range(3):
         for j in range(4):
             c0, c1, c2 = C[0, j], C[1, j], C[2, j]
             t3 = 1.0 if j == 3 else 0.0
             for l in range(W):
-                out[4 * i + j, l] = T[4 * i, l] * c0 + T[4 * i + 1, l] * c1 + T[4 * i + 2, l] * c2 + t3 * T[4 * i + 3, l]
+                out[(4 * i + j) * W + l] = T[(4 * i) * W + l] * c0 + T[(4 * i + 1) * W + l] * c1 + T[(4 * i + 2) * W + l] * c2 + t3 * T[(4 * i + 3) * W + l]
 
 
 @njit(cache=True, error_model="numpy")
 def _lanes_times_lanes(T, E, out):
-    """out[:, l] = T[:, l] E[:, l] for every lane (3x4 affine, rows ``4 i + j``)."""
+    """out = T E lane by lane (3x4 affine, flat rows ``4 i + j`` of W lanes)."""
     for i in range(3):
         for j in range(4):
             for l in range(W):
-                s = T[4 * i, l] * E[j, l] + T[4 * i + 1, l] * E[4 + j, l] + T[4 * i + 2, l] * E[8 + j, l]
-                out[4 * i + j, l] = s + T[4 * i + 3, l] if j == 3 else s
+                s = T[(4 * i) * W + l] * E[j * W + l] + T[(4 * i + 1) * W + l] * E[(4 + j) * W + l] + T[(4 * i + 2) * W + l] * E[(8 + j) * W + l]
+                out[(4 * i + j) * W + l] = s + T[(4 * i + 3) * W + l] if j == 3 else s
 
 
 @njit(cache=True, error_model="numpy")
 def _exp6_lanes(d, E, co):
-    """E[:, l] = exp(d[:, l]) (3x4 rows) for the local twists d (6, W) = [shift; tilt]: Rodrigues with
+    """E = exp(d) lane by lane (12 flat rows) for the local twists d (6 rows) = [shift; tilt]: Rodrigues with
     the coefficients' Taylor series in t^2 (the closed forms for a lane with t^2 >= SMALL); co: a
-    (4, W) scratch for t^2 and the coefficients. Separate loops, so that each one vectorises."""
+    4 x W scratch for t^2 and the coefficients. Separate loops, so that each one vectorises."""
     for l in range(W):
-        x = d[3, l] * d[3, l] + d[4, l] * d[4, l] + d[5, l] * d[5, l]
-        co[0, l] = x
+        x = d[3 * W + l] * d[3 * W + l] + d[4 * W + l] * d[4 * W + l] + d[5 * W + l] * d[5 * W + l]
+        co[0 * W + l] = x
         # sin t/t, (1 - cos t)/t^2, (t - sin t)/t^3 to x^5 (Horner)
-        co[1, l] = 1.0 - x * (1.0 / 6.0) * (1.0 - x * (1.0 / 20.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0)))))
-        co[2, l] = 0.5 - x * (1.0 / 24.0) * (1.0 - x * (1.0 / 30.0) * (1.0 - x * (1.0 / 56.0) * (1.0 - x * (1.0 / 90.0) * (1.0 - x * (1.0 / 132.0)))))
-        co[3, l] = 1.0 / 6.0 - x * (1.0 / 120.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0) * (1.0 - x * (1.0 / 156.0)))))
+        co[1 * W + l] = 1.0 - x * (1.0 / 6.0) * (1.0 - x * (1.0 / 20.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0)))))
+        co[2 * W + l] = 0.5 - x * (1.0 / 24.0) * (1.0 - x * (1.0 / 30.0) * (1.0 - x * (1.0 / 56.0) * (1.0 - x * (1.0 / 90.0) * (1.0 - x * (1.0 / 132.0)))))
+        co[3 * W + l] = 1.0 / 6.0 - x * (1.0 / 120.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0) * (1.0 - x * (1.0 / 156.0)))))
     big = 0.0
     for l in range(W):
-        big = max(big, co[0, l])
+        big = max(big, co[0 * W + l])
     if not big < SMALL:                           # also NaN: the closed forms say what they say
         for l in range(W):
-            x = co[0, l]
+            x = co[0 * W + l]
             if not x < SMALL:
                 t = np.sqrt(x)
                 sn, cs = np.sin(t), np.cos(t)
-                co[1, l], co[2, l], co[3, l] = sn / t, (1.0 - cs) / x, (t - sn) / (x * t)
+                co[1 * W + l], co[2 * W + l], co[3 * W + l] = sn / t, (1.0 - cs) / x, (t - sn) / (x * t)
     for l in range(W):
-        wx, wy, wz, x, A, B, Cc = d[3, l], d[4, l], d[5, l], co[0, l], co[1, l], co[2, l], co[3, l]
+        wx, wy, wz, x, A, B, Cc = d[3 * W + l], d[4 * W + l], d[5 * W + l], co[0 * W + l], co[1 * W + l], co[2 * W + l], co[3 * W + l]
         xx, yy, zz, xy, xz, yz = wx * wx - x, wy * wy - x, wz * wz - x, wx * wy, wx * wz, wy * wz
-        E[0, l], E[1, l], E[2, l] = 1.0 + B * xx, -A * wz + B * xy, A * wy + B * xz
-        E[4, l], E[5, l], E[6, l] = A * wz + B * xy, 1.0 + B * yy, -A * wx + B * yz
-        E[8, l], E[9, l], E[10, l] = -A * wy + B * xz, A * wx + B * yz, 1.0 + B * zz
-        v0, v1, v2 = d[0, l], d[1, l], d[2, l]
-        E[3, l] = (1.0 + Cc * xx) * v0 + (-B * wz + Cc * xy) * v1 + (B * wy + Cc * xz) * v2
-        E[7, l] = (B * wz + Cc * xy) * v0 + (1.0 + Cc * yy) * v1 + (-B * wx + Cc * yz) * v2
-        E[11, l] = (-B * wy + Cc * xz) * v0 + (B * wx + Cc * yz) * v1 + (1.0 + Cc * zz) * v2
+        E[0 * W + l], E[1 * W + l], E[2 * W + l] = 1.0 + B * xx, -A * wz + B * xy, A * wy + B * xz
+        E[4 * W + l], E[5 * W + l], E[6 * W + l] = A * wz + B * xy, 1.0 + B * yy, -A * wx + B * yz
+        E[8 * W + l], E[9 * W + l], E[10 * W + l] = -A * wy + B * xz, A * wx + B * yz, 1.0 + B * zz
+        v0, v1, v2 = d[0 * W + l], d[1 * W + l], d[2 * W + l]
+        E[3 * W + l] = (1.0 + Cc * xx) * v0 + (-B * wz + Cc * xy) * v1 + (B * wy + Cc * xz) * v2
+        E[7 * W + l] = (B * wz + Cc * xy) * v0 + (1.0 + Cc * yy) * v1 + (-B * wx + Cc * yz) * v2
+        E[11 * W + l] = (-B * wy + Cc * xz) * v0 + (B * wx + Cc * yz) * v1 + (1.0 + Cc * zz) * v2
 
 
 @njit(cache=True, error_model="numpy")
 def _joint_coefficients(kind, dl, J):
-    """J (2, W): cos and sin of the joint errors dl (kind 1; series below SMALL), or dl itself (kind 2)."""
+    """J (2 rows of W): cos and sin of the joint errors dl (kind 1; series below SMALL), or dl itself (kind 2)."""
     if kind == 2:
-        J[0, :] = dl
+        J[:W] = dl
         return
     for l in range(W):
         u = dl[l]
         x = u * u
-        J[1, l] = u * (1.0 - x * (1.0 / 6.0) * (1.0 - x * (1.0 / 20.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0))))))
-        J[0, l] = 1.0 - x * (1.0 / 2.0) * (1.0 - x * (1.0 / 12.0) * (1.0 - x * (1.0 / 30.0) * (1.0 - x * (1.0 / 56.0) * (1.0 - x * (1.0 / 90.0) * (1.0 - x * (1.0 / 132.0))))))
+        J[1 * W + l] = u * (1.0 - x * (1.0 / 6.0) * (1.0 - x * (1.0 / 20.0) * (1.0 - x * (1.0 / 42.0) * (1.0 - x * (1.0 / 72.0) * (1.0 - x * (1.0 / 110.0))))))
+        J[0 * W + l] = 1.0 - x * (1.0 / 2.0) * (1.0 - x * (1.0 / 12.0) * (1.0 - x * (1.0 / 30.0) * (1.0 - x * (1.0 / 56.0) * (1.0 - x * (1.0 / 90.0) * (1.0 - x * (1.0 / 132.0))))))
     big = 0.0
     for l in range(W):
         big = max(big, dl[l] * dl[l])
     if not big < SMALL:
         for l in range(W):
             if not dl[l] * dl[l] < SMALL:
-                J[0, l], J[1, l] = np.cos(dl[l]), np.sin(dl[l])
+                J[0 * W + l], J[1 * W + l] = np.cos(dl[l]), np.sin(dl[l])
 
 
 @njit(cache=True, error_model="numpy")
 def _joint_apply(T, kind, J):
-    """T[:, l] <- T[:, l] Rot(z) (kind 1, J = cos, sin) or T[:, l] Trans(z, J[0]) (kind 2)."""
+    """T <- T Rot(z) lane by lane (kind 1, J = cos, sin rows) or T Trans(z, J[0]) (kind 2)."""
     if kind == 2:
         for i in range(3):
             for l in range(W):
-                T[4 * i + 3, l] += J[0, l] * T[4 * i + 2, l]
+                T[(4 * i + 3) * W + l] += J[0 * W + l] * T[(4 * i + 2) * W + l]
         return
     for i in range(3):
         for l in range(W):
-            x, y = T[4 * i, l], T[4 * i + 1, l]
-            T[4 * i, l] = J[0, l] * x + J[1, l] * y
-            T[4 * i + 1, l] = -J[1, l] * x + J[0, l] * y
+            x, y = T[(4 * i) * W + l], T[(4 * i + 1) * W + l]
+            T[(4 * i) * W + l] = J[0 * W + l] * x + J[1 * W + l] * y
+            T[(4 * i + 1) * W + l] = -J[1 * W + l] * x + J[0 * W + l] * y
 
 
 @njit(cache=True, error_model="numpy")
 def _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, e, q, k0, nk,
-                EK, JK, d, co, off, dl):
+                EK, JK, d, co, off, dl, eg):
     """The operations of samples k0 <= k < k0 + nk (rows of e (m, n_cols)) at joint values q:
-    EK (K, 12, W) the placement exponentials, JK (K, 2, W) the joint errors' coefficients."""
-    off[:, :] = 0.0
+    EK (K, 12 W) the placement exponentials, JK (K, 2 W) the joint errors' coefficients (eg: an
+    n_cols x W scratch; lanes from nk on are zero errors)."""
+    eg[:] = 0.0                                # the group's errors, one row per column (lanes contiguous)
+    for l in range(nk):
+        for col in range(e.shape[1]):
+            eg[col * W + l] = e[k0 + l, col]
+    off[:] = 0.0
     for t in range(v_col.shape[0]):
-        for l in range(nk):
-            off[v_var[t], l] += e[k0 + l, v_col[t]]
+        for l in range(W):
+            off[v_var[t] * W + l] += eg[v_col[t] * W + l]
     for k in range(op_stage.shape[0]):
         if op_p[k + 1] > op_p[k]:
-            d[:, :] = 0.0
+            d[:] = 0.0
             for t in range(op_p[k], op_p[k + 1]):
-                for l in range(nk):
-                    d[p_field[t], l] += e[k0 + l, p_col[t]]
+                for l in range(W):
+                    d[p_field[t] * W + l] += eg[p_col[t] * W + l]
             _exp6_lanes(d, EK[k], co)
         s = op_stage[k]
         if s >= 0:                                # offsets and joint terms
             for l in range(W):
-                dl[l] = a[s] * off[var[s], l]
+                dl[l] = a[s] * off[var[s] * W + l]
             for t in range(op_j[k], op_j[k + 1]):
-                for l in range(nk):
-                    g = j_coef[t] * (q[j_var[t]] + off[j_var[t], l] if j_var[t] >= 0 else 1.0)
-                    dl[l] += e[k0 + l, j_col[t]] * g
+                for l in range(W):
+                    g = j_coef[t] * (q[j_var[t]] + off[j_var[t] * W + l] if j_var[t] >= 0 else 1.0)
+                    dl[l] += eg[j_col[t] * W + l] * g
             _joint_coefficients(kind[s], dl, JK[k])
 
 
@@ -292,7 +298,7 @@ def _apply_ops(T, T2, C, EK, JK, kind, op_stage, op_p, seg_start):
     for r in range(3):
         for j in range(4):
             for l in range(W):
-                T[4 * r + j, l] = C[0, r, j]
+                T[(4 * r + j) * W + l] = C[0, r, j]
     for k in range(op_stage.shape[0]):
         if op_p[k + 1] > op_p[k]:
             _lanes_times_lanes(T, EK[k], T2)
@@ -309,28 +315,28 @@ def _apply_ops(T, T2, C, EK, JK, kind, op_stage, op_p, seg_start):
 def _rotation_lane(T, T0, l):
     """R R0^T of lane l, row-major as a 9-tuple."""
     def row(u, v):
-        return T[4 * u, l] * T0[v, 0] + T[4 * u + 1, l] * T0[v, 1] + T[4 * u + 2, l] * T0[v, 2]
+        return T[(4 * u) * W + l] * T0[v, 0] + T[(4 * u + 1) * W + l] * T0[v, 1] + T[(4 * u + 2) * W + l] * T0[v, 2]
     return (row(0, 0), row(0, 1), row(0, 2), row(1, 0), row(1, 1), row(1, 2), row(2, 0), row(2, 1), row(2, 2))
 
 
 @njit(cache=True, error_model="numpy")
 def _tip_error(T, T0, res, i, k0, nk, out):
-    """out[i, k0 + l] = [p - p0; rotation vector of R R0^T] for the lanes l < nk (res: (8, W) scratch)."""
+    """out[i, k0 + l] = [p - p0; rotation vector of R R0^T] for the lanes l < nk (res: an 8 x W scratch)."""
     for l in range(W):
         r = _rotation_lane(T, T0, l)
         vx, vy, vz = 0.5 * (r[7] - r[5]), 0.5 * (r[2] - r[6]), 0.5 * (r[3] - r[1])
         s2 = vx * vx + vy * vy + vz * vz
         f = 1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * (35.0 / 1152.0))))   # asin(s)/s
-        res[0, l], res[1, l], res[2, l] = vx, vy, vz
-        res[3, l], res[4, l], res[5, l] = s2, 0.5 * (r[0] + r[4] + r[8] - 1.0), f
+        res[0 * W + l], res[1 * W + l], res[2 * W + l] = vx, vy, vz
+        res[3 * W + l], res[4 * W + l], res[5 * W + l] = s2, 0.5 * (r[0] + r[4] + r[8] - 1.0), f
     for l in range(nk):
-        f = res[5, l]
-        if not (res[3, l] < SMALL_ROT and res[4, l] > 0.0):   # beyond 0.01 rad: serial_kernels._rotvec's closed form
-            th = np.arccos(min(1.0, max(-1.0, res[4, l])))
+        f = res[5 * W + l]
+        if not (res[3 * W + l] < SMALL_ROT and res[4 * W + l] > 0.0):   # beyond 0.01 rad: serial_kernels._rotvec's closed form
+            th = np.arccos(min(1.0, max(-1.0, res[4 * W + l])))
             f = 1.0 + th * th / 6.0 if th < 1e-8 else th / np.sin(th)
         for u in range(3):
-            out[i, k0 + l, u] = T[4 * u + 3, l] - T0[u, 3]
-            out[i, k0 + l, 3 + u] = res[u, l] * f
+            out[i, k0 + l, u] = T[(4 * u + 3) * W + l] - T0[u, 3]
+            out[i, k0 + l, 3 + u] = res[u * W + l] * f
 
 
 @njit(cache=True, error_model="numpy")
@@ -341,14 +347,14 @@ def _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_
     C = np.empty((K + 1, 3, 4))
     T0 = np.empty((3, 4))
     _constants(P, kind, var, a, c, Q[i], seg_start, fac_kind, fac_stage, C, T0)
-    EK, JK = np.empty((K, 12, W)), np.empty((K, 2, W))
-    T, T2, d, co, res = np.empty((12, W)), np.empty((12, W)), np.empty((6, W)), np.empty((4, W)), np.empty((8, W))
-    off, dl = np.empty((Q.shape[1], W)), np.empty(W)
+    EK, JK = np.empty((K, 12 * W)), np.empty((K, 2 * W))
+    T, T2, d, co, res = np.empty(12 * W), np.empty(12 * W), np.empty(6 * W), np.empty(4 * W), np.empty(8 * W)
+    off, dl, eg = np.empty(Q.shape[1] * W), np.empty(W), np.empty(errors.shape[2] * W)
     e = errors[i]
     for k0 in range(lo, hi, W):
         nk = min(W, hi - k0)
         _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, e, Q[i], k0,
-                    nk, EK, JK, d, co, off, dl)
+                    nk, EK, JK, d, co, off, dl, eg)
         Tt = _apply_ops(T, T2, C, EK, JK, kind, op_stage, op_p, seg_start)
         _tip_error(Tt, T0, res, i, k0, nk, out)
 
@@ -404,18 +410,18 @@ def pose_error_shared(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_sta
     n, m, K = Q.shape[0], errors.shape[0], op_stage.shape[0]
     out = np.empty((n, m, 6))
     G, CH = (m + W - 1) // W, TASK // W
-    EK, JK = np.empty((CH, K, 12, W)), np.empty((CH, K, 2, W))
+    EK, JK = np.empty((CH, K, 12 * W)), np.empty((CH, K, 2 * W))
     for g0 in range(0, G, CH):
         ng = min(CH, G - g0)
         for g in prange(ng):
             k0 = (g0 + g) * W
             _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, errors,
-                        Q[0], k0, min(W, m - k0), EK[g], JK[g], np.empty((6, W)), np.empty((4, W)),
-                        np.empty((Q.shape[1], W)), np.empty(W))
+                        Q[0], k0, min(W, m - k0), EK[g], JK[g], np.empty(6 * W), np.empty(4 * W),
+                        np.empty(Q.shape[1] * W), np.empty(W), np.empty(errors.shape[1] * W))
         for i in prange(n):
             C, T0 = np.empty((K + 1, 3, 4)), np.empty((3, 4))
             _constants(P, kind, var, a, c, Q[i], seg_start, fac_kind, fac_stage, C, T0)
-            T, T2, res = np.empty((12, W)), np.empty((12, W)), np.empty((8, W))
+            T, T2, res = np.empty(12 * W), np.empty(12 * W), np.empty(8 * W)
             for g in range(ng):
                 k0 = (g0 + g) * W
                 Tt = _apply_ops(T, T2, C, EK[g], JK[g], kind, op_stage, op_p, seg_start)
