@@ -15,8 +15,15 @@ Each sensitivity timing is the fastest of three calls, for evotol and for Pinocc
    damped least squares ``J^T (J J^T + 1e-12 I)^-1``, to 1e-12, then the regressor);
 3. **nonlinear Monte Carlo**: ``evotol.verification.nonlinear.verify_nonlinear`` of the UR5 study's optimum
    (the study's own verification) and ``pose_error`` alone, in pose-samples per second;
-4. **the Monte Carlo profile** (issue 43): the compiled kernel alone on one thread and on every thread,
-   the share of the Python wrapper, and the arithmetic per sample against the machine's scalar limit.
+4. **the Monte Carlo kernel before and after** (issue 43 item 2): the scalar kernel
+   (``SerialChain._pose_error_scalar``) and the batched one (``serial_montecarlo``) on the same poses and
+   samples, their ratio (less noisy than either rate on a shared machine) and the load average; the
+   batched kernel alone on one thread and on every thread, the share of the Python wrapper, the
+   arithmetic per pose-sample against the machine's SIMD peak, the samples shared by every pose
+   (``pose_error_shared``); the UR5 study's ``verify_nonlinear`` with each kernel and a cProfile of it.
+
+Run it from the repository root with ``PYTHONPATH=.`` to measure this checkout (``python benchmarks/...``
+puts ``benchmarks/`` first on ``sys.path``, so an installed evotol would be imported instead).
 
 ``python benchmarks/bench_urdf.py [--quick]``. The first call compiles the kernels (numba, cached
 on disk), so every timing below is of a second call.
@@ -103,55 +110,77 @@ def pin_ik_loop(robot, poses, q_asm, Rt):
     return c, w, iters[0] / len(poses)
 
 
-def flops_per_sample(chain) -> tuple[int, int]:
-    """(arithmetic operations, transcendental calls) of one Monte Carlo sample of the serial kernel,
-    counted from its code: a placement exponential (Rodrigues, ~75 operations + sqrt, sin, cos) per
-    perturbed mark, a 3x4 product (63) per stage that is not the identity and per perturbed mark, a
-    joint motion (24 + sin, cos for a revolute), the relative rotation (27) and its rotation vector (~20 +
-    arccos, sin)."""
-    perturbed = len(set(chain.p_terms[:, 1].tolist()))
-    ns, n_ident = len(chain.P), int(np.sum(chain.ident))
-    n_joint = int(np.sum(chain.kind > 0))
-    ops = 75 * perturbed + 63 * (ns - n_ident + perturbed) + 24 * n_joint + 27 + 20 + len(chain.p_terms)
-    return ops, 3 * perturbed + 2 * int(np.sum(chain.kind == 1)) + 2
+def flops_per_sample(chain) -> int:
+    """Arithmetic operations of one pose-sample of the batched kernel, counted from its code
+    (robots/mechanism/kinematics/serial_montecarlo.py): per operation with placement errors the
+    series coefficients (33) and Rodrigues (75) and a per-lane 3x4 product (63); per joint error the
+    sin/cos series (25) and the rotation (18, a translation 6); per constant a 3x4 product (63); the
+    terms' sums; the tip error and its rotation vector (70). No transcendental call below 0.1 rad."""
+    from evotol.robots.mechanism.kinematics.serial_montecarlo import program
+
+    seg_start, _, _, op_stage, op_p = program(chain)[:5]
+    ops = 70 + len(chain.p_terms) + len(chain.v_col) + 3 * len(chain.j_col)
+    for k in range(len(op_stage)):
+        ops += (33 + 75 + 63) * (op_p[k + 1] > op_p[k])
+        if op_stage[k] >= 0:
+            ops += 43 if chain.kind[op_stage[k]] == 1 else 6
+        ops += 63 * (seg_start[k + 2] > seg_start[k + 1])
+    return int(ops)
+
+
+def machine_peak() -> tuple[float, int, float]:
+    """(GHz, float64 SIMD lanes, peak flop/s of all cores): lanes from lscpu's flags (AVX-512: 8,
+    AVX2: 4), two FMA ports a core (2 flops each)."""
+    flags, ghz = "", float("nan")
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("flags") and not flags:
+                flags = line
+            if line.startswith("cpu MHz"):
+                ghz = max(0.0 if ghz != ghz else ghz, float(line.split(":")[1]) / 1e3)
+    except (OSError, ValueError):
+        pass
+    lanes = 8 if "avx512f" in flags else 4 if "avx2" in flags else 2
+    return ghz, lanes, os.cpu_count() * ghz * 1e9 * lanes * 2 * 2
 
 
 def mc_profile(robot, poses, E) -> None:
-    """Where the Monte Carlo time goes: the kernel alone on 1 and on every thread, the Python
-    wrapper around it, and the arithmetic it does against the machine's scalar limit."""
+    """Where the Monte Carlo time goes: the batched kernel alone on 1 and on every thread (CPU and wall),
+    the Python wrapper around it, and the arithmetic per pose-sample against the machine's SIMD peak;
+    the samples shared by every pose (verify_nonlinear's broadcast array) on their own line."""
     import numba
 
-    from evotol.robots.mechanism.kinematics.serial import _kernels
+    from evotol.robots.mechanism.kinematics import serial_montecarlo as mc
 
     ch = robot._serial
-    q = robot.joint_values(poses)
-    Q = np.stack([q[v] for v in robot.kin.variables], 1)
-    K = _kernels()
-    p = ch.p_terms
-    args = (*ch._args(), Q, E, p[:, 0].copy(), p[:, 1].copy(), p[:, 2].copy(), ch.j_col, ch.j_stage, ch.j_coef,
-            ch.j_var, ch.v_col, ch.v_var)
+    Q = ch.joints_array(robot.joint_values(poses))
+    args = (ch.P, ch.kind, ch.var, ch.a, ch.c, *mc.program(ch), ch.v_col, ch.v_var, Q, E)
     n = E.shape[0] * E.shape[1]
     threads = numba.get_num_threads()
     rates = {}
     for k in sorted({1, threads}):
         numba.set_num_threads(k)
-        K.pose_error(*args)
-        rates[k] = n / best(lambda: K.pose_error(*args))[1]
+        mc.pose_error(*args)
+        c, w = best(lambda: mc.pose_error(*args))
+        rates[k] = (n / c, n / w)
     numba.set_num_threads(threads)
+    Eb = np.broadcast_to(E[0], E.shape)                   # the same samples at every pose
+    mc.pose_error_shared(*args[:-1], E[0])
+    c_sh, w_sh = best(lambda: mc.pose_error_shared(*args[:-1], E[0]))
+    c_sc, w_sc = best(lambda: ch._pose_error_scalar(Q, Eb))
     _, w_pub = best(lambda: robot.pose_error(poses, E))
-    ops, trans = flops_per_sample(ch)
-    try:
-        ghz = max(float(l.split(":")[1]) for l in open("/proc/cpuinfo") if l.startswith("cpu MHz")) / 1e3
-    except (OSError, ValueError):
-        ghz = float("nan")
-    limit = threads * ghz * 1e9 * 4 / ops          # 2 scalar FMA ports = 4 operations a cycle per core
-    print(f"  Monte Carlo profile: kernel {rates[1]:.3g} pose-samples/s on 1 thread, {rates[threads]:.3g} on {threads} "
-          f"(x{rates[threads] / rates[1]:.2f}); public pose_error {n / w_pub:.3g}/s (wrapper "
-          f"{100 * max(0.0, 1 - n / w_pub / rates[threads]):.0f} % of its time)")
-    print(f"    per sample ~{ops} arithmetic operations + {trans} sin/cos/sqrt/arccos: "
-          f"{rates[threads] * ops / 1e9:.2f} Gop/s achieved; scalar limit of {threads} cores at {ghz:.1f} GHz "
-          f"(4 operations/cycle, no SIMD, transcendental calls not counted) {limit:.3g} pose-samples/s "
-          f"= {rates[threads] / limit:.0%} reached")
+    ops = flops_per_sample(ch)
+    ghz, lanes, peak = machine_peak()
+    r1, rt = rates[1][0], rates[threads][1]
+    print(f"  Monte Carlo profile (batched kernel): 1 thread {r1:.3g} pose-samples/s per CPU second; {threads} threads "
+          f"{rates[threads][0]:.3g} per CPU second, {rt:.3g} wall; public pose_error {n / w_pub:.3g}/s wall "
+          f"(wrapper: inverse geometry cache, checks, {100 * max(0.0, 1 - n / w_pub / rt):.0f} % of its time)")
+    print(f"    per pose-sample ~{ops} operations: {r1 * ops / 1e9:.2f} Gflop/s per core achieved; peak of "
+          f"{os.cpu_count()} cores at {ghz:.1f} GHz with {lanes} float64 lanes x 2 FMA {peak / 1e9:.0f} Gflop/s = "
+          f"{peak / ops:.3g} pose-samples/s; reached {os.cpu_count() * r1 / (peak / ops):.0%} (CPU-time rate x cores)")
+    print(f"    samples shared by every pose (pose_error_shared, verify_nonlinear's case): {n / c_sh:.3g} per CPU second "
+          f"({n / w_sh:.3g} wall) vs scalar kernel {n / c_sc:.3g} ({n / w_sc:.3g} wall): after/before x{c_sc / c_sh:.2f} CPU, "
+          f"x{w_sc / w_sh:.2f} wall")
 
 
 def main(quick: bool = False) -> None:
@@ -196,16 +225,45 @@ def main(quick: bool = False) -> None:
         print(f"  pose_error: {len(poses)} poses x {m} samples in {c_mc:.3f} ({w_mc:.3f}): "
               f"{len(poses) * m / c_mc:.3g} pose-samples/s CPU ({len(poses) * m / w_mc:.3g} wall)")
         if robot._serial is not None:
+            Q = robot._serial.joints_array(robot.joint_values(poses))
+            after = best(lambda: robot._serial.pose_error(Q, E))
+            before = best(lambda: robot._serial._pose_error_scalar(Q, E))
+            n_ps = len(poses) * m
+            print(f"  kernel before (scalar, one sample at a time) {n_ps / before[0]:.3g} CPU ({n_ps / before[1]:.3g} wall), "
+                  f"after (batched) {n_ps / after[0]:.3g} CPU ({n_ps / after[1]:.3g} wall) pose-samples/s: "
+                  f"after/before x{before[0] / after[0]:.2f} CPU, x{before[1] / after[1]:.2f} wall "
+                  f"(load {os.getloadavg()[0]:.1f})")
             mc_profile(robot, poses, E)
     spec = tomllib.loads((ROOT / "reports" / "studies" / "ur5_urdf.toml").read_text())
     spec["poses"] = {"grid": [10, 10, 10]}
     problem = load_problem(spec, ROOT / "reports" / "studies")
     t = allocate_optimum(problem).tolerances
     verify_nonlinear(problem, t, n_samples=10)
-    chk, c_v, w_v = timed(lambda: verify_nonlinear(problem, t, n_samples=300))
-    print(f"\nUR5 study verification (verify_nonlinear, 10x10x10 grid, 300 samples): {c_v:.2f} s CPU ({w_v:.2f} wall), "
-          f"{problem.n_poses * 300 / c_v:.3g} pose-samples/s CPU ({problem.n_poses * 300 / w_v:.3g} wall)")
+    chain = type(problem.robot._serial)
+    rates = {}
+    for label, kernel in (("before", chain._pose_error_scalar), ("after", chain.pose_error)):
+        chain.pose_error, saved = kernel, chain.pose_error            # the scalar kernel behind the same call
+        try:
+            verify_nonlinear(problem, t, n_samples=10)
+            _, c_v, w_v = timed(lambda: verify_nonlinear(problem, t, n_samples=300))
+        finally:
+            chain.pose_error = saved
+        rates[label] = (problem.n_poses * 300 / c_v, problem.n_poses * 300 / w_v)
+        print(f"\nUR5 study verification {label} (verify_nonlinear, 10x10x10 grid, 300 samples): {c_v:.2f} s CPU "
+              f"({w_v:.2f} wall), {rates[label][0]:.3g} pose-samples/s CPU ({rates[label][1]:.3g} wall)")
+    print(f"  after/before x{rates['after'][0] / rates['before'][0]:.2f} CPU, x{rates['after'][1] / rates['before'][1]:.2f} wall; "
+          f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    import cProfile
+    import pstats
 
+    pr = cProfile.Profile()
+    pr.enable()
+    verify_nonlinear(problem, t, n_samples=300)
+    pr.disable()
+    st = pstats.Stats(pr)
+    top = sorted(st.stats.items(), key=lambda kv: -kv[1][2])[:5]
+    print("  where verify_nonlinear's time goes (cProfile, own time): " + ", ".join(
+        f"{Path(fn[0]).stem}.{fn[2]} {100 * v[2] / st.total_tt:.0f} %" for fn, v in top))
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

@@ -72,6 +72,7 @@ class SerialChain:
         self.P, self.kind, self.var, self.a, self.c, self.mark = [], [], [], [], [], []
         self.mark_of = {}               # frame -> mark index (its placement)
         self.stage_of = {}              # joint frame -> stage index
+        self._mc = None                 # the Monte Carlo kernel's program (serial_montecarlo.program), on first use
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -277,7 +278,8 @@ class SerialChain:
         return K.sensitivity(*self._args(), np.ascontiguousarray(Q, float), t_col, t_mark, t_field, t_coef, t_var, self.n_cols)
 
     def pose_error(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
-        """(n, m, 6) nonlinear tip error for errors (n, m, n_cols) at joint values Q (n, n_vars).
+        """(n, m, 6) nonlinear tip error for errors (n, m, n_cols) at joint values Q (n, n_vars), by the
+        batched kernel of :mod:`evotol.robots.mechanism.kinematics.serial_montecarlo`.
 
         Parameters
         ----------
@@ -292,13 +294,29 @@ class SerialChain:
             ``[dp (m); rotation vector (rad)]`` of the perturbed tip relative to the nominal, base
             frame.
         """
+        from evotol.robots.mechanism.kinematics import serial_montecarlo as mc
+
+        _kernels()
+        if self._mc is None:
+            self._mc = mc.program(self)
+        errors = np.asarray(errors, float)                     # broadcast views as they are
+        args = (self.P, self.kind, self.var, self.a, self.c, *self._mc, self.v_col, self.v_var, np.ascontiguousarray(Q, float))
+        # the parallel kernels from the main thread only: their fork-safe threading layer is not thread-safe
+        if threading.current_thread() is not threading.main_thread():
+            return mc.pose_error_serial(*args, errors)
+        if errors.shape[0] > 1 and errors.strides[0] == 0 and not (self.j_var >= 0).any():
+            return mc.pose_error_shared(*args, errors[0])      # the same samples at every pose (verify_nonlinear)
+        return mc.pose_error(*args, errors)
+
+    def _pose_error_scalar(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
+        """:meth:`pose_error` by the scalar kernel it replaced (issue 43: one sample at a time, the whole
+        chain and ``sin``/``cos`` per sample), kept for ``benchmarks/bench_urdf.py``'s before/after."""
         K = _kernels()
-        # the parallel kernel from the main thread only: its fork-safe threading layer is not thread-safe
         kernel = K.pose_error if threading.current_thread() is threading.main_thread() else K.pose_error_serial
         p = self.p_terms
-        return kernel(*self._args(), np.ascontiguousarray(Q, float), np.asarray(errors, float),   # broadcast views as they are
-                            p[:, 0].copy(), p[:, 1].copy(), p[:, 2].copy(), self.j_col, self.j_stage, self.j_coef, self.j_var,
-                            self.v_col, self.v_var)
+        return kernel(*self._args(), np.ascontiguousarray(Q, float), np.asarray(errors, float),
+                      p[:, 0].copy(), p[:, 1].copy(), p[:, 2].copy(), self.j_col, self.j_stage, self.j_coef, self.j_var,
+                      self.v_col, self.v_var)
 
     def inverse_geometry(self, q0: np.ndarray, targets: np.ndarray, Rts: np.ndarray | None, axes, scale: float):
         """(Q (n, n_vars), scaled residual (n,)) continued from q0 through targets (K, n, n_axes).
