@@ -153,6 +153,22 @@ class Report:
         self._parts.append(f"<h2>{html.escape(text)}</h2>")
         return self
 
+    def lead(self, text: str) -> "Report":
+        """Put a highlighted note first, under the title (before every section added so far).
+
+        Parameters
+        ----------
+        text : str
+            The prose (HTML-escaped).
+
+        Returns
+        -------
+        Report
+            This report, so that calls chain.
+        """
+        self._parts.insert(0, f'<div class="note">{html.escape(text)}</div>')
+        return self
+
     def text(self, text: str, note: bool = False, raw: bool = False) -> "Report":
         """Add a paragraph, or a highlighted note.
 

@@ -448,12 +448,6 @@ def render_user_study(summary: dict) -> Report:
     rep = Report(f"evotol study: {summary['name']}",
                  f"{summary['robot']}, {summary['n_poses']} poses, measure {summary['measure']}, requirement {req}; "
                  f"lengths in {u.length}, angles in {u.angle} (the JSON holds SI values)")
-    if summary.get("interrupted"):
-        what = summary.get("interruption", {})
-        rep.text(f"Interrupted (Ctrl-C): stopped {', '.join(what.get('stopped', []))}"
-                 + (f"; not run: {', '.join(what['skipped'])}" if what.get("skipped") else "")
-                 + ". The results below are what was computed until then; a GA or NSGA-II that was "
-                   "stopped reports its best design so far.", note=True)
     for line in summary.get("warnings", []):
         rep.text(f"Warning: {line}", note=True)
     for line in summary.get("notes", []):

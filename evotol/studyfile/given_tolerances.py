@@ -1,7 +1,7 @@
 """``evotol run`` on a study whose every tolerance is given: the analysis, not a refusal (issue 33).
 
 When every source of a study file is ``fixed`` (or ``locked``), there is nothing to allocate; the
-question is what those tolerances give. :func:`run_given_tolerances` analyses them
+question is what those tolerances give. :func:`given_tolerances_outcome` analyses them
 (:func:`evotol.verification.tolerance_analysis.analyse`: worst case of the norm and per axis with
 both signed limits, RSS, the probability of meeting the requirement and the error at the
 requirement's probability, Monte Carlo on the nonlinear model, contributions, the worst pose, the
@@ -11,7 +11,6 @@ and ``seed`` set the Monte Carlo; ``[requirement] probability`` (default 0.9973)
 """
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +20,8 @@ from evotol.core import plausibility
 from evotol.core.axis_limits import configurations
 from evotol.errors import ValidationError
 from evotol.reporting.analysis_page import render_analysis
-from evotol.studies import StudyResult, write_outputs
+from evotol.studyfile.kinds import Outcome
+from evotol.studyfile.steps import run_steps
 from evotol.summaries.user_study import source_table, study_units_block
 from evotol.units.display import DisplayUnits
 from evotol.verification.tolerance_analysis import analyse
@@ -156,41 +156,32 @@ def analysis_lines(summary: dict):
         yield (f"  note: {line}")
 
 
-def run_given_tolerances(spec: dict, path: Path, out: Path, name: str, problem, units: DisplayUnits, seed: int,
-                         t0: float) -> dict:
-    """Analyse, print and write a study whose every tolerance is given (module docstring).
+def given_tolerances_outcome(study, problem, units: DisplayUnits) -> Outcome:
+    """Analyse a study whose every tolerance is given (module docstring): one step, ``analysis``.
 
     Parameters
     ----------
-    spec : dict
-        The parsed study file.
-    path : Path
-        The study file.
-    out : Path
-        The output folder.
-    name : str
-        The study's name.
+    study : evotol.studyfile.kinds.Study
+        The run (its file, seed and Ctrl-C).
     problem : evotol.core.problem.ToleranceProblem
         Its problem (every source fixed or locked).
     units : DisplayUnits
         Display units.
-    seed : int
-        The Monte Carlo seed.
-    t0 : float
-        ``time.perf_counter()`` at the start of the run.
 
     Returns
     -------
-    dict
-        The summary written (:func:`analysis_summary`) with ``study_file``, ``warnings``, ``html``
-        and ``json``.
+    evotol.studyfile.kinds.Outcome
+        The summary (:func:`analysis_summary`, with ``study_file`` and ``warnings``) and its page.
 
     Raises
     ------
     evotol.errors.ValidationError
         A ``[verify]`` key other than ``n_samples`` and ``nonlinear``; ``[poses] refine`` (the
         analysis checks the poses listed; refinement belongs to an allocation, issue 39).
+    KeyboardInterrupt
+        A Ctrl-C stopped the analysis: there is nothing to write.
     """
+    spec, seed = study.spec, study.seed
     vspec = dict(spec.get("verify", {}))
     check_table_keys(vspec, VERIFY_KEYS, "verify")
     if spec.get("poses", {}).get("refine"):
@@ -198,14 +189,14 @@ def run_given_tolerances(spec: dict, path: Path, out: Path, name: str, problem, 
                               "analysis of given tolerances checks the poses listed and does not search the workspace "
                               "for a worse one (give a finer grid or a Latin hypercube)")
     prob = problem.requirement.required_yield
-    analysis = analyse(problem, probability=float(prob), n_samples=int(vspec.get("n_samples", 1000)), seed=seed,
-                       nonlinear=bool(vspec.get("nonlinear", True)))
-    summary = analysis_summary(name, problem, analysis, seed=seed, units=units, seconds=time.perf_counter() - t0)
-    summary["study_file"] = str(Path(path).resolve())
+    done = run_steps({"analysis": lambda: analyse(problem, probability=float(prob), n_samples=int(vspec.get(
+        "n_samples", 1000)), seed=seed, nonlinear=bool(vspec.get("nonlinear", True)))}, study.ctrl_c, study.log)
+    if "analysis" not in done:
+        raise KeyboardInterrupt     # the one step stopped: no analysis to write
+    summary = analysis_summary(study.name, problem, done["analysis"], seed=seed, units=units, seconds=study.seconds())
+    summary["study_file"] = str(Path(study.path).resolve())
     summary["warnings"] = plausibility.problem_warnings(problem)
     if "methods" in spec:
         summary["notes"].append(f"[methods] {sorted(spec['methods'])} not run: every tolerance is given, so there is "
                                 "nothing to allocate; this is their analysis.")
-    paths = write_outputs(name, out, StudyResult(summary), render_analysis(summary))
-    summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
-    return summary
+    return Outcome(summary, render_analysis)

@@ -16,7 +16,8 @@ from evotol.allocators.nonlinear_limit import allocate_process_nonlinear_limit
 from evotol.allocators.process import ProcessProblem, allocate_process_baselines, process_front
 from evotol.errors import ValidationError
 from evotol.reporting import Report
-from evotol.studies import StudyResult, write_outputs
+from evotol.studyfile.kinds import Outcome, run_kind
+from evotol.studyfile.steps import run_steps
 from evotol.studyfile.processes import DEFAULT_METHODS, METHODS, load_process_problem
 from evotol.units import COST, COUNT, RELATIVE, units_block
 
@@ -30,8 +31,10 @@ def _result_dict(pp: ProcessProblem, r) -> dict:
     return d
 
 
-def run_process_study(spec: dict, path: Path, out, seed: int) -> dict:
-    """Run the methods of a process-selection study file and write ``NAME.json`` / ``NAME.html``.
+def run_process_study(spec: dict, path: Path, out, seed: int, keep_going: bool = False) -> dict:
+    """Run the methods of a process-selection study file and write ``NAME.json`` / ``NAME.html``
+    through the one pipeline of every study (:func:`evotol.studyfile.kinds.run_kind`; ``evotol run``
+    claims the output set first).
 
     Parameters
     ----------
@@ -43,6 +46,8 @@ def run_process_study(spec: dict, path: Path, out, seed: int) -> dict:
         The output folder.
     seed : int
         Seed of the GA and NSGA-II (unless their tables set one).
+    keep_going : bool, optional
+        After a Ctrl-C, still run the remaining methods.
 
     Returns
     -------
@@ -56,33 +61,55 @@ def run_process_study(spec: dict, path: Path, out, seed: int) -> dict:
         An unknown method or keyword in ``[methods]``, or a bad study file
         (:func:`evotol.studyfile.processes.load_process_problem`).
     """
-    t0 = time.perf_counter()
-    name = spec.get("name", path.stem)
+    return run_kind(process_study, spec, path, out, spec.get("name", Path(path).stem), seed, keep_going=keep_going)
+
+
+def process_study(study) -> Outcome:
+    """A process-selection study's methods as steps (module docstring), its summary and page.
+
+    Parameters
+    ----------
+    study : evotol.studyfile.kinds.Study
+        The run.
+
+    Returns
+    -------
+    evotol.studyfile.kinds.Outcome
+        The summary and its page.
+
+    Raises
+    ------
+    ValidationError
+        As :func:`run_process_study`, before any method runs.
+    """
+    spec, path, seed, name = study.spec, study.path, study.seed, study.name
     pp = load_process_problem(spec, base_dir=path.parent)
     methods = spec.get("methods", DEFAULT_METHODS)
     for m, kw in methods.items():
         if m not in METHODS:
             raise ValidationError(f"methods.{m}", m, unknown_key_message(m, sorted(METHODS)))
         check_keywords(METHODS[m], kw, f"methods.{m}", exclude=("problem", "pp", "budget"))
-    results, front, nonlinear = {}, None, None
-    for m, kw in methods.items():
-        logger.info("%s ...", m)
-        kw = dict(kw)
-        if m in ("ga", "nsga2"):
-            kw.setdefault("seed", seed)
+
+    def method(m, kw):
+        kw = {**({"seed": seed} if m in ("ga", "nsga2") else {}), **kw}
+        special = {"baselines": allocate_process_baselines, "nsga2": process_front,
+                   "nonlinear_limit": allocate_process_nonlinear_limit}
+        return lambda: special.get(m, METHODS[m])(pp, **kw)
+
+    done = run_steps({m: method(m, kw) for m, kw in methods.items()}, study.ctrl_c, study.log)
+    results, front, nonlinear = {}, done.get("nsga2"), None
+    for m, value in done.items():       # in the order of [methods]
         if m == "baselines":
-            results.update({f"baseline {k}": r for k, r in allocate_process_baselines(pp, **kw).items()})
-        elif m == "nsga2":
-            front = process_front(pp, **kw)
+            results.update({f"baseline {k}": r for k, r in value.items()})
         elif m == "nonlinear_limit":
-            nl = allocate_process_nonlinear_limit(pp, **kw)
-            results["nonlinear limit"] = nl.result
-            nonlinear = {"linear_optimum_nonlinear_worst_case_over_limit": nl.linear_worst_case["max_over_limit"],
-                         "nonlinear_worst_case_over_limit": nl.worst_case["max_over_limit"],
-                         "method": nl.worst_case["responses"][0]["method"], "cost_difference": nl.cost_difference,
-                         "n_iterations": nl.iterations, "converged": nl.converged}
-        else:
-            results[m] = METHODS[m](pp, **kw)
+            results["nonlinear limit"] = value.result
+            nonlinear = {"linear_optimum_nonlinear_worst_case_over_limit": value.linear_worst_case["max_over_limit"],
+                         "nonlinear_worst_case_over_limit": value.worst_case["max_over_limit"],
+                         "method": value.worst_case["responses"][0]["method"], "cost_difference": value.cost_difference,
+                         "n_iterations": value.iterations, "converged": value.converged}
+        elif m != "nsga2":
+            results[m] = value
+    t0 = study.t0
     summary = {"name": name, "study_file": str(Path(path).resolve()), "problem": pp.describe(), "seed": seed,
                "results": {m: _result_dict(pp, r) for m, r in results.items()},
                "seconds": time.perf_counter() - t0, "units": units_block(pp.base)}
@@ -94,6 +121,12 @@ def run_process_study(spec: dict, path: Path, out, seed: int) -> dict:
         summary["pareto_front"] = front.table.to_dict(orient="list")
     if nonlinear is not None:
         summary["nonlinear_limit"] = nonlinear
+    return Outcome(summary, lambda summary: _page(summary, pp, results, front, nonlinear))
+
+
+def _page(summary: dict, pp: ProcessProblem, results: dict, front, nonlinear) -> Report:
+    """The process study's page from its summary and results."""
+    name = summary["name"]
     rep = Report(f"evotol process-selection study: {name}",
                  f"{pp.robot.name}, {pp.n_sources} sources, {pp.n_combinations} process combinations, "
                  f"measure {pp.requirement.measure}" + (f", quality loss A = {pp.quality_loss_A}" if pp.quality_loss_A else ""))
@@ -116,9 +149,7 @@ def run_process_study(spec: dict, path: Path, out, seed: int) -> dict:
                  f"after {nonlinear['n_iterations']} re-linearisations.", note=True)
     if front is not None:
         front_figure(rep, front)
-    paths = write_outputs(name, out, StudyResult(summary), rep)
-    summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
-    return summary
+    return rep
 
 
 def front_figure(rep: Report, front) -> None:

@@ -10,7 +10,6 @@ import tomllib
 from contextlib import nullcontext
 from pathlib import Path
 
-from evotol._runtime.interrupt import CtrlC
 from evotol._runtime.keyword_checks import check_keywords
 from evotol._runtime.output_paths import path_inside
 from evotol._runtime.output_set import claim_outputs
@@ -23,19 +22,19 @@ from evotol.measures.statistical.distributions import Distribution, as_distribut
 from evotol.reporting.export import FORMATS as EXPORT_FORMATS
 from evotol.reporting.export import write_tolerance_table
 from evotol.reporting.user_study import render_user_study
-from evotol.studies import StudyResult, write_outputs
 
 logger = logging.getLogger(__name__)
 from evotol.studyfile.methods import METHODS, check_methods, method_options, study_methods
 from evotol.studyfile.sections import SECTIONS, StudyRun
 from evotol.studyfile.comparisons import comparison_runs, run_comparison
-from evotol.studyfile.steps import StepLog, run_steps
-from evotol.studyfile.given_tolerances import run_given_tolerances
+from evotol.studyfile.steps import run_steps
+from evotol.studyfile.given_tolerances import given_tolerances_outcome
+from evotol.studyfile.kinds import Outcome, Study, StudyKind, run_kind
 from evotol.studyfile.iso9283 import read_iso9283
 from evotol.studyfile.problem import load_problem
-from evotol.studyfile.stack_table import run_stack_study
+from evotol.studyfile.stack_table import stack_study
 from evotol.summaries.drawing import drawing_precision, precision_warnings
-from evotol.studyfile.process_run import run_process_study
+from evotol.studyfile.process_run import process_study
 from evotol.core.shop import apply_shop
 from evotol.core.plausibility import study_warnings, warn as warn_plausibility
 from evotol.summaries.user_study import study_summary
@@ -179,16 +178,33 @@ def run_study_file(path, out=None, seed=None, keep_going: bool = False, force: b
 
 
 def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: float, keep_going: bool) -> dict:
-    """The body of :func:`run_study_file`, run while it holds the output set (its Returns)."""
-    if "processes" in spec:     # process selection: [processes.<dimension>] (evotol/studyfile/processes.py)
-        return run_process_study(spec, path, out, seed)
-    if "stack" in spec:         # a tolerance stack written in the file: [stack] (evotol/studyfile/stack_table.py)
-        return run_stack_study(spec, path, out, seed, keep_going)
+    """The body of :func:`run_study_file`, run while it holds the output set (its Returns): the file's
+    kind (:data:`KINDS`, the first whose ``present`` holds) run through the one pipeline
+    (:func:`evotol.studyfile.kinds.run_kind`)."""
+    kind = next(k for k in KINDS if k.present(spec))
+    return run_kind(kind.run, spec, path, out, name, seed, t0, keep_going)
+
+
+def robot_study(study: Study) -> Outcome:
+    """A robot or mechanism study: its methods, comparisons and Monte Carlo checks as steps, then
+    its summary with each present section's block (or, every tolerance given, their analysis).
+
+    Parameters
+    ----------
+    study : evotol.studyfile.kinds.Study
+        The run.
+
+    Returns
+    -------
+    evotol.studyfile.kinds.Outcome
+        The summary, its page and the drawing table's and sections' files.
+    """
+    spec, path, seed, log = study.spec, study.path, study.seed, study.log
     problem = apply_shop(spec, load_problem(spec, base_dir=path.parent))    # [shop] floors, measurable (issue 41)
     iso = read_iso9283(spec, problem)       # ISO 9283 AP/RP and random sources, checked before work (issue 44)
     units = report_units(spec, problem)
     if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
-        return run_given_tolerances(spec, path, out, name, problem, units, seed, t0)
+        return given_tolerances_outcome(study, problem, units)
     precision = drawing_precision(spec.get("report", {}).get("precision"), units)   # [report] precision (issue 34)
     coarse = precision_warnings(problem, units, precision)      # a step coarser than the zones (issue 41)
     problem.warnings = [*problem.warnings, *coarse]
@@ -205,7 +221,7 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
         vspec = {**vspec, "distribution": vmodel}
     if any("budget" not in kw for m, kw in methods.items() if m != "nsga2"):
         problem.check_feasible()            # a requirement no design meets: say so before the first method
-    results, log = {}, StepLog(keep_going)
+    results = {}
 
     def method(m, kw):
         def step():
@@ -227,35 +243,33 @@ def _run_claimed(spec: dict, path: Path, out: Path, name: str, seed: int, t0: fl
                 return run_comparison(run)
         return step
 
-    with CtrlC() as ctrl_c:
-        run_steps({m: method(m, kw) for m, kw in methods.items()}, ctrl_c, log, results)
-        front = results.pop("nsga2", None)
-        # what the sections compare with: ordinary runs under the same Ctrl-C (issue 39)
-        compared = run_steps({c: comparison(c, run) for c, run in
-                              (comparison_runs(spec, problem, methods) if results else {}).items()}, ctrl_c, log)
-        checks = run_steps({m: (lambda r=r: verify(problem, r.t, seed=seed, progress=True, **vspec).to_dict())
-                            for m, r in results.items()}, ctrl_c, log, label="verify ", say=False)
-    stopped = log.stopped
-    summary = study_summary(name, problem, results, front, checks, seed=seed, units=units,
-                            seconds=time.perf_counter() - t0, precision=precision)
+    ctrl_c = study.ctrl_c
+    run_steps({m: method(m, kw) for m, kw in methods.items()}, ctrl_c, log, results)
+    front = results.pop("nsga2", None)
+    # what the sections compare with: ordinary runs under the same Ctrl-C (issue 39)
+    compared = run_steps({c: comparison(c, run) for c, run in
+                          (comparison_runs(spec, problem, methods) if results else {}).items()}, ctrl_c, log)
+    checks = run_steps({m: (lambda r=r: verify(problem, r.t, seed=seed, progress=True, **vspec).to_dict())
+                        for m, r in results.items()}, ctrl_c, log, label="verify ", say=False)
+    summary = study_summary(study.name, problem, results, front, checks, seed=seed, units=units,
+                            seconds=study.seconds(), precision=precision)
     summary["study_file"] = str(path.resolve())
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(problem.model.notes())      # e.g. a redundant arm's posture (issue 23)
-    run = StudyRun(problem, results, compared, seed, bool(stopped), iso)
+    run = StudyRun(problem, results, compared, seed, bool(log.stopped), iso)
     present = [s for s in SECTIONS if s.present(run)]      # callouts, calibration, ISO 9283 (sections.py)
     for section in present:
         section.summarise(summary, run)
-    summary["interrupted"] = bool(stopped)
-    if stopped:
-        summary["interruption"] = log.interruption()
+    exports = []
     if results:     # the drawing table, linked from the page (evotol/reporting/export.py)
-        summary["exports"] = {k: f"{name}_tolerances.{k}" for k in EXPORT_FORMATS}
-    rep = render_user_study(summary)
-    paths = write_outputs(name, out, StudyResult(summary), rep)
-    for f in summary.get("exports", {}).values():
-        write_tolerance_table(summary, path_inside(out, f))
-    for section in present:
-        if section.export is not None:
-            section.export(summary, out, name)
-    summary.update({"html": str(paths["html"]), "json": str(paths["json"])})
-    return summary
+        summary["exports"] = {k: f"{study.name}_tolerances.{k}" for k in EXPORT_FORMATS}
+        exports.append(lambda summary, out, name: [write_tolerance_table(summary, path_inside(out, f))
+                                                   for f in summary["exports"].values()])
+    exports += [section.export for section in present if section.export is not None]
+    return Outcome(summary, render_user_study, exports)
+
+
+#: the kinds of study file, tried in order (evotol/studyfile/kinds.py): the first whose ``present`` holds runs
+KINDS = (StudyKind("processes", lambda spec: "processes" in spec, process_study),   # [processes.<dimension>]
+         StudyKind("stack", lambda spec: "stack" in spec, stack_study),               # [stack] (stack_table.py)
+         StudyKind("robot", lambda spec: True, robot_study))                          # a robot or mechanism

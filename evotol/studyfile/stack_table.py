@@ -32,7 +32,6 @@ The figures and their conventions: :mod:`evotol.measures.stack_analysis`; the pa
 from __future__ import annotations
 
 import logging
-import time
 from pathlib import Path
 
 import evotol.cost_models
@@ -43,11 +42,10 @@ from evotol.allocators.stack_allocation import stack_problem
 from evotol.errors import ValidationError
 from evotol.measures.stack_analysis import DISTRIBUTIONS, Stack, StackDimension, StackModel, analyse_stack
 from evotol.reporting.stack_report import DEFAULT_PRECISION, render_stack
-from evotol.studies import StudyResult, write_outputs
+from evotol.studyfile.kinds import Outcome
 from evotol.summaries.stack import allocation_summary, stack_summary
 from evotol.units.display import ALIASES, LENGTHS
-from evotol.studyfile.steps import StepLog, run_steps
-from evotol._runtime.interrupt import CtrlC
+from evotol.studyfile.steps import run_steps
 
 logger = logging.getLogger(__name__)
 
@@ -252,24 +250,19 @@ def _asymmetric(stack: Stack) -> bool:
     return centre != 0 or any(d.upper != -d.lower for d in stack.dimensions)
 
 
-def run_stack_study(spec: dict, path, out, seed: int, keep_going: bool = False) -> dict:
-    """``evotol run`` of a study file with a ``[stack]`` table: analyse, write JSON and HTML.
+def stack_study(study) -> Outcome:
+    """``evotol run`` of a study file with a ``[stack]`` table: its analysis and, with
+    ``[stack.allocation]``, its allocation methods as steps (:mod:`evotol.studyfile.kinds`).
 
     Parameters
     ----------
-    path : str or Path
-        The study file (its stem is the default name).
-    out : str or Path
-        The output folder.
-    seed : int
-        Seed of the Monte Carlo (non-normal dimensions).
-    keep_going : bool, optional
-        After a Ctrl-C, still run the remaining allocation methods (:mod:`evotol.studyfile.steps`).
+    study : evotol.studyfile.kinds.Study
+        The run (its file, seed, Ctrl-C and step log).
 
     Returns
     -------
-    dict
-        The summary written, with ``study_file``, ``seconds`` and the ``html`` and ``json`` paths.
+    evotol.studyfile.kinds.Outcome
+        The summary (with ``study_file`` and ``seconds``) and its page.
 
     Raises
     ------
@@ -279,7 +272,7 @@ def run_stack_study(spec: dict, path, out, seed: int, keep_going: bool = False) 
     evotol.errors.InfeasibleError
         No allowed half-widths hold the gap within its limits.
     """
-    t0 = time.perf_counter()
+    spec, seed = study.spec, study.seed
     check_table_keys(spec, TOP_KEYS, "")
     stack, models, display = stack_from_table(spec["stack"])
     units = (spec.get("report") or {}).get("units")
@@ -289,22 +282,14 @@ def run_stack_study(spec: dict, path, out, seed: int, keep_going: bool = False) 
             raise ValidationError("report.units", units, f"a length unit among {sorted(LENGTHS)} for a stack")
         display = {**display, "unit": u, "precision": DEFAULT_PRECISION[u] if "precision" not in spec["stack"]
                    else display["precision"]}
-    name = spec.get("name", Path(path).stem)
     alloc = allocation_from_table(spec["stack"], stack, display["scale"]) if "allocation" in spec["stack"] else None
-    summary = stack_summary(name, stack, models, display, seed=seed)
+    summary = stack_summary(study.name, stack, models, display, seed=seed)
     if alloc is not None:
         problem, methods = alloc
-        log = StepLog(keep_going)
-        with CtrlC() as ctrl_c:        # the one step loop of every study (evotol/studyfile/steps.py)
-            results = run_steps({m: (lambda m=m, kw=kw: STACK_METHODS[m](problem, **{
-                **({"seed": seed, "progress": False} if m == "ga" else {}), **kw})) for m, kw in methods.items()},
-                ctrl_c, log)
+        results = run_steps({m: (lambda m=m, kw=kw: STACK_METHODS[m](problem, **{
+            **({"seed": seed, "progress": False} if m == "ga" else {}), **kw})) for m, kw in methods.items()},
+            study.ctrl_c, study.log)     # the one step loop of every study (evotol/studyfile/steps.py)
         if results:
             summary["allocation"] = allocation_summary(stack, problem, results, models, display, seed=seed)
-        summary["interrupted"] = bool(log.stopped)
-        if log.stopped:
-            summary["interruption"] = log.interruption()
-    summary.update(study_file=str(Path(path).resolve()), seconds=time.perf_counter() - t0)
-    paths = write_outputs(name, out, StudyResult(summary), render_stack(summary))
-    summary.update(html=str(paths["html"]), json=str(paths["json"]))
-    return summary
+    summary.update(study_file=str(Path(study.path).resolve()), seconds=study.seconds())
+    return Outcome(summary, render_stack)
