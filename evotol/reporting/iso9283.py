@@ -44,6 +44,14 @@ def iso9283_section(rep, summary: dict) -> None:
                      f"AP at yield {q:g}: predicted / simulated (95 %)", "RP predicted",
                      "RP Gaussian shortcut", "RP simulated", "RP of one test (95 %)", "vAP simulated"],
               table_id="iso9283")
+    if "AP_orientation" in iso["poses"][0]:     # ISO 9283 §7.2, where the requirement has an orientation
+        A = lambda v: u.format(v, "rad")        # noqa: E731
+        rep.table([[p["name"]] + [f"{A(p['AP_orientation'][a]['predicted'])} / {A(p['AP_orientation'][a]['simulated'])}"
+                                  for a in "abc"]
+                   + [f"{A(p['RP_orientation'][a]['predicted'])} / {A(p['RP_orientation'][a]['simulated'])}" for a in "abc"]
+                   for p in iso["poses"]],
+                  ["pose"] + [f"AP{a} predicted / simulated" for a in "abc"] + [f"RP{a} predicted / simulated" for a in "abc"],
+                  table_id="iso9283-orientation")
     for line in iso["notes"]:
         rep.text(line, note=True)
     buys = iso["what_each_source_buys"]

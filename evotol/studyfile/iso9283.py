@@ -41,7 +41,8 @@ from evotol.errors import ValidationError
 from evotol.allocators.iso9283 import allocate_iso9283
 from evotol.calibration.iso9283 import predict_calibrated, simulate_calibrated
 from evotol.measures.iso9283.budget import source_shares
-from evotol.measures.iso9283 import TestCube, check_cube, iso_positions, largest_cube, predict, quantile_interval, simulate
+from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, largest_cube, predict, predict_orientation,
+                                     quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import RandomPart
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count
@@ -422,6 +423,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     pred_q = pred if iso.yield_ is not None else predict(iso.robot, P, t_sys, iso.sources, t_rand, q_check,
                                                          n_samples=50000, seed=seed)
     sim_opts = iso.simulate
+    user_req = problem.requirement if problem.calibration is None else problem.calibration.requirement
+    orient = None if user_req.orientation is None else predict_orientation(iso.robot, P, t_sys, iso.sources, t_rand)
     approaches = ("-z", "+x", "+y") if sim_opts["multidirectional"] else ("-z",)
     sim = simulate(iso.robot, P, t_sys, iso.sources, t_rand, n_robots=int(sim_opts["robots"]),
                    n_cycles=int(sim_opts["cycles"]), approaches=approaches, seed=seed)
@@ -438,6 +441,14 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                         "simulated": float(rp.mean()), "interval": np.percentile(rp, [2.5, 97.5]).tolist()}}
         if sim["vAP"] is not None:
             entry["vAP"] = {"simulated": float(sim["vAP"][:, i].mean()), "max": float(sim["vAP"][:, i].max())}
+        if orient is not None:      # ISO 9283 §7.2: AP_a, AP_b, AP_c and RP_a, RP_b, RP_c (rad)
+            ap_abc, rp_abc = np.abs(sim["AP_abc"][:, i]), sim["RP_abc"][:, i]              # (robots, 3)
+            entry["AP_orientation"] = {a: {"predicted": float(orient["AP"][i, k]), "simulated": float(ap_abc[:, k].max()),
+                                           "interval": list(quantile_interval(ap_abc[:, k], 1.0)[1])}
+                                       for k, a in enumerate("abc")}
+            entry["RP_orientation"] = {a: {"predicted": float(orient["RP"][i, k]), "simulated": float(rp_abc[:, k].mean()),
+                                           "interval": np.percentile(rp_abc[:, k], [2.5, 97.5]).tolist()}
+                                       for k, a in enumerate("abc")}
         poses.append(entry)
     block["poses"] = poses
     if info is not None:        # the same robots after the study's calibration: AP falls, RP stays (first order)
@@ -478,5 +489,9 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
         "comparison only); simulated: the mean over the simulated 30-cycle tests, its interval the 2.5-97.5 % range "
         "of one test's RP.",
         "Lost motion is taken up against the approach motion (tool moving down): a fixed offset (AP, vAP), its "
-        "cycle-to-cycle variation feeds RP."]
+        "cycle-to-cycle variation feeds RP."] + ([
+        "Orientation (ISO 9283 7.2): per angle a, b, c (rotations about the base x, y, z: the components of the "
+        "orientation error's rotation vector, first order) AP_a = |mean - commanded| (predicted: exact worst case over "
+        "the tolerance box; simulated: the largest over the robots) and RP_a = 3 S_a (predicted: 3 sigma of the "
+        "linearised random sources; simulated: mean over the tests), rad."] if orient is not None else [])
     return block
