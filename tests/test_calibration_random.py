@@ -148,3 +148,36 @@ def test_random_sources_with_an_rss_requirement_are_refused():
     spec["requirement"]["measure"] = "rss"
     with pytest.raises(ValidationError, match="worst-case requirement"):
         load_problem(spec, base_dir=STUDY.parent)
+
+
+def test_the_study_states_what_the_random_sources_take_and_cost(tmp_path, capsys):
+    """evotol run of the example (smaller grid and simulation): the JSON's calibrated budget adds up to the
+    requirement, the ISO block's calibrated AP is the proven systematic part plus the fit's quantile and above
+    the first-order residual, RP is unchanged, the simulated calibration (random sources drawn) stays within the
+    stated worst case, and the terminal and the page say what the random sources take and cost."""
+    import json
+
+    from evotol.cli import main
+
+    text = STUDY.read_text().replace("grid = [3, 3, 3]", "grid = [2, 2, 2]").replace("simulate = 200 ", "simulate = 20 ")
+    text = text.replace("sensitivity = {}\n", "").replace("ga = { pop_size = 80, n_gen = 150 }\n", "")
+    text = text.replace("n_samples = 300", "n_samples = 30")
+    (tmp_path / "s.toml").write_text(text)
+    main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    data = json.loads((tmp_path / "ur5_calibrated.json").read_text())
+    page = (tmp_path / "ur5_calibrated.html").read_text()
+    b = data["iso9283"]["calibrated_budget"]
+    assert b["noise_only"] + b["random_identification"] + b["random_worst_case"] + b["second_order"] + \
+        b["remainder"] + b["geometric_bound"] == pytest.approx(b["requirement"], rel=1e-9)
+    al = b["random_allocation"]
+    assert al["active"] and al["cost"] == pytest.approx(sum(s["cost"] for s in data["iso9283"]["random_sources"]))
+    for p in data["iso9283"]["poses"]:
+        c = p["calibrated"]
+        assert c["AP"]["predicted"] == pytest.approx(c["AP"]["systematic_bound"] + c["AP"]["noise_quantile"])
+        assert c["AP"]["systematic"] <= c["AP"]["systematic_bound"] < p["AP"]["predicted"]
+        assert c["RP"]["predicted"] == p["RP"]["predicted"]
+    sim = data["calibration"]["methods"]["optimum"]["simulation"]
+    assert sim["simulated"]["position"]["max"] <= sim["worst_case"]["position"] <= 5e-4
+    assert "Random sources (12" in out and f"they cost {al['cost']:.4g}" in out and "the requirement binds" in out
+    assert "ISO 9283 after calibration" in out and "iso9283-calibrated-plan" in page and "they cost" in page
