@@ -228,16 +228,34 @@ ISO = {"AP": "0.5 mm", "RP": "0.05 mm"}
 
 
 @pytest.mark.parametrize("cap, other", [("joints", r"\[poses\] joints"), ("callouts", r"\[\[robot\.callouts\]\]"),
-                                        ("per-axis", "requirement per axis"), ("calibration", r"\[calibration\]")])
+                                        ("per-axis", "requirement per axis")])
 def test_iso9283_with_a_part_it_does_not_compose_with_is_refused_before_any_work(cap, other, monkeypatch):
-    """[requirement] iso9283 beside joint configurations, callouts, per-axis limits or [calibration]: one line
-    naming both, before the robot is even read (the spy fails on any description read)."""
+    """[requirement] iso9283 beside joint configurations, callouts or per-axis limits: one line
+    naming both, before the robot is even read (the spy fails on any description read). [calibration]
+    composes (tests/test_calibration_random.py) but for the two cases below."""
     import evotol.studyfile.problem as sp
 
     monkeypatch.setattr(sp, "read_robot", lambda *a, **k: (_ for _ in ()).throw(AssertionError("robot read")))
     spec = CAPABILITIES[cap](ur5())
     spec["requirement"]["iso9283"] = dict(ISO)
     with pytest.raises(ValidationError, match=rf"^iso9283 = '{other}': expected a study without it") as exc:
+        load_problem(spec, base_dir=STUDIES)
+    assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("table, field", [({"calibrate": {"configurations": 40}}, "iso9283.calibrate"),
+                                          ({"allocate": True}, "requirement.iso9283")],
+                         ids=["second-calibration", "iso-requirement-allocated"])
+def test_iso9283_with_calibration_refuses_what_it_does_not_compose_before_any_work(table, field, monkeypatch):
+    """[calibration] with [iso9283] calibrate (a second, simulated calibration) or with ISO AP/RP requirements
+    allocated in the calibrated budget (not done): one line naming the field, before the robot is read."""
+    import evotol.studyfile.problem as sp
+
+    monkeypatch.setattr(sp, "read_robot", lambda *a, **k: (_ for _ in ()).throw(AssertionError("robot read")))
+    spec = CAPABILITIES["calibration"](ur5())
+    spec["requirement"]["iso9283"] = dict(ISO)
+    spec["iso9283"] = table
+    with pytest.raises(ValidationError, match=rf"^{field} = ") as exc:
         load_problem(spec, base_dir=STUDIES)
     assert "\n" not in str(exc.value)
 

@@ -35,9 +35,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from evotol.calibration.noise_share import level_of, norm_quantile
+from evotol.calibration.random_share import RandomPart, random_terms
 from evotol.errors import ValidationError
 from evotol.measures.iso9283.budget import APPROACHES, approach_signs, joints_and_maps, lost_motion_columns
-from evotol.measures.iso9283.figures import figures_of_test
+from evotol.measures.iso9283.figures import ap_worst_case, figures_of_test
 from evotol.measures.iso9283.poses import full_poses
 from evotol.robots.mechanism.model.random_sources import column_loading, cycle_errors, unit_draws
 
@@ -125,3 +127,53 @@ def simulate_calibrated(robot, positions, systematic, sources, random_t, n_robot
         out[f"AP_{label}"], out[f"RP_{label}"] = fig["AP"].T, fig["RP"].T
     out.update(rank=int(keep.sum()), n_columns=m)
     return out
+
+
+def predict_calibrated(problem, positions, systematic, sources, random_t) -> dict:
+    """Predicted ISO 9283 AP of a robot calibrated by the study's plan (``[calibration]``), first order.
+
+    After the plan's calibration a robot's barycentre error at an ISO pose is ``J M δ + J o + n``: the
+    systematic residual (``M`` the plan's post-calibration map, ``δ`` in ``±t``), the lost motion's fixed
+    offset ``o`` for the test's approach (not identified: the calibration takes it up from any side), and
+    the identification's error ``n`` -- the tracker's noise and the random sources at the calibration
+    visits (:mod:`evotol.calibration.random_share`), normal. AP is bounded by the worst case of the first two
+    (:func:`evotol.measures.iso9283.figures.ap_worst_case` over the stacked zonotope, proven) plus the quantile
+    of ``|n|`` at the plan's level; RP is the random sources' and does not change.
+
+    Parameters
+    ----------
+    problem : evotol.core.problem.ToleranceProblem
+        The calibrated problem (``problem.calibration``).
+
+    Returns
+    -------
+    dict
+        Per position (p,): ``AP_systematic`` (worst case of ``J M δ + J o``, attained), ``AP_bound`` (its proven
+        bound), ``noise_quantile`` (of ``|n|``), ``AP`` (``AP_bound + noise_quantile``), all m; ``level``.
+    """
+    info = problem.calibration
+    cal, robot = problem.model, problem.model.base
+    P = np.asarray(positions, float)
+    poses = full_poses(robot, P)
+    q, S = joints_and_maps(robot, P)
+    JM = np.asarray(cal.sensitivity(poses), float)[:, :3]
+    loadings, t = column_loading(robot, sources), np.asarray(random_t, float)
+    m = robot.n_columns
+    if len(sources):
+        lm, free = lost_motion_columns(sources, loadings, t, approach_signs(robot, S, APPROACHES["-z"]))
+    else:
+        lm, free = np.zeros((len(P), m)), np.zeros((len(P), m))
+    ts = np.asarray(systematic, float)
+    J = np.concatenate([JM, S[:, :3]], axis=2)
+    val, bound = np.empty(len(P)), np.empty(len(P))
+    for i in range(len(P)):
+        a, b = ap_worst_case(J[i:i + 1], np.concatenate([np.zeros(m), lm[i] / 2]),
+                             np.concatenate([ts, np.abs(lm[i]) / 2 + np.abs(free[i])]))
+        val[i], bound[i] = a[0], b[0]
+    C = cal.noise_covariance(poses)[:, :3, :3]
+    if info.random is not None:
+        part = RandomPart(tuple(sources), tuple(t), tuple(loadings))
+        C = C + random_terms(robot, info.identification, info.plan, poses, part)["covariance"][:, :3, :3]
+    level = level_of(info.plan.k)
+    nq = norm_quantile(C, level)
+    return {"AP_systematic": val, "AP_bound": bound, "noise_quantile": nq, "AP": bound + nq, "level": level}

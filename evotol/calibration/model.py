@@ -167,7 +167,7 @@ class CalibratedRobot(RobotErrorModel):
 
 
 def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: dict | None = None,
-                    remainder: dict | None = None) -> dict:
+                    remainder: dict | None = None, random: dict | None = None) -> dict:
     """How much of the requirement the instrument noise takes, per constrained component (module docstring).
 
     The noise's share is the quantile ``q`` of the propagated noise's norm at the level
@@ -190,6 +190,10 @@ def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: di
     remainder : dict, optional
         Component -> the second-order allowance of the sources within their final upper bounds (m,
         rad; :func:`evotol.calibration.linear_range.remainder_allowance`), taken off the bound too.
+    random : dict, optional
+        :func:`evotol.calibration.random_share.random_terms` of the robot's random sources: their
+        ``covariance`` through the identification is added to the noise's before the quantile, and their
+        ``worst_case`` at the poses (the largest) is taken off the bound.
 
     Returns
     -------
@@ -199,7 +203,9 @@ def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: di
         "allowance": the noise's quantile q, "level": its probability, "second_order": the noise's
         second-order term, "remainder": the sources' second-order allowance, "bound": the user's bound,
         "geometric_bound": what is left for the tolerances, "coverage": the probability that the
-        3-D noise stays inside the ball of radius q at a pose (= level)}}``.
+        3-D noise stays inside the ball of radius q at a pose (= level)}}``; with ``random`` also
+        ``"noise_only"`` (the quantile without the random sources), ``"random_identification"`` (what they
+        add to it) and ``"random_worst_case"`` (their largest effect at a pose, taken off with ``d``).
 
     Raises
     ------
@@ -219,9 +225,17 @@ def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: di
         s = float(sig[comp].max())
         d = float((second_order or {}).get(comp, 0.0)) + float((remainder or {}).get(comp, 0.0))
         a = float(norm_quantile(cov[:, o:o + 3, o:o + 3], level).max(initial=0.0))
+        extra = {}
+        if random is not None:      # the random sources: beside the noise in the fit, and at the pose itself
+            both = cov[:, o:o + 3, o:o + 3] + random["covariance"][:, o:o + 3, o:o + 3]
+            a, a0 = float(norm_quantile(both, level).max(initial=0.0)), a
+            w = float(random["worst_case"][comp].max())
+            extra = {"noise_only": a0, "random_identification": a - a0, "random_worst_case": w}
+            d += w
         if a + d >= E or (rule == "covariance" and d >= E):
             u = "m" if comp == "position" else "rad"
-            raise ValidationError("calibration.noise", f"{100 * level:.2f} % quantile {a:.3g} {u} + second order {d:.3g} {u}",
+            raise ValidationError("calibration.noise", f"{100 * level:.2f} % quantile {a:.3g} {u} + second order"
+                                  f"{' and random sources' if extra else ''} {d:.3g} {u}",
                                   f"an instrument noise whose {comp} effect after calibration stays below the requirement "
                                   f"{E:g} {u} (condition number {robot.identification.condition:.3g}: spread the "
                                   "configurations, e.g. over = 'joints', or identify fewer sources)")
@@ -232,5 +246,5 @@ def noise_allowance(robot: CalibratedRobot, poses, requirement, second_order: di
         out[comp] = {"sigma": s, "k_sigma": k * s, "allowance": a, "level": level,
                      "second_order": float((second_order or {}).get(comp, 0.0)),
                      "remainder": float((remainder or {}).get(comp, 0.0)), "bound": float(E), "geometric_bound": geo,
-                     "coverage": level}
+                     "coverage": level, **extra}
     return out

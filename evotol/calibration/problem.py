@@ -25,8 +25,12 @@ from evotol.calibration.configurations import is_described
 from evotol.calibration.identification import Identification, identify
 from evotol.calibration.linear_range import (calibrated_upper_bounds, checked_range, noise_second_order,
                                              remainder_allowance, second_order_norms)
-from evotol.calibration.model import CalibratedRobot, noise_allowance
+from evotol.calibration.model import NOISE_RULE, CalibratedRobot, noise_allowance
 from evotol.calibration.plan import CalibrationPlan
+from evotol.calibration.noise_share import level_of
+from evotol.calibration.random_allocation import allocate_random
+from evotol.calibration.random_share import RandomPart, random_terms, unit_terms
+from evotol.measures.iso9283.figures import ap_worst_case
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
 
@@ -48,6 +52,10 @@ class CalibrationInfo:
         The user's requirement (the problem's is the geometric share).
     simulate : int
         Robots of the simulated calibration per design in a study (``[calibration] simulate``).
+    random : evotol.calibration.random_share.RandomPart or None
+        The robot's random sources (issue 44 item 4), in the budget beside the noise; None: none.
+    random_allocation : dict or None
+        :func:`evotol.calibration.random_allocation.allocate_random`'s result when they were allocated.
     """
 
     plan: CalibrationPlan
@@ -56,6 +64,8 @@ class CalibrationInfo:
     bounds: dict
     requirement: object
     simulate: int = 200
+    random: RandomPart | None = None
+    random_allocation: dict | None = None
 
     def to_dict(self) -> dict:
         """Plain data for the JSON summary and the report (SI).
@@ -75,7 +85,10 @@ class CalibrationInfo:
                 "measure": list(p.measure), "instrument": p.instrument, "k": float(p.k),
                 "linear_fraction": float(p.linear_fraction),
                 "noise_sigma": {c: v.tolist() for c, v in p.noise.items()},
-                "identify": p.identify if isinstance(p.identify, str) else list(p.identify)}
+                "identify": p.identify if isinstance(p.identify, str) else list(p.identify),
+                **({} if self.random is None else {"random_sources": {
+                    s.name: float(t) for s, t in zip(self.random.sources, self.random.tolerances)}}),
+                **({} if self.random_allocation is None else {"random_allocation": self.random_allocation})}
 
 
 def check_composable(problem) -> None:
@@ -138,7 +151,36 @@ def _checked(robot, idn, plan, task_joints, req, norms, tolerances, bounds):
     return tolerances, {k: max(v, seen.get(k, 0.0)) for k, v in proven.items()}
 
 
-def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
+#: share of the requirement kept for the systematic residual when the random sources are allocated after
+#: calibration (a calibration that leaves no first-order error would otherwise leave the tolerances a bound of 0)
+SYSTEMATIC_RESERVE = 0.01
+
+
+def _allocate_random(robot, cal, idn, plan, problem, tolerances, second, remainder, random):
+    """The random sources allocated within what calibration leaves (evotol.calibration.random_allocation)."""
+    E = problem.requirement.position
+    if E is None:
+        raise ValidationError("iso9283.allocate", True, "a position requirement to allocate random sources for")
+    up = np.array([tolerances[n].upper for n in robot.source_names], float)
+    JM = np.asarray(cal.sensitivity(problem.poses), float)[:, :3]
+    wc_sys = float(ap_worst_case(JM, np.zeros(len(up)), up)[1].max())
+    d = float((second or {}).get("position", 0.0)) + float((remainder or {}).get("position", 0.0))
+    budget = E - d - wc_sys - SYSTEMATIC_RESERVE * E      # the systematic share keeps a margin: a requirement row > 0
+    u = unit_terms(robot, idn, plan, problem.poses, random)
+    C0 = cal.noise_covariance(problem.poses)[:, :3, :3]
+    al = allocate_random(C0, u["covariance"], u["support"], u["cos_delta"], random.costs, random.lower, random.upper,
+                         budget, level_of(plan.k), start=np.array(random.tolerances))
+    t = al.pop("tolerances")
+    al.update(systematic_worst_case=wc_sys, second_order=d, joint_optimum=bool(wc_sys <= 1e-9 * E),
+              tolerances={s.name: float(v) for s, v in zip(random.sources, t)},
+              costs={s.name: float(c.cost(v)) for s, c, v in zip(random.sources, random.costs, t)},
+              meaning="allocated with every systematic tolerance at its upper bound, "
+                      + ("the joint optimum here: calibration leaves no systematic first-order error"
+                         if wc_sys <= 1e-9 * E else "a sequential allocation: systematic first"))
+    return dataclasses.replace(random, tolerances=tuple(float(v) for v in t)), al
+
+
+def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200, random: RandomPart | None = None):
     """The problem of the same robot after the plan's calibration (module docstring).
 
     Parameters
@@ -149,6 +191,11 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
         The calibration plan.
     simulate : int
         Robots of the simulated calibration per design when a study is run (kept on ``calibration``).
+    random : evotol.calibration.random_share.RandomPart, optional
+        Random sources of the robot (lost motion, encoder resolution, bearing play) at their tolerances:
+        they disturb the identification beside the noise and add their worst case at each pose
+        (:mod:`evotol.calibration.random_share`); a worst-case requirement (``worst_case`` and the other
+        bounds) and a described mechanism only.
 
     Returns
     -------
@@ -160,13 +207,18 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
     ------
     evotol.errors.ValidationError
         A problem with clearance sources, a plan that is not a :class:`CalibrationPlan`, what
-        :func:`evotol.calibration.identification.identify` refuses, or a noise that takes the
-        whole requirement.
+        :func:`evotol.calibration.identification.identify` refuses, a noise (with the random sources)
+        that takes the whole requirement, random sources with an ``rss`` or ``yield`` requirement or a
+        model without joint maps.
     """
     if not isinstance(plan, CalibrationPlan):
         raise ValidationError("calibration", plan, "an evotol.calibration.CalibrationPlan")
     check_composable(problem)
     robot = problem.model
+    if random is not None and (problem.requirement.measure in NOISE_RULE or not is_described(robot)):
+        raise ValidationError("calibration random sources", problem.requirement.measure if is_described(robot) else
+                              robot.name, "a worst-case requirement on a described arm (random sources in a calibrated "
+                              "budget are taken off the requirement by the triangle inequality)")
     idn = identify(robot, plan)
     cal = CalibratedRobot(robot, idn, plan)
     req = problem.requirement
@@ -189,12 +241,17 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200):
         tolerances, remainder = _checked(robot, idn, plan, task_joints, req, norms, tolerances, bounds)
     for n, b in bounds.items():
         b["upper"] = float(tolerances[n].upper)
-    noise = noise_allowance(cal, problem.poses, req, second, remainder)
+    allocation = None
+    if random is not None and random.allocated:     # the random sources are variables too (random_allocation.py)
+        noise_allowance(cal, problem.poses, req, second, remainder)        # a noise alone too large: refused first
+        random, allocation = _allocate_random(robot, cal, idn, plan, problem, tolerances, second, remainder, random)
+    extra = None if random is None else random_terms(robot, idn, plan, problem.poses, random)
+    noise = noise_allowance(cal, problem.poses, req, second, remainder, extra)
     changes = {c: v["geometric_bound"] for c, v in noise.items() if isinstance(v, dict)}
     new_req = dataclasses.replace(req, **changes) if noise["rule"] != "covariance" else req
     shared = problem.shared or None
     out = ToleranceProblem(cal, tolerances, new_req, problem.poses, n_directions=problem.n_directions,
                            shared=shared, shared_cost=problem.shared_cost)
-    out.calibration = CalibrationInfo(plan, idn, noise, bounds, req, int(simulate))
+    out.calibration = CalibrationInfo(plan, idn, noise, bounds, req, int(simulate), random, allocation)
     out.uncalibrated = problem
     return out

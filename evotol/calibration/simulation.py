@@ -28,6 +28,7 @@ from scipy.optimize import least_squares
 from evotol.calibration.compensation import Compensation
 from evotol.calibration.identification import registration_columns
 from evotol.calibration.plan import MEASURED
+from evotol.calibration.random_share import draw_visits
 from evotol.measures.statistical import distributions
 from evotol.errors import ValidationError, is_integer
 
@@ -159,7 +160,10 @@ def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 
         Rg, rn = registration_columns(robot, plan, Qc)
         Rlin = Rg[:, mrows][:, :, [rn.index(r) for r in idn.registration]].reshape(-1, len(idn.registration)) * w[:, None]
     n_reg = 0 if Rlin is None else Rlin.shape[1]
-    Y = (np.swapaxes(_pose_error(robot, Qc, D)[:, :, mrows], 0, 1).reshape(n_samples, -1) + eps) * w   # whitened
+    part = info.random          # random sources: drawn anew at every visit (readings, task poses; random_share.py)
+    Rc = None if part is None else draw_visits(part, len(Qc) * n_samples, rng).reshape(len(Qc), n_samples, -1)
+    read = _pose_error(robot, Qc, D) if Rc is None else robot.pose_error_at_joints(Qc, D[None] + Rc)
+    Y = (np.swapaxes(read[:, :, mrows], 0, 1).reshape(n_samples, -1) + eps) * w                # whitened
 
     def readings(X):                          # X (b, n_reg + nK) -> whitened model readings (b, n_rows)
         E = np.zeros((X.shape[0], robot.n_columns))
@@ -189,6 +193,12 @@ def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 
     # first-order prediction for the same robots and noise
     Jt = robot.sensitivity_at_joints(Qt)
     lin = np.einsum("pij,sj->psi", Jt @ idn.M, D) - np.einsum("pik,sk->psi", Jt[:, :, K], (eps * w) @ idn.estimator.T)
+    if part is not None:        # the random sources' share of the readings, and their draw at each task pose (first order)
+        Sc = robot.sensitivity_at_joints(Qc)[:, mrows]                                  # (n_c, rows, n_cols)
+        yr = np.einsum("crm,csm->scr", Sc, Rc).reshape(n_samples, -1) * w
+        rt = np.einsum("pim,psm->psi", Jt, draw_visits(part, len(Qt) * n_samples, rng).reshape(len(Qt), n_samples, -1))
+        lin = lin - np.einsum("pik,sk->psi", Jt[:, :, K], yr @ idn.estimator.T) + rt
+        sim = sim + rt
     wc = problem.evaluate(t[None], "worst_case")
     out = {k: {} for k in ("simulated", "predicted", "difference", "worst_case", "requirement", "exceed_rate")}
     for comp, E_req in problem.uncalibrated.components:
@@ -198,7 +208,8 @@ def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 
         out["predicted"][comp] = {"max": float(nl.max()), "quantile": float(np.quantile(nl, quantile))}
         out["difference"][comp] = float(np.abs(sim[:, :, ROWS[comp]] - lin[:, :, ROWS[comp]]).max())
         nz = info.noise.get(comp, {})
-        allow = nz.get("allowance", 0.0) + nz.get("second_order", 0.0) + nz.get("remainder", 0.0)
+        allow = nz.get("allowance", 0.0) + nz.get("second_order", 0.0) + nz.get("remainder", 0.0) + \
+            nz.get("random_worst_case", 0.0)
         out["worst_case"][comp] = float(np.max(getattr(wc, comp)[0])) + float(allow)
         out["requirement"][comp] = float(E_req)
         out["exceed_rate"][comp] = float(np.mean(ns > E_req))

@@ -69,7 +69,7 @@ def plan_from_table(table, seed: int = 0) -> tuple[CalibrationPlan, int]:
     return CalibrationPlan(require_units=True, **kw), int(simulate)
 
 
-def calibrate_study_problem(problem, table, seed: int = 0):
+def calibrate_study_problem(problem, table, seed: int = 0, random=None):
     """The study's problem after its ``[calibration]`` table (``evotol run``; module docstring).
 
     Parameters
@@ -80,6 +80,8 @@ def calibrate_study_problem(problem, table, seed: int = 0):
         The ``[calibration]`` table.
     seed : int
         The study's seed.
+    random : evotol.calibration.random_share.RandomPart, optional
+        The study's random sources (``[iso9283.random]``), in the calibrated budget.
 
     Returns
     -------
@@ -94,4 +96,4 @@ def calibrate_study_problem(problem, table, seed: int = 0):
     from evotol.calibration.problem import calibrated_problem
 
     plan, simulate = plan_from_table(table, seed)
-    return calibrated_problem(problem, plan, simulate)
+    return calibrated_problem(problem, plan, simulate, random)

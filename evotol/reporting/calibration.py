@@ -65,15 +65,41 @@ def noise_texts(summary: dict) -> list[str]:
         if not isinstance(n, dict):
             continue
         u = "m" if comp == "position" else "rad"
+        rnd = "random_worst_case" in n        # random sources in the calibrated budget (issue 44 item 4)
         out.append(f"Noise share of the {comp} requirement {_fmt(summary, n['bound'], u)}: largest propagated sigma "
                    f"{_fmt(summary, n['sigma'], u)} ({plan['k']:g} sigma = {_fmt(summary, n.get('k_sigma', 0.0), u)}); "
-                   f"the noise's norm at a pose stays below {_fmt(summary, n['allowance'], u)} with probability "
+                   f"{'the norm of the fit error (noise and random sources)' if rnd else 'the noise' + chr(39) + 's norm'} "
+                   f"at a pose stays below {_fmt(summary, n['allowance'], u)} with probability "
                    f"{100 * n['coverage']:.2f} % (its quantile from the propagated covariance); second-order terms: "
                    f"{_fmt(summary, n['second_order'], u)} of the noise-driven corrections and "
                    f"{_fmt(summary, n.get('remainder', 0.0), u)} of the sources within their upper bounds; "
                    f"{_RULES[plan['noise']['rule']]}. The tolerances hold the geometric share "
                    f"{_fmt(summary, n['geometric_bound'], u)} (the requirement shown in the results table).")
+        if rnd:
+            out.append(_random_sentence(summary, plan, n, u))
     return out
+
+
+def _random_sentence(summary: dict, plan: dict, n: dict, u: str) -> str:
+    """What the random sources take of a calibrated requirement, and what they cost when allocated."""
+    text = (f"Random sources ({len(plan.get('random_sources', {}))}, repeatability: calibration cannot remove them): "
+            f"through the fit they raise that quantile from {_fmt(summary, n['noise_only'], u)} (noise alone) by "
+            f"{_fmt(summary, n['random_identification'], u)}, and at a pose they add at most "
+            f"{_fmt(summary, n['random_worst_case'], u)} (proven worst case), taken off the bound with it.")
+    al = plan.get("random_allocation")
+    if al:
+        text += (f" They are {al['meaning']}; "
+                 f"they cost {al['cost']:.4g}; the requirement {'binds' if al['active'] else 'does not bind'} "
+                 f"(fit quantile + worst case {_fmt(summary, al['quantile'] + al['worst_case'], u)} of "
+                 f"{_fmt(summary, al['budget'], u)} left for them).")
+    poses = summary.get("iso9283", {}).get("poses", [])
+    if poses and "calibrated" in poses[0]:
+        ap = max(p["calibrated"]["AP"]["predicted"] for p in poses)
+        rp = max(p["calibrated"]["RP"]["predicted"] for p in poses)
+        text += (f" ISO 9283 after calibration (first order, largest over P1-P5): AP {_fmt(summary, ap, u)} "
+                 f"(uncalibrated {_fmt(summary, max(p['AP']['predicted'] for p in poses), u)}), RP {_fmt(summary, rp, u)} "
+                 "(unchanged).")
+    return text
 
 
 def terminal_lines(summary: dict) -> list[str]:

@@ -44,6 +44,14 @@ def iso9283_section(rep, summary: dict) -> None:
                      f"AP at yield {q:g}: predicted / simulated (95 %)", "RP predicted",
                      "RP Gaussian shortcut", "RP simulated", "RP of one test (95 %)", "vAP simulated"],
               table_id="iso9283")
+    if "AP_orientation" in iso["poses"][0]:     # ISO 9283 §7.2, where the requirement has an orientation
+        A = lambda v: u.format(v, "rad")        # noqa: E731
+        rep.table([[p["name"]] + [f"{A(p['AP_orientation'][a]['predicted'])} / {A(p['AP_orientation'][a]['simulated'])}"
+                                  for a in "abc"]
+                   + [f"{A(p['RP_orientation'][a]['predicted'])} / {A(p['RP_orientation'][a]['simulated'])}" for a in "abc"]
+                   for p in iso["poses"]],
+                  ["pose"] + [f"AP{a} predicted / simulated" for a in "abc"] + [f"RP{a} predicted / simulated" for a in "abc"],
+                  table_id="iso9283-orientation")
     for line in iso["notes"]:
         rep.text(line, note=True)
     buys = iso["what_each_source_buys"]
@@ -63,6 +71,23 @@ def iso9283_section(rep, summary: dict) -> None:
                     L(p["RP_before_mean"]), L(p["RP_after_mean"])] for p in c["poses"]],
                   ["pose", "AP before (mean)", "AP after (mean)", "AP before (max)", "AP after (max)", "RP before",
                    "RP after"], table_id="iso9283-calibrated")
+    if "calibrated_budget" in iso:          # the study's [calibration] with random sources (issue 44 item 4)
+        b = iso["calibrated_budget"]
+        al = b.get("random_allocation")
+        rep.text(f"After the study's calibration (first order, the noise's quantile at {100 * iso['poses'][0]['calibrated']['AP']['level']:.2f} %): "
+                 "AP is the systematic residual and the lost motion's offset (proven bound) plus the fit's error from the "
+                 "tracker's noise and the random sources; RP does not change."
+                 + ("" if b.get("random_worst_case") is None else
+                    f" The random sources take {L(b['random_worst_case'])} (worst case at a task pose) and "
+                    f"{L(b['random_identification'])} of the fit's quantile (noise alone {L(b['noise_only'])}) of the "
+                    f"requirement {L(b['requirement'])}")
+                 + ("." if not al else f"; allocated, they cost {al['cost']:.4g} and the requirement "
+                    + ("binds." if al["active"] else "does not bind.")))
+        rep.table([[p["name"], L(p["AP"]["predicted"]), L(p["calibrated"]["AP"]["predicted"]),
+                    L(p["calibrated"]["AP"]["systematic_bound"]), L(p["calibrated"]["AP"]["noise_quantile"]),
+                    L(p["calibrated"]["RP"]["predicted"])] for p in iso["poses"]],
+                  ["pose", "AP uncalibrated", "AP calibrated", "of which systematic and lost motion", "of which fit error",
+                   "RP (unchanged)"], table_id="iso9283-calibrated-plan")
     if "allocation" in iso:
         a = iso["allocation"]
         rep.text(f"Allocated with the systematic sources: cost {a['cost']:.4g}, "

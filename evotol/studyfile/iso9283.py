@@ -39,11 +39,13 @@ import evotol.cost_models
 from evotol._runtime.keyword_checks import check_table_keys
 from evotol.errors import ValidationError
 from evotol.allocators.iso9283 import allocate_iso9283
-from evotol.calibration.iso9283 import simulate_calibrated
+from evotol.calibration.iso9283 import predict_calibrated, simulate_calibrated
 from evotol.measures.iso9283.budget import source_shares
-from evotol.measures.iso9283 import TestCube, check_cube, iso_positions, largest_cube, predict, quantile_interval, simulate
+from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, largest_cube, predict, predict_orientation,
+                                     quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
-from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, encoder_count
+from evotol.calibration.random_share import RandomPart
+from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count
 
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6,
          "deg": math.pi / 180, "arcmin": math.pi / 180 / 60, "arcsec": math.pi / 180 / 3600}
@@ -175,6 +177,38 @@ PART_WORDS = {"callouts": "[[robot.callouts]]", "joint_space": "[poses] joints",
               "axis_limits": "requirement per axis", "clearances": "[clearances]"}
 
 
+def random_part(spec: dict, robot) -> RandomPart | None:
+    """The ``[iso9283.random]`` sources at their catalogue values, for a calibrated budget; None without any.
+
+    Parameters
+    ----------
+    robot : evotol.robots.base.RobotErrorModel
+        The uncalibrated model (a described arm).
+
+    Returns
+    -------
+    evotol.calibration.random_share.RandomPart or None
+        The sources, their tolerances (SI) and column loadings.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A bad random-source table, or random sources on a robot that is not a described arm.
+    """
+    table = spec.get("iso9283", {}).get("random", {}) if isinstance(spec.get("iso9283"), dict) else {}
+    if not table:
+        return None
+    if not isinstance(robot, MechanismModel):
+        raise ValidationError("iso9283.random", type(robot).__name__, "a serial arm from a mechanism description")
+    sources, costs, lower, upper = _random_sources(table, robot)
+    alloc = bool(spec["iso9283"].get("allocate", False))
+    if alloc and any(c is None for c in costs):
+        raise ValidationError(f"iso9283.random.{sources[costs.index(None)].kind}.cost", None,
+                              "a cost model to allocate the random sources")
+    return RandomPart(tuple(sources), tuple(s.tolerance for s in sources), tuple(column_loading(robot, sources)),
+                      *((tuple(costs), tuple(lower), tuple(upper)) if alloc else ()))
+
+
 def check_composable(spec: dict) -> None:
     """Refuse, from the study file alone and so before any work, the parts ISO 9283 figures do not compose with.
 
@@ -186,21 +220,28 @@ def check_composable(spec: dict) -> None:
     Raises
     ------
     evotol.errors.ValidationError
-        One line naming ``iso9283`` and the other part: ``[calibration]`` (the ISO block has its own
-        ``[iso9283] calibrate``), ``[[robot.callouts]]``, ``[poses] joints`` (the ISO poses are the test
-        cube's), ``[clearances]``, a requirement per axis.
+        One line naming ``iso9283`` and the other part: ``[[robot.callouts]]``, ``[poses] joints`` (the
+        ISO poses are the test cube's), ``[clearances]``, a requirement per axis; with ``[calibration]``,
+        ``[iso9283] calibrate`` (a second calibration).
     """
     req = spec.get("requirement", {})
     if "iso9283" not in spec and "iso9283" not in req:
         return
-    other = [("calibration" in spec, "calibration"), ("callouts" in spec.get("robot", {}), "callouts"),
+    table = spec.get("iso9283", {})
+    if "calibration" in spec and isinstance(table, dict) and table.get("calibrate"):
+        raise ValidationError("iso9283.calibrate", table["calibrate"], "no calibrate beside [calibration]: one "
+                              "calibration ([calibration] is the plan the tolerances are allocated for)")
+    if "calibration" in spec and isinstance(table, dict) and table.get("allocate") and req.get("iso9283"):
+        raise ValidationError("requirement.iso9283", req["iso9283"], "no ISO 9283 requirement beside [calibration] "
+                              "with allocate = true: the calibrated allocation holds [requirement] position (AP/RP "
+                              "requirements in a calibrated budget are not allocated yet); leave allocate out to check them")
+    other = [("callouts" in spec.get("robot", {}), "callouts"),
              ("joints" in spec.get("poses", {}), "joint_space"), ("clearances" in spec, "clearances"),
              (any(isinstance(req.get(c), dict) for c in ("position", "orientation")), "axis_limits")]
     for present, part in other:
         if present:
             raise ValidationError("iso9283", PART_WORDS[part], "a study without it: the ISO 9283 figures are not yet "
-                                  "composed with it (docs/combinations.md)" + (
-                                      "; [iso9283] calibrate simulates a calibration" if part == "calibration" else ""))
+                                  "composed with it (docs/combinations.md)")
 
 
 def read_iso9283(spec: dict, problem) -> IsoStudy | None:
@@ -228,12 +269,12 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     check_table_keys(table, TABLE_KEYS, "iso9283")
     check_table_keys(req or {}, ("AP", "RP"), "requirement.iso9283")
     check_table_keys(table.get("simulate", {}), SIM_KEYS, "iso9283.simulate")
-    robot = problem.model
+    robot = problem.model.described      # with [calibration]: the arm inside the calibrated model
     check_composable(spec)
     if not problem.free.any():
         raise ValidationError("iso9283", "every tolerance given", "at least one tolerance to allocate: the ISO block "
                               "is not yet written by the given-tolerances analysis")
-    part = next((m.part for m in problem.error_model.parts() if m.part), None)   # e.g. a description's own callouts
+    part = next((m.part for m in problem.error_model.parts() if m.part and m.part != "calibration"), None)
     if part is not None:
         raise ValidationError("iso9283", PART_WORDS[part], "a serial arm without it: the ISO 9283 figures are not yet "
                               "composed with it (docs/combinations.md)")
@@ -298,6 +339,30 @@ def _q(x, y):
     return est, list(iv)
 
 
+def calibrated_budget(info) -> dict:
+    """What the random sources take of a calibrated requirement (SI; docs/calibration.md, issue 44 item 4).
+
+    Parameters
+    ----------
+    info : evotol.calibration.problem.CalibrationInfo
+        The calibrated problem's ``calibration``.
+
+    Returns
+    -------
+    dict
+        ``requirement``, ``noise_only`` (the noise's quantile alone), ``random_identification`` (what the
+        random sources add to it through the fit), ``random_worst_case`` (their largest effect at a task pose),
+        ``second_order``, ``remainder``, ``geometric_bound`` (left for the systematic residual), all m, and
+        ``random_allocation`` (cost, tolerances, whether the requirement binds) when they are allocated.
+    """
+    pos = info.noise.get("position", {})
+    keys = ("noise_only", "random_identification", "random_worst_case", "second_order", "remainder", "geometric_bound")
+    return {"requirement": pos.get("bound"), **{k: pos.get(k) for k in keys},
+            "random_allocation": info.random_allocation,
+            "meaning": "calibrated requirement = systematic residual (geometric_bound) + quantile of the fit's error "
+                       "(noise_only + random_identification) + the random sources' worst case at a pose + second order"}
+
+
 def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     """The ``iso9283`` block of the study JSON (SI, docs/iso9283.md): the cube, the poses (commanded
     positions), per pose ``AP`` and ``RP`` each with ``predicted`` and, simulated on the nonlinear
@@ -324,10 +389,15 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     from_method = "optimum" if "optimum" in results else next(iter(results), None)
     t_sys = np.asarray(results[from_method].t if from_method else problem.full(problem.lower[problem.free][None])[0], float)
     t_rand = np.array([s.tolerance for s in iso.sources])
+    info = problem.calibration          # [calibration]: the random sources sit in the calibrated budget (issue 44)
+    if info is not None and info.random is not None:
+        t_rand = np.array(info.random.tolerances, float)
     block = {"cube": {"centre": list(iso.cube.centre), "edge": iso.cube.edge},
              "requirement": {"AP": iso.AP, "RP": iso.RP, "yield": iso.yield_},
              "systematic_from": from_method or "lower bounds"}
-    if iso.allocate:
+    if info is not None:
+        block["calibrated_budget"] = calibrated_budget(info)
+    if iso.allocate and info is None:
         tols = problem.tolerances
         al = allocate_iso9283(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names], [problem.lower, problem.upper],
                               problem.free, iso.sources, iso.costs, [iso.lower, iso.upper], iso.AP, iso.RP,
@@ -353,6 +423,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     pred_q = pred if iso.yield_ is not None else predict(iso.robot, P, t_sys, iso.sources, t_rand, q_check,
                                                          n_samples=50000, seed=seed)
     sim_opts = iso.simulate
+    user_req = problem.requirement if problem.calibration is None else problem.calibration.requirement
+    orient = None if user_req.orientation is None else predict_orientation(iso.robot, P, t_sys, iso.sources, t_rand)
     approaches = ("-z", "+x", "+y") if sim_opts["multidirectional"] else ("-z",)
     sim = simulate(iso.robot, P, t_sys, iso.sources, t_rand, n_robots=int(sim_opts["robots"]),
                    n_cycles=int(sim_opts["cycles"]), approaches=approaches, seed=seed)
@@ -369,8 +441,23 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                         "simulated": float(rp.mean()), "interval": np.percentile(rp, [2.5, 97.5]).tolist()}}
         if sim["vAP"] is not None:
             entry["vAP"] = {"simulated": float(sim["vAP"][:, i].mean()), "max": float(sim["vAP"][:, i].max())}
+        if orient is not None:      # ISO 9283 §7.2: AP_a, AP_b, AP_c and RP_a, RP_b, RP_c (rad)
+            ap_abc, rp_abc = np.abs(sim["AP_abc"][:, i]), sim["RP_abc"][:, i]              # (robots, 3)
+            entry["AP_orientation"] = {a: {"predicted": float(orient["AP"][i, k]), "simulated": float(ap_abc[:, k].max()),
+                                           "interval": list(quantile_interval(ap_abc[:, k], 1.0)[1])}
+                                       for k, a in enumerate("abc")}
+            entry["RP_orientation"] = {a: {"predicted": float(orient["RP"][i, k]), "simulated": float(rp_abc[:, k].mean()),
+                                           "interval": np.percentile(rp_abc[:, k], [2.5, 97.5]).tolist()}
+                                       for k, a in enumerate("abc")}
         poses.append(entry)
     block["poses"] = poses
+    if info is not None:        # the same robots after the study's calibration: AP falls, RP stays (first order)
+        pc = predict_calibrated(problem, P, t_sys, iso.sources, t_rand)
+        for i, entry in enumerate(poses):
+            entry["calibrated"] = {"AP": {"predicted": float(pc["AP"][i]), "systematic": float(pc["AP_systematic"][i]),
+                                          "systematic_bound": float(pc["AP_bound"][i]),
+                                          "noise_quantile": float(pc["noise_quantile"][i]), "level": pc["level"]},
+                                   "RP": {"predicted": entry["RP"]["predicted"]}}
     if iso.calibrate:
         c = simulate_calibrated(iso.robot, P, t_sys, iso.sources, t_rand, n_robots=iso.calibrate["robots"],
                                 n_cycles=int(sim_opts["cycles"]), n_configurations=iso.calibrate["configurations"],
@@ -389,7 +476,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
         "AP_pose": f"P{shares['AP_pose'] + 1}", "RP_pose": f"P{shares['RP_pose'] + 1}",
         "meaning": "share of the worst-case AP (first order, at its worst pose and direction) and of the RP variance "
                    "E|e|^2 (at its largest pose) each source takes; sources under 1 % left out"}
-    block["meets"] = {"AP": None if iso.AP is None else bool(pred["AP_bound"].max() <= iso.AP),
+    ap_top = pred["AP_bound"].max() if info is None else max(e["calibrated"]["AP"]["predicted"] for e in poses)
+    block["meets"] = {"AP": None if iso.AP is None else bool(ap_top <= iso.AP),
                       "RP": None if iso.RP is None else bool(pred["RP"].max() <= iso.RP)}
     block["simulation"] = {"robots": int(sim_opts["robots"]), "cycles": int(sim_opts["cycles"]), "approaches": list(approaches),
                            "model": "nonlinear (pose_error_at_joints)"}
@@ -401,5 +489,9 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
         "comparison only); simulated: the mean over the simulated 30-cycle tests, its interval the 2.5-97.5 % range "
         "of one test's RP.",
         "Lost motion is taken up against the approach motion (tool moving down): a fixed offset (AP, vAP), its "
-        "cycle-to-cycle variation feeds RP."]
+        "cycle-to-cycle variation feeds RP."] + ([
+        "Orientation (ISO 9283 7.2): per angle a, b, c (rotations about the base x, y, z: the components of the "
+        "orientation error's rotation vector, first order) AP_a = |mean - commanded| (predicted: exact worst case over "
+        "the tolerance box; simulated: the largest over the robots) and RP_a = 3 S_a (predicted: 3 sigma of the "
+        "linearised random sources; simulated: mean over the tests), rad."] if orient is not None else [])
     return block

@@ -10,7 +10,7 @@ from evotol.core.problem import ToleranceProblem
 from evotol.core.quality_loss import with_quality_loss
 from evotol.errors import ValidationError
 from evotol.studyfile.callouts import callout_warnings
-from evotol.studyfile.iso9283 import check_composable as check_iso_composable
+from evotol.studyfile.iso9283 import check_composable as check_iso_composable, random_part
 from evotol.studyfile.joint_poses import drop_unreachable, joint_poses
 from evotol.studyfile.keys import check_study_keys
 from evotol.studyfile.poses import read_poses
@@ -72,6 +72,7 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
                                clearances=classes, all_given=True)     # every tolerance given: analysed (issue 33)
     plausibility.warn(callout_warnings(problem))        # an orientation callout that binds (issue 35)
     if "calibration" in spec:   # a robot that will be calibrated (docs/calibration.md, evotol/calibration)
-        problem = calibrate_study_problem(problem, spec["calibration"], spec.get("seed", 0))
+        problem = calibrate_study_problem(problem, spec["calibration"], spec.get("seed", 0),
+                                          random=random_part(spec, problem.model))   # [iso9283.random] (issue 44)
     # quality_loss = A (or {response = A}): machining cost + Taguchi loss (docs/process_selection.md)
     return with_quality_loss(problem, spec["quality_loss"]) if "quality_loss" in spec else problem

@@ -31,7 +31,7 @@ from scipy.stats import binom
 
 from evotol.errors import ValidationError
 from evotol.measures.iso9283.figures import (ap_at_yield, ap_worst_case, cycle_errors_linear, figures_of_test, gaussian_rp,
-                                    rp_from_errors, worst_direction)
+                                    orientation_figures_of_test, rp_from_errors, worst_direction)
 from evotol.measures.iso9283.poses import full_poses
 from evotol.robots.mechanism.model.random_sources import backlash_offset, column_loading, cycle_errors, unit_draws
 
@@ -145,8 +145,7 @@ def source_shares(robot, positions, systematic, sources, random_t=None) -> dict:
     for s, k in zip(sources, range(len(sources))):
         if s.kind == "backlash":
             ap[s.name] = float((a @ C[i_ap, :, k] + np.abs(a) @ H[i_ap, :, k]) * t[k] / val)
-    var = [np.full(s.dim, 1 / 16) if s.kind == "radial_play" else
-           np.array([(s.variation if s.kind == "backlash" else 1.0) ** 2 / 12]) for s in sources]
+    var = _unit_variances(sources)
     v = np.array([[tk * tk * np.sum((Ji @ G) ** 2 * vk) for G, tk, vk in zip(loadings, t, var)] for Ji in J])
     i_rp = int(np.argmax(v.sum(1))) if len(sources) else 0
     rp = {s.name: float(x) for s, x in zip(sources, v[i_rp] / max(v[i_rp].sum(), 1e-300))} if len(sources) else {}
@@ -191,10 +190,40 @@ def predict(robot, positions, systematic, sources, random_t=None, yield_=None, n
     if sources:
         draws = unit_draws(sources, n_samples, np.random.default_rng(seed))
         rp = rp_from_errors(cycle_errors_linear(J, loadings, t, draws))
-        var = [np.full(s.dim, 1 / 16) if s.kind == "radial_play" else
-               [(s.variation if s.kind == "backlash" else 1.0) ** 2 / 12] for s in sources]
-        rp_gauss = gaussian_rp(J, loadings, t, var, n_samples, seed)
+        rp_gauss = gaussian_rp(J, loadings, t, _unit_variances(sources), n_samples, seed)
     return {"AP": ap, "AP_bound": bound, "RP": rp, "RP_gaussian": rp_gauss, "signs": signs}
+
+
+def _unit_variances(sources) -> list:
+    """Variance of each source's unit draw per component (:func:`unit_draws`)."""
+    return [np.full(s.dim, 1 / 16) if s.kind == "radial_play" else
+            np.array([(s.variation if s.kind == "backlash" else 1.0) ** 2 / 12]) for s in sources]
+
+
+def predict_orientation(robot, positions, systematic, sources, random_t=None) -> dict:
+    """Predicted orientation AP and RP per angle (ISO 9283 §7.2; rotations about the base axes x, y, z), first order.
+
+    With ``r`` the row of the first-order map of one angle at a pose, a robot's mean angle error over the
+    cycles is ``r (δ + o)`` (systematic errors in ``±t``, the lost motion's offset ``o``): its worst case is
+    exact, ``|r·c| + Σ_i |r_i| h_i`` over the box of centre ``c`` and half-widths ``h`` (one linear function
+    over a box). ``RP_a = 3 S_a`` tends to ``3 sqrt(Σ_k t_k² Σ_j (r G_k)_j² var_kj)`` for many cycles: exact
+    for the variance of the linearised random sources, whatever their distribution.
+
+    Returns
+    -------
+    dict
+        ``AP`` and ``RP`` (p, 3): per pose the worst ``|ā − a_c|`` and ``3 S_a`` for a, b, c (rad).
+    """
+    _, S = joints_and_maps(robot, positions)
+    R = S[:, 3:]
+    loadings, t = column_loading(robot, sources), _tols(sources, random_t)
+    lm, free = lost_motion_columns(sources, loadings, t, approach_signs(robot, S, APPROACHES["-z"])) if sources else \
+        (np.zeros((len(S), S.shape[2])), np.zeros((len(S), S.shape[2])))
+    h = np.asarray(systematic, float)[None] + np.abs(lm) / 2 + np.abs(free)                  # (p, m)
+    ap = np.abs(np.einsum("pam,pm->pa", R, lm / 2)) + np.einsum("pam,pm->pa", np.abs(R), h)
+    var = sum((tk * tk * (np.einsum("pam,mj->paj", R, G) ** 2 @ v) for G, tk, v in
+               zip(loadings, t, _unit_variances(sources))), np.zeros_like(ap))
+    return {"AP": ap, "RP": 3 * np.sqrt(var)}
 
 
 def simulate(robot, positions, systematic, sources, random_t=None, n_robots=200, n_cycles=30,
@@ -246,16 +275,18 @@ def simulate(robot, positions, systematic, sources, random_t=None, n_robots=200,
         cyc = cycle_errors(loadings, t, unit_draws(sources, p * N, rng)).reshape(p, N, m) if sources else 0.0
         side = share * np.abs(free[:, None, :]) * rng.uniform(-1, 1, (p, n_robots, m))   # lost motion not taken up
         err = (delta + share * lm[:, None, :] + side).repeat(n_cycles, axis=1) + cyc           # (p, N, m)
-        e = robot.pose_error_at_joints(q, err)[..., :3].reshape(p, n_robots, n_cycles, 3)
+        e6 = robot.pose_error_at_joints(q, err).reshape(p, n_robots, n_cycles, 6)
+        e = e6[..., :3]
         f = figures_of_test(e + P[:, None, None, :], P[:, None, :])
         if k == 0:
-            first = f
+            first, orient = f, orientation_figures_of_test(e6[..., 3:])
         bary.append(f["barycentre"])
     vap = None
     if len(bary) > 1:
         B = np.stack(bary)                                                   # (k, p, R, 3)
         vap = np.max(np.linalg.norm(B[:, None] - B[None], axis=-1), axis=(0, 1)).T
-    return {"AP": first["AP"].T, "RP": first["RP"].T, "vAP": vap}
+    return {"AP": first["AP"].T, "RP": first["RP"].T, "vAP": vap,
+            "AP_abc": np.swapaxes(orient["AP"], 0, 1), "RP_abc": np.swapaxes(orient["RP"], 0, 1)}
 
 
 def quantile_interval(x, y: float, level: float = 0.95):

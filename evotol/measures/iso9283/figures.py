@@ -148,6 +148,31 @@ def ap_at_yield(J, half, lost_motion, free, yield_, n_samples: int = 20000, seed
     return np.quantile(np.linalg.norm(e, axis=-1), yield_, axis=1)
 
 
+def orientation_figures_of_test(angles) -> dict:
+    """Orientation AP and RP of one ISO test (ISO 9283 §7.2.1-7.2.2): per angle ``a, b, c``
+    ``AP_a = ā − a_c`` and ``RP_a = ±3 S_a``, ``S_a = sqrt(Σ (a_j − ā)² / (n − 1))``.
+
+    Parameters
+    ----------
+    angles : (..., n, 3) array_like
+        Attained minus commanded orientation of ``n`` cycles about the base axes x, y, z (rad): the
+        rotation vector of each cycle's orientation error (docs/iso9283.md: first order in the angles).
+
+    Returns
+    -------
+    dict
+        ``AP`` (..., 3) signed ``ā − a_c`` and ``RP`` (..., 3) ``3 S_a``, rad.
+
+    Examples
+    --------
+    >>> f = orientation_figures_of_test([[1e-3, 0, 0], [3e-3, 0, 2e-3]])
+    >>> [round(float(v), 6) for v in f["AP"]], round(float(f["RP"][0]) / 3, 7)
+    ([0.002, 0.0, 0.001], 0.0014142)
+    """
+    A = np.asarray(angles, float)
+    return {"AP": A.mean(axis=-2), "RP": 3 * A.std(axis=-2, ddof=1)}
+
+
 def cycle_errors_linear(J, loadings, tolerances, draws) -> np.ndarray:
     """First-order cycle errors at each pose: ``J Σ_k t_k G_k d_k``.
 
