@@ -122,3 +122,27 @@ def test_kkt_conditions_at_5000_dimensions_checked_by_hand():
     assert np.all(lam[at_hi] >= lam0 * (1 - 1e-9))                    # at the upper bound: c' + λ|a|/L <= 0
     assert np.all(t >= lo) and np.all(t <= hi)
     assert r.cost == pytest.approx(float(np.sum(a0 + a1 * s / t)), rel=1e-12)
+
+
+def test_quality_loss_optimum_inside_the_requirement_equals_each_sources_own_minimum():
+    """A loss term q_j t² (Taguchi, evotol.core.quality_loss: q_j = A/9 (a_j/L)²) with a loose requirement:
+    the row is inactive (λ = 0) and each tolerance minimises its own cost, found here by a bounded scalar
+    search per source; every source has its own cost-model object (its own q_j)."""
+    from scipy.optimize import minimize_scalar
+    from evotol.core.quality_loss import with_quality_loss
+
+    rng = np.random.default_rng(11)
+    n, big = 20, 1e-2                                                # a 10 mm limit: the requirement does not bind
+    a = rng.choice([-1.0, 1.0], n) * rng.uniform(0.5, 2.0, n)
+    stack = LinearStack({f"x{j}": float(v) for j, v in enumerate(a)}, {"gap": big})
+    cost = ReciprocalCost(1.0, 0.5, scale=1e-5)
+    p = with_quality_loss(assembly_problem(stack, {nm: Tolerance(cost, lower=1e-7, upper=1e-3)
+                                                   for nm in stack.source_names}), 50.0)
+    r = allocate_optimum(p)
+    assert r.certificate["solver"].startswith("dual search") and r.certificate["multipliers"] == [0.0]
+    q = 50.0 / 9 * (a / big) ** 2
+    own = [minimize_scalar(lambda t, qj=qj: 1.0 + 0.5e-5 / t + qj * t * t, bounds=(1e-7, 1e-3), method="bounded",
+                           options={"xatol": 1e-16}) for qj in q]
+    assert r.cost == pytest.approx(sum(o.fun for o in own), rel=1e-12)
+    assert np.allclose(r.t, (0.5e-5 / (2 * q)) ** (1 / 3), rtol=1e-9)            # c' = 0: t³ = a1 s / (2 q)
+    assert np.abs(a) @ r.t < big

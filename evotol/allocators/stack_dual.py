@@ -248,6 +248,8 @@ def dual_search(problem: ToleranceProblem, rows: StackRows) -> dict:
     t_mid = np.sqrt(inner.lo * inner.hi)
     g_mid = R @ (rows.power * t_mid ** rows.power)
     scale = float(np.abs(inner.dcost(t_mid)) @ t_mid) / max(float(np.max(g_mid)), 1e-300)
+    if not (np.isfinite(scale) and scale > 0):      # flat costs at the middle (a loss term's minimum): any start
+        scale = 1.0
 
     last = [None]
 
