@@ -3,8 +3,11 @@ study with 1 000 / 2 000 / 5 000 dimensions, worst case (centred and asymmetric 
 exponential costs) and RSS (centred zones). Prints, per size, the seconds of reading the table and
 building the problem, of the optimum (the dual search, evotol/allocators/stack_dual.py) and of the
 whole ``evotol run`` in a subprocess (JSON and page included), with the certificate's gap and KKT
-residual. Target: 5 000 dimensions, optimum <= 2 s. With ``--slsqp N`` it also times the cutting-plane
-SLSQP path on the N-dimension stacks and prints the relative cost difference.
+residual; the lines ``N dimensions: optimum X s`` (worst case, centred, reciprocal) and ``N dimensions: rss
+refusal after X s`` (an RSS optimum of asymmetric zones, from the read table to the one-line error) are
+the ones benchmarks/run_all.py puts beside issue 43's targets (5 000 dimensions: optimum <= 2 s; the
+refusal before any work). With ``--slsqp N`` it also times the cutting-plane SLSQP path on the
+N-dimension stacks and prints the relative cost difference.
 
     python benchmarks/bench_stack.py [--sizes 1000 2000 5000] [--slsqp 1000]
 """
@@ -24,6 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import evotol.allocators.optimum as optimum  # noqa: E402
+from evotol.errors import ValidationError  # noqa: E402
 from evotol.studyfile.stack_table import allocation_from_table, stack_from_table  # noqa: E402
 
 COSTS = {"reciprocal": {"model": "reciprocal", "a0": 1.0, "a1": 0.5, "scale": 1e-5},
@@ -105,6 +109,22 @@ def one(n: int, cost: str, measure: str, asymmetric: bool, slsqp: bool, tmp: Pat
         finally:
             optimum.stack_rows = keep
     print(line, flush=True)
+    if measure == "worst_case" and cost == "reciprocal" and not asymmetric:
+        print(f"  {n} dimensions: optimum {t2 - t1:.3f} s", flush=True)       # the line run_all.py reads
+
+
+def rss_refusal(n: int) -> None:
+    """The refusal of an RSS optimum of asymmetric zones: seconds from the read table to the one-line error."""
+    table = stack_table(n, "reciprocal", "worst_case", True)
+    table["allocation"] = {**table["allocation"], "measure": "rss"}
+    stack, _, display = stack_from_table(table)
+    t0 = time.perf_counter()
+    try:
+        allocation_from_table(table, stack, display["scale"])
+    except ValidationError as exc:
+        print(f"  {n} dimensions: rss refusal after {time.perf_counter() - t0:.3f} s ({exc.field})", flush=True)
+    else:
+        print(f"  {n} dimensions: rss of asymmetric zones NOT refused", flush=True)
 
 
 def main() -> None:
@@ -118,6 +138,7 @@ def main() -> None:
             for cost, measure, asym in (("reciprocal", "worst_case", False), ("exponential", "worst_case", False),
                                         ("reciprocal", "worst_case", True), ("reciprocal", "rss", False)):
                 one(n, cost, measure, asym, n in args.slsqp, Path(tmp))
+            rss_refusal(n)
 
 
 if __name__ == "__main__":
