@@ -265,6 +265,12 @@ class CostModel:
             t_max = 100 * self.scale
         if not (np.isfinite(t_min) and np.isfinite(t_max) and 0 <= t_min <= t_max):
             raise ValidationError(f"{self.name} tolerance range", (t_min, t_max), "0 <= t_min <= t_max, finite (SI units)")
+        # a range this model (these coefficients) passed is not checked again: a stack of 5 000 dimensions
+        # shares one model and one range (4 s of grids at 5 000, twice per study)
+        key = (float(t_min), float(t_max), int(n), self.p.tobytes(), float(self.scale))
+        passed = self.__dict__.setdefault("_ranges_passed", set())
+        if key in passed:
+            return
         t = _range_grid(t_min, t_max, n) if t_max > t_min else np.array([t_max])
         c, dc = self.cost(t), self.dcost(t)
         bad = np.flatnonzero(~np.isfinite(c) | (c < 0))
@@ -278,6 +284,7 @@ class CostModel:
             i = bad[0]
             raise ValidationError(f"{self.name}{self.params}", f"dcost/dt({t[i]:.6g}) = {dc[i]:.6g} > 0",
                                   f"a cost that does not increase with the tolerance on [{t_min:.6g}, {t_max:.6g}] (SI)")
+        passed.add(key)
 
     def __repr__(self) -> str:
         ps = ", ".join(f"{k}={v:.6g}" for k, v in self.params.items())

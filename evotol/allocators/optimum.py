@@ -40,6 +40,7 @@ from scipy.optimize import minimize, nnls
 from evotol.allocators.sensitivity import sensitivity_design
 from evotol.allocators.budget import check_budget
 from evotol.allocators.monotone import allocate_monotone
+from evotol.allocators.stack_dual import StackRows, dual_search, stack_rows
 from evotol.allocators.workspace_refinement import allocate_on_workspace
 from evotol.measures.constraints import ConstraintRows
 from evotol.measures import feasibility
@@ -51,10 +52,15 @@ from evotol._runtime.blas_threads import single_threaded_blas
 
 
 def _check_convex(problem: ToleranceProblem) -> None:
+    seen = set()        # one check per (model, range): a stack of 5 000 dimensions shares one (1.8 s -> 0)
     for j in np.flatnonzero(~problem.locked & (problem.cost_weight > 0)):
         n = problem.names[j]
         tol = problem.tolerances[n]
         cm, w = tol.cost, tol.width_factor
+        key = (id(cm), w * problem.lower[j], w * problem.upper[j])
+        if key in seen:
+            continue
+        seen.add(key)
         if not cm.is_convex(w * problem.lower[j], w * problem.upper[j]):
             raise ValidationError(f"tolerances[{n!r}].cost", cm, f"a cost model convex on [{problem.lower[j]:.3g}, "
                                   f"{problem.upper[j]:.3g}] for the certified optimum (use allocate_ga instead)")
@@ -328,6 +334,11 @@ def _allocate_optimum_at_poses(problem: ToleranceProblem, *, budget: float | Non
                                max_rows: int):
     """:func:`allocate_optimum` on the problem's poses (no clearances, no refinement)."""
     t0 = time.perf_counter()
+    stack = stack_rows(problem) if budget is None else None
+    if stack is not None:       # one error direction at one pose: the dual search (evotol/allocators/stack_dual.py)
+        if np.any(stack.value(problem.lower[stack.index]) > 1 + 1e-9):
+            problem.check_feasible()                # its exact rows say infeasible: the problem's own refusal
+        return _stack_optimum(problem, stack, t0)
     problem.check_feasible()
     rows = ConstraintRows(problem)
     if budget is not None:
@@ -363,6 +374,25 @@ def _allocate_optimum_at_poses(problem: ToleranceProblem, *, budget: float | Non
     if problem.requirement.measure == "worst_case":
         # the proven bound of the design (tightened: evotol.measures.feasibility), over the requirement, as
         # make_result's one proven evaluation found it
+        cert["proven_bound_over_requirement"] = result.info["bound_ratio"]
+    return result
+
+
+def _stack_optimum(problem: ToleranceProblem, stack: StackRows, t0: float) -> AllocationResult:
+    """:func:`allocate_optimum` of a stack: the dual search, certified by its own dual bound."""
+    found = dual_search(problem, stack)
+    t = problem.full(found["t"][None])[0]
+    locked_cost = sum(float(problem.tolerances[problem.names[j]].cost_of(t[j])) * problem.cost_weight[j]
+                      for j in np.flatnonzero(problem.locked))
+    cert = {"lower_bound": found["lower_bound"] + locked_cost, "kkt_residual": found["kkt_residual"],
+            "active_rows": found["active_rows"], "working_rows": int(stack.rows.shape[0]), "rounds": 1,
+            "solver": "dual search (one direction, evotol.allocators.stack_dual)",
+            "multipliers": found["lam"].tolist()}
+    t, ev, repair = feasibility.hold_to_rule(problem, t, max_miss=np.inf)     # the search's last bits outside
+    result = issue(make_result(problem, "optimum", t, evaluation=ev, certificate=cert, seconds=time.perf_counter() - t0,
+                               info={"solver_message": "dual search converged", **repair}))
+    cert["gap"] = (result.cost - cert["lower_bound"]) / result.cost
+    if problem.requirement.measure == "worst_case":
         cert["proven_bound_over_requirement"] = result.info["bound_ratio"]
     return result
 

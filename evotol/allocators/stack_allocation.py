@@ -3,7 +3,8 @@ its dimensions chosen by cost so that the gap stays within its limits [LSL, USL]
 
 Mapping onto a :class:`evotol.core.problem.ToleranceProblem` (SI, m):
 
-* the robot is a :class:`evotol.robots.assembly.LinearStack` ``gap = Σ a_i x_i`` whose limit is the half
+* the robot is the stack's :class:`evotol.robots.assembly.LinearStack` (:meth:`Stack.linear_stack`)
+  ``gap = Σ a_i x_i`` whose limit is the half
   width of the specification ``L = (USL − LSL)/2``;
 * dimension ``i`` keeps the **shape of its drawing zone**: with the drawn half-width ``h_i`` and
   deviations ``l_i <= u_i``, its tolerance is the half-width ``t_i`` and its interval
@@ -27,7 +28,6 @@ from evotol.cost_models.base import CostModel
 from evotol.core.problem import Requirement, Tolerance, ToleranceProblem
 from evotol.errors import ValidationError
 from evotol.measures.stack_model import Stack, StackDimension
-from evotol.robots.assembly import LinearStack
 
 #: name of the fixed source that carries the offset of the limits' centre from the nominal gap
 CENTRE = "limits' centre"
@@ -69,7 +69,6 @@ def stack_problem(stack: Stack, costs: dict, lower: dict, upper: dict, *, measur
     half = 0.5 * (stack.upper_limit - stack.lower_limit)
     a, n, _, h = stack.arrays()
     centre = float(a @ n) - 0.5 * (stack.lower_limit + stack.upper_limit)
-    sens = {d.name: float(ai) for d, ai in zip(stack.dimensions, a)}
     tols = {}
     for d, hi in zip(stack.dimensions, h):
         f = f"dimensions.{d.name}"
@@ -87,9 +86,8 @@ def stack_problem(stack: Stack, costs: dict, lower: dict, upper: dict, *, measur
             raise ValidationError(f"{f}.cost", costs[d.name], "a evotol.cost_models.CostModel")
         tols[d.name] = Tolerance(costs[d.name], float(lower[d.name]), float(upper[d.name]), **shape)
     if centre != 0:
-        sens[CENTRE] = 1.0
         tols[CENTRE] = Tolerance.fixed(half * 1e-12, offset=centre)
-    robot = LinearStack(sens, {stack.gap: half}, name=f"stack '{stack.gap}'")
+    robot = stack.linear_stack(half, extra={CENTRE: 1.0} if centre != 0 else None)
     return ToleranceProblem(robot, tols, Requirement(position=1.0, measure=measure), np.zeros((1, 1)))
 
 

@@ -13,9 +13,12 @@ Figures (all in the stack's length unit; the functions are homogeneous in it):
 
 * nominal gap ``g_0 = Σ a_i n_i``; mean gap ``μ = Σ a_i m_i``;
 * **worst case** (arithmetic): ``μ ± T_wc``, ``T_wc = Σ |a_i| h_i`` -- the exact extremes over
-  the tolerance box (the box's corners);
+  the tolerance box (the box's corners), computed as ``g_0 + Σ min/max(a_i l_i, a_i u_i)``;
 * **RSS** (statistical, every tolerance ``h_i = 3σ_i``): ``μ ± T_rss``,
-  ``T_rss = sqrt(Σ (a_i h_i)²)``;
+  ``T_rss = sqrt(Σ (a_i h_i)²)`` -- both by the one linear-stack model's functions
+  (:func:`evotol.robots.assembly.linear_stack.worst_case_deviation`,
+  :func:`~evotol.robots.assembly.linear_stack.rss_half_width`), which
+  :class:`evotol.robots.assembly.LinearStack` uses too;
 * **modified RSS** (Drake ch. 9, eq. of the "MRSS" model): ``μ ± C_f T_rss`` with the correction
   factor ``C_f = 1 + 0.5 (T_wc − T_rss) / (T_rss (√n − 1))`` (``n`` the number of dimensions;
   ``C_f = 1`` for ``n = 1``, where ``T_wc = T_rss``);
@@ -52,6 +55,7 @@ from evotol.errors import ValidationError, is_integer
 from evotol.measures.stack_model import (DISTRIBUTIONS, SHIFT_MODELS, Stack, StackDimension, StackModel,  # noqa: F401 -- one door
                                          _finite)
 from evotol._runtime.random_state import seed_from
+from evotol.robots.assembly.linear_stack import rss_half_width as linear_rss, worst_case_deviation, zone_extremes
 
 __all__ = ["Stack", "StackDimension", "StackModel", "DISTRIBUTIONS", "SHIFT_MODELS", "worst_case",
            "rss_half_width", "mrss_factor", "gap_moments", "fraction_outside", "check_model", "sample_gap",
@@ -66,9 +70,10 @@ def worst_case(stack: Stack) -> tuple[float, float]:
     tuple of float
         ``(μ − T_wc, μ + T_wc)``, ``T_wc = Σ |a_i| h_i`` (length unit).
     """
-    a, _, m, h = stack.arrays()
-    mu, t = float(a @ m), float(np.abs(a) @ h)
-    return mu - t, mu + t
+    a, n, _, _ = stack.arrays()
+    below, above = worst_case_deviation(a, *stack.deviations())
+    g0 = float(a @ n)
+    return g0 + float(below), g0 + float(above)
 
 
 def rss_half_width(stack: Stack) -> float:
@@ -80,7 +85,7 @@ def rss_half_width(stack: Stack) -> float:
         The RSS half-width (every tolerance ``3σ``).
     """
     a, _, _, h = stack.arrays()
-    return float(np.sqrt(np.sum((a * h) ** 2)))
+    return float(linear_rss(a, h))
 
 
 def mrss_factor(stack: Stack) -> float:
@@ -96,9 +101,9 @@ def mrss_factor(stack: Stack) -> float:
     float
         ``C_f`` (dimensionless); 1 for one dimension.
     """
-    a, _, _, h = stack.arrays()
-    n = len(a)
-    t_wc, t_rss = float(np.abs(a) @ h), rss_half_width(stack)
+    n = len(stack.dimensions)
+    lo, hi = worst_case(stack)
+    t_wc, t_rss = 0.5 * (hi - lo), rss_half_width(stack)
     if n == 1 or t_rss == 0:
         return 1.0
     return float(1.0 + 0.5 * (t_wc - t_rss) / (t_rss * (np.sqrt(n) - 1.0)))
@@ -268,8 +273,7 @@ def contributions(stack: Stack) -> list[dict]:
         total deviation; a one-sided dimension adds nothing to one side).
     """
     a, *_ = stack.arrays()
-    lo = np.array([min(ai * d.lower, ai * d.upper) for ai, d in zip(a, stack.dimensions)])
-    hi = np.array([max(ai * d.lower, ai * d.upper) for ai, d in zip(a, stack.dimensions)])
+    lo, hi = zone_extremes(a, *stack.deviations())
     slo, shi = float(lo.sum()), float(hi.sum())
     return [{"name": d.name, "below": float(l) + 0.0, "above": float(u) + 0.0,
              "below_percent": 100 * float(l) / slo + 0.0 if slo else 0.0,

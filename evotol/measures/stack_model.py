@@ -1,6 +1,9 @@
 """The values a stack analysis works on: a dimension (nominal, signed deviations, direction,
 distribution), the stack (gap name, limits, unit) and the statistical model (capability, mean
-shift). Conventions and equations: :mod:`evotol.measures.stack_analysis`."""
+shift). Conventions and equations: :mod:`evotol.measures.stack_analysis`. A stack is the one
+linear-stack model with drawn zones: :meth:`Stack.linear_stack` gives its
+:class:`evotol.robots.assembly.LinearStack`, and both take their worst case and RSS from
+:mod:`evotol.robots.assembly.linear_stack`."""
 from __future__ import annotations
 
 from collections import Counter
@@ -9,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import ValidationError, is_real
+from evotol.robots.assembly import LinearStack
 
 #: the distributions a dimension can have inside its zone
 DISTRIBUTIONS = ("normal", "uniform", "triangular")
@@ -147,6 +151,50 @@ class Stack:
     def names(self) -> list[str]:
         """Dimension names, in loop order."""
         return [d.name for d in self.dimensions]
+
+    def deviations(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(lower, upper)``: every dimension's signed deviations (length unit).
+
+        Returns
+        -------
+        tuple of ndarray
+            Two arrays of shape (n_dimensions,).
+        """
+        return np.array([x.lower for x in self.dimensions]), np.array([x.upper for x in self.dimensions])
+
+    def linear_stack(self, limit: float | None = None, *, extra: dict | None = None, name: str | None = None) -> LinearStack:
+        """The stack as the one linear-stack model, :class:`evotol.robots.assembly.LinearStack` (a robot
+        an allocation works on): ``gap = Σ a_i x_i`` with the allowed deviation ``limit``.
+
+        Parameters
+        ----------
+        limit : float, optional
+            Allowed deviation of the gap (length unit); default the half-width of the limits,
+            ``(USL − LSL)/2``.
+        extra : dict of str to float, optional
+            Further sources after the dimensions: name -> sensitivity (the allocation's fixed
+            "limits' centre", :mod:`evotol.allocators.stack_allocation`).
+        name : str, optional
+            The robot's name (default ``stack 'GAP'``).
+
+        Returns
+        -------
+        LinearStack
+            One response (the gap), the dimensions' sensitivities; no nominals (the drawing table
+            leaves them blank, as for a stack given by its sensitivities).
+
+        Raises
+        ------
+        evotol.errors.ValidationError
+            No ``limit`` and not both limits of the gap.
+        """
+        if limit is None:
+            if self.lower_limit is None or self.upper_limit is None:
+                raise ValidationError("upper_limit" if self.lower_limit is not None else "lower_limit", None,
+                                      "both limits of the gap (or a limit given to linear_stack)")
+            limit = 0.5 * (self.upper_limit - self.lower_limit)
+        return LinearStack({**{d.name: float(d.sensitivity) for d in self.dimensions}, **(extra or {})}, {self.gap: limit},
+                           name=name or f"stack '{self.gap}'")
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(a, n, m, h)``: sensitivities, nominals, zone centres and half-widths (length unit).

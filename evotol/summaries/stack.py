@@ -106,6 +106,7 @@ def allocation_summary(stack: Stack, problem, results: dict, models: dict, displ
     """
     out = {"measure": problem.requirement.measure, "methods": {}}
     units = DisplayUnits(display["unit"])
+    dims = set(stack.names)         # once: Stack.names builds a list (2.3 s at 5 000 dimensions when asked per name)
     for m, r in results.items():
         costs = problem.source_costs(r.t)
         total = float(costs.sum())
@@ -116,8 +117,8 @@ def allocation_summary(stack: Stack, problem, results: dict, models: dict, displ
             "cost": float(r.cost), "feasible": bool(r.feasible), "status": r.status(), "verdict": r.verdict,
             "normalised_error": float(r.errors.violation[0] + 1),
             "tolerances": {n: float(v) for n, v in zip(problem.names, r.t)       # the allocated (free) half-widths
-                           if n in stack.names and not problem.tolerances[n].is_fixed},
+                           if n in dims and not problem.tolerances[n].is_fixed},
             "cost_share_percent": {n: 100 * float(c) / total if total else 0.0
-                                   for n, c in zip(problem.names, costs) if n in stack.names},
+                                   for n, c in zip(problem.names, costs) if n in dims},
             "stack": fig, "drawing": rounded_design(problem, r.t, units, {display["unit"]: display["precision"]})}
     return out
