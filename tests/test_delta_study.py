@@ -90,3 +90,28 @@ def test_every_number_in_the_json_has_a_unit(quick):
 
     data = quick[1]
     assert data["units"]["keys"] and numbers_without_unit(data, data["units"]) == []
+
+
+def test_centred_design_worst_case_is_the_plain_problems():
+    """The study evaluates a centred design [-t, t] on the symmetric problem (whose support
+    coefficients it already has) instead of on its own interval problem: both must give the same
+    worst case and the same nonlinear check, to the bit, and the worst case is never below 2000
+    random vertices of the box (brute force, the norm is convex)."""
+    from evotol.verification.nonlinear import verify_nonlinear
+
+    robot = DeltaRobot()
+    prob = study.tolerance_problem(robot, cylinder_poses(12, seed=3))
+    t = ds.paper_bounds() * np.random.default_rng(1).uniform(0.2, 1.0, 47)
+    centred, half = study.interval_problem(prob, -t, t)
+    assert centred.shape.plain and prob.shape.plain and np.array_equal(half, t)
+    wc_own = centred.evaluate(half[None], top_only=True).position[0]
+    wc_plain = prob.evaluate(half[None], top_only=True).position[0]
+    assert np.array_equal(wc_own, wc_plain)
+    V = np.where(np.random.default_rng(2).random((2000, 47)) < 0.5, -t, t)
+    sampled = np.linalg.norm(np.einsum("pij,sj->psi", prob.jacobian[:, :3], V), axis=-1).max(axis=1)
+    assert np.all(sampled <= wc_plain * (1 + 1e-9))
+    idx = np.array([0, 5, 11])
+    a = verify_nonlinear(centred.with_poses(idx), half, n_samples=200, seed=0)
+    b = verify_nonlinear(prob.with_poses(idx), half, n_samples=200, seed=0)
+    for field in ("worst_vertex", "mc_max", "mc_q999"):
+        assert np.array_equal(getattr(a, field)["position"], getattr(b, field)["position"])
