@@ -11,7 +11,6 @@ and ``seed`` set the Monte Carlo; ``[requirement] probability`` (default 0.9973)
 """
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 
@@ -171,7 +170,7 @@ def given_tolerances_outcome(study, problem, units: DisplayUnits) -> Outcome:
     Returns
     -------
     evotol.studyfile.kinds.Outcome
-        The summary (:func:`analysis_summary`, with ``study_file`` and ``warnings``) and its page.
+        The summary (:func:`analysis_summary`, with ``warnings``) and its page.
 
     Raises
     ------
@@ -194,7 +193,6 @@ def given_tolerances_outcome(study, problem, units: DisplayUnits) -> Outcome:
     if "analysis" not in done:
         raise KeyboardInterrupt     # the one step stopped: no analysis to write
     summary = analysis_summary(study.name, problem, done["analysis"], seed=seed, units=units, seconds=study.seconds())
-    summary["study_file"] = str(Path(study.path).resolve())
     summary["warnings"] = plausibility.problem_warnings(problem)
     if "methods" in spec:
         summary["notes"].append(f"[methods] {sorted(spec['methods'])} not run: every tolerance is given, so there is "

@@ -126,7 +126,7 @@ def finish(study: Study, outcome: Outcome) -> dict:
         was stopped), ``html`` and ``json``.
     """
     summary = outcome.summary
-    summary.setdefault("study_file", str(Path(study.path).resolve()))
+    summary["study_file"] = str(Path(study.path).resolve())     # every kind's, here only
     summary["interrupted"] = bool(study.log.stopped)
     if study.log.stopped:
         summary["interruption"] = study.log.interruption()

@@ -110,7 +110,7 @@ def process_study(study) -> Outcome:
         elif m != "nsga2":
             results[m] = value
     t0 = study.t0
-    summary = {"name": name, "study_file": str(Path(path).resolve()), "problem": pp.describe(), "seed": seed,
+    summary = {"name": name, "problem": pp.describe(), "seed": seed,
                "results": {m: _result_dict(pp, r) for m, r in results.items()},
                "seconds": time.perf_counter() - t0, "units": units_block(pp.base)}
     summary["units"]["keys"].update(quality_loss=COST + " (expected Taguchi loss)", n_nodes=COUNT, n_convex_solves=COUNT,

@@ -253,7 +253,6 @@ def robot_study(study: Study) -> Outcome:
                         for m, r in results.items()}, ctrl_c, log, label="verify ", say=False)
     summary = study_summary(study.name, problem, results, front, checks, seed=seed, units=units,
                             seconds=study.seconds(), precision=precision)
-    summary["study_file"] = str(path.resolve())
     summary["warnings"] = study_warnings(problem, results.values())   # unit slips (issue 27)
     summary["notes"] = list(problem.model.notes())      # e.g. a redundant arm's posture (issue 23)
     run = StudyRun(problem, results, compared, seed, bool(log.stopped), iso)

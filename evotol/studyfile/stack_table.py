@@ -32,7 +32,6 @@ The figures and their conventions: :mod:`evotol.measures.stack_analysis`; the pa
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 
 import evotol.cost_models
 from evotol._runtime.keyword_checks import check_keywords, check_table_keys, unknown_key_message
@@ -266,7 +265,7 @@ def stack_study(study) -> Outcome:
     Returns
     -------
     evotol.studyfile.kinds.Outcome
-        The summary (with ``study_file`` and ``seconds``) and its page.
+        The summary (with ``seconds``) and its page.
 
     Raises
     ------
@@ -295,5 +294,5 @@ def stack_study(study) -> Outcome:
             study.ctrl_c, study.log)     # the one step loop of every study (evotol/studyfile/steps.py)
         if results:
             summary["allocation"] = allocation_summary(stack, problem, results, models, display, seed=seed)
-    summary.update(study_file=str(Path(study.path).resolve()), seconds=study.seconds())
+    summary["seconds"] = study.seconds()
     return Outcome(summary, render_stack)
