@@ -386,6 +386,9 @@ def allocate_ga(problem: ToleranceProblem, *, pop_size: int = 100, n_gen: int = 
     t0 = time.perf_counter()
     seed = seed_from(rng, seed)
     check_ga_options(operators=operators, pop_size=pop_size, n_gen=n_gen, seed=seed)
+    if refine and budget is None:
+        from evotol.allocators.workspace_refinement import check_refinable
+        check_refinable(problem)        # a calibrated problem: refused before the generations run
     if budget is not None:           # below the cheapest design: no answer (issue 15)
         budget = check_budget(problem, budget)
     measure = problem.requirement.measure

@@ -41,7 +41,7 @@ from evotol.allocators.sensitivity import sensitivity_design
 from evotol.allocators.budget import check_budget
 from evotol.allocators.monotone import allocate_monotone
 from evotol.allocators.stack_dual import StackRows, dual_search, stack_rows
-from evotol.allocators.workspace_refinement import allocate_on_workspace
+from evotol.allocators.workspace_refinement import allocate_on_workspace, check_refinable
 from evotol.measures.constraints import ConstraintRows
 from evotol.measures import feasibility
 from evotol.errors import ConvergenceError, ValidationError
@@ -236,8 +236,9 @@ def check_optimum(problem: ToleranceProblem, *, budget: float | None = None, ref
     Raises
     ------
     evotol.errors.ValidationError
-        ``budget`` or ``refine`` with clearance sources; a measure other than ``worst_case``/``rss``;
-        ``rss`` with asymmetric intervals; a cost model that is not convex on its range.
+        ``budget`` or ``refine`` with clearance sources; ``refine`` on a calibrated problem; a measure
+        other than ``worst_case``/``rss``; ``rss`` with asymmetric intervals; a cost model that is not
+        convex on its range.
     """
     if problem.clearances is not None:      # not convex: the monotone bracket, on the problem's poses
         if budget is not None:
@@ -247,6 +248,8 @@ def check_optimum(problem: ToleranceProblem, *, budget: float | None = None, ref
             raise ValidationError("refine", refine, "false with clearance sources (the optimum bracket minimises cost "
                                   "on the problem's poses; the GA's refine holds a design over the workspace)")
         return
+    if refine:
+        check_refinable(problem)
     if problem.requirement.measure not in ("worst_case", "rss"):
         raise ValidationError("requirement.measure", problem.requirement.measure,
                               "'worst_case' or 'rss' for the exact optimum (mc_quantile and yield have no convex rows: use allocate_ga)")

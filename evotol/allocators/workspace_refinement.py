@@ -87,6 +87,30 @@ def _normalised_search(problem: ToleranceProblem, T: np.ndarray, n_directions: i
     return np.max(np.stack(out), axis=0)
 
 
+#: why a calibrated problem is not refined over the workspace (docs/combinations.md, issue 39)
+REFINE_REASON = ("the calibration's noise allowance, the random sources' share and the linear-range caps are "
+                 "computed at the problem's poses, and rebuilding them at every pose the search adds costs about a "
+                 "second a pose; give denser poses instead")
+
+
+def check_refinable(problem: ToleranceProblem) -> None:
+    """Refuse, before any work, a problem whose requirement share depends on its poses: a calibrated one.
+
+    A calibrated problem (:func:`evotol.calibration.calibrated_problem`) takes the instrument noise, the
+    random sources and the second-order terms off the requirement at its own poses, and caps each source
+    at the linear range found there; a copy at other poses (``at_poses``) keeps them, so a search over
+    new poses would judge them against allowances computed elsewhere (docs/combinations.md, issue 39).
+
+    Raises
+    ------
+    ValidationError
+        ``refine`` on a calibrated problem, one line naming both.
+    """
+    if problem.calibration is not None:
+        raise ValidationError("refine", "a calibrated problem", f"a problem without calibration: {REFINE_REASON} "
+                              "(calibrated_problem(problem.at_poses(denser), plan))")
+
+
 def dense_problem(problem: ToleranceProblem, candidates=None, grid: int | list | None = None) -> ToleranceProblem:
     """The problem on the dense search set: ``candidates`` (array of poses) or a workspace grid.
 
@@ -227,10 +251,12 @@ def refine_poses(problem: ToleranceProblem, allocate, *, candidates=None, grid=N
     Raises
     ------
     ValidationError
-        If ``allocate`` is not callable or ``max_rounds`` is not a positive integer.
+        If ``allocate`` is not callable, ``max_rounds`` is not a positive integer, or the problem is
+        calibrated (:func:`check_refinable`).
     """
     if not callable(allocate):
         raise ValidationError("allocate", allocate, "a function problem -> AllocationResult")
+    check_refinable(problem)
     if not is_integer(max_rounds, 1):
         raise ValidationError("max_rounds", max_rounds, "a positive integer")
     dense = dense if dense is not None else dense_problem(problem, candidates, grid)
@@ -404,6 +430,7 @@ def hold_on_workspace(problem: ToleranceProblem, t, *, candidates=None, grid=Non
     InfeasibleError, ValidationError
         As :func:`scale_into_requirement`.
     """
+    check_refinable(problem)
     dense = dense if dense is not None else dense_problem(problem, candidates, grid)
     t = problem.as_array(t)
     if candidates is not None or not local:

@@ -4,6 +4,7 @@ modules beside this one, put together as a :class:`~evotol.core.problem.Toleranc
 from __future__ import annotations
 
 from evotol.calibration.table import calibrate_study_problem
+from evotol.allocators.workspace_refinement import REFINE_REASON
 from evotol.core import plausibility
 from evotol.core.axis_limits import axis_requirement
 from evotol.core.problem import ToleranceProblem
@@ -13,7 +14,7 @@ from evotol.studyfile.callouts import callout_warnings
 from evotol.studyfile.iso9283 import check_composable as check_iso_composable, random_part
 from evotol.studyfile.joint_poses import drop_unreachable, joint_poses
 from evotol.studyfile.keys import check_study_keys
-from evotol.studyfile.poses import read_poses
+from evotol.studyfile.poses import read_poses, refine_option
 from evotol.studyfile.requirement import read_requirement
 from evotol.studyfile.robot import read_robot
 from evotol.studyfile.sources import read_clearances, read_tolerances
@@ -49,6 +50,9 @@ def load_problem(spec: dict, base_dir=None) -> ToleranceProblem:
     """
     check_study_keys(spec)
     check_iso_composable(spec)              # ISO 9283 with a part it does not compose with: before any work
+    if "calibration" in spec and refine_option(spec) is not False:      # before any work (issue 39)
+        raise ValidationError("poses.refine", spec["poses"]["refine"], "no refine beside [calibration]: "
+                              f"{REFINE_REASON} (a denser [poses] grid)")
     if "processes" in spec:
         raise ValidationError("processes", sorted(spec["processes"]), "no [processes.*] here: a process-selection study "
                               "is read by evotol.studyfile.processes.load_process_problem (evotol run does so)")
