@@ -35,6 +35,7 @@ from evotol.studyfile.problem import load_problem
 from evotol.studyfile.stack_table import stack_study
 from evotol.summaries.drawing import drawing_precision, precision_warnings
 from evotol.studyfile.process_run import process_study
+from evotol.core.memory import check_memory
 from evotol.core.shop import apply_shop
 from evotol.core.plausibility import study_warnings, warn as warn_plausibility
 from evotol.summaries.user_study import study_summary
@@ -219,6 +220,7 @@ def robot_study(study: Study) -> Outcome:
     vmodel = verification_model(spec, problem, vspec)     # an rss requirement: checked on its own model (issue 34)
     if vmodel is not None:
         vspec = {**vspec, "distribution": vmodel}
+    check_memory(problem)           # more poses than the machine's memory holds: said with the estimate (issue 43)
     if any("budget" not in kw for m, kw in methods.items() if m != "nsga2"):
         problem.check_feasible()            # a requirement no design meets: say so before the first method
     results = {}

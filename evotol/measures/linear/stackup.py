@@ -66,6 +66,11 @@ class WorstCase:
     contributions: np.ndarray  # (..., n_poses, n_sources) share of h(u*), mean shift included
 
 
+#: bytes of the (designs, poses, directions) grid and the ascent's temporaries evaluated at once: more designs
+#: than fit are evaluated in blocks of designs (each design's numbers are computed alike; issue 43 item 4)
+DESIGN_BLOCK_BYTES = 64 * 2 ** 20
+
+
 def _stack(blocks: list[np.ndarray]):
     """Concatenate blocks along columns; returns (Bcat (p, 3, K), column -> source index)."""
     Bcat = np.concatenate(blocks, axis=2)
@@ -134,6 +139,8 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
     ``shape``: asymmetric intervals (:class:`IntervalShape`); the maximum is then taken over the
     full sphere of directions, and the ascent is also started from ``n_starts`` − 1 other good
     grid directions (h has more separated local maxima without central symmetry).
+    Many designs are evaluated in blocks of designs whose grid and ascent temporaries fit in
+    :data:`DESIGN_BLOCK_BYTES` (a GA population over thousands of poses; issue 43).
 
     Parameters
     ----------
@@ -165,6 +172,13 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
     else:
         c, D, delta = coefficients[:3]
         const = coefficients[3] if len(coefficients) > 3 else None
+    per_design = 8 * c.shape[0] * max(c.shape[1], 4 * sum(B.shape[2] for B in blocks))     # bytes of its largest temporaries
+    if T.shape[0] > 1 and T.shape[0] * per_design > DESIGN_BLOCK_BYTES:      # designs in blocks: memory bounded (issue 43)
+        step = max(1, DESIGN_BLOCK_BYTES // per_design)
+        coef = (c, D, delta) if const is None else (c, D, delta, const)
+        parts = [worst_case(blocks, T[i:i + step], coefficients=coef, top_only=top_only, shape=shape, n_starts=n_starts)
+                 for i in range(0, T.shape[0], step)]
+        return WorstCase(*(np.concatenate([getattr(r, f) for r in parts]) for f in WorstCase.__dataclass_fields__))
     grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ T.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)  # (n, p, d)
     if const is not None:
         grid = grid + const[None]
