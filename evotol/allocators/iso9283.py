@@ -44,8 +44,8 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
 
     Parameters
     ----------
-    sys_costs : list of evotol.cost_models.base.CostModel
-        Per column of the model its cost model.
+    sys_costs : list of evotol.cost_models.base.CostModel or None
+        Per column of the model its cost model; None for a given (fixed) source, never priced.
     sys_bounds : (2, n_columns) array_like
         Lower and upper bounds of the systematic tolerances (SI); a column not free keeps its lower.
     free : (n_columns,) array_like of bool
@@ -104,10 +104,10 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
         t[var] = np.exp(x)
         return t
 
-    def cost(x):
+    def cost(x):            # a given (fixed) source has no cost model: never priced
         t = full(x)
-        c = sum(float(cm.cost(ti)) for cm, ti in zip(costs, t))
-        g = np.array([float(cm.dcost(ti)) for cm, ti in zip(costs, t)]) * t
+        c = sum(float(cm.cost(ti)) for cm, ti in zip(costs, t) if cm is not None)
+        g = np.array([0.0 if cm is None else float(cm.dcost(ti)) for cm, ti in zip(costs, t)]) * t
         return c, g[var]
 
     def ap_parts(t):

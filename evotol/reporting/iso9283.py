@@ -6,6 +6,8 @@ the allocation (docs/iso9283.md).
 """
 from __future__ import annotations
 
+from html import escape
+
 from evotol.units.display import DisplayUnits
 
 
@@ -52,6 +54,12 @@ def iso9283_section(rep, summary: dict) -> None:
                    for p in iso["poses"]],
                   ["pose"] + [f"AP{a} predicted / simulated" for a in "abc"] + [f"RP{a} predicted / simulated" for a in "abc"],
                   table_id="iso9283-orientation")
+    for fig, v in iso.get("verdict", {}).items():     # a verdict names its model (STYLE.md)
+        unit = "rad" if fig[2:] in ("a", "b", "c") else "m"             # APa, RPb, ...: an angle
+        V = lambda x: escape(u.format(x, unit))                           # noqa: E731
+        rep.text(f"{fig} ≤ {V(v['requirement'])}: the design <b>{v['verdict']}</b> it: {V(v['predicted'])} on the "
+                 f"{escape(v['model'])}; simulated on the nonlinear model ({escape(v['simulated_as'])}): {V(v['simulated'])}"
+                 + ("." if v["simulated_within"] else ", above the requirement."), raw=True)
     for line in iso["notes"]:
         rep.text(line, note=True)
     buys = iso["what_each_source_buys"]

@@ -45,6 +45,7 @@ from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, larges
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import RandomPart
+from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count
 
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6,
@@ -258,8 +259,9 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         A bad key or quantity; a robot that is not a described arm; a cube outside the workspace or
         the joint limits; RP required without any random source; AP below what the random sources
         leave with every systematic tolerance at its lower bound (the noise floor), or RP below the
-        random sources' own at their lower bounds (when allocated) or their catalogue values; a study whose
-        tolerances are all given (its analysis does not write the ISO block yet).
+        random sources' own at their lower bounds (when allocated) or their catalogue values -- except when
+        every tolerance is given and nothing is allocated: the figures are then checked, and the block
+        says whether they meet the requirement; ``allocate`` with every tolerance given and no random source.
     """
     req = spec.get("requirement", {}).get("iso9283")
     table = spec.get("iso9283")
@@ -271,9 +273,6 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     check_table_keys(table.get("simulate", {}), SIM_KEYS, "iso9283.simulate")
     robot = problem.model.described      # with [calibration]: the arm inside the calibrated model
     check_composable(spec)
-    if not problem.free.any():
-        raise ValidationError("iso9283", "every tolerance given", "at least one tolerance to allocate: the ISO block "
-                              "is not yet written by the given-tolerances analysis")
     part = next((m.part for m in problem.error_model.parts() if m.part and m.part != "calibration"), None)
     if part is not None:
         raise ValidationError("iso9283", PART_WORDS[part], "a serial arm without it: the ISO 9283 figures are not yet "
@@ -290,6 +289,9 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         raise ValidationError("requirement.iso9283.RP", req["RP"], "at least one random source in [iso9283.random] "
                               "(RP is what changes from cycle to cycle)")
     allocate = bool(table.get("allocate", False))
+    if allocate and not sources and not problem.free.any():
+        raise ValidationError("iso9283.allocate", True, "a random source in [iso9283.random] or a tolerance to allocate: "
+                              "every systematic tolerance is given and there is no random source")
     if allocate and any(c is None for c in costs):
         i = costs.index(None)
         raise ValidationError(f"iso9283.random.{sources[i].kind}.cost", None, "a cost model to allocate the random sources")
@@ -317,8 +319,8 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
 
 def _check_floor(iso: IsoStudy, problem) -> None:
     """AP/RP below what the fixed parts leave: a one-line error before the methods run."""
-    if iso.AP is None and iso.RP is None:
-        return
+    if (iso.AP is None and iso.RP is None) or not (iso.allocate or problem.free.any()):
+        return          # every tolerance given and nothing allocated: a verdict, not a refusal
     t_rand = iso.lower if iso.allocate else [s.tolerance for s in iso.sources]
     floor = predict(iso.robot, iso.positions, problem.full(problem.lower[problem.free][None])[0], iso.sources, t_rand,
                     iso.yield_, n_samples=20000)
@@ -394,7 +396,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
         t_rand = np.array(info.random.tolerances, float)
     block = {"cube": {"centre": list(iso.cube.centre), "edge": iso.cube.edge},
              "requirement": {"AP": iso.AP, "RP": iso.RP, "yield": iso.yield_},
-             "systematic_from": from_method or "lower bounds"}
+             "systematic_from": from_method or ("lower bounds" if problem.free.any() else "given tolerances")}
     if info is not None:
         block["calibrated_budget"] = calibrated_budget(info)
     if iso.allocate and info is None:
@@ -479,6 +481,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     ap_top = pred["AP_bound"].max() if info is None else max(e["calibrated"]["AP"]["predicted"] for e in poses)
     block["meets"] = {"AP": None if iso.AP is None else bool(ap_top <= iso.AP),
                       "RP": None if iso.RP is None else bool(pred["RP"].max() <= iso.RP)}
+    block["verdict"] = verdicts(iso, pred, sim, None if info is None else ap_top)
     block["simulation"] = {"robots": int(sim_opts["robots"]), "cycles": int(sim_opts["cycles"]), "approaches": list(approaches),
                            "model": "nonlinear (pose_error_at_joints)"}
     block["notes"] = [
