@@ -132,3 +132,30 @@ def test_allocate_with_every_tolerance_given_and_no_random_source_is_refused():
     with pytest.raises(ValidationError) as e:
         read_iso9283(spec, load_problem(spec))
     assert e.value.field == "iso9283.allocate" and "\n" not in str(e.value)
+
+
+def test_random_sources_allocated_beside_given_systematic_tolerances_meet_rp_by_our_own_sampling(references):
+    """allocate = true with every systematic tolerance given: only the random sources move; RP of the allocated
+    lost-motion variations and encoder counts, sampled here through Pinocchio's Jacobian, is within the requirement."""
+    spec = tomllib.loads(study_text(4e-4, 4e-5))
+    spec["iso9283"]["allocate"] = True
+    spec["iso9283"]["simulate"]["robots"] = 5
+    for k in ("backlash", "encoder"):
+        spec["iso9283"]["random"][k]["cost"] = {"model": "reciprocal", "a0": 1.0, "a1": 1.0, "scale": 1e-4}
+    problem = load_problem(spec)
+    block = iso9283_block(read_iso9283(spec, problem), problem, {}, seed=0)
+    assert block["systematic_from"] == "given tolerances (random sources allocated)"
+    assert block["allocation"]["feasible"] and block["allocation"]["active"]["RP"]
+    assert set(block["allocation"]["systematic"].values()) == {T_SYS}
+    tol = {(s["kind"], s["joint"]): s["tolerance"] for s in block["random_sources"]}
+    b = np.array([tol["backlash", j] for j in JOINTS])
+    q = np.array([tol["encoder", j] for j in JOINTS])
+    rng = np.random.default_rng(7)
+    dq = rng.uniform(-0.5, 0.5, (400000, 6)) * 0.1 * b + rng.uniform(-0.5, 0.5, (400000, 6)) * q
+    qs, _ = joints_and_maps(MechanismModel(UR5, sources=JOINTS), [p["position"] for p in block["poses"]])
+    for i, p in enumerate(block["poses"]):
+        J = pinocchio_position_jacobian({j: qs[j][i:i + 1] for j in JOINTS})[:3]
+        e = dq @ J.T
+        l = np.linalg.norm(e - e.mean(axis=0), axis=1)
+        assert l.mean() + 3 * l.std(ddof=1) <= 4e-5 * 1.003
+        assert p["RP"]["predicted"] == pytest.approx(l.mean() + 3 * l.std(ddof=1), rel=5e-3)

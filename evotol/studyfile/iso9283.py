@@ -405,7 +405,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                               problem.free, iso.sources, iso.costs, [iso.lower, iso.upper], iso.AP, iso.RP,
                               x0=np.concatenate([t_sys, t_rand]), seed=seed)
         t_sys, t_rand = al["systematic"], al["random"]
-        block["systematic_from"] = "iso9283 allocation"
+        block["systematic_from"] = "iso9283 allocation" if problem.free.any() else "given tolerances (random sources allocated)"
         block["allocation"] = {
             "cost": al["cost"], "feasible": al["feasible"], "active": al["active"], "message": al["message"],
             "systematic": dict(zip(iso.robot.source_names, t_sys.tolist())),
