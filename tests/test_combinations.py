@@ -243,12 +243,12 @@ def test_iso9283_with_a_part_it_does_not_compose_with_is_refused_before_any_work
     assert "\n" not in str(exc.value)
 
 
-@pytest.mark.parametrize("table, field", [({"calibrate": {"configurations": 40}}, "iso9283.calibrate"),
-                                          ({"allocate": True}, "requirement.iso9283")],
-                         ids=["second-calibration", "iso-requirement-allocated"])
+@pytest.mark.parametrize("table, field", [({"calibrate": {"configurations": 40}}, "iso9283.calibrate")],
+                         ids=["second-calibration"])
 def test_iso9283_with_calibration_refuses_what_it_does_not_compose_before_any_work(table, field, monkeypatch):
-    """[calibration] with [iso9283] calibrate (a second, simulated calibration) or with ISO AP/RP requirements
-    allocated in the calibrated budget (not done): one line naming the field, before the robot is read."""
+    """[calibration] with [iso9283] calibrate (a second, simulated calibration): one line naming the field, before
+    the robot is read. (ISO AP/RP requirements allocated in the calibrated budget now work:
+    tests/test_iso9283_calibrated_budget.py.)"""
     import evotol.studyfile.problem as sp
 
     monkeypatch.setattr(sp, "read_robot", lambda *a, **k: (_ for _ in ()).throw(AssertionError("robot read")))

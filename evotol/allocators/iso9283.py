@@ -28,7 +28,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from evotol.errors import ValidationError
-from evotol.measures.iso9283.budget import joints_and_maps, lost_motion_parts
+from evotol.measures.iso9283.budget import joints_and_maps, lost_motion_parts, rp_unit_errors, rp_with_gradient
 from evotol.measures.iso9283.figures import ap_worst_case, rp_from_errors, worst_direction
 from evotol.measures.linear.directions import directions_for
 from evotol.robots.mechanism.model.random_sources import column_loading, unit_draws
@@ -93,10 +93,7 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
     J = S[:, :3]
     loadings = column_loading(robot, sources)
     C, H = lost_motion_parts(robot, S, sources, loadings)
-    draws = unit_draws(sources, n_samples, np.random.default_rng(seed))
-    E = np.stack([np.einsum("pim,nm->pni", J, d @ G.T) for G, d in zip(loadings, draws)], axis=-1) if K else \
-        np.zeros((len(J), n_samples, 3, 0))                                                            # (p, n, 3, K)
-    E = E - E.mean(axis=1, keepdims=True)
+    E = rp_unit_errors(robot, S, sources, n_samples, seed) if K else np.zeros((len(J), n_samples, 3, 0))   # (p, n, 3, K)
     costs = list(sys_costs) + list(rand_costs)
 
     def full(x):
@@ -123,15 +120,10 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
         return np.array(out), np.array(grads)
 
     def rp_parts(t):
-        tr = t[m:]
-        e = E @ tr                                                           # (p, n, 3)
-        l = np.linalg.norm(e, axis=-1)
-        dl = np.einsum("pni,pnik->pnk", e / np.maximum(l, 1e-300)[..., None], E)
-        lm, sd = l.mean(1), l.std(1, ddof=1)
-        dsd = np.einsum("pn,pnk->pk", l - lm[:, None], dl - dl.mean(1, keepdims=True)) / ((l.shape[1] - 1) * sd[:, None])
+        rp, grad = rp_with_gradient(E, t[m:])
         g = np.zeros((len(J), m + K))
-        g[:, m:] = (dl.mean(1) + 3 * dsd) * tr
-        return lm + 3 * sd, g[:, var]
+        g[:, m:] = grad * t[m:]
+        return rp, g[:, var]
 
     cons = []
     # aim at AP cos δ: the proven bound (grid maximum / cos δ <= attained / cos δ) then meets AP

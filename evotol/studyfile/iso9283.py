@@ -44,7 +44,7 @@ from evotol.measures.iso9283.budget import source_shares
 from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, largest_cube, predict, predict_orientation,
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
-from evotol.calibration.random_share import RandomPart
+from evotol.calibration.random_share import IsoTarget, RandomPart
 from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count
 
@@ -54,6 +54,7 @@ TABLE_KEYS = ("cube", "yield", "simulate", "allocate", "random", "calibrate")
 CALIBRATE_KEYS = ("configurations", "noise", "robots")
 RANDOM_KEYS = ("joints", "tolerance", "bits", "gear_ratio", "variation", "lower", "upper", "cost")
 SIM_KEYS = ("robots", "cycles", "multidirectional")
+REQUIREMENT_KEYS = ("AP", "RP")
 
 
 def quantity(raw, where: str) -> float:
@@ -206,8 +207,24 @@ def random_part(spec: dict, robot) -> RandomPart | None:
     if alloc and any(c is None for c in costs):
         raise ValidationError(f"iso9283.random.{sources[costs.index(None)].kind}.cost", None,
                               "a cost model to allocate the random sources")
+    req = spec.get("requirement", {}).get("iso9283") or {}
+    iso = None
+    if alloc and req:           # ISO AP/RP allocated inside the calibrated budget (issue 44)
+        check_table_keys(req, REQUIREMENT_KEYS, "requirement.iso9283")
+        iso = IsoTarget(tuple(map(tuple, iso_positions(_cube(spec["iso9283"], robot)).tolist())),
+                        *(quantity(req[k], f"requirement.iso9283.{k}") if k in req else None for k in ("AP", "RP")))
     return RandomPart(tuple(sources), tuple(s.tolerance for s in sources), tuple(column_loading(robot, sources)),
-                      *((tuple(costs), tuple(lower), tuple(upper)) if alloc else ()))
+                      *((tuple(costs), tuple(lower), tuple(upper)) if alloc else ()), iso=iso)
+
+
+def _cube(table: dict, robot) -> TestCube:
+    """``[iso9283] cube``, checked, else the largest in the workspace."""
+    c = table.get("cube")
+    if c is None:
+        return largest_cube(robot)
+    check_table_keys(c, ("centre", "edge"), "iso9283.cube")
+    return check_cube(robot, TestCube(tuple(quantity(v, "iso9283.cube.centre") for v in c["centre"]),
+                                      quantity(c["edge"], "iso9283.cube.edge")))
 
 
 def check_composable(spec: dict) -> None:
@@ -232,10 +249,6 @@ def check_composable(spec: dict) -> None:
     if "calibration" in spec and isinstance(table, dict) and table.get("calibrate"):
         raise ValidationError("iso9283.calibrate", table["calibrate"], "no calibrate beside [calibration]: one "
                               "calibration ([calibration] is the plan the tolerances are allocated for)")
-    if "calibration" in spec and isinstance(table, dict) and table.get("allocate") and req.get("iso9283"):
-        raise ValidationError("requirement.iso9283", req["iso9283"], "no ISO 9283 requirement beside [calibration] "
-                              "with allocate = true: the calibrated allocation holds [requirement] position (AP/RP "
-                              "requirements in a calibrated budget are not allocated yet); leave allocate out to check them")
     other = [("callouts" in spec.get("robot", {}), "callouts"),
              ("joints" in spec.get("poses", {}), "joint_space"), ("clearances" in spec, "clearances"),
              (any(isinstance(req.get(c), dict) for c in ("position", "orientation")), "axis_limits")]
@@ -269,7 +282,7 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         return None
     table = table or {}
     check_table_keys(table, TABLE_KEYS, "iso9283")
-    check_table_keys(req or {}, ("AP", "RP"), "requirement.iso9283")
+    check_table_keys(req or {}, REQUIREMENT_KEYS, "requirement.iso9283")
     check_table_keys(table.get("simulate", {}), SIM_KEYS, "iso9283.simulate")
     robot = problem.model.described      # with [calibration]: the arm inside the calibrated model
     check_composable(spec)
@@ -295,13 +308,7 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     if allocate and any(c is None for c in costs):
         i = costs.index(None)
         raise ValidationError(f"iso9283.random.{sources[i].kind}.cost", None, "a cost model to allocate the random sources")
-    c = table.get("cube")
-    if c is None:
-        cube = largest_cube(robot)
-    else:
-        check_table_keys(c, ("centre", "edge"), "iso9283.cube")
-        cube = check_cube(robot, TestCube(tuple(quantity(v, "iso9283.cube.centre") for v in c["centre"]),
-                                          quantity(c["edge"], "iso9283.cube.edge")))
+    cube = _cube(table, robot)
     sim = {"robots": 200, "cycles": 30, "multidirectional": any(s.kind == "backlash" for s in sources),
            **table.get("simulate", {})}
     cal = table.get("calibrate")
@@ -324,7 +331,8 @@ def _check_floor(iso: IsoStudy, problem) -> None:
     t_rand = iso.lower if iso.allocate else [s.tolerance for s in iso.sources]
     floor = predict(iso.robot, iso.positions, problem.full(problem.lower[problem.free][None])[0], iso.sources, t_rand,
                     iso.yield_, n_samples=20000)
-    if iso.AP is not None and iso.AP < floor["AP"].max():
+    # calibrated: the allocation checks the calibrated AP at the random sources' lower bounds itself
+    if iso.AP is not None and problem.calibration is None and iso.AP < floor["AP"].max():
         raise ValidationError("requirement.iso9283.AP", iso.AP, f"more than {floor['AP'].max():.3g} m, the AP that the "
                               "random sources (lost motion) leave with every tolerance at its lower bound (the noise floor)")
     if iso.RP is not None and iso.RP < floor["RP"].max():

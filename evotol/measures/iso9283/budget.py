@@ -117,6 +117,52 @@ def lost_motion_parts(robot, S, sources, loadings) -> tuple[np.ndarray, np.ndarr
     return C, H
 
 
+def rp_unit_errors(robot, S, sources, n_samples: int, seed: int = 0) -> np.ndarray:
+    """Per random source, the first-order position errors of ``n_samples`` cycle draws at unit tolerance,
+    centred on their mean: the fixed draws (common random numbers) on which RP is allocated.
+
+    Parameters
+    ----------
+    n_samples : int
+        Cycle draws.
+    seed : int
+        Seed of the draws.
+
+    Returns
+    -------
+    (p, n_samples, 3, n_random) ndarray
+        m per unit tolerance.
+    """
+    J = S[:, :3]
+    draws = unit_draws(sources, n_samples, np.random.default_rng(seed))
+    E = np.stack([np.einsum("pim,nm->pni", J, d @ G.T) for G, d in zip(column_loading(robot, sources), draws)], axis=-1)
+    return E - E.mean(axis=1, keepdims=True)
+
+
+def rp_with_gradient(E, t) -> tuple[np.ndarray, np.ndarray]:
+    """RP ``= E l + 3 std l`` (the mean over the draws, ``std`` with ``n − 1``) of the errors ``E t`` at each
+    pose, and its gradient with respect to the tolerances (smooth on fixed draws).
+
+    Parameters
+    ----------
+    E : (p, n, 3, n_random) ndarray
+        :func:`rp_unit_errors`.
+
+    Returns
+    -------
+    rp : (p,) ndarray
+        m.
+    grad : (p, n_random) ndarray
+        m per unit tolerance.
+    """
+    e = E @ t                                                            # (p, n, 3)
+    l = np.linalg.norm(e, axis=-1)
+    dl = np.einsum("pni,pnik->pnk", e / np.maximum(l, 1e-300)[..., None], E)
+    lm, sd = l.mean(1), l.std(1, ddof=1)
+    dsd = np.einsum("pn,pnk->pk", l - lm[:, None], dl - dl.mean(1, keepdims=True)) / ((l.shape[1] - 1) * sd[:, None])
+    return lm + 3 * sd, dl.mean(1) + 3 * dsd
+
+
 def source_shares(robot, positions, systematic, sources, random_t=None) -> dict:
     """What each source takes of AP and of RP at the pose where each is largest (first order).
 
