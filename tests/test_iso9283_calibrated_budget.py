@@ -150,3 +150,11 @@ def test_the_study_block_says_what_is_certified_and_meets(problem):
     assert v["RP"]["meets"] is True
     assert max(p["calibrated"]["AP"]["predicted"] for p in block["poses"]) <= AP
     assert "proven bound" in block["calibrated_budget"]["random_allocation"]["iso"]["proven"]
+    from evotol.reporting.html import Report
+    from evotol.reporting.iso9283 import iso9283_section
+    from evotol.units.display import DisplayUnits
+    rep = Report("t", "s")
+    iso9283_section(rep, {"iso9283": block, "display_units": DisplayUnits().to_dict()})
+    page = rep.render()
+    assert "allocated to the ISO requirement after calibration too (binding: AP, RP)" in page
+    assert "<b>meets</b>" in page

@@ -90,7 +90,10 @@ def iso9283_section(rep, summary: dict) -> None:
                     f"{L(b['random_identification'])} of the fit's quantile (noise alone {L(b['noise_only'])}) of the "
                     f"requirement {L(b['requirement'])}")
                  + ("." if not al else f"; allocated, they cost {al['cost']:.4g} and the requirement "
-                    + ("binds." if al["active"] else "does not bind.")))
+                    + ("binds." if al["active"] else "does not bind."))
+                 + ("" if not (al and al.get("iso")) else
+                    " They are allocated to the ISO requirement after calibration too (binding: "
+                    + (", ".join(k for k, v in al["iso"]["active"].items() if v) or "none") + "). " + al["iso"]["proven"] + "."))
         rep.table([[p["name"], L(p["AP"]["predicted"]), L(p["calibrated"]["AP"]["predicted"]),
                     L(p["calibrated"]["AP"]["systematic_bound"]), L(p["calibrated"]["AP"]["noise_quantile"]),
                     L(p["calibrated"]["RP"]["predicted"])] for p in iso["poses"]],
