@@ -54,7 +54,9 @@ TABLE_KEYS = ("cube", "yield", "simulate", "allocate", "random", "calibrate")
 CALIBRATE_KEYS = ("configurations", "noise", "robots")
 RANDOM_KEYS = ("joints", "tolerance", "bits", "gear_ratio", "variation", "lower", "upper", "cost")
 SIM_KEYS = ("robots", "cycles", "multidirectional")
-REQUIREMENT_KEYS = ("AP", "RP")
+#: ISO 9283 figures a requirement may name: positional AP, RP (m) and orientational AP_a.. RP_c (rad, §7.2)
+REQUIREMENT_KEYS = ("AP", "RP", "APa", "APb", "APc", "RPa", "RPb", "RPc")
+ORIENTATION_KEYS = REQUIREMENT_KEYS[2:]
 
 
 def quantity(raw, where: str) -> float:
@@ -117,6 +119,8 @@ class IsoStudy:
         Allocate the random sources with the systematic ones.
     calibrate : dict or None
         ``configurations``, ``noise`` (m), ``robots`` of a simulated calibration; None: none.
+    orientation : dict
+        Required orientation figures ``APa`` .. ``RPc`` (rad), the ones the file names.
     """
 
     robot: MechanismModel
@@ -131,6 +135,7 @@ class IsoStudy:
     simulate: dict = field(default_factory=dict)
     allocate: bool = False
     calibrate: dict | None = None
+    orientation: dict = field(default_factory=dict)
 
     @property
     def positions(self) -> np.ndarray:
@@ -249,6 +254,10 @@ def check_composable(spec: dict) -> None:
     if "calibration" in spec and isinstance(table, dict) and table.get("calibrate"):
         raise ValidationError("iso9283.calibrate", table["calibrate"], "no calibrate beside [calibration]: one "
                               "calibration ([calibration] is the plan the tolerances are allocated for)")
+    ori = [k for k in ORIENTATION_KEYS if k in (req.get("iso9283") or {})]
+    if "calibration" in spec and ori:
+        raise ValidationError(f"requirement.iso9283.{ori[0]}", req["iso9283"][ori[0]], "no orientation figure beside "
+                              "[calibration]: the calibrated orientation figures are not predicted yet (AP, RP are)")
     other = [("callouts" in spec.get("robot", {}), "callouts"),
              ("joints" in spec.get("poses", {}), "joint_space"), ("clearances" in spec, "clearances"),
              (any(isinstance(req.get(c), dict) for c in ("position", "orientation")), "axis_limits")]
@@ -294,12 +303,13 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         raise ValidationError("iso9283", type(robot).__name__, "a serial arm from a mechanism description")
     ap = quantity(req["AP"], "requirement.iso9283.AP") if req and "AP" in req else None
     rp = quantity(req["RP"], "requirement.iso9283.RP") if req and "RP" in req else None
+    orientation = {k: quantity(req[k], f"requirement.iso9283.{k}") for k in ORIENTATION_KEYS if req and k in req}
     y = table.get("yield")
     if y is not None and not 0 < y < 1:
         raise ValidationError("iso9283.yield", y, "a share in (0, 1); leave it out for the worst case")
     sources, costs, lower, upper = _random_sources(table.get("random", {}), robot)
-    if rp is not None and not sources:
-        raise ValidationError("requirement.iso9283.RP", req["RP"], "at least one random source in [iso9283.random] "
+    for k in [k for k in ("RP", "RPa", "RPb", "RPc") if req and k in req and not sources][:1]:
+        raise ValidationError(f"requirement.iso9283.{k}", req[k], "at least one random source in [iso9283.random] "
                               "(RP is what changes from cycle to cycle)")
     allocate = bool(table.get("allocate", False))
     if allocate and not sources and not problem.free.any():
@@ -319,14 +329,14 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         if cal["configurations"] * 3 < robot.n_columns or cal["noise"] < 0 or cal["robots"] < 1:
             raise ValidationError("iso9283.calibrate", cal, f"at least {-(-robot.n_columns // 3)} configurations, "
                                   "a noise >= 0 and at least 1 robot")
-    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal)
+    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation)
     _check_floor(iso, problem)
     return iso
 
 
 def _check_floor(iso: IsoStudy, problem) -> None:
     """AP/RP below what the fixed parts leave: a one-line error before the methods run."""
-    if (iso.AP is None and iso.RP is None) or not (iso.allocate or problem.free.any()):
+    if (iso.AP is None and iso.RP is None and not iso.orientation) or not (iso.allocate or problem.free.any()):
         return          # every tolerance given and nothing allocated: a verdict, not a refusal
     t_rand = iso.lower if iso.allocate else [s.tolerance for s in iso.sources]
     floor = predict(iso.robot, iso.positions, problem.full(problem.lower[problem.free][None])[0], iso.sources, t_rand,
@@ -335,6 +345,13 @@ def _check_floor(iso: IsoStudy, problem) -> None:
     if iso.AP is not None and problem.calibration is None and iso.AP < floor["AP"].max():
         raise ValidationError("requirement.iso9283.AP", iso.AP, f"more than {floor['AP'].max():.3g} m, the AP that the "
                               "random sources (lost motion) leave with every tolerance at its lower bound (the noise floor)")
+    fo = predict_orientation(iso.robot, iso.positions, problem.full(problem.lower[problem.free][None])[0], iso.sources,
+                             t_rand) if iso.orientation else None
+    for k, v in iso.orientation.items():
+        lowest = fo[k[:2]][:, "abc".index(k[2])].max()
+        if v < lowest:
+            raise ValidationError(f"requirement.iso9283.{k}", v, f"more than {lowest:.3g} rad, the {k} of every tolerance at "
+                                  "its lower bound and the random sources at " + ("their lower bounds" if iso.allocate else "their catalogue values"))
     if iso.RP is not None and iso.RP < floor["RP"].max():
         raise ValidationError("requirement.iso9283.RP", iso.RP, f"more than {floor['RP'].max():.3g} m, the RP of the "
                               "random sources at " + ("their lower bounds" if iso.allocate else "their catalogue values"))
@@ -403,7 +420,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     if info is not None and info.random is not None:
         t_rand = np.array(info.random.tolerances, float)
     block = {"cube": {"centre": list(iso.cube.centre), "edge": iso.cube.edge},
-             "requirement": {"AP": iso.AP, "RP": iso.RP, "yield": iso.yield_},
+             "requirement": {"AP": iso.AP, "RP": iso.RP, "yield": iso.yield_, **iso.orientation},
              "systematic_from": from_method or ("lower bounds" if problem.free.any() else "given tolerances")}
     if info is not None:
         block["calibrated_budget"] = calibrated_budget(info)
@@ -411,7 +428,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
         tols = problem.tolerances
         al = allocate_iso9283(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names], [problem.lower, problem.upper],
                               problem.free, iso.sources, iso.costs, [iso.lower, iso.upper], iso.AP, iso.RP,
-                              x0=np.concatenate([t_sys, t_rand]), seed=seed)
+                              x0=np.concatenate([t_sys, t_rand]), seed=seed, orientation=iso.orientation)
         t_sys, t_rand = al["systematic"], al["random"]
         block["systematic_from"] = "iso9283 allocation" if problem.free.any() else "given tolerances (random sources allocated)"
         block["allocation"] = {
@@ -419,9 +436,12 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
             "systematic": dict(zip(iso.robot.source_names, t_sys.tolist())),
             "RP_sampled": al["RP"].tolist(), "RP_fresh_draws": al["RP_fresh"].tolist(),
             "RP_convex_bound": al["RP_convex_bound"].tolist(), "AP_bound": al["AP_bound"].tolist(),
+            **({"orientation": al["orientation"]} if "orientation" in al else {}),
             "proven": "AP: the worst case over the tolerance box is convex in the tolerances; its proven bound "
                       "(grid / cos δ) meets the requirement. RP: sampled on fixed draws (not convex in general), "
-                      "re-estimated on fresh draws; E l + 3 sqrt(E l²) is a convex upper bound."}
+                      "re-estimated on fresh draws; E l + 3 sqrt(E l²) is a convex upper bound."
+                      + (" Orientation (APa..RPc): exact first-order worst case and 3 sigma, both convex: certified."
+                         if iso.orientation else "")}
     block["random_sources"] = [{"name": s.name, "kind": s.kind, "joint": s.joint, "unit": s.unit, "tolerance": float(t),
                                 "variation": s.variation if s.kind == "backlash" else None,
                                 "cost": None if c is None else float(c.cost(t))}
@@ -434,7 +454,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                                                          n_samples=50000, seed=seed)
     sim_opts = iso.simulate
     user_req = problem.requirement if problem.calibration is None else problem.calibration.requirement
-    orient = None if user_req.orientation is None else predict_orientation(iso.robot, P, t_sys, iso.sources, t_rand)
+    orient = None if user_req.orientation is None and not iso.orientation else \
+        predict_orientation(iso.robot, P, t_sys, iso.sources, t_rand)
     approaches = ("-z", "+x", "+y") if sim_opts["multidirectional"] else ("-z",)
     sim = simulate(iso.robot, P, t_sys, iso.sources, t_rand, n_robots=int(sim_opts["robots"]),
                    n_cycles=int(sim_opts["cycles"]), approaches=approaches, seed=seed)
@@ -489,7 +510,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     ap_top = pred["AP_bound"].max() if info is None else max(e["calibrated"]["AP"]["predicted"] for e in poses)
     block["meets"] = {"AP": None if iso.AP is None else bool(ap_top <= iso.AP),
                       "RP": None if iso.RP is None else bool(pred["RP"].max() <= iso.RP)}
-    block["verdict"] = verdicts(iso, pred, sim, None if info is None else ap_top)
+    block["verdict"] = verdicts(iso, pred, sim, None if info is None else ap_top, orient)
     block["simulation"] = {"robots": int(sim_opts["robots"]), "cycles": int(sim_opts["cycles"]), "approaches": list(approaches),
                            "model": "nonlinear (pose_error_at_joints)"}
     block["notes"] = [

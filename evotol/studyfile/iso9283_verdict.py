@@ -26,7 +26,7 @@ def _verdict(req, value, attained, model, simulated, simulated_as) -> dict:
             "simulated_within": bool(simulated <= req)}
 
 
-def verdicts(iso, pred: dict, sim: dict, calibrated_ap=None) -> dict:
+def verdicts(iso, pred: dict, sim: dict, calibrated_ap=None, orient=None) -> dict:
     """Per required figure, whether the design meets it and on which model (a verdict names its model).
 
     Parameters
@@ -37,11 +37,13 @@ def verdicts(iso, pred: dict, sim: dict, calibrated_ap=None) -> dict:
         :func:`evotol.measures.iso9283.simulate` of the same design.
     calibrated_ap : float or None
         The largest predicted AP after the study's calibration (m); None: uncalibrated.
+    orient : dict or None
+        :func:`evotol.measures.iso9283.predict_orientation` of the design, for ``iso.orientation``.
 
     Returns
     -------
     dict
-        ``AP`` and/or ``RP``: ``requirement``, ``predicted`` (the value the verdict compares, largest over
+        Per required figure (``AP``, ``RP``, and any of ``APa`` .. ``RPc``, rad): ``requirement``, ``predicted`` (the value the verdict compares, largest over
         the poses, m), ``attained``, ``meets`` (True, False, or None when a requirement lies between the
         attained worst case and its proven bound), ``verdict``, ``model``, ``simulated`` (the nonlinear
         test's largest over the poses) and ``simulated_within`` (a sample: evidence, not proof).
@@ -64,4 +66,11 @@ def verdicts(iso, pred: dict, sim: dict, calibrated_ap=None) -> dict:
     if iso.RP is not None:
         out["RP"] = _verdict(iso.RP, pred["RP"].max(), pred["RP"].max(), "first order, E l + 3 std l of the linearised "
                              "random sources, sampled", float(sim["RP"].mean(axis=0).max()), "the mean RP of the simulated tests")
+    for k, lim in getattr(iso, "orientation", {}).items():     # APa .. RPc (rad): exact first order
+        a = "abc".index(k[2])
+        v = float(orient[k[:2]][:, a].max())
+        simulated = np.abs(sim["AP_abc"][..., a]).max() if k[:2] == "AP" else sim["RP_abc"][..., a].mean(axis=0).max()
+        out[k] = _verdict(lim, v, v, "first order, exact: the worst case of one linear function over the tolerance box"
+                          if k[:2] == "AP" else "first order, exact: 3 sigma of the linearised random sources", float(simulated),
+                          "the largest over the simulated robots" if k[:2] == "AP" else "the mean 3 S of the simulated tests")
     return out

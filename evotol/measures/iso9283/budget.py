@@ -267,9 +267,25 @@ def predict_orientation(robot, positions, systematic, sources, random_t=None) ->
         (np.zeros((len(S), S.shape[2])), np.zeros((len(S), S.shape[2])))
     h = np.asarray(systematic, float)[None] + np.abs(lm) / 2 + np.abs(free)                  # (p, m)
     ap = np.abs(np.einsum("pam,pm->pa", R, lm / 2)) + np.einsum("pam,pm->pa", np.abs(R), h)
-    var = sum((tk * tk * (np.einsum("pam,mj->paj", R, G) ** 2 @ v) for G, tk, v in
-               zip(loadings, t, _unit_variances(sources))), np.zeros_like(ap))
+    var = orientation_variance_weights(R, loadings, sources) @ (t * t) if sources else np.zeros_like(ap)
     return {"AP": ap, "RP": 3 * np.sqrt(var)}
+
+
+def orientation_variance_weights(R, loadings, sources) -> np.ndarray:
+    """Variance of each orientation angle per unit squared tolerance of each random source, first order:
+    ``w_pak = Σ_j (r_pa G_k)_j² var_kj`` so that ``S_a² = Σ_k τ_k² w_pak`` (ISO 9283 §7.2; RP_a = 3 S_a).
+
+    Parameters
+    ----------
+    R : (p, 3, n_columns) ndarray
+        Orientation rows of the first-order map (rad per m or rad).
+
+    Returns
+    -------
+    (p, 3, n_random) ndarray
+        rad² per unit².
+    """
+    return np.stack([np.einsum("pam,mj->paj", R, G) ** 2 @ v for G, v in zip(loadings, _unit_variances(sources))], axis=-1)
 
 
 def simulate(robot, positions, systematic, sources, random_t=None, n_robots=200, n_cycles=30,
