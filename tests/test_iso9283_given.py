@@ -159,3 +159,19 @@ def test_random_sources_allocated_beside_given_systematic_tolerances_meet_rp_by_
         l = np.linalg.norm(e - e.mean(axis=0), axis=1)
         assert l.mean() + 3 * l.std(ddof=1) <= 4e-5 * 1.003
         assert p["RP"]["predicted"] == pytest.approx(l.mean() + 3 * l.std(ddof=1), rel=5e-3)
+
+
+def test_joint_configurations_as_the_requirement_poses_leave_the_iso_poses_to_the_cube(references, tmp_path):
+    """[poses] joints beside ISO 9283 (issue 44 item 4): the requirement is checked at the listed joint
+    configurations, the ISO figures at the test cube's poses -- the same enumerated worst case and own-sampled
+    RP as the task-pose study, and the analysis at the configurations themselves."""
+    ap, rp = references
+    spec = tomllib.loads(study_text(1.01 * ap.max(), 1.01 * rp.max()))
+    spec["poses"] = {"joints": [[0.0, -1.0, 1.5, -2.0, -1.5, 0.3], [0.6, -1.4, 1.9, -1.8, -1.6, -0.4]]}
+    problem = load_problem(spec)
+    assert problem.model.part_of("joint_space") is not None and len(problem.poses) == 2
+    block = iso9283_block(read_iso9283(spec, problem), problem, {}, seed=0)
+    for p, a, r in zip(block["poses"], ap, rp):
+        assert p["AP"]["predicted"] == pytest.approx(a, rel=1e-9)
+        assert p["RP"]["predicted"] == pytest.approx(r, rel=5e-3)
+    assert block["verdict"]["AP"]["meets"] is True and block["verdict"]["RP"]["meets"] is True

@@ -243,9 +243,9 @@ def check_composable(spec: dict) -> None:
     Raises
     ------
     evotol.errors.ValidationError
-        One line naming ``iso9283`` and the other part: ``[[robot.callouts]]``, ``[poses] joints`` (the
-        ISO poses are the test cube's), ``[clearances]``, a requirement per axis; with ``[calibration]``,
-        ``[iso9283] calibrate`` (a second calibration).
+        One line naming ``iso9283`` and the other part: ``[[robot.callouts]]``, ``[clearances]``, a
+        requirement per axis; with ``[calibration]``, ``[iso9283] calibrate`` (a second calibration) or an
+        orientation figure. (``[poses] joints`` composes: the ISO poses are the test cube's.)
     """
     req = spec.get("requirement", {})
     if "iso9283" not in spec and "iso9283" not in req:
@@ -259,7 +259,7 @@ def check_composable(spec: dict) -> None:
         raise ValidationError(f"requirement.iso9283.{ori[0]}", req["iso9283"][ori[0]], "no orientation figure beside "
                               "[calibration]: the calibrated orientation figures are not predicted yet (AP, RP are)")
     other = [("callouts" in spec.get("robot", {}), "callouts"),
-             ("joints" in spec.get("poses", {}), "joint_space"), ("clearances" in spec, "clearances"),
+             ("clearances" in spec, "clearances"),
              (any(isinstance(req.get(c), dict) for c in ("position", "orientation")), "axis_limits")]
     for present, part in other:
         if present:
@@ -295,7 +295,8 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     check_table_keys(table.get("simulate", {}), SIM_KEYS, "iso9283.simulate")
     robot = problem.model.described      # with [calibration]: the arm inside the calibrated model
     check_composable(spec)
-    part = next((m.part for m in problem.error_model.parts() if m.part and m.part != "calibration"), None)
+    # [poses] joints composes: the ISO poses are the test cube's, solved on the described arm (issue 44)
+    part = next((m.part for m in problem.error_model.parts() if m.part and m.part not in ("calibration", "joint_space")), None)
     if part is not None:
         raise ValidationError("iso9283", PART_WORDS[part], "a serial arm without it: the ISO 9283 figures are not yet "
                               "composed with it (docs/combinations.md)")
