@@ -158,3 +158,25 @@ def test_the_study_block_says_what_is_certified_and_meets(problem):
     page = rep.render()
     assert "allocated to the ISO requirement after calibration too (binding: AP, RP)" in page
     assert "<b>meets</b>" in page
+
+
+def test_evotol_run_states_the_iso_allocation_after_calibration(tmp_path, capsys):
+    """The whole path (evotol run, 2x2x2 grid, the optimum only): the JSON's calibrated AP and RP meet the ISO
+    requirement at every pose, the verdicts name the calibrated model, and the terminal says what binds."""
+    import json
+
+    from evotol.cli import main
+
+    text = STUDY.read_text().replace("grid = [3, 3, 3]", "grid = [2, 2, 2]").replace("simulate = 200 ", "simulate = 20 ")
+    text = text.replace("sensitivity = {}\n", "").replace("ga = { pop_size = 80, n_gen = 150 }\n", "")
+    text = text.replace("n_samples = 300", "n_samples = 30").replace(
+        'measure = "worst_case"\n', 'measure = "worst_case"\niso9283 = { AP = "0.3 mm", RP = "0.05 mm" }\n', 1)
+    text = text.replace("allocate = true ", "allocate = true\nsimulate = { robots = 10, cycles = 30, multidirectional = false }\n#")
+    (tmp_path / "s.toml").write_text(text)
+    main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    block = json.loads((tmp_path / "ur5_calibrated.json").read_text())["iso9283"]
+    for p in block["poses"]:
+        assert p["calibrated"]["AP"]["predicted"] <= AP and p["RP"]["predicted"] <= RP
+    assert block["verdict"]["AP"]["meets"] and "calibration" in block["verdict"]["AP"]["model"]
+    assert "allocated to AP <= 0.3000 mm and RP <= 0.05000 mm there too; binding: AP, RP" in out
