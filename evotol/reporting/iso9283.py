@@ -57,9 +57,11 @@ def iso9283_section(rep, summary: dict) -> None:
     for fig, v in iso.get("verdict", {}).items():     # a verdict names its model (STYLE.md)
         unit = "rad" if fig[2:] in ("a", "b", "c") else "m"             # APa, RPb, ...: an angle
         V = lambda x: escape(u.format(x, unit))                           # noqa: E731
+        sim = (f"simulated on the nonlinear model ({escape(v['simulated_as'])}): {V(v['simulated'])}"
+               + ("." if v["simulated_within"] else ", above the requirement.")) if v["simulated"] is not None else \
+            escape(v["simulated_as"]) + "."
         rep.text(f"{fig} ≤ {V(v['requirement'])}: the design <b>{v['verdict']}</b> it: {V(v['predicted'])} on the "
-                 f"{escape(v['model'])}; simulated on the nonlinear model ({escape(v['simulated_as'])}): {V(v['simulated'])}"
-                 + ("." if v["simulated_within"] else ", above the requirement."), raw=True)
+                 f"{escape(v['model'])}; {sim}", raw=True)
     for line in iso["notes"]:
         rep.text(line, note=True)
     buys = iso["what_each_source_buys"]

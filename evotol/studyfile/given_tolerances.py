@@ -158,7 +158,7 @@ def analysis_lines(summary: dict):
     for fig, v in summary.get("iso9283", {}).get("verdict", {}).items():     # ISO 9283: the verdict and its model
         U = lambda x: u.format(x, "rad" if fig[2:] in ("a", "b", "c") else "m")    # noqa: E731
         yield (f"  ISO 9283 {fig} <= {U(v['requirement'])}: {v['verdict']} ({U(v['predicted'])}, {v['model']}; "
-               f"simulated {U(v['simulated'])})")
+               + (f"simulated {U(v['simulated'])})" if v["simulated"] is not None else f"{v['simulated_as']})"))
     for line in summary.get("notes", []):
         yield (f"  note: {line}")
 

@@ -22,8 +22,8 @@ def _verdict(req, value, attained, model, simulated, simulated_as) -> dict:
     meets = True if value <= req else (False if attained > req else None)
     return {"requirement": req, "predicted": float(value), "attained": float(attained), "meets": meets,
             "verdict": {True: "meets", False: "does not meet", None: "undecided (between attained and proven bound)"}[meets],
-            "model": model, "simulated": float(simulated), "simulated_as": simulated_as,
-            "simulated_within": bool(simulated <= req)}
+            "model": model, "simulated": None if simulated is None else float(simulated), "simulated_as": simulated_as,
+            "simulated_within": None if simulated is None else bool(simulated <= req)}
 
 
 def verdicts(iso, pred: dict, sim: dict, calibrated_ap=None, orient=None) -> dict:
@@ -43,10 +43,12 @@ def verdicts(iso, pred: dict, sim: dict, calibrated_ap=None, orient=None) -> dic
     Returns
     -------
     dict
-        Per required figure (``AP``, ``RP``, and any of ``APa`` .. ``RPc``, rad): ``requirement``, ``predicted`` (the value the verdict compares, largest over
-        the poses, m), ``attained``, ``meets`` (True, False, or None when a requirement lies between the
-        attained worst case and its proven bound), ``verdict``, ``model``, ``simulated`` (the nonlinear
-        test's largest over the poses) and ``simulated_within`` (a sample: evidence, not proof).
+        Per required figure (``AP``, ``RP``, and any of ``APa`` .. ``RPc`` in rad): ``requirement``,
+        ``predicted`` (the value the verdict compares, largest over the poses, m), ``attained``, ``meets``
+        (True, False, or None when a requirement lies between the attained worst case and its proven bound),
+        ``verdict``, ``model``, ``simulated`` (the nonlinear test's largest over the poses; None for the
+        calibrated AP, which this test does not calibrate) and ``simulated_within`` (a sample: evidence, not
+        proof).
     """
     out = {}
     if iso.AP is not None:
@@ -55,8 +57,8 @@ def verdicts(iso, pred: dict, sim: dict, calibrated_ap=None, orient=None) -> dic
         as_ = "the largest AP over the simulated robots" if y is None else f"the simulated robots' AP quantile at {y:g}"
         if calibrated_ap is not None:
             out["AP"] = _verdict(iso.AP, calibrated_ap, calibrated_ap, "first order after the study's calibration: "
-                                 "systematic residual and lost motion (proven bound) plus the fit error's quantile", sim_ap,
-                                 as_ + ", uncalibrated")
+                                 "systematic residual and lost motion (proven bound) plus the fit error's quantile", None,
+                                 "not simulated after calibration here: the calibration section's simulated calibration")
         elif y is None:
             out["AP"] = _verdict(iso.AP, pred["AP_bound"].max(), pred["AP"].max(), "first-order worst case over the "
                                  "tolerance box: attained by explicit errors, proven bound grid / cos δ", sim_ap, as_)
