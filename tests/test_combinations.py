@@ -227,12 +227,11 @@ def test_refused_pairs_name_both_capabilities_before_any_work(caps, other, monke
 ISO = {"AP": "0.5 mm", "RP": "0.05 mm"}
 
 
-@pytest.mark.parametrize("cap, other", [("joints", r"\[poses\] joints"), ("callouts", r"\[\[robot\.callouts\]\]"),
-                                        ("per-axis", "requirement per axis")])
+@pytest.mark.parametrize("cap, other", [("callouts", r"\[\[robot\.callouts\]\]"), ("per-axis", "requirement per axis")])
 def test_iso9283_with_a_part_it_does_not_compose_with_is_refused_before_any_work(cap, other, monkeypatch):
-    """[requirement] iso9283 beside joint configurations, callouts or per-axis limits: one line
-    naming both, before the robot is even read (the spy fails on any description read). [calibration]
-    composes (tests/test_calibration_random.py) but for the two cases below."""
+    """[requirement] iso9283 beside callouts or per-axis limits: one line naming both, before the robot is even
+    read (the spy fails on any description read). [calibration] composes (tests/test_calibration_random.py) but
+    for the case below; joint configurations compose (tests/test_iso9283_given.py)."""
     import evotol.studyfile.problem as sp
 
     monkeypatch.setattr(sp, "read_robot", lambda *a, **k: (_ for _ in ()).throw(AssertionError("robot read")))
@@ -243,12 +242,12 @@ def test_iso9283_with_a_part_it_does_not_compose_with_is_refused_before_any_work
     assert "\n" not in str(exc.value)
 
 
-@pytest.mark.parametrize("table, field", [({"calibrate": {"configurations": 40}}, "iso9283.calibrate"),
-                                          ({"allocate": True}, "requirement.iso9283")],
-                         ids=["second-calibration", "iso-requirement-allocated"])
+@pytest.mark.parametrize("table, field", [({"calibrate": {"configurations": 40}}, "iso9283.calibrate")],
+                         ids=["second-calibration"])
 def test_iso9283_with_calibration_refuses_what_it_does_not_compose_before_any_work(table, field, monkeypatch):
-    """[calibration] with [iso9283] calibrate (a second, simulated calibration) or with ISO AP/RP requirements
-    allocated in the calibrated budget (not done): one line naming the field, before the robot is read."""
+    """[calibration] with [iso9283] calibrate (a second, simulated calibration): one line naming the field, before
+    the robot is read. (ISO AP/RP requirements allocated in the calibrated budget now work:
+    tests/test_iso9283_calibrated_budget.py.)"""
     import evotol.studyfile.problem as sp
 
     monkeypatch.setattr(sp, "read_robot", lambda *a, **k: (_ for _ in ()).throw(AssertionError("robot read")))

@@ -13,7 +13,11 @@ sources' tolerances ``τ`` (log-space SLSQP, analytic gradients) subject to, at 
   ``std l`` is not in general, so the RP constraint is **not** certified convex: what is proven is the
   convex bound ``RP ≤ E l + 3 sqrt(E l²)`` (``std ≤`` root mean square), which the result states
   beside the sampled RP; the sampled RP is aimed :data:`RP_MARGIN` below the requirement and
-  re-estimated on fresh draws.
+  re-estimated on fresh draws;
+* the orientation figures (ISO 9283 §7.2), where required: ``AP_a ≤ limit`` (the worst case
+  ``|r·c| + Σ_i |r_i| h_i`` of one linear function over the box, exact and convex) and ``RP_a ≤ limit``
+  (``3 sqrt(Σ_k τ_k² w_k)``, exact for the linearised random sources, a weighted norm: convex), per angle
+  a, b, c about the base axes: **certified**.
 
 Parameters
 ----------
@@ -28,7 +32,8 @@ import numpy as np
 from scipy.optimize import minimize
 
 from evotol.errors import ValidationError
-from evotol.measures.iso9283.budget import joints_and_maps, lost_motion_parts
+from evotol.measures.iso9283.budget import (joints_and_maps, lost_motion_parts, orientation_variance_weights,
+                                           rp_unit_errors, rp_with_gradient)
 from evotol.measures.iso9283.figures import ap_worst_case, rp_from_errors, worst_direction
 from evotol.measures.linear.directions import directions_for
 from evotol.robots.mechanism.model.random_sources import column_loading, unit_draws
@@ -39,13 +44,13 @@ RP_MARGIN = 0.015
 
 
 def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds, AP, RP,
-                     x0=None, n_samples: int = 10000, seed: int = 0, maxiter: int = 200) -> dict:
+                     x0=None, n_samples: int = 10000, seed: int = 0, maxiter: int = 200, orientation=None) -> dict:
     """Least-cost tolerances meeting AP (worst case) and RP at every pose (module docstring).
 
     Parameters
     ----------
-    sys_costs : list of evotol.cost_models.base.CostModel
-        Per column of the model its cost model.
+    sys_costs : list of evotol.cost_models.base.CostModel or None
+        Per column of the model its cost model; None for a given (fixed) source, never priced.
     sys_bounds : (2, n_columns) array_like
         Lower and upper bounds of the systematic tolerances (SI); a column not free keeps its lower.
     free : (n_columns,) array_like of bool
@@ -66,13 +71,19 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
         Seed of the draws.
     maxiter : int
         SLSQP iterations.
+    orientation : dict or None
+        Orientation figures required (ISO 9283 §7.2, rad): keys ``APa``, ``APb``, ``APc`` (worst case of
+        ``|ā − a_c|`` over the tolerance box, exact: ``|r·c| + Σ |r_i| h_i``, convex) and ``RPa``, ``RPb``,
+        ``RPc`` (``3 sqrt(Σ_k τ_k² w_k)``, exact for the linearised random sources, convex: a weighted norm);
+        a, b, c the rotations about the base x, y, z (:func:`evotol.measures.iso9283.predict_orientation`).
 
     Returns
     -------
     dict
         ``systematic`` (n_columns,) and ``random`` (n_random,) tolerances (SI), ``cost``, ``AP``
         and ``AP_bound`` (p,), ``RP`` (p,) on the draws and ``RP_fresh`` on fresh draws,
-        ``RP_convex_bound`` (p,), ``active`` (which constraints bind), ``success``, ``message``.
+        ``RP_convex_bound`` (p,), ``active`` (which constraints bind), ``success``, ``message``; with
+        ``orientation``, ``orientation``: per key its ``limit``, per pose ``value`` (rad) and ``active``.
 
     Raises
     ------
@@ -84,8 +95,8 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
     hi = np.concatenate([np.asarray(sys_bounds, float)[1], rb[1]])
     if np.any(lo <= 0) or np.any(lo > hi):
         raise ValidationError("iso9283 allocation bounds", (lo.min(), (hi - lo).min()), "0 < lower <= upper")
-    if AP is None and RP is None:
-        raise ValidationError("iso9283 requirement", None, "AP or RP to allocate for")
+    if AP is None and RP is None and not orientation:
+        raise ValidationError("iso9283 requirement", None, "AP, RP or an orientation figure to allocate for")
     free = np.asarray(free, bool)
     m, K = len(free), len(sources)
     var = np.concatenate([free, np.ones(K, bool)])
@@ -93,10 +104,7 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
     J = S[:, :3]
     loadings = column_loading(robot, sources)
     C, H = lost_motion_parts(robot, S, sources, loadings)
-    draws = unit_draws(sources, n_samples, np.random.default_rng(seed))
-    E = np.stack([np.einsum("pim,nm->pni", J, d @ G.T) for G, d in zip(loadings, draws)], axis=-1) if K else \
-        np.zeros((len(J), n_samples, 3, 0))                                                            # (p, n, 3, K)
-    E = E - E.mean(axis=1, keepdims=True)
+    E = rp_unit_errors(robot, S, sources, n_samples, seed) if K else np.zeros((len(J), n_samples, 3, 0))   # (p, n, 3, K)
     costs = list(sys_costs) + list(rand_costs)
 
     def full(x):
@@ -104,10 +112,10 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
         t[var] = np.exp(x)
         return t
 
-    def cost(x):
+    def cost(x):            # a given (fixed) source has no cost model: never priced
         t = full(x)
-        c = sum(float(cm.cost(ti)) for cm, ti in zip(costs, t))
-        g = np.array([float(cm.dcost(ti)) for cm, ti in zip(costs, t)]) * t
+        c = sum(float(cm.cost(ti)) for cm, ti in zip(costs, t) if cm is not None)
+        g = np.array([0.0 if cm is None else float(cm.dcost(ti)) for cm, ti in zip(costs, t)]) * t
         return c, g[var]
 
     def ap_parts(t):
@@ -123,15 +131,10 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
         return np.array(out), np.array(grads)
 
     def rp_parts(t):
-        tr = t[m:]
-        e = E @ tr                                                           # (p, n, 3)
-        l = np.linalg.norm(e, axis=-1)
-        dl = np.einsum("pni,pnik->pnk", e / np.maximum(l, 1e-300)[..., None], E)
-        lm, sd = l.mean(1), l.std(1, ddof=1)
-        dsd = np.einsum("pn,pnk->pk", l - lm[:, None], dl - dl.mean(1, keepdims=True)) / ((l.shape[1] - 1) * sd[:, None])
+        rp, grad = rp_with_gradient(E, t[m:])
         g = np.zeros((len(J), m + K))
-        g[:, m:] = (dl.mean(1) + 3 * dsd) * tr
-        return lm + 3 * sd, g[:, var]
+        g[:, m:] = grad * t[m:]
+        return rp, g[:, var]
 
     cons = []
     # aim at AP cos δ: the proven bound (grid maximum / cos δ <= attained / cos δ) then meets AP
@@ -143,6 +146,27 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
     if RP is not None and K:
         cons.append({"type": "ineq", "fun": lambda x: (rp_aim - rp_parts(full(x))[0]) / RP,
                      "jac": lambda x: -rp_parts(full(x))[1] / RP})
+    R = S[:, 3:]                                                              # orientation rows (p, 3, m)
+    Wv = orientation_variance_weights(R, loadings, sources) if K else np.zeros((len(J), 3, 0))
+
+    def angle_parts(t, key):                  # APa..RPc at every pose, and its gradient in log space
+        ts, tr, r = t[:m], t[m:], R[:, "abc".index(key[2])]
+        g = np.zeros((len(J), m + K))
+        if key.startswith("AP"):
+            c = np.einsum("pm,pmk,k->p", r, C, tr)
+            val = np.abs(c) + np.einsum("pm,pm->p", np.abs(r), ts[None] + H @ tr)
+            g[:, :m] = np.abs(r)
+            g[:, m:] = np.sign(c)[:, None] * np.einsum("pm,pmk->pk", r, C) + np.einsum("pm,pmk->pk", np.abs(r), H)
+        else:
+            w = Wv[:, "abc".index(key[2])]
+            val = 3 * np.sqrt(np.maximum(w @ (tr * tr), 1e-300))
+            g[:, m:] = 9 * w * tr / val[:, None]
+        return val, (g * t)[:, var]
+
+    ori = {k: float(v) for k, v in (orientation or {}).items() if v is not None}
+    for key, L in ori.items():          # aimed 1e-6 below: the exact figure then meets the limit, not rounds onto it
+        cons.append({"type": "ineq", "fun": lambda x, k=key, L=L: (L * (1 - 1e-6) - angle_parts(full(x), k)[0]) / L,
+                     "jac": lambda x, k=key, L=L: -angle_parts(full(x), k)[1] / L})
     start = np.sqrt(lo * hi) if x0 is None else np.clip(np.asarray(x0, float), lo, hi)
     res = minimize(lambda x: cost(x), np.log(start[var]), jac=True, method="SLSQP", constraints=cons,
                    bounds=list(zip(np.log(lo[var]), np.log(hi[var]))), options={"maxiter": maxiter, "ftol": 1e-10})
@@ -155,7 +179,11 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
     l2 = np.sqrt(np.mean(np.sum((E @ t[m:]) ** 2, axis=-1), axis=1))
     bound = np.linalg.norm(E @ t[m:], axis=-1).mean(1) + 3 * l2
     feasible = (AP is None or ap_val[:, 1].max() <= AP * (1 + 1e-6)) and (RP is None or rp_val.max() <= RP * (1 + 1e-6))
-    return {"systematic": t[:m], "random": t[m:], "cost": cost(res.x)[0], "AP": ap_val[:, 0], "AP_bound": ap_val[:, 1],
+    orient = {k: {"limit": L, "value": angle_parts(t, k)[0].tolist()} for k, L in ori.items()}
+    for o in orient.values():
+        o["active"] = bool(max(o["value"]) >= o["limit"] * (1 - 1e-3))
+        feasible = feasible and max(o["value"]) <= o["limit"] * (1 + 1e-6)
+    return {**({"orientation": orient} if ori else {}), "systematic": t[:m], "random": t[m:], "cost": cost(res.x)[0], "AP": ap_val[:, 0], "AP_bound": ap_val[:, 1],
             "RP": rp_val, "RP_fresh": rp_fresh, "RP_convex_bound": bound, "feasible": bool(feasible),
             "active": {"AP": AP is not None and bool(ap_val[:, 0].max() >= ap_aim * (1 - 1e-3)),
                        "RP": RP is not None and bool(rp_val.max() >= rp_aim * (1 - 1e-3))},

@@ -29,7 +29,7 @@ from evotol.calibration.model import NOISE_RULE, CalibratedRobot, noise_allowanc
 from evotol.calibration.plan import CalibrationPlan
 from evotol.calibration.noise_share import level_of
 from evotol.calibration.random_allocation import allocate_random
-from evotol.calibration.random_share import RandomPart, random_terms, unit_terms
+from evotol.calibration.random_share import RandomPart, iso_terms, random_terms, unit_terms
 from evotol.measures.iso9283.figures import ap_worst_case
 from evotol.core.problem import ToleranceProblem
 from evotol.errors import ValidationError
@@ -168,8 +168,12 @@ def _allocate_random(robot, cal, idn, plan, problem, tolerances, second, remaind
     budget = E - d - wc_sys - SYSTEMATIC_RESERVE * E      # the systematic share keeps a margin: a requirement row > 0
     u = unit_terms(robot, idn, plan, problem.poses, random)
     C0 = cal.noise_covariance(problem.poses)[:, :3, :3]
+    iso = None
+    if random.iso is not None:      # ISO 9283 AP/RP required after calibration too (issue 44, docs/iso9283.md)
+        iso = iso_terms(cal, idn, plan, random, up)
+        iso["AP_budget"] = None if random.iso.AP is None else random.iso.AP - d
     al = allocate_random(C0, u["covariance"], u["support"], u["cos_delta"], random.costs, random.lower, random.upper,
-                         budget, level_of(plan.k), start=np.array(random.tolerances))
+                         budget, level_of(plan.k), start=np.array(random.tolerances), iso=iso)
     t = al.pop("tolerances")
     al.update(systematic_worst_case=wc_sys, second_order=d, joint_optimum=bool(wc_sys <= 1e-9 * E),
               tolerances={s.name: float(v) for s, v in zip(random.sources, t)},

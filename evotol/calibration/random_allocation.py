@@ -32,12 +32,15 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
+from evotol.allocators.iso9283 import RP_MARGIN
 from evotol.calibration.noise_share import norm_quantile
 from evotol.errors import ValidationError
+from evotol.measures.iso9283.budget import rp_with_gradient
 
 
-def allocate_random(C0, cov, support, cos_delta, costs, lower, upper, budget, level, start=None) -> dict:
-    """Least-cost random tolerances with ``max_i q_i(τ) + max_i w_i(τ) ≤ budget`` (module docstring).
+def allocate_random(C0, cov, support, cos_delta, costs, lower, upper, budget, level, start=None, iso=None) -> dict:
+    """Least-cost random tolerances with ``max_i q_i(τ) + max_i w_i(τ) ≤ budget`` (module docstring) and, with
+    ``iso``, the calibrated ISO 9283 AP and the RP at the test cube's poses.
 
     Parameters
     ----------
@@ -59,17 +62,24 @@ def allocate_random(C0, cov, support, cos_delta, costs, lower, upper, budget, le
         Probability of the noise quantile.
     start : (K,) array_like or None
         Start (default the geometric mean of the bounds).
+    iso : dict or None
+        :func:`evotol.calibration.random_share.iso_terms` with ``AP_budget`` (the required AP less the
+        second-order allowance, m): at each ISO pose ``max_d (s0 + τ·s_d) / cos δ + q_iso(τ) ≤ AP_budget``
+        (convex, like the position constraint) and the RP on fixed draws ``≤ RP (1 − RP_MARGIN)`` (sampled,
+        not certified convex; :mod:`evotol.allocators.iso9283`).
 
     Returns
     -------
     dict
         ``tolerances`` (K,), ``cost``, ``quantile`` and ``worst_case`` (m, the largest over the poses, exact
-        quantile), ``budget``, ``active`` (the constraint binds within 0.5 %), ``success``, ``message``.
+        quantile), ``budget``, ``active`` (the constraint binds within 0.5 %), ``success``, ``message``; with
+        ``iso``, ``iso``: per ISO pose ``AP`` (bound plus exact quantile), ``AP_worst_case``, ``AP_quantile``
+        and ``RP`` (on the fixed draws), ``AP_budget``, ``RP_aim`` and ``active`` per figure.
 
     Raises
     ------
     evotol.errors.ValidationError
-        Bad bounds, or a budget the random sources at their lower bounds already exceed.
+        Bad bounds, or a budget (or an ISO figure) the random sources at their lower bounds already exceed.
     """
     lo, hi = np.asarray(lower, float), np.asarray(upper, float)
     if np.any(lo <= 0) or np.any(lo > hi):
@@ -79,25 +89,28 @@ def allocate_random(C0, cov, support, cos_delta, costs, lower, upper, budget, le
                               "the calibrated systematic worst case and the second-order terms")
     cov, support = np.asarray(cov, float), np.asarray(support, float)
 
-    def w_of(t):
-        h = np.einsum("k,knd->nd", t, support)
+    def w_of(t, s0=0.0, sup=support, cd=cos_delta):
+        h = s0 + np.einsum("k,knd->nd", t, sup)
         j = h.argmax(axis=1)
-        return h.max(axis=1) / cos_delta, support[:, np.arange(len(h)), j].T / cos_delta          # (n,), (n, K)
+        return h.max(axis=1) / cd, sup[:, np.arange(len(h)), j].T / cd          # (n,), (n, K)
 
-    def lam_of(t):
+    def lam_of(t, C0=C0, cov=cov):
         C = C0 + np.einsum("k,knij->nij", t * t, cov)
         ev, V = np.linalg.eigh(C)
         v = V[:, :, -1]
         dl = 2 * t[None] * np.einsum("ni,knij,nj->nk", v, cov, v)
         return np.sqrt(np.maximum(ev[:, -1], 1e-300)), dl, C
 
-    def exact(t):
-        s, _, C = lam_of(t)
+    def exact(t, C0=C0, cov=cov):
+        s, _, C = lam_of(t, C0, cov)
         return norm_quantile(C, level), s
 
+    I = _IsoParts(iso, w_of, lam_of, exact) if iso is not None else None
     if exact(lo)[0].max() + w_of(lo)[0].max() > budget:
         raise ValidationError("iso9283.random.lower", lo.tolist(), f"random sources whose worst case and share of the "
                               f"identification stay below {budget:.3g} m, what calibration leaves for them")
+    if I is not None:
+        I.check_lower(lo)
     x = np.log(np.sqrt(lo * hi) if start is None else np.clip(start, lo, hi))
     res = None
     for _ in range(3):
@@ -121,21 +134,86 @@ def allocate_random(C0, cov, support, cos_delta, costs, lower, upper, budget, le
             t = np.exp(x)
             return sum(float(c.cost(v)) for c, v in zip(costs, t)), np.array([float(c.dcost(v)) for c, v in zip(costs, t)]) * t
 
+        cons = [{"type": "ineq", "fun": con, "jac": jac}] + ([] if I is None else I.constraints(np.exp(x)))
         res = minimize(f, x, jac=True, method="SLSQP", bounds=list(zip(np.log(lo), np.log(hi))),
-                       constraints=[{"type": "ineq", "fun": con, "jac": jac}], options={"maxiter": 200, "ftol": 1e-12})
+                       constraints=cons, options={"maxiter": 200, "ftol": 1e-12})
         x = res.x
     t = np.exp(x)
-    q = float(exact(t)[0].max())
-    w = float(w_of(t)[0].max())
-    if q + w > budget:     # κ moved since the last solve: shrink onto the budget (both terms grow with τ)
+
+    def ok(t):
+        return exact(t)[0].max() + w_of(t)[0].max() <= budget and (I is None or I.ok(t))
+
+    if not ok(t):     # κ moved since the last solve: shrink onto the budget (every term grows with τ)
         lo_s, hi_s = 0.0, 1.0
         for _ in range(40):
             mid = (lo_s + hi_s) / 2
-            tm = np.maximum(t * mid, lo)
-            ok = exact(tm)[0].max() + w_of(tm)[0].max() <= budget
-            lo_s, hi_s = (mid, hi_s) if ok else (lo_s, mid)
+            lo_s, hi_s = (mid, hi_s) if ok(np.maximum(t * mid, lo)) else (lo_s, mid)
         t = np.maximum(t * lo_s, lo)
-        q, w = float(exact(t)[0].max()), float(w_of(t)[0].max())
-    return {"tolerances": t, "cost": float(sum(c.cost(v) for c, v in zip(costs, t))), "quantile": q, "worst_case": w,
-            "budget": float(budget), "active": bool(q + w >= 0.995 * budget), "success": bool(res.success),
-            "message": str(res.message)}
+    q, w = float(exact(t)[0].max()), float(w_of(t)[0].max())
+    out = {"tolerances": t, "cost": float(sum(c.cost(v) for c, v in zip(costs, t))), "quantile": q, "worst_case": w,
+           "budget": float(budget), "active": bool(q + w >= 0.995 * budget), "success": bool(res.success),
+           "message": str(res.message)}
+    if I is not None:
+        out["iso"] = I.report(t)
+    return out
+
+
+class _IsoParts:
+    """The ISO 9283 constraints of :func:`allocate_random` (its ``iso`` parameter): calibrated AP and RP per pose."""
+
+    def __init__(self, iso, w_of, lam_of, exact):
+        self.iso, self.AP, self.RP = iso, iso.get("AP_budget"), iso.get("RP")
+        self.rp_aim = None if self.RP is None else self.RP * (1 - RP_MARGIN)
+        self.w = lambda t: w_of(t, iso["s0"], np.asarray(iso["support"], float), iso["cos_delta"])     # noqa: E731
+        self.lam = lambda t: lam_of(t, iso["C0"], np.asarray(iso["cov"], float))                      # noqa: E731
+        self.exact = lambda t: exact(t, iso["C0"], np.asarray(iso["cov"], float))                     # noqa: E731
+
+    def ap(self, t):
+        return self.w(t)[0] + self.exact(t)[0]                          # (p,): proven bound + exact quantile
+
+    def rp(self, t):
+        return rp_with_gradient(self.iso["E"], t)
+
+    def check_lower(self, lo):
+        if self.AP is not None and self.ap(lo).max() > self.AP:
+            raise ValidationError("requirement.iso9283.AP", self.iso["AP"], f"more than {self.ap(lo).max():.3g} m plus the "
+                                  "second-order allowance: the calibrated AP with every random source at its lower bound")
+        if self.RP is not None and self.rp(lo)[0].max() > self.rp_aim:
+            raise ValidationError("requirement.iso9283.RP", self.RP, f"more than {self.rp(lo)[0].max() / (1 - RP_MARGIN):.3g} m, "
+                                  "the RP of the random sources at their lower bounds")
+
+    def constraints(self, t0):
+        out = []
+        if self.AP is not None:
+            q, s = self.exact(t0)
+            kappa = q / np.maximum(s, 1e-300)
+
+            def fun(x):
+                t = np.exp(x)
+                return (self.AP - self.w(t)[0] - kappa * self.lam(t)[0]) / self.AP
+
+            def jac(x):
+                t = np.exp(x)
+                _, dw = self.w(t)
+                s, dl, _ = self.lam(t)
+                return -(dw + kappa[:, None] * dl / (2 * s[:, None])) * t / self.AP
+            out.append({"type": "ineq", "fun": fun, "jac": jac})
+        if self.RP is not None:
+            out.append({"type": "ineq", "fun": lambda x: (self.rp_aim - self.rp(np.exp(x))[0]) / self.RP,
+                        "jac": lambda x: -self.rp(np.exp(x))[1] * np.exp(x) / self.RP})
+        return out
+
+    def ok(self, t):
+        return (self.AP is None or self.ap(t).max() <= self.AP) and (self.RP is None or self.rp(t)[0].max() <= self.rp_aim)
+
+    def report(self, t):
+        w, q = self.w(t)[0], self.exact(t)[0]
+        rp = self.rp(t)[0]
+        return {"AP": (w + q).tolist(), "AP_worst_case": w.tolist(), "AP_quantile": q.tolist(), "RP": rp.tolist(),
+                "AP_budget": self.AP, "RP_aim": self.rp_aim,
+                "proven": "AP: the systematic residual and the lost motion's offset, a proven bound (grid / cos δ, convex in "
+                          "the tolerances), plus the exact quantile of the fit's error (normal: noise and random sources "
+                          "through the identification) at the plan's level, less the second-order allowance of the task "
+                          "poses; RP: sampled on fixed draws (not convex in general), aimed 1.5 % below the requirement",
+                "active": {"AP": self.AP is not None and bool((w + q).max() >= 0.995 * self.AP),
+                           "RP": self.RP is not None and bool(rp.max() >= 0.995 * self.rp_aim)}}

@@ -54,7 +54,26 @@ import numpy as np
 
 from evotol.calibration.plan import MEASURED
 from evotol.errors import ValidationError
-from evotol.measures.linear.directions import hemisphere
+from evotol.measures.iso9283.budget import joints_and_maps, lost_motion_parts, rp_unit_errors
+from evotol.measures.iso9283.poses import full_poses
+from evotol.measures.linear.directions import directions_for, hemisphere
+
+
+@dataclass(frozen=True)
+class IsoTarget:
+    """ISO 9283 figures required of the calibrated robot at the test cube's poses (issue 44, docs/iso9283.md).
+
+    Parameters
+    ----------
+    positions : tuple of (x, y, z)
+        The ISO poses P1..P5 (m).
+    AP, RP : float or None
+        Required calibrated AP (worst case) and RP (m); None: not required.
+    """
+
+    positions: tuple
+    AP: float | None
+    RP: float | None
 
 
 @dataclass(frozen=True)
@@ -72,6 +91,8 @@ class RandomPart:
     costs, lower, upper : tuple or None
         To allocate them (:mod:`evotol.calibration.random_allocation`): per source its cost model and
         bounds (SI); None: their tolerances are given.
+    iso : IsoTarget or None
+        ISO 9283 AP/RP the allocation must also meet after calibration; None: none.
 
     Raises
     ------
@@ -90,6 +111,7 @@ class RandomPart:
     costs: tuple | None = None
     lower: tuple | None = None
     upper: tuple | None = None
+    iso: IsoTarget | None = None
 
     def __post_init__(self):
         if not (len(self.sources) == len(self.tolerances) == len(self.loadings)) or not self.sources:
@@ -248,3 +270,48 @@ def unit_terms(robot, identification, plan, poses, part: RandomPart, n_direction
         a = np.einsum("dk,pkm,mj->pdj", D, J[:, :3], G)
         sup.append(0.5 * np.linalg.norm(a, axis=-1) if src.kind == "radial_play" else _unit_parts(src)[0] * np.abs(a[..., 0]))
     return {"covariance": np.array(cov), "support": np.array(sup), "cos_delta": float(np.cos(delta))}
+
+
+def iso_terms(cal, identification, plan, part: RandomPart, systematic, n_samples: int = 10000, seed: int = 0) -> dict:
+    """The calibrated ISO 9283 figures at the test cube's poses as functions of the random tolerances ``τ``, for
+    :func:`evotol.calibration.random_allocation.allocate_random` (docs/iso9283.md, "ISO requirements in a
+    calibrated budget").
+
+    After calibration a robot's barycentre error at an ISO pose is ``J M δ + J o(τ) + n(τ)``
+    (:func:`evotol.calibration.iso9283.predict_calibrated`): the systematic residual (``δ`` in ``±t``), the lost
+    motion's offset for the test's approach (a box linear in ``τ``, :func:`evotol.measures.iso9283.budget.lost_motion_parts`)
+    and the fit's error, normal with covariance ``C_0 + Σ_k τ_k² C_k``. The worst case of the first two in a
+    direction ``u`` is ``s_0(u) + Σ_k τ_k s_k(u)`` (linear in ``τ``): on a full-sphere grid of directions its
+    maximum / cos δ is a proven bound, convex in ``τ``. RP is the random sources' own, unchanged by calibration.
+
+    Parameters
+    ----------
+    cal : evotol.calibration.model.CalibratedRobot
+        The calibrated model (its ``base`` the arm).
+    systematic : (n_columns,) array_like
+        The systematic tolerances the bound holds for (SI; their upper bounds: any design below is covered).
+    n_samples : int
+        Fixed cycle draws for RP.
+    seed : int
+        Seed of the draws.
+
+    Returns
+    -------
+    dict
+        ``C0`` (p, 3, 3) and ``cov`` (K, p, 3, 3) (m², m² per unit²); ``s0`` (p, d) and ``support`` (K, p, d)
+        (m, m per unit); ``cos_delta``; ``E`` (p, n, 3, K) centred unit errors for RP; ``AP``, ``RP`` (m or None).
+    """
+    from_positions = np.asarray(part.iso.positions, float)
+    robot = cal.base
+    poses = full_poses(robot, from_positions)
+    _, S = joints_and_maps(robot, from_positions)
+    JM = np.asarray(cal.sensitivity(poses), float)[:, :3]
+    D, delta = directions_for(S[:, :3], 600, full_sphere=True)
+    C, H = lost_motion_parts(robot, S, part.sources, part.loadings)                       # (p, m, K)
+    JD = np.einsum("dk,pkm->pdm", D, S[:, :3])
+    support = np.einsum("pdm,pmk->kpd", JD, C) + np.einsum("pdm,pmk->kpd", np.abs(JD), H)
+    s0 = np.abs(np.einsum("dk,pkm->pdm", D, JM)) @ np.asarray(systematic, float)
+    u = unit_terms(robot, identification, plan, poses, part)
+    return {"C0": cal.noise_covariance(poses)[:, :3, :3], "cov": u["covariance"], "s0": s0, "support": support,
+            "cos_delta": float(np.cos(delta)), "E": rp_unit_errors(robot, S, part.sources, n_samples, seed),
+            "AP": part.iso.AP, "RP": part.iso.RP}

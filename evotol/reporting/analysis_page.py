@@ -3,12 +3,13 @@
 Drawn from the JSON summary alone (:func:`evotol.studyfile.given_tolerances.analysis_summary`): the
 verdict, the given tolerances, per pose the worst case of the norm and the per-axis range (both
 signed limits), RSS, the probability of meeting the requirement, the error at the requirement's
-probability, the joints used (wrapped to (-180°, 180°]), the contributions at the worst pose and
-the Monte Carlo check. Values are shown in the study's display units; the JSON stays SI.
+probability, the joints used (wrapped to (-180°, 180°]), the contributions at the worst pose,
+the Monte Carlo check and, where the study asks, the ISO 9283 section. Values are shown in the study's display units; the JSON stays SI.
 """
 from __future__ import annotations
 
 from evotol.reporting.html import Report
+from evotol.reporting.iso9283 import iso9283_section
 from evotol.reporting.joints_section import joints_section
 from evotol.units.display import DisplayUnits
 
@@ -99,6 +100,8 @@ def render_analysis(summary: dict) -> Report:
                  f"{100 * mc['max_exceed_rate']:.3g} % on the linear model"
                  + (f", {100 * mc['max_exceed_rate_nonlinear']:.3g} % on the nonlinear model" if mc.get("max_exceed_rate_nonlinear") is not None else "")
                  + (f". {mc['linearisation_verdict']}." if mc.get("linearisation_verdict") else "."))
+    if "iso9283" in summary:        # ISO 9283 AP and RP of the given tolerances (docs/iso9283.md)
+        iso9283_section(rep, summary)
     return rep
 
 

@@ -99,6 +99,11 @@ def _random_sentence(summary: dict, plan: dict, n: dict, u: str) -> str:
         text += (f" ISO 9283 after calibration (first order, largest over P1-P5): AP {_fmt(summary, ap, u)} "
                  f"(uncalibrated {_fmt(summary, max(p['AP']['predicted'] for p in poses), u)}), RP {_fmt(summary, rp, u)} "
                  "(unchanged).")
+        req = summary["iso9283"].get("requirement", {})
+        if al and al.get("iso"):        # the ISO requirement allocated in the calibrated budget (docs/iso9283.md)
+            bind = ", ".join(k for k, v in al["iso"]["active"].items() if v) or "neither"
+            text += (f" The random sources are allocated to AP <= {_fmt(summary, req.get('AP'), u)} and RP <= "
+                     f"{_fmt(summary, req.get('RP'), u)} there too; binding: {bind}.")
     return text
 
 

@@ -6,6 +6,8 @@ the allocation (docs/iso9283.md).
 """
 from __future__ import annotations
 
+from html import escape
+
 from evotol.units.display import DisplayUnits
 
 
@@ -52,6 +54,14 @@ def iso9283_section(rep, summary: dict) -> None:
                    for p in iso["poses"]],
                   ["pose"] + [f"AP{a} predicted / simulated" for a in "abc"] + [f"RP{a} predicted / simulated" for a in "abc"],
                   table_id="iso9283-orientation")
+    for fig, v in iso.get("verdict", {}).items():     # a verdict names its model (STYLE.md)
+        unit = "rad" if fig[2:] in ("a", "b", "c") else "m"             # APa, RPb, ...: an angle
+        V = lambda x: escape(u.format(x, unit))                           # noqa: E731
+        sim = (f"simulated on the nonlinear model ({escape(v['simulated_as'])}): {V(v['simulated'])}"
+               + ("." if v["simulated_within"] else ", above the requirement.")) if v["simulated"] is not None else \
+            escape(v["simulated_as"]) + "."
+        rep.text(f"{fig} ≤ {V(v['requirement'])}: the design <b>{v['verdict']}</b> it: {V(v['predicted'])} on the "
+                 f"{escape(v['model'])}; {sim}", raw=True)
     for line in iso["notes"]:
         rep.text(line, note=True)
     buys = iso["what_each_source_buys"]
@@ -82,7 +92,10 @@ def iso9283_section(rep, summary: dict) -> None:
                     f"{L(b['random_identification'])} of the fit's quantile (noise alone {L(b['noise_only'])}) of the "
                     f"requirement {L(b['requirement'])}")
                  + ("." if not al else f"; allocated, they cost {al['cost']:.4g} and the requirement "
-                    + ("binds." if al["active"] else "does not bind.")))
+                    + ("binds." if al["active"] else "does not bind."))
+                 + ("" if not (al and al.get("iso")) else
+                    " They are allocated to the ISO requirement after calibration too (binding: "
+                    + (", ".join(k for k, v in al["iso"]["active"].items() if v) or "none") + "). " + al["iso"]["proven"] + "."))
         rep.table([[p["name"], L(p["AP"]["predicted"]), L(p["calibrated"]["AP"]["predicted"]),
                     L(p["calibrated"]["AP"]["systematic_bound"]), L(p["calibrated"]["AP"]["noise_quantile"]),
                     L(p["calibrated"]["RP"]["predicted"])] for p in iso["poses"]],

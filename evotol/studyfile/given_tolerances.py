@@ -8,6 +8,9 @@ requirement's probability, Monte Carlo on the nonlinear model, contributions, th
 joints used at every pose), prints it, and writes ``NAME.json`` and ``NAME.html``
 (:func:`evotol.reporting.analysis_page.render_analysis`). ``[verify] n_samples`` (default 1000)
 and ``seed`` set the Monte Carlo; ``[requirement] probability`` (default 0.9973) the quantile.
+With ``[requirement] iso9283`` or ``[iso9283]`` the summary also carries the ``iso9283`` block and the page
+its section, as for an allocation study: AP and RP predicted and simulated for the given tolerances, and
+whether they meet the requirement on which model (docs/iso9283.md).
 """
 from __future__ import annotations
 
@@ -19,6 +22,7 @@ from evotol.core import plausibility
 from evotol.core.axis_limits import configurations
 from evotol.errors import ValidationError
 from evotol.reporting.analysis_page import render_analysis
+from evotol.studyfile.iso9283 import iso9283_block
 from evotol.studyfile.kinds import Outcome
 from evotol.studyfile.steps import run_steps
 from evotol.summaries.user_study import source_table, study_units_block
@@ -151,11 +155,15 @@ def analysis_lines(summary: dict):
         yield (f"  Monte Carlo ({mc['n_samples']} samples per pose): exceed rate {100 * mc['max_exceed_rate']:.3g} % (linear)"
               + (f", {100 * mc['max_exceed_rate_nonlinear']:.3g} % (nonlinear)" if mc.get("max_exceed_rate_nonlinear") is not None else "")
               + (f"; {mc['linearisation_verdict']}" if mc.get("linearisation_verdict") else ""))
+    for fig, v in summary.get("iso9283", {}).get("verdict", {}).items():     # ISO 9283: the verdict and its model
+        U = lambda x: u.format(x, "rad" if fig[2:] in ("a", "b", "c") else "m")    # noqa: E731
+        yield (f"  ISO 9283 {fig} <= {U(v['requirement'])}: {v['verdict']} ({U(v['predicted'])}, {v['model']}; "
+               + (f"simulated {U(v['simulated'])})" if v["simulated"] is not None else f"{v['simulated_as']})"))
     for line in summary.get("notes", []):
         yield (f"  note: {line}")
 
 
-def given_tolerances_outcome(study, problem, units: DisplayUnits) -> Outcome:
+def given_tolerances_outcome(study, problem, units: DisplayUnits, iso=None) -> Outcome:
     """Analyse a study whose every tolerance is given (module docstring): one step, ``analysis``.
 
     Parameters
@@ -166,6 +174,10 @@ def given_tolerances_outcome(study, problem, units: DisplayUnits) -> Outcome:
         Its problem (every source fixed or locked).
     units : DisplayUnits
         Display units.
+    iso : evotol.studyfile.iso9283.IsoStudy or None
+        The study's ISO 9283 request: its figures for the given tolerances (and, with ``allocate``, the
+        random sources allocated beside them) as a second step, the same ``iso9283`` block and page
+        section as an allocation study (docs/iso9283.md).
 
     Returns
     -------
@@ -188,11 +200,16 @@ def given_tolerances_outcome(study, problem, units: DisplayUnits) -> Outcome:
                               "analysis of given tolerances checks the poses listed and does not search the workspace "
                               "for a worse one (give a finer grid or a Latin hypercube)")
     prob = problem.requirement.required_yield
-    done = run_steps({"analysis": lambda: analyse(problem, probability=float(prob), n_samples=int(vspec.get(
-        "n_samples", 1000)), seed=seed, nonlinear=bool(vspec.get("nonlinear", True)))}, study.ctrl_c, study.log)
+    steps = {"analysis": lambda: analyse(problem, probability=float(prob), n_samples=int(vspec.get(
+        "n_samples", 1000)), seed=seed, nonlinear=bool(vspec.get("nonlinear", True)))}
+    if iso is not None:             # ISO 9283 AP/RP of the given tolerances (issue 44)
+        steps["iso9283"] = lambda: iso9283_block(iso, problem, {}, seed)
+    done = run_steps(steps, study.ctrl_c, study.log)
     if "analysis" not in done:
-        raise KeyboardInterrupt     # the one step stopped: no analysis to write
+        raise KeyboardInterrupt     # the first step stopped: no analysis to write
     summary = analysis_summary(study.name, problem, done["analysis"], seed=seed, units=units, seconds=study.seconds())
+    if "iso9283" in done:
+        summary["iso9283"] = done["iso9283"]
     summary["warnings"] = plausibility.problem_warnings(problem)
     if "methods" in spec:
         summary["notes"].append(f"[methods] {sorted(spec['methods'])} not run: every tolerance is given, so there is "

@@ -44,7 +44,8 @@ from evotol.measures.iso9283.budget import source_shares
 from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, largest_cube, predict, predict_orientation,
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
-from evotol.calibration.random_share import RandomPart
+from evotol.calibration.random_share import IsoTarget, RandomPart
+from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count
 
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6,
@@ -53,6 +54,9 @@ TABLE_KEYS = ("cube", "yield", "simulate", "allocate", "random", "calibrate")
 CALIBRATE_KEYS = ("configurations", "noise", "robots")
 RANDOM_KEYS = ("joints", "tolerance", "bits", "gear_ratio", "variation", "lower", "upper", "cost")
 SIM_KEYS = ("robots", "cycles", "multidirectional")
+#: ISO 9283 figures a requirement may name: positional AP, RP (m) and orientational AP_a.. RP_c (rad, §7.2)
+REQUIREMENT_KEYS = ("AP", "RP", "APa", "APb", "APc", "RPa", "RPb", "RPc")
+ORIENTATION_KEYS = REQUIREMENT_KEYS[2:]
 
 
 def quantity(raw, where: str) -> float:
@@ -115,6 +119,8 @@ class IsoStudy:
         Allocate the random sources with the systematic ones.
     calibrate : dict or None
         ``configurations``, ``noise`` (m), ``robots`` of a simulated calibration; None: none.
+    orientation : dict
+        Required orientation figures ``APa`` .. ``RPc`` (rad), the ones the file names.
     """
 
     robot: MechanismModel
@@ -129,6 +135,7 @@ class IsoStudy:
     simulate: dict = field(default_factory=dict)
     allocate: bool = False
     calibrate: dict | None = None
+    orientation: dict = field(default_factory=dict)
 
     @property
     def positions(self) -> np.ndarray:
@@ -205,8 +212,24 @@ def random_part(spec: dict, robot) -> RandomPart | None:
     if alloc and any(c is None for c in costs):
         raise ValidationError(f"iso9283.random.{sources[costs.index(None)].kind}.cost", None,
                               "a cost model to allocate the random sources")
+    req = spec.get("requirement", {}).get("iso9283") or {}
+    iso = None
+    if alloc and req:           # ISO AP/RP allocated inside the calibrated budget (issue 44)
+        check_table_keys(req, REQUIREMENT_KEYS, "requirement.iso9283")
+        iso = IsoTarget(tuple(map(tuple, iso_positions(_cube(spec["iso9283"], robot)).tolist())),
+                        *(quantity(req[k], f"requirement.iso9283.{k}") if k in req else None for k in ("AP", "RP")))
     return RandomPart(tuple(sources), tuple(s.tolerance for s in sources), tuple(column_loading(robot, sources)),
-                      *((tuple(costs), tuple(lower), tuple(upper)) if alloc else ()))
+                      *((tuple(costs), tuple(lower), tuple(upper)) if alloc else ()), iso=iso)
+
+
+def _cube(table: dict, robot) -> TestCube:
+    """``[iso9283] cube``, checked, else the largest in the workspace."""
+    c = table.get("cube")
+    if c is None:
+        return largest_cube(robot)
+    check_table_keys(c, ("centre", "edge"), "iso9283.cube")
+    return check_cube(robot, TestCube(tuple(quantity(v, "iso9283.cube.centre") for v in c["centre"]),
+                                      quantity(c["edge"], "iso9283.cube.edge")))
 
 
 def check_composable(spec: dict) -> None:
@@ -220,9 +243,9 @@ def check_composable(spec: dict) -> None:
     Raises
     ------
     evotol.errors.ValidationError
-        One line naming ``iso9283`` and the other part: ``[[robot.callouts]]``, ``[poses] joints`` (the
-        ISO poses are the test cube's), ``[clearances]``, a requirement per axis; with ``[calibration]``,
-        ``[iso9283] calibrate`` (a second calibration).
+        One line naming ``iso9283`` and the other part: ``[[robot.callouts]]``, ``[clearances]``, a
+        requirement per axis; with ``[calibration]``, ``[iso9283] calibrate`` (a second calibration) or an
+        orientation figure. (``[poses] joints`` composes: the ISO poses are the test cube's.)
     """
     req = spec.get("requirement", {})
     if "iso9283" not in spec and "iso9283" not in req:
@@ -231,12 +254,12 @@ def check_composable(spec: dict) -> None:
     if "calibration" in spec and isinstance(table, dict) and table.get("calibrate"):
         raise ValidationError("iso9283.calibrate", table["calibrate"], "no calibrate beside [calibration]: one "
                               "calibration ([calibration] is the plan the tolerances are allocated for)")
-    if "calibration" in spec and isinstance(table, dict) and table.get("allocate") and req.get("iso9283"):
-        raise ValidationError("requirement.iso9283", req["iso9283"], "no ISO 9283 requirement beside [calibration] "
-                              "with allocate = true: the calibrated allocation holds [requirement] position (AP/RP "
-                              "requirements in a calibrated budget are not allocated yet); leave allocate out to check them")
+    ori = [k for k in ORIENTATION_KEYS if k in (req.get("iso9283") or {})]
+    if "calibration" in spec and ori:
+        raise ValidationError(f"requirement.iso9283.{ori[0]}", req["iso9283"][ori[0]], "no orientation figure beside "
+                              "[calibration]: the calibrated orientation figures are not predicted yet (AP, RP are)")
     other = [("callouts" in spec.get("robot", {}), "callouts"),
-             ("joints" in spec.get("poses", {}), "joint_space"), ("clearances" in spec, "clearances"),
+             ("clearances" in spec, "clearances"),
              (any(isinstance(req.get(c), dict) for c in ("position", "orientation")), "axis_limits")]
     for present, part in other:
         if present:
@@ -258,8 +281,9 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         A bad key or quantity; a robot that is not a described arm; a cube outside the workspace or
         the joint limits; RP required without any random source; AP below what the random sources
         leave with every systematic tolerance at its lower bound (the noise floor), or RP below the
-        random sources' own at their lower bounds (when allocated) or their catalogue values; a study whose
-        tolerances are all given (its analysis does not write the ISO block yet).
+        random sources' own at their lower bounds (when allocated) or their catalogue values -- except when
+        every tolerance is given and nothing is allocated: the figures are then checked, and the block
+        says whether they meet the requirement; ``allocate`` with every tolerance given and no random source.
     """
     req = spec.get("requirement", {}).get("iso9283")
     table = spec.get("iso9283")
@@ -267,14 +291,12 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         return None
     table = table or {}
     check_table_keys(table, TABLE_KEYS, "iso9283")
-    check_table_keys(req or {}, ("AP", "RP"), "requirement.iso9283")
+    check_table_keys(req or {}, REQUIREMENT_KEYS, "requirement.iso9283")
     check_table_keys(table.get("simulate", {}), SIM_KEYS, "iso9283.simulate")
     robot = problem.model.described      # with [calibration]: the arm inside the calibrated model
     check_composable(spec)
-    if not problem.free.any():
-        raise ValidationError("iso9283", "every tolerance given", "at least one tolerance to allocate: the ISO block "
-                              "is not yet written by the given-tolerances analysis")
-    part = next((m.part for m in problem.error_model.parts() if m.part and m.part != "calibration"), None)
+    # [poses] joints composes: the ISO poses are the test cube's, solved on the described arm (issue 44)
+    part = next((m.part for m in problem.error_model.parts() if m.part and m.part not in ("calibration", "joint_space")), None)
     if part is not None:
         raise ValidationError("iso9283", PART_WORDS[part], "a serial arm without it: the ISO 9283 figures are not yet "
                               "composed with it (docs/combinations.md)")
@@ -282,24 +304,22 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         raise ValidationError("iso9283", type(robot).__name__, "a serial arm from a mechanism description")
     ap = quantity(req["AP"], "requirement.iso9283.AP") if req and "AP" in req else None
     rp = quantity(req["RP"], "requirement.iso9283.RP") if req and "RP" in req else None
+    orientation = {k: quantity(req[k], f"requirement.iso9283.{k}") for k in ORIENTATION_KEYS if req and k in req}
     y = table.get("yield")
     if y is not None and not 0 < y < 1:
         raise ValidationError("iso9283.yield", y, "a share in (0, 1); leave it out for the worst case")
     sources, costs, lower, upper = _random_sources(table.get("random", {}), robot)
-    if rp is not None and not sources:
-        raise ValidationError("requirement.iso9283.RP", req["RP"], "at least one random source in [iso9283.random] "
+    for k in [k for k in ("RP", "RPa", "RPb", "RPc") if req and k in req and not sources][:1]:
+        raise ValidationError(f"requirement.iso9283.{k}", req[k], "at least one random source in [iso9283.random] "
                               "(RP is what changes from cycle to cycle)")
     allocate = bool(table.get("allocate", False))
+    if allocate and not sources and not problem.free.any():
+        raise ValidationError("iso9283.allocate", True, "a random source in [iso9283.random] or a tolerance to allocate: "
+                              "every systematic tolerance is given and there is no random source")
     if allocate and any(c is None for c in costs):
         i = costs.index(None)
         raise ValidationError(f"iso9283.random.{sources[i].kind}.cost", None, "a cost model to allocate the random sources")
-    c = table.get("cube")
-    if c is None:
-        cube = largest_cube(robot)
-    else:
-        check_table_keys(c, ("centre", "edge"), "iso9283.cube")
-        cube = check_cube(robot, TestCube(tuple(quantity(v, "iso9283.cube.centre") for v in c["centre"]),
-                                          quantity(c["edge"], "iso9283.cube.edge")))
+    cube = _cube(table, robot)
     sim = {"robots": 200, "cycles": 30, "multidirectional": any(s.kind == "backlash" for s in sources),
            **table.get("simulate", {})}
     cal = table.get("calibrate")
@@ -310,21 +330,29 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         if cal["configurations"] * 3 < robot.n_columns or cal["noise"] < 0 or cal["robots"] < 1:
             raise ValidationError("iso9283.calibrate", cal, f"at least {-(-robot.n_columns // 3)} configurations, "
                                   "a noise >= 0 and at least 1 robot")
-    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal)
+    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation)
     _check_floor(iso, problem)
     return iso
 
 
 def _check_floor(iso: IsoStudy, problem) -> None:
     """AP/RP below what the fixed parts leave: a one-line error before the methods run."""
-    if iso.AP is None and iso.RP is None:
-        return
+    if (iso.AP is None and iso.RP is None and not iso.orientation) or not (iso.allocate or problem.free.any()):
+        return          # every tolerance given and nothing allocated: a verdict, not a refusal
     t_rand = iso.lower if iso.allocate else [s.tolerance for s in iso.sources]
     floor = predict(iso.robot, iso.positions, problem.full(problem.lower[problem.free][None])[0], iso.sources, t_rand,
                     iso.yield_, n_samples=20000)
-    if iso.AP is not None and iso.AP < floor["AP"].max():
+    # calibrated: the allocation checks the calibrated AP at the random sources' lower bounds itself
+    if iso.AP is not None and problem.calibration is None and iso.AP < floor["AP"].max():
         raise ValidationError("requirement.iso9283.AP", iso.AP, f"more than {floor['AP'].max():.3g} m, the AP that the "
                               "random sources (lost motion) leave with every tolerance at its lower bound (the noise floor)")
+    fo = predict_orientation(iso.robot, iso.positions, problem.full(problem.lower[problem.free][None])[0], iso.sources,
+                             t_rand) if iso.orientation else None
+    for k, v in iso.orientation.items():
+        lowest = fo[k[:2]][:, "abc".index(k[2])].max()
+        if v < lowest:
+            raise ValidationError(f"requirement.iso9283.{k}", v, f"more than {lowest:.3g} rad, the {k} of every tolerance at "
+                                  "its lower bound and the random sources at " + ("their lower bounds" if iso.allocate else "their catalogue values"))
     if iso.RP is not None and iso.RP < floor["RP"].max():
         raise ValidationError("requirement.iso9283.RP", iso.RP, f"more than {floor['RP'].max():.3g} m, the RP of the "
                               "random sources at " + ("their lower bounds" if iso.allocate else "their catalogue values"))
@@ -393,25 +421,28 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     if info is not None and info.random is not None:
         t_rand = np.array(info.random.tolerances, float)
     block = {"cube": {"centre": list(iso.cube.centre), "edge": iso.cube.edge},
-             "requirement": {"AP": iso.AP, "RP": iso.RP, "yield": iso.yield_},
-             "systematic_from": from_method or "lower bounds"}
+             "requirement": {"AP": iso.AP, "RP": iso.RP, "yield": iso.yield_, **iso.orientation},
+             "systematic_from": from_method or ("lower bounds" if problem.free.any() else "given tolerances")}
     if info is not None:
         block["calibrated_budget"] = calibrated_budget(info)
     if iso.allocate and info is None:
         tols = problem.tolerances
         al = allocate_iso9283(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names], [problem.lower, problem.upper],
                               problem.free, iso.sources, iso.costs, [iso.lower, iso.upper], iso.AP, iso.RP,
-                              x0=np.concatenate([t_sys, t_rand]), seed=seed)
+                              x0=np.concatenate([t_sys, t_rand]), seed=seed, orientation=iso.orientation)
         t_sys, t_rand = al["systematic"], al["random"]
-        block["systematic_from"] = "iso9283 allocation"
+        block["systematic_from"] = "iso9283 allocation" if problem.free.any() else "given tolerances (random sources allocated)"
         block["allocation"] = {
             "cost": al["cost"], "feasible": al["feasible"], "active": al["active"], "message": al["message"],
             "systematic": dict(zip(iso.robot.source_names, t_sys.tolist())),
             "RP_sampled": al["RP"].tolist(), "RP_fresh_draws": al["RP_fresh"].tolist(),
             "RP_convex_bound": al["RP_convex_bound"].tolist(), "AP_bound": al["AP_bound"].tolist(),
+            **({"orientation": al["orientation"]} if "orientation" in al else {}),
             "proven": "AP: the worst case over the tolerance box is convex in the tolerances; its proven bound "
                       "(grid / cos δ) meets the requirement. RP: sampled on fixed draws (not convex in general), "
-                      "re-estimated on fresh draws; E l + 3 sqrt(E l²) is a convex upper bound."}
+                      "re-estimated on fresh draws; E l + 3 sqrt(E l²) is a convex upper bound."
+                      + (" Orientation (APa..RPc): exact first-order worst case and 3 sigma, both convex: certified."
+                         if iso.orientation else "")}
     block["random_sources"] = [{"name": s.name, "kind": s.kind, "joint": s.joint, "unit": s.unit, "tolerance": float(t),
                                 "variation": s.variation if s.kind == "backlash" else None,
                                 "cost": None if c is None else float(c.cost(t))}
@@ -424,7 +455,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                                                          n_samples=50000, seed=seed)
     sim_opts = iso.simulate
     user_req = problem.requirement if problem.calibration is None else problem.calibration.requirement
-    orient = None if user_req.orientation is None else predict_orientation(iso.robot, P, t_sys, iso.sources, t_rand)
+    orient = None if user_req.orientation is None and not iso.orientation else \
+        predict_orientation(iso.robot, P, t_sys, iso.sources, t_rand)
     approaches = ("-z", "+x", "+y") if sim_opts["multidirectional"] else ("-z",)
     sim = simulate(iso.robot, P, t_sys, iso.sources, t_rand, n_robots=int(sim_opts["robots"]),
                    n_cycles=int(sim_opts["cycles"]), approaches=approaches, seed=seed)
@@ -479,6 +511,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     ap_top = pred["AP_bound"].max() if info is None else max(e["calibrated"]["AP"]["predicted"] for e in poses)
     block["meets"] = {"AP": None if iso.AP is None else bool(ap_top <= iso.AP),
                       "RP": None if iso.RP is None else bool(pred["RP"].max() <= iso.RP)}
+    block["verdict"] = verdicts(iso, pred, sim, None if info is None else ap_top, orient)
     block["simulation"] = {"robots": int(sim_opts["robots"]), "cycles": int(sim_opts["cycles"]), "approaches": list(approaches),
                            "model": "nonlinear (pose_error_at_joints)"}
     block["notes"] = [

@@ -205,7 +205,7 @@ def robot_study(study: Study) -> Outcome:
     iso = read_iso9283(spec, problem)       # ISO 9283 AP/RP and random sources, checked before work (issue 44)
     units = report_units(spec, problem)
     if not problem.free.any():     # every tolerance given: nothing to allocate, analyse them (issue 33)
-        return given_tolerances_outcome(study, problem, units)
+        return given_tolerances_outcome(study, problem, units, iso)
     precision = drawing_precision(spec.get("report", {}).get("precision"), units)   # [report] precision (issue 34)
     coarse = precision_warnings(problem, units, precision)      # a step coarser than the zones (issue 41)
     problem.warnings = [*problem.warnings, *coarse]

@@ -117,6 +117,52 @@ def lost_motion_parts(robot, S, sources, loadings) -> tuple[np.ndarray, np.ndarr
     return C, H
 
 
+def rp_unit_errors(robot, S, sources, n_samples: int, seed: int = 0) -> np.ndarray:
+    """Per random source, the first-order position errors of ``n_samples`` cycle draws at unit tolerance,
+    centred on their mean: the fixed draws (common random numbers) on which RP is allocated.
+
+    Parameters
+    ----------
+    n_samples : int
+        Cycle draws.
+    seed : int
+        Seed of the draws.
+
+    Returns
+    -------
+    (p, n_samples, 3, n_random) ndarray
+        m per unit tolerance.
+    """
+    J = S[:, :3]
+    draws = unit_draws(sources, n_samples, np.random.default_rng(seed))
+    E = np.stack([np.einsum("pim,nm->pni", J, d @ G.T) for G, d in zip(column_loading(robot, sources), draws)], axis=-1)
+    return E - E.mean(axis=1, keepdims=True)
+
+
+def rp_with_gradient(E, t) -> tuple[np.ndarray, np.ndarray]:
+    """RP ``= E l + 3 std l`` (the mean over the draws, ``std`` with ``n − 1``) of the errors ``E t`` at each
+    pose, and its gradient with respect to the tolerances (smooth on fixed draws).
+
+    Parameters
+    ----------
+    E : (p, n, 3, n_random) ndarray
+        :func:`rp_unit_errors`.
+
+    Returns
+    -------
+    rp : (p,) ndarray
+        m.
+    grad : (p, n_random) ndarray
+        m per unit tolerance.
+    """
+    e = E @ t                                                            # (p, n, 3)
+    l = np.linalg.norm(e, axis=-1)
+    dl = np.einsum("pni,pnik->pnk", e / np.maximum(l, 1e-300)[..., None], E)
+    lm, sd = l.mean(1), l.std(1, ddof=1)
+    dsd = np.einsum("pn,pnk->pk", l - lm[:, None], dl - dl.mean(1, keepdims=True)) / ((l.shape[1] - 1) * sd[:, None])
+    return lm + 3 * sd, dl.mean(1) + 3 * dsd
+
+
 def source_shares(robot, positions, systematic, sources, random_t=None) -> dict:
     """What each source takes of AP and of RP at the pose where each is largest (first order).
 
@@ -221,9 +267,25 @@ def predict_orientation(robot, positions, systematic, sources, random_t=None) ->
         (np.zeros((len(S), S.shape[2])), np.zeros((len(S), S.shape[2])))
     h = np.asarray(systematic, float)[None] + np.abs(lm) / 2 + np.abs(free)                  # (p, m)
     ap = np.abs(np.einsum("pam,pm->pa", R, lm / 2)) + np.einsum("pam,pm->pa", np.abs(R), h)
-    var = sum((tk * tk * (np.einsum("pam,mj->paj", R, G) ** 2 @ v) for G, tk, v in
-               zip(loadings, t, _unit_variances(sources))), np.zeros_like(ap))
+    var = orientation_variance_weights(R, loadings, sources) @ (t * t) if sources else np.zeros_like(ap)
     return {"AP": ap, "RP": 3 * np.sqrt(var)}
+
+
+def orientation_variance_weights(R, loadings, sources) -> np.ndarray:
+    """Variance of each orientation angle per unit squared tolerance of each random source, first order:
+    ``w_pak = Σ_j (r_pa G_k)_j² var_kj`` so that ``S_a² = Σ_k τ_k² w_pak`` (ISO 9283 §7.2; RP_a = 3 S_a).
+
+    Parameters
+    ----------
+    R : (p, 3, n_columns) ndarray
+        Orientation rows of the first-order map (rad per m or rad).
+
+    Returns
+    -------
+    (p, 3, n_random) ndarray
+        rad² per unit².
+    """
+    return np.stack([np.einsum("pam,mj->paj", R, G) ** 2 @ v for G, v in zip(loadings, _unit_variances(sources))], axis=-1)
 
 
 def simulate(robot, positions, systematic, sources, random_t=None, n_robots=200, n_cycles=30,
