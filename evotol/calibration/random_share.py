@@ -291,7 +291,7 @@ def iso_terms(cal, identification, plan, part: RandomPart, systematic, n_samples
     systematic : (n_columns,) array_like
         The systematic tolerances the bound holds for (SI; their upper bounds: any design below is covered).
     n_samples : int
-        Fixed cycle draws for RP.
+        Cycle draws, the same for every design (common random numbers of the RP quantile).
     seed : int
         Seed of the draws.
 

@@ -29,7 +29,7 @@ def study_bytes(problem) -> int:
     Parameters
     ----------
     problem : evotol.core.problem.ToleranceProblem
-        The study's problem.
+        The problem whose methods are estimated (its poses, sources and directions).
 
     Returns
     -------
@@ -53,7 +53,7 @@ def check_memory(problem, available: int | None = None) -> None:
     Parameters
     ----------
     problem : evotol.core.problem.ToleranceProblem
-        The study's problem.
+        The study's problem, before its first method runs.
     available : int, optional
         Bytes available (default: :func:`evotol._runtime.memory.available_bytes`; unknown: no check).
 
