@@ -71,7 +71,7 @@ def test_unknown_keys_and_kinds_are_refused(problem):
     refusal(spec, problem, "iso9283.random")
 
 
-def test_the_study_json_carries_the_iso_block(tmp_path):
+def test_the_study_json_carries_the_iso_block(tmp_path, capsys):
     from evotol.studyfile.run import run_study_file
     text = EXAMPLE.read_text().replace("allocate = true", "allocate = false").replace(
         "robots = 200", "robots = 20").replace("robots = 100", "robots = 10").replace('n_samples = 300', 'n_samples = 50').replace(
@@ -97,3 +97,17 @@ def test_the_study_json_carries_the_iso_block(tmp_path):
         assert p["RP_after_mean"] == pytest.approx(p["RP_before_mean"], rel=1e-3)
     page = (tmp_path / "iso9283_example.html").read_text()
     assert "ISO 9283 pose accuracy and repeatability" in page and "id='iso9283'" in page
+    # the terminal states the block too: each figure's verdict on its model, each pose, the calibrated AP
+    from evotol.cli import _print_results
+    from evotol.units.display import DisplayUnits
+    summary = json.loads((tmp_path / "iso9283_example.json").read_text())
+    capsys.readouterr()
+    _print_results(summary)
+    out = capsys.readouterr().out
+    u = DisplayUnits(**summary["display_units"])
+    assert "[evotol] ISO 9283" in out
+    for fig, v in block["verdict"].items():
+        assert f"{fig} <= {u.format(v['requirement'], 'm')}: {v['verdict']} ({u.format(v['predicted'], 'm')}, {v['model']}" in out
+    for p in block["poses"]:
+        assert f"{p['name']}: AP {u.format(p['AP']['predicted'], 'm')} predicted, {u.format(p['AP']['simulated'], 'm')} simulated" in out
+    assert "calibrated (10 simulated robots" in out and "RP unchanged" in out

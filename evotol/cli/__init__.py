@@ -234,6 +234,7 @@ def _print_results(summary: dict) -> None:
     from evotol.reporting.callout_drawing import terminal_lines
     from evotol.reporting.drawing import terminal_tolerance_rows
     from evotol.reporting.calibration import terminal_lines as calibration_lines
+    from evotol.reporting.iso9283 import terminal_lines as iso_lines
     from evotol.reporting.shop_floors import floor_lines
     from evotol.reporting.user_study import model_line, terminal_rows
 
@@ -276,6 +277,8 @@ def _print_results(summary: dict) -> None:
     for line in floor_lines(summary):        # sources held at the [shop] floors, as on the page (issue 41)
         print(f"  {line}")
     for line in calibration_lines(summary):  # a calibrated study: the page's calibration section (issue 41)
+        print(line)
+    for line in iso_lines(summary):          # ISO 9283 figures: the page's section (issue 44)
         print(line)
 
 

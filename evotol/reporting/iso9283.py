@@ -106,3 +106,72 @@ def iso9283_section(rep, summary: dict) -> None:
         rep.text(f"Allocated with the systematic sources: cost {a['cost']:.4g}, "
                  f"{'feasible' if a['feasible'] else 'NOT feasible'}, active: "
                  + (", ".join(k for k, v in a["active"].items() if v) or "none") + ". " + a["proven"], note=not a["feasible"])
+
+
+def verdict_lines(summary: dict) -> list[str]:
+    """One line per required ISO 9283 figure: the verdict, its value and the model it is on (the page's
+    sentences; the nonlinear simulation beside it as evidence).
+
+    Parameters
+    ----------
+    summary : dict
+        A study's JSON summary (allocation or analysis); no lines without an ``iso9283`` verdict.
+
+    Returns
+    -------
+    list of str
+        ``"AP <= 0.5 mm: meets (0.4993 mm, <model>; simulated 0.2021 mm, <as>)"`` per figure.
+    """
+    u = DisplayUnits(**summary["display_units"])
+    out = []
+    for fig, v in summary.get("iso9283", {}).get("verdict", {}).items():
+        unit = "rad" if fig[2:] in ("a", "b", "c") else "m"        # APa, RPb, ...: an angle
+        f = lambda x: u.format(x, unit)                            # noqa: E731
+        sim = f"simulated {f(v['simulated'])}, {v['simulated_as']}" if v["simulated"] is not None else v["simulated_as"]
+        out.append(f"{fig} <= {f(v['requirement'])}: {v['verdict']} ({f(v['predicted'])}, {v['model']}; {sim})")
+    return out
+
+
+def terminal_lines(summary: dict) -> list[str]:
+    """What the page's ISO 9283 section states, as terminal lines: the cube and requirement, the allocation
+    of systematic and random sources, each figure's verdict, the predicted and simulated AP and RP per pose,
+    and the calibrated AP (RP unchanged).
+
+    Parameters
+    ----------
+    summary : dict
+        A user study's JSON summary; no lines without an ``iso9283`` block.
+
+    Returns
+    -------
+    list of str
+        A title line, then lines indented by two spaces.
+    """
+    iso = summary.get("iso9283")
+    if not iso:
+        return []
+    u = DisplayUnits(**summary["display_units"])
+
+    def L(v):
+        return "-" if v is None else u.format(v, "m")
+
+    req = iso["requirement"]
+    out = [f"[evotol] ISO 9283 (docs/iso9283.md): test cube centre ({', '.join(L(c) for c in iso['cube']['centre'])}), "
+           f"edge {L(iso['cube']['edge'])}; AP <= {L(req['AP'])}, RP <= {L(req['RP'])}; systematic tolerances from "
+           f"{iso['systematic_from']}"]
+    if "allocation" in iso:
+        a = iso["allocation"]
+        out.append(f"  allocated with the random sources: cost {a['cost']:.6g}, {'feasible' if a['feasible'] else 'NOT feasible'}"
+                   f", binding: {', '.join(k for k, v in a['active'].items() if v) or 'none'}")
+    out += ["  " + line for line in verdict_lines(summary)]
+    for p in iso["poses"]:
+        ap, rp = p["AP"], p["RP"]
+        out.append(f"  {p['name']}: AP {L(ap['predicted'])} predicted, {L(ap['simulated'])} simulated; RP {L(rp['predicted'])} "
+                   f"predicted, {L(rp['simulated'])} simulated ({L(rp['interval'][0])} - {L(rp['interval'][1])} for one test)")
+    if "calibrated" in iso:
+        c = iso["calibrated"]
+        out.append(f"  calibrated ({c['robots']} simulated robots, {c['configurations']} configurations): largest AP "
+                   + ", ".join(f"{p['name']} {L(p['AP_before_max'])} -> {L(p['AP_after_max'])}" for p in c["poses"])
+                   + "; RP unchanged (" + ", ".join(f"{L(p['RP_before_mean'])} -> {L(p['RP_after_mean'])}" for p in c["poses"][:1])
+                   + " at " + c["poses"][0]["name"] + ")")
+    return out

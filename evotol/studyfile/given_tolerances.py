@@ -22,6 +22,7 @@ from evotol.core import plausibility
 from evotol.core.axis_limits import configurations
 from evotol.errors import ValidationError
 from evotol.reporting.analysis_page import render_analysis
+from evotol.reporting.iso9283 import verdict_lines
 from evotol.studyfile.iso9283 import iso9283_block
 from evotol.studyfile.kinds import Outcome
 from evotol.studyfile.steps import run_steps
@@ -155,10 +156,8 @@ def analysis_lines(summary: dict):
         yield (f"  Monte Carlo ({mc['n_samples']} samples per pose): exceed rate {100 * mc['max_exceed_rate']:.3g} % (linear)"
               + (f", {100 * mc['max_exceed_rate_nonlinear']:.3g} % (nonlinear)" if mc.get("max_exceed_rate_nonlinear") is not None else "")
               + (f"; {mc['linearisation_verdict']}" if mc.get("linearisation_verdict") else ""))
-    for fig, v in summary.get("iso9283", {}).get("verdict", {}).items():     # ISO 9283: the verdict and its model
-        U = lambda x: u.format(x, "rad" if fig[2:] in ("a", "b", "c") else "m")    # noqa: E731
-        yield (f"  ISO 9283 {fig} <= {U(v['requirement'])}: {v['verdict']} ({U(v['predicted'])}, {v['model']}; "
-               + (f"simulated {U(v['simulated'])})" if v["simulated"] is not None else f"{v['simulated_as']})"))
+    for line in verdict_lines(summary):       # ISO 9283: the verdict and its model (as an allocation study's)
+        yield f"  ISO 9283 {line}"
     for line in summary.get("notes", []):
         yield (f"  note: {line}")
 
