@@ -7,7 +7,9 @@ The worst-case measures keep, per component (position and orientation: both are 
 asymmetric intervals also the offsets' part ``const[p, d]`` and twice the directions, the full
 sphere). Measured on the UR5 study (36 sources, 600 directions, position and orientation) at 3 375
 poses: the two caches take 1.17 GB and the peak beyond the imports was 2.2 GB, so the estimate is
-twice the caches (:data:`WORKING_FACTOR`) plus the sensitivities.
+twice the caches (:data:`WORKING_FACTOR`) plus the sensitivities. Above
+:data:`~evotol.core.problem.tolerance_problem.COEFFICIENT_CACHE_BYTES` a component's coefficients are
+computed by blocks of poses and not kept (slower, bounded).
 """
 from __future__ import annotations
 
@@ -15,6 +17,7 @@ import numpy as np
 
 from evotol._runtime.memory import available_bytes
 from evotol.errors import ValidationError
+from evotol.core.problem.tolerance_problem import COEFFICIENT_CACHE_BYTES
 from evotol.measures.linear import directions_for
 
 #: the peak over the caches: the optimum's and the feasibility check's working copies (measured 1.9 on the UR5)
@@ -34,7 +37,8 @@ def study_bytes(problem) -> int:
     Returns
     -------
     int
-        ``WORKING_FACTOR * Σ_components P D (n_src + [asymmetric]) * 8 + P * 6 * n_columns * 8``, with D
+        ``WORKING_FACTOR * Σ_components min(P D (n_src + [asymmetric]) * 8, COEFFICIENT_CACHE_BYTES)`` plus,
+        per pose, the sensitivities and the results kept (``6 n_columns + 3 n_src + 8`` numbers), with D
         the directions :func:`evotol.measures.linear.directions_for` takes for each component (fewer for a
         planar error, 1 for an error along one axis).
     """
@@ -43,8 +47,9 @@ def study_bytes(problem) -> int:
     caches = 0
     for blocks in problem.blocks.values():      # position and orientation: both are evaluated for the report
         D, _ = directions_for(np.concatenate(blocks, axis=2), problem.n_directions, full_sphere=asym)
-        caches += P * len(D) * (n + asym) * 8
-    return int(WORKING_FACTOR * caches + P * 6 * problem.error_model.n_columns * 8)
+        caches += min(P * len(D) * (n + asym) * 8, COEFFICIENT_CACHE_BYTES)      # above it: blocks of poses
+    per_pose_kept = 6 * problem.error_model.n_columns * 8 + 8 * (3 * n + 8)     # J; results: shares, directions
+    return int(WORKING_FACTOR * caches + P * per_pose_kept)
 
 
 def check_memory(problem, available: int | None = None) -> None:

@@ -77,17 +77,18 @@ class ConstraintRows:
             probes = np.concatenate([probes, np.sqrt(problem.lower * problem.upper)[None], problem.upper[None]])
             probes = problem.full(probes[:, problem.free])
             for comp, lim in problem.components:
-                coef = problem.coefficients(comp)
-                c, D = coef[0], coef[1]
-                const = coef[3] if len(coef) > 3 else None
-                grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ probes.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)
-                if const is not None:
-                    grid = grid + const[None]
-                k = np.argmax(grid, axis=2)                              # (n_probe, n_poses)
-                flat = np.unique((np.arange(problem.n_poses)[None, :] * D.shape[0] + k).ravel())
-                pp, dd = np.divmod(flat, D.shape[0])
-                self._add_linear(c[pp, dd, :] / lim, [(comp, int(a), int(b)) for a, b in zip(pp, dd)],
-                                 None if const is None else const[pp, dd] / lim)
+                for sl, coef in problem.coefficient_blocks(comp):      # one block, or blocks of poses (issue 43)
+                    c, D = coef[0], coef[1]
+                    const = coef[3] if len(coef) > 3 else None
+                    grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ probes.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)
+                    if const is not None:
+                        grid = grid + const[None]
+                    k = np.argmax(grid, axis=2)                              # (n_probe, poses of the block)
+                    flat = np.unique((np.arange(c.shape[0])[None, :] * D.shape[0] + k).ravel())
+                    pp, dd = np.divmod(flat, D.shape[0])
+                    first = sl.start or 0
+                    self._add_linear(c[pp, dd, :] / lim, [(comp, first + int(a), int(b)) for a, b in zip(pp, dd)],
+                                     None if const is None else const[pp, dd] / lim)
             self.check(probes)
             self.prune(probes)
 

@@ -73,8 +73,7 @@ def tighten_bounds(problem, ev, t: np.ndarray) -> None:
         value = getattr(ev, comp)
         if bound is None or value is None:
             continue
-        coeff = problem.coefficients(comp)
-        D, delta = coeff[1], coeff[2]
+        D, delta = problem.directions(comp)
         blocks = problem.blocks[comp]
         for p in np.flatnonzero(bound[0] > lim * (1 + FEASIBILITY_RTOL)):
             b, attained = certified_max([B[p:p + 1] for B in blocks], t, D, delta, float(value[0, p]), shape,
@@ -107,11 +106,11 @@ def proven_cuts(problem, rows, t: np.ndarray) -> int:
     shape = None if problem.shape.plain else problem.shape
     added = 0
     for comp, lim in problem.components:
-        coeff = problem.coefficients(comp)
+        D, delta = problem.directions(comp)
         blocks = problem.blocks[comp]
         bound, value = getattr(ev, f"{comp}_bound"), getattr(ev, comp)
         for p in np.flatnonzero(bound[0] > lim * (1 + FEASIBILITY_RTOL)):
-            _, attained, u = certified_max([B[p:p + 1] for B in blocks], t, coeff[1], coeff[2], float(value[0, p]),
+            _, attained, u = certified_max([B[p:p + 1] for B in blocks], t, D, delta, float(value[0, p]),
                                            shape, rtol=BOUND_RTOL, return_direction=True)
             if u is not None and attained > lim * (1 + 0.1 * FEASIBILITY_RTOL):
                 row, const = problem.support_row(comp, int(p), u)

@@ -94,7 +94,7 @@ def sampled_worst_case(problem: ToleranceProblem, T: np.ndarray, component: str)
     Parameters
     ----------
     problem : ToleranceProblem
-        Its support coefficients (:meth:`ToleranceProblem.coefficients`) are used.
+        Its support coefficients (:meth:`ToleranceProblem.coefficient_blocks`) are used.
     T : ndarray, shape (n_designs, n_sources) or (n_sources,)
         Tolerance vectors, SI (m or rad), in source order.
     component : {"position", "orientation"}
@@ -105,12 +105,13 @@ def sampled_worst_case(problem: ToleranceProblem, T: np.ndarray, component: str)
     ndarray, shape (n_designs, n_poses)
         The sampled worst-case error at every pose, m (position) or rad (orientation).
     """
-    coeff = problem.coefficients(component)
-    c = coeff[0]
-    grid = np.einsum("pdj,nj->npd", c, np.atleast_2d(T))
-    if len(coeff) > 3:
-        grid = grid + coeff[3][None]
-    return grid.max(axis=2)
+    out = []
+    for _, coeff in problem.coefficient_blocks(component):     # one block, or blocks of poses (issue 43)
+        grid = np.einsum("pdj,nj->npd", coeff[0], np.atleast_2d(T))
+        if len(coeff) > 3:
+            grid = grid + coeff[3][None]
+        out.append(grid.max(axis=2))
+    return out[0] if len(out) == 1 else np.concatenate(out, axis=1)
 
 
 def sample_tightness(problem: ToleranceProblem, designs: dict[str, np.ndarray], seed: int = 0) -> dict:
@@ -143,7 +144,7 @@ def sample_tightness(problem: ToleranceProblem, designs: dict[str, np.ndarray], 
     for comp, _ in problem.components:
         exact = getattr(ev, comp)
         page = sampled_worst_case(problem, T, comp)
-        _, D, delta = problem.coefficients(comp)[:3]
+        D, delta = problem.directions(comp)
         ratio = np.where(exact > 0, page / np.where(exact > 0, exact, 1.0), 1.0)
         worst = np.argmax(exact, axis=1)
         at_max = page.max(axis=1) / exact.max(axis=1)
@@ -196,7 +197,7 @@ def explorer_data(problem: ToleranceProblem, designs: dict[str, np.ndarray], see
     owner = np.repeat(np.arange(problem.n_sources), [B.shape[2] for B in problem.blocks["position"]]).tolist()
     components = []
     for comp, lim in problem.components:
-        _, D, delta = problem.coefficients(comp)[:3]
+        D, delta = problem.directions(comp)
         components.append({"name": comp, "limit": float(lim), "directions": D.tolist(), "covering_angle": float(delta),
                            "blocks": np.concatenate(problem.blocks[comp], axis=2).tolist(), "owner": owner,
                            "sensitivity": problem.sensitivities[comp].tolist()})

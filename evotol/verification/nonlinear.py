@@ -73,7 +73,7 @@ def worst_vertex_errors(problem: ToleranceProblem, t) -> dict[str, np.ndarray]:
     out = {}
     shape = None if problem.shape.plain else problem.shape
     for comp, _ in problem.components:
-        wc = measures.worst_case(problem.blocks[comp], t, coefficients=problem.coefficients(comp), shape=shape)
+        wc = measures.worst_case_by_blocks(problem.blocks[comp], t, problem.coefficient_blocks(comp), shape=shape)
         errs = measures.worst_case_errors(problem.blocks[comp], t, wc.direction, shape)
         E = np.concatenate(errs, axis=1)                                   # (p, n_columns)
         nl = problem.error_model.pose_error(problem.poses, E[:, None, :])[:, 0]

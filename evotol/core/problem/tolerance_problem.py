@@ -45,6 +45,10 @@ from evotol.core.tolerance import Tolerance
 from evotol.core.variables import tolerance_variables
 from evotol.robots.base import RobotErrorModel
 
+#: bytes of one component's support coefficients kept for every pose; above it they are computed by blocks of
+#: poses (a quarter of it each) when used and not kept (:meth:`ToleranceProblem.coefficient_blocks`, issue 43)
+COEFFICIENT_CACHE_BYTES = 2 ** 30
+
 __all__ = ["ToleranceProblem"]
 
 
@@ -335,14 +339,56 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         """
         if component not in self._coeff_cache:
             blocks = self.blocks[component]
-            D, delta = measures.directions_for(np.concatenate(blocks, axis=2), self.n_directions,
-                                               full_sphere=self.asymmetric)
+            D, delta = self.directions(component)
             if self.shape.plain:
                 self._coeff_cache[component] = (measures.support_coefficients(blocks, D), D, delta)
             else:
                 self._coeff_cache[component] = (measures.support_coefficients(blocks, D, self.shape), D, delta,
                                                 measures.support_constant(blocks, D, self.shape))
         return self._coeff_cache[component]
+
+    def directions(self, component: str) -> tuple[np.ndarray, float]:
+        """The direction grid of the worst-case support function and its covering angle (the ``D``,
+        ``delta`` of :meth:`coefficients`, without building the coefficients).
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component whose direction grid is asked for.
+
+        Returns
+        -------
+        tuple
+            ``D`` (n_directions, 3) unit directions and ``delta`` (rad;
+            :func:`evotol.measures.linear.directions_for`).
+        """
+        return measures.directions_for(np.concatenate(self.blocks[component], axis=2), self.n_directions,
+                                       full_sphere=self.asymmetric)
+
+    def coefficient_blocks(self, component: str) -> list[tuple[slice, tuple]]:
+        """The support coefficients by blocks of poses: ``[(poses, (c, D, delta[, const]))]``.
+
+        One block, the cached :meth:`coefficients`, when they fit in :data:`COEFFICIENT_CACHE_BYTES`;
+        otherwise blocks of consecutive poses computed when asked for and not kept, so memory grows
+        with the poses' results, not with poses x directions x sources (issue 43 item 4).
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component whose coefficients are asked for.
+
+        Returns
+        -------
+        list of (slice, tuple)
+            The poses of each block and its coefficients in the layout of :meth:`coefficients`; a lazy
+            sequence (:class:`evotol.measures.linear.PoseBlocks`) when blocked.
+        """
+        D, delta = self.directions(component)
+        per_pose = 8 * len(D) * (self.n_sources + 1)
+        if component in self._coeff_cache or self.n_poses * per_pose <= COEFFICIENT_CACHE_BYTES:
+            return [(slice(None), self.coefficients(component))]
+        return measures.PoseBlocks(self.blocks[component], D, delta, None if self.shape.plain else self.shape,
+                                   max(1, COEFFICIENT_CACHE_BYTES // (4 * per_pose)))
 
     def support_row(self, component: str, pose: int, u: np.ndarray) -> tuple[np.ndarray, float]:
         """The worst-case row at one pose and direction u: h(u) = row·t + const (SI).

@@ -38,8 +38,8 @@ class WorstCaseMeasure(Measure):
         shape = None if problem.shape.plain else problem.shape
         parts = {}
         for comp in COMPONENTS:
-            wc = measures.worst_case(problem.blocks[comp], T, coefficients=problem.coefficients(comp),
-                                     top_only=top_only, shape=shape)
+            wc = measures.worst_case_by_blocks(problem.blocks[comp], T, problem.coefficient_blocks(comp),
+                                               top_only=top_only, shape=shape)
             parts[comp] = ComponentErrors(wc.value, wc.bound, wc.contributions, wc.direction)
         return evaluation_of(parts, violation(problem, parts))
 

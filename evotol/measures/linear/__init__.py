@@ -16,6 +16,7 @@ from evotol.measures.linear.directions import circle, directions_for
 from evotol.measures.linear.directions import hemisphere  # noqa: F401  (a cached grid, not listed)
 from evotol.measures.linear.stackup import WorstCase, refine_direction, rss, spectral_norms, worst_case, worst_case_errors
 from evotol.measures.linear.support import IntervalShape, mean_shift, support_coefficients, support_constant
+from evotol.measures.linear.pose_blocks import PoseBlocks, worst_case_by_blocks
 
-__all__ = ["circle", "directions_for", "WorstCase", "IntervalShape", "mean_shift", "support_coefficients",
+__all__ = ["PoseBlocks", "worst_case_by_blocks", "circle", "directions_for", "WorstCase", "IntervalShape", "mean_shift", "support_coefficients",
            "support_constant", "refine_direction", "worst_case", "worst_case_errors", "spectral_norms", "rss"]

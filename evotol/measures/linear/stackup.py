@@ -129,7 +129,7 @@ def refine_direction(blocks: list[np.ndarray], t: np.ndarray, u: np.ndarray, ite
 
 def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
                coefficients: tuple | None = None, top_only: bool = False,
-               shape: IntervalShape | None = None, n_starts: int = 8) -> WorstCase:
+               shape: IntervalShape | None = None, n_starts: int = 8, top_level: np.ndarray | None = None) -> WorstCase:
     """Exact worst-case error norm at every pose for designs ``t`` (n_designs, n_src) or (n_src,).
 
     ``coefficients`` = (c, D, δ[, const]) from :func:`support_coefficients` /
@@ -154,6 +154,10 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
         Refine only the poses that can hold the maximum.
     n_starts : int
         Ascent starts per pose for non-plain shapes.
+    top_level : ndarray, shape (n_designs,), optional
+        With ``top_only``: each design's largest grid value over every pose, when ``blocks`` hold
+        only some of them (:func:`evotol.measures.linear.pose_blocks.worst_case_by_blocks`); default
+        the largest over ``blocks``' poses.
 
     Returns
     -------
@@ -176,7 +180,8 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
     if T.shape[0] > 1 and T.shape[0] * per_design > DESIGN_BLOCK_BYTES:      # designs in blocks: memory bounded (issue 43)
         step = max(1, DESIGN_BLOCK_BYTES // per_design)
         coef = (c, D, delta) if const is None else (c, D, delta, const)
-        parts = [worst_case(blocks, T[i:i + step], coefficients=coef, top_only=top_only, shape=shape, n_starts=n_starts)
+        parts = [worst_case(blocks, T[i:i + step], coefficients=coef, top_only=top_only, shape=shape, n_starts=n_starts,
+                            top_level=None if top_level is None else top_level[i:i + step])
                  for i in range(0, T.shape[0], step)]
         return WorstCase(*(np.concatenate([getattr(r, f) for r in parts]) for f in WorstCase.__dataclass_fields__))
     grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ T.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)  # (n, p, d)
@@ -189,9 +194,10 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
         Th, shift = T, None
     else:
         Th, shift = T * shape.rho, mean_shift(blocks, shape, T)
+    level = gmax.max(axis=1, keepdims=True) if top_level is None else np.asarray(top_level, float)[:, None]
     if top_only:
         # poses whose proven bound is below the best attained grid value cannot hold the maximum
-        keep = np.flatnonzero(np.any(gmax / np.cos(delta) >= gmax.max(axis=1, keepdims=True), axis=0))
+        keep = np.flatnonzero(np.any(gmax / np.cos(delta) >= level, axis=0))
         u, h = u0.copy(), gmax.copy()
         if keep.size:
             u_k, h_k = refine_direction([B[keep] for B in blocks], Th, u0[:, keep],
@@ -202,7 +208,7 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
     if not plain and n_starts > 1 and grid.shape[2] > 1:
         # a non-centred set has more separated local maxima of h: also ascend from the best grid
         # direction of each of a few cones around other good grid points, keep the largest
-        keep_all = np.flatnonzero(np.any(gmax / np.cos(delta) >= gmax.max(axis=1, keepdims=True), axis=0)) \
+        keep_all = np.flatnonzero(np.any(gmax / np.cos(delta) >= level, axis=0)) \
             if top_only else np.arange(grid.shape[1])
         g = grid[:, keep_all]                                            # (n, k, d)
         order = np.argsort(-g, axis=2)[:, :, :max(4 * n_starts, 16)]

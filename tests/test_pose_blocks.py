@@ -1,0 +1,78 @@
+"""Support coefficients by blocks of poses (issue 43 item 4): above ``COEFFICIENT_CACHE_BYTES`` a component's
+coefficients are computed for a block of poses, used and dropped. Every consumer -- the worst-case measure
+(with and without ``top_only``), the optimum's cutting planes, the nonlinear vertex check, the explorer's
+sampled worst case -- must give the numbers of the cached, all-poses path: here the cache is shrunk so the
+small UR5 study (8 poses) runs in blocks of one pose, and each number is compared with the same call on the cached
+problem. Values and bounds agree to round-off; worst directions to the ascent's own precision (h is
+stationary at u*, and the ascent's stopping test is shared by the poses evaluated together)."""
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+import evotol.core.problem.tolerance_problem as tp
+from evotol.allocators import allocate_optimum
+from evotol.measures.linear import PoseBlocks
+from evotol.studyfile.problem import load_problem
+from evotol.summaries.explorer_data import sampled_worst_case
+from evotol.verification.nonlinear import worst_vertex_errors
+from tests.test_combinations import STUDIES, ur5
+
+
+@pytest.fixture(scope="module")
+def pair():
+    """The UR5 on 8 task poses, cached, and a copy whose coefficients come in blocks."""
+    spec = ur5()
+    spec["poses"] = {"grid": [2, 2, 2]}
+    spec["requirement"]["orientation"] = 2e-3
+    cached = load_problem(spec, base_dir=STUDIES)
+    blocked = copy.copy(cached)
+    blocked._coeff_cache = {}
+    return cached, blocked
+
+
+@pytest.fixture
+def small_cache(pair, monkeypatch):
+    cached, _ = pair
+    D, _ = cached.directions("position")
+    per_pose = 8 * len(D) * (cached.n_sources + 1)
+    monkeypatch.setattr(tp, "COEFFICIENT_CACHE_BYTES", 7 * per_pose)     # 8 poses do not fit: blocks of 7 // 4 = 1
+    return per_pose
+
+
+def test_blocks_cover_every_pose_once_with_the_cached_coefficients(pair, small_cache):
+    cached, blocked = pair
+    for comp in ("position", "orientation"):
+        pieces = blocked.coefficient_blocks(comp)
+        assert isinstance(pieces, PoseBlocks) and len(pieces) == 8 and comp not in blocked._coeff_cache
+        c = np.concatenate([coef[0] for _, coef in pieces])
+        assert np.array_equal(c, cached.coefficients(comp)[0])          # the same arithmetic, pose by pose
+        assert [sl.start for sl, _ in pieces] == list(range(8))
+
+
+@pytest.mark.parametrize("top_only", [False, True])
+def test_worst_case_in_blocks_equals_all_poses(pair, small_cache, top_only):
+    cached, blocked = pair
+    rng = np.random.default_rng(0)
+    T = np.exp(rng.uniform(np.log(cached.lower), np.log(cached.upper), (5, cached.n_sources)))
+    a, b = cached.evaluate(T, top_only=top_only), blocked.evaluate(T, top_only=top_only)
+    for comp in ("position", "orientation"):
+        assert np.allclose(getattr(a, comp), getattr(b, comp), rtol=1e-12)
+        assert np.allclose(getattr(a, f"{comp}_bound"), getattr(b, f"{comp}_bound"), rtol=1e-12)
+        if not top_only:
+            assert np.allclose(getattr(a, f"{comp}_direction"), getattr(b, f"{comp}_direction"), atol=1e-6)
+        assert np.allclose(sampled_worst_case(cached, T, comp), sampled_worst_case(blocked, T, comp), rtol=1e-12)
+    t = T[0]
+    va, vb = worst_vertex_errors(cached, t), worst_vertex_errors(blocked, t)
+    for comp in va:
+        assert np.allclose(va[comp], vb[comp], rtol=1e-6)
+
+
+def test_optimum_in_blocks_equals_the_cached_optimum(pair, small_cache):
+    cached, blocked = pair
+    ra, rb = allocate_optimum(cached), allocate_optimum(blocked)
+    assert ra.feasible and rb.feasible
+    assert rb.cost == pytest.approx(ra.cost, rel=1e-7)
+    assert np.allclose(rb.t, ra.t, rtol=1e-5)
