@@ -20,7 +20,7 @@ def test_estimate_is_twice_the_coefficients_the_problem_builds():
     p = load_problem(ur5(), base_dir=STUDIES)
     built = sum(sum(a.nbytes for a in p.coefficients(c) if isinstance(a, np.ndarray) and a.ndim == 3)
                 for c in ("position", "orientation"))
-    kept = p.n_poses * 8 * (6 * p.error_model.n_columns + 3 * p.n_sources + 8)      # J and the results
+    kept = p.n_poses * (8 * 6 * p.error_model.n_columns + memory.PER_POSE_BYTES)      # J and the results
     assert memory.study_bytes(p) == pytest.approx(memory.WORKING_FACTOR * built + kept, rel=1e-12)
 
 
