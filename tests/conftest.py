@@ -13,10 +13,20 @@ file while the other idles (longest processing time first: the makespan is at mo
 from __future__ import annotations
 
 import copy
+import os
 from collections import Counter
 from pathlib import Path
 
+# One BLAS thread per test process, as ``evotol``'s command sets for itself (evotol.cli.main,
+# evotol/_runtime/blas_threads.py): with two xdist workers on two cores, OpenBLAS's own threads spin
+# against the other worker -- the five-bar's 80 SLSQP solves (tests/test_fivebar.py) took 28.8 s with
+# two BLAS threads and 6.6 s with one, alone on a machine at load 4 (issue 43). Set before numpy is
+# loaded here; the limit below covers a numpy that a plugin loaded first. Subprocesses inherit it.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
 import pytest
+from threadpoolctl import threadpool_limits
 
 STUDIES = Path(__file__).resolve().parents[1] / "reports" / "studies"
 
@@ -37,6 +47,13 @@ FILE_SECONDS = {
     "test_clearance_allocation.py": 6, "test_knots.py": 5, "test_allocators.py": 5, "test_drawn_callouts.py": 5,
     "test_studyfile_specs.py": 5, "test_export.py": 5,
 }
+
+
+def pytest_configure(config):
+    """BLAS limited to one thread for the whole test process (see the variables set above), unless the
+    user set ``OPENBLAS_NUM_THREADS`` (or ``OMP_``/``MKL_``) to something else."""
+    if os.environ["OPENBLAS_NUM_THREADS"] == "1":
+        config._evotol_blas_limit = threadpool_limits(limits=1, user_api="blas")
 
 
 def pytest_collection_modifyitems(config, items):

@@ -58,7 +58,7 @@ def test_certified_optimum_holds_on_the_nonlinear_model(problem, optimum):
     assert nl == pytest.approx(5e-4, rel=1e-3)
 
 
-# Slow (the slowest test in CI, about 40 s) because its checks are strong: each allocator is held to the
+# Slow (40 s in CI with two BLAS threads per worker; 5.7 s alone with one, tests/conftest.py) because its checks are strong: each allocator is held to the
 # certified optimum's lower bound, and the budget mode is solved to its own certified optimum (SLSQP with
 # cutting planes over the 8 poses' support rows of 18 callout variables) to meet the requirement to 1e-4.
 def test_ga_nsga_sensitivity_and_budget_on_callouts(problem, optimum):

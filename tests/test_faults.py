@@ -378,6 +378,28 @@ def test_serial_kernels_import_when_numba_cannot_cache(locators, cache):
     assert r.stderr.count("[evotol] numba cannot write its cache") == 1 and "NUMBA_CACHE_DIR" in r.stderr
 
 
+
+NO_LOCATOR_CLEARANCE = """
+    from numba.core import caching
+    caching.CacheImpl._locator_classes = {locators}
+    from evotol.robots.clearance import newton_kernel as nk
+    compiled = nk._compiled()
+    print(compiled is not None and type(compiled[0]._cache).__name__)
+"""
+
+
+@pytest.mark.parametrize("locators, cache", [("[]", "NullCache"), ("[caching.UserProvidedCacheLocator]", "FunctionCache")])
+def test_clearance_kernel_compiles_when_numba_cannot_cache(locators, cache):
+    """The same for the clearance engine's Newton kernels (issue 43): compiled (cached in a temporary
+    folder, else without a cache), not dropped to the NumPy iteration; one line says so."""
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "EVOTOL_NO_NUMBA")} | {"PYTHONPATH": str(ROOT)}
+    r = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", "-c",
+                        textwrap.dedent(NO_LOCATOR_CLEARANCE.format(locators=locators))], cwd=ROOT,
+                       env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == [cache]
+    assert r.stderr.count("[evotol] numba cannot write its cache") == 1 and "NUMBA_CACHE_DIR" in r.stderr
+
 POOL = """
     import os, time
     from evotol._runtime.executor import run_chunks

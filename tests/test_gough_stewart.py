@@ -148,6 +148,7 @@ def test_optimum_equals_an_independent_scipy_solve():
     assert np.allclose(opt.t, ref.x * 1e-5, rtol=1e-3)
 
 
+# Slow (~11 s alone) because it runs the documentation's two examples as a user would, unchanged (docs/gough_stewart.md).
 def test_the_docs_examples_run(tmp_path, capsys):
     """The allocation study and the study of given tolerances (patterns) of docs/gough_stewart.md."""
     assert main(["run", str(EXAMPLES / "gough_stewart_study.toml"), "--out", str(tmp_path)]) == 0

@@ -42,6 +42,7 @@ def test_longest_first_follows_the_expected_times():
     assert [EXPECTED_SECONDS[n] for n in order[:-1]] == sorted((EXPECTED_SECONDS[n] for n in order[:-1]), reverse=True)
 
 
+# Slow (~10 s alone) because its check needs both runs: two studies side by side, then each alone, number by number.
 def test_studies_run_side_by_side_give_the_numbers_of_a_run_alone(tmp_path, capsys):
     names = ["chase1990-clutch", "process-stack"]
     res = reproduce_concurrently(names, tmp_path / "jobs", jobs=2, quick=True, report_every=1e9)

@@ -46,13 +46,17 @@ def test_type_checking_names_are_the_front_door():
 
 
 def test_mypy_accepts_the_front_door_and_rejects_a_wrong_call(tmp_path, installed_layout):
-    done = _mypy(installed_layout, SCRIPT)
-    assert done.returncode == 0 and "Success" in done.stdout, done.stdout + done.stderr
+    """One mypy run over both files (it checks evotol once, not twice; issue 43): every error it reports
+    is in the wrong call's file -- none in the front-door script nor in evotol -- and the wrong call's
+    two errors are there."""
     wrong = tmp_path / "wrong.py"
     wrong.write_text("from evotol import allocate_optimum, AllocationResult\n"
                      "x: int = allocate_optimum(None)\n")
-    done = _mypy(installed_layout, wrong)
-    assert done.returncode == 1
+    done = _mypy(installed_layout, SCRIPT, wrong)
+    assert done.returncode == 1, done.stdout + done.stderr
+    errors = [line for line in done.stdout.splitlines() if ": error:" in line]
+    assert errors and all(line.startswith(str(wrong) + ":") for line in errors), done.stdout
+    assert "Found 2 errors in 1 file (checked 2 source files)" in done.stdout, done.stdout
     assert 'Argument 1 to "allocate_optimum" has incompatible type "None"' in done.stdout, done.stdout
     assert 'Incompatible types in assignment (expression has type "AllocationResult"' in done.stdout, done.stdout
 

@@ -5,8 +5,9 @@ folder; on a read-only install with a read-only home neither works and ``@njit(c
 ``RuntimeError: cannot cache function ...: no locator available`` *at import*, killing every
 serial-arm study. :func:`njit` catches that once, points numba at a private folder of the system's
 temporary directory (``NUMBA_CACHE_DIR``, also inherited by worker processes), says so on one line
-of stderr, and compiles without a cache if even that fails. The clearance engine has its own fallback
-(:mod:`evotol.robots.clearance.newton_kernel`: NumPy iterations).
+of stderr, and compiles without a cache if even that fails. The serial-arm kernels and the clearance
+engine's Newton kernels (:mod:`evotol.robots.clearance.newton_kernel`, which falls back to its NumPy
+iteration only when numba itself fails) are compiled through it.
 """
 from __future__ import annotations
 

@@ -33,7 +33,8 @@ IRSBot-2 problems (``benchmarks/bench_clearance.py``). Both agree to round-off.
 
 numba is a dependency of evotol, imported on the first compiled iteration. The first use on a
 fresh install compiles the kernel (about 6 s) into numba's on-disk cache (``__pycache__`` beside
-this file, or numba's user-wide cache directory); later processes load it in about 0.5 s. If numba
+this file, or numba's user-wide cache directory; where neither can be written, a temporary folder,
+:mod:`evotol._runtime.numba_cache`); later processes load it in about 0.5 s. If numba
 cannot be imported or fails to compile, a ``RuntimeWarning`` says so once and the solver uses the
 NumPy iteration (same results up to round-off); ``EVOTOL_NO_NUMBA=1`` asks for that explicitly.
 
@@ -165,9 +166,10 @@ def _kernel():
 @functools.lru_cache(maxsize=1)
 def _compiled():
     try:
-        import numba
+        from evotol._runtime.numba_cache import njit     # cache=True that falls back (issue 42)
 
-        jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+        # a read-only install caches in a temporary folder instead of dropping to the NumPy iteration (issue 43)
+        jit = njit(cache=True, nogil=True, error_model="numpy")
         helpers = {"_chol_factor": jit(_chol_factor), "_chol_solve": jit(_chol_solve)}
         compiled = tuple(jit(_bound(f, **helpers)) for f in (_newton_iterate_py, _project_centred_py, _predict_centred_py))
         _say_if_compiling(compiled[0])
