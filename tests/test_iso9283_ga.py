@@ -95,3 +95,51 @@ def test_bad_ga_budget_is_refused_in_one_line(case):
         allocate_iso9283_ga(robot, P, [None] * 6, [[1e-6] * 6, [1e-3] * 6], np.zeros(6, bool), [], [], [[], []],
                             AP, None, pop_size=2)
     assert e.value.field == "ga (iso9283)" and "\n" not in str(e.value) and "pop_size >= 4" in str(e.value)
+
+
+# --- in a study file: the ga beside [iso9283] allocate = true ------------------------------------------
+def example_spec(methods: dict) -> dict:
+    import tomllib
+    from pathlib import Path
+    spec = tomllib.loads((Path(UR5).parents[2] / "reports/studies/iso9283_example.toml").read_text())
+    spec["iso9283"].pop("calibrate")
+    spec["iso9283"]["simulate"] = {"robots": 5, "cycles": 30, "multidirectional": False}
+    spec["poses"]["grid"] = [2, 2, 2]
+    spec["methods"] = methods
+    return spec
+
+
+def test_a_study_with_a_ga_writes_its_iso_allocation_judged_like_the_optimum():
+    from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
+    from evotol.studyfile.problem import load_problem
+    spec = example_spec({"optimum": {}, "ga": {"pop_size": 8, "n_gen": 3, "seed": 1}})
+    problem = load_problem(spec)
+    iso = read_iso9283(spec, problem)
+    assert iso.ga == {"pop_size": 8, "n_gen": 3, "seed": 1}
+    block = iso9283_block(iso, problem, {}, seed=0)
+    g, opt = block["allocation_ga"], block["allocation"]
+    # the cost recomputed here from the cost models at the GA's tolerances
+    tols = problem.tolerances
+    own = sum(float(tols[n].cost.cost(t)) for free, (n, t) in zip(problem.free, g["systematic"].items()) if free) \
+        + sum(float(c.cost(g["random"][s.name])) for s, c in zip(iso.sources, iso.costs))
+    assert g["cost"] == pytest.approx(own, rel=1e-12)
+    assert g["gap_to_optimum"] == pytest.approx(g["cost"] / opt["cost"] - 1, rel=1e-12)
+    assert g["evaluations"] <= 8 * 3 and g["seed"] == 1
+    assert g["feasible"] == (max(g["AP_bound"]) <= iso.AP * (1 + 1e-6) and max(g["RP_sampled"]) <= iso.RP * (1 + 1e-6))
+    assert g["cost"] >= opt["cost"] * (1 - 0.004)          # the optimum's AP margin cos δ is at most 0.4 %
+
+
+@pytest.mark.parametrize("methods, requirement, field", [
+    ({"optimum": {}, "nsga2": {}}, None, "methods.nsga2"),
+    ({"ga": {"pop_size": 8, "operators": "paper"}}, None, "methods.ga.operators"),
+    ({"ga": {}}, {"AP": "0.5 mm", "RP": "0.05 mm", "APa": "0.9 mrad"}, "requirement.iso9283.APa")],
+    ids=["nsga2", "ga-operators", "ga-orientation"])
+def test_what_the_iso_ga_does_not_take_is_refused_in_one_line(methods, requirement, field):
+    from evotol.studyfile.iso9283 import read_iso9283
+    from evotol.studyfile.problem import load_problem
+    spec = example_spec(methods)
+    if requirement:
+        spec["requirement"]["iso9283"] = requirement
+    with pytest.raises(ValidationError) as e:
+        read_iso9283(spec, load_problem(spec))
+    assert e.value.field == field and "\n" not in str(e.value)

@@ -25,6 +25,29 @@ robot : evotol.robots.mechanism.model.error_model.MechanismModel
     The arm.
 positions : (p, 3) array_like
     The ISO poses (m).
+sys_costs : list of evotol.cost_models.base.CostModel or None
+    Per column of the model its cost model; None for a given (fixed) source, never priced.
+sys_bounds : (2, n_columns) array_like
+    Lower and upper bounds of the systematic tolerances (SI); a column not free keeps its lower.
+free : (n_columns,) array_like of bool
+    Which systematic tolerances the allocation may change.
+sources : sequence of evotol.robots.mechanism.model.random_sources.RandomSource
+    The random sources.
+rand_costs : list of evotol.cost_models.base.CostModel
+    Per random source its cost model.
+rand_bounds : (2, n_random) array_like
+    Lower and upper bounds of the random tolerances (SI).
+AP, RP : float or None
+    Required figures (m); None: no such constraint.
+n_samples : int
+    Fixed cycle draws for RP.
+seed : int
+    Seed of the draws.
+orientation : dict or None
+    Orientation figures required (ISO 9283 §7.2, rad): keys ``APa``, ``APb``, ``APc`` (worst case of
+    ``|ā − a_c|`` over the tolerance box, exact: ``|r·c| + Σ |r_i| h_i``, convex) and ``RPa``, ``RPb``,
+    ``RPc`` (``3 sqrt(Σ_k τ_k² w_k)``, exact for the linearised random sources, convex: a weighted norm);
+    a, b, c the rotations about the base x, y, z (:func:`evotol.measures.iso9283.predict_orientation`).
 """
 from __future__ import annotations
 
@@ -49,33 +72,10 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
 
     Parameters
     ----------
-    sys_costs : list of evotol.cost_models.base.CostModel or None
-        Per column of the model its cost model; None for a given (fixed) source, never priced.
-    sys_bounds : (2, n_columns) array_like
-        Lower and upper bounds of the systematic tolerances (SI); a column not free keeps its lower.
-    free : (n_columns,) array_like of bool
-        Which systematic tolerances the allocation may change.
-    sources : sequence of evotol.robots.mechanism.model.random_sources.RandomSource
-        The random sources.
-    rand_costs : list of evotol.cost_models.base.CostModel
-        Per random source its cost model.
-    rand_bounds : (2, n_random) array_like
-        Lower and upper bounds of the random tolerances (SI).
-    AP, RP : float or None
-        Required figures (m); None: no such constraint.
     x0 : (n_columns + n_random,) array_like or None
         Start (SI); None: the geometric mean of the bounds.
-    n_samples : int
-        Fixed cycle draws for RP.
-    seed : int
-        Seed of the draws.
     maxiter : int
         SLSQP iterations.
-    orientation : dict or None
-        Orientation figures required (ISO 9283 §7.2, rad): keys ``APa``, ``APb``, ``APc`` (worst case of
-        ``|ā − a_c|`` over the tolerance box, exact: ``|r·c| + Σ |r_i| h_i``, convex) and ``RPa``, ``RPb``,
-        ``RPc`` (``3 sqrt(Σ_k τ_k² w_k)``, exact for the linearised random sources, convex: a weighted norm);
-        a, b, c the rotations about the base x, y, z (:func:`evotol.measures.iso9283.predict_orientation`).
 
     Returns
     -------

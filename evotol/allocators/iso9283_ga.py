@@ -15,6 +15,13 @@ Every design is first moved onto the boundary of the requirement (AP is positive
 ``(t, τ)`` and non-decreasing in each tolerance, RP in ``τ``: ``t ← r_AP t``, ``τ ← min(r_AP, r_RP) τ`` meets
 both where no bound clips; a few such steps). The best design is judged by :func:`iso_check`, the evaluation of
 the optimum, and called feasible only if that holds. Orientation figures are not handled (refused).
+
+Parameters
+----------
+terms : dict
+    :func:`evotol.allocators.iso9283.iso_terms` (the functions below add cached matrices to it).
+T : (n, m + K) ndarray
+    Designs: systematic then random tolerances (SI).
 """
 from __future__ import annotations
 
@@ -33,13 +40,6 @@ from evotol.measures.linear.directions import directions_for
 
 def population_figures(terms: dict, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The proven AP bound and the fixed-draw RP of many designs, per pose.
-
-    Parameters
-    ----------
-    terms : dict
-        :func:`evotol.allocators.iso9283.iso_terms`.
-    T : (n, m + K) ndarray
-        Designs: systematic then random tolerances (SI).
 
     Returns
     -------
@@ -84,10 +84,6 @@ def scale_to_boundary(terms: dict, T: np.ndarray, iters: int = 3) -> np.ndarray:
 
     Parameters
     ----------
-    terms : dict
-        :func:`evotol.allocators.iso9283.iso_terms`.
-    T : (n, m + K) ndarray
-        Designs (SI).
     iters : int
         Steps.
 
@@ -136,8 +132,6 @@ def design_cost(costs, T) -> np.ndarray:
     ----------
     costs : list of evotol.cost_models.base.CostModel or None
         Per column (systematic then random).
-    T : (n, m + K) ndarray
-        Designs (SI).
 
     Returns
     -------
@@ -148,19 +142,20 @@ def design_cost(costs, T) -> np.ndarray:
 
 @single_threaded_blas
 def allocate_iso9283_ga(robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds, AP, RP, *,
-                        pop_size: int = 40, n_gen: int = 40, seed: int = 0, n_samples: int = 10000) -> dict:
+                        pop_size: int = 40, n_gen: int = 40, seed: int = 0, n_samples: int = 10000,
+                        draw_seed: int | None = None) -> dict:
     """The GA's least-cost tolerances meeting AP (proven bound) and RP at every pose (module docstring).
 
     Parameters
     ----------
-    robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds, AP, RP
-        As :func:`evotol.allocators.iso9283.allocate_iso9283` (SI).
+    robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds, AP, RP, n_samples
+        As :func:`evotol.allocators.iso9283.allocate_iso9283` (SI; RP draws).
     pop_size, n_gen : int
         Population and generations (at least 4 and 1).
     seed : int
-        Seed of the GA, its initial Latin hypercube and the RP draws (the optimum's with the same seed).
-    n_samples : int
-        Fixed cycle draws for RP.
+        Seed of the GA and its initial Latin hypercube.
+    draw_seed : int or None
+        Seed of the RP draws (the optimum's with the same seed); None: ``seed``.
 
     Returns
     -------
@@ -176,7 +171,8 @@ def allocate_iso9283_ga(robot, positions, sys_costs, sys_bounds, free, sources, 
     """
     if int(pop_size) < 4 or int(n_gen) < 1:
         raise ValidationError("ga (iso9283)", {"pop_size": pop_size, "n_gen": n_gen}, "pop_size >= 4 and n_gen >= 1")
-    terms = iso_terms(robot, positions, sys_bounds, free, sources, rand_bounds, AP, RP, None, n_samples, seed)
+    terms = iso_terms(robot, positions, sys_bounds, free, sources, rand_bounds, AP, RP, None, n_samples,
+                      seed if draw_seed is None else draw_seed)
     costs = list(sys_costs) + list(rand_costs)
     prob = _Problem(terms, costs)
     X0 = qmc.scale(qmc.LatinHypercube(d=prob.n_var, seed=seed).random(int(pop_size)), prob.xl, prob.xu)

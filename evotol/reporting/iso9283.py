@@ -106,3 +106,9 @@ def iso9283_section(rep, summary: dict) -> None:
         rep.text(f"Allocated with the systematic sources: cost {a['cost']:.4g}, "
                  f"{'feasible' if a['feasible'] else 'NOT feasible'}, active: "
                  + (", ".join(k for k, v in a["active"].items() if v) or "none") + ". " + a["proven"], note=not a["feasible"])
+        if "allocation_ga" in iso:      # the study's GA on the same problem (evotol/studyfile/iso9283_methods.py)
+            g = iso["allocation_ga"]
+            rep.text(f"The GA ({g['pop_size']} × {g['n_gen']}) allocated them together too: cost {g['cost']:.4g} "
+                     f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
+                     + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check (proven AP bound, RP on the "
+                     "same draws).", note=not g["feasible"])
