@@ -59,7 +59,8 @@ def iso_ga_options(spec: dict, problem, orientation: dict) -> dict | None:
     if orientation:
         k = next(iter(orientation))
         raise ValidationError(f"requirement.iso9283.{k}", req[k], "no orientation figure beside [methods] ga and "
-                              "[iso9283] allocate = true: the ga allocates to AP and RP only (the optimum takes them)")
+                              "[iso9283] allocate = true: the ga allocates to AP and RP only (the optimum takes them: list "
+                              "[methods] without ga)")
     check_ga_options(**{k: v for k, v in ga.items() if k in ("pop_size", "n_gen", "seed")})
     return {"pop_size": int(ga.get("pop_size", 100)), "n_gen": int(ga.get("n_gen", 200)),
             **({"seed": int(ga["seed"])} if "seed" in ga else {})}
