@@ -25,6 +25,29 @@ robot : evotol.robots.mechanism.model.error_model.MechanismModel
     The arm.
 positions : (p, 3) array_like
     The ISO poses (m).
+sys_costs : list of evotol.cost_models.base.CostModel or None
+    Per column of the model its cost model; None for a given (fixed) source, never priced.
+sys_bounds : (2, n_columns) array_like
+    Lower and upper bounds of the systematic tolerances (SI); a column not free keeps its lower.
+free : (n_columns,) array_like of bool
+    Which systematic tolerances the allocation may change.
+sources : sequence of evotol.robots.mechanism.model.random_sources.RandomSource
+    The random sources.
+rand_costs : list of evotol.cost_models.base.CostModel
+    Per random source its cost model.
+rand_bounds : (2, n_random) array_like
+    Lower and upper bounds of the random tolerances (SI).
+AP, RP : float or None
+    Required figures (m); None: no such constraint.
+n_samples : int
+    Fixed cycle draws for RP.
+seed : int
+    Seed of the draws.
+orientation : dict or None
+    Orientation figures required (ISO 9283 §7.2, rad): keys ``APa``, ``APb``, ``APc`` (worst case of
+    ``|ā − a_c|`` over the tolerance box, exact: ``|r·c| + Σ |r_i| h_i``, convex) and ``RPa``, ``RPb``,
+    ``RPc`` (``3 sqrt(Σ_k τ_k² w_k)``, exact for the linearised random sources, convex: a weighted norm);
+    a, b, c the rotations about the base x, y, z (:func:`evotol.measures.iso9283.predict_orientation`).
 """
 from __future__ import annotations
 
@@ -49,33 +72,10 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
 
     Parameters
     ----------
-    sys_costs : list of evotol.cost_models.base.CostModel or None
-        Per column of the model its cost model; None for a given (fixed) source, never priced.
-    sys_bounds : (2, n_columns) array_like
-        Lower and upper bounds of the systematic tolerances (SI); a column not free keeps its lower.
-    free : (n_columns,) array_like of bool
-        Which systematic tolerances the allocation may change.
-    sources : sequence of evotol.robots.mechanism.model.random_sources.RandomSource
-        The random sources.
-    rand_costs : list of evotol.cost_models.base.CostModel
-        Per random source its cost model.
-    rand_bounds : (2, n_random) array_like
-        Lower and upper bounds of the random tolerances (SI).
-    AP, RP : float or None
-        Required figures (m); None: no such constraint.
     x0 : (n_columns + n_random,) array_like or None
         Start (SI); None: the geometric mean of the bounds.
-    n_samples : int
-        Fixed cycle draws for RP.
-    seed : int
-        Seed of the draws.
     maxiter : int
         SLSQP iterations.
-    orientation : dict or None
-        Orientation figures required (ISO 9283 §7.2, rad): keys ``APa``, ``APb``, ``APc`` (worst case of
-        ``|ā − a_c|`` over the tolerance box, exact: ``|r·c| + Σ |r_i| h_i``, convex) and ``RPa``, ``RPb``,
-        ``RPc`` (``3 sqrt(Σ_k τ_k² w_k)``, exact for the linearised random sources, convex: a weighted norm);
-        a, b, c the rotations about the base x, y, z (:func:`evotol.measures.iso9283.predict_orientation`).
 
     Returns
     -------
@@ -90,21 +90,9 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
     evotol.errors.ValidationError
         Bounds with lower > upper or not positive, or neither AP nor RP.
     """
-    rb = np.asarray(rand_bounds, float).reshape(2, -1)
-    lo = np.concatenate([np.asarray(sys_bounds, float)[0], rb[0]])
-    hi = np.concatenate([np.asarray(sys_bounds, float)[1], rb[1]])
-    if np.any(lo <= 0) or np.any(lo > hi):
-        raise ValidationError("iso9283 allocation bounds", (lo.min(), (hi - lo).min()), "0 < lower <= upper")
-    if AP is None and RP is None and not orientation:
-        raise ValidationError("iso9283 requirement", None, "AP, RP or an orientation figure to allocate for")
-    free = np.asarray(free, bool)
-    m, K = len(free), len(sources)
-    var = np.concatenate([free, np.ones(K, bool)])
-    _, S = joints_and_maps(robot, positions)
-    J = S[:, :3]
-    loadings = column_loading(robot, sources)
-    C, H = lost_motion_parts(robot, S, sources, loadings)
-    E = rp_unit_errors(robot, S, sources, n_samples, seed) if K else np.zeros((len(J), n_samples, 3, 0))   # (p, n, 3, K)
+    terms = iso_terms(robot, positions, sys_bounds, free, sources, rand_bounds, AP, RP, orientation, n_samples, seed)
+    lo, hi, var, m, K, J, C, H, E = (terms[k] for k in ("lo", "hi", "var", "m", "K", "J", "C", "H", "E"))
+    S, loadings = terms["S"], terms["loadings"]
     costs = list(sys_costs) + list(rand_costs)
 
     def full(x):
@@ -138,11 +126,11 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
 
     cons = []
     # aim at AP cos δ: the proven bound (grid maximum / cos δ <= attained / cos δ) then meets AP
-    ap_aim = None if AP is None else AP * np.cos(directions_for(J, 600, full_sphere=True)[1])
+    ap_aim = None if AP is None else AP * np.cos(terms["delta"])
     if AP is not None:
         cons.append({"type": "ineq", "fun": lambda x: (ap_aim - ap_parts(full(x))[0]) / AP,
                      "jac": lambda x: -ap_parts(full(x))[1] / AP})
-    rp_aim = None if RP is None else RP * (1 - RP_MARGIN)
+    rp_aim = terms["rp_aim"]
     if RP is not None and K:
         cons.append({"type": "ineq", "fun": lambda x: (rp_aim - rp_parts(full(x))[0]) / RP,
                      "jac": lambda x: -rp_parts(full(x))[1] / RP})
@@ -171,21 +159,85 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
     res = minimize(lambda x: cost(x), np.log(start[var]), jac=True, method="SLSQP", constraints=cons,
                    bounds=list(zip(np.log(lo[var]), np.log(hi[var]))), options={"maxiter": maxiter, "ftol": 1e-10})
     t = full(res.x)
-    ap_val = np.array([ap_worst_case(J[i:i + 1], C[i] @ t[m:], t[:m] + H[i] @ t[m:]) for i in range(len(J))])[:, :, 0]
-    rp_val = rp_parts(t)[0]
-    fresh = unit_draws(sources, n_samples, np.random.default_rng(seed + 1))
-    rp_fresh = rp_from_errors(sum((tk * np.einsum("pim,nm->pni", J, d @ G.T) for G, d, tk in zip(loadings, fresh, t[m:])),
-                                  np.zeros((len(J), n_samples, 3))))
-    l2 = np.sqrt(np.mean(np.sum((E @ t[m:]) ** 2, axis=-1), axis=1))
-    bound = np.linalg.norm(E @ t[m:], axis=-1).mean(1) + 3 * l2
-    feasible = (AP is None or ap_val[:, 1].max() <= AP * (1 + 1e-6)) and (RP is None or rp_val.max() <= RP * (1 + 1e-6))
+    chk = iso_check(terms, t)
+    ap_val, rp_val, feasible = chk["ap"], chk["RP"], chk["feasible"]
     orient = {k: {"limit": L, "value": angle_parts(t, k)[0].tolist()} for k, L in ori.items()}
     for o in orient.values():
         o["active"] = bool(max(o["value"]) >= o["limit"] * (1 - 1e-3))
         feasible = feasible and max(o["value"]) <= o["limit"] * (1 + 1e-6)
     return {**({"orientation": orient} if ori else {}), "systematic": t[:m], "random": t[m:], "cost": cost(res.x)[0], "AP": ap_val[:, 0], "AP_bound": ap_val[:, 1],
-            "RP": rp_val, "RP_fresh": rp_fresh, "RP_convex_bound": bound, "feasible": bool(feasible),
+            "RP": rp_val, "RP_fresh": chk["RP_fresh"], "RP_convex_bound": chk["RP_convex_bound"], "feasible": bool(feasible),
             "active": {"AP": AP is not None and bool(ap_val[:, 0].max() >= ap_aim * (1 - 1e-3)),
                        "RP": RP is not None and bool(rp_val.max() >= rp_aim * (1 - 1e-3))},
             "success": bool(res.success), "message": str(res.message)}
 
+
+
+def iso_terms(robot, positions, sys_bounds, free, sources, rand_bounds, AP, RP, orientation=None,
+              n_samples: int = 10000, seed: int = 0) -> dict:
+    """The parts of the ISO 9283 constraints shared by every allocator (module docstring), checked.
+
+    Returns
+    -------
+    dict
+        ``lo``, ``hi`` (bounds of systematic then random tolerances, SI), ``var`` (which are variables),
+        ``m``, ``K`` (numbers of columns and random sources), ``S`` (p, 6, m) the first-order map,
+        ``J`` its position rows, ``C``, ``H`` (p, m, K) the lost motion's box per unit tolerance,
+        ``E`` (p, n, 3, K) the fixed RP draws, ``loadings``, ``delta`` (the covering angle of the AP
+        direction grid, rad), ``AP``, ``RP``, ``rp_aim`` (m), ``sources``, ``n_samples``, ``seed``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Bounds with lower > upper or not positive, or neither AP, RP nor an orientation figure.
+    """
+    rb = np.asarray(rand_bounds, float).reshape(2, -1)
+    lo = np.concatenate([np.asarray(sys_bounds, float)[0], rb[0]])
+    hi = np.concatenate([np.asarray(sys_bounds, float)[1], rb[1]])
+    if np.any(lo <= 0) or np.any(lo > hi):
+        raise ValidationError("iso9283 allocation bounds", (lo.min(), (hi - lo).min()), "0 < lower <= upper")
+    if AP is None and RP is None and not orientation:
+        raise ValidationError("iso9283 requirement", None, "AP, RP or an orientation figure to allocate for")
+    free = np.asarray(free, bool)
+    m, K = len(free), len(sources)
+    _, S = joints_and_maps(robot, positions)
+    J = S[:, :3]
+    loadings = column_loading(robot, sources)
+    C, H = lost_motion_parts(robot, S, sources, loadings)
+    E = rp_unit_errors(robot, S, sources, n_samples, seed) if K else np.zeros((len(J), n_samples, 3, 0))   # (p, n, 3, K)
+    return {"lo": lo, "hi": hi, "var": np.concatenate([free, np.ones(K, bool)]), "m": m, "K": K, "S": S, "J": J,
+            "C": C, "H": H, "E": E, "loadings": loadings, "delta": directions_for(J, 600, full_sphere=True)[1],
+            "AP": AP, "RP": RP, "rp_aim": None if RP is None else RP * (1 - RP_MARGIN), "sources": list(sources),
+            "n_samples": n_samples, "seed": seed}
+
+
+def iso_check(terms: dict, t) -> dict:
+    """The exact first-order AP and RP of one design, as every allocator's final design is judged.
+
+    AP: the attained worst case and its proven bound (grid / cos δ) at each pose
+    (:func:`evotol.measures.iso9283.figures.ap_worst_case`); RP: ``E l + 3 std l`` on the fixed draws of
+    :func:`iso_terms` and on fresh draws; feasible if the bound meets AP and the fixed-draw RP meets RP.
+
+    Parameters
+    ----------
+    terms : dict
+        :func:`iso_terms`.
+    t : (m + K,) array_like
+        Systematic then random tolerances (SI).
+
+    Returns
+    -------
+    dict
+        ``ap`` (p, 2) attained and bound, ``RP``, ``RP_fresh``, ``RP_convex_bound`` (p,), all m, and ``feasible``.
+    """
+    t = np.asarray(t, float)
+    m, J, C, H, E, AP, RP = (terms[k] for k in ("m", "J", "C", "H", "E", "AP", "RP"))
+    ap_val = np.array([ap_worst_case(J[i:i + 1], C[i] @ t[m:], t[:m] + H[i] @ t[m:]) for i in range(len(J))])[:, :, 0]
+    rp_val = rp_with_gradient(E, t[m:])[0]
+    fresh = unit_draws(terms["sources"], terms["n_samples"], np.random.default_rng(terms["seed"] + 1))
+    rp_fresh = rp_from_errors(sum((tk * np.einsum("pim,nm->pni", J, d @ G.T) for G, d, tk in zip(terms["loadings"], fresh, t[m:])),
+                                  np.zeros((len(J), terms["n_samples"], 3))))
+    l2 = np.sqrt(np.mean(np.sum((E @ t[m:]) ** 2, axis=-1), axis=1))
+    bound = np.linalg.norm(E @ t[m:], axis=-1).mean(1) + 3 * l2
+    feasible = (AP is None or ap_val[:, 1].max() <= AP * (1 + 1e-6)) and (RP is None or rp_val.max() <= RP * (1 + 1e-6))
+    return {"ap": ap_val, "RP": rp_val, "RP_fresh": rp_fresh, "RP_convex_bound": bound, "feasible": bool(feasible)}

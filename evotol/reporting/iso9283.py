@@ -106,6 +106,12 @@ def iso9283_section(rep, summary: dict) -> None:
         rep.text(f"Allocated with the systematic sources: cost {a['cost']:.4g}, "
                  f"{'feasible' if a['feasible'] else 'NOT feasible'}, active: "
                  + (", ".join(k for k, v in a["active"].items() if v) or "none") + ". " + a["proven"], note=not a["feasible"])
+        if "allocation_ga" in iso:      # the study's GA on the same problem (evotol/studyfile/iso9283_methods.py)
+            g = iso["allocation_ga"]
+            rep.text(f"The GA ({g['pop_size']} × {g['n_gen']}) allocated them together too: cost {g['cost']:.4g} "
+                     f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
+                     + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check (proven AP bound, RP on the "
+                     "same draws).", note=not g["feasible"])
 
 
 def verdict_lines(summary: dict) -> list[str]:
@@ -163,6 +169,11 @@ def terminal_lines(summary: dict) -> list[str]:
         a = iso["allocation"]
         out.append(f"  allocated with the random sources: cost {a['cost']:.6g}, {'feasible' if a['feasible'] else 'NOT feasible'}"
                    f", binding: {', '.join(k for k, v in a['active'].items() if v) or 'none'}")
+    if "allocation_ga" in iso:
+        g = iso["allocation_ga"]
+        out.append(f"  the study's ga ({g['pop_size']} x {g['n_gen']}) allocated them too: cost {g['cost']:.6g} "
+                   f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
+                   + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
     out += ["  " + line for line in verdict_lines(summary)]
     for p in iso["poses"]:
         ap, rp = p["AP"], p["RP"]

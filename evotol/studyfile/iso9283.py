@@ -45,6 +45,7 @@ from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, larges
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import IsoTarget, RandomPart
+from evotol.studyfile.iso9283_methods import ga_allocation, iso_ga_options
 from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count
 
@@ -121,6 +122,9 @@ class IsoStudy:
         ``configurations``, ``noise`` (m), ``robots`` of a simulated calibration; None: none.
     orientation : dict
         Required orientation figures ``APa`` .. ``RPc`` (rad), the ones the file names.
+    ga : dict or None
+        The study's GA settings when it allocates the random sources to AP/RP too
+        (:func:`evotol.studyfile.iso9283_methods.iso_ga_options`).
     """
 
     robot: MechanismModel
@@ -136,6 +140,7 @@ class IsoStudy:
     allocate: bool = False
     calibrate: dict | None = None
     orientation: dict = field(default_factory=dict)
+    ga: dict | None = None
 
     @property
     def positions(self) -> np.ndarray:
@@ -330,7 +335,8 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         if cal["configurations"] * 3 < robot.n_columns or cal["noise"] < 0 or cal["robots"] < 1:
             raise ValidationError("iso9283.calibrate", cal, f"at least {-(-robot.n_columns // 3)} configurations, "
                                   "a noise >= 0 and at least 1 robot")
-    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation)
+    ga = iso_ga_options(spec, problem, orientation)        # the GA allocates the random sources too (issue 44)
+    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation, ga)
     _check_floor(iso, problem)
     return iso
 
@@ -443,6 +449,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                       "re-estimated on fresh draws; E l + 3 sqrt(E l²) is a convex upper bound."
                       + (" Orientation (APa..RPc): exact first-order worst case and 3 sigma, both convex: certified."
                          if iso.orientation else "")}
+        if iso.ga is not None:          # the study's GA on the same problem, judged by the same check
+            block["allocation_ga"] = ga_allocation(iso, problem, al, seed)
     block["random_sources"] = [{"name": s.name, "kind": s.kind, "joint": s.joint, "unit": s.unit, "tolerance": float(t),
                                 "variation": s.variation if s.kind == "backlash" else None,
                                 "cost": None if c is None else float(c.cost(t))}
