@@ -362,6 +362,8 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
             ``D`` (n_directions, 3) unit directions and ``delta`` (rad;
             :func:`evotol.measures.linear.directions_for`).
         """
+        if component in self._coeff_cache:          # the cached coefficients' own grid
+            return tuple(self._coeff_cache[component][1:3])
         return measures.directions_for(np.concatenate(self.blocks[component], axis=2), self.n_directions,
                                        full_sphere=self.asymmetric)
 
@@ -383,9 +385,11 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
             The poses of each block and its coefficients in the layout of :meth:`coefficients`; a lazy
             sequence (:class:`evotol.measures.linear.PoseBlocks`) when blocked.
         """
+        if component in self._coeff_cache:
+            return [(slice(None), self._coeff_cache[component])]
         D, delta = self.directions(component)
         per_pose = 8 * len(D) * (self.n_sources + 1)
-        if component in self._coeff_cache or self.n_poses * per_pose <= COEFFICIENT_CACHE_BYTES:
+        if self.n_poses * per_pose <= COEFFICIENT_CACHE_BYTES:
             return [(slice(None), self.coefficients(component))]
         return measures.PoseBlocks(self.blocks[component], D, delta, None if self.shape.plain else self.shape,
                                    max(1, COEFFICIENT_CACHE_BYTES // (4 * per_pose)))
