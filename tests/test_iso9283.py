@@ -48,6 +48,29 @@ def pinocchio_position_jacobian(q: dict) -> np.ndarray:
     return np.stack([J[:, model.idx_vs[model.getJointId(j)]] for j in JOINTS], axis=1)
 
 
+def own_ap_and_rp(robot, P, t_sys, b, c, n=400000, seed=2027):
+    """Per ISO pose: the worst-case AP by enumerating every corner of the encoder offsets ``t_sys`` (rad) and
+    the lost motion ``b`` taken up against a downward approach, through Pinocchio's Jacobian; RP by our own
+    sampling of J·δq, 10 % of ``b`` and the encoder count ``c`` uniform per cycle (m). Shared by the ISO tests."""
+    q, _ = joints_and_maps(robot, P)
+    rng = np.random.default_rng(seed)
+    dq = rng.uniform(-0.5, 0.5, (n, 6)) * 0.1 * b + rng.uniform(-0.5, 0.5, (n, 6)) * c
+    ap, rp = [], []
+    for i in range(len(P)):
+        J6 = pinocchio_position_jacobian({j: q[j][i:i + 1] for j in JOINTS})
+        dqa = np.linalg.solve(J6, [0, 0, -1.0, 0, 0, 0])       # the joints' motion as the tool moves down
+        s = np.where(np.abs(dqa) > 1e-9 * np.abs(dqa).max(), np.sign(dqa), 0.0)
+        ends = [(0.0, -sj * bj / 2) if sj else (-bj / 2, bj / 2) for sj, bj in zip(s, b)]
+        sys_corners = np.array(list(itertools.product(*[(-t, t) for t in t_sys])))           # (64, 6)
+        lm_corners = np.array(list(itertools.product(*ends)))                                 # (64, 6)
+        x = (sys_corners[:, None] + lm_corners[None]).reshape(-1, 6)
+        ap.append(np.linalg.norm(x @ J6[:3].T, axis=1).max())
+        e = dq @ J6[:3].T
+        l = np.linalg.norm(e - e.mean(axis=0), axis=1)
+        rp.append(l.mean() + 3 * l.std(ddof=1))
+    return np.array(ap), np.array(rp)
+
+
 def test_the_standards_formulas_by_hand():
     rng = np.random.default_rng(1)
     X, c = rng.normal(size=(30, 3)), np.array([0.1, -0.2, 0.3])

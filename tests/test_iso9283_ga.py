@@ -9,7 +9,6 @@ joint the approach does not move anywhere in ±b/2); RP = l̄ + 3 S_l of our own
 (``allocate_iso9283``, SLSQP; AP convex) of the relaxed problem in which the *attained* AP (not its bound) meets
 the requirement and RP the same aim on the same draws: every design the GA may call feasible is feasible there.
 """
-import itertools
 
 import numpy as np
 import pytest
@@ -24,7 +23,7 @@ from evotol.measures.linear.directions import directions_for
 from evotol.robots.mechanism import MechanismModel
 from evotol.robots.mechanism.model.random_sources import RandomSource, encoder_count
 
-from tests.test_iso9283 import ARCMIN, JOINTS, UR5, pinocchio_position_jacobian
+from tests.test_iso9283 import ARCMIN, JOINTS, UR5, own_ap_and_rp
 
 AP, RP = 4e-4, 4e-5
 N_DRAWS = 5000
@@ -45,27 +44,6 @@ def case():
     delta = directions_for(S[:, :3], 600, full_sphere=True)[1]
     relaxed = allocate_iso9283(*args, AP / np.cos(delta), RP, n_samples=N_DRAWS)     # attained AP <= AP
     return robot, P, ga, relaxed
-
-
-def own_ap_and_rp(robot, P, t_sys, b, c, n=400000):
-    """Per pose: worst-case AP by corner enumeration, RP by our own sampling (m)."""
-    q, _ = joints_and_maps(robot, P)
-    rng = np.random.default_rng(2027)
-    dq = rng.uniform(-0.5, 0.5, (n, 6)) * 0.1 * b + rng.uniform(-0.5, 0.5, (n, 6)) * c
-    ap, rp = [], []
-    for i in range(len(P)):
-        J6 = pinocchio_position_jacobian({j: q[j][i:i + 1] for j in JOINTS})
-        dqa = np.linalg.solve(J6, [0, 0, -1.0, 0, 0, 0])       # the joints' motion as the tool moves down
-        s = np.where(np.abs(dqa) > 1e-9 * np.abs(dqa).max(), np.sign(dqa), 0.0)
-        ends = [(0.0, -sj * bj / 2) if sj else (-bj / 2, bj / 2) for sj, bj in zip(s, b)]
-        sys_corners = np.array(list(itertools.product(*[(-t, t) for t in t_sys])))           # (64, 6)
-        lm_corners = np.array(list(itertools.product(*ends)))                                 # (64, 6)
-        x = (sys_corners[:, None] + lm_corners[None]).reshape(-1, 6)
-        ap.append(np.linalg.norm(x @ J6[:3].T, axis=1).max())
-        e = dq @ J6[:3].T
-        l = np.linalg.norm(e - e.mean(axis=0), axis=1)
-        rp.append(l.mean() + 3 * l.std(ddof=1))
-    return np.array(ap), np.array(rp)
 
 
 def test_ga_design_meets_ap_and_rp_by_corner_enumeration_and_own_sampling(case):

@@ -8,7 +8,6 @@ offsets (±t) and lost-motion offsets (taken up against the approach motion, end
 approach does not move anywhere in ±b/2); RP = l̄ + 3 S_l of our own uniform draws of J·δq (lost-motion
 variation ±v b/2, encoder counts ±q/2). The requirement is set 1 % above and 1 % below these references.
 """
-import itertools
 import json
 import tomllib
 
@@ -20,7 +19,7 @@ from evotol.robots.mechanism import MechanismModel
 from evotol.studyfile.iso9283 import read_iso9283, iso9283_block
 from evotol.studyfile.problem import load_problem
 
-from tests.test_iso9283 import JOINTS, UR5, pinocchio_position_jacobian
+from tests.test_iso9283 import JOINTS, UR5, own_ap_and_rp, pinocchio_position_jacobian
 
 T_SYS = 3e-5                            # every encoder offset given: ±30 µrad
 B = np.pi / 180 / 60                    # lost motion 1 arcmin per joint, 10 % of it varying
@@ -63,25 +62,7 @@ def references():
     """Per ISO pose: the worst-case AP by corner enumeration and RP by our own sampling (m)."""
     from evotol.measures.iso9283 import TestCube, iso_positions
     P = iso_positions(TestCube((0.4, 0.0, 0.3), 0.2))
-    q, _ = joints_and_maps(MechanismModel(UR5, sources=JOINTS), P)
-    rng = np.random.default_rng(2026)
-    n = 400000
-    dq = rng.uniform(-0.5, 0.5, (n, 6)) * 0.1 * B + rng.uniform(-0.5, 0.5, (n, 6)) * COUNT
-    ap, rp = [], []
-    for i in range(len(P)):
-        J6 = pinocchio_position_jacobian({j: q[j][i:i + 1] for j in JOINTS})
-        dqa = np.linalg.solve(J6, [0, 0, -1.0, 0, 0, 0])       # the joints' motion as the tool moves down
-        s = np.where(np.abs(dqa) > 1e-9 * np.abs(dqa).max(), np.sign(dqa), 0.0)
-        ends = [(0.0, -sj * B / 2) if sj else (-B / 2, B / 2) for sj in s]
-        best = 0.0
-        for d in itertools.product((-T_SYS, T_SYS), repeat=6):
-            for o in itertools.product(*ends):
-                best = max(best, np.linalg.norm(J6[:3] @ (np.array(d) + np.array(o))))
-        ap.append(best)
-        e = dq @ J6[:3].T
-        l = np.linalg.norm(e - e.mean(axis=0), axis=1)
-        rp.append(l.mean() + 3 * l.std(ddof=1))
-    return np.array(ap), np.array(rp)
+    return own_ap_and_rp(MechanismModel(UR5, sources=JOINTS), P, [T_SYS] * 6, np.full(6, B), COUNT, seed=2026)
 
 
 def test_given_tolerances_write_the_iso_block_and_meet_a_requirement_just_above(tmp_path, references):

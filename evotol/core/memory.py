@@ -13,12 +13,9 @@ computed by blocks of poses and not kept (slower, bounded).
 """
 from __future__ import annotations
 
-import numpy as np
-
 from evotol._runtime.memory import available_bytes
 from evotol.errors import ValidationError
 from evotol.core.problem.tolerance_problem import COEFFICIENT_CACHE_BYTES
-from evotol.measures.linear import directions_for
 
 #: the peak over the caches: the optimum's and the feasibility check's working copies (measured 1.9 on the UR5)
 WORKING_FACTOR = 2.0
@@ -46,14 +43,11 @@ def study_bytes(problem) -> int:
         the directions :func:`evotol.measures.linear.directions_for` takes for each component (fewer for a
         planar error, 1 for an error along one axis).
     """
-    P, n = problem.n_poses, problem.n_sources
-    asym = bool(problem.asymmetric)
     caches = 0
-    for blocks in problem.blocks.values():      # position and orientation: both are evaluated for the report
-        D, _ = directions_for(np.concatenate(blocks, axis=2), problem.n_directions, full_sphere=asym)
-        full = P * len(D) * (n + asym) * 8
+    for comp in problem.blocks:                 # position and orientation: both are evaluated for the report
+        full = problem.coefficient_bytes(comp)
         caches += full if full <= COEFFICIENT_CACHE_BYTES else COEFFICIENT_CACHE_BYTES // 4    # else: one block
-    return int(WORKING_FACTOR * caches + P * (6 * problem.error_model.n_columns * 8 + PER_POSE_BYTES))
+    return int(WORKING_FACTOR * caches + problem.n_poses * (6 * problem.error_model.n_columns * 8 + PER_POSE_BYTES))
 
 
 def check_memory(problem, available: int | None = None) -> None:

@@ -387,12 +387,28 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         """
         if component in self._coeff_cache:
             return [(slice(None), self._coeff_cache[component])]
-        D, delta = self.directions(component)
-        per_pose = 8 * len(D) * (self.n_sources + 1)
+        per_pose = self.coefficient_bytes(component) / max(self.n_poses, 1)
         if self.n_poses * per_pose <= COEFFICIENT_CACHE_BYTES:
             return [(slice(None), self.coefficients(component))]
+        D, delta = self.directions(component)
         return measures.PoseBlocks(self.blocks[component], D, delta, None if self.shape.plain else self.shape,
-                                   max(1, COEFFICIENT_CACHE_BYTES // (4 * per_pose)))
+                                   max(1, int(COEFFICIENT_CACHE_BYTES // (4 * per_pose))))
+
+    def coefficient_bytes(self, component: str) -> int:
+        """Bytes of a component's support coefficients at every pose: ``c`` and, for asymmetric
+        intervals, ``const`` (:meth:`coefficients`), ``8 P D (n_sources + [asymmetric])``.
+
+        Parameters
+        ----------
+        component : {"position", "orientation"}
+            The error component whose coefficients are sized.
+
+        Returns
+        -------
+        int
+            Bytes, whether or not they are built (blocks of poses above :data:`COEFFICIENT_CACHE_BYTES`).
+        """
+        return 8 * self.n_poses * len(self.directions(component)[0]) * (self.n_sources + int(bool(self.asymmetric)))
 
     def support_row(self, component: str, pose: int, u: np.ndarray) -> tuple[np.ndarray, float]:
         """The worst-case row at one pose and direction u: h(u) = row·t + const (SI).
