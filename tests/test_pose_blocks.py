@@ -18,16 +18,24 @@ from evotol.measures.linear import PoseBlocks
 from evotol.studyfile.problem import load_problem
 from evotol.summaries.explorer_data import sampled_worst_case
 from evotol.verification.nonlinear import worst_vertex_errors
-from tests.test_combinations import STUDIES, ur5
+from tests.test_combinations import STUDIES, ur5, with_callouts
 
 
-@pytest.fixture(scope="module")
-def pair():
-    """The UR5 on 8 task poses, cached, and a copy whose coefficients come in blocks."""
+@pytest.fixture(scope="module", params=["plain", "asymmetric", "joints+callouts"])
+def pair(request):
+    """The UR5 on 8 task poses, cached, and a copy whose coefficients come in blocks: plain ±t; asymmetric
+    intervals (the offsets' ``const`` in every block); callouts on joint configurations (the composed model)."""
     spec = ur5()
     spec["poses"] = {"grid": [2, 2, 2]}
     spec["requirement"]["orientation"] = 2e-3
+    if request.param == "joints+callouts":
+        with_callouts(spec)
+        arm = load_problem(copy.deepcopy(spec), base_dir=STUDIES).model.described
+        q = arm.joint_values(arm.workspace.grid(2))
+        spec["poses"] = {"joints": np.stack([q[v] for v in arm.kin.variables], axis=1).tolist()}
     cached = load_problem(spec, base_dir=STUDIES)
+    if request.param == "asymmetric":
+        cached = cached.with_tolerances(minus=0.5, plus=1.5)
     blocked = copy.copy(cached)
     blocked._coeff_cache = {}
     return cached, blocked

@@ -212,7 +212,8 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
             if top_only else np.arange(grid.shape[1])
         g = grid[:, keep_all]                                            # (n, k, d)
         order = np.argsort(-g, axis=2)[:, :, :max(4 * n_starts, 16)]
-        for s_ in range(1, n_starts):
+        # no pose of this block can hold a maximum (blocks of poses, top_only): nothing to ascend from
+        for s_ in range(1, n_starts if keep_all.size else 1):
             pick = order[:, :, min(s_ * order.shape[2] // n_starts, order.shape[2] - 1)]
             u_s, h_s = refine_direction([B[keep_all] for B in blocks], Th, D[pick],
                                         shift=None if shift is None else shift[:, keep_all])
