@@ -110,22 +110,26 @@ def multistart_max(C: np.ndarray, B: np.ndarray, D: np.ndarray, nd: int, n_start
     v = Z.shape[1]
     A = Ct @ Z                                     # objective ||A z||^2
     AtA = A.T @ A
-    Zc = [Z[c] for c in cones]
+    # the cones' rows stacked, a one-row cone padded with a zero row: one product per call
+    Zc = np.zeros((len(cones), 2, v))
+    for i, c in enumerate(cones):
+        Zc[i, :len(c)] = Z[c]
 
     def f(z):
         return -z @ AtA @ z, -2 * AtA @ z
 
     def g(z):
-        return np.array([1.0 - np.sum((Zi @ z) ** 2) for Zi in Zc])
+        w = Zc @ z
+        return 1.0 - (w * w).sum(1)
 
     def jg(z):
-        return np.array([-2 * Zi.T @ (Zi @ z) for Zi in Zc])
+        return -2 * np.einsum("crv,cr->cv", Zc, Zc @ z)
 
     cons = [{"type": "ineq", "fun": g, "jac": jg}]
     out = np.empty(n_starts)
     for k in range(n_starts):
         z0 = rng.normal(size=v)
-        norms = np.array([np.linalg.norm(Zi @ z0) for Zi in Zc])
+        norms = np.linalg.norm(Zc @ z0, axis=1)
         z0 = z0 / max(norms.max(), 1e-300) * rng.uniform(0.2, 1.0)
         r = minimize(f, z0, jac=True, constraints=cons, method="SLSQP", options=dict(maxiter=300, ftol=1e-14))
         z = r.x
