@@ -112,6 +112,12 @@ def iso9283_section(rep, summary: dict) -> None:
                      f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
                      + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check (proven AP bound, RP on the "
                      "same draws).", note=not g["feasible"])
+        if "allocation_sensitivity" in iso:     # the equal-effect rule on the same problem
+            g = iso["allocation_sensitivity"]
+            rep.text(f"The equal-effect rule (study's sensitivity method: each source the same share of AP, each random "
+                     f"source the same share of RP, scaled onto the boundary) costs {g['cost']:.4g} "
+                     f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
+                     + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check.", note=not g["feasible"])
 
 
 def verdict_lines(summary: dict) -> list[str]:
@@ -172,6 +178,11 @@ def terminal_lines(summary: dict) -> list[str]:
     if "allocation_ga" in iso:
         g = iso["allocation_ga"]
         out.append(f"  the study's ga ({g['pop_size']} x {g['n_gen']}) allocated them too: cost {g['cost']:.6g} "
+                   f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
+                   + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
+    if "allocation_sensitivity" in iso:
+        g = iso["allocation_sensitivity"]
+        out.append(f"  the equal-effect rule (sensitivity) allocated them too: cost {g['cost']:.6g} "
                    f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
                    + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
     out += ["  " + line for line in verdict_lines(summary)]

@@ -5,12 +5,15 @@ systematic and random sources together is the certified optimum (:func:`evotol.a
 A ``ga`` among the study's methods then allocates them too (:func:`evotol.allocators.iso9283_ga.allocate_iso9283_ga`,
 judged by the optimum's own check), beside its ordinary run on the position requirement; ``nsga2``, whose front
 knows neither the random sources nor AP/RP, is refused in one line before any work, and so are GA settings
-and orientation figures the ISO GA does not take.
+and orientation figures the ISO GA does not take. A ``sensitivity`` among the methods allocates them by the
+equal-effect rule too (:func:`evotol.allocators.iso9283_sensitivity.allocate_iso9283_sensitivity`), so that
+the optimum shows what the rule costs.
 """
 from __future__ import annotations
 
 from evotol.allocators.ga import check_ga_options
 from evotol.allocators.iso9283_ga import allocate_iso9283_ga
+from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
 from evotol.errors import ValidationError
 from evotol.studyfile.methods import study_methods
 
@@ -102,3 +105,63 @@ def ga_allocation(iso, problem, optimum: dict, seed: int) -> dict:
                        "onto the AP/RP boundary), judged by the optimum's check: feasible if the proven AP bound meets AP "
                        "and the RP on the optimum's fixed draws meets RP. The optimum aims its attained AP at AP cos δ, "
                        "the ga its proven bound at AP: a gap below 0 (at most about 0.4 %) is that margin, not a better design"}
+
+
+def iso_sensitivity_wanted(spec: dict, problem, orientation: dict) -> bool:
+    """Whether the study's ``sensitivity`` also allocates the random sources to AP/RP (the equal-effect rule).
+
+    Parameters
+    ----------
+    spec, problem, orientation
+        As :func:`iso_ga_options`.
+
+    Returns
+    -------
+    bool
+        True with ``sensitivity`` among the methods, ``[requirement] iso9283``, ``allocate = true`` and no
+        ``[calibration]``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        One line: an orientation figure beside it (the rule shares AP and RP only).
+    """
+    table, req = spec.get("iso9283") or {}, spec.get("requirement", {}).get("iso9283")
+    if not table.get("allocate") or not req or "calibration" in spec or not problem.free.any():
+        return False
+    if "sensitivity" not in study_methods(spec, problem):
+        return False
+    if orientation:
+        k = next(iter(orientation))
+        raise ValidationError(f"requirement.iso9283.{k}", req[k], "no orientation figure beside [methods] sensitivity and "
+                              "[iso9283] allocate = true: the equal-effect rule shares AP and RP only (the optimum takes "
+                              "them: list [methods] without sensitivity)")
+    return True
+
+
+def sensitivity_allocation(iso, problem, optimum: dict, seed: int) -> dict:
+    """The ISO block's ``allocation_sensitivity``: the equal-effect rule on systematic and random sources (SI).
+
+    Parameters
+    ----------
+    iso, problem, optimum, seed
+        As :func:`ga_allocation` (the RP draws are the optimum's).
+
+    Returns
+    -------
+    dict
+        ``cost``, ``gap_to_optimum``, ``feasible``, ``systematic`` and ``random`` (name -> tolerance),
+        ``AP_bound``, ``RP_sampled``, ``RP_fresh_draws`` (per pose, m), ``meaning``.
+    """
+    tols = problem.tolerances
+    s = allocate_iso9283_sensitivity(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names],
+                                     [problem.lower, problem.upper], problem.free, iso.sources, iso.costs,
+                                     [iso.lower, iso.upper], iso.AP, iso.RP, seed=seed)
+    return {"cost": s["cost"], "gap_to_optimum": s["cost"] / optimum["cost"] - 1, "feasible": s["feasible"],
+            "systematic": dict(zip(iso.robot.source_names, s["systematic"].tolist())),
+            "random": {src.name: float(t) for src, t in zip(iso.sources, s["random"])},
+            "AP_bound": s["AP_bound"].tolist(), "RP_sampled": s["RP"].tolist(), "RP_fresh_draws": s["RP_fresh"].tolist(),
+            "meaning": "the equal-effect rule (each source the same share of AP by its largest effect per unit tolerance, "
+                       "each random source the same root-sum-square share of RP), scaled onto the AP/RP boundary and "
+                       "judged by the optimum's check: feasible if the proven AP bound meets AP and the RP on the "
+                       "optimum's fixed draws meets RP; it ignores cost, the gap is what the optimum saves"}

@@ -1,0 +1,110 @@
+"""The equal-effect (sensitivity) allocation under ISO 9283 AP and RP (issue 44 item 3,
+evotol/allocators/iso9283_sensitivity.py, docs/iso9283.md).
+
+Independent references written here: the UR5's joint Jacobian from Pinocchio (``computeFrameJacobian``) for
+the rule's shares (each encoder offset's largest ‖J e_j‖ over the five poses), corner enumeration of AP and our
+own sampling of RP (:func:`tests.test_iso9283.own_ap_and_rp`), and the certified optimum of the relaxed problem
+(``allocate_iso9283``: attained AP ≤ AP, the same RP draws) as a lower bound of every feasible design's cost.
+"""
+
+import numpy as np
+import pytest
+
+import evotol.cost_models as cm
+from evotol.allocators.iso9283 import RP_MARGIN, allocate_iso9283
+from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
+from evotol.errors import ValidationError
+from evotol.measures.iso9283 import TestCube, iso_positions
+from evotol.measures.iso9283.budget import joints_and_maps
+from evotol.measures.linear.directions import directions_for
+from evotol.robots.mechanism import MechanismModel
+from evotol.robots.mechanism.model.random_sources import RandomSource, encoder_count
+
+from tests.test_iso9283 import ARCMIN, JOINTS, UR5, own_ap_and_rp, pinocchio_position_jacobian
+from tests.test_iso9283_ga import example_spec
+
+AP, RP = 4e-4, 4e-5
+N_DRAWS = 5000
+
+
+@pytest.fixture(scope="module")
+def case():
+    robot = MechanismModel(UR5, sources=JOINTS)         # systematic: the six encoder offsets
+    P = iso_positions(TestCube((0.4, 0.0, 0.3), 0.2))
+    srcs = [RandomSource("backlash", j, ARCMIN) for j in JOINTS] + \
+           [RandomSource("encoder", j, encoder_count(14, 50)) for j in JOINTS]
+    sc = [cm.ReciprocalCost(0.1, 1.0, scale=1e-5)] * 6
+    rc = [cm.ReciprocalCost(0.2, 1.0, scale=s.tolerance) for s in srcs]
+    args = (robot, P, sc, [[1e-6] * 6, [1e-3] * 6], np.ones(6, bool), srcs, rc,
+            [[s.tolerance / 10 for s in srcs], [s.tolerance * 10 for s in srcs]])
+    rule = allocate_iso9283_sensitivity(*args, AP, RP, n_samples=N_DRAWS)
+    _, S = joints_and_maps(robot, P)
+    delta = directions_for(S[:, :3], 600, full_sphere=True)[1]
+    relaxed = allocate_iso9283(*args, AP / np.cos(delta), RP, n_samples=N_DRAWS)     # attained AP <= AP
+    return robot, P, rule, relaxed
+
+
+def test_the_rules_design_meets_ap_and_rp_by_corner_enumeration_and_own_sampling(case):
+    robot, P, rule, _ = case
+    assert rule["feasible"]
+    ap, rp = own_ap_and_rp(robot, P, rule["systematic"], rule["random"][:6], rule["random"][6:])
+    assert ap.max() <= AP * (1 + 1e-9)                 # every corner, every pose
+    assert ap.max() >= AP * 0.99                       # scaled onto the boundary: AP binds (measured 0.9975)
+    assert rp.max() <= RP                              # measured 0.861 RP: RP does not bind here
+    # evotol's RP on its 5 000 fixed draws, ours on 400 000: within about three standard errors of the
+    # smaller sample (RP_MARGIN, the allocators' aim below RP for that reason; measured 0.7 %)
+    assert rp == pytest.approx(rule["RP"], rel=RP_MARGIN)
+
+
+def test_the_shares_are_equal_effects_by_pinocchios_jacobian(case):
+    robot, P, rule, _ = case
+    q, _ = joints_and_maps(robot, P)
+    col = np.array([np.linalg.norm(pinocchio_position_jacobian({j: q[j][i:i + 1] for j in JOINTS})[:3], axis=0)
+                    for i in range(len(P))]).max(0)                  # a_j = max_p ‖J_p e_j‖ (m/rad)
+    moving = col > 1e-9 * col.max()                                  # wrist 3 does not move the flange's origin
+    assert moving.sum() == 5
+    t = rule["systematic"]
+    effect = col[moving] * t[moving]
+    assert effect == pytest.approx(np.full(5, effect[0]), rel=1e-9)  # the same share each, after one common factor
+    assert t[~moving] == pytest.approx(1e-3)                         # no effect: the upper bound
+
+
+def test_the_rule_costs_more_than_the_certified_optimum(case):
+    _, _, rule, relaxed = case
+    assert relaxed["feasible"]
+    assert rule["cost"] >= relaxed["cost"] * (1 - 1e-6)              # a lower bound of every feasible design
+    assert rule["cost"] >= relaxed["cost"] * 1.05                     # measured +20.6 %: the rule ignores cost
+
+
+def test_a_study_with_sensitivity_writes_the_rules_iso_allocation(tmp_path):
+    from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
+    from evotol.studyfile.problem import load_problem
+    spec = example_spec({"optimum": {}, "sensitivity": {}})
+    problem = load_problem(spec)
+    iso = read_iso9283(spec, problem)
+    assert iso.sensitivity
+    block = iso9283_block(iso, problem, {}, seed=0)
+    g, opt = block["allocation_sensitivity"], block["allocation"]
+    tols = problem.tolerances
+    own = sum(float(tols[n].cost.cost(t)) for free, (n, t) in zip(problem.free, g["systematic"].items()) if free) \
+        + sum(float(c.cost(g["random"][s.name])) for s, c in zip(iso.sources, iso.costs))
+    assert g["cost"] == pytest.approx(own, rel=1e-12)
+    assert g["gap_to_optimum"] == pytest.approx(g["cost"] / opt["cost"] - 1, rel=1e-12)
+    assert g["feasible"] == (max(g["AP_bound"]) <= iso.AP * (1 + 1e-6) and max(g["RP_sampled"]) <= iso.RP * (1 + 1e-6))
+    assert g["feasible"] and g["gap_to_optimum"] > 0
+    from evotol.reporting.iso9283 import terminal_lines
+    from evotol.units.display import DisplayUnits
+    lines = terminal_lines({"iso9283": block, "display_units": DisplayUnits().to_dict()})
+    assert any("equal-effect rule (sensitivity)" in line and f"{g['cost']:.6g}" in line for line in lines)
+
+
+def test_without_sensitivity_there_is_no_rules_allocation_and_orientation_is_refused():
+    from evotol.studyfile.iso9283 import read_iso9283
+    from evotol.studyfile.problem import load_problem
+    spec = example_spec({"optimum": {}})
+    assert not read_iso9283(spec, load_problem(spec)).sensitivity
+    spec = example_spec({"optimum": {}, "sensitivity": {}})
+    spec["requirement"]["iso9283"] = {"AP": "0.5 mm", "RP": "0.05 mm", "APa": "0.9 mrad"}
+    with pytest.raises(ValidationError) as e:
+        read_iso9283(spec, load_problem(spec))
+    assert e.value.field == "requirement.iso9283.APa" and "\n" not in str(e.value) and "sensitivity" in str(e.value)
