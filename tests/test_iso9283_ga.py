@@ -29,8 +29,9 @@ AP, RP = 4e-4, 4e-5
 N_DRAWS = 5000
 
 
-@pytest.fixture(scope="module")
-def case():
+def ur5_case():
+    """The UR5 case of the ISO allocator tests: the allocators' arguments (before AP, RP) and the certified
+    optimum of the relaxed problem (attained AP <= AP, the same RP draws)."""
     robot = MechanismModel(UR5, sources=JOINTS)         # systematic: the six encoder offsets
     P = iso_positions(TestCube((0.4, 0.0, 0.3), 0.2))
     srcs = [RandomSource("backlash", j, ARCMIN) for j in JOINTS] + \
@@ -39,11 +40,17 @@ def case():
     rc = [cm.ReciprocalCost(0.2, 1.0, scale=s.tolerance) for s in srcs]
     args = (robot, P, sc, [[1e-6] * 6, [1e-3] * 6], np.ones(6, bool), srcs, rc,
             [[s.tolerance / 10 for s in srcs], [s.tolerance * 10 for s in srcs]])
-    ga = allocate_iso9283_ga(*args, AP, RP, pop_size=40, n_gen=40, seed=0, n_samples=N_DRAWS)
     _, S = joints_and_maps(robot, P)
     delta = directions_for(S[:, :3], 600, full_sphere=True)[1]
     relaxed = allocate_iso9283(*args, AP / np.cos(delta), RP, n_samples=N_DRAWS)     # attained AP <= AP
-    return robot, P, ga, relaxed
+    return args, relaxed
+
+
+@pytest.fixture(scope="module")
+def case():
+    args, relaxed = ur5_case()
+    ga = allocate_iso9283_ga(*args, AP, RP, pop_size=40, n_gen=40, seed=0, n_samples=N_DRAWS)
+    return args[0], args[1], ga, relaxed
 
 
 def test_ga_design_meets_ap_and_rp_by_corner_enumeration_and_own_sampling(case):

@@ -10,38 +10,19 @@ own sampling of RP (:func:`tests.test_iso9283.own_ap_and_rp`), and the certified
 import numpy as np
 import pytest
 
-import evotol.cost_models as cm
-from evotol.allocators.iso9283 import RP_MARGIN, allocate_iso9283
+from evotol.allocators.iso9283 import RP_MARGIN
 from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
 from evotol.errors import ValidationError
-from evotol.measures.iso9283 import TestCube, iso_positions
 from evotol.measures.iso9283.budget import joints_and_maps
-from evotol.measures.linear.directions import directions_for
-from evotol.robots.mechanism import MechanismModel
-from evotol.robots.mechanism.model.random_sources import RandomSource, encoder_count
 
-from tests.test_iso9283 import ARCMIN, JOINTS, UR5, own_ap_and_rp, pinocchio_position_jacobian
-from tests.test_iso9283_ga import example_spec
-
-AP, RP = 4e-4, 4e-5
-N_DRAWS = 5000
+from tests.test_iso9283 import JOINTS, own_ap_and_rp, pinocchio_position_jacobian
+from tests.test_iso9283_ga import AP, N_DRAWS, RP, example_spec, ur5_case
 
 
 @pytest.fixture(scope="module")
 def case():
-    robot = MechanismModel(UR5, sources=JOINTS)         # systematic: the six encoder offsets
-    P = iso_positions(TestCube((0.4, 0.0, 0.3), 0.2))
-    srcs = [RandomSource("backlash", j, ARCMIN) for j in JOINTS] + \
-           [RandomSource("encoder", j, encoder_count(14, 50)) for j in JOINTS]
-    sc = [cm.ReciprocalCost(0.1, 1.0, scale=1e-5)] * 6
-    rc = [cm.ReciprocalCost(0.2, 1.0, scale=s.tolerance) for s in srcs]
-    args = (robot, P, sc, [[1e-6] * 6, [1e-3] * 6], np.ones(6, bool), srcs, rc,
-            [[s.tolerance / 10 for s in srcs], [s.tolerance * 10 for s in srcs]])
-    rule = allocate_iso9283_sensitivity(*args, AP, RP, n_samples=N_DRAWS)
-    _, S = joints_and_maps(robot, P)
-    delta = directions_for(S[:, :3], 600, full_sphere=True)[1]
-    relaxed = allocate_iso9283(*args, AP / np.cos(delta), RP, n_samples=N_DRAWS)     # attained AP <= AP
-    return robot, P, rule, relaxed
+    args, relaxed = ur5_case()
+    return args[0], args[1], allocate_iso9283_sensitivity(*args, AP, RP, n_samples=N_DRAWS), relaxed
 
 
 def test_the_rules_design_meets_ap_and_rp_by_corner_enumeration_and_own_sampling(case):

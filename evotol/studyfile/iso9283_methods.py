@@ -69,6 +69,31 @@ def iso_ga_options(spec: dict, problem, orientation: dict) -> dict | None:
             **({"seed": int(ga["seed"])} if "seed" in ga else {})}
 
 
+def judged_design(iso, result: dict, optimum: dict) -> dict:
+    """What the ISO block states of any allocator's design beside the optimum (SI): ``cost``, ``gap_to_optimum``
+    (cost / optimum's − 1), ``feasible`` (:func:`evotol.allocators.iso9283.iso_check`), ``systematic`` and
+    ``random`` (name -> tolerance), ``AP_bound``, ``RP_sampled``, ``RP_fresh_draws`` (per pose, m).
+
+    Parameters
+    ----------
+    iso : evotol.studyfile.iso9283.IsoStudy
+        The request (source names).
+    result : dict
+        The allocator's result (``cost``, ``feasible``, ``systematic``, ``random``, ``AP_bound``, ``RP``, ``RP_fresh``).
+    optimum : dict
+        :func:`evotol.allocators.iso9283.allocate_iso9283`'s result.
+
+    Returns
+    -------
+    dict
+    """
+    return {"cost": result["cost"], "gap_to_optimum": result["cost"] / optimum["cost"] - 1, "feasible": result["feasible"],
+            "systematic": dict(zip(iso.robot.source_names, result["systematic"].tolist())),
+            "random": {s.name: float(t) for s, t in zip(iso.sources, result["random"])},
+            "AP_bound": result["AP_bound"].tolist(), "RP_sampled": result["RP"].tolist(),
+            "RP_fresh_draws": result["RP_fresh"].tolist()}
+
+
 def ga_allocation(iso, problem, optimum: dict, seed: int) -> dict:
     """The ISO block's ``allocation_ga``: the GA on systematic and random sources together (SI).
 
@@ -96,11 +121,8 @@ def ga_allocation(iso, problem, optimum: dict, seed: int) -> dict:
                              [problem.lower, problem.upper], problem.free, iso.sources, iso.costs, [iso.lower, iso.upper],
                              iso.AP, iso.RP, pop_size=opts["pop_size"], n_gen=opts["n_gen"], seed=opts["seed"],
                              draw_seed=seed)
-    return {"cost": ga["cost"], "gap_to_optimum": ga["cost"] / optimum["cost"] - 1, "feasible": ga["feasible"],
+    return {**judged_design(iso, ga, optimum),
             "pop_size": opts["pop_size"], "n_gen": opts["n_gen"], "seed": opts["seed"], "evaluations": ga["evaluations"],
-            "systematic": dict(zip(iso.robot.source_names, ga["systematic"].tolist())),
-            "random": {s.name: float(t) for s, t in zip(iso.sources, ga["random"])},
-            "AP_bound": ga["AP_bound"].tolist(), "RP_sampled": ga["RP"].tolist(), "RP_fresh_draws": ga["RP_fresh"].tolist(),
             "meaning": "the study's ga on the systematic and random sources together (pymoo GA in log space, designs moved "
                        "onto the AP/RP boundary), judged by the optimum's check: feasible if the proven AP bound meets AP "
                        "and the RP on the optimum's fixed draws meets RP. The optimum aims its attained AP at AP cos δ, "
@@ -157,10 +179,7 @@ def sensitivity_allocation(iso, problem, optimum: dict, seed: int) -> dict:
     s = allocate_iso9283_sensitivity(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names],
                                      [problem.lower, problem.upper], problem.free, iso.sources, iso.costs,
                                      [iso.lower, iso.upper], iso.AP, iso.RP, seed=seed)
-    return {"cost": s["cost"], "gap_to_optimum": s["cost"] / optimum["cost"] - 1, "feasible": s["feasible"],
-            "systematic": dict(zip(iso.robot.source_names, s["systematic"].tolist())),
-            "random": {src.name: float(t) for src, t in zip(iso.sources, s["random"])},
-            "AP_bound": s["AP_bound"].tolist(), "RP_sampled": s["RP"].tolist(), "RP_fresh_draws": s["RP_fresh"].tolist(),
+    return {**judged_design(iso, s, optimum),
             "meaning": "the equal-effect rule (each source the same share of AP by its largest effect per unit tolerance, "
                        "each random source the same root-sum-square share of RP), scaled onto the AP/RP boundary and "
                        "judged by the optimum's check: feasible if the proven AP bound meets AP and the RP on the "
