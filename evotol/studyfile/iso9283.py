@@ -172,9 +172,11 @@ def _random_sources(table: dict, robot) -> tuple[list, list, list, list]:
         passive = [] if sel == "all" or kind in PLAY_KINDS else \
             [j for j in joint_frames(robot) if j not in act and any(fnmatch.fnmatch(j, p) for p in sel)]
         if passive:
+            var = joint_frames(robot)[passive[0]]
             raise ValidationError(f"{where}.joints", passive[0], f"an actuated joint of {act}: {kind} needs an actuator "
-                                  f"({passive[0]!r} is a joint's frame; bearing play, radial_play and axial_play, may "
-                                  "sit on a passive joint)")
+                                  + (f"(name the variable {var!r} of frame {passive[0]!r})" if var in act else
+                                     f"({passive[0]!r} is a passive joint; bearing play, radial_play and axial_play, may "
+                                     "sit on a passive joint)"))
         if not joints:
             raise ValidationError(f"{where}.joints", sel, f"'all' or names/patterns of actuated joints {act}"
                                   + (" or of joints' frames (bearing play)" if kind in PLAY_KINDS else ""))
