@@ -105,7 +105,7 @@ class IsoStudy:
     Parameters
     ----------
     robot : evotol.robots.mechanism.model.error_model.MechanismModel
-        The arm.
+        The mechanism (a description, serial or closed-loop).
     cube : evotol.measures.iso9283.TestCube
         The test cube.
     AP, RP : float or None

@@ -2,7 +2,7 @@
 next (issue 44).
 
 A **systematic** source (a DH or placement error, an encoder offset) is fixed per robot; a **random**
-source draws anew at every cycle. Each random source acts through columns the arm's error model
+source draws anew at every cycle. Each random source acts through columns the mechanism's error model
 already has (:class:`evotol.robots.mechanism.model.error_model.MechanismModel`: the joint's encoder offset, the three
 shifts of the joint's placement), so the first-order map and the nonlinear ``pose_error`` serve both
 kinds. The kinds, each with its tolerance ``t`` (the catalogue's figure) and its distribution:
