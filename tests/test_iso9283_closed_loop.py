@@ -274,6 +274,8 @@ def test_study_file_takes_play_on_passive_joints_and_refuses_what_it_cannot_do()
     spec = tomllib.loads(STUDY)
     iso = read_iso9283(spec, load_problem(spec))
     assert [s.name for s in iso.sources] == [f"2_{i}.radial_play" for i in (1, 2, 3)]
+    both = tomllib.loads(STUDY.replace('["2_?"]', '["q1_1", "1_1", "2_1"]').replace('"2_?.shift_?"', '"?_1.shift_?"'))
+    assert [s.joint for s in read_iso9283(both, load_problem(both)).sources] == ["q1_1", "2_1"]   # q1_1 turns frame 1_1
     bad = tomllib.loads(STUDY.replace("radial_play]", "encoder]"))
     with pytest.raises(ValidationError, match=r"iso9283.random.encoder.joints = '2_1'.*needs an actuator") as e:
         read_iso9283(bad, load_problem(bad))

@@ -169,6 +169,8 @@ def _random_sources(table: dict, robot) -> tuple[list, list, list, list]:
         # bearing play may sit on a passive joint (named by its frame); backlash and encoder need an actuator
         pool = act + ([f for f in joint_frames(robot) if f not in act] if kind in PLAY_KINDS else [])
         joints = act if sel == "all" else [j for j in pool if any(fnmatch.fnmatch(j, p) for p in sel)]
+        frame_of = {v: f for f, v in joint_frames(robot).items() if v in act}      # an actuator's frame: one play
+        joints = [j for i, j in enumerate(joints) if frame_of.get(j, j) not in [frame_of.get(k, k) for k in joints[:i]]]
         passive = [] if sel == "all" or kind in PLAY_KINDS else \
             [j for j in joint_frames(robot) if j not in act and any(fnmatch.fnmatch(j, p) for p in sel)]
         if passive:
