@@ -22,7 +22,7 @@ sources' tolerances ``τ`` (log-space SLSQP, analytic gradients) subject to, at 
 Parameters
 ----------
 robot : evotol.robots.mechanism.model.error_model.MechanismModel
-    The arm.
+    The mechanism (a description, serial or closed-loop).
 positions : (p, 3) array_like
     The ISO poses (m).
 sys_costs : list of evotol.cost_models.base.CostModel or None

@@ -9,7 +9,7 @@ and the ``[iso9283]`` table -- the test cube, the yield, the simulated test and 
     calibrate = { configurations = 40, noise = "10 um", robots = 100 }   # the same robots calibrated
 
     [iso9283.random.backlash]     # one table per kind: backlash, encoder, radial_play, axial_play
-    joints = "all"                # or a list of actuated joints
+    joints = "all"                # or a list of actuated joints (bearing play: also passive joints' frames)
     tolerance = "1 arcmin"        # one value or one per joint; encoder: or bits = 19, gear_ratio = 100
     variation = 0.1               # backlash: share that varies from cycle to cycle
     lower = "0.2 arcmin"          # bounds for the allocation
@@ -24,7 +24,8 @@ Parameters
 spec : dict
     The parsed study file.
 problem : evotol.core.problem.ToleranceProblem
-    The study's problem (its robot must be a described serial arm without wrappers).
+    The study's problem (its robot must be a described mechanism, serial or closed-loop and spatial, without
+    wrappers).
 """
 from __future__ import annotations
 
@@ -48,7 +49,7 @@ from evotol.calibration.random_share import IsoTarget, RandomPart
 from evotol.studyfile.iso9283_methods import (ga_allocation, iso_ga_options, iso_sensitivity_wanted,
                                              sensitivity_allocation)
 from evotol.studyfile.iso9283_verdict import verdicts
-from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count
+from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count, joint_frames
 
 UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6,
          "deg": math.pi / 180, "arcmin": math.pi / 180 / 60, "arcsec": math.pi / 180 / 3600}
@@ -56,6 +57,7 @@ TABLE_KEYS = ("cube", "yield", "simulate", "allocate", "random", "calibrate")
 CALIBRATE_KEYS = ("configurations", "noise", "robots")
 RANDOM_KEYS = ("joints", "tolerance", "bits", "gear_ratio", "variation", "lower", "upper", "cost")
 SIM_KEYS = ("robots", "cycles", "multidirectional")
+PLAY_KINDS = ("radial_play", "axial_play")
 #: ISO 9283 figures a requirement may name: positional AP, RP (m) and orientational AP_a.. RP_c (rad, §7.2)
 REQUIREMENT_KEYS = ("AP", "RP", "APa", "APb", "APc", "RPa", "RPb", "RPc")
 ORIENTATION_KEYS = REQUIREMENT_KEYS[2:]
@@ -104,7 +106,7 @@ class IsoStudy:
     Parameters
     ----------
     robot : evotol.robots.mechanism.model.error_model.MechanismModel
-        The arm.
+        The mechanism (a description, serial or closed-loop).
     cube : evotol.measures.iso9283.TestCube
         The test cube.
     AP, RP : float or None
@@ -169,9 +171,22 @@ def _random_sources(table: dict, robot) -> tuple[list, list, list, list]:
         check_table_keys(o, RANDOM_KEYS, where)
         sel = o.get("joints", "all")
         act = list(robot.kin.actuated)
-        joints = act if sel == "all" else [j for j in act if any(fnmatch.fnmatch(j, p) for p in sel)]
+        # bearing play may sit on a passive joint (named by its frame); backlash and encoder need an actuator
+        pool = act + ([f for f in joint_frames(robot) if f not in act] if kind in PLAY_KINDS else [])
+        joints = act if sel == "all" else [j for j in pool if any(fnmatch.fnmatch(j, p) for p in sel)]
+        frame_of = {v: f for f, v in joint_frames(robot).items() if v in act}      # an actuator's frame: one play
+        joints = [j for i, j in enumerate(joints) if frame_of.get(j, j) not in [frame_of.get(k, k) for k in joints[:i]]]
+        passive = [] if sel == "all" or kind in PLAY_KINDS else \
+            [j for j in joint_frames(robot) if j not in act and any(fnmatch.fnmatch(j, p) for p in sel)]
+        if passive:
+            var = joint_frames(robot)[passive[0]]
+            raise ValidationError(f"{where}.joints", passive[0], f"an actuated joint of {act}: {kind} needs an actuator "
+                                  + (f"(name the variable {var!r} of frame {passive[0]!r})" if var in act else
+                                     f"({passive[0]!r} is a passive joint; bearing play, radial_play and axial_play, may "
+                                     "sit on a passive joint)"))
         if not joints:
-            raise ValidationError(f"{where}.joints", sel, f"'all' or names/patterns of actuated joints {act}")
+            raise ValidationError(f"{where}.joints", sel, f"'all' or names/patterns of actuated joints {act}"
+                                  + (" or of joints' frames (bearing play)" if kind in PLAY_KINDS else ""))
         if "bits" in o:
             t = [encoder_count(float(o["bits"]), float(o.get("gear_ratio", 1.0)))] * len(joints)
         elif "tolerance" in o:
@@ -216,7 +231,7 @@ def random_part(spec: dict, robot) -> RandomPart | None:
     if not table:
         return None
     if not isinstance(robot, MechanismModel):
-        raise ValidationError("iso9283.random", type(robot).__name__, "a serial arm from a mechanism description")
+        raise ValidationError("iso9283.random", type(robot).__name__, "a mechanism description (serial or closed-loop)")
     sources, costs, lower, upper = _random_sources(table, robot)
     alloc = bool(spec["iso9283"].get("allocate", False))
     if alloc and any(c is None for c in costs):
@@ -288,7 +303,7 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     Raises
     ------
     evotol.errors.ValidationError
-        A bad key or quantity; a robot that is not a described arm; a cube outside the workspace or
+        A bad key or quantity; a robot that is not a described mechanism, or a planar one; a cube outside the workspace or
         the joint limits; RP required without any random source; AP below what the random sources
         leave with every systematic tolerance at its lower bound (the noise floor), or RP below the
         random sources' own at their lower bounds (when allocated) or their catalogue values -- except when
@@ -308,10 +323,14 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
     # [poses] joints composes: the ISO poses are the test cube's, solved on the described arm (issue 44)
     part = next((m.part for m in problem.error_model.parts() if m.part and m.part not in ("calibration", "joint_space")), None)
     if part is not None:
-        raise ValidationError("iso9283", PART_WORDS[part], "a serial arm without it: the ISO 9283 figures are not yet "
+        raise ValidationError("iso9283", PART_WORDS[part], "a mechanism without it: the ISO 9283 figures are not yet "
                               "composed with it (docs/combinations.md)")
     if not isinstance(robot, MechanismModel):
-        raise ValidationError("iso9283", type(robot).__name__, "a serial arm from a mechanism description")
+        raise ValidationError("iso9283", type(robot).__name__, "a mechanism description (serial or closed-loop)")
+    if robot.kin.mech.planar:
+        raise ValidationError("iso9283", f"planar mechanism {robot.kin.mech.name}", "a spatial mechanism: the ISO 9283 "
+                              "test cube is 3-D (P2-P5 on a diagonal plane across z) and the standard defines no plane "
+                              "analogue (docs/iso9283.md, Closed-loop mechanisms)")
     ap = quantity(req["AP"], "requirement.iso9283.AP") if req and "AP" in req else None
     rp = quantity(req["RP"], "requirement.iso9283.RP") if req and "RP" in req else None
     orientation = {k: quantity(req[k], f"requirement.iso9283.{k}") for k in ORIENTATION_KEYS if req and k in req}

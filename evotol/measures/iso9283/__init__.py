@@ -1,4 +1,5 @@
-"""ISO 9283 pose accuracy and repeatability of an arm with systematic and random sources (issue 44):
+"""ISO 9283 pose accuracy and repeatability of a described mechanism (serial or closed-loop) with systematic
+and random sources (issue 44):
 the test cube and its poses (:mod:`~evotol.measures.iso9283.poses`), the standard's figures and their
 first-order prediction (:mod:`~evotol.measures.iso9283.figures`), the prediction and the simulated test of an
 arm (:mod:`~evotol.measures.iso9283.budget`). docs/iso9283.md."""

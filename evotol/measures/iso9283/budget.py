@@ -1,10 +1,10 @@
-"""The ISO 9283 figures of an arm with systematic and random sources: predicted (first order) and a
-simulated ISO 9283 test on the nonlinear model (docs/iso9283.md).
+"""The ISO 9283 figures of a mechanism (serial or closed-loop) with systematic and random sources: predicted
+(first order) and a simulated ISO 9283 test on the nonlinear model (docs/iso9283.md).
 
 Parameters
 ----------
 robot : evotol.robots.mechanism.model.error_model.MechanismModel
-    The arm (its workspace has coordinates x, y, z; its sources are the systematic columns).
+    The mechanism (its workspace has coordinates x, y, z; its sources are the systematic columns).
 positions : (p, 3) array_like
     Commanded positions (m), e.g. :func:`evotol.measures.iso9283.poses.iso_positions`.
 systematic : (n_columns,) array_like

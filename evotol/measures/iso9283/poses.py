@@ -11,7 +11,7 @@ orientation (the workspace's other coordinates at mid-range).
 Parameters
 ----------
 robot : evotol.robots.mechanism.model.error_model.MechanismModel
-    The arm (a workspace with coordinates x, y, z).
+    The mechanism (a workspace with coordinates x, y, z).
 cube : TestCube
     A test cube.
 positions : (n, 3) array_like

@@ -1,7 +1,8 @@
-"""Random error sources of a serial arm: what changes from one cycle to the next (issue 44).
+"""Random error sources of a described mechanism, serial or closed-loop: what changes from one cycle to the
+next (issue 44).
 
 A **systematic** source (a DH or placement error, an encoder offset) is fixed per robot; a **random**
-source draws anew at every cycle. Each random source acts through columns the arm's error model
+source draws anew at every cycle. Each random source acts through columns the mechanism's error model
 already has (:class:`evotol.robots.mechanism.model.error_model.MechanismModel`: the joint's encoder offset, the three
 shifts of the joint's placement), so the first-order map and the nonlinear ``pose_error`` serve both
 kinds. The kinds, each with its tolerance ``t`` (the catalogue's figure) and its distribution:
@@ -19,15 +20,25 @@ kinds. The kinds, each with its tolerance ``t`` (the catalogue's figure) and its
 ``axial_play``    axial bearing play of joint J, ``t = a`` (m, total): the axis slides uniformly within
                   ``± a/2`` along itself.
 
+Backlash and encoder need an actuator: their joint is an actuated joint variable. Bearing play may sit
+on any joint, actuated or **passive** (on a parallel mechanism the passive joints' play is the main
+random source): its joint is an actuated joint variable or the name of a joint's frame, and it acts
+through the three shifts of that joint's placement (:func:`play_columns`). On a closed-loop mechanism
+the first-order map and ``pose_error`` close the loops, so every source moves the end effector as the
+whole mechanism does (docs/iso9283.md, "Closed-loop mechanisms": checked against a closed-form Delta).
+
 The direction of the joint axis in the joint's placement frame is read from the model itself (the
-rotation of the encoder column and the translations of the shift columns at one configuration), so a
-URDF arm whose axes are not ``z`` is handled the same way.
+rotation of the encoder column and the translations of the shift columns at one configuration) for an
+actuated joint with shift columns of its own name, so a URDF arm whose axes are not ``z`` is handled the
+same way; for a joint's frame it is the frame's seat axis
+(:func:`evotol.robots.mechanism.callouts.table.joint_seat`: the placement's z for a ``[[frame]]`` row).
 
 Parameters
 ----------
 robot : evotol.robots.mechanism.model.error_model.MechanismModel
-    The arm; every random source names one of its actuated joints and needs that joint's columns
-    among the model's sources (the encoder offset ``J``; for bearing play ``J.shift_x|y|z``).
+    The mechanism; backlash and encoder name an actuated joint and need its encoder column (``J``);
+    bearing play needs the shifts of the joint's placement (``<frame>.shift_x|y|z``) among the model's
+    sources.
 sources : sequence of RandomSource
     The random sources.
 loadings : list of (n_columns, dim) ndarray
@@ -46,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evotol.errors import ValidationError
+from evotol.robots.mechanism.callouts.table import joint_seat
 
 KINDS = ("backlash", "encoder", "radial_play", "axial_play")
 UNITS = {"backlash": "rad", "encoder": "rad", "radial_play": "m", "axial_play": "m"}
@@ -53,14 +65,15 @@ UNITS = {"backlash": "rad", "encoder": "rad", "radial_play": "m", "axial_play": 
 
 @dataclass(frozen=True)
 class RandomSource:
-    """One random source of a serial arm (module docstring: kinds, distributions).
+    """One random source of a described mechanism (module docstring: kinds, distributions).
 
     Parameters
     ----------
     kind : {"backlash", "encoder", "radial_play", "axial_play"}
         What moves from one cycle to the next.
     joint : str
-        The actuated joint it belongs to (its variable name in the model).
+        The joint it belongs to: an actuated joint variable (backlash, encoder, bearing play), or for
+        bearing play also a joint's frame name (a passive joint of a closed loop, e.g. ``"2_1"``).
     tolerance : float
         The catalogue figure ``t`` (rad for backlash and encoder, m for bearing play), > 0.
     variation : float
@@ -147,6 +160,89 @@ def _axis_in_placement(robot, joint: str) -> tuple[np.ndarray, list[int]]:
     return axis / np.linalg.norm(axis), [names.index(s) for s in shifts]
 
 
+def joint_frames(robot) -> dict:
+    """The joints a bearing play may name besides the actuated variables: frame name -> its joint variable.
+
+    Returns
+    -------
+    dict of str to str
+        Every revolute or prismatic ``[[frame]]`` row (a URDF joint's row ``J__q`` under its origin's name
+        ``J``) -> the name in its joint field (an expression for a coupled joint).
+    """
+    out = {}
+    for f in robot.kin.mech.frames:
+        if f.joint != "fixed":
+            out[f.name[:-3] if f.name.endswith("__q") else f.name] = str(getattr(f, f.joint_field))
+    return out
+
+
+def _one_branch_of_mean(mech, frame: str) -> str | None:
+    """``"P1 = mean of (E1, Eb1)"`` when ``frame`` lies on some but not all branches of a mean point, else None."""
+    frames = {f.name: f for f in mech.frames}
+
+    def chain(n):
+        out = set()
+        while n in frames and n not in out:
+            out.add(n)
+            n = frames[n].antecedent
+        return out
+    for pt in mech.points:
+        on = [frame in chain(m) for m in pt.frames]
+        if any(on) and not all(on):
+            return f"{pt.name} = mean of {tuple(pt.frames)}"
+    return None
+
+
+def play_columns(robot, joint: str) -> tuple[np.ndarray, list[int]]:
+    """The axis (in the placement frame) and the three shift columns through which a joint's bearing play acts.
+
+    ``joint`` is an actuated variable with columns ``J`` and ``J.shift_x|y|z`` (a URDF arm: axis read from
+    the model), or a joint's frame name, or an actuated variable whose frame is named otherwise (the Delta's
+    ``q1_1`` turns frame ``1_1``): columns ``<frame>.shift_x|y|z``, axis the frame's seat axis.
+
+    Parameters
+    ----------
+    joint : str
+        An actuated joint variable or a joint's frame name (a passive joint of a closed loop, e.g. ``"2_1"``).
+
+    Returns
+    -------
+    axis : (3,) ndarray
+        Unit axis in the placement frame.
+    cols : list of int
+        Columns of the placement's shifts along its x, y, z (m).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        Not a joint of the mechanism; a joint on one branch of a point closed at the mean of its branches (a
+        rod of the Delta's parallelogram: its play would tilt the platform, which the midpoint closure does
+        not model; measured against Clavel's six-rod model, docs/iso9283.md); or its shift columns not among
+        the model's sources.
+    """
+    names = list(robot.source_names)
+    if joint in robot.kin.actuated and f"{joint}.shift_x" in names:
+        return _axis_in_placement(robot, joint)
+    frames = joint_frames(robot)
+    frame = joint if joint in frames else next((f for f, v in frames.items() if v == joint), None)
+    if frame is None:
+        raise ValidationError("random source joint", joint, f"an actuated joint {tuple(robot.kin.actuated)} or a "
+                              f"joint's frame {tuple(frames)}")
+    branch = _one_branch_of_mean(robot.kin.mech, frame)
+    if branch:
+        raise ValidationError(f"random source {joint} bearing play", frame, f"a joint on every branch or none of a "
+                              f"point closed at the mean of its branches: {branch}, an over-constrained loop (e.g. a "
+                              "parallelogram); play of one branch tilts the platform, which that closure does not model "
+                              "(docs/iso9283.md, Closed-loop mechanisms)")
+    shifts = [f"{frame}.shift_{a}" for a in "xyz"]
+    missing = [s for s in shifts if s not in names]
+    if missing:
+        raise ValidationError("random source joint columns", missing[0], f"the model's sources to include "
+                              f"{frame}.shift_x|y|z (the bearing play of {joint!r} moves its placement), e.g. "
+                              f"[robot] sources = [..., \"{frame}.shift_?\"]")
+    return joint_seat(robot.kin.mech, frame)["axis"], [names.index(s) for s in shifts]
+
+
 def column_loading(robot, sources) -> list[np.ndarray]:
     """Per source: the matrix ``G`` (n_columns, dim) taking its unit draws to the model's columns.
 
@@ -161,20 +257,23 @@ def column_loading(robot, sources) -> list[np.ndarray]:
     Raises
     ------
     evotol.errors.ValidationError
-        A joint that is not actuated, or a model without the joint's columns.
+        Backlash or encoder on a joint that is not actuated (they need an actuator), or a model without
+        the joint's columns.
     """
     names = list(robot.source_names)
     out = []
     for s in sources:
-        if s.joint not in robot.kin.actuated:
-            raise ValidationError(f"random source {s.name} joint", s.joint, f"an actuated joint of {robot.kin.actuated}")
         G = np.zeros((len(names), s.dim))
         if s.kind in ("backlash", "encoder"):
+            if s.joint not in robot.kin.actuated:
+                raise ValidationError(f"random source {s.name} joint", s.joint, f"an actuated joint of "
+                                      f"{tuple(robot.kin.actuated)}: {s.kind} needs an actuator (bearing play, "
+                                      "radial_play and axial_play, may sit on a passive joint)")
             if s.joint not in names:
                 raise ValidationError("random source joint columns", s.joint, f"the model's sources to include {s.joint!r}")
             G[names.index(s.joint), 0] = 1.0
         else:
-            a, cols = _axis_in_placement(robot, s.joint)
+            a, cols = play_columns(robot, s.joint)
             if s.kind == "axial_play":
                 G[cols, 0] = a
             else:
