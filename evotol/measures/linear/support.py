@@ -110,6 +110,10 @@ def mean_shift(blocks: list[np.ndarray], shape: IntervalShape, T: np.ndarray) ->
     return out
 
 
+#: poses per in-place step of :func:`support_coefficients` (a step's coefficients stay in cache)
+_POSES_PER_STEP = 64
+
+
 def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalShape | None = None) -> np.ndarray:
     """c[p, d, j] = ρ_j ‖B_jᵀ u_d‖ + κ_j u_d·b_j for blocks B_j (n_poses, 3, dim_j); shape
     (n_poses, n_dir, n_src). With the default shape (ρ = 1, κ = 0): ‖B_jᵀ u_d‖.
@@ -125,14 +129,28 @@ def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: Interva
         Support coefficients c[p, d, j] (m or rad per unit of tolerance).
     """
     out = np.empty((blocks[0].shape[0], D.shape[0], len(blocks)))
+    line = [j for j, B in enumerate(blocks) if B.shape[2] == 1]
+    if line:        # interval sources: |u_d·b_j| of all at once, a (d, 3) @ (3, m) product per pose, in place
+        Bl = np.concatenate([blocks[j] for j in line], axis=2)                       # (p, 3, m_line)
+        c = out if len(line) == len(blocks) else np.empty((len(Bl), D.shape[0], len(line)))
+        for s in range(0, len(Bl), _POSES_PER_STEP):
+            seg = c[s:s + _POSES_PER_STEP]
+            np.matmul(D, Bl[s:s + _POSES_PER_STEP], out=seg)
+            if shape is None:
+                np.abs(seg, out=seg)
+            else:
+                seg[...] = shape.rho[line] * np.abs(seg) + shape.kappa[line] * seg
+        if c is out:
+            return out
+        out[:, :, line] = c
     for j, B in enumerate(blocks):
+        if B.shape[2] == 1:
+            continue
         proj = np.matmul(np.swapaxes(B, 1, 2), D.T)          # (p, k, d)
         out[:, :, j] = np.sqrt(np.sum(proj * proj, axis=1))
         if shape is not None:
             if shape.rho[j] != 1:
                 out[:, :, j] *= shape.rho[j]
-            if B.shape[2] == 1 and shape.kappa[j] != 0:
-                out[:, :, j] += shape.kappa[j] * proj[:, 0, :]
     return out
 
 

@@ -41,6 +41,8 @@ n : int
 """
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -162,6 +164,13 @@ def as_distribution(value, field: str = "distribution", dim: int | None = None) 
     return d
 
 
+@functools.lru_cache(maxsize=1024)
+def _checked(dist: Distribution, dim: int) -> Distribution:
+    """``dist`` once validated for ``dim`` (a Monte Carlo draws per pose: checked once, not per pose and
+    source); a refusal is raised every time (not cached)."""
+    return as_distribution(dist, dim=dim)
+
+
 def _truncated_variance(k: float) -> float:
     """Variance of N(0, 1) truncated at ±k."""
     return float(1 - 2 * k * stats.norm.pdf(k) / (2 * stats.norm.cdf(k) - 1))
@@ -278,7 +287,7 @@ def draw(U: np.ndarray, dims, dists, radial: str = "uniform") -> list[np.ndarray
         raise ValidationError("radial", radial, f"one of {RADIAL}")
     out, c = [], 0
     for dim, dist in zip(dims, dists):
-        dist = as_distribution(dist, dim=dim)
+        dist = _checked(dist, dim) if isinstance(dist, Distribution) else as_distribution(dist, dim=dim)
         k = float(dist.sigma_k)
         if dim == 1:
             u = U[:, c]
