@@ -108,10 +108,9 @@ def test_a_study_with_a_ga_writes_its_iso_allocation_judged_like_the_optimum():
 
 
 @pytest.mark.parametrize("methods, requirement, field", [
-    ({"optimum": {}, "nsga2": {}}, None, "methods.nsga2"),
     ({"ga": {"pop_size": 8, "operators": "paper"}}, None, "methods.ga.operators"),
     ({"ga": {}}, {"AP": "0.5 mm", "RP": "0.05 mm", "APa": "0.9 mrad"}, "requirement.iso9283.APa")],
-    ids=["nsga2", "ga-operators", "ga-orientation"])
+    ids=["ga-operators", "ga-orientation"])
 def test_what_the_iso_ga_does_not_take_is_refused_in_one_line(methods, requirement, field):
     from evotol.studyfile.iso9283 import read_iso9283
     from evotol.studyfile.problem import load_problem

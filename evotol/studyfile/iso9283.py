@@ -45,7 +45,7 @@ from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, larges
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import IsoTarget, RandomPart
-from evotol.studyfile.iso9283_methods import ga_allocation, iso_ga_options
+from evotol.studyfile.iso9283_methods import front_allocation, ga_allocation, iso_front_options, iso_ga_options
 from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count
 
@@ -125,6 +125,9 @@ class IsoStudy:
     ga : dict or None
         The study's GA settings when it allocates the random sources to AP/RP too
         (:func:`evotol.studyfile.iso9283_methods.iso_ga_options`).
+    front : dict or None
+        The study's ``nsga2`` settings when it also runs the ISO front, cost against AP with RP held
+        (:func:`evotol.studyfile.iso9283_methods.iso_front_options`).
     """
 
     robot: MechanismModel
@@ -141,6 +144,7 @@ class IsoStudy:
     calibrate: dict | None = None
     orientation: dict = field(default_factory=dict)
     ga: dict | None = None
+    front: dict | None = None
 
     @property
     def positions(self) -> np.ndarray:
@@ -336,7 +340,8 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
             raise ValidationError("iso9283.calibrate", cal, f"at least {-(-robot.n_columns // 3)} configurations, "
                                   "a noise >= 0 and at least 1 robot")
     ga = iso_ga_options(spec, problem, orientation)        # the GA allocates the random sources too (issue 44)
-    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation, ga)
+    front = iso_front_options(spec, problem, orientation)   # nsga2: the ISO front too (cost against AP, RP held)
+    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation, ga, front)
     _check_floor(iso, problem)
     return iso
 
@@ -451,6 +456,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                          if iso.orientation else "")}
         if iso.ga is not None:          # the study's GA on the same problem, judged by the same check
             block["allocation_ga"] = ga_allocation(iso, problem, al, seed)
+        if iso.front is not None:       # the study's nsga2: cost against AP, RP held, judged against the exact frontier
+            block["front_nsga2"] = front_allocation(iso, problem, al, seed)
     block["random_sources"] = [{"name": s.name, "kind": s.kind, "joint": s.joint, "unit": s.unit, "tolerance": float(t),
                                 "variation": s.variation if s.kind == "backlash" else None,
                                 "cost": None if c is None else float(c.cost(t))}
