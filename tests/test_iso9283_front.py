@@ -14,18 +14,14 @@ import re
 import numpy as np
 import pytest
 
-import evotol.cost_models as cm
 from evotol.allocators.iso9283 import RP_MARGIN, allocate_iso9283
 from evotol.allocators.iso9283_front import allocate_iso9283_front
 from evotol.errors import ValidationError
-from evotol.measures.iso9283 import TestCube, iso_positions
 from evotol.measures.iso9283.budget import joints_and_maps
 from evotol.measures.linear.directions import directions_for
-from evotol.robots.mechanism import MechanismModel
-from evotol.robots.mechanism.model.random_sources import RandomSource, encoder_count
 
-from tests.test_iso9283 import ARCMIN, JOINTS, UR5, own_ap_and_rp
-from tests.test_iso9283_ga import example_spec
+from tests.test_iso9283 import own_ap_and_rp
+from tests.test_iso9283_ga import example_spec, small_ur5_case
 
 AP, RP = 4e-4, 4e-5
 N_DRAWS = 5000
@@ -33,14 +29,8 @@ N_DRAWS = 5000
 
 @pytest.fixture(scope="module")
 def case():
-    robot = MechanismModel(UR5, sources=JOINTS)         # systematic: the six encoder offsets
-    P = iso_positions(TestCube((0.4, 0.0, 0.3), 0.2))
-    srcs = [RandomSource("backlash", j, ARCMIN) for j in JOINTS] + \
-           [RandomSource("encoder", j, encoder_count(14, 50)) for j in JOINTS]
-    sc = [cm.ReciprocalCost(0.1, 1.0, scale=1e-5)] * 6
-    rc = [cm.ReciprocalCost(0.2, 1.0, scale=s.tolerance) for s in srcs]
-    args = (robot, P, sc, [[1e-6] * 6, [1e-3] * 6], np.ones(6, bool), srcs, rc,
-            [[s.tolerance / 10 for s in srcs], [s.tolerance * 10 for s in srcs]])
+    args = small_ur5_case()
+    robot, P = args[:2]
     front = allocate_iso9283_front(*args, AP, RP, pop_size=40, n_gen=60, seed=0, n_samples=N_DRAWS)
     _, S = joints_and_maps(robot, P)
     delta = directions_for(S[:, :3], 600, full_sphere=True)[1]

@@ -29,16 +29,23 @@ AP, RP = 4e-4, 4e-5
 N_DRAWS = 5000
 
 
-@pytest.fixture(scope="module")
-def case():
+def small_ur5_case() -> tuple:
+    """The arguments of the ISO allocators for the UR5 with its six encoder offsets (systematic), six lost motions
+    and six encoder counts (random); shared by the ISO GA and front tests."""
     robot = MechanismModel(UR5, sources=JOINTS)         # systematic: the six encoder offsets
     P = iso_positions(TestCube((0.4, 0.0, 0.3), 0.2))
     srcs = [RandomSource("backlash", j, ARCMIN) for j in JOINTS] + \
            [RandomSource("encoder", j, encoder_count(14, 50)) for j in JOINTS]
     sc = [cm.ReciprocalCost(0.1, 1.0, scale=1e-5)] * 6
     rc = [cm.ReciprocalCost(0.2, 1.0, scale=s.tolerance) for s in srcs]
-    args = (robot, P, sc, [[1e-6] * 6, [1e-3] * 6], np.ones(6, bool), srcs, rc,
+    return (robot, P, sc, [[1e-6] * 6, [1e-3] * 6], np.ones(6, bool), srcs, rc,
             [[s.tolerance / 10 for s in srcs], [s.tolerance * 10 for s in srcs]])
+
+
+@pytest.fixture(scope="module")
+def case():
+    args = small_ur5_case()
+    robot, P = args[:2]
     ga = allocate_iso9283_ga(*args, AP, RP, pop_size=40, n_gen=40, seed=0, n_samples=N_DRAWS)
     _, S = joints_and_maps(robot, P)
     delta = directions_for(S[:, :3], 600, full_sphere=True)[1]

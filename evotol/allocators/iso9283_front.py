@@ -27,31 +27,22 @@ below the frontier by that margin (at most about 0.4 % in AP), never by more.
 from __future__ import annotations
 
 import numpy as np
-from pymoo.core.problem import Problem
 from pymoo.core.repair import Repair
 from scipy.stats import qmc
 
 from evotol._runtime.blas_threads import single_threaded_blas
 from evotol.allocators.iso9283 import allocate_iso9283, iso_check, iso_terms
-from evotol.allocators.iso9283_ga import design_cost, population_figures
+from evotol.allocators.iso9283_ga import LogDesignProblem, design_cost, population_figures
 from evotol.allocators.nsga_driver import run_nsga2
 from evotol.errors import ValidationError
 
 
-class _FrontProblem(Problem):
+class _FrontProblem(LogDesignProblem):
     """Cost and the proven AP bound of a population (module docstring); one RP constraint."""
 
     def __init__(self, terms, costs):
-        v = terms["var"]
         self.rp_constrained = terms["RP"] is not None and terms["K"] > 0
-        super().__init__(n_var=int(v.sum()), n_obj=2, n_ieq_constr=int(self.rp_constrained),
-                         xl=np.log(terms["lo"][v]), xu=np.log(terms["hi"][v]))
-        self.terms, self.costs = terms, costs
-
-    def full(self, X):
-        T = np.repeat(self.terms["lo"][None], len(X), 0)
-        T[:, self.terms["var"]] = np.exp(X)
-        return T
+        super().__init__(terms, costs, n_obj=2, n_ieq_constr=int(self.rp_constrained))
 
     def _evaluate(self, X, out, *args, **kwargs):
         T = self.full(X)

@@ -49,19 +49,26 @@ def iso_ga_options(spec: dict, problem, orientation: dict) -> dict | None:
     methods = study_methods(spec, problem)
     if "ga" not in methods:
         return None
-    ga = dict(methods["ga"])
-    other = [k for k in ga if k not in ISO_GA_KEYS]
+    return _iso_settings("ga", methods["ga"], req, orientation,
+                         "the ga then allocates the random sources to AP/RP too", "the ga allocates to AP and RP only")
+
+
+def _iso_settings(method: str, table: dict, req: dict, orientation: dict, then: str, only: str) -> dict:
+    """``pop_size``, ``n_gen``, ``seed`` of a method that also allocates to AP/RP; anything else refused in one line."""
+    other = [k for k in table if k not in ISO_GA_KEYS]
     if other:
-        raise ValidationError(f"methods.ga.{other[0]}", ga[other[0]], "only pop_size, n_gen and seed beside [iso9283] "
-                              "allocate = true (the ga then allocates the random sources to AP/RP too, pymoo's operators)")
+        raise ValidationError(f"methods.{method}.{other[0]}", table[other[0]], "only pop_size, n_gen and seed beside "
+                              f"[iso9283] allocate = true ({then}, pymoo's operators)")
     if orientation:
         k = next(iter(orientation))
-        raise ValidationError(f"requirement.iso9283.{k}", req[k], "no orientation figure beside [methods] ga and "
-                              "[iso9283] allocate = true: the ga allocates to AP and RP only (the optimum takes them: list "
-                              "[methods] without ga)")
-    check_ga_options(**{k: v for k, v in ga.items() if k in ("pop_size", "n_gen", "seed")})
-    return {"pop_size": int(ga.get("pop_size", 100)), "n_gen": int(ga.get("n_gen", 200)),
-            **({"seed": int(ga["seed"])} if "seed" in ga else {})}
+        raise ValidationError(f"requirement.iso9283.{k}", req[k], f"no orientation figure beside [methods] {method} and "
+                              f"[iso9283] allocate = true: {only} (the optimum takes them: list [methods] without {method})")
+    try:
+        check_ga_options(**{k: v for k, v in table.items() if k in ("pop_size", "n_gen", "seed")})
+    except ValidationError as e:
+        raise ValidationError(f"methods.{method}.{e.field}", e.value, e.expected) from None
+    return {"pop_size": int(table.get("pop_size", 100)), "n_gen": int(table.get("n_gen", 200)),
+            **({"seed": int(table["seed"])} if "seed" in table else {})}
 
 
 def ga_allocation(iso, problem, optimum: dict, seed: int) -> dict:
@@ -127,27 +134,12 @@ def iso_front_options(spec: dict, problem, orientation: dict) -> dict | None:
     methods = study_methods(spec, problem)
     if "nsga2" not in methods:
         return None
-    front = dict(methods["nsga2"])
     if "calibration" in spec:
-        raise ValidationError("methods.nsga2", front, "no nsga2 beside [calibration] and [iso9283] allocate = true: the "
-                              "ISO front (cost against AP, RP held) does not take a calibrated budget yet (list [methods] "
-                              "without nsga2; docs/iso9283.md)")
-    other = [k for k in front if k not in ISO_GA_KEYS]
-    if other:
-        raise ValidationError(f"methods.nsga2.{other[0]}", front[other[0]], "only pop_size, n_gen and seed beside "
-                              "[iso9283] allocate = true (the nsga2 then also runs the ISO front, pymoo's operators)")
-    if orientation:
-        k = next(iter(orientation))
-        raise ValidationError(f"requirement.iso9283.{k}", req[k], "no orientation figure beside [methods] nsga2 and "
-                              "[iso9283] allocate = true: the ISO front trades cost against AP with RP held only (the "
-                              "optimum takes them: list [methods] without nsga2)")
-    opts = {"pop_size": front.get("pop_size", 100), "n_gen": front.get("n_gen", 200)}
-    for k, least in (("pop_size", 4), ("n_gen", 1)):
-        if isinstance(opts[k], bool) or not isinstance(opts[k], int) or opts[k] < least:
-            raise ValidationError(f"methods.nsga2.{k}", opts[k], f"an integer >= {least}")
-    if "seed" in front and (isinstance(front["seed"], bool) or not isinstance(front["seed"], int)):
-        raise ValidationError("methods.nsga2.seed", front["seed"], "an integer")
-    return {**opts, **({"seed": front["seed"]} if "seed" in front else {})}
+        raise ValidationError("methods.nsga2", methods["nsga2"], "no nsga2 beside [calibration] and [iso9283] allocate = "
+                              "true: the ISO front (cost against AP, RP held) does not take a calibrated budget yet (list "
+                              "[methods] without nsga2; docs/iso9283.md)")
+    return _iso_settings("nsga2", methods["nsga2"], req, orientation, "the nsga2 then also runs the ISO front",
+                         "the ISO front trades cost against AP with RP held only")
 
 
 def front_allocation(iso, problem, optimum: dict, seed: int) -> dict:
