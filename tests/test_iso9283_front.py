@@ -52,7 +52,7 @@ def test_front_points_meet_their_ap_by_corner_enumeration_and_rp_by_own_sampling
         assert ap.max() == pytest.approx(p["AP_attained"], rel=1e-9)    # evotol's attained worst case is a corner's
         # RP held at 1.5 % below on 5 000 fixed draws: our own 400 000 draws meet the requirement itself
         assert rp.max() <= RP
-        assert rp.max() == pytest.approx(p["RP"], rel=0.01)             # measured: within 0.2 %
+        assert rp.max() == pytest.approx(p["RP"], rel=0.01)             # measured: within 0.25 %
 
 
 def test_the_front_never_beats_the_certified_frontier(case):
@@ -64,7 +64,7 @@ def test_the_front_never_beats_the_certified_frontier(case):
     # interpolated in (log AP, log cost): no point below by more than the optimum's AP aim margin (0.4 %)
     gaps = np.array([p["gap"] for p in pts])
     assert gaps.min() >= -(1 - np.cos(delta))
-    assert np.median(gaps) <= 0.30                     # measured: +5.8 % .. +23.7 %, median +12.8 % at 40 x 60
+    assert np.median(gaps) <= 0.20                     # measured: +4.0 % .. +13.5 %, median +8.5 % at 40 x 60
     # at the same AP by a certified solve: the relaxed optimum (attained AP <= the point's bound) is a lower bound
     for p in checked(pts):
         relaxed = allocate_iso9283(*args, p["AP_bound"] / np.cos(delta), RP, n_samples=N_DRAWS)

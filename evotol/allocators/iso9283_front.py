@@ -170,8 +170,7 @@ def allocate_iso9283_front(robot, positions, sys_costs, sys_bounds, free, source
     costs = list(sys_costs) + list(rand_costs)
     prob = _FrontProblem(terms, costs)
     X0 = qmc.scale(qmc.LatinHypercube(d=prob.n_var, seed=seed).random(int(pop_size)), prob.xl, prob.xu)
-    X0 = _UnderRP()._do(prob, X0)
-    algo = run_nsga2(prob, pop_size=int(pop_size), n_gen=int(n_gen), seed=seed, sampling=X0, progress=None,
+    algo = run_nsga2(prob, pop_size=int(pop_size), n_gen=int(n_gen), seed=seed, sampling=X0, repair=_UnderRP(), progress=None,
                      size=f"ISO front, {int(n_gen)} generations × {int(pop_size)} designs")     # a bar on a terminal
     X = algo.opt.get("X")
     if prob.rp_constrained:

@@ -34,7 +34,7 @@ class _Callbacks(Callback):
 
 def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, sampling=None, callback=None,
               progress: bool | None = False, size: str = "", verbose: bool = False,
-              interruptible: bool = False) -> NSGA2:
+              interruptible: bool = False, repair=None) -> NSGA2:
     """Run pymoo's ``NSGA2`` (duplicates eliminated) for ``n_gen`` generations on a pymoo ``problem``;
     return the algorithm (``algo.pop``, ``algo.opt``).
 
@@ -64,13 +64,16 @@ def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, samplin
     interruptible : bool
         If True, Ctrl-C ends the run early and keeps the population reached so far; otherwise
         the ``KeyboardInterrupt`` propagates.
+    repair : pymoo.core.repair.Repair or None
+        pymoo's repair, applied to every design before it is evaluated (the initial population and every
+        offspring); None: none.
 
     Returns
     -------
     pymoo.algorithms.moo.nsga2.NSGA2
         The algorithm after the run: ``algo.pop`` (last population), ``algo.opt`` (its front).
     """
-    kw = {} if sampling is None else {"sampling": sampling}
+    kw = {**({} if sampling is None else {"sampling": sampling}), **({} if repair is None else {"repair": repair})}
     algo = NSGA2(pop_size=pop_size, eliminate_duplicates=True, **kw)
     with progress_bar(n_gen, "NSGA-II", "gen", progress, size=size) as bar:
         algo.setup(problem, termination=get_termination("n_gen", int(n_gen)), seed=seed, verbose=verbose,
