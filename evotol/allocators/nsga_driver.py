@@ -1,8 +1,9 @@
 """The one NSGA-II driver of evotol: pymoo's ``NSGA2``, its termination, its loop and its hooks.
 
 Every Pareto front evotol computes runs through :func:`run_nsga2`: the tolerance front
-(:func:`evotol.allocators.allocate_nsga2`), the design-study front (:func:`evotol.design.nsga2`)
-and the process-selection front (:func:`evotol.allocators.process.process_front`). Each brings its
+(:func:`evotol.allocators.allocate_nsga2`), the design-study front (:func:`evotol.design.nsga2`),
+the process-selection front (:func:`evotol.allocators.process.process_front`) and the ISO 9283 front of cost
+against AP (:func:`evotol.allocators.iso9283_front.allocate_iso9283_front`). Each brings its
 own pymoo ``Problem`` (what a decision vector means, what the objectives are) and, when it needs
 per-generation work (lazy constraint checks, a history), a pymoo ``Callback``; the driver owns the
 rest: the algorithm's settings (duplicates eliminated), the ``n_gen`` termination, pymoo's
