@@ -103,13 +103,37 @@ def scale_to_boundary(terms: dict, T: np.ndarray, iters: int = 3) -> np.ndarray:
     return T
 
 
-class _Problem(Problem):
-    def __init__(self, terms, costs):
+class LogDesignProblem(Problem):
+    """pymoo's problem over ``x = log (t, τ)`` of the free tolerances (module docstring): least cost, one constraint
+    (AP and RP's normalised violation); :mod:`evotol.allocators.iso9283_front` changes the objectives.
+
+    Parameters
+    ----------
+    terms, costs
+        As :func:`population_figures` and :func:`design_cost`.
+    n_obj, n_ieq_constr : int
+        Objectives and inequality constraints.
+    """
+
+    def __init__(self, terms, costs, n_obj: int = 1, n_ieq_constr: int = 1):
         v = terms["var"]
-        super().__init__(n_var=int(v.sum()), n_obj=1, n_ieq_constr=1, xl=np.log(terms["lo"][v]), xu=np.log(terms["hi"][v]))
+        super().__init__(n_var=int(v.sum()), n_obj=n_obj, n_ieq_constr=n_ieq_constr, xl=np.log(terms["lo"][v]),
+                         xu=np.log(terms["hi"][v]))
         self.terms, self.costs = terms, costs
 
     def full(self, X):
+        """Designs from decision vectors: the free columns ``exp(X)``, the others at their lower bounds.
+
+        Parameters
+        ----------
+        X : (n, n_var) ndarray
+            Log tolerances of the free columns.
+
+        Returns
+        -------
+        (n, m + K) ndarray
+            Systematic then random tolerances (SI).
+        """
         T = np.repeat(self.terms["lo"][None], len(X), 0)
         T[:, self.terms["var"]] = np.exp(X)
         return T
@@ -174,7 +198,7 @@ def allocate_iso9283_ga(robot, positions, sys_costs, sys_bounds, free, sources, 
     terms = iso_terms(robot, positions, sys_bounds, free, sources, rand_bounds, AP, RP, None, n_samples,
                       seed if draw_seed is None else draw_seed)
     costs = list(sys_costs) + list(rand_costs)
-    prob = _Problem(terms, costs)
+    prob = LogDesignProblem(terms, costs)
     X0 = qmc.scale(qmc.LatinHypercube(d=prob.n_var, seed=seed).random(int(pop_size)), prob.xl, prob.xu)
     res = minimize(prob, GA(pop_size=int(pop_size), sampling=X0, repair=_OntoBoundary(), eliminate_duplicates=True),
                    ("n_gen", int(n_gen)), seed=seed, verbose=False)

@@ -1,8 +1,9 @@
 """The one NSGA-II driver of evotol: pymoo's ``NSGA2``, its termination, its loop and its hooks.
 
 Every Pareto front evotol computes runs through :func:`run_nsga2`: the tolerance front
-(:func:`evotol.allocators.allocate_nsga2`), the design-study front (:func:`evotol.design.nsga2`)
-and the process-selection front (:func:`evotol.allocators.process.process_front`). Each brings its
+(:func:`evotol.allocators.allocate_nsga2`), the design-study front (:func:`evotol.design.nsga2`),
+the process-selection front (:func:`evotol.allocators.process.process_front`) and the ISO 9283 front of cost
+against AP (:func:`evotol.allocators.iso9283_front.allocate_iso9283_front`). Each brings its
 own pymoo ``Problem`` (what a decision vector means, what the objectives are) and, when it needs
 per-generation work (lazy constraint checks, a history), a pymoo ``Callback``; the driver owns the
 rest: the algorithm's settings (duplicates eliminated), the ``n_gen`` termination, pymoo's
@@ -34,7 +35,7 @@ class _Callbacks(Callback):
 
 def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, sampling=None, callback=None,
               progress: bool | None = False, size: str = "", verbose: bool = False,
-              interruptible: bool = False) -> NSGA2:
+              interruptible: bool = False, repair=None) -> NSGA2:
     """Run pymoo's ``NSGA2`` (duplicates eliminated) for ``n_gen`` generations on a pymoo ``problem``;
     return the algorithm (``algo.pop``, ``algo.opt``).
 
@@ -64,13 +65,16 @@ def run_nsga2(problem: Problem, *, pop_size: int, n_gen: int, seed: int, samplin
     interruptible : bool
         If True, Ctrl-C ends the run early and keeps the population reached so far; otherwise
         the ``KeyboardInterrupt`` propagates.
+    repair : pymoo.core.repair.Repair or None
+        pymoo's repair, applied to every design before it is evaluated (the initial population and every
+        offspring); None: none.
 
     Returns
     -------
     pymoo.algorithms.moo.nsga2.NSGA2
         The algorithm after the run: ``algo.pop`` (last population), ``algo.opt`` (its front).
     """
-    kw = {} if sampling is None else {"sampling": sampling}
+    kw = {**({} if sampling is None else {"sampling": sampling}), **({} if repair is None else {"repair": repair})}
     algo = NSGA2(pop_size=pop_size, eliminate_duplicates=True, **kw)
     with progress_bar(n_gen, "NSGA-II", "gen", progress, size=size) as bar:
         algo.setup(problem, termination=get_termination("n_gen", int(n_gen)), seed=seed, verbose=verbose,

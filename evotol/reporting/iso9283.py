@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from html import escape
 
+import plotly.graph_objects as go
+
 from evotol.units.display import DisplayUnits
 
 
@@ -118,6 +120,57 @@ def iso9283_section(rep, summary: dict) -> None:
                      f"source the same share of RP, scaled onto the boundary) costs {g['cost']:.4g} "
                      f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
                      + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check.", note=not g["feasible"])
+        if "front_nsga2" in iso:        # the study's nsga2 on the same problem: cost against AP, RP held
+            f = iso["front_nsga2"]
+            rep.text(front_sentence(f, L))
+            rep.figure(_front_figure(f, u), div_id="iso9283-front")
+
+
+def _gaps(f: dict) -> list[float]:
+    return [p["gap"] for p in f["points"] if p["gap"] is not None]
+
+
+def front_sentence(f: dict, L) -> str:
+    """What the ISO front is and how far above the exact frontier it lies (page and terminal).
+
+    Parameters
+    ----------
+    f : dict
+        The block's ``front_nsga2`` (evotol/studyfile/iso9283_methods.py).
+    L : callable
+        A length (m) as text.
+
+    Returns
+    -------
+    str
+    """
+    g = _gaps(f)
+    ap = [p["AP_bound"] for p in f["points"]]
+    return (f"NSGA-II front of cost against AP with RP <= {L(f['requirement']['RP'])} held ({f['pop_size']} x "
+            f"{f['n_gen']}): {f['kept']} of {f['judged']} points kept after re-judging by the optimum's check"
+            + ("" if not ap else f", AP {L(min(ap))} – {L(max(ap))}")
+            + ("" if not g else f"; cost above the exact frontier (certified optima at {len(f['exact_frontier'])} AP "
+               f"levels, interpolated in log AP) by {100 * min(g):+.2f} % to {100 * max(g):+.2f} % "
+               f"(median {100 * sorted(g)[len(g) // 2]:+.2f} %)") + ".")
+
+
+def _front_figure(f: dict, u: DisplayUnits):
+    k = u.factor("m")
+    pts, ex = f["points"], f["exact_frontier"]
+    fig = go.Figure(go.Scatter(x=[p["AP_bound"] * k for p in pts], y=[p["cost"] for p in pts], mode="markers",
+                               name="NSGA-II front (proven AP bound, RP held)",
+                               text=[None if p["gap"] is None else f"{100 * p['gap']:+.2f} % above the frontier"
+                                     for p in pts]))
+    fig.add_scatter(x=[e["AP"] * k for e in ex], y=[e["cost"] for e in ex], mode="lines+markers",
+                    name="exact frontier (certified optima)", line={"color": "black"})
+    fig.add_scatter(x=[f["optimum"]["AP_bound"] * k], y=[f["optimum"]["cost"]], mode="markers",
+                    name="certified optimum at the requirement", marker={"symbol": "star", "size": 14})
+    if f["requirement"]["AP"] is not None:
+        fig.add_vline(x=f["requirement"]["AP"] * k, line_dash="dash", line_color="grey", annotation_text="AP required")
+    fig.update_layout(title="ISO 9283: cost against AP, RP held (log scales)", height=460, xaxis_type="log",
+                      yaxis_type="log", xaxis_title=f"AP, proven bound ({u.length})",
+                      yaxis_title="cost")
+    return fig
 
 
 def verdict_lines(summary: dict) -> list[str]:
@@ -185,6 +238,8 @@ def terminal_lines(summary: dict) -> list[str]:
         out.append(f"  the equal-effect rule (sensitivity) allocated them too: cost {g['cost']:.6g} "
                    f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
                    + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
+    if "front_nsga2" in iso:
+        out.append("  " + front_sentence(iso["front_nsga2"], L))
     out += ["  " + line for line in verdict_lines(summary)]
     for p in iso["poses"]:
         ap, rp = p["AP"], p["RP"]

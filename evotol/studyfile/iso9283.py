@@ -46,8 +46,7 @@ from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, larges
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import IsoTarget, RandomPart
-from evotol.studyfile.iso9283_methods import (ga_allocation, iso_ga_options, iso_sensitivity_wanted,
-                                             sensitivity_allocation)
+from evotol.studyfile.iso9283_methods import method_allocations, study_method_options
 from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count, joint_frames
 
@@ -131,6 +130,9 @@ class IsoStudy:
     sensitivity : bool
         The study's ``sensitivity`` allocates the random sources to AP/RP too, by the equal-effect rule
         (:func:`evotol.studyfile.iso9283_methods.iso_sensitivity_wanted`).
+    front : dict or None
+        The study's ``nsga2`` settings when it also runs the ISO front, cost against AP with RP held
+        (:func:`evotol.studyfile.iso9283_methods.iso_front_options`).
     """
 
     robot: MechanismModel
@@ -148,6 +150,7 @@ class IsoStudy:
     orientation: dict = field(default_factory=dict)
     ga: dict | None = None
     sensitivity: bool = False
+    front: dict | None = None
 
     @property
     def positions(self) -> np.ndarray:
@@ -359,9 +362,8 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
         if cal["configurations"] * 3 < robot.n_columns or cal["noise"] < 0 or cal["robots"] < 1:
             raise ValidationError("iso9283.calibrate", cal, f"at least {-(-robot.n_columns // 3)} configurations, "
                                   "a noise >= 0 and at least 1 robot")
-    ga = iso_ga_options(spec, problem, orientation)        # the GA allocates the random sources too (issue 44)
-    sens = iso_sensitivity_wanted(spec, problem, orientation)     # and the equal-effect rule, to compare
-    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation, ga, sens)
+    iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation,
+                   **study_method_options(spec, problem, orientation))     # ga, sensitivity, nsga2 on AP/RP too
     _check_floor(iso, problem)
     return iso
 
@@ -474,10 +476,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                       "re-estimated on fresh draws; E l + 3 sqrt(E l²) is a convex upper bound."
                       + (" Orientation (APa..RPc): exact first-order worst case and 3 sigma, both convex: certified."
                          if iso.orientation else "")}
-        if iso.ga is not None:          # the study's GA on the same problem, judged by the same check
-            block["allocation_ga"] = ga_allocation(iso, problem, al, seed)
-        if iso.sensitivity:             # the equal-effect rule on the same problem, judged by the same check
-            block["allocation_sensitivity"] = sensitivity_allocation(iso, problem, al, seed)
+        block.update(method_allocations(iso, problem, al, seed))     # the study's ga, sensitivity, nsga2 on it too
     block["random_sources"] = [{"name": s.name, "kind": s.kind, "joint": s.joint, "unit": s.unit, "tolerance": float(t),
                                 "variation": s.variation if s.kind == "backlash" else None,
                                 "cost": None if c is None else float(c.cost(t))}

@@ -3,15 +3,19 @@
 With ``[requirement] iso9283`` and ``allocate = true`` (without ``[calibration]``) the ISO block's allocation of
 systematic and random sources together is the certified optimum (:func:`evotol.allocators.iso9283.allocate_iso9283`).
 A ``ga`` among the study's methods then allocates them too (:func:`evotol.allocators.iso9283_ga.allocate_iso9283_ga`,
-judged by the optimum's own check), beside its ordinary run on the position requirement; ``nsga2``, whose front
-knows neither the random sources nor AP/RP, is refused in one line before any work, and so are GA settings
-and orientation figures the ISO GA does not take. A ``sensitivity`` among the methods allocates them by the
-equal-effect rule too (:func:`evotol.allocators.iso9283_sensitivity.allocate_iso9283_sensitivity`), so that
-the optimum shows what the rule costs.
+judged by the optimum's own check), beside its ordinary run on the position requirement. An ``nsga2`` among them
+runs its ordinary front on the position requirement and, beside it, the front of cost against AP on systematic and
+random sources with every point holding RP (:func:`evotol.allocators.iso9283_front.allocate_iso9283_front`), judged
+against the exact frontier of certified optima. Settings and orientation figures the ISO GA or front does not take,
+and an ``nsga2`` beside ``[calibration]``, are refused in one line before any work.
+A ``sensitivity`` among the methods allocates them by the equal-effect rule too
+(:func:`evotol.allocators.iso9283_sensitivity.allocate_iso9283_sensitivity`), so that the optimum shows what the
+rule costs.
 """
 from __future__ import annotations
 
 from evotol.allocators.ga import check_ga_options
+from evotol.allocators.iso9283_front import allocate_iso9283_front
 from evotol.allocators.iso9283_ga import allocate_iso9283_ga
 from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
 from evotol.errors import ValidationError
@@ -41,32 +45,34 @@ def iso_ga_options(spec: dict, problem, orientation: dict) -> dict | None:
     Raises
     ------
     evotol.errors.ValidationError
-        One line: ``nsga2`` among the methods; a GA setting other than ``pop_size``, ``n_gen``, ``seed``; an
-        orientation figure beside the GA.
+        One line: a GA setting other than ``pop_size``, ``n_gen``, ``seed``; an orientation figure beside the GA.
     """
     table, req = spec.get("iso9283") or {}, spec.get("requirement", {}).get("iso9283")
     if not table.get("allocate") or not req or "calibration" in spec or not problem.free.any():
         return None
     methods = study_methods(spec, problem)
-    if "nsga2" in methods:
-        raise ValidationError("methods.nsga2", methods["nsga2"], "no nsga2 beside [iso9283] allocate = true: its front "
-                              "trades cost against the position requirement and knows neither the random sources nor "
-                              "AP/RP (the optimum and the ga allocate both; docs/iso9283.md)")
     if "ga" not in methods:
         return None
-    ga = dict(methods["ga"])
-    other = [k for k in ga if k not in ISO_GA_KEYS]
+    return _iso_settings("ga", methods["ga"], req, orientation,
+                         "the ga then allocates the random sources to AP/RP too", "the ga allocates to AP and RP only")
+
+
+def _iso_settings(method: str, table: dict, req: dict, orientation: dict, then: str, only: str) -> dict:
+    """``pop_size``, ``n_gen``, ``seed`` of a method that also allocates to AP/RP; anything else refused in one line."""
+    other = [k for k in table if k not in ISO_GA_KEYS]
     if other:
-        raise ValidationError(f"methods.ga.{other[0]}", ga[other[0]], "only pop_size, n_gen and seed beside [iso9283] "
-                              "allocate = true (the ga then allocates the random sources to AP/RP too, pymoo's operators)")
+        raise ValidationError(f"methods.{method}.{other[0]}", table[other[0]], "only pop_size, n_gen and seed beside "
+                              f"[iso9283] allocate = true ({then}, pymoo's operators)")
     if orientation:
         k = next(iter(orientation))
-        raise ValidationError(f"requirement.iso9283.{k}", req[k], "no orientation figure beside [methods] ga and "
-                              "[iso9283] allocate = true: the ga allocates to AP and RP only (the optimum takes them: list "
-                              "[methods] without ga)")
-    check_ga_options(**{k: v for k, v in ga.items() if k in ("pop_size", "n_gen", "seed")})
-    return {"pop_size": int(ga.get("pop_size", 100)), "n_gen": int(ga.get("n_gen", 200)),
-            **({"seed": int(ga["seed"])} if "seed" in ga else {})}
+        raise ValidationError(f"requirement.iso9283.{k}", req[k], f"no orientation figure beside [methods] {method} and "
+                              f"[iso9283] allocate = true: {only} (the optimum takes them: list [methods] without {method})")
+    try:
+        check_ga_options(**{k: v for k, v in table.items() if k in ("pop_size", "n_gen", "seed")})
+    except ValidationError as e:
+        raise ValidationError(f"methods.{method}.{e.field}", e.value, e.expected) from None
+    return {"pop_size": int(table.get("pop_size", 100)), "n_gen": int(table.get("n_gen", 200)),
+            **({"seed": int(table["seed"])} if "seed" in table else {})}
 
 
 def judged_design(iso, result: dict, optimum: dict) -> dict:
@@ -129,6 +135,88 @@ def ga_allocation(iso, problem, optimum: dict, seed: int) -> dict:
                        "the ga its proven bound at AP: a gap below 0 (at most about 0.4 %) is that margin, not a better design"}
 
 
+def iso_front_options(spec: dict, problem, orientation: dict) -> dict | None:
+    """The ``nsga2`` settings when it also runs the ISO front (cost against AP, RP held); None when it does not.
+
+    Parameters
+    ----------
+    spec, problem, orientation
+        As :func:`iso_ga_options`.
+
+    Returns
+    -------
+    dict or None
+        ``pop_size``, ``n_gen`` (defaults 100, 200, as the ordinary front) and, if given, ``seed``.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        One line: ``nsga2`` beside ``[calibration]``; a setting other than ``pop_size``, ``n_gen``, ``seed``; a
+        ``pop_size`` below 4 or ``n_gen`` below 1; an orientation figure.
+    """
+    table, req = spec.get("iso9283") or {}, spec.get("requirement", {}).get("iso9283")
+    if not table.get("allocate") or not req or not problem.free.any():
+        return None
+    methods = study_methods(spec, problem)
+    if "nsga2" not in methods:
+        return None
+    if "calibration" in spec:
+        raise ValidationError("methods.nsga2", methods["nsga2"], "no nsga2 beside [calibration] and [iso9283] allocate = "
+                              "true: the ISO front (cost against AP, RP held) does not take a calibrated budget yet (list "
+                              "[methods] without nsga2; docs/iso9283.md)")
+    return _iso_settings("nsga2", methods["nsga2"], req, orientation, "the nsga2 then also runs the ISO front",
+                         "the ISO front trades cost against AP with RP held only")
+
+
+def front_allocation(iso, problem, optimum: dict, seed: int) -> dict:
+    """The ISO block's ``front_nsga2``: cost against AP on systematic and random sources, RP held (SI).
+
+    Parameters
+    ----------
+    iso : evotol.studyfile.iso9283.IsoStudy
+        The request, with ``front`` its settings (:func:`iso_front_options`).
+    problem
+        As :func:`ga_allocation`.
+    optimum : dict
+        :func:`evotol.allocators.iso9283.allocate_iso9283`'s result at the requirement, shown beside the front.
+    seed : int
+        The study's seed (the front's unless it sets its own; the RP draws are the optimum's).
+
+    Returns
+    -------
+    dict
+        ``points`` (each ``cost``, ``AP_bound``, ``AP_attained``, ``RP``, ``RP_fresh_draws``, ``gap``,
+        ``systematic`` and ``random`` name -> tolerance), ``exact_frontier`` (each ``AP``, ``cost``, ``AP_bound``,
+        ``feasible``), ``gap_method``, ``judged``, ``kept``, ``pop_size``, ``n_gen``, ``seed``, ``evaluations``,
+        ``optimum`` (its ``cost`` and ``AP_bound``), ``requirement``, ``meaning``.
+    """
+    tols = problem.tolerances
+    opts = {**iso.front, "seed": iso.front.get("seed", seed)}
+    f = allocate_iso9283_front(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names],
+                               [problem.lower, problem.upper], problem.free, iso.sources, iso.costs,
+                               [iso.lower, iso.upper], iso.AP, iso.RP, pop_size=opts["pop_size"], n_gen=opts["n_gen"],
+                               seed=opts["seed"], draw_seed=seed)
+    names = iso.robot.source_names
+    points = [{"cost": p["cost"], "AP_bound": p["AP_bound"], "AP_attained": p["AP_attained"], "RP": p["RP"],
+               "RP_fresh_draws": p["RP_fresh"], "gap": p["gap"],
+               "systematic": {n: float(t) for n, t, fr in zip(names, p["systematic"], problem.free) if fr},
+               "random": {s.name: float(t) for s, t in zip(iso.sources, p["random"])}} for p in f["points"]]
+    return {"points": points, "judged": f["judged"], "kept": f["kept"], "pop_size": opts["pop_size"],
+            "n_gen": opts["n_gen"], "seed": opts["seed"], "evaluations": f["evaluations"],
+            "exact_frontier": [{k: v for k, v in lv.items() if k != "tolerances"} for lv in f["exact_frontier"]],
+            "optimum": {"cost": optimum["cost"], "AP_bound": float(max(optimum["AP_bound"]))},
+            "requirement": {"AP": iso.AP, "RP": iso.RP},
+            "gap_method": "cost / exact frontier - 1, the frontier interpolated linearly in (log AP, log cost) between "
+                          "its levels",
+            "meaning": "NSGA-II (pymoo, log tolerances) on the systematic and random sources together: cost against AP "
+                       "(its proven first-order worst-case bound, the largest over the five poses), every point holding "
+                       "RP on the optimum's fixed draws (aimed like the optimum, 1.5 % below). Every point re-judged by "
+                       "the optimum's check and kept only if its RP meets the requirement, and only if no cheaper kept "
+                       "point has a smaller AP. The exact frontier: the certified optimum (AP convex; RP sampled) at "
+                       "each level, the proven AP bound <= level. It aims its attained AP at level cos δ, a front point "
+                       "its bound at the level: a gap below 0 (at most about 0.4 %) is that margin, not a better design"}
+
+
 def iso_sensitivity_wanted(spec: dict, problem, orientation: dict) -> bool:
     """Whether the study's ``sensitivity`` also allocates the random sources to AP/RP (the equal-effect rule).
 
@@ -184,3 +272,45 @@ def sensitivity_allocation(iso, problem, optimum: dict, seed: int) -> dict:
                        "each random source the same root-sum-square share of RP), scaled onto the AP/RP boundary and "
                        "judged by the optimum's check: feasible if the proven AP bound meets AP and the RP on the "
                        "optimum's fixed draws meets RP; it ignores cost, the gap is what the optimum saves"}
+
+
+def study_method_options(spec: dict, problem, orientation: dict) -> dict:
+    """Which of the study's methods also allocate the random sources to AP/RP, checked before any work.
+
+    Parameters
+    ----------
+    spec, problem, orientation
+        As :func:`iso_ga_options`.
+
+    Returns
+    -------
+    dict
+        ``ga`` (:func:`iso_ga_options`), ``sensitivity`` (:func:`iso_sensitivity_wanted`), ``front``
+        (:func:`iso_front_options`): the :class:`evotol.studyfile.iso9283.IsoStudy` fields.
+    """
+    return {"ga": iso_ga_options(spec, problem, orientation),
+            "sensitivity": iso_sensitivity_wanted(spec, problem, orientation),
+            "front": iso_front_options(spec, problem, orientation)}
+
+
+def method_allocations(iso, problem, optimum: dict, seed: int) -> dict:
+    """The ISO block's allocations by the study's other methods, each judged by the optimum's check.
+
+    Parameters
+    ----------
+    iso, problem, optimum, seed
+        As :func:`ga_allocation`.
+
+    Returns
+    -------
+    dict
+        ``allocation_ga``, ``allocation_sensitivity``, ``front_nsga2``: the ones the study asks for.
+    """
+    out = {}
+    if iso.ga is not None:
+        out["allocation_ga"] = ga_allocation(iso, problem, optimum, seed)
+    if iso.sensitivity:
+        out["allocation_sensitivity"] = sensitivity_allocation(iso, problem, optimum, seed)
+    if iso.front is not None:
+        out["front_nsga2"] = front_allocation(iso, problem, optimum, seed)
+    return out

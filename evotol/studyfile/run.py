@@ -228,7 +228,7 @@ def robot_study(study: Study) -> Outcome:
     def method(m, kw):
         def step():
             if m == "nsga2":        # a front, not a design: taken out of the results below
-                return allocate_nsga2(problem, seed=seed, **{"progress": True, **kw})   # a bar, or log lines
+                return allocate_nsga2(problem, **{"seed": seed, "progress": True, **kw})   # its own seed if set   # a bar, or log lines
             opts = method_options(spec, m, kw)
             if m == "ga":
                 opts.setdefault("seed", seed)
