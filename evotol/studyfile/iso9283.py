@@ -46,7 +46,7 @@ from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, larges
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import IsoTarget, RandomPart
-from evotol.studyfile.iso9283_methods import method_allocations, study_method_options
+from evotol.studyfile.iso9283_methods import allocator_args, method_allocations, study_method_options
 from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count, joint_frames
 
@@ -459,10 +459,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     if info is not None:
         block["calibrated_budget"] = calibrated_budget(info)
     if iso.allocate and info is None:
-        tols = problem.tolerances
-        al = allocate_iso9283(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names], [problem.lower, problem.upper],
-                              problem.free, iso.sources, iso.costs, [iso.lower, iso.upper], iso.AP, iso.RP,
-                              x0=np.concatenate([t_sys, t_rand]), seed=seed, orientation=iso.orientation)
+        al = allocate_iso9283(*allocator_args(iso, problem), x0=np.concatenate([t_sys, t_rand]), seed=seed,
+                              orientation=iso.orientation)
         t_sys, t_rand = al["systematic"], al["random"]
         block["systematic_from"] = "iso9283 allocation" if problem.free.any() else "given tolerances (random sources allocated)"
         block["allocation"] = {

@@ -75,6 +75,27 @@ def _iso_settings(method: str, table: dict, req: dict, orientation: dict, then: 
             **({"seed": int(table["seed"])} if "seed" in table else {})}
 
 
+def allocator_args(iso, problem) -> tuple:
+    """The ISO allocators' common arguments, from the study (SI): robot, poses, the systematic cost models and
+    bounds, which systematic tolerances are free, the random sources with their cost models and bounds, AP, RP
+    (:func:`evotol.allocators.iso9283.allocate_iso9283`).
+
+    Parameters
+    ----------
+    iso : evotol.studyfile.iso9283.IsoStudy
+        The request.
+    problem : evotol.core.problem.ToleranceProblem
+        The study's problem: its cost models, bounds and free tolerances.
+
+    Returns
+    -------
+    tuple
+    """
+    tols = problem.tolerances
+    return (iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names], [problem.lower, problem.upper],
+            problem.free, iso.sources, iso.costs, [iso.lower, iso.upper], iso.AP, iso.RP)
+
+
 def judged_design(iso, result: dict, optimum: dict) -> dict:
     """What the ISO block states of any allocator's design beside the optimum (SI): ``cost``, ``gap_to_optimum``
     (cost / optimum's − 1), ``feasible`` (:func:`evotol.allocators.iso9283.iso_check`), ``systematic`` and
@@ -121,12 +142,9 @@ def ga_allocation(iso, problem, optimum: dict, seed: int) -> dict:
         ``evaluations``, ``systematic`` and ``random`` (name -> tolerance), ``AP_bound``, ``RP_sampled``,
         ``RP_fresh_draws`` (per pose, m), ``meaning``.
     """
-    tols = problem.tolerances
     opts = {**iso.ga, "seed": iso.ga.get("seed", seed)}
-    ga = allocate_iso9283_ga(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names],
-                             [problem.lower, problem.upper], problem.free, iso.sources, iso.costs, [iso.lower, iso.upper],
-                             iso.AP, iso.RP, pop_size=opts["pop_size"], n_gen=opts["n_gen"], seed=opts["seed"],
-                             draw_seed=seed)
+    ga = allocate_iso9283_ga(*allocator_args(iso, problem), pop_size=opts["pop_size"], n_gen=opts["n_gen"],
+                             seed=opts["seed"], draw_seed=seed)
     return {**judged_design(iso, ga, optimum),
             "pop_size": opts["pop_size"], "n_gen": opts["n_gen"], "seed": opts["seed"], "evaluations": ga["evaluations"],
             "meaning": "the study's ga on the systematic and random sources together (pymoo GA in log space, designs moved "
@@ -190,11 +208,8 @@ def front_allocation(iso, problem, optimum: dict, seed: int) -> dict:
         ``feasible``), ``gap_method``, ``judged``, ``kept``, ``pop_size``, ``n_gen``, ``seed``, ``evaluations``,
         ``optimum`` (its ``cost`` and ``AP_bound``), ``requirement``, ``meaning``.
     """
-    tols = problem.tolerances
     opts = {**iso.front, "seed": iso.front.get("seed", seed)}
-    f = allocate_iso9283_front(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names],
-                               [problem.lower, problem.upper], problem.free, iso.sources, iso.costs,
-                               [iso.lower, iso.upper], iso.AP, iso.RP, pop_size=opts["pop_size"], n_gen=opts["n_gen"],
+    f = allocate_iso9283_front(*allocator_args(iso, problem), pop_size=opts["pop_size"], n_gen=opts["n_gen"],
                                seed=opts["seed"], draw_seed=seed)
     names = iso.robot.source_names
     points = [{"cost": p["cost"], "AP_bound": p["AP_bound"], "AP_attained": p["AP_attained"], "RP": p["RP"],
@@ -263,10 +278,7 @@ def sensitivity_allocation(iso, problem, optimum: dict, seed: int) -> dict:
         ``cost``, ``gap_to_optimum``, ``feasible``, ``systematic`` and ``random`` (name -> tolerance),
         ``AP_bound``, ``RP_sampled``, ``RP_fresh_draws`` (per pose, m), ``meaning``.
     """
-    tols = problem.tolerances
-    s = allocate_iso9283_sensitivity(iso.robot, iso.positions, [tols[n].cost for n in iso.robot.source_names],
-                                     [problem.lower, problem.upper], problem.free, iso.sources, iso.costs,
-                                     [iso.lower, iso.upper], iso.AP, iso.RP, seed=seed)
+    s = allocate_iso9283_sensitivity(*allocator_args(iso, problem), seed=seed)
     return {**judged_design(iso, s, optimum),
             "meaning": "the equal-effect rule (each source the same share of AP by its largest effect per unit tolerance, "
                        "each random source the same root-sum-square share of RP), scaled onto the AP/RP boundary and "
@@ -280,7 +292,7 @@ def study_method_options(spec: dict, problem, orientation: dict) -> dict:
     Parameters
     ----------
     spec, problem, orientation
-        As :func:`iso_ga_options`.
+        Read and checked as :func:`iso_ga_options` reads them.
 
     Returns
     -------
