@@ -89,3 +89,20 @@ def test_without_sensitivity_there_is_no_rules_allocation_and_orientation_is_ref
     with pytest.raises(ValidationError) as e:
         read_iso9283(spec, load_problem(spec))
     assert e.value.field == "requirement.iso9283.APa" and "\n" not in str(e.value) and "sensitivity" in str(e.value)
+
+
+def test_the_block_names_the_methods_that_did_not_allocate_to_ap_and_rp():
+    from evotol.allocators import allocate_equal, allocate_sensitivity
+    from evotol.reporting.iso9283 import terminal_lines
+    from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
+    from evotol.studyfile.problem import load_problem
+    from evotol.units.display import DisplayUnits
+    spec = example_spec({"optimum": {}, "sensitivity": {}, "equal": {}})
+    problem = load_problem(spec)
+    iso = read_iso9283(spec, problem)
+    results = {"sensitivity": allocate_sensitivity(problem), "equal": allocate_equal(problem)}
+    block = iso9283_block(iso, problem, results, seed=0)
+    assert block["methods"] == {"sensitivity": "allocation_sensitivity", "equal": None}
+    lines = terminal_lines({"iso9283": block, "display_units": DisplayUnits().to_dict()})
+    assert any(line.strip().startswith("Not allocated to AP/RP: equal allocated the systematic sources alone")
+               for line in lines)

@@ -124,6 +124,27 @@ def iso9283_section(rep, summary: dict) -> None:
             f = iso["front_nsga2"]
             rep.text(front_sentence(f, L))
             rep.figure(_front_figure(f, u), div_id="iso9283-front")
+        if not_iso(iso):
+            rep.text(not_iso(iso), note=True)
+
+
+def not_iso(iso: dict) -> str:
+    """The sentence naming the study's methods that allocated the systematic sources alone (not to AP/RP);
+    empty when every method that ran allocated to AP/RP too.
+
+    Parameters
+    ----------
+    iso : dict
+        The study JSON's ``iso9283`` block.
+
+    Returns
+    -------
+    str
+    """
+    names = [n for n, key in iso.get("methods", {}).items() if key is None]
+    return "" if not names else (
+        f"Not allocated to AP/RP: {', '.join(names)} allocated the systematic sources alone, to the position "
+        "requirement; the allocations above are the ones to AP and RP.")
 
 
 def _gaps(f: dict) -> list[float]:
@@ -240,6 +261,8 @@ def terminal_lines(summary: dict) -> list[str]:
                    + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
     if "front_nsga2" in iso:
         out.append("  " + front_sentence(iso["front_nsga2"], L))
+    if not_iso(iso):
+        out.append("  " + not_iso(iso))
     out += ["  " + line for line in verdict_lines(summary)]
     for p in iso["poses"]:
         ap, rp = p["AP"], p["RP"]

@@ -46,7 +46,7 @@ from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, larges
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import IsoTarget, RandomPart
-from evotol.studyfile.iso9283_methods import allocator_args, method_allocations, study_method_options
+from evotol.studyfile.iso9283_methods import allocator_args, method_allocations, methods_scope, study_method_options
 from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count, joint_frames
 
@@ -475,6 +475,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                       + (" Orientation (APa..RPc): exact first-order worst case and 3 sigma, both convex: certified."
                          if iso.orientation else "")}
         block.update(method_allocations(iso, problem, al, seed))     # the study's ga, sensitivity, nsga2 on it too
+        block["methods"] = methods_scope(results, block)              # and which methods did not allocate to it
     block["random_sources"] = [{"name": s.name, "kind": s.kind, "joint": s.joint, "unit": s.unit, "tolerance": float(t),
                                 "variation": s.variation if s.kind == "backlash" else None,
                                 "cost": None if c is None else float(c.cost(t))}

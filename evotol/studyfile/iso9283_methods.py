@@ -326,3 +326,29 @@ def method_allocations(iso, problem, optimum: dict, seed: int) -> dict:
     if iso.front is not None:
         out["front_nsga2"] = front_allocation(iso, problem, optimum, seed)
     return out
+
+
+#: the study's methods that also allocate the random sources to AP/RP beside ``allocate = true``, and where
+#: the block states it
+ISO_ALLOCATIONS = {"optimum": "allocation", "ga": "allocation_ga", "sensitivity": "allocation_sensitivity",
+                   "nsga2": "front_nsga2"}
+
+
+def methods_scope(names, block: dict) -> dict:
+    """What each of the study's methods allocated beside ``[iso9283] allocate = true``: the ISO block's key of
+    its allocation to AP/RP, or None where it allocated the systematic sources alone, to the position
+    requirement (``monotone``, ``equal``, ``lagrange``: they know neither the random sources nor AP/RP).
+
+    Parameters
+    ----------
+    names : iterable of str
+        The study's methods that ran.
+    block : dict
+        The ISO block, its allocations written.
+
+    Returns
+    -------
+    dict
+        Method name -> key in the block, or None.
+    """
+    return {n: ISO_ALLOCATIONS[n] if ISO_ALLOCATIONS.get(n) in block else None for n in names}
