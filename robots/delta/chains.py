@@ -65,6 +65,11 @@ def _cs(angle):
 
 _CS0 = _cs(0.0)        # (cos 0, sin 0) as the numpy scalars np.cos(0.0), np.sin(0.0)
 
+# the three legs' columns of a parameter are equally spaced: slices give views, not fancy-index copies
+_LEG_SLICE = {p: slice(int(c[0]), int(c[-1]) + 1, int(c[1] - c[0])) for p, c in _LEG_COL.items()}
+if not all(np.array_equal(np.arange(len(_INDEX))[s], _LEG_COL[p]) for p, s in _LEG_SLICE.items()):   # pragma: no cover
+    raise ImportError("robots.delta.chains: leg parameter columns are no longer equally spaced")
+
 
 class DeltaChains:
     """The KK chains of the Delta's legs with errors (mixin of :class:`evotol.robots.delta.model.DeltaRobot`)."""
@@ -72,8 +77,8 @@ class DeltaChains:
     def _unpack(self, errors):
         """errors (..., 47) -> common (..., ) and per-leg (..., 3) error arrays."""
         e = {"Ra": errors[..., _INDEX["Ra"]][..., None], "Rb": errors[..., _INDEX["Rb"]][..., None]}
-        for p, cols in _LEG_COL.items():
-            e[p] = errors[..., cols]
+        for p, cols in _LEG_SLICE.items():
+            e[p] = errors[..., cols]        # a view (equally spaced columns), read only by sums below
         return e
 
     def branch_points(self, q1, q2, q3, errors, *, level_on_actual: bool = True):
