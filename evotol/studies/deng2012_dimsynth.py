@@ -32,7 +32,7 @@ import pandas as pd
 
 from evotol import design as doe
 from evotol.design import Factor, Objective
-from evotol._runtime.executor import scheduler_of
+from evotol._runtime.executor import scheduler_of, worker_count
 from evotol.design.filtering import DesignStudy, Preset
 from evotol.core.pareto import non_dominated
 from evotol.studies import Study, StudyResult
@@ -339,6 +339,12 @@ def compute(config: dict) -> StudyResult:
     entries = doe.random_subset(f, config["n_designs"], seed=seed) if config["n_designs"] else doe.full_factorial(f)
     store = Path(config["out_dir"]) / f"{NAME}_store{'_quick' if quick else ''}" if config.get("out_dir") else None
     log = doe.EvaluationLog()
+    if scheduler is None and worker_count(workers) > 1:
+        # the pools' workers fork with the clearance kernels loaded here: one compile (fresh install)
+        # or cache load, not one per worker (issue 43)
+        from evotol.robots.clearance.support import warm_up
+
+        warm_up()
     df = doe.evaluate(entries, ev, store=store, workers=workers, scheduler=scheduler, progress=config["progress"],
                       log=log, chunk_size=4 if quick else None, description="IRSBot-2 designs")
     # always evaluate the thesis's two good designs (Tab. VII.2) -- they are grid designs

@@ -48,14 +48,27 @@ def _rot_x(c, s, p):
     return (x, c * y - s * z, s * y + c * z)
 
 
-def _kk(p, alpha, dx, q, r, b=None):
-    """Apply Rot(x, alpha) Trans(x, dx) Rot(z, q) Trans(z, r) (eq. 4), preceded by Trans(z, b)."""
-    x, y, z = p
-    x, y, z = _rot_z(np.cos(q), np.sin(q), (x, y, z + r))
-    x, y, z = _rot_x(np.cos(alpha), np.sin(alpha), (x + dx, y, z))
+def _kk_cs(p, cs_alpha, dx, cs_q, r, b=None):
+    """Apply Rot(x, alpha) Trans(x, dx) Rot(z, q) Trans(z, r) (eq. 4), preceded by Trans(z, b),
+    given ``cs_alpha = (cos alpha, sin alpha)`` and ``cs_q``: the two branches of a leg share most
+    angles, so their cosines and sines are computed once per chain (issue 43)."""
+    x, y, z = _rot_z(cs_q[0], cs_q[1], (p[0], p[1], p[2] + r))
+    x, y, z = _rot_x(cs_alpha[0], cs_alpha[1], (x + dx, y, z))
     if b is not None:
         z = z + b
     return x, y, z
+
+
+def _cs(angle):
+    return np.cos(angle), np.sin(angle)
+
+
+_CS0 = _cs(0.0)        # (cos 0, sin 0) as the numpy scalars np.cos(0.0), np.sin(0.0)
+
+# the three legs' columns of a parameter are equally spaced: slices give views, not fancy-index copies
+_LEG_SLICE = {p: slice(int(c[0]), int(c[-1]) + 1, int(c[1] - c[0])) for p, c in _LEG_COL.items()}
+if not all(np.array_equal(np.arange(len(_INDEX))[s], _LEG_COL[p]) for p, s in _LEG_SLICE.items()):   # pragma: no cover
+    raise ImportError("robots.delta.chains: leg parameter columns are no longer equally spaced")
 
 
 class DeltaChains:
@@ -64,8 +77,8 @@ class DeltaChains:
     def _unpack(self, errors):
         """errors (..., 47) -> common (..., ) and per-leg (..., 3) error arrays."""
         e = {"Ra": errors[..., _INDEX["Ra"]][..., None], "Rb": errors[..., _INDEX["Rb"]][..., None]}
-        for p, cols in _LEG_COL.items():
-            e[p] = errors[..., cols]
+        for p, cols in _LEG_SLICE.items():
+            e[p] = errors[..., cols]        # a view (equally spaced columns), read only by sums below
         return e
 
     def branch_points(self, q1, q2, q3, errors, *, level_on_actual: bool = True):
@@ -113,14 +126,15 @@ class DeltaChains:
         th = g.theta + e["theta"]
         zero = 0.0 * (La + j1 + j2 + j3 + j5 + j6 + a1 + a3 + a5 + a6 + th + Ra + Rb)  # broadcast shape/dtype
         pE = (Rb + zero, zero, zero)  # Rot(x, pi/2) Trans(x, Rb) applied to the origin of E
+        cs5, csa5, cs2, cs1, csa1, csth = _cs(j5), _cs(a5), _cs(j2), _cs(j1), _cs(a1), _cs(th)
         out = []
         for jq, jr, aj, r5, b in ((j3, j4, a3, -d, None), (j6, j7, a6, d, -2 * d)):
-            p = _kk(pE, a5, 0.0, j5, r5)               # 5 (cut joint, antecedent 4 or 7)
-            p = _kk(p, 0.0, Lb, jr, 0.0)                 # 4 or 7: rod end hinge
-            p = _kk(p, aj, 0.0, jq, 0.0, b)              # 3 or 6: rod start hinge (6: b = -2d)
-            p = _kk(p, 0.0, La, j2, d)                   # 2: upper bar
-            p = _kk(p, a1, Ra, j1, 0.0)                  # 1: actuated joint
-            p = _rot_z(np.cos(th), np.sin(th), p)        # A: leg on the base
+            p = _kk_cs(pE, csa5, 0.0, cs5, r5)              # 5 (cut joint, antecedent 4 or 7)
+            p = _kk_cs(p, _CS0, Lb, _cs(jr), 0.0)           # 4 or 7: rod end hinge
+            p = _kk_cs(p, _cs(aj), 0.0, _cs(jq), 0.0, b)    # 3 or 6: rod start hinge (6: b = -2d)
+            p = _kk_cs(p, _CS0, La, cs2, d)                 # 2: upper bar
+            p = _kk_cs(p, csa1, Ra, cs1, 0.0)               # 1: actuated joint
+            p = _rot_z(csth[0], csth[1], p)                 # A: leg on the base
             out.append(p)
         return out[0], out[1]
 

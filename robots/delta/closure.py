@@ -52,6 +52,19 @@ class DeltaClosure:
         return J
 
     def _nominal_state(self, poses):
+        """Nominal IK ``q1``, state ``X`` and closure Jacobian ``J`` at ``poses`` (n, 3) m, read-only.
+
+        Kept for the last poses asked (one entry): a solver of problem (12) asks for the same pose
+        at every evaluation of its objective, and the state depends on nothing else (the geometry
+        is frozen; a new geometry object empties it)."""
+        return self._nominal_cached(poses)[:3]
+
+    def _nominal_cached(self, poses):
+        """``(q1, X, J, J^-1)`` at ``poses``, kept for the last poses asked (see :meth:`_nominal_state`)."""
+        key = (poses.shape, poses.tobytes())
+        hit = self.__dict__.get("_nominal_entry")
+        if hit is not None and hit[0] is self.geometry and hit[1] == key:
+            return hit[2]
         q1, q2, q3 = self._ik(poses)
         X = np.empty((len(poses), 9))
         X[:, :3] = poses
@@ -63,7 +76,11 @@ class DeltaClosure:
             k = int(np.argmax(cond))
             raise KinematicsError(f"delta: pose {poses[k].tolist()} m is (near) singular "
                                   f"(loop-closure Jacobian condition {cond[k]:.3g})", poses=poses[cond > 1e8])
-        return q1, X, J
+        state = (q1, X, J, np.linalg.inv(J))
+        for a in state:
+            a.setflags(write=False)
+        self._nominal_entry = (self.geometry, key, state)
+        return state
 
     def forward_kinematics(self, poses, errors) -> np.ndarray:
         """Platform position of the robot *with errors*, commanded to the nominal IK of ``poses``.
@@ -121,8 +138,8 @@ class DeltaClosure:
     def _solve(self, poses, errors):
         poses = self.check_poses(poses)
         errors = self._check_errors(errors, len(poses))
-        q1, X0, J0 = self._nominal_state(poses)
-        Jinv = np.linalg.inv(J0)[:, None]              # (n, 1, 9, 9)
+        q1, X0, _, Jinv = self._nominal_cached(poses)
+        Jinv = Jinv[:, None]                           # (n, 1, 9, 9)
         q1b = q1[:, None, :]
         X = np.broadcast_to(X0[:, None, :], errors.shape[:2] + (9,)).copy()
         for _ in range(self.max_iter):
