@@ -203,3 +203,21 @@ def test_evotol_reproduce_says_it_in_one_line_and_the_rerun_is_identical(tmp_pat
     assert {k: v for k, v in rerun.items() if k != "resumed"} == {k: v for k, v in whole.items() if k != "resumed"}
     assert np.array_equal(np.array(rerun["y"]), _expected())
 
+
+
+def test_reproduce_with_a_scheduler_leaves_the_environment_as_it_found_it(monkeypatch, tmp_path):
+    """`evotol reproduce --scheduler ADDR` sets EVOTOL_DASK_SCHEDULER for its own studies only: a second command
+    in the same process once connected to the first one's (closed) scheduler -- six study tests failed so when
+    a test of this file ran first in their worker."""
+    import evotol.cli.argument_types as argument_types
+    from evotol.cli import main, scheduler_in_environment
+
+    seen = []
+    monkeypatch.setattr(argument_types, "check_scheduler_answers", lambda address: seen.append(address))
+    monkeypatch.delenv(SCHEDULER_ENV, raising=False)
+    assert main(["reproduce", "drake1999-motor", "--out", str(tmp_path), "--scheduler", "tcp://127.0.0.1:9", "-q"]) == 0
+    assert seen == ["tcp://127.0.0.1:9"] and SCHEDULER_ENV not in os.environ
+    monkeypatch.setenv(SCHEDULER_ENV, "tcp://elsewhere:8786")          # a user's own setting comes back
+    with scheduler_in_environment("tcp://127.0.0.1:9"):
+        assert os.environ[SCHEDULER_ENV] == "tcp://127.0.0.1:9"
+    assert os.environ[SCHEDULER_ENV] == "tcp://elsewhere:8786"

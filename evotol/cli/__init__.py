@@ -10,6 +10,7 @@ import html
 import importlib
 import logging
 import math
+import os
 import pkgutil
 import sys
 import time
@@ -70,21 +71,54 @@ def cmd_reproduce(args) -> int:
     """
     from evotol import studies
     from evotol.cli.argument_types import check_scheduler_answers
-    from evotol._runtime.interrupt import CtrlC
     from evotol._runtime.output_paths import output_folder
-    from evotol._runtime.progress import Heartbeat
-
-    import os
 
     names = list(studies.available()) if args.study == "all" else [studies.get(args.study).name]
     out = output_folder(args.out, "--out")          # before any computation (issue 15)
     if args.scheduler:
-        import os
-
-        from evotol._runtime.executor.backends import SCHEDULER_ENV
-
         check_scheduler_answers(args.scheduler)
-        os.environ[SCHEDULER_ENV] = args.scheduler  # read by the grid/design studies (evotol._runtime.executor.scheduler_of)
+    with scheduler_in_environment(args.scheduler):
+        return _reproduce(args, names, out)
+
+
+def scheduler_in_environment(address):
+    """``EVOTOL_DASK_SCHEDULER`` set to ``address`` for one command (the grid and design studies and their
+    worker processes read it: :func:`evotol._runtime.executor.scheduler_of`), then restored, so that a second
+    command in the same process (a script, a test) does not connect to the first one's scheduler.
+
+    Parameters
+    ----------
+    address : str or None
+        The scheduler's address; None or empty: the environment is left as it is.
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+    """
+    import contextlib
+
+    from evotol._runtime.executor.backends import SCHEDULER_ENV
+
+    @contextlib.contextmanager
+    def scope():
+        previous = os.environ.get(SCHEDULER_ENV)
+        os.environ[SCHEDULER_ENV] = address
+        try:
+            yield
+        finally:
+            if previous is None:
+                os.environ.pop(SCHEDULER_ENV, None)
+            else:
+                os.environ[SCHEDULER_ENV] = previous
+    return scope() if address else contextlib.nullcontext()
+
+
+def _reproduce(args, names, out) -> int:
+    """:func:`cmd_reproduce` after its checks (its docstring)."""
+    from evotol import studies
+    from evotol._runtime.interrupt import CtrlC
+    from evotol._runtime.progress import Heartbeat
+
     summaries, failed, seconds = {}, [], {}
     interrupted = None                     # (study, what happened) after Ctrl-C
     t_all = time.perf_counter()
