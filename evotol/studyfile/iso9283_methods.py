@@ -47,14 +47,20 @@ def iso_ga_options(spec: dict, problem, orientation: dict) -> dict | None:
     evotol.errors.ValidationError
         One line: a GA setting other than ``pop_size``, ``n_gen``, ``seed``; an orientation figure beside the GA.
     """
-    table, req = spec.get("iso9283") or {}, spec.get("requirement", {}).get("iso9283")
-    if not table.get("allocate") or not req or "calibration" in spec or not problem.free.any():
-        return None
-    methods = study_methods(spec, problem)
-    if "ga" not in methods:
+    req, methods = _beside_allocation(spec, problem)
+    if "ga" not in methods or "calibration" in spec:
         return None
     return _iso_settings("ga", methods["ga"], req, orientation,
                          "the ga then allocates the random sources to AP/RP too", "the ga allocates to AP and RP only")
+
+
+def _beside_allocation(spec: dict, problem) -> tuple[dict, dict]:
+    """``[requirement] iso9283`` and the study's methods when ``[iso9283] allocate = true`` has a requirement and
+    free tolerances (the methods may then allocate to AP/RP too); else ``({}, {})``."""
+    table, req = spec.get("iso9283") or {}, spec.get("requirement", {}).get("iso9283")
+    if not table.get("allocate") or not req or not problem.free.any():
+        return {}, {}
+    return req, study_methods(spec, problem)
 
 
 def _iso_settings(method: str, table: dict, req: dict, orientation: dict, then: str, only: str) -> dict:
@@ -172,10 +178,7 @@ def iso_front_options(spec: dict, problem, orientation: dict) -> dict | None:
         One line: ``nsga2`` beside ``[calibration]``; a setting other than ``pop_size``, ``n_gen``, ``seed``; a
         ``pop_size`` below 4 or ``n_gen`` below 1; an orientation figure.
     """
-    table, req = spec.get("iso9283") or {}, spec.get("requirement", {}).get("iso9283")
-    if not table.get("allocate") or not req or not problem.free.any():
-        return None
-    methods = study_methods(spec, problem)
+    req, methods = _beside_allocation(spec, problem)
     if "nsga2" not in methods:
         return None
     if "calibration" in spec:
@@ -251,10 +254,8 @@ def iso_sensitivity_wanted(spec: dict, problem, orientation: dict) -> bool:
     evotol.errors.ValidationError
         One line: an orientation figure beside it (the rule shares AP and RP only).
     """
-    table, req = spec.get("iso9283") or {}, spec.get("requirement", {}).get("iso9283")
-    if not table.get("allocate") or not req or "calibration" in spec or not problem.free.any():
-        return False
-    if "sensitivity" not in study_methods(spec, problem):
+    req, methods = _beside_allocation(spec, problem)
+    if "sensitivity" not in methods or "calibration" in spec:
         return False
     if orientation:
         k = next(iter(orientation))
