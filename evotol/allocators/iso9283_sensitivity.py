@@ -35,6 +35,32 @@ from evotol.allocators.iso9283 import iso_check, iso_terms
 from evotol.allocators.iso9283_ga import design_cost, population_figures, scale_to_boundary
 
 
+def source_effects(terms: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Each source's effect per unit tolerance on the two figures (steps 1-2 of the rule, module docstring).
+
+    Parameters
+    ----------
+    terms : dict
+        The problem's parts (:func:`evotol.allocators.iso9283.iso_terms`): its first-order map and the lost
+        motion's box give ``a``, its fixed draws ``rho``.
+
+    Returns
+    -------
+    a : (m + K,) ndarray
+        Largest effect on the barycentre over the poses (m per unit tolerance): ``max_p ‖J_p e_j‖`` for a
+        systematic column, ``max_p (‖J_p C_pk‖ + Σ_i ‖J_p e_i‖ |H_pik|)`` for a random source.
+    rho : (K,) ndarray
+        RP with only random source ``k`` at tolerance 1, largest over the poses (m per unit tolerance;
+        zeros without RP).
+    """
+    m, K, J, C, H = (terms[k] for k in ("m", "K", "J", "C", "H"))
+    col = np.linalg.norm(J, axis=1)                                          # (p, m): ‖J_p e_j‖
+    a = np.concatenate([col.max(0), (np.linalg.norm(np.einsum("pim,pmk->pik", J, C), axis=1)
+                                     + np.einsum("pm,pmk->pk", col, np.abs(H))).max(0) if K else np.zeros(0)])
+    rho = population_figures(terms, np.eye(m + K)[m:])[1].max(1) if terms["RP"] is not None and K else np.zeros(K)
+    return a, rho
+
+
 def equal_effect_shares(terms: dict) -> np.ndarray:
     """Steps 1-2 of the rule (module docstring): the tolerances before scaling onto the boundary (SI).
 
@@ -48,23 +74,46 @@ def equal_effect_shares(terms: dict) -> np.ndarray:
     (m + K,) ndarray
         Systematic then random tolerances; no effect: upper bound; not free: lower bound.
     """
-    m, K, J, C, H = (terms[k] for k in ("m", "K", "J", "C", "H"))
-    col = np.linalg.norm(J, axis=1)                                          # (p, m): ‖J_p e_j‖
-    a = np.concatenate([col.max(0), (np.linalg.norm(np.einsum("pim,pmk->pik", J, C), axis=1)
-                                     + np.einsum("pm,pmk->pk", col, np.abs(H))).max(0) if K else np.zeros(0)])
+    m, K = terms["m"], terms["K"]
+    a, rho = source_effects(terms)
     t = terms["hi"].copy()
     on_ap = terms["var"] & (a > 1e-12 * a.max(initial=0))
     if terms["AP"] is not None and on_ap.any():
         t[on_ap] = terms["AP"] / on_ap.sum() / a[on_ap]
-    if terms["RP"] is not None and K:
-        unit = np.eye(m + K)[m:]                                              # one random source at 1
-        rho = population_figures(terms, unit)[1].max(1)
-        on_rp = rho > 0
-        if on_rp.any():
-            tau = np.full(K, np.inf)
-            tau[on_rp] = terms["RP"] / np.sqrt(on_rp.sum()) / rho[on_rp]
-            t[m:] = np.where(on_rp, np.minimum(tau, np.where(on_ap[m:], t[m:], np.inf)), t[m:])
+    on_rp = rho > 0
+    if on_rp.any():
+        tau = np.full(K, np.inf)
+        tau[on_rp] = terms["RP"] / np.sqrt(on_rp.sum()) / rho[on_rp]
+        t[m:] = np.where(on_rp, np.minimum(tau, np.where(on_ap[m:], t[m:], np.inf)), t[m:])
     return np.where(terms["var"], np.clip(t, terms["lo"], terms["hi"]), terms["lo"])
+
+
+def rule_design(terms: dict, costs, shares: np.ndarray, iters: int = 6) -> dict:
+    """Step 3-4 of a rule: its tolerances scaled onto the AP/RP boundary and judged like every allocator's design.
+
+    Parameters
+    ----------
+    terms : dict
+        The problem's parts (:func:`evotol.allocators.iso9283.iso_terms`): the bounds, draws and requirement the
+        design is scaled onto and judged by.
+    costs : list of evotol.cost_models.base.CostModel or None
+        Per column, systematic then random (:func:`evotol.allocators.iso9283_ga.design_cost`).
+    shares : (m + K,) ndarray
+        The rule's tolerances before scaling (SI).
+    iters : int
+        Scaling steps (:func:`evotol.allocators.iso9283_ga.scale_to_boundary`).
+
+    Returns
+    -------
+    dict
+        ``systematic`` (m,), ``random`` (K,) tolerances (SI), ``shares``, ``cost``, ``AP`` and ``AP_bound`` (p,),
+        ``RP``, ``RP_fresh`` (p,), all m, ``feasible`` (:func:`evotol.allocators.iso9283.iso_check`).
+    """
+    t = scale_to_boundary(terms, shares[None], iters=iters)[0]
+    chk = iso_check(terms, t)
+    return {"systematic": t[:terms["m"]], "random": t[terms["m"]:], "shares": shares,
+            "cost": float(design_cost(costs, t[None])[0]), "AP": chk["ap"][:, 0], "AP_bound": chk["ap"][:, 1],
+            "RP": chk["RP"], "RP_fresh": chk["RP_fresh"], "feasible": chk["feasible"]}
 
 
 def allocate_iso9283_sensitivity(robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds,
@@ -90,10 +139,4 @@ def allocate_iso9283_sensitivity(robot, positions, sys_costs, sys_bounds, free, 
         As :func:`evotol.allocators.iso9283.iso_terms`.
     """
     terms = iso_terms(robot, positions, sys_bounds, free, sources, rand_bounds, AP, RP, None, n_samples, seed)
-    shares = equal_effect_shares(terms)
-    t = scale_to_boundary(terms, shares[None], iters=6)[0]
-    chk = iso_check(terms, t)
-    costs = list(sys_costs) + list(rand_costs)
-    return {"systematic": t[:terms["m"]], "random": t[terms["m"]:], "shares": shares,
-            "cost": float(design_cost(costs, t[None])[0]), "AP": chk["ap"][:, 0], "AP_bound": chk["ap"][:, 1],
-            "RP": chk["RP"], "RP_fresh": chk["RP_fresh"], "feasible": chk["feasible"]}
+    return rule_design(terms, list(sys_costs) + list(rand_costs), equal_effect_shares(terms))

@@ -12,6 +12,15 @@ import plotly.graph_objects as go
 
 from evotol.units.display import DisplayUnits
 
+#: the ISO block's allocations by the study's rules (evotol/studyfile/iso9283_methods.py): key -> (name, method, how)
+RULE_NAMES = {
+    "allocation_sensitivity": ("the equal-effect rule", "sensitivity", "each source the same share of AP, each random "
+                               "source the same share of RP, scaled onto the boundary"),
+    "allocation_equal": ("equal tolerances", "equal", "every tolerance the same value, the largest that meets AP and RP"),
+    "allocation_lagrange": ("the Lagrange closed form", "lagrange", "least cost on the AP worst-case and RP "
+                            "root-sum-square stack-ups, scaled onto the boundary"),
+}
+
 
 def iso9283_section(rep, summary: dict) -> None:
     """Append the ISO 9283 section to a user study's report (module docstring).
@@ -114,12 +123,12 @@ def iso9283_section(rep, summary: dict) -> None:
                      f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
                      + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check (proven AP bound, RP on the "
                      "same draws).", note=not g["feasible"])
-        if "allocation_sensitivity" in iso:     # the equal-effect rule on the same problem
-            g = iso["allocation_sensitivity"]
-            rep.text(f"The equal-effect rule (study's sensitivity method: each source the same share of AP, each random "
-                     f"source the same share of RP, scaled onto the boundary) costs {g['cost']:.4g} "
-                     f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
-                     + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check.", note=not g["feasible"])
+        for key, (name, method, how) in RULE_NAMES.items():     # the study's rules on the same problem
+            if key in iso:
+                g = iso[key]
+                rep.text(f"{name[0].upper() + name[1:]} (the study's {method} method: {how}) costs {g['cost']:.4g} "
+                         f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
+                         + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check.", note=not g["feasible"])
         if "front_nsga2" in iso:        # the study's nsga2 on the same problem: cost against AP, RP held
             f = iso["front_nsga2"]
             rep.text(front_sentence(f, L))
@@ -254,11 +263,12 @@ def terminal_lines(summary: dict) -> list[str]:
         out.append(f"  the study's ga ({g['pop_size']} x {g['n_gen']}) allocated them too: cost {g['cost']:.6g} "
                    f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
                    + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
-    if "allocation_sensitivity" in iso:
-        g = iso["allocation_sensitivity"]
-        out.append(f"  the equal-effect rule (sensitivity) allocated them too: cost {g['cost']:.6g} "
-                   f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
-                   + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
+    for key, (name, method, _) in RULE_NAMES.items():
+        if key in iso:
+            g = iso[key]
+            out.append(f"  {name} ({method}) allocated them too: cost {g['cost']:.6g} "
+                       f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
+                       + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
     if "front_nsga2" in iso:
         out.append("  " + front_sentence(iso["front_nsga2"], L))
     if not_iso(iso):

@@ -127,9 +127,9 @@ class IsoStudy:
     ga : dict or None
         The study's GA settings when it allocates the random sources to AP/RP too
         (:func:`evotol.studyfile.iso9283_methods.iso_ga_options`).
-    sensitivity : bool
-        The study's ``sensitivity`` allocates the random sources to AP/RP too, by the equal-effect rule
-        (:func:`evotol.studyfile.iso9283_methods.iso_sensitivity_wanted`).
+    rules : tuple of str
+        The study's ``sensitivity``, ``equal``, ``lagrange`` that allocate the random sources to AP/RP too, each by
+        its rule (:func:`evotol.studyfile.iso9283_methods.iso_rules_wanted`).
     front : dict or None
         The study's ``nsga2`` settings when it also runs the ISO front, cost against AP with RP held
         (:func:`evotol.studyfile.iso9283_methods.iso_front_options`).
@@ -149,7 +149,7 @@ class IsoStudy:
     calibrate: dict | None = None
     orientation: dict = field(default_factory=dict)
     ga: dict | None = None
-    sensitivity: bool = False
+    rules: tuple = ()
     front: dict | None = None
 
     @property
@@ -363,7 +363,7 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
             raise ValidationError("iso9283.calibrate", cal, f"at least {-(-robot.n_columns // 3)} configurations, "
                                   "a noise >= 0 and at least 1 robot")
     iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation,
-                   **study_method_options(spec, problem, orientation))     # ga, sensitivity, nsga2 on AP/RP too
+                   **study_method_options(spec, problem, orientation))     # ga, the rules, nsga2 on AP/RP too
     _check_floor(iso, problem)
     return iso
 
@@ -474,7 +474,7 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
                       "re-estimated on fresh draws; E l + 3 sqrt(E l²) is a convex upper bound."
                       + (" Orientation (APa..RPc): exact first-order worst case and 3 sigma, both convex: certified."
                          if iso.orientation else "")}
-        block.update(method_allocations(iso, problem, al, seed))     # the study's ga, sensitivity, nsga2 on it too
+        block.update(method_allocations(iso, problem, al, seed))     # the study's ga, rules, nsga2 on it too
         block["methods"] = methods_scope(results, block)              # and which methods did not allocate to it
     block["random_sources"] = [{"name": s.name, "kind": s.kind, "joint": s.joint, "unit": s.unit, "tolerance": float(t),
                                 "variation": s.variation if s.kind == "backlash" else None,

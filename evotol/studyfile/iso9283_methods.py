@@ -8,14 +8,15 @@ runs its ordinary front on the position requirement and, beside it, the front of
 random sources with every point holding RP (:func:`evotol.allocators.iso9283_front.allocate_iso9283_front`), judged
 against the exact frontier of certified optima. Settings and orientation figures the ISO GA or front does not take,
 and an ``nsga2`` beside ``[calibration]``, are refused in one line before any work.
-A ``sensitivity`` among the methods allocates them by the equal-effect rule too
-(:func:`evotol.allocators.iso9283_sensitivity.allocate_iso9283_sensitivity`), so that the optimum shows what the
-rule costs.
+A ``sensitivity``, ``equal`` or ``lagrange`` among the methods allocates them by its rule too: the equal-effect
+rule (:func:`evotol.allocators.iso9283_sensitivity.allocate_iso9283_sensitivity`), equal tolerances and the Lagrange
+closed form (:mod:`evotol.allocators.iso9283_baselines`), so that the optimum shows what each rule costs.
 """
 from __future__ import annotations
 
 from evotol.allocators.ga import check_ga_options
 from evotol.allocators.iso9283_front import allocate_iso9283_front
+from evotol.allocators.iso9283_baselines import allocate_iso9283_equal, allocate_iso9283_lagrange
 from evotol.allocators.iso9283_ga import allocate_iso9283_ga
 from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
 from evotol.errors import ValidationError
@@ -235,43 +236,61 @@ def front_allocation(iso, problem, optimum: dict, seed: int) -> dict:
                        "its bound at the level: a gap below 0 (at most about 0.4 %) is that margin, not a better design"}
 
 
-def iso_sensitivity_wanted(spec: dict, problem, orientation: dict) -> bool:
-    """Whether the study's ``sensitivity`` also allocates the random sources to AP/RP (the equal-effect rule).
+#: the study's rules that also allocate the random sources to AP/RP: method -> (allocator, what its design means)
+ISO_RULES = {
+    "sensitivity": (allocate_iso9283_sensitivity,
+                    "the equal-effect rule (each source the same share of AP by its largest effect per unit tolerance, "
+                    "each random source the same root-sum-square share of RP), scaled onto the AP/RP boundary"),
+    "equal": (allocate_iso9283_equal,
+              "equal tolerances (every tolerance the same value in SI, m or rad, clipped to its bounds: the largest "
+              "whose proven AP bound meets AP and whose RP meets the optimum's aim, 1.5 % below RP)"),
+    "lagrange": (allocate_iso9283_lagrange,
+                 "the Lagrange closed form (least cost on the AP worst-case stack-up of the largest effects per unit "
+                 "tolerance and the RP root-sum-square stack-up of each random source's RP alone), scaled onto the "
+                 "AP/RP boundary"),
+}
+
+
+def iso_rules_wanted(spec: dict, problem, orientation: dict) -> tuple[str, ...]:
+    """Which of the study's ``sensitivity``, ``equal``, ``lagrange`` also allocate the random sources to AP/RP.
 
     Parameters
     ----------
     spec, problem, orientation
-        As :func:`iso_ga_options`.
+        The study file, its problem and the orientation figures required, as :func:`iso_ga_options` reads them.
 
     Returns
     -------
-    bool
-        True with ``sensitivity`` among the methods, ``[requirement] iso9283``, ``allocate = true`` and no
-        ``[calibration]``.
+    tuple of str
+        The rules among the methods, with ``[requirement] iso9283``, ``allocate = true`` and no
+        ``[calibration]`` (there each runs its ordinary allocation alone); else empty.
 
     Raises
     ------
     evotol.errors.ValidationError
-        One line: an orientation figure beside it (the rule shares AP and RP only).
+        One line: an orientation figure beside one of them (the rules share AP and RP only).
     """
     req, methods = _beside_allocation(spec, problem)
-    if "sensitivity" not in methods or "calibration" in spec:
-        return False
-    if orientation:
+    if "calibration" in spec:
+        return ()
+    rules = tuple(r for r in ISO_RULES if r in methods)
+    if rules and orientation:
         k = next(iter(orientation))
-        raise ValidationError(f"requirement.iso9283.{k}", req[k], "no orientation figure beside [methods] sensitivity and "
-                              "[iso9283] allocate = true: the equal-effect rule shares AP and RP only (the optimum takes "
-                              "them: list [methods] without sensitivity)")
-    return True
+        raise ValidationError(f"requirement.iso9283.{k}", req[k], f"no orientation figure beside [methods] {rules[0]} "
+                              f"and [iso9283] allocate = true: the {rules[0]} rule shares AP and RP only (the optimum "
+                              f"takes them: list [methods] without {', '.join(rules)})")
+    return rules
 
 
-def sensitivity_allocation(iso, problem, optimum: dict, seed: int) -> dict:
-    """The ISO block's ``allocation_sensitivity``: the equal-effect rule on systematic and random sources (SI).
+def rule_allocation(iso, problem, optimum: dict, seed: int, rule: str) -> dict:
+    """The ISO block's ``allocation_<rule>``: the rule on systematic and random sources (SI).
 
     Parameters
     ----------
     iso, problem, optimum, seed
         As :func:`ga_allocation` (the RP draws are the optimum's).
+    rule : str
+        ``sensitivity``, ``equal`` or ``lagrange`` (:data:`ISO_RULES`).
 
     Returns
     -------
@@ -279,12 +298,10 @@ def sensitivity_allocation(iso, problem, optimum: dict, seed: int) -> dict:
         ``cost``, ``gap_to_optimum``, ``feasible``, ``systematic`` and ``random`` (name -> tolerance),
         ``AP_bound``, ``RP_sampled``, ``RP_fresh_draws`` (per pose, m), ``meaning``.
     """
-    s = allocate_iso9283_sensitivity(*allocator_args(iso, problem), seed=seed)
-    return {**judged_design(iso, s, optimum),
-            "meaning": "the equal-effect rule (each source the same share of AP by its largest effect per unit tolerance, "
-                       "each random source the same root-sum-square share of RP), scaled onto the AP/RP boundary and "
-                       "judged by the optimum's check: feasible if the proven AP bound meets AP and the RP on the "
-                       "optimum's fixed draws meets RP; it ignores cost, the gap is what the optimum saves"}
+    allocate, what = ISO_RULES[rule]
+    return {**judged_design(iso, allocate(*allocator_args(iso, problem), seed=seed), optimum),
+            "meaning": what + " and judged by the optimum's check: feasible if the proven AP bound meets AP and the RP "
+                              "on the optimum's fixed draws meets RP; the gap is what the optimum saves"}
 
 
 def study_method_options(spec: dict, problem, orientation: dict) -> dict:
@@ -298,11 +315,11 @@ def study_method_options(spec: dict, problem, orientation: dict) -> dict:
     Returns
     -------
     dict
-        ``ga`` (:func:`iso_ga_options`), ``sensitivity`` (:func:`iso_sensitivity_wanted`), ``front``
+        ``ga`` (:func:`iso_ga_options`), ``rules`` (:func:`iso_rules_wanted`), ``front``
         (:func:`iso_front_options`): the :class:`evotol.studyfile.iso9283.IsoStudy` fields.
     """
     return {"ga": iso_ga_options(spec, problem, orientation),
-            "sensitivity": iso_sensitivity_wanted(spec, problem, orientation),
+            "rules": iso_rules_wanted(spec, problem, orientation),
             "front": iso_front_options(spec, problem, orientation)}
 
 
@@ -317,13 +334,14 @@ def method_allocations(iso, problem, optimum: dict, seed: int) -> dict:
     Returns
     -------
     dict
-        ``allocation_ga``, ``allocation_sensitivity``, ``front_nsga2``: the ones the study asks for.
+        ``allocation_ga``, ``allocation_sensitivity``, ``allocation_equal``, ``allocation_lagrange``,
+        ``front_nsga2``: the ones the study asks for.
     """
     out = {}
     if iso.ga is not None:
         out["allocation_ga"] = ga_allocation(iso, problem, optimum, seed)
-    if iso.sensitivity:
-        out["allocation_sensitivity"] = sensitivity_allocation(iso, problem, optimum, seed)
+    for rule in iso.rules:
+        out[f"allocation_{rule}"] = rule_allocation(iso, problem, optimum, seed, rule)
     if iso.front is not None:
         out["front_nsga2"] = front_allocation(iso, problem, optimum, seed)
     return out
@@ -331,14 +349,15 @@ def method_allocations(iso, problem, optimum: dict, seed: int) -> dict:
 
 #: the study's methods that also allocate the random sources to AP/RP beside ``allocate = true``, and where
 #: the block states it
-ISO_ALLOCATIONS = {"optimum": "allocation", "ga": "allocation_ga", "sensitivity": "allocation_sensitivity",
+ISO_ALLOCATIONS = {"optimum": "allocation", "ga": "allocation_ga", **{r: f"allocation_{r}" for r in ISO_RULES},
                    "nsga2": "front_nsga2"}
 
 
 def methods_scope(names, block: dict) -> dict:
     """What each of the study's methods allocated beside ``[iso9283] allocate = true``: the ISO block's key of
     its allocation to AP/RP, or None where it allocated the systematic sources alone, to the position
-    requirement (``monotone``, ``equal``, ``lagrange``: they know neither the random sources nor AP/RP).
+    requirement (``monotone``: it knows neither the random sources nor AP/RP; inside ``[calibration]`` the ``ga``
+    and the rules of :data:`ISO_RULES` too).
 
     Parameters
     ----------
