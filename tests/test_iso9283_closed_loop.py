@@ -46,17 +46,19 @@ def sphere_centres(q, shift=0.0):
     return elbows(q) - RB * e + shift
 
 
-def fk(c):
-    """Platform centre: the intersection of three spheres of radius Lb about c (..., 3, 3), the lower root (z larger)."""
+def fk(c, lb=LB):
+    """Platform centre: the intersection of three spheres of radii lb (scalar or (..., 3), default Lb) about c
+    (..., 3, 3), the lower root (z larger)."""
+    lb = np.broadcast_to(lb, c.shape[:-1])
     A = 2 * (c[..., 1:, :] - c[..., :1, :])                                         # (..., 2, 3)
-    b = np.sum(c[..., 1:, :] ** 2, -1) - np.sum(c[..., :1, :] ** 2, -1)           # (..., 2)
+    b = np.sum(c[..., 1:, :] ** 2, -1) - np.sum(c[..., :1, :] ** 2, -1) - lb[..., 1:] ** 2 + lb[..., :1] ** 2
     n = np.cross(A[..., 0, :], A[..., 1, :])
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     AAt = np.einsum("...ij,...kj->...ik", A, A)
     p0 = np.einsum("...ji,...j->...i", A, np.linalg.solve(AAt, b[..., None])[..., 0])   # min-norm point of the line
     w = p0 - c[..., 0, :]
     bq = np.sum(w * n, -1)
-    s = -bq + np.sign(n[..., 2]) * np.sqrt(bq ** 2 - np.sum(w * w, -1) + LB ** 2)
+    s = -bq + np.sign(n[..., 2]) * np.sqrt(bq ** 2 - np.sum(w * w, -1) + lb[..., 0] ** 2)
     return p0 + s[..., None] * n
 
 
