@@ -46,17 +46,19 @@ def sphere_centres(q, shift=0.0):
     return elbows(q) - RB * e + shift
 
 
-def fk(c):
-    """Platform centre: the intersection of three spheres of radius Lb about c (..., 3, 3), the lower root (z larger)."""
+def fk(c, lb=LB):
+    """Platform centre: the intersection of three spheres of radii lb (scalar or (..., 3), default Lb) about c
+    (..., 3, 3), the lower root (z larger)."""
+    lb = np.broadcast_to(lb, c.shape[:-1])
     A = 2 * (c[..., 1:, :] - c[..., :1, :])                                         # (..., 2, 3)
-    b = np.sum(c[..., 1:, :] ** 2, -1) - np.sum(c[..., :1, :] ** 2, -1)           # (..., 2)
+    b = np.sum(c[..., 1:, :] ** 2, -1) - np.sum(c[..., :1, :] ** 2, -1) - lb[..., 1:] ** 2 + lb[..., :1] ** 2
     n = np.cross(A[..., 0, :], A[..., 1, :])
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     AAt = np.einsum("...ij,...kj->...ik", A, A)
     p0 = np.einsum("...ji,...j->...i", A, np.linalg.solve(AAt, b[..., None])[..., 0])   # min-norm point of the line
     w = p0 - c[..., 0, :]
     bq = np.sum(w * n, -1)
-    s = -bq + np.sign(n[..., 2]) * np.sqrt(bq ** 2 - np.sum(w * w, -1) + LB ** 2)
+    s = -bq + np.sign(n[..., 2]) * np.sqrt(bq ** 2 - np.sum(w * w, -1) + lb[..., 0] ** 2)
     return p0 + s[..., None] * n
 
 
@@ -310,14 +312,12 @@ def test_actuator_bearing_play_named_by_its_variable_against_own_fk(delta):
     assert np.abs(pred / own - 1).max() < 0.006
 
 
-def test_equal_effect_allocation_on_the_delta_meets_ap_and_rp_through_own_fk():
-    """The pair Delta + the ISO allocators (issue 44): the equal-effect rule's design (actuator encoder offsets,
-    systematic; encoder counts and lost motion, random) checked through the closed-form FK -- AP by the 2³ x 2³
-    corners of the offsets and the lost motion taken up against the approach, RP by own draws -- and its cost
-    above the certified optimum of the same problem."""
+def delta_iso_case():
+    """The Delta with the ISO allocators (issue 44): the actuator encoder offsets q1_1..q1_3 systematic (reciprocal cost,
+    bounds 1e-7..1e-2 rad), encoder counts and lost motion on the actuators random (bounds 1/20..20 times the
+    catalogue values Q_ENC, B_LM), AP 0.2 mm and RP 20 µm at P1..P5. Returns the allocators' positional arguments
+    and the actuator angles (5, 3) at the poses."""
     import evotol.cost_models as cm
-    from evotol.allocators.iso9283 import allocate_iso9283
-    from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
 
     robot = model_from_table({"mechanism": "delta", "sources": ["q1_?"]})
     P = iso_positions(CUBE)
@@ -325,25 +325,47 @@ def test_equal_effect_allocation_on_the_delta_meets_ap_and_rp_through_own_fk():
     q1 = np.stack([q[f"q1_{i}"] for i in (1, 2, 3)], axis=1)
     sources = [RandomSource("encoder", f"q1_{i}", Q_ENC) for i in (1, 2, 3)] + \
               [RandomSource("backlash", f"q1_{i}", B_LM, VAR) for i in (1, 2, 3)]
-    AP, RP = 2e-4, 2e-5
     args = (robot, P, [cm.ReciprocalCost(0.1, 1.0, scale=1e-4)] * 3, [[1e-7] * 3, [1e-2] * 3], np.ones(3, bool),
             sources, [cm.ReciprocalCost(0.2, 1.0, scale=s.tolerance) for s in sources],
-            [[s.tolerance / 20 for s in sources], [s.tolerance * 20 for s in sources]], AP, RP)
-    rule, opt = allocate_iso9283_sensitivity(*args, n_samples=5000), allocate_iso9283(*args, n_samples=5000)
-    assert rule["feasible"] and opt["feasible"]
-    assert rule["cost"] >= opt["cost"] * (1 - 0.004)                  # the optimum's AP aim cos δ: at most 0.4 %
-    t, enc, lm = rule["systematic"], rule["random"][:3], rule["random"][3:]
+            [[s.tolerance / 20 for s in sources], [s.tolerance * 20 for s in sources]], 2e-4, 2e-5)
+    return args, q1
+
+
+def own_ap_by_corners(q1, P, t, lm):
+    """Worst-case AP (5,) of encoder offsets in ±t and lost motion lm (3,) through the closed-form FK: the largest over
+    the 2³ sign corners of the offsets x the 2³ corners of the lost motion taken up against the approach (b' = 0 or b)."""
     s = approach_signs_own(q1, P)
     signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
     taken = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], float)
     dq = (signs * t)[None, :, None, :] - s[:, None, None, :] * taken[None, None, :, :] * lm / 2       # (5, 8, 8, 3)
-    ap = np.linalg.norm(fk(sphere_centres(q1[:, None, None, :] + dq)) - P[:, None, None], axis=-1).max((1, 2))
+    return np.linalg.norm(fk(sphere_centres(q1[:, None, None, :] + dq)) - P[:, None, None], axis=-1).max((1, 2))
+
+
+def own_rp_by_draws(q1, enc, lm, n=200_000, seed=5):
+    """RP (5,) of encoder counts enc (3,) and lost motion lm (3,) varying by VAR, by own uniform draws through the FK."""
+    rng = np.random.default_rng(seed)
+    dq = (rng.uniform(-0.5, 0.5, (5, n, 3)) * enc + rng.uniform(-0.5, 0.5, (5, n, 3)) * VAR * lm)
+    return rp(fk(sphere_centres(q1[:, None, :] + dq)))
+
+
+def test_equal_effect_allocation_on_the_delta_meets_ap_and_rp_through_own_fk():
+    """The pair Delta + the ISO allocators (issue 44): the equal-effect rule's design (actuator encoder offsets,
+    systematic; encoder counts and lost motion, random) checked through the closed-form FK -- AP by the 2³ x 2³
+    corners of the offsets and the lost motion taken up against the approach, RP by own draws -- and its cost
+    above the certified optimum of the same problem."""
+    from evotol.allocators.iso9283 import allocate_iso9283
+    from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
+
+    args, q1 = delta_iso_case()
+    P, AP, RP = args[1], args[-2], args[-1]
+    rule, opt = allocate_iso9283_sensitivity(*args, n_samples=5000), allocate_iso9283(*args, n_samples=5000)
+    assert rule["feasible"] and opt["feasible"]
+    assert rule["cost"] >= opt["cost"] * (1 - 0.004)                  # the optimum's AP aim cos δ: at most 0.4 %
+    t, enc, lm = rule["systematic"], rule["random"][:3], rule["random"][3:]
+    ap = own_ap_by_corners(q1, P, t, lm)
     print("AP own / required", ap / AP, "rule cost", rule["cost"], "optimum", opt["cost"])
     assert ap.max() <= AP * (1 + 2e-3)                               # first order vs the FK (1.8e-4 measured above)
     assert ap.max() >= AP * 0.99                                     # the rule is scaled onto the AP boundary
-    rng = np.random.default_rng(5)
-    n = 200_000
-    dq = (rng.uniform(-0.5, 0.5, (5, n, 3)) * enc + rng.uniform(-0.5, 0.5, (5, n, 3)) * VAR * lm)
-    own = rp(fk(sphere_centres(q1[:, None, :] + dq)))
+    own = own_rp_by_draws(q1, enc, lm)
     print("RP own / required", own / RP)
     assert own.max() <= RP * (1 + 0.006)                             # sampled on both sides (2·10⁵ and 5 000 draws)
