@@ -13,20 +13,15 @@ import time
 
 import numpy as np
 
-from evotol.allocators.monotone import _cut
+from evotol.allocators.monotone import _cut, new_vertices
 
 
 def cut_every_pair(V: np.ndarray, z: np.ndarray, chunk: int = 256) -> np.ndarray:
-    """The cut with each new vertex compared with every vertex (the cut before e5bb283)."""
-    above = np.all(V > z, axis=1)
-    if not above.any():
+    """The cut with each new vertex compared with every vertex (the dominance check before e5bb283)."""
+    split = new_vertices(V, z)
+    if split is None:
         return V
-    keep, up = V[~above], V[above]
-    n = V.shape[1]
-    cand = np.repeat(up, n, axis=0)
-    k = np.tile(np.arange(n), len(up))
-    cand[np.arange(len(cand)), k] = z[k]
-    cand = np.unique(cand, axis=0)
+    keep, cand = split
     allv = np.concatenate([keep, cand])
     ok = np.ones(len(cand), bool)
     for s in range(0, len(cand), chunk):
