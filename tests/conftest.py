@@ -36,7 +36,7 @@ STUDIES = Path(__file__).resolve().parents[1] / "reports" / "studies"
 #: run after these, more tests first (pytest-xdist's own order). A guide for the order only: a stale or
 #: missing entry changes how long the run takes, never what it checks.
 FILE_SECONDS = {
-    "test_iso9283_calibrated_budget.py": 30, "test_feasibility.py": 27, "test_iso9283_closed_loop.py": 24,
+    "test_iso9283_calibrated_budget.py": 30, "test_iso9283_calibrated_methods.py": 25, "test_feasibility.py": 27, "test_iso9283_closed_loop.py": 24,
     "test_iso9283_front.py": 23, "test_explorer.py": 22, "test_docstrings.py": 21, "test_bad_inputs.py": 17,
     "test_tolerances.py": 16, "test_combinations.py": 16, "test_callout_allocation.py": 14,
     "test_calibration.py": 14, "test_no_task_box.py": 13, "test_checks_optimised.py": 13,

@@ -160,7 +160,7 @@ def test_the_study_states_what_the_random_sources_take_and_cost(tmp_path, capsys
     from evotol.cli import main
 
     text = STUDY.read_text().replace("grid = [3, 3, 3]", "grid = [2, 2, 2]").replace("simulate = 200 ", "simulate = 20 ")
-    text = text.replace("sensitivity = {}\n", "").replace("ga = { pop_size = 80, n_gen = 150 }\n", "")
+    text = text.replace("ga = { pop_size = 80, n_gen = 150 }\n", "")      # the sensitivity rule stays
     text = text.replace("n_samples = 300", "n_samples = 30")
     (tmp_path / "s.toml").write_text(text)
     main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path)])
@@ -181,3 +181,10 @@ def test_the_study_states_what_the_random_sources_take_and_cost(tmp_path, capsys
     assert sim["simulated"]["position"]["max"] <= sim["worst_case"]["position"] <= 5e-4
     assert "Random sources (12" in out and f"they cost {al['cost']:.4g}" in out and "the requirement binds" in out
     assert "ISO 9283 after calibration" in out and "iso9283-calibrated-plan" in page and "they cost" in page
+    # the study's sensitivity rule allocated the random sources in the same budget too, judged by its check
+    rule = b["methods"]["sensitivity"]
+    assert rule["feasible"] and max(rule["figures"]) <= 1 + 1e-12 and rule["cost"] >= al["cost"] * (1 - 1e-9)
+    assert data["iso9283"]["methods"] == {"sensitivity": "calibrated_budget.methods.sensitivity",
+                                          "optimum": "calibrated_budget.random_allocation"}
+    sentence = f"The study's sensitivity allocated the random sources in the calibrated budget too: cost {rule['cost']:.6g}"
+    assert sentence in out and sentence in page.replace("&#x27;", "'")

@@ -95,9 +95,28 @@ def _t_of_lambda(costs, lo, hi, g, lam: float, rss: bool) -> np.ndarray:
     return np.exp(0.5 * (a + b))
 
 
-def _stack_up(costs, lo, hi, g, target: float, rss: bool) -> np.ndarray:
+def stack_up(costs, lo, hi, g, target: float, rss: bool) -> np.ndarray:
     """The Lagrange tolerances on one stack-up ``Σ g t = target`` (or ``sqrt(Σ g² t²)``), λ by a root solve in
-    log λ; every tolerance at its upper bound when those already hold it."""
+    log λ; every tolerance at its upper bound when those already hold it.
+
+    Parameters
+    ----------
+    costs : sequence of evotol.cost_models.base.CostModel
+        Per tolerance its convex, decreasing cost model.
+    lo, hi : (n,) ndarray
+        Bounds (SI).
+    g : (n,) ndarray
+        Effect per unit tolerance (the target's unit per SI unit), > 0.
+    target : float
+        The stack-up's limit.
+    rss : bool
+        Root sum square instead of the worst-case sum.
+
+    Returns
+    -------
+    (n,) ndarray
+        The tolerances (SI): the lower bounds when even those miss the target.
+    """
     gg = g ** 2 if rss else g
 
     def excess(loglam):
@@ -132,11 +151,11 @@ def lagrange_tolerances(terms: dict, costs) -> np.ndarray:
     on_ap = var & (a > 1e-12 * a.max(initial=0))
     if terms["AP"] is not None and on_ap.any():
         idx = np.flatnonzero(on_ap)
-        t[idx] = _stack_up([costs[j] for j in idx], lo[idx], hi[idx], a[idx], terms["AP"], rss=False)
+        t[idx] = stack_up([costs[j] for j in idx], lo[idx], hi[idx], a[idx], terms["AP"], rss=False)
     on_rp = np.flatnonzero(rho > 0)
     if len(on_rp):
         idx = m + on_rp
-        tau = _stack_up([costs[j] for j in idx], lo[idx], hi[idx], rho[on_rp], terms["RP"], rss=True)
+        tau = stack_up([costs[j] for j in idx], lo[idx], hi[idx], rho[on_rp], terms["RP"], rss=True)
         t[idx] = np.where(on_ap[idx], np.minimum(t[idx], tau), tau)
     return np.where(var, np.clip(t, lo, hi), lo)
 

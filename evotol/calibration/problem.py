@@ -28,7 +28,8 @@ from evotol.calibration.linear_range import (calibrated_upper_bounds, checked_ra
 from evotol.calibration.model import NOISE_RULE, CalibratedRobot, noise_allowance
 from evotol.calibration.plan import CalibrationPlan
 from evotol.calibration.noise_share import level_of
-from evotol.calibration.random_allocation import allocate_random
+from evotol.calibration.random_allocation import least_cost
+from evotol.calibration.random_budget import RandomBudget
 from evotol.calibration.random_share import RandomPart, iso_terms, random_terms, unit_terms
 from evotol.measures.iso9283.figures import ap_worst_case
 from evotol.core.problem import ToleranceProblem
@@ -56,6 +57,9 @@ class CalibrationInfo:
         The robot's random sources (issue 44 item 4), in the budget beside the noise; None: none.
     random_allocation : dict or None
         :func:`evotol.calibration.random_allocation.allocate_random`'s result when they were allocated.
+    random_budget : evotol.calibration.random_budget.RandomBudget or None
+        The budget they were allocated in, which the study's other methods allocate them in too
+        (:mod:`evotol.calibration.random_rules`); not in the JSON.
     """
 
     plan: CalibrationPlan
@@ -66,6 +70,7 @@ class CalibrationInfo:
     simulate: int = 200
     random: RandomPart | None = None
     random_allocation: dict | None = None
+    random_budget: RandomBudget | None = None
 
     def to_dict(self) -> dict:
         """Plain data for the JSON summary and the report (SI).
@@ -172,8 +177,9 @@ def _allocate_random(robot, cal, idn, plan, problem, tolerances, second, remaind
     if random.iso is not None:      # ISO 9283 AP/RP required after calibration too (issue 44, docs/iso9283.md)
         iso = iso_terms(cal, idn, plan, random, up)
         iso["AP_budget"] = None if random.iso.AP is None else random.iso.AP - d
-    al = allocate_random(C0, u["covariance"], u["support"], u["cos_delta"], random.costs, random.lower, random.upper,
-                         budget, level_of(plan.k), start=np.array(random.tolerances), iso=iso)
+    rb = RandomBudget(C0, u["covariance"], u["support"], u["cos_delta"], random.costs, random.lower, random.upper,
+                      budget, level_of(plan.k), iso)
+    al = least_cost(rb, start=np.array(random.tolerances))
     t = al.pop("tolerances")
     al.update(systematic_worst_case=wc_sys, second_order=d, joint_optimum=bool(wc_sys <= 1e-9 * E),
               tolerances={s.name: float(v) for s, v in zip(random.sources, t)},
@@ -181,7 +187,7 @@ def _allocate_random(robot, cal, idn, plan, problem, tolerances, second, remaind
               meaning="allocated with every systematic tolerance at its upper bound, "
                       + ("the joint optimum here: calibration leaves no systematic first-order error"
                          if wc_sys <= 1e-9 * E else "a sequential allocation: systematic first"))
-    return dataclasses.replace(random, tolerances=tuple(float(v) for v in t)), al
+    return dataclasses.replace(random, tolerances=tuple(float(v) for v in t)), al, rb
 
 
 def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200, random: RandomPart | None = None):
@@ -245,10 +251,10 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200, rand
         tolerances, remainder = _checked(robot, idn, plan, task_joints, req, norms, tolerances, bounds)
     for n, b in bounds.items():
         b["upper"] = float(tolerances[n].upper)
-    allocation = None
+    allocation = random_budget = None
     if random is not None and random.allocated:     # the random sources are variables too (random_allocation.py)
         noise_allowance(cal, problem.poses, req, second, remainder)        # a noise alone too large: refused first
-        random, allocation = _allocate_random(robot, cal, idn, plan, problem, tolerances, second, remainder, random)
+        random, allocation, random_budget = _allocate_random(robot, cal, idn, plan, problem, tolerances, second, remainder, random)
     extra = None if random is None else random_terms(robot, idn, plan, problem.poses, random)
     noise = noise_allowance(cal, problem.poses, req, second, remainder, extra)
     changes = {c: v["geometric_bound"] for c, v in noise.items() if isinstance(v, dict)}
@@ -256,6 +262,6 @@ def calibrated_problem(problem, plan: CalibrationPlan, simulate: int = 200, rand
     shared = problem.shared or None
     out = ToleranceProblem(cal, tolerances, new_req, problem.poses, n_directions=problem.n_directions,
                            shared=shared, shared_cost=problem.shared_cost)
-    out.calibration = CalibrationInfo(plan, idn, noise, bounds, req, int(simulate), random, allocation)
+    out.calibration = CalibrationInfo(plan, idn, noise, bounds, req, int(simulate), random, allocation, random_budget)
     out.uncalibrated = problem
     return out

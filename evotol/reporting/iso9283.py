@@ -112,6 +112,8 @@ def iso9283_section(rep, summary: dict) -> None:
                     L(p["calibrated"]["RP"]["predicted"])] for p in iso["poses"]],
                   ["pose", "AP uncalibrated", "AP calibrated", "of which systematic and lost motion", "of which fit error",
                    "RP (unchanged)"], table_id="iso9283-calibrated-plan")
+        for line in calibrated_method_lines(b):
+            rep.text(line, note="NOT feasible" in line)
     if "allocation" in iso:
         a = iso["allocation"]
         rep.text(f"Allocated with the systematic sources: cost {a['cost']:.4g}, "
@@ -135,6 +137,29 @@ def iso9283_section(rep, summary: dict) -> None:
             rep.figure(_front_figure(f, u), div_id="iso9283-front")
         if not_iso(iso):
             rep.text(not_iso(iso), note=True)
+
+
+def calibrated_method_lines(budget: dict) -> list[str]:
+    """One sentence per study method that allocated the random sources in the calibrated budget too (page and
+    terminal; evotol/studyfile/iso9283_calibrated.py).
+
+    Parameters
+    ----------
+    budget : dict
+        The ISO block's ``calibrated_budget`` (its ``methods`` and ``random_allocation``).
+
+    Returns
+    -------
+    list of str
+    """
+    al = budget.get("random_allocation") or {}
+    out = []
+    for m, g in budget.get("methods", {}).items():
+        size = f" ({g['pop_size']} x {g['n_gen']})" if m == "ga" else ""
+        out.append(f"The study's {m}{size} allocated the random sources in the calibrated budget too: cost {g['cost']:.6g} "
+                   f"({100 * g['gap_to_optimum']:+.2f} % against the least-cost design, {al.get('cost', float('nan')):.6g}), "
+                   + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check; " + g["meaning"] + ".")
+    return out
 
 
 def not_iso(iso: dict) -> str:
@@ -271,6 +296,7 @@ def terminal_lines(summary: dict) -> list[str]:
                        + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
     if "front_nsga2" in iso:
         out.append("  " + front_sentence(iso["front_nsga2"], L))
+    out += ["  " + line for line in calibrated_method_lines(iso.get("calibrated_budget", {}))]
     if not_iso(iso):
         out.append("  " + not_iso(iso))
     out += ["  " + line for line in verdict_lines(summary)]

@@ -46,6 +46,7 @@ from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, larges
                                      quantile_interval, simulate)
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import IsoTarget, RandomPart
+from evotol.studyfile.iso9283_calibrated import calibrated_block, calibrated_methods
 from evotol.studyfile.iso9283_methods import allocator_args, method_allocations, methods_scope, study_method_options
 from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count, joint_frames
@@ -133,6 +134,9 @@ class IsoStudy:
     front : dict or None
         The study's ``nsga2`` settings when it also runs the ISO front, cost against AP with RP held
         (:func:`evotol.studyfile.iso9283_methods.iso_front_options`).
+    calibrated : dict
+        Inside ``[calibration]``: the study's methods that also allocate the random sources in the calibrated
+        budget, with their settings (:func:`evotol.studyfile.iso9283_calibrated.calibrated_methods`).
     """
 
     robot: MechanismModel
@@ -151,6 +155,7 @@ class IsoStudy:
     ga: dict | None = None
     rules: tuple = ()
     front: dict | None = None
+    calibrated: dict = field(default_factory=dict)
 
     @property
     def positions(self) -> np.ndarray:
@@ -363,7 +368,8 @@ def read_iso9283(spec: dict, problem) -> IsoStudy | None:
             raise ValidationError("iso9283.calibrate", cal, f"at least {-(-robot.n_columns // 3)} configurations, "
                                   "a noise >= 0 and at least 1 robot")
     iso = IsoStudy(robot, cube, ap, rp, y, sources, costs, lower, upper, sim, allocate, cal, orientation,
-                   **study_method_options(spec, problem, orientation))     # ga, the rules, nsga2 on AP/RP too
+                   **study_method_options(spec, problem, orientation),     # ga, the rules, nsga2 on AP/RP too
+                   calibrated=calibrated_methods(spec, problem))            # or in the calibrated budget
     _check_floor(iso, problem)
     return iso
 
@@ -400,30 +406,6 @@ def _q(x, y):
     return est, list(iv)
 
 
-def calibrated_budget(info) -> dict:
-    """What the random sources take of a calibrated requirement (SI; docs/calibration.md, issue 44 item 4).
-
-    Parameters
-    ----------
-    info : evotol.calibration.problem.CalibrationInfo
-        The calibrated problem's ``calibration``.
-
-    Returns
-    -------
-    dict
-        ``requirement``, ``noise_only`` (the noise's quantile alone), ``random_identification`` (what the
-        random sources add to it through the fit), ``random_worst_case`` (their largest effect at a task pose),
-        ``second_order``, ``remainder``, ``geometric_bound`` (left for the systematic residual), all m, and
-        ``random_allocation`` (cost, tolerances, whether the requirement binds) when they are allocated.
-    """
-    pos = info.noise.get("position", {})
-    keys = ("noise_only", "random_identification", "random_worst_case", "second_order", "remainder", "geometric_bound")
-    return {"requirement": pos.get("bound"), **{k: pos.get(k) for k in keys},
-            "random_allocation": info.random_allocation,
-            "meaning": "calibrated requirement = systematic residual (geometric_bound) + quantile of the fit's error "
-                       "(noise_only + random_identification) + the random sources' worst case at a pose + second order"}
-
-
 def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     """The ``iso9283`` block of the study JSON (SI, docs/iso9283.md): the cube, the poses (commanded
     positions), per pose ``AP`` and ``RP`` each with ``predicted`` and, simulated on the nonlinear
@@ -456,8 +438,8 @@ def iso9283_block(iso: IsoStudy, problem, results: dict, seed: int = 0) -> dict:
     block = {"cube": {"centre": list(iso.cube.centre), "edge": iso.cube.edge},
              "requirement": {"AP": iso.AP, "RP": iso.RP, "yield": iso.yield_, **iso.orientation},
              "systematic_from": from_method or ("lower bounds" if problem.free.any() else "given tolerances")}
-    if info is not None:
-        block["calibrated_budget"] = calibrated_budget(info)
+    if info is not None:        # what the random sources take of it, and the study's methods on them
+        block.update(calibrated_block(iso, info, results, seed))
     if iso.allocate and info is None:
         al = allocate_iso9283(*allocator_args(iso, problem), x0=np.concatenate([t_sys, t_rand]), seed=seed,
                               orientation=iso.orientation)

@@ -263,7 +263,8 @@ def iso_rules_wanted(spec: dict, problem, orientation: dict) -> tuple[str, ...]:
     -------
     tuple of str
         The rules among the methods, with ``[requirement] iso9283``, ``allocate = true`` and no
-        ``[calibration]`` (there each runs its ordinary allocation alone); else empty.
+        ``[calibration]`` (there each allocates them in the calibrated budget instead:
+        :mod:`evotol.studyfile.iso9283_calibrated`); else empty.
 
     Raises
     ------
@@ -356,8 +357,8 @@ ISO_ALLOCATIONS = {"optimum": "allocation", "ga": "allocation_ga", **{r: f"alloc
 def methods_scope(names, block: dict) -> dict:
     """What each of the study's methods allocated beside ``[iso9283] allocate = true``: the ISO block's key of
     its allocation to AP/RP, or None where it allocated the systematic sources alone, to the position
-    requirement (``monotone``: it knows neither the random sources nor AP/RP; inside ``[calibration]`` the ``ga``
-    and the rules of :data:`ISO_RULES` too).
+    requirement (``monotone``: it knows neither the random sources nor AP/RP; inside ``[calibration]``:
+    :func:`evotol.studyfile.iso9283_calibrated.calibrated_scope`).
 
     Parameters
     ----------

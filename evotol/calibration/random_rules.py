@@ -1,0 +1,192 @@
+"""The study's other methods on the random sources of a calibrated budget (issue 44 item 3 inside item 4,
+docs/iso9283.md): the GA, the equal-effect rule, equal tolerances and the Lagrange closed form, each judged
+like the least-cost design (:func:`evotol.calibration.random_allocation.least_cost`) by the budget's own check
+(:meth:`evotol.calibration.random_budget.RandomBudget.ok`: exact quantile of the fit's error, proven worst
+case, the ISO figures if required), with every systematic tolerance at its upper bound as there.
+
+Each source's **normalised effect** per unit tolerance is what it adds alone, at tolerance 1 (SI) with every
+other random source at 0, to each figure, over that figure's limit: the position figure
+``max_i q_i + max_i w_i`` over the budget (less its value at ``τ = 0``, the noise alone), and with an ISO
+target the calibrated AP over ``AP_budget`` and RP over its aim; ``e_k`` is the largest of these. Then:
+
+* **equal tolerances**: every random tolerance the same value ``c`` (SI), clipped to its bounds;
+* **equal effect** (the sensitivity rule): ``τ_k = s / e_k``, every source the same normalised effect;
+* **Lagrange** (Spotts 1973; Chase & Greenwood 1988): least cost on the worst-case stack-up
+  ``Σ_k e_k τ_k = 1`` (:func:`evotol.allocators.iso9283_baselines.stack_up`);
+* **GA** (pymoo, log tolerances, feasibility first): least cost subject to the position figure with the
+  quantile as ``κ_i sqrt(λ_max(C_i(τ)))`` (``κ_i`` the exact quantile's ratio at the least-cost design, the
+  form :func:`least_cost` solves), the ISO AP alike and RP on the first 2 000 of the fixed draws, a whole
+  population at once; the search's surrogate is not what it is judged by.
+
+Every design is then moved onto the boundary along its ray (:meth:`RandomBudget.onto_boundary`: one common
+factor, found by the exact check) and judged: ``feasible`` only if :meth:`RandomBudget.ok` holds; its cost
+beside the least-cost design's.
+
+Parameters
+----------
+rb : evotol.calibration.random_budget.RandomBudget
+    The calibrated budget every function here reads.
+"""
+from __future__ import annotations
+
+import numpy as np
+from pymoo.algorithms.soo.nonconvex.ga import GA
+from pymoo.core.problem import Problem
+from pymoo.optimize import minimize
+from scipy.stats import qmc
+
+from evotol._runtime.blas_threads import single_threaded_blas
+from evotol.allocators.iso9283_baselines import stack_up
+from evotol.calibration.random_budget import RandomBudget
+
+#: what each method's design is, for the block (method -> sentence)
+CALIBRATED_RULES = {
+    "equal": "equal tolerances (every random tolerance the same value in SI, clipped to its bounds)",
+    "sensitivity": "the equal-effect rule (each random source the same effect per unit tolerance on the calibrated "
+                   "figures, over each figure's limit)",
+    "lagrange": "the Lagrange closed form on the worst-case stack-up of the sources' normalised effects",
+    "ga": "pymoo's GA in log space on a convex surrogate of the budget (the fit's quantile as κ sqrt(λ_max), RP on "
+          "2 000 of the fixed draws)",
+}
+
+
+def _figures(rb: RandomBudget, t) -> np.ndarray:
+    """Each figure of a design over its limit: position, and with an ISO target AP and RP."""
+    out = [rb.position(t) / rb.budget]
+    if rb.AP is not None:
+        out.append(rb.ap(t).max() / rb.AP)
+    if rb.RP is not None:
+        with np.errstate(invalid="ignore", divide="ignore"):         # RP's gradient at τ = 0 is not used
+            out.append(rb.rp(t)[0].max() / rb.rp_aim)
+    return np.array(out)
+
+
+def normalised_effects(rb: RandomBudget) -> np.ndarray:
+    """``e_k`` (module docstring): each source's largest added figure over its limit per unit tolerance.
+
+    Parameters
+    ----------
+
+    Returns
+    -------
+    (K,) ndarray
+        Per unit tolerance (1 / SI unit).
+    """
+    K = len(rb.lo)
+    zero = _figures(rb, np.zeros(K))
+    return np.array([(_figures(rb, np.eye(K)[k]) - zero).max() for k in range(K)])
+
+
+def rule_tolerances(rb: RandomBudget, rule: str) -> np.ndarray:
+    """The design of ``equal``, ``sensitivity`` or ``lagrange`` before it is moved onto the boundary (SI).
+
+    Parameters
+    ----------
+    rule : str
+        ``equal``, ``sensitivity`` or ``lagrange``.
+
+    Returns
+    -------
+    (K,) ndarray
+    """
+    if rule == "equal":
+        return np.full(len(rb.lo), float(np.sqrt(rb.lo.min() * rb.hi.max())))
+    e = np.maximum(normalised_effects(rb), 1e-300)
+    if rule == "sensitivity":
+        return 1.0 / e
+    return stack_up(rb.costs, rb.lo, rb.hi, e, 1.0, rss=False)
+
+
+class _Surrogate(Problem):
+    """The GA's problem: cost, and the largest figure over its limit minus 1 on the convex surrogate."""
+
+    def __init__(self, rb: RandomBudget, kappa, kappa_iso, n_draws: int = 2000):
+        super().__init__(n_var=len(rb.lo), n_obj=1, n_ieq_constr=1, xl=np.log(rb.lo), xu=np.log(rb.hi))
+        self.rb, self.kappa, self.kappa_iso = rb, kappa, kappa_iso
+        self.E = None if rb.RP is None else np.asarray(rb.iso["E"], float)[:, :n_draws]
+
+    def _evaluate(self, X, out, *args, **kwargs):
+        rb, T = self.rb, np.exp(X)
+        out["F"] = np.array([rb.cost(t) for t in T])[:, None]
+        g = np.array([(np.max(rb.w(t)[0]) + np.max(self.kappa * rb.lam(t)[0])) / rb.budget
+                      for t in T])
+        if rb.AP is not None:
+            g = np.maximum(g, [np.max(rb.iso_w(t)[0] + self.kappa_iso * rb.iso_lam(t)[0]) / rb.AP for t in T])
+        if self.E is not None:
+            lens = np.linalg.norm(np.einsum("pnik,sk->spni", self.E, T), axis=-1)       # (designs, p, n)
+            g = np.maximum(g, (lens.mean(-1) + 3 * lens.std(-1, ddof=1)).max(-1) / rb.rp_aim)
+        out["G"] = (g - 1.0)[:, None]
+
+
+@single_threaded_blas
+def ga_tolerances(rb: RandomBudget, optimum, pop_size: int = 100, n_gen: int = 200, seed: int = 0) -> tuple:
+    """The GA's design (module docstring) before it is moved onto the boundary, and its evaluations.
+
+    Parameters
+    ----------
+    optimum : (K,) array_like
+        The least-cost design, where ``κ`` is taken.
+    pop_size, n_gen, seed : int
+        pymoo's GA settings and the seed of its Latin-hypercube start.
+
+    Returns
+    -------
+    tuple
+        ``(τ (K,) ndarray, evaluations)``.
+    """
+    t0 = np.asarray(optimum, float)
+    q, s = rb.exact(t0)
+    kappa_iso = None
+    if rb.AP is not None:
+        qi, si = rb.iso_exact(t0)
+        kappa_iso = qi / np.maximum(si, 1e-300)
+    prob = _Surrogate(rb, q / np.maximum(s, 1e-300), kappa_iso)
+    X0 = qmc.scale(qmc.LatinHypercube(d=prob.n_var, seed=seed).random(int(pop_size)), prob.xl, prob.xu)
+    res = minimize(prob, GA(pop_size=int(pop_size), sampling=X0, eliminate_duplicates=True), ("n_gen", int(n_gen)),
+                   seed=seed, verbose=False)
+    X = res.X if res.X is not None else res.pop.get("X")[np.argmin(res.pop.get("G")[:, 0])]
+    return np.exp(np.atleast_2d(X)[0]), int(res.algorithm.evaluator.n_eval)
+
+
+def calibrated_design(rb: RandomBudget, method: str, optimum: dict, names, seed: int = 0, ga=None) -> dict:
+    """One method's random tolerances in the calibrated budget, moved onto the boundary and judged (SI).
+
+    Parameters
+    ----------
+    method : str
+        A key of :data:`CALIBRATED_RULES`.
+    optimum : dict
+        The least-cost design's result (its ``tolerances`` name -> value and ``cost``).
+    names : sequence of str
+        The random sources' names.
+    seed : int
+        The GA's seed unless ``ga`` sets one.
+    ga : dict or None
+        The GA's ``pop_size``, ``n_gen`` and ``seed``.
+
+    Returns
+    -------
+    dict
+        ``tolerances`` (name -> SI), ``cost``, ``gap_to_optimum`` (cost / least cost − 1), ``feasible``,
+        ``figures`` (position over the budget, and AP, RP over theirs: at most 1 when feasible), with the ISO
+        target ``iso`` (:meth:`RandomBudget.report`), for the GA ``evaluations``, and ``meaning``.
+    """
+    extra = {}
+    if method == "ga":
+        opts = {"pop_size": 100, "n_gen": 200, "seed": seed, **(ga or {})}
+        t, n = ga_tolerances(rb, [optimum["tolerances"][n] for n in names], opts["pop_size"], opts["n_gen"], opts["seed"])
+        extra = {**opts, "evaluations": n}
+    else:
+        t = rule_tolerances(rb, method)
+    t = rb.onto_boundary(t)
+    cost = rb.cost(t)
+    out = {"tolerances": {n: float(v) for n, v in zip(names, t)}, "cost": cost,
+           "gap_to_optimum": cost / optimum["cost"] - 1, "feasible": bool(rb.ok(t)),
+           "figures": _figures(rb, t).tolist(), **extra,
+           "meaning": CALIBRATED_RULES[method] + ", in the calibrated budget with every systematic tolerance at its "
+                      "upper bound as the least-cost design; moved onto the boundary by one common factor and judged by "
+                      "the same check (exact quantile of the fit's error, proven worst case" +
+                      (", ISO AP and RP on the fixed draws)" if rb.iso is not None else ")")}
+    if rb.iso is not None:
+        out["iso"] = rb.report(t)
+    return out

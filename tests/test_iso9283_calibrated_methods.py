@@ -1,0 +1,134 @@
+"""The study's GA, equal-effect rule, equal tolerances and Lagrange closed form on the random sources of a
+calibrated budget (issue 44: every allocator, also inside ``[calibration]``; evotol/calibration/random_rules.py,
+evotol/studyfile/iso9283_calibrated.py, docs/iso9283.md).
+
+The UR5 of reports/studies/ur5_calibrated.toml with ``[requirement] iso9283 = { AP = "0.3 mm", RP = "0.05 mm" }``
+(as tests/test_iso9283_calibrated_budget.py). References written here: each design's cost from the study file's
+cost formulas (``a0 + a1 scale / t``, read from the TOML), RP at every ISO pose by our own sampling of J·δq
+(Pinocchio's Jacobian, the cycle draws of tests/test_iso9283_calibrated_budget.py), the Lagrange stationarity by
+central differences of those formulas, and the least-cost design of the same budget.
+"""
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evotol.calibration.random_rules import calibrated_design, normalised_effects, rule_tolerances
+from evotol.measures.iso9283.budget import joints_and_maps
+from evotol.reporting.iso9283 import calibrated_method_lines
+from evotol.studyfile import load_problem
+from evotol.studyfile.iso9283_calibrated import calibrated_methods, calibrated_scope
+from tests.test_iso9283 import JOINTS, pinocchio_position_jacobian
+from tests.test_iso9283_calibrated_budget import _columns, _cycles
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDY = ROOT / "reports/studies/ur5_calibrated.toml"
+RP = 5e-5
+METHODS = ("equal", "sensitivity", "lagrange", "ga")
+
+
+@pytest.fixture(scope="module")
+def case():
+    spec = tomllib.loads(STUDY.read_text())
+    spec["poses"]["grid"] = [2, 2, 2]
+    spec["requirement"]["iso9283"] = {"AP": "0.3 mm", "RP": "0.05 mm"}
+    spec["methods"] = {"sensitivity": {}, "optimum": {}, "ga": {"pop_size": 40, "n_gen": 40},
+                       "equal": {}, "lagrange": {}, "monotone": {}}
+    problem = load_problem(spec, base_dir=STUDY.parent)
+    info = problem.calibration
+    names = [s.name for s in info.random.sources]
+    designs = {m: calibrated_design(info.random_budget, m, info.random_allocation, names, 0,
+                                    ga={"pop_size": 40, "n_gen": 40} if m == "ga" else None) for m in METHODS}
+    return spec, problem, names, designs
+
+
+def _formula_cost(spec, names, tol: dict) -> float:
+    """The study file's reciprocal prices, ``a0 + a1 scale / t`` per source, summed (written here)."""
+    total = 0.0
+    for n in names:
+        kind = "backlash" if "backlash" in n or "lost" in n else "encoder"
+        c = spec["iso9283"]["random"][kind]["cost"]
+        total += c["a0"] + c["a1"] * c["scale"] / tol[n]
+    return total
+
+
+def test_the_study_asks_each_method_in_the_calibrated_budget(case):
+    spec, problem, _, _ = case
+    wanted = calibrated_methods(spec, problem)
+    assert wanted == {"sensitivity": {}, "ga": {"pop_size": 40, "n_gen": 40}, "equal": {}, "lagrange": {}}
+    scope = calibrated_scope(["sensitivity", "optimum", "ga", "monotone"], {"sensitivity": {}, "ga": {}})
+    assert scope == {"sensitivity": "calibrated_budget.methods.sensitivity",
+                     "optimum": "calibrated_budget.random_allocation", "ga": "calibrated_budget.methods.ga",
+                     "monotone": None}
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_each_design_is_feasible_priced_and_on_the_boundary(case, method):
+    spec, problem, names, designs = case
+    info = problem.calibration
+    rb, d, al = info.random_budget, designs[method], info.random_allocation
+    t = np.array([d["tolerances"][n] for n in names])
+    assert d["feasible"] and rb.ok(t) and max(d["figures"]) <= 1 + 1e-12
+    assert d["cost"] == pytest.approx(_formula_cost(spec, names, d["tolerances"]), rel=1e-12)
+    assert al["cost"] == pytest.approx(_formula_cost(spec, names, al["tolerances"]), rel=1e-12)
+    # the least-cost design is the cheapest (its RP is sampled, so allow the aim's 1.5 % margin's effect)
+    assert d["gap_to_optimum"] >= -0.005
+    assert np.all(t >= rb.lo * (1 - 1e-12)) and np.all(t <= rb.hi * (1 + 1e-12))
+    if not np.all(t >= rb.hi * (1 - 1e-9)):       # on the boundary: 1 % more of every tolerance misses
+        assert not rb.ok(np.clip(1.01 * t, rb.lo, rb.hi))
+
+
+@pytest.mark.parametrize("method", ("equal", "ga"))
+def test_rp_of_the_design_by_our_own_sampling(case, method):
+    _, problem, names, designs = case
+    part = problem.calibration.random
+    t = [designs[method]["tolerances"][n] for n in names]
+    part = dataclasses.replace(part, tolerances=tuple(t))
+    P = np.array(part.iso.positions)
+    q, _ = joints_and_maps(problem.model.base, P)
+    cols = _columns(part)
+    dq = _cycles(part, (300000,), np.random.default_rng(5))
+    dq = dq[:, [cols[part.sources.index(next(s for s in part.sources if s.joint == j))] for j in JOINTS]]
+    for i in range(len(P)):
+        e = dq @ pinocchio_position_jacobian({j: q[j][i:i + 1] for j in JOINTS})[:3].T
+        l = np.linalg.norm(e - e.mean(axis=0), axis=1)
+        rp = l.mean() + 3 * l.std(ddof=1)
+        assert rp <= RP * 1.003
+        assert rp == pytest.approx(designs[method]["iso"]["RP"][i], rel=5e-3)
+
+
+def test_equal_and_lagrange_rules_hold_their_definitions(case):
+    spec, problem, names, designs = case
+    rb = problem.calibration.random_budget
+    t = np.array([designs["equal"]["tolerances"][n] for n in names])
+    free = (t > rb.lo * (1 + 1e-9)) & (t < rb.hi * (1 - 1e-9))
+    assert free.sum() >= 2 and np.ptp(t[free]) <= 1e-12 * t[free].max()
+    # Lagrange: -c_k'(τ_k) / e_k is the same multiplier for every source inside its bounds (central differences
+    # of the file's formulas, written here)
+    e = normalised_effects(rb)
+    tl = rule_tolerances(rb, "lagrange")
+    inside = (tl > rb.lo * (1 + 1e-6)) & (tl < rb.hi * (1 - 1e-6))
+    assert inside.sum() >= 2
+    lam = []
+    for k in np.flatnonzero(inside):
+        h = 1e-6 * tl[k]
+        up, dn = dict(zip(names, tl)), dict(zip(names, tl))
+        up[names[k]], dn[names[k]] = tl[k] + h, tl[k] - h
+        slope = (_formula_cost(spec, names, up) - _formula_cost(spec, names, dn)) / (2 * h)
+        lam.append(-slope / e[k])
+    assert np.ptp(lam) <= 1e-5 * np.max(lam)
+    assert float(np.sum(e * tl)) == pytest.approx(1.0, rel=1e-8)       # the stack-up holds with equality
+
+
+def test_the_sentences_name_each_method_and_its_gap(case):
+    _, problem, _, designs = case
+    b = {"random_allocation": problem.calibration.random_allocation, "methods": designs}
+    lines = calibrated_method_lines(b)
+    assert len(lines) == 4 and all("feasible by the same check" in s and "NOT" not in s for s in lines)
+    g = designs["ga"]
+    assert f"The study's ga (40 x 40) allocated the random sources in the calibrated budget too: cost {g['cost']:.6g} " \
+           f"({100 * g['gap_to_optimum']:+.2f} % against the least-cost design" in lines[3]
