@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import brentq
+from scipy.special import ndtr
 from scipy.stats import norm
 
 from evotol.errors import ValidationError
@@ -46,30 +47,37 @@ def level_of(k: float) -> float:
 #: Gauss-Legendre nodes per integral, and where a normal range is cut (standard deviations)
 NODES, CUT = 96, 10.0
 _S, _W = np.polynomial.legendre.leggauss(NODES)
+_ROOT_2PI = np.sqrt(2 * np.pi)
+_SIN, _COS = np.sin(np.pi / 2 * _S), np.cos(np.pi / 2 * _S)          # the substitution's, computed once
+
+
+def _pdf(z):
+    """The standard normal density, as scipy.stats.norm.pdf computes it, without its argument checks (the
+    quantile's root solve calls it thousands of times: 3x faster)."""
+    return np.exp(-z ** 2 / 2.0) / _ROOT_2PI
 
 
 def _over(L):
     """Nodes z (k, NODES) and weights over [−L, L] for each half-width L (k,): ``z = L sin(πs/2)`` when L ≤ CUT."""
     L = np.asarray(L, float)[:, None]
     bounded = L <= CUT
-    s = np.pi / 2 * _S
-    z = np.where(bounded, L * np.sin(s), CUT * _S)
-    w = np.where(bounded, L * np.cos(s) * np.pi / 2 * _W, CUT * _W)
+    z = np.where(bounded, L * _SIN, CUT * _S)
+    w = np.where(bounded, L * _COS * np.pi / 2 * _W, CUT * _W)
     return z, w
 
 
 def _cdf(x: float, lam: np.ndarray) -> float:
     """``P(Σ λ_i z_i² ≤ x)`` (module docstring) for 1 to 3 eigenvalues ``lam`` > 0, sorted descending."""
-    last = lambda rest: 2 * norm.cdf(np.sqrt(np.maximum(rest, 0.0) / lam[-1])) - 1    # noqa: E731
+    last = lambda rest: 2 * ndtr(np.sqrt(np.maximum(rest, 0.0) / lam[-1])) - 1         # noqa: E731
     if len(lam) == 1:
         return float(last(x))
     z1, w1 = _over([np.sqrt(x / lam[0])])
     r1 = x - lam[0] * z1[0] ** 2                                          # (NODES,)
     if len(lam) == 2:
-        return float(np.sum(w1[0] * norm.pdf(z1[0]) * last(r1)))
+        return float(np.sum(w1[0] * _pdf(z1[0]) * last(r1)))
     z2, w2 = _over(np.sqrt(np.maximum(r1, 0.0) / lam[1]))                 # (NODES, NODES)
-    inner = np.sum(w2 * norm.pdf(z2) * last(r1[:, None] - lam[1] * z2 ** 2), axis=1)
-    return float(np.sum(w1[0] * norm.pdf(z1[0]) * inner))
+    inner = np.sum(w2 * _pdf(z2) * last(r1[:, None] - lam[1] * z2 ** 2), axis=1)
+    return float(np.sum(w1[0] * _pdf(z1[0]) * inner))
 
 
 def norm_quantile(cov, p: float) -> np.ndarray:
