@@ -144,6 +144,7 @@ def test_the_study_block_says_what_is_certified_and_meets(problem):
     spec["poses"]["grid"] = [2, 2, 2]
     spec["requirement"]["iso9283"] = {"AP": "0.3 mm", "RP": "0.05 mm"}
     spec["iso9283"]["simulate"] = {"robots": 5, "cycles": 30, "multidirectional": False}
+    spec["methods"] = {"optimum": {}}      # the ga and rules in this budget: tests/test_iso9283_calibrated_methods.py
     block = iso9283_block(read_iso9283(spec, problem), problem, {"optimum": SimpleNamespace(t=problem.upper)}, seed=0)
     v = block["verdict"]
     assert v["AP"]["meets"] is True and "after the study's calibration" in v["AP"]["model"]

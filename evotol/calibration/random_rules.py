@@ -107,15 +107,24 @@ class _Surrogate(Problem):
 
     def _evaluate(self, X, out, *args, **kwargs):
         rb, T = self.rb, np.exp(X)
-        out["F"] = np.array([rb.cost(t) for t in T])[:, None]
-        g = np.array([(np.max(rb.w(t)[0]) + np.max(self.kappa * rb.lam(t)[0])) / rb.budget
-                      for t in T])
-        if rb.AP is not None:
-            g = np.maximum(g, [np.max(rb.iso_w(t)[0] + self.kappa_iso * rb.iso_lam(t)[0]) / rb.AP for t in T])
+        out["F"] = sum(np.asarray(c.cost(T[:, k]), float) for k, c in enumerate(rb.costs))[:, None]
+        w, q = _surrogate(T, 0.0, rb.support, rb.cos_delta, rb.C0, rb.cov, self.kappa)
+        g = (w.max(-1) + q.max(-1)) / rb.budget                        # the budget: max w + max q over the poses
+        if rb.AP is not None:                                           # AP: at each ISO pose, w + q
+            g = np.maximum(g, np.add(*_surrogate(T, *rb.iso_parts, *rb.iso_cov, self.kappa_iso)).max(-1) / rb.AP)
         if self.E is not None:
-            lens = np.linalg.norm(np.einsum("pnik,sk->spni", self.E, T), axis=-1)       # (designs, p, n)
-            g = np.maximum(g, (lens.mean(-1) + 3 * lens.std(-1, ddof=1)).max(-1) / rb.rp_aim)
+            e = self.E @ T.T                                              # (p, n, 3, designs)
+            lens = np.sqrt(np.einsum("pnis,pnis->pns", e, e))
+            g = np.maximum(g, (lens.mean(1) + 3 * lens.std(1, ddof=1)).max(0) / rb.rp_aim)
         out["G"] = (g - 1.0)[:, None]
+
+
+def _surrogate(T, s0, support, cos_delta, C0, cov, kappa):
+    """Per design and pose the worst case ``w_i`` and ``κ_i sqrt(λ_max(C_i))`` (m): the convex form of a
+    calibrated figure's two parts, for a whole population at once."""
+    w = (s0 + np.einsum("sk,knd->snd", T, support)).max(-1) / cos_delta
+    lam = np.linalg.eigvalsh(C0 + np.einsum("sk,knij->snij", T * T, cov))[..., -1]
+    return w, kappa * np.sqrt(np.maximum(lam, 1e-300))
 
 
 @single_threaded_blas
