@@ -41,9 +41,12 @@ def bracket_clause(g: dict, optimum_cost: float) -> str:
     if "lower_bound" not in g:
         return ""
     return (f"; bracket [{g['lower_bound']:.6g}, {g['cost']:.6g}] of the least cost (gap {100 * g['gap']:.1f} %, "
-            f"{g['rounds']} rounds, {g['vertices']} vertices, {'converged' if g['converged'] else 'not converged'}), "
+            f"{g['rounds']} rounds, {g['vertices']} vertices, "
+            f"{'converged' if g['converged'] else 'not converged: stopped by ' + str(g.get('stop'))}), "
             f"the certified optimum {optimum_cost:.6g}"
-            + (" inside it" if g["lower_bound"] <= optimum_cost <= g["cost"] else " outside it"))
+            + (" inside it" if g["lower_bound"] <= optimum_cost <= g["cost"] else
+               " above it (the optimum aims its AP at AP cos δ, at most about 0.4 % dearer)" if optimum_cost > g["cost"]
+               else " below it (RP on the fixed draws is not monotone: docs/iso9283.md)"))
 
 
 def iso9283_section(rep, summary: dict) -> None:

@@ -253,13 +253,13 @@ ISO_RULES = {
                  "AP/RP boundary"),
     "monotone": (allocate_iso9283_monotone,
                  "the polyblock bracket (Tuy 2000) of the least cost, started from the cheaper of the equal-effect rule's "
-                 "and the equal tolerances' designs, a 10 s search: the design is the bracket's upper end, lower_bound its "
+                 "and the equal tolerances' designs, at most 10 s (stop says what ended it): the design is the bracket's upper end, lower_bound its "
                  "lower end (proven where RP on the fixed draws never decreases as a tolerance grows; it can dip by about "
                  "2 %, docs/iso9283.md), gap their distance relative to the design's cost"),
 }
 
 #: what the ``monotone`` rule adds to its allocation: the bracket
-BRACKET_KEYS = ("lower_bound", "gap", "rounds", "vertices", "evaluations", "converged", "incumbent", "improved")
+BRACKET_KEYS = ("lower_bound", "gap", "rounds", "vertices", "evaluations", "converged", "stop", "incumbent", "improved")
 
 
 def iso_rules_wanted(spec: dict, problem, orientation: dict) -> tuple[str, ...]:
