@@ -20,11 +20,13 @@ maximum of ``h(u; t, τ)`` over 600 directions / cos δ) ``<= AP`` and ``E l + 3
   that meets the sampled RP only where it dips below the envelope may cost less than it. The upper bound is the
   cost of a design that meets the check itself (feasible as every ISO allocator's design is judged).
 
-The search stops at ``rel_gap``, at ``max_seconds``, at ``max_evaluations`` or before a cut proposing more than
+The first vertex is the reduced upper corner (:func:`evotol.allocators.monotone.upper_reduction`). The search
+stops at ``rel_gap``, at ``max_seconds``, at ``max_evaluations`` or before a cut proposing more than
 :data:`MAX_NEW_VERTICES` new vertices (the polyblock without that cut still holds every feasible design, so the
-lower bound stands). The incumbent (the first upper bound) is the cheaper of the equal-effect rule's design
-(:func:`evotol.allocators.iso9283_sensitivity.equal_effect_shares`, scaled onto the boundary) and the equal
-tolerances (:func:`evotol.allocators.iso9283_baselines.equal_tolerances`) among those the check accepts. The
+lower bound stands). The incumbent (the first upper bound) is the cheapest the check accepts of the Lagrange closed form's and the
+equal-effect rule's designs (:func:`evotol.allocators.iso9283_baselines.lagrange_tolerances`,
+:func:`evotol.allocators.iso9283_sensitivity.equal_effect_shares`, scaled onto the boundary) and the equal
+tolerances (:func:`evotol.allocators.iso9283_baselines.equal_tolerances`). The
 bracket is a bracket: the design is called optimal only where ``gap <= rel_gap``.
 """
 from __future__ import annotations
@@ -32,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.allocators.iso9283 import iso_terms
-from evotol.allocators.iso9283_baselines import equal_tolerances, within_requirement
+from evotol.allocators.iso9283_baselines import equal_tolerances, lagrange_tolerances, within_requirement
 from evotol.allocators.iso9283_ga import design_cost
 from evotol.allocators.iso9283_sensitivity import equal_effect_shares, rule_design
 from evotol.allocators.monotone import MonotoneProblem, polyblock_search
@@ -116,15 +118,17 @@ def allocate_iso9283_monotone(robot, positions, sys_costs, sys_bounds, free, sou
     terms = iso_terms(robot, positions, sys_bounds, free, sources, rand_bounds, AP, RP, None, n_samples, seed)
     costs = list(sys_costs) + list(rand_costs)
     mp, design = iso_monotone_problem(terms, costs)
-    rule = rule_design(terms, costs, equal_effect_shares(terms))
-    starts = {"sensitivity": np.concatenate([rule["systematic"], rule["random"]]), "equal": equal_tolerances(terms)}
+    scaled = {k: rule_design(terms, costs, shares) for k, shares in
+              (("lagrange", lagrange_tolerances(terms, costs)), ("sensitivity", equal_effect_shares(terms)))}
+    starts = {**{k: np.concatenate([r["systematic"], r["random"]]) for k, r in scaled.items()},
+              "equal": equal_tolerances(terms)}
     # both sit on the boundary to rounding (the rule aims at AP (1 − 1e-9) itself): 1e-6 inside it
     starts = {k: np.where(terms["var"], np.maximum(t * (1 - 1e-6), terms["lo"]), t) for k, t in starts.items()}
     held = {k: t for k, t in starts.items() if within_requirement(terms, t[None])[0]}
     incumbent = min(held, key=lambda k: design_cost(costs, held[k][None])[0], default=None)
     ub = np.inf if incumbent is None else float(design_cost(costs, held[incumbent][None])[0])
     res = polyblock_search(mp, upper_bound=ub, spent=len(starts), rel_gap=rel_gap, max_evaluations=max_evaluations,
-                           max_seconds=max_seconds, max_new_vertices=MAX_NEW_VERTICES)
+                           max_seconds=max_seconds, max_new_vertices=MAX_NEW_VERTICES, reduce_upper=True)
     t = held.get(incumbent) if res["x"] is None else design(res["x"][None])[0]
     if t is None:                               # nothing found that holds: the loosest lower corner, judged NOT feasible
         t = terms["lo"].copy()

@@ -252,8 +252,8 @@ ISO_RULES = {
                  "tolerance and the RP root-sum-square stack-up of each random source's RP alone), scaled onto the "
                  "AP/RP boundary"),
     "monotone": (allocate_iso9283_monotone,
-                 "the polyblock bracket (Tuy 2000) of the least cost, started from the cheaper of the equal-effect rule's "
-                 "and the equal tolerances' designs, at most 10 s (stop says what ended it): the design is the bracket's upper end, lower_bound its "
+                 "the polyblock bracket (Tuy 2000) of the least cost, started from the cheapest of the Lagrange, "
+                 "equal-effect and equal designs, at most 10 s (stop says what ended it): the design is the bracket's upper end, lower_bound its "
                  "lower end (proven where RP on the fixed draws never decreases as a tolerance grows; it can dip by about "
                  "2 %, docs/iso9283.md), gap their distance relative to the design's cost"),
 }
