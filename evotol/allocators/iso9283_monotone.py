@@ -89,7 +89,7 @@ def allocate_iso9283_monotone(robot, positions, sys_costs, sys_bounds, free, sou
     robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds, AP, RP, n_samples, seed
         As :func:`evotol.allocators.iso9283_baselines.allocate_iso9283_equal`.
     max_seconds : float
-        Wall time of the polyblock search (s), checked once per round.
+        Wall time of the polyblock search (s), checked once per round and after every cut.
     rel_gap : float
         As :func:`evotol.allocators.monotone.polyblock`.
     max_evaluations : int
@@ -122,7 +122,7 @@ def allocate_iso9283_monotone(robot, positions, sys_costs, sys_bounds, free, sou
               (("lagrange", lagrange_tolerances(terms, costs)), ("sensitivity", equal_effect_shares(terms)))}
     starts = {**{k: np.concatenate([r["systematic"], r["random"]]) for k, r in scaled.items()},
               "equal": equal_tolerances(terms)}
-    # both sit on the boundary to rounding (the rule aims at AP (1 − 1e-9) itself): 1e-6 inside it
+    # the rules' designs sit on the boundary to rounding (scaled to AP (1 − 1e-9), the check's own limit): 1e-6 inside
     starts = {k: np.where(terms["var"], np.maximum(t * (1 - 1e-6), terms["lo"]), t) for k, t in starts.items()}
     held = {k: t for k, t in starts.items() if within_requirement(terms, t[None])[0]}
     incumbent = min(held, key=lambda k: design_cost(costs, held[k][None])[0], default=None)
@@ -130,7 +130,7 @@ def allocate_iso9283_monotone(robot, positions, sys_costs, sys_bounds, free, sou
     res = polyblock_search(mp, upper_bound=ub, spent=len(starts), rel_gap=rel_gap, max_evaluations=max_evaluations,
                            max_seconds=max_seconds, max_new_vertices=MAX_NEW_VERTICES, reduce_upper=True)
     t = held.get(incumbent) if res["x"] is None else design(res["x"][None])[0]
-    if t is None:                               # nothing found that holds: the loosest lower corner, judged NOT feasible
+    if t is None:                   # nothing found that holds: every tolerance at its lower bound, judged as it is
         t = terms["lo"].copy()
     out = rule_design(terms, costs, t, iters=0)
     return {**out, "lower_bound": res["lower_bound"], "gap": res["gap"], "rounds": res["rounds"],

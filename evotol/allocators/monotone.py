@@ -300,8 +300,8 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
     dict
         ``lower_bound`` (proven, cost units), ``upper_bound`` (cost of ``t``; inf if none
         found), ``t`` ((n_sources,) best feasible design, m or rad, or None), ``gap`` (relative,
-        inf without a design), ``evaluations``, ``vertices``, ``rounds`` and ``converged``
-        (``gap <= rel_gap``).
+        inf without a design), ``evaluations``, ``vertices``, ``rounds``, ``converged``
+        (``gap <= rel_gap``) and ``stop`` (:func:`polyblock_search`).
     """
     rows = ExactRows(problem)
     f = problem.free
