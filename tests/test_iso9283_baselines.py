@@ -80,13 +80,13 @@ def test_both_meet_ap_and_rp_by_own_check_and_cost_at_least_the_optimum(case):
     assert lag["cost"] < rule["cost"] < equal["cost"]
 
 
-def test_a_study_with_equal_and_lagrange_writes_both_iso_allocations_and_names_monotone():
+def test_a_study_with_equal_and_lagrange_writes_both_iso_allocations():
     from evotol.reporting.iso9283 import terminal_lines
     from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
     from evotol.studyfile.iso9283_methods import methods_scope
     from evotol.studyfile.problem import load_problem
     from evotol.units.display import DisplayUnits
-    spec = example_spec({"optimum": {}, "equal": {}, "lagrange": {}, "monotone": {}})
+    spec = example_spec({"optimum": {}, "equal": {}, "lagrange": {}})
     problem = load_problem(spec)
     iso = read_iso9283(spec, problem)
     assert iso.rules == ("equal", "lagrange")
@@ -100,16 +100,14 @@ def test_a_study_with_equal_and_lagrange_writes_both_iso_allocations_and_names_m
         assert g["gap_to_optimum"] == pytest.approx(g["cost"] / opt["cost"] - 1, rel=1e-12)
         assert g["feasible"] == (max(g["AP_bound"]) <= iso.AP * (1 + 1e-6) and max(g["RP_sampled"]) <= iso.RP * (1 + 1e-6))
         assert g["feasible"] and g["gap_to_optimum"] > -0.004             # the optimum's AP aim: at most 0.4 %
-    # monotone knows neither the random sources nor AP/RP: the block says so (its run on a 36-source problem
-    # takes minutes, so only the scope is built here from the method names that ran)
-    block["methods"] = methods_scope(["optimum", "equal", "lagrange", "monotone"], block)
-    assert block["methods"] == {"optimum": "allocation", "equal": "allocation_equal", "lagrange": "allocation_lagrange",
-                                "monotone": None}
+    # monotone allocates to AP/RP too now: tests/test_iso9283_monotone.py runs it in a study
+    block["methods"] = methods_scope(["optimum", "equal", "lagrange"], block)
+    assert block["methods"] == {"optimum": "allocation", "equal": "allocation_equal", "lagrange": "allocation_lagrange"}
     lines = terminal_lines({"iso9283": block, "display_units": DisplayUnits().to_dict()})
     for name, key in (("equal tolerances (equal)", "allocation_equal"),
                       ("the Lagrange closed form (lagrange)", "allocation_lagrange")):
         assert any(name in line and f"{block[key]['cost']:.6g}" in line for line in lines)
-    assert any(line.strip().startswith("Not allocated to AP/RP: monotone allocated") for line in lines)
+    assert not any("Not allocated to AP/RP" in line for line in lines)
 
 
 def test_an_orientation_figure_beside_a_rule_is_refused_in_one_line_and_calibration_keeps_the_rules_out():

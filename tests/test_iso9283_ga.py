@@ -98,6 +98,23 @@ def example_spec(methods: dict) -> dict:
     return spec
 
 
+def study_block(methods: dict):
+    """The example study's problem, request and ISO block with these methods (seed 0)."""
+    from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
+    from evotol.studyfile.problem import load_problem
+    spec = example_spec(methods)
+    problem = load_problem(spec)
+    iso = read_iso9283(spec, problem)
+    return problem, iso, iso9283_block(iso, problem, {}, seed=0)
+
+
+def own_cost(problem, iso, g: dict) -> float:
+    """The cost of an ISO allocation recomputed here from the cost models at its tolerances."""
+    tols = problem.tolerances
+    return sum(float(tols[n].cost.cost(t)) for free, (n, t) in zip(problem.free, g["systematic"].items()) if free) \
+        + sum(float(c.cost(g["random"][s.name])) for s, c in zip(iso.sources, iso.costs))
+
+
 def test_a_study_with_a_ga_writes_its_iso_allocation_judged_like_the_optimum():
     from evotol.studyfile.iso9283 import iso9283_block, read_iso9283
     from evotol.studyfile.problem import load_problem

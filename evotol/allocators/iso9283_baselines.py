@@ -37,8 +37,22 @@ from evotol.allocators.iso9283_ga import population_figures
 from evotol.allocators.iso9283_sensitivity import rule_design, source_effects
 
 
-def _within(terms: dict, T: np.ndarray) -> np.ndarray:
-    """Whether each design's proven AP bound meets AP and its sampled RP meets the aim (bool per design)."""
+def within_requirement(terms: dict, T: np.ndarray) -> np.ndarray:
+    """Whether each design's proven AP bound meets AP and its sampled RP meets the aim: the check the equal
+    tolerances and the polyblock (:mod:`evotol.allocators.iso9283_monotone`) search by.
+
+    Parameters
+    ----------
+    terms : dict
+        The problem whose AP and RP aim the designs are checked against (:func:`evotol.allocators.iso9283.iso_terms`).
+    T : (n, m + K) ndarray
+        The designs checked, systematic then random (SI).
+
+    Returns
+    -------
+    (n,) ndarray of bool
+        Grid AP bound ``<= AP (1 − 1e-9)`` and fixed-draw RP ``<=`` its aim, at every pose.
+    """
     ap, rp = population_figures(terms, T)
     ok = np.ones(len(T), bool)
     if terms["AP"] is not None:
@@ -69,7 +83,7 @@ def equal_tolerances(terms: dict) -> np.ndarray:
         return np.where(var, np.clip(np.asarray(c, float)[:, None], lo, hi), lo)
 
     grid = np.geomspace(lo[var].min(), hi[var].max(), 65)
-    ok = _within(terms, design(grid))
+    ok = within_requirement(terms, design(grid))
     if ok.all():
         return design(grid[-1:])[0]
     if not ok[0]:
@@ -78,7 +92,7 @@ def equal_tolerances(terms: dict) -> np.ndarray:
     a, b = np.log(grid[i - 1]), np.log(grid[i])
     for _ in range(40):                                                   # bisection in log c
         mid = 0.5 * (a + b)
-        a, b = (mid, b) if _within(terms, design([np.exp(mid)]))[0] else (a, mid)
+        a, b = (mid, b) if within_requirement(terms, design([np.exp(mid)]))[0] else (a, mid)
     return design([np.exp(a)])[0]
 
 

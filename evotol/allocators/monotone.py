@@ -24,10 +24,17 @@ algorithm, here in x = log t:
 The result is a bracket [lower bound, cost of the best feasible design found]; its relative gap
 is reported in the certificate (a loose bracket is reported as such, never as optimal). A
 given incumbent (e.g. the GA's design) tightens the pruning.
+
+The algorithm (:func:`polyblock_search`) runs on any :class:`MonotoneProblem`: log bounds, a batched
+feasibility check, the cost and the cost per variable. :func:`polyblock` builds one from a
+:class:`ToleranceProblem` (feasibility by its exact measure, as above);
+:mod:`evotol.allocators.iso9283_monotone` from the ISO 9283 AP/RP problem.
 """
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -96,11 +103,177 @@ def _cut(V: np.ndarray, z: np.ndarray, chunk: int = 256) -> np.ndarray:
     return np.concatenate([keep, cand[ok]])
 
 
+@dataclass(frozen=True)
+class MonotoneProblem:
+    """A monotone minimisation in log variables, the polyblock's input (module docstring): minimise ``cost(x)``
+    over ``lo <= x <= hi`` subject to ``feasible(x)``, where ``cost`` decreases and feasibility can only be lost
+    when a variable grows (the feasible set is normal: x feasible and x' <= x imply x' feasible).
+
+    Parameters
+    ----------
+    lo, hi : (n,) ndarray
+        Bounds of the variables (log tolerances, log of m or rad).
+    feasible : callable
+        ``feasible(X) -> (k,) bool`` for designs ``X`` (k, n): whether each meets the requirement.
+    cost : callable
+        ``cost(X) -> (k,)``: the cost of each design (cost models' unit), ``const + Σ_i var_costs(X)[:, i]``.
+    var_costs : callable
+        ``var_costs(X) -> (k, n)``: the cost carried by each variable, ``c_i(x_i)``, decreasing (the box reduction).
+    """
+
+    lo: np.ndarray
+    hi: np.ndarray
+    feasible: Callable[[np.ndarray], np.ndarray]
+    cost: Callable[[np.ndarray], np.ndarray]
+    var_costs: Callable[[np.ndarray], np.ndarray]
+
+
+def polyblock_search(mp: MonotoneProblem, *, upper_bound: float = np.inf, spent: int = 0, rel_gap: float = 1e-2,
+                     max_evaluations: int = 4000, batch: int = 16, bisections: int = 14, max_vertices: int = 20000,
+                     max_seconds: float | None = None, max_new_vertices: int | None = None,
+                     reduce_upper: bool = False) -> dict:
+    """The polyblock algorithm on a generic monotone problem (module docstring).
+
+    Parameters
+    ----------
+    mp : MonotoneProblem
+        The problem in log variables.
+    upper_bound : float
+        The cost of a feasible design already known (the incumbent's; cost units), inf without one.
+    spent : int
+        Evaluations already spent (counted against ``max_evaluations``).
+    rel_gap, max_evaluations, batch, bisections, max_vertices, max_seconds
+        As :func:`polyblock`; ``max_seconds`` is checked once per round and after every cut.
+    max_new_vertices : int or None
+        Stop before a cut that would propose more new vertices than this (one cut's dominance check grows with
+        their number times the vertices kept: in 54 dimensions one cut of 1 947 vertices took 16 s); None: no limit.
+    reduce_upper : bool
+        Start from the reduced upper corner (:func:`upper_reduction`) instead of ``hi``.
+
+    Returns
+    -------
+    dict
+        ``lower_bound``, ``upper_bound``, ``x`` (the best feasible log design found, or None where none beat
+        ``upper_bound``), ``gap``, ``evaluations``, ``vertices``, ``rounds``, ``converged`` and ``stop`` (what ended
+        the search: ``"gap"``, ``"loosest design"``, ``"evaluations"``, ``"vertices"``, ``"time"``, ``"cut size"``).
+    """
+    t0 = time.perf_counter()
+    lo, hi, cost = mp.lo, mp.hi, mp.cost
+
+    def lower_corner(v, cv):
+        """Reduction of the boxes [lo, v] by the incumbent: a design x <= v cheaper than ub has
+        c_i(x_i) < ub - sum_{j != i} c_j(v_j) (every other c_j(x_j) >= c_j(v_j)), so x_i is above
+        the root of that equation (bisection on the decreasing one-variable costs)."""
+        r = ub - cv[:, None] + mp.var_costs(v)
+        a, b = np.broadcast_to(lo, v.shape).copy(), v.copy()
+        for _ in range(50):
+            m = 0.5 * (a + b)
+            dear = mp.var_costs(m) >= r
+            a, b = np.where(dear, m, a), np.where(dear, b, m)
+        return np.minimum(a, v)
+
+    n_eval, best_x, ub = spent, None, upper_bound
+    V = hi[None].copy()
+    if mp.feasible(V)[0]:                             # the loosest design already holds
+        c = float(cost(V)[0])
+        return {"lower_bound": c, "upper_bound": c, "x": V[0], "gap": 0.0, "evaluations": 1, "vertices": 1,
+                "rounds": 0, "converged": True, "stop": "loosest design"}
+    n_eval += 1
+    if reduce_upper:
+        V = upper_reduction(mp)[None]
+        n_eval += 31 * len(lo)
+    rounds, stop = 0, None
+    lb = float(cost(V)[0])
+    while True:
+        cV = cost(V)
+        alive = cV < ub
+        V, cV = V[alive], cV[alive]
+        lb = float(cV.min()) if len(V) else ub
+        if ub < np.inf and (ub - lb) <= rel_gap * ub or not len(V):
+            stop = "gap"
+            break
+        stop = stop or ("evaluations" if n_eval >= max_evaluations else "vertices" if len(V) > max_vertices else
+                        "time" if max_seconds and time.perf_counter() - t0 > max_seconds else None)
+        if stop:
+            break
+        rounds += 1
+        pick = np.argsort(cV)[:batch]
+        v = V[pick]
+        base = lower_corner(v, cV[pick]) if np.isfinite(ub) else np.broadcast_to(lo, v.shape).copy()
+        # a box [base, v] whose lower corner already misses E holds no design cheaper than ub
+        empty = ~mp.feasible(base)
+        n_eval += len(v)
+        if empty.any():
+            V = np.delete(V, pick[empty], axis=0)
+            v, base = v[~empty], base[~empty]
+            if not len(v):
+                continue
+        # bisection on lambda in [0, 1] along base -> v (monotone), all picked vertices at once
+        a, b = np.zeros(len(v)), np.ones(len(v))
+        for _ in range(bisections):
+            m = 0.5 * (a + b)
+            ok = mp.feasible(base + m[:, None] * (v - base))
+            n_eval += len(v)
+            a, b = np.where(ok, m, a), np.where(ok, b, m)
+        inner = base + a[:, None] * (v - base)
+        outer = base + b[:, None] * (v - base)
+        ci = cost(inner)
+        i = int(np.argmin(ci))
+        if ci[i] < ub:
+            best_x, ub = inner[i], float(ci[i])
+        # cut every vertex strictly above an outer point (no design there is feasible)
+        for z in outer:
+            if max_new_vertices and np.all(V > z, axis=1).sum() * len(z) > max_new_vertices:
+                stop = "cut size"                     # the polyblock without this cut still holds G
+                break
+            V = _cut(V, z)
+            V = V[cost(V) < ub]
+            if max_seconds and time.perf_counter() - t0 > max_seconds:   # fewer cuts: the polyblock still holds G
+                break
+    gap = (ub - lb) / ub if np.isfinite(ub) else np.inf
+    return {"lower_bound": lb, "upper_bound": ub, "x": best_x, "gap": gap, "evaluations": int(n_eval),
+            "vertices": int(len(V)), "rounds": rounds, "converged": bool(gap <= rel_gap), "stop": stop}
+
+
+def upper_reduction(mp: MonotoneProblem, steps: int = 30) -> np.ndarray:
+    """The upper side of Tuy, Al-Khayyal & Thach 2005's box reduction: no feasible design exceeds ``b_i`` in
+    variable ``i``, where ``b_i`` is the outer end of a bisection on the design with every other variable at its
+    lower bound (``x`` feasible implies that design, which is ``<= x``, feasible: the set is normal).
+
+    Parameters
+    ----------
+    mp : MonotoneProblem
+        The problem (its ``feasible`` called ``steps + 1`` times on ``n`` designs).
+    steps : int
+        Bisection steps in each log variable.
+
+    Returns
+    -------
+    (n,) ndarray
+        The reduced upper corner, ``<= hi`` (``hi`` where that design holds at ``hi_i``).
+    """
+    n = len(mp.lo)
+    idx = np.arange(n)
+
+    def axis_designs(x):
+        X = np.repeat(mp.lo[None], n, 0)
+        X[idx, idx] = x
+        return X
+
+    a, b = mp.lo.copy(), mp.hi.copy()
+    for _ in range(steps):
+        m = 0.5 * (a + b)
+        ok = mp.feasible(axis_designs(m))
+        a, b = np.where(ok, m, a), np.where(ok, b, m)
+    return np.where(mp.feasible(axis_designs(mp.hi)), mp.hi, b)
+
+
 def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-2, max_evaluations: int = 4000,
               batch: int = 16, bisections: int = 14, max_vertices: int = 20000, max_seconds: float | None = None) -> dict:
-    """Bracket of the minimum cost (see module docstring). Returns {"lower_bound", "upper_bound",
-    "t" (best feasible design, SI, or None), "gap", "evaluations", "vertices", "rounds",
-    "converged"}. ``incumbent``: a feasible design (SI) to start the upper bound from.
+    """Bracket of the minimum cost of a :class:`ToleranceProblem` (module docstring): :func:`polyblock_search` on
+    its free log tolerances, feasibility by its exact measure. Returns {"lower_bound", "upper_bound",
+    "t" (best feasible design, SI, or None), "gap", "evaluations", "vertices", "rounds", "converged"}.
+    ``incumbent``: a feasible design (SI) to start the upper bound from.
 
     Parameters
     ----------
@@ -127,22 +300,15 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
     dict
         ``lower_bound`` (proven, cost units), ``upper_bound`` (cost of ``t``; inf if none
         found), ``t`` ((n_sources,) best feasible design, m or rad, or None), ``gap`` (relative,
-        inf without a design), ``evaluations``, ``vertices``, ``rounds`` and ``converged``
-        (``gap <= rel_gap``).
+        inf without a design), ``evaluations``, ``vertices``, ``rounds``, ``converged``
+        (``gap <= rel_gap``) and ``stop`` (:func:`polyblock_search`).
     """
-    t0 = time.perf_counter()
     rows = ExactRows(problem)
     f = problem.free
-    lo, hi = np.log(problem.lower[f]), np.log(problem.upper[f])
+    M, w = problem.variable_matrix, problem.cost_weight
 
     def design(X):
         return problem.full(np.exp(X))
-
-    def cost(X):
-        return problem.cost(design(np.atleast_2d(X)))
-
-    M = problem.variable_matrix
-    w = problem.cost_weight
 
     def var_costs(X):
         """Cost carried by each free variable at log-tolerances X (m, n): c_i(x_i)."""
@@ -150,75 +316,19 @@ def polyblock(problem: ToleranceProblem, *, incumbent=None, rel_gap: float = 1e-
         C = np.stack([problem.tolerances[nm].cost_of(T[:, j]) * w[j] for j, nm in enumerate(problem.names)], 1)
         return C @ M
 
-    def lower_corner(v, cv):
-        """Reduction of the boxes [lo, v] by the incumbent: a design x <= v cheaper than ub has
-        c_i(x_i) < ub - sum_{j != i} c_j(v_j) (every other c_j(x_j) >= c_j(v_j)), so x_i is above
-        the root of that equation (bisection on the decreasing one-variable costs)."""
-        r = ub - cv[:, None] + var_costs(v)
-        a, b = np.broadcast_to(lo, v.shape).copy(), v.copy()
-        for _ in range(50):
-            m = 0.5 * (a + b)
-            dear = var_costs(m) >= r
-            a, b = np.where(dear, m, a), np.where(dear, b, m)
-        return np.minimum(a, v)
-
-    n_eval = 0
-    best_t, ub = None, np.inf
+    mp = MonotoneProblem(np.log(problem.lower[f]), np.log(problem.upper[f]),
+                         feasible=lambda X: rows.violation(design(X)) <= 1e-9,
+                         cost=lambda X: problem.cost(design(np.atleast_2d(X))), var_costs=var_costs)
+    best_t, ub, spent = None, np.inf, 0
     if incumbent is not None:
         t_inc = problem.as_array(incumbent)
         if rows.violation(t_inc[None])[0] <= 1e-9:
             best_t, ub = t_inc, float(problem.cost(t_inc))
-        n_eval += 1
-    V = hi[None].copy()
-    if rows.violation(design(V))[0] <= 1e-9:          # the loosest design already holds
-        t = design(V)[0]
-        c = float(problem.cost(t))
-        return {"lower_bound": c, "upper_bound": c, "t": t, "gap": 0.0, "evaluations": 1, "vertices": 1,
-                "rounds": 0, "converged": True}
-    n_eval += 1
-    rounds = 0
-    lb = float(cost(V)[0])
-    while True:
-        cV = cost(V)
-        alive = cV < ub
-        V, cV = V[alive], cV[alive]
-        lb = float(cV.min()) if len(V) else ub
-        if ub < np.inf and (ub - lb) <= rel_gap * ub or not len(V):
-            break
-        if n_eval >= max_evaluations or len(V) > max_vertices or (max_seconds and time.perf_counter() - t0 > max_seconds):
-            break
-        rounds += 1
-        pick = np.argsort(cV)[:batch]
-        v = V[pick]
-        base = lower_corner(v, cV[pick]) if np.isfinite(ub) else np.broadcast_to(lo, v.shape).copy()
-        # a box [base, v] whose lower corner already misses E holds no design cheaper than ub
-        empty = rows.violation(design(base)) > 1e-9
-        n_eval += len(v)
-        if empty.any():
-            V = np.delete(V, pick[empty], axis=0)
-            v, base = v[~empty], base[~empty]
-            if not len(v):
-                continue
-        # bisection on lambda in [0, 1] along base -> v (monotone), all picked vertices at once
-        a, b = np.zeros(len(v)), np.ones(len(v))
-        for _ in range(bisections):
-            m = 0.5 * (a + b)
-            ok = rows.violation(design(base + m[:, None] * (v - base))) <= 1e-9
-            n_eval += len(v)
-            a, b = np.where(ok, m, a), np.where(ok, b, m)
-        inner = base + a[:, None] * (v - base)
-        outer = base + b[:, None] * (v - base)
-        ci = cost(inner)
-        i = int(np.argmin(ci))
-        if ci[i] < ub:
-            best_t, ub = design(inner[i:i + 1])[0], float(ci[i])
-        # cut every vertex strictly above an outer point (no design there is feasible)
-        for z in outer:
-            V = _cut(V, z)
-            V = V[cost(V) < ub]
-    gap = (ub - lb) / ub if np.isfinite(ub) else np.inf
-    return {"lower_bound": lb, "upper_bound": ub, "t": best_t, "gap": gap, "evaluations": int(n_eval),
-            "vertices": int(len(V)), "rounds": rounds, "converged": bool(gap <= rel_gap)}
+        spent = 1
+    res = polyblock_search(mp, upper_bound=ub, spent=spent, rel_gap=rel_gap, max_evaluations=max_evaluations,
+                           batch=batch, bisections=bisections, max_vertices=max_vertices, max_seconds=max_seconds)
+    x = res.pop("x")
+    return {**res, "t": best_t if x is None else design(x[None])[0]}
 
 
 def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None, incumbent=None, rel_gap: float = 1e-2,

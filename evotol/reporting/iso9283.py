@@ -19,7 +19,34 @@ RULE_NAMES = {
     "allocation_equal": ("equal tolerances", "equal", "every tolerance the same value, the largest that meets AP and RP"),
     "allocation_lagrange": ("the Lagrange closed form", "lagrange", "least cost on the AP worst-case and RP "
                             "root-sum-square stack-ups, scaled onto the boundary"),
+    "allocation_monotone": ("the polyblock bracket's design", "monotone", "the cheapest design the polyblock search "
+                            "found or started from, the upper end of a bracket of the least cost"),
 }
+
+
+def bracket_clause(g: dict, optimum_cost: float) -> str:
+    """The bracket of the ``monotone`` rule beside the optimum's cost (page and terminal); empty for the other rules.
+
+    Parameters
+    ----------
+    g : dict
+        The rule's allocation in the ISO block (``lower_bound``, ``gap``, ``rounds``, ``vertices``, ``converged``).
+    optimum_cost : float
+        The certified optimum's cost (cost models' unit).
+
+    Returns
+    -------
+    str
+    """
+    if "lower_bound" not in g:
+        return ""
+    return (f"; bracket [{g['lower_bound']:.6g}, {g['cost']:.6g}] of the least cost (gap {100 * g['gap']:.1f} %, "
+            f"{g['rounds']} rounds, {g['vertices']} vertices, "
+            f"{'converged' if g['converged'] else 'not converged: stopped by ' + str(g.get('stop'))}), "
+            f"the certified optimum {optimum_cost:.6g}"
+            + (" inside it" if g["lower_bound"] <= optimum_cost <= g["cost"] else
+               " above it (the optimum aims its AP at AP cos δ, at most about 0.4 % dearer)" if optimum_cost > g["cost"]
+               else " below it (RP on the fixed draws is not monotone: docs/iso9283.md)"))
 
 
 def iso9283_section(rep, summary: dict) -> None:
@@ -130,7 +157,8 @@ def iso9283_section(rep, summary: dict) -> None:
                 g = iso[key]
                 rep.text(f"{name[0].upper() + name[1:]} (the study's {method} method: {how}) costs {g['cost']:.4g} "
                          f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
-                         + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check.", note=not g["feasible"])
+                         + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check"
+                         + bracket_clause(g, a["cost"]) + ".", note=not g["feasible"])
         if "front_nsga2" in iso:        # the study's nsga2 on the same problem: cost against AP, RP held
             f = iso["front_nsga2"]
             rep.text(front_sentence(f, L))
@@ -293,7 +321,8 @@ def terminal_lines(summary: dict) -> list[str]:
             g = iso[key]
             out.append(f"  {name} ({method}) allocated them too: cost {g['cost']:.6g} "
                        f"({100 * g['gap_to_optimum']:+.2f} % against the allocation above), "
-                       + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check")
+                       + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check"
+                       + bracket_clause(g, iso["allocation"]["cost"]))
     if "front_nsga2" in iso:
         out.append("  " + front_sentence(iso["front_nsga2"], L))
     out += ["  " + line for line in calibrated_method_lines(iso.get("calibrated_budget", {}))]

@@ -129,8 +129,8 @@ class IsoStudy:
         The study's GA settings when it allocates the random sources to AP/RP too
         (:func:`evotol.studyfile.iso9283_methods.iso_ga_options`).
     rules : tuple of str
-        The study's ``sensitivity``, ``equal``, ``lagrange`` that allocate the random sources to AP/RP too, each by
-        its rule (:func:`evotol.studyfile.iso9283_methods.iso_rules_wanted`).
+        The study's ``sensitivity``, ``equal``, ``lagrange``, ``monotone`` that allocate the random sources to AP/RP
+        too, each by its rule (:func:`evotol.studyfile.iso9283_methods.iso_rules_wanted`).
     front : dict or None
         The study's ``nsga2`` settings when it also runs the ISO front, cost against AP with RP held
         (:func:`evotol.studyfile.iso9283_methods.iso_front_options`).

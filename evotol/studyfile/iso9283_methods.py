@@ -10,7 +10,9 @@ against the exact frontier of certified optima. Settings and orientation figures
 and an ``nsga2`` beside ``[calibration]``, are refused in one line before any work.
 A ``sensitivity``, ``equal`` or ``lagrange`` among the methods allocates them by its rule too: the equal-effect
 rule (:func:`evotol.allocators.iso9283_sensitivity.allocate_iso9283_sensitivity`), equal tolerances and the Lagrange
-closed form (:mod:`evotol.allocators.iso9283_baselines`), so that the optimum shows what each rule costs.
+closed form (:mod:`evotol.allocators.iso9283_baselines`), so that the optimum shows what each rule costs. A
+``monotone`` among them brackets the least cost by polyblocks
+(:func:`evotol.allocators.iso9283_monotone.allocate_iso9283_monotone`), its bracket stated beside the optimum.
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from evotol.allocators.ga import check_ga_options
 from evotol.allocators.iso9283_front import allocate_iso9283_front
 from evotol.allocators.iso9283_baselines import allocate_iso9283_equal, allocate_iso9283_lagrange
 from evotol.allocators.iso9283_ga import allocate_iso9283_ga
+from evotol.allocators.iso9283_monotone import allocate_iso9283_monotone
 from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
 from evotol.errors import ValidationError
 from evotol.studyfile.methods import study_methods
@@ -248,11 +251,20 @@ ISO_RULES = {
                  "the Lagrange closed form (least cost on the AP worst-case stack-up of the largest effects per unit "
                  "tolerance and the RP root-sum-square stack-up of each random source's RP alone), scaled onto the "
                  "AP/RP boundary"),
+    "monotone": (allocate_iso9283_monotone,
+                 "the polyblock bracket (Tuy 2000) of the least cost, started from the cheapest of the Lagrange, "
+                 "equal-effect and equal designs, at most 10 s (stop says what ended it): the design is the bracket's upper end, lower_bound its "
+                 "lower end (proven where RP on the fixed draws never decreases as a tolerance grows; it can dip by about "
+                 "2 %, docs/iso9283.md), gap their distance relative to the design's cost"),
 }
+
+#: what the ``monotone`` rule adds to its allocation: the bracket
+BRACKET_KEYS = ("lower_bound", "gap", "rounds", "vertices", "evaluations", "converged", "stop", "incumbent", "improved")
 
 
 def iso_rules_wanted(spec: dict, problem, orientation: dict) -> tuple[str, ...]:
-    """Which of the study's ``sensitivity``, ``equal``, ``lagrange`` also allocate the random sources to AP/RP.
+    """Which of the study's ``sensitivity``, ``equal``, ``lagrange``, ``monotone`` also allocate the random sources to
+    AP/RP.
 
     Parameters
     ----------
@@ -291,16 +303,18 @@ def rule_allocation(iso, problem, optimum: dict, seed: int, rule: str) -> dict:
     iso, problem, optimum, seed
         As :func:`ga_allocation` (the RP draws are the optimum's).
     rule : str
-        ``sensitivity``, ``equal`` or ``lagrange`` (:data:`ISO_RULES`).
+        ``sensitivity``, ``equal``, ``lagrange`` or ``monotone`` (:data:`ISO_RULES`).
 
     Returns
     -------
     dict
         ``cost``, ``gap_to_optimum``, ``feasible``, ``systematic`` and ``random`` (name -> tolerance),
-        ``AP_bound``, ``RP_sampled``, ``RP_fresh_draws`` (per pose, m), ``meaning``.
+        ``AP_bound``, ``RP_sampled``, ``RP_fresh_draws`` (per pose, m), ``meaning``; for ``monotone`` also its
+        bracket (:data:`BRACKET_KEYS`).
     """
     allocate, what = ISO_RULES[rule]
-    return {**judged_design(iso, allocate(*allocator_args(iso, problem), seed=seed), optimum),
+    res = allocate(*allocator_args(iso, problem), seed=seed)
+    return {**judged_design(iso, res, optimum), **{k: res[k] for k in BRACKET_KEYS if k in res},
             "meaning": what + " and judged by the optimum's check: feasible if the proven AP bound meets AP and the RP "
                               "on the optimum's fixed draws meets RP; the gap is what the optimum saves"}
 
@@ -336,7 +350,7 @@ def method_allocations(iso, problem, optimum: dict, seed: int) -> dict:
     -------
     dict
         ``allocation_ga``, ``allocation_sensitivity``, ``allocation_equal``, ``allocation_lagrange``,
-        ``front_nsga2``: the ones the study asks for.
+        ``allocation_monotone``, ``front_nsga2``: the ones the study asks for.
     """
     out = {}
     if iso.ga is not None:
@@ -357,8 +371,7 @@ ISO_ALLOCATIONS = {"optimum": "allocation", "ga": "allocation_ga", **{r: f"alloc
 def methods_scope(names, block: dict) -> dict:
     """What each of the study's methods allocated beside ``[iso9283] allocate = true``: the ISO block's key of
     its allocation to AP/RP, or None where it allocated the systematic sources alone, to the position
-    requirement (``monotone``: it knows neither the random sources nor AP/RP; inside ``[calibration]``:
-    :func:`evotol.studyfile.iso9283_calibrated.calibrated_scope`).
+    requirement (inside ``[calibration]``: :func:`evotol.studyfile.iso9283_calibrated.calibrated_scope`).
 
     Parameters
     ----------
