@@ -184,9 +184,12 @@ def calibrated_method_lines(budget: dict) -> list[str]:
     out = []
     for m, g in budget.get("methods", {}).items():
         size = f" ({g['pop_size']} x {g['n_gen']})" if m == "ga" else ""
+        bracket = "" if "lower_bound" not in g else (
+            f" Its bracket of the least cost: [{g['lower_bound']:.6g}, {g['upper_bound']:.6g}] (gap {100 * g['gap']:.1f} %, "
+            f"stopped by {g['stop']}; the lower bound proven for {g['lower_bound_proven_for']}).")
         out.append(f"The study's {m}{size} allocated the random sources in the calibrated budget too: cost {g['cost']:.6g} "
                    f"({100 * g['gap_to_optimum']:+.2f} % against the least-cost design, {al.get('cost', float('nan')):.6g}), "
-                   + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check; " + g["meaning"] + ".")
+                   + ("feasible" if g["feasible"] else "NOT feasible") + " by the same check; " + g["meaning"] + "." + bracket)
     return out
 
 

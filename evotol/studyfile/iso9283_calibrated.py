@@ -2,7 +2,7 @@
 
 With ``[calibration]`` and ``[iso9283] allocate = true`` the random sources are variables of the calibrated budget
 and their least-cost design is :func:`evotol.calibration.random_allocation.least_cost`'s (the block's
-``calibrated_budget.random_allocation``). A ``ga``, ``sensitivity``, ``equal`` or ``lagrange`` among the study's
+``calibrated_budget.random_allocation``). A ``ga``, ``sensitivity``, ``equal``, ``lagrange`` or ``monotone`` among the study's
 methods then allocates them in the same budget too (:mod:`evotol.calibration.random_rules`), beside its ordinary
 run on the systematic sources, each judged by the budget's own check; the block's
 ``calibrated_budget.methods`` holds them.
