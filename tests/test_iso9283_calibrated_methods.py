@@ -19,7 +19,7 @@ import pytest
 
 from evotol.calibration.random_rules import calibrated_design, normalised_effects, rule_tolerances
 from evotol.measures.iso9283.budget import joints_and_maps
-from evotol.reporting.iso9283 import calibrated_method_lines
+from evotol.reporting.iso9283 import calibrated_method_lines, not_iso
 from evotol.studyfile import load_problem
 from evotol.studyfile.iso9283_calibrated import calibrated_methods, calibrated_scope
 from tests.test_iso9283 import JOINTS, pinocchio_position_jacobian
@@ -65,6 +65,9 @@ def test_the_study_asks_each_method_in_the_calibrated_budget(case):
     assert scope == {"sensitivity": "calibrated_budget.methods.sensitivity",
                      "optimum": "calibrated_budget.random_allocation", "ga": "calibrated_budget.methods.ga",
                      "monotone": None}
+    # a method that did not allocate them is named for what it did, not as "not allocated to AP/RP"
+    assert not_iso({"calibrated_budget": {}, "methods": scope}).startswith(
+        "Random sources not allocated by monotone: it allocated the systematic sources alone, to the calibrated")
 
 
 @pytest.mark.parametrize("method", METHODS)

@@ -141,6 +141,8 @@ def iso9283_section(rep, summary: dict) -> None:
                    "RP (unchanged)"], table_id="iso9283-calibrated-plan")
         for line in calibrated_method_lines(b):
             rep.text(line, note="NOT feasible" in line)
+        if not_iso(iso):
+            rep.text(not_iso(iso), note=True)
     if "allocation" in iso:
         a = iso["allocation"]
         rep.text(f"Allocated with the systematic sources: cost {a['cost']:.4g}, "
@@ -194,8 +196,8 @@ def calibrated_method_lines(budget: dict) -> list[str]:
 
 
 def not_iso(iso: dict) -> str:
-    """The sentence naming the study's methods that allocated the systematic sources alone (not to AP/RP);
-    empty when every method that ran allocated to AP/RP too.
+    """The sentence naming the study's methods that allocated the systematic sources alone (not to AP/RP, or inside
+    ``[calibration]`` not the random sources); empty when every method that ran allocated them too.
 
     Parameters
     ----------
@@ -207,6 +209,9 @@ def not_iso(iso: dict) -> str:
     str
     """
     names = [n for n, key in iso.get("methods", {}).items() if key is None]
+    if names and "calibrated_budget" in iso:      # [calibration]: the random sources sit in the calibrated budget
+        return (f"Random sources not allocated by {', '.join(names)}: it allocated the systematic sources alone, to the "
+                "calibrated position requirement; the random sources' designs in the calibrated budget are the ones above.")
     return "" if not names else (
         f"Not allocated to AP/RP: {', '.join(names)} allocated the systematic sources alone, to the position "
         "requirement; the allocations above are the ones to AP and RP.")
