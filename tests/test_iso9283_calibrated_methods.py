@@ -150,3 +150,25 @@ def test_the_monotone_bracket_holds_the_least_cost(case):
     assert "smaller design meets RP" in m["lower_bound_proven_for"]
     line = calibrated_method_lines({"random_allocation": al, "methods": {"monotone": m}})[0]
     assert f"Its bracket of the least cost: [{m['lower_bound']:.6g}, {m['upper_bound']:.6g}]" in line
+
+
+def test_an_nsga2_beside_the_calibrated_iso_allocation_is_refused_from_the_file_alone(monkeypatch):
+    """The ISO front does not take a calibrated budget: refused in one line before the robot is calibrated (the
+    check was made after the calibrated problem, ~10 s of identification and budget here)."""
+    import evotol.calibration.problem as calibration_problem
+    from evotol.errors import ValidationError
+    from evotol.studyfile.iso9283 import check_composable
+
+    def no_identification(*a, **k):
+        raise AssertionError("the calibration was identified before the refusal")
+
+    spec = tomllib.loads(STUDY.read_text())
+    spec["requirement"]["iso9283"] = {"AP": "0.3 mm", "RP": "0.05 mm"}
+    spec["methods"]["nsga2"] = {"pop_size": 20}
+    with pytest.raises(ValidationError, match=r"^methods.nsga2 = .*no nsga2 beside \[calibration\]"):
+        check_composable(spec)
+    monkeypatch.setattr(calibration_problem, "identify", no_identification)
+    with pytest.raises(ValidationError, match="no nsga2 beside"):
+        load_problem(spec, base_dir=STUDY.parent)
+    del spec["requirement"]["iso9283"]           # without an ISO requirement the ordinary front runs: not refused
+    check_composable(spec)

@@ -47,7 +47,8 @@ from evotol.measures.iso9283 import (TestCube, check_cube, iso_positions, larges
 from evotol.robots.mechanism.model.error_model import MechanismModel
 from evotol.calibration.random_share import IsoTarget, RandomPart
 from evotol.studyfile.iso9283_calibrated import calibrated_block, calibrated_methods
-from evotol.studyfile.iso9283_methods import allocator_args, method_allocations, methods_scope, study_method_options
+from evotol.studyfile.iso9283_methods import (allocator_args, method_allocations, methods_scope,
+                                              refuse_front_beside_calibration, study_method_options)
 from evotol.studyfile.iso9283_verdict import verdicts
 from evotol.robots.mechanism.model.random_sources import KINDS, RandomSource, column_loading, encoder_count, joint_frames
 
@@ -277,8 +278,8 @@ def check_composable(spec: dict) -> None:
     ------
     evotol.errors.ValidationError
         One line naming ``iso9283`` and the other part: ``[[robot.callouts]]``, ``[clearances]``, a
-        requirement per axis; with ``[calibration]``, ``[iso9283] calibrate`` (a second calibration) or an
-        orientation figure. (``[poses] joints`` composes: the ISO poses are the test cube's.)
+        requirement per axis; with ``[calibration]``, ``[iso9283] calibrate`` (a second calibration), an
+        orientation figure or an ``nsga2`` with ``allocate = true``. (``[poses] joints`` composes: the ISO poses are the test cube's.)
     """
     req = spec.get("requirement", {})
     if "iso9283" not in spec and "iso9283" not in req:
@@ -287,6 +288,7 @@ def check_composable(spec: dict) -> None:
     if "calibration" in spec and isinstance(table, dict) and table.get("calibrate"):
         raise ValidationError("iso9283.calibrate", table["calibrate"], "no calibrate beside [calibration]: one "
                               "calibration ([calibration] is the plan the tolerances are allocated for)")
+    refuse_front_beside_calibration(spec, spec.get("methods") or {})
     ori = [k for k in ORIENTATION_KEYS if k in (req.get("iso9283") or {})]
     if "calibration" in spec and ori:
         raise ValidationError(f"requirement.iso9283.{ori[0]}", req["iso9283"][ori[0]], "no orientation figure beside "

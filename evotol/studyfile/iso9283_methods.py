@@ -185,12 +185,33 @@ def iso_front_options(spec: dict, problem, orientation: dict) -> dict | None:
     req, methods = _beside_allocation(spec, problem)
     if "nsga2" not in methods:
         return None
-    if "calibration" in spec:
+    refuse_front_beside_calibration(spec, methods)
+    return _iso_settings("nsga2", methods["nsga2"], req, orientation, "the nsga2 then also runs the ISO front",
+                         "the ISO front trades cost against AP with RP held only")
+
+
+def refuse_front_beside_calibration(spec: dict, methods: dict) -> None:
+    """Refuse an ``nsga2`` beside ``[calibration]`` and ``[iso9283] allocate = true`` with ``[requirement] iso9283``
+    in one line (the ISO front does not take a calibrated budget); read from the file alone, before any work.
+
+    Parameters
+    ----------
+    spec : dict
+        The study file as read.
+    methods : dict
+        Its ``[methods]`` table (method -> settings).
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        That pair.
+    """
+    table = spec.get("iso9283") if isinstance(spec.get("iso9283"), dict) else {}
+    if "calibration" in spec and "nsga2" in methods and table.get("allocate") \
+            and (spec.get("requirement") or {}).get("iso9283"):
         raise ValidationError("methods.nsga2", methods["nsga2"], "no nsga2 beside [calibration] and [iso9283] allocate = "
                               "true: the ISO front (cost against AP, RP held) does not take a calibrated budget yet (list "
                               "[methods] without nsga2; docs/iso9283.md)")
-    return _iso_settings("nsga2", methods["nsga2"], req, orientation, "the nsga2 then also runs the ISO front",
-                         "the ISO front trades cost against AP with RP held only")
 
 
 def front_allocation(iso, problem, optimum: dict, seed: int) -> dict:
