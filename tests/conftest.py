@@ -83,3 +83,27 @@ def motor_stack_run(_motor_stack_session):
     (``evotol run``: ``out/motor_stack.json`` and ``.html``); the summary is the test's own copy."""
     out, summary = _motor_stack_session
     return out, copy.deepcopy(summary)
+
+
+@pytest.fixture(scope="session")
+def _chromium_session():
+    from evotol.reporting.headless import HeadlessChromium
+    from tests.browser import require_chromium
+
+    require_chromium()
+    with HeadlessChromium() as browser:
+        yield browser
+
+
+@pytest.fixture
+def chromium(_chromium_session):
+    """The test process's headless Chromium (:class:`evotol.reporting.headless.HeadlessChromium`), started
+    once for the session (issue 43: a start and a close cost 1-2 s per test); the tabs the test opened are
+    closed after it, so each test sees a browser with no page of another. Skipped (or failed, with
+    ``EVOTOL_REQUIRE_BROWSER=1``) as :func:`tests.browser.require_chromium` says when there is none."""
+    browser = _chromium_session
+    before = {t["targetId"] for t in browser.send("Target.getTargets")["targetInfos"]}
+    yield browser
+    for t in browser.send("Target.getTargets")["targetInfos"]:
+        if t["type"] == "page" and t["targetId"] not in before:
+            browser.send("Target.closeTarget", {"targetId": t["targetId"]})
