@@ -116,6 +116,7 @@ def test_report_is_self_contained_and_lists_python_counts(tmp_path):
     assert 'data-preset="p_max ≤ 0.05 mm"' in html
 
 
+# Slow (~8-11 s) because its check is strong: plotly redraws 524 lines in a software-rendered (SwiftShader) Chromium at every click.
 def test_preset_button_in_headless_chromium_shows_the_python_count(tmp_path, chromium):
     require_chromium()
     st = make_study(3)
