@@ -298,12 +298,15 @@ def test_the_sentinels_catch_a_computation_that_starts(tmp_path, no_computation)
         main(["run", _study(tmp_path), "--out", str(tmp_path)])
 
 
-def _raise_in_worker(kind):
-    from evotol.errors import InfeasibleError, KinematicsError, ValidationError
+@pytest.fixture(scope="module")
+def spawned_worker():
+    """One spawned worker process for the cases below (issue 43: one start instead of three). An error that
+    could not cross the boundary would break the pool (BrokenProcessPool) and fail every later case too."""
+    import concurrent.futures as cf
+    import multiprocessing as mp
 
-    raise {"validation": ValidationError("grid", -1, "a positive integer"),
-           "kinematics": KinematicsError("pose out of reach", poses=[[0.1, 0.2]]),
-           "infeasible": InfeasibleError("position <= 1e-06 m", 2e-6, 3, "tight")}[kind]
+    with cf.ProcessPoolExecutor(1, mp_context=mp.get_context("spawn")) as pool:
+        yield pool
 
 
 @pytest.mark.parametrize("kind, field, text", [
@@ -311,22 +314,20 @@ def _raise_in_worker(kind):
     ("kinematics", "poses", "pose out of reach"),
     ("infeasible", "smallest_error", "infeasible: position <= 1e-06 m cannot be met"),
 ])
-def test_errors_cross_a_process_boundary_as_themselves(kind, field, text):
+def test_errors_cross_a_process_boundary_as_themselves(kind, field, text, spawned_worker):
     """An error raised in a worker process (the executor's pools, a DOE chunk) reaches the parent as
     the same class with the same fields and message; before, ValidationError and InfeasibleError
     could not be unpickled and the pool broke (BrokenProcessPool)."""
-    import concurrent.futures as cf
-    import multiprocessing as mp
     import pickle
 
     from evotol.errors import EvotolError
+    from tests.worker_errors import raise_in_worker
 
     with pytest.raises(EvotolError) as local:
-        _raise_in_worker(kind)
+        raise_in_worker(kind)
     again = pickle.loads(pickle.dumps(local.value))
     assert type(again) is type(local.value) and str(again) == str(local.value)
     assert getattr(again, field) == getattr(local.value, field)
-    with cf.ProcessPoolExecutor(1, mp_context=mp.get_context("spawn")) as pool:
-        with pytest.raises(type(local.value), match=text.replace("(", r"\(")) as remote:
-            pool.submit(_raise_in_worker, kind).result()
+    with pytest.raises(type(local.value), match=text.replace("(", r"\(")) as remote:
+        spawned_worker.submit(raise_in_worker, kind).result()
     assert getattr(remote.value, field) == getattr(local.value, field)

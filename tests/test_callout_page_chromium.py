@@ -15,7 +15,7 @@ import subprocess
 
 import pytest
 
-from evotol.reporting.headless import CHROMIUM_FLAGS, HeadlessChromium
+from evotol.reporting.headless import CHROMIUM_FLAGS
 from evotol.studyfile import run_study_file
 from tests.browser import require_chromium
 from tests.test_shop import STUDY
@@ -60,20 +60,19 @@ def test_callout_symbols_are_svg_and_no_glyph_is_left_to_a_font(page):
         assert "nan" not in " ".join(cells).lower().split()
 
 
-def test_each_frame_renders_on_one_line_with_symbols_at_text_size(page):
+def test_each_frame_renders_on_one_line_with_symbols_at_text_size(page, chromium):
     require_chromium()
-    with HeadlessChromium() as browser:
-        tab = browser.open(page)
-        got = tab.evaluate("""(() => [...document.querySelectorAll('#callouts tbody tr, #callouts tr')].filter(
-            tr => tr.querySelector('td')).map(tr => {
-              const td = tr.querySelectorAll('td')[2];
-              const range = document.createRange(); range.selectNodeContents(td);
-              const rects = [...range.getClientRects()].filter(r => r.width > 0);
-              const top = Math.min(...rects.map(r => r.top)), bottom = Math.max(...rects.map(r => r.bottom));
-              const font = parseFloat(getComputedStyle(td).fontSize);
-              const svgs = [...td.querySelectorAll('svg.gdt')].map(s => s.getBoundingClientRect());
-              return {span: bottom - top, font: font, svgs: svgs.map(r => [r.width, r.height])};
-            }))()""")
+    tab = chromium.open(page)
+    got = tab.evaluate("""(() => [...document.querySelectorAll('#callouts tbody tr, #callouts tr')].filter(
+        tr => tr.querySelector('td')).map(tr => {
+          const td = tr.querySelectorAll('td')[2];
+          const range = document.createRange(); range.selectNodeContents(td);
+          const rects = [...range.getClientRects()].filter(r => r.width > 0);
+          const top = Math.min(...rects.map(r => r.top)), bottom = Math.max(...rects.map(r => r.bottom));
+          const font = parseFloat(getComputedStyle(td).fontSize);
+          const svgs = [...td.querySelectorAll('svg.gdt')].map(s => s.getBoundingClientRect());
+          return {span: bottom - top, font: font, svgs: svgs.map(r => [r.width, r.height])};
+        }))()""")
     assert len(got) == 12
     for row in got:
         assert row["span"] < 1.8 * row["font"], row                  # one line (two would be about 2.8 em)

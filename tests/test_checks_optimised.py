@@ -56,15 +56,29 @@ check_measure(Falling())
 }
 
 
-@pytest.mark.parametrize("case", sorted(CASES))
-def test_check_fails_under_python_O(case):
-    code = PRELUDE + "try:\n" + textwrap.indent(CASES[case].strip(), "    ") + f'''
+@pytest.fixture(scope="module")
+def optimised_run():
+    """One ``python -O`` process runs every case, each in its own namespace, and prints one line per case
+    (its first line: ``CheckFailed: ...``, ``passed`` or the unexpected error); a case's test reads its
+    line. One process instead of one per case (issue 43): evotol is imported once (the file alone: 10.9 s -> 5.9 s)."""
+    code = PRELUDE + "import traceback\n"
+    for i, case in enumerate(sorted(CASES)):
+        code += f"try:\n    exec(compile({CASES[case]!r}, {case!r}, 'exec'), {{'np': np, 'CheckFailed': CheckFailed}})\n" + f'''
 except CheckFailed as exc:
-    print("CheckFailed:", str(exc).splitlines()[0])
+    print({i}, "CheckFailed:", str(exc).splitlines()[0])
+except Exception:
+    print({i}, "raised:", traceback.format_exc().replace("\\n", " | "))
 else:
-    print("passed")
+    print({i}, "passed")
 '''
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     out = subprocess.run([sys.executable, "-O", "-c", code], env=env, capture_output=True, text=True, timeout=300)
+    lines = dict(line.split(" ", 1) for line in out.stdout.splitlines() if line.split(" ", 1)[0].isdigit())
+    return out, {case: lines.get(str(i), "") for i, case in enumerate(sorted(CASES))}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_check_fails_under_python_O(case, optimised_run):
+    out, lines = optimised_run
     assert out.returncode == 0, out.stderr
-    assert out.stdout.startswith("CheckFailed:"), out.stdout
+    assert lines[case].startswith("CheckFailed:"), out.stdout

@@ -182,6 +182,8 @@ def test_calibration_on_joint_configurations_keeps_its_linear_range_bound_and_si
     assert sim.simulated["position"]["max"] <= 5e-4
 
 
+# Slow (~8 s alone) because its check is strong: the calibrated problem's linear-range caps from iterated fits, two
+# optima and a calibration simulated on the nonlinear model (60 robots, each identified and compensated).
 def test_puma560_calibrated_on_its_joint_configurations_costs_less_than_uncalibrated():
     """The PUMA 560 (standard DH) on the five configurations of reports/studies/puma560_axes.toml, a norm
     requirement of 0.5 mm, calibrated over the workspace (40 configurations, 20 um): its linear-range caps

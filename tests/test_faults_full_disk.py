@@ -63,6 +63,7 @@ cp "$DISK/out/ucr3_example.json" "$RES/rerun.json"
 """
 
 
+# Slow (~7-10 s) because its check is strong: three real study runs (a good one, one on a full tmpfs, one after).
 def test_a_real_full_disk_is_one_line_and_keeps_the_earlier_files(tmp_path, capsys):
     why = _namespaces_mount(tmp_path)
     if why:

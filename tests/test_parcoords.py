@@ -16,7 +16,6 @@ import pytest
 from evotol import design as doe
 from evotol.errors import ValidationError
 from evotol.design.filtering import DesignStudy, Preset
-from evotol.reporting.headless import HeadlessChromium
 from tests.browser import require_chromium
 from evotol.reporting.html import Report
 from evotol.reporting.parcoords import (KNEE, PARETO, Axis, add_parcoords, default_axes, drawn_lines, format_tick,
@@ -117,7 +116,8 @@ def test_report_is_self_contained_and_lists_python_counts(tmp_path):
     assert 'data-preset="p_max ≤ 0.05 mm"' in html
 
 
-def test_preset_button_in_headless_chromium_shows_the_python_count(tmp_path):
+# Slow (~8-11 s) because its check is strong: plotly redraws 524 lines in a software-rendered (SwiftShader) Chromium at every click.
+def test_preset_button_in_headless_chromium_shows_the_python_count(tmp_path, chromium):
     require_chromium()
     st = make_study(3)
     extra = pareto_like(st)
@@ -125,36 +125,35 @@ def test_preset_button_in_headless_chromium_shows_the_python_count(tmp_path):
     info = add_parcoords(rep, st, extra=extra, log_objectives=["p_max_mm", "r_max_deg"], div_id="pc")
     path = rep.write(tmp_path / "toy.html")
     n_lines = len(st.entries) + len(extra)
-    with HeadlessChromium() as browser:
-        page = browser.open(path)
-        page.wait_for("document.getElementById('pc') && document.getElementById('pc').getAttribute('data-ready')")
-        assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == n_lines
-        for name in ["p_max ≤ 0.05 mm", "Δb_xy A = 0.1"]:
-            page.evaluate(f"document.querySelector('button[data-preset=\"{name}\"]').click()")
-            page.wait_for(f"document.getElementById('pc').getAttribute('data-preset') === {name!r} && "
-                          "document.getElementById('pc').getAttribute('data-apply-ms')")
-            shown = int(page.evaluate("document.getElementById('pc-count-n').textContent"))
-            python = st.filter(name, among=parcoords_frame(st, extra=extra)).count
-            assert shown == python == info["presets"][name]
-            page.evaluate("document.getElementById('pc').removeAttribute('data-apply-ms')")
-        # the kept-ranges panel reads like the thesis: Δb_z keeps only 0.001 under p_max <= 0.05
-        page.evaluate("document.querySelector('button[data-preset=\"p_max ≤ 0.05 mm\"]').click()")
-        page.wait_for("document.getElementById('pc').getAttribute('data-apply-ms')")
-        ranges = page.evaluate("document.getElementById('pc-ranges').innerText")
-        assert re.search(r"Δb_z A \(mm\)\s+levels 0\.001(;|\s*$|\n)", ranges)
-        table = page.evaluate("document.getElementById('pc-table').innerText")
-        assert table.count("\n") >= 1
-        # brushing by hand = a restyle of one axis' constraint range; the count follows
-        lo, hi = math.log10(0.02), math.log10(0.3)
-        k = 1 + st.inputs.index("db_xy_B_mm")
-        page.evaluate(f"Plotly.restyle('pc', {{'dimensions[{k}].constraintrange': [[{lo}, {hi}]]}}, [0]).then(function(){{ return 1; }})")
-        shown = int(page.wait_for(f"document.getElementById('pc').getAttribute('data-kept')"))
-        frame = parcoords_frame(st, extra=extra)
-        expect = int(((frame["p_max_mm"] <= 0.05) & (frame["db_xy_B_mm"] >= 0.02) & (frame["db_xy_B_mm"] <= 0.3)).sum())
-        assert shown == expect
-        # 'all entries' clears every constraint
-        page.evaluate("document.querySelector('button[data-preset=\"\"]').click()")
-        page.wait_for(f"document.getElementById('pc-count-n').textContent === '{n_lines}'")
+    page = chromium.open(path)
+    page.wait_for("document.getElementById('pc') && document.getElementById('pc').getAttribute('data-ready')")
+    assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == n_lines
+    for name in ["p_max ≤ 0.05 mm", "Δb_xy A = 0.1"]:
+        page.evaluate(f"document.querySelector('button[data-preset=\"{name}\"]').click()")
+        page.wait_for(f"document.getElementById('pc').getAttribute('data-preset') === {name!r} && "
+                      "document.getElementById('pc').getAttribute('data-apply-ms')")
+        shown = int(page.evaluate("document.getElementById('pc-count-n').textContent"))
+        python = st.filter(name, among=parcoords_frame(st, extra=extra)).count
+        assert shown == python == info["presets"][name]
+        page.evaluate("document.getElementById('pc').removeAttribute('data-apply-ms')")
+    # the kept-ranges panel reads like the thesis: Δb_z keeps only 0.001 under p_max <= 0.05
+    page.evaluate("document.querySelector('button[data-preset=\"p_max ≤ 0.05 mm\"]').click()")
+    page.wait_for("document.getElementById('pc').getAttribute('data-apply-ms')")
+    ranges = page.evaluate("document.getElementById('pc-ranges').innerText")
+    assert re.search(r"Δb_z A \(mm\)\s+levels 0\.001(;|\s*$|\n)", ranges)
+    table = page.evaluate("document.getElementById('pc-table').innerText")
+    assert table.count("\n") >= 1
+    # brushing by hand = a restyle of one axis' constraint range; the count follows
+    lo, hi = math.log10(0.02), math.log10(0.3)
+    k = 1 + st.inputs.index("db_xy_B_mm")
+    page.evaluate(f"Plotly.restyle('pc', {{'dimensions[{k}].constraintrange': [[{lo}, {hi}]]}}, [0]).then(function(){{ return 1; }})")
+    shown = int(page.wait_for(f"document.getElementById('pc').getAttribute('data-kept')"))
+    frame = parcoords_frame(st, extra=extra)
+    expect = int(((frame["p_max_mm"] <= 0.05) & (frame["db_xy_B_mm"] >= 0.02) & (frame["db_xy_B_mm"] <= 0.3)).sum())
+    assert shown == expect
+    # 'all entries' clears every constraint
+    page.evaluate("document.querySelector('button[data-preset=\"\"]').click()")
+    page.wait_for(f"document.getElementById('pc-count-n').textContent === '{n_lines}'")
 
 
 def test_drawn_sample_keeps_nsga_entries_preset_entries_and_axis_ends():
@@ -183,7 +182,7 @@ N_TRACE_LINES = ("(function(v){ return v.bdata ? atob(v.bdata).length / 8 : v.le
                  "(document.getElementById('pc').data[0].dimensions[1].values)")
 
 
-def test_page_draws_a_sample_but_counts_every_entry_and_can_draw_all(tmp_path):
+def test_page_draws_a_sample_but_counts_every_entry_and_can_draw_all(tmp_path, chromium):
     require_chromium()
     st = make_study(3)
     extra = pareto_like(st)
@@ -192,24 +191,23 @@ def test_page_draws_a_sample_but_counts_every_entry_and_can_draw_all(tmp_path):
     n_lines = len(st.entries) + len(extra)
     assert info["n_drawn"] == 100 and info["n_lines"] == n_lines
     path = rep.write(tmp_path / "sampled.html")
-    with HeadlessChromium() as browser:
-        page = browser.open(path)
-        page.wait_for("document.getElementById('pc') && document.getElementById('pc').getAttribute('data-ready')")
-        renderer = page.evaluate("document.getElementById('pc').getAttribute('data-renderer')")
-        software = re.search("swiftshader|llvmpipe|software", renderer, re.I) is not None
-        drawn = 100 if software else n_lines          # a hardware renderer draws every line by itself
-        assert int(page.evaluate("document.getElementById('pc').getAttribute('data-drawn')")) == drawn
-        assert int(page.evaluate(N_TRACE_LINES)) == drawn
-        for name in ["p_max ≤ 0.05 mm", "r_max ≤ 0.01°"]:
-            ms = page.evaluate(f"window.evotolParcoords['pc'].apply({name!r})")
-            assert ms > 0
-            assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == info["presets"][name]
-        note = page.evaluate("document.getElementById('pc-drawn').innerText")
-        assert (f"sample of 100 of {n_lines} lines" in note) if software else (f"All {n_lines} lines drawn" in note)
-        # draw every line: the trace now holds all of them, the brushes and the count stay
-        page.evaluate("document.querySelector('#pc-drawn button[data-draw=\"all\"]') ? "
-                      "window.evotolParcoords['pc'].setDraw(true).then(function(){ return 1; }) : 1")
-        assert int(page.evaluate(N_TRACE_LINES)) == n_lines
-        assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == info["presets"]["r_max ≤ 0.01°"]
-        assert page.evaluate("document.getElementById('pc').data[0].dimensions.some(function(d){ return d.constraintrange; })")
-        assert f"All {n_lines} lines drawn" in page.evaluate("document.getElementById('pc-drawn').innerText")
+    page = chromium.open(path)
+    page.wait_for("document.getElementById('pc') && document.getElementById('pc').getAttribute('data-ready')")
+    renderer = page.evaluate("document.getElementById('pc').getAttribute('data-renderer')")
+    software = re.search("swiftshader|llvmpipe|software", renderer, re.I) is not None
+    drawn = 100 if software else n_lines          # a hardware renderer draws every line by itself
+    assert int(page.evaluate("document.getElementById('pc').getAttribute('data-drawn')")) == drawn
+    assert int(page.evaluate(N_TRACE_LINES)) == drawn
+    for name in ["p_max ≤ 0.05 mm", "r_max ≤ 0.01°"]:
+        ms = page.evaluate(f"window.evotolParcoords['pc'].apply({name!r})")
+        assert ms > 0
+        assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == info["presets"][name]
+    note = page.evaluate("document.getElementById('pc-drawn').innerText")
+    assert (f"sample of 100 of {n_lines} lines" in note) if software else (f"All {n_lines} lines drawn" in note)
+    # draw every line: the trace now holds all of them, the brushes and the count stay
+    page.evaluate("document.querySelector('#pc-drawn button[data-draw=\"all\"]') ? "
+                  "window.evotolParcoords['pc'].setDraw(true).then(function(){ return 1; }) : 1")
+    assert int(page.evaluate(N_TRACE_LINES)) == n_lines
+    assert int(page.evaluate("document.getElementById('pc-count-n').textContent")) == info["presets"]["r_max ≤ 0.01°"]
+    assert page.evaluate("document.getElementById('pc').data[0].dimensions.some(function(d){ return d.constraintrange; })")
+    assert f"All {n_lines} lines drawn" in page.evaluate("document.getElementById('pc-drawn').innerText")

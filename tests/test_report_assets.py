@@ -4,7 +4,6 @@ import re
 import plotly.graph_objects as go
 from plotly.offline import get_plotlyjs
 
-from evotol.reporting.headless import HeadlessChromium
 from tests.browser import require_chromium
 from evotol.reporting.html import Report, plotlyjs_name
 
@@ -38,13 +37,12 @@ def test_inline_plotly_is_one_self_contained_file(tmp_path):
     assert not list(tmp_path.glob("plotly-*.min.js"))
 
 
-def test_report_draws_offline_in_headless_chromium(tmp_path):
+def test_report_draws_offline_in_headless_chromium(tmp_path, chromium):
     """The page loads plotly.js from the file beside it (file://, no network) and draws the figure."""
     require_chromium()
     page_path = _report("offline").write(tmp_path / "report.html")
-    with HeadlessChromium() as browser:
-        page = browser.open(page_path)
-        page.wait_for("typeof Plotly === 'object' && document.querySelector('#fig .main-svg') !== null")
-        assert page.evaluate("document.querySelectorAll('#fig .scatterlayer .trace').length") == 1
-        urls = page.evaluate("Array.from(document.scripts).filter(function(s){return s.src;}).map(function(s){return s.src;})")
-        assert urls == [(tmp_path / plotlyjs_name()).resolve().as_uri()], urls
+    page = chromium.open(page_path)
+    page.wait_for("typeof Plotly === 'object' && document.querySelector('#fig .main-svg') !== null")
+    assert page.evaluate("document.querySelectorAll('#fig .scatterlayer .trace').length") == 1
+    urls = page.evaluate("Array.from(document.scripts).filter(function(s){return s.src;}).map(function(s){return s.src;})")
+    assert urls == [(tmp_path / plotlyjs_name()).resolve().as_uri()], urls

@@ -296,9 +296,8 @@ def test_refined_3ucr_optimum_and_ga_hold_on_a_4x_denser_grid():
     assert ga.cost >= ref.certificate["lower_bound"] * (1 - 1e-9)
 
 
-# Slow (about 20 s in CI) because its check is strong: the refined optimum of the 47-source Delta is
+# Slow (about 20 s in CI, ~13 s alone) because its check is strong: the refined optimum of the 47-source Delta is
 # checked on all 1 728 poses of a 12-per-axis grid, not on the grid it was refined on.
-# Slow (~13 s alone) because its check is strong: the refined optimum of 47 sources re-checked on all 1 728 poses of a 12^3 grid.
 def test_refined_delta_optimum_holds_on_a_4x_denser_grid():
     """Delta (47 sources): the optimum refined from the 15 postures on a 3-per-axis grid of the
     workspace box (+ local maximisation) holds 0.2 mm on a 12-per-axis grid."""

@@ -45,6 +45,7 @@ def test_type_checking_names_are_the_front_door():
     assert typed == dict(evotol._WHERE)
 
 
+# Slow (~11 s in a full run) because its check is strong: mypy reads all of evotol (one run for both files).
 def test_mypy_accepts_the_front_door_and_rejects_a_wrong_call(tmp_path, installed_layout):
     """One mypy run over both files (it checks evotol once, not twice; issue 43): every error it reports
     is in the wrong call's file -- none in the front-door script nor in evotol -- and the wrong call's
