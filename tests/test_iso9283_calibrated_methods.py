@@ -172,3 +172,18 @@ def test_an_nsga2_beside_the_calibrated_iso_allocation_is_refused_from_the_file_
         load_problem(spec, base_dir=STUDY.parent)
     del spec["requirement"]["iso9283"]           # without an ISO requirement the ordinary front runs: not refused
     check_composable(spec)
+
+
+def test_random_sources_of_a_calibrated_budget_on_joint_configurations_are_refused_naming_both():
+    """[poses] joints + [calibration] + [iso9283.random]: refused in one line naming the two parts, from the file
+    alone (before, the same study stopped with "iso9283.random = 'JointSpaceModel'", a class name)."""
+    from evotol.errors import ValidationError
+    from evotol.studyfile.iso9283 import check_composable
+
+    spec = tomllib.loads(STUDY.read_text())
+    spec["poses"] = {"joints": [[0.1, -1.2, 1.4, -1.8, -1.57, 0.0]]}
+    with pytest.raises(ValidationError, match=r"^iso9283.random = '\[poses\] joints': expected task poses beside "
+                                              r"\[calibration\]"):
+        check_composable(spec)
+    del spec["calibration"]          # without [calibration] the ISO figures compose with joint configurations
+    check_composable(spec)

@@ -279,7 +279,7 @@ def check_composable(spec: dict) -> None:
     evotol.errors.ValidationError
         One line naming ``iso9283`` and the other part: ``[[robot.callouts]]``, ``[clearances]``, a
         requirement per axis; with ``[calibration]``, ``[iso9283] calibrate`` (a second calibration), an
-        orientation figure or an ``nsga2`` with ``allocate = true``. (``[poses] joints`` composes: the ISO poses are the test cube's.)
+        orientation figure, an ``nsga2`` with ``allocate = true``, or random sources on ``[poses] joints``. (``[poses] joints`` composes: the ISO poses are the test cube's.)
     """
     req = spec.get("requirement", {})
     if "iso9283" not in spec and "iso9283" not in req:
@@ -289,6 +289,9 @@ def check_composable(spec: dict) -> None:
         raise ValidationError("iso9283.calibrate", table["calibrate"], "no calibrate beside [calibration]: one "
                               "calibration ([calibration] is the plan the tolerances are allocated for)")
     refuse_front_beside_calibration(spec, spec.get("methods") or {})
+    if "calibration" in spec and isinstance(table, dict) and table.get("random") and "joints" in (spec.get("poses") or {}):
+        raise ValidationError("iso9283.random", "[poses] joints", "task poses beside [calibration]: random sources in a "
+                              "calibrated budget are not yet composed with joint configurations (docs/combinations.md)")
     ori = [k for k in ORIENTATION_KEYS if k in (req.get("iso9283") or {})]
     if "calibration" in spec and ori:
         raise ValidationError(f"requirement.iso9283.{ori[0]}", req["iso9283"][ori[0]], "no orientation figure beside "
