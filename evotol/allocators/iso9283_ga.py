@@ -164,6 +164,32 @@ def design_cost(costs, T) -> np.ndarray:
     return sum((np.asarray(cm.cost(T[:, j]), float) for j, cm in enumerate(costs) if cm is not None), np.zeros(len(T)))
 
 
+def run_ga(prob, pop_size: int, n_gen: int, seed: int, repair=None) -> tuple[np.ndarray, int]:
+    """pymoo's GA from a Latin hypercube of ``pop_size`` designs (seeded), feasibility first: its best design.
+
+    Parameters
+    ----------
+    prob : pymoo.core.problem.Problem
+        One objective, one inequality constraint (``G <= 0``), bounds ``xl``, ``xu``.
+    pop_size, n_gen, seed : int
+        Population, generations, and the seed of the start and of the GA.
+    repair : pymoo.core.repair.Repair or None
+        Applied to every offspring.
+
+    Returns
+    -------
+    tuple
+        ``(X (n_var,) ndarray, evaluations)``: the best feasible design, else the least violating of the last
+        population.
+    """
+    X0 = qmc.scale(qmc.LatinHypercube(d=prob.n_var, seed=seed).random(int(pop_size)), prob.xl, prob.xu)
+    algorithm = GA(pop_size=int(pop_size), sampling=X0, eliminate_duplicates=True,
+                   **({"repair": repair} if repair is not None else {}))
+    res = minimize(prob, algorithm, ("n_gen", int(n_gen)), seed=seed, verbose=False)
+    X = res.X if res.X is not None else res.pop.get("X")[np.argmin(res.pop.get("G")[:, 0])]
+    return np.atleast_2d(X)[0], int(res.algorithm.evaluator.n_eval)
+
+
 @single_threaded_blas
 def allocate_iso9283_ga(robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds, AP, RP, *,
                         pop_size: int = 40, n_gen: int = 40, seed: int = 0, n_samples: int = 10000,
@@ -199,12 +225,9 @@ def allocate_iso9283_ga(robot, positions, sys_costs, sys_bounds, free, sources, 
                       seed if draw_seed is None else draw_seed)
     costs = list(sys_costs) + list(rand_costs)
     prob = LogDesignProblem(terms, costs)
-    X0 = qmc.scale(qmc.LatinHypercube(d=prob.n_var, seed=seed).random(int(pop_size)), prob.xl, prob.xu)
-    res = minimize(prob, GA(pop_size=int(pop_size), sampling=X0, repair=_OntoBoundary(), eliminate_duplicates=True),
-                   ("n_gen", int(n_gen)), seed=seed, verbose=False)
-    X = res.X if res.X is not None else res.pop.get("X")[np.argmin(res.pop.get("G")[:, 0])]
-    t = prob.full(np.atleast_2d(X))[0]
+    X, n_eval = run_ga(prob, pop_size, n_gen, seed, repair=_OntoBoundary())
+    t = prob.full(X[None])[0]
     chk = iso_check(terms, t)
     return {"systematic": t[:terms["m"]], "random": t[terms["m"]:], "cost": float(design_cost(costs, t[None])[0]),
             "AP": chk["ap"][:, 0], "AP_bound": chk["ap"][:, 1], "RP": chk["RP"], "RP_fresh": chk["RP_fresh"],
-            "feasible": chk["feasible"], "evaluations": int(res.algorithm.evaluator.n_eval)}
+            "feasible": chk["feasible"], "evaluations": n_eval}

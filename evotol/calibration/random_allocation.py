@@ -88,19 +88,19 @@ def least_cost(rb: RandomBudget, start=None) -> dict:
     x = np.log(np.sqrt(lo * hi) if start is None else np.clip(start, lo, hi))
     res = None
     for _ in range(3):
-        q, s = rb.exact(np.exp(x))
+        q, s = rb.task.exact(np.exp(x))
         kappa = q / np.maximum(s, 1e-300)
 
         def con(x, kappa=kappa):
             t = np.exp(x)
-            w, _ = rb.w(t)
-            s, _, _ = rb.lam(t)
+            w, _ = rb.task.w(t)
+            s, _, _ = rb.task.lam(t)
             return (budget - w[:, None] - (kappa * s)[None, :]).ravel() / budget
 
         def jac(x, kappa=kappa):
             t = np.exp(x)
-            _, dw = rb.w(t)
-            s, dl, _ = rb.lam(t)
+            _, dw = rb.task.w(t)
+            s, dl, _ = rb.task.lam(t)
             dq = kappa[:, None] * dl / (2 * s[:, None])
             return -(dw[:, None, :] + dq[None, :, :]).reshape(-1, len(t)) * t / budget
 
@@ -119,7 +119,7 @@ def least_cost(rb: RandomBudget, start=None) -> dict:
             mid = (lo_s + hi_s) / 2
             lo_s, hi_s = (mid, hi_s) if rb.ok(np.maximum(t * mid, lo)) else (lo_s, mid)
         t = np.maximum(t * lo_s, lo)
-    q, w = float(rb.exact(t)[0].max()), float(rb.w(t)[0].max())
+    q, w = float(rb.task.exact(t)[0].max()), float(rb.task.w(t)[0].max())
     out = {"tolerances": t, "cost": rb.cost(t), "quantile": q, "worst_case": w,
            "budget": float(budget), "active": bool(q + w >= 0.995 * budget), "success": bool(res.success),
            "message": str(res.message)}
@@ -132,17 +132,17 @@ def _iso_constraints(rb: RandomBudget, t0) -> list:
     """SLSQP's ISO constraints at ``κ`` of ``t0``: calibrated AP (convex form) and RP on the fixed draws."""
     out = []
     if rb.AP is not None:
-        q, s = rb.iso_exact(t0)
+        q, s = rb.iso_figure.exact(t0)
         kappa = q / np.maximum(s, 1e-300)
 
         def fun(x):
             t = np.exp(x)
-            return (rb.AP - rb.iso_w(t)[0] - kappa * rb.iso_lam(t)[0]) / rb.AP
+            return (rb.AP - rb.iso_figure.w(t)[0] - kappa * rb.iso_figure.lam(t)[0]) / rb.AP
 
         def jac(x):
             t = np.exp(x)
-            _, dw = rb.iso_w(t)
-            s, dl, _ = rb.iso_lam(t)
+            _, dw = rb.iso_figure.w(t)
+            s, dl, _ = rb.iso_figure.lam(t)
             return -(dw + kappa[:, None] * dl / (2 * s[:, None])) * t / rb.AP
         out.append({"type": "ineq", "fun": fun, "jac": jac})
     if rb.RP is not None:

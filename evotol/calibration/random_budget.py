@@ -29,23 +29,71 @@ import numpy as np
 from evotol.allocators.iso9283 import RP_MARGIN
 from evotol.calibration.noise_share import norm_quantile
 from evotol.errors import ValidationError
-from evotol.measures.iso9283.budget import rp_with_gradient
+from evotol.measures.iso9283.budget import rp_value, rp_with_gradient
 
 
-def _worst(t, s0, sup, cd):
-    """Worst case per pose (grid maximum / cos δ) and its gradient at the maximising direction."""
-    h = s0 + np.einsum("k,knd->nd", t, sup)
-    j = h.argmax(axis=1)
-    return h.max(axis=1) / cd, sup[:, np.arange(len(h)), j].T / cd          # (n,), (n, K)
+class Figure:
+    """One calibrated figure's two parts as functions of ``τ``, per pose: the worst case ``w_i`` (``s_0`` plus the
+    sources' support on a grid of directions, / cos δ: a proven bound) and the fit's error, normal with
+    covariance ``C_0 + Σ_k τ_k² C_k``. The budget's position figure at the task poses and the calibrated AP at
+    the ISO poses are both of this form.
 
+    Parameters
+    ----------
+    s0 : float or (n, d) ndarray
+        The fixed part of the support (m).
+    support : (K, n, d) ndarray
+        Per random source its support per unit tolerance (m per unit).
+    cos_delta : float
+        Cosine of the grid's covering angle.
+    C0 : (n, 3, 3) ndarray
+        The noise's covariance (m²).
+    cov : (K, n, 3, 3) ndarray
+        Per random source the covariance of its unit tolerance through the identification (m² per unit²).
+    level : float
+        Probability of the quantile.
+    """
 
-def _largest_sd(t, C0, cov):
-    """``sqrt(λ_max(C(τ)))`` per pose, its gradient, and ``C(τ)``."""
-    C = C0 + np.einsum("k,knij->nij", t * t, cov)
-    ev, V = np.linalg.eigh(C)
-    v = V[:, :, -1]
-    dl = 2 * t[None] * np.einsum("ni,knij,nj->nk", v, cov, v)
-    return np.sqrt(np.maximum(ev[:, -1], 1e-300)), dl, C
+    def __init__(self, s0, support, cos_delta, C0, cov, level):
+        self.s0, self.support, self.cos_delta = s0, np.asarray(support, float), cos_delta
+        self.C0, self.cov, self.level = C0, np.asarray(cov, float), level
+
+    def w(self, t):
+        """Worst case per pose (m) and its gradient at the maximising direction (m per unit).
+
+        Returns
+        -------
+        tuple of ndarray
+            ``(n,)`` and ``(n, K)``.
+        """
+        h = self.s0 + np.einsum("k,knd->nd", t, self.support)
+        j = h.argmax(axis=1)
+        return h.max(axis=1) / self.cos_delta, self.support[:, np.arange(len(h)), j].T / self.cos_delta
+
+    def lam(self, t):
+        """``sqrt(λ_max(C_i(τ)))`` per pose (m), its gradient, and ``C_i(τ)``.
+
+        Returns
+        -------
+        tuple of ndarray
+            ``(n,)``, ``(n, K)``, ``(n, 3, 3)``.
+        """
+        C = self.C0 + np.einsum("k,knij->nij", t * t, self.cov)
+        ev, V = np.linalg.eigh(C)
+        v = V[:, :, -1]
+        dl = 2 * t[None] * np.einsum("ni,knij,nj->nk", v, self.cov, v)
+        return np.sqrt(np.maximum(ev[:, -1], 1e-300)), dl, C
+
+    def exact(self, t):
+        """The exact quantile of the fit's error per pose and ``sqrt(λ_max)`` (m).
+
+        Returns
+        -------
+        tuple of ndarray
+            Two ``(n,)`` arrays.
+        """
+        s, _, C = self.lam(t)
+        return norm_quantile(C, self.level), s
 
 
 class RandomBudget:
@@ -53,14 +101,9 @@ class RandomBudget:
 
     Parameters
     ----------
-    C0 : (n, 3, 3) ndarray
-        The noise's covariance at the task poses (m²).
-    cov : (K, n, 3, 3) ndarray
-        Per random source the covariance of its unit tolerance through the identification (m² per unit²).
-    support : (K, n, d) ndarray
-        Per random source its support at the poses on a grid of d directions per unit tolerance (m per unit).
-    cos_delta : float
-        Cosine of the grid's covering angle.
+    C0, cov, support, cos_delta
+        The task poses' noise covariance (m²), per source its unit covariance through the identification and its
+        support on the direction grid, and the grid's cosine: the position :class:`Figure` (with ``s0 = 0``).
     costs : sequence of evotol.cost_models.base.CostModel
         Per random source its cost model.
     lower, upper : (K,) array_like
@@ -85,54 +128,21 @@ class RandomBudget:
         if budget <= 0:
             raise ValidationError("requirement.position", f"{budget:.3g} m left for the random sources", "a requirement "
                                   "above the calibrated systematic worst case and the second-order terms")
-        self.C0, self.cov = C0, np.asarray(cov, float)
-        self.support, self.cos_delta = np.asarray(support, float), cos_delta
+        self.task = Figure(0.0, support, cos_delta, C0, cov, level)          # the position figure at the task poses
         self.costs, self.budget, self.level = list(costs), float(budget), level
         self.iso = iso
         self.AP = None if iso is None else iso.get("AP_budget")
         self.RP = None if iso is None else iso.get("RP")
         self.rp_aim = None if self.RP is None else self.RP * (1 - RP_MARGIN)
-        if iso is not None:
-            self.iso_parts = (iso["s0"], np.asarray(iso["support"], float), iso["cos_delta"])
-            self.iso_cov = (iso["C0"], np.asarray(iso["cov"], float))
-        if self.exact(self.lo)[0].max() + self.w(self.lo)[0].max() > self.budget:
+        self.iso_figure = None if iso is None else Figure(iso["s0"], iso["support"], iso["cos_delta"], iso["C0"],
+                                                          iso["cov"], level)    # the calibrated AP at P1-P5
+        if self.position(self.lo) > self.budget:
             raise ValidationError("iso9283.random.lower", self.lo.tolist(), f"random sources whose worst case and share "
                                   f"of the identification stay below {self.budget:.3g} m, what calibration leaves for them")
         if iso is not None:
             self._check_iso_lower()
 
     # -- the position budget at the task poses
-    def w(self, t):
-        """Worst case ``w_i(τ)`` per task pose (m) and its gradient (m per unit).
-
-        Returns
-        -------
-        tuple of ndarray
-            ``(n,)`` worst case and ``(n, K)`` gradient.
-        """
-        return _worst(t, 0.0, self.support, self.cos_delta)
-
-    def lam(self, t):
-        """``sqrt(λ_max(C_i(τ)))`` per task pose (m), its gradient, and ``C_i(τ)``.
-
-        Returns
-        -------
-        tuple of ndarray
-            ``(n,)``, ``(n, K)``, ``(n, 3, 3)``.
-        """
-        return _largest_sd(t, self.C0, self.cov)
-
-    def exact(self, t):
-        """The exact quantile ``q_i(τ)`` per task pose and ``sqrt(λ_max)`` (m).
-
-        Returns
-        -------
-        tuple of ndarray
-            Two ``(n,)`` arrays.
-        """
-        s, _, C = self.lam(t)
-        return norm_quantile(C, self.level), s
-
     def position(self, t) -> float:
         """``max_i q_i(τ) + max_i w_i(τ)`` (m), what the budget bounds.
 
@@ -140,40 +150,9 @@ class RandomBudget:
         -------
         float
         """
-        return float(self.exact(t)[0].max() + self.w(t)[0].max())
+        return float(self.task.exact(t)[0].max() + self.task.w(t)[0].max())
 
     # -- the ISO 9283 figures at the test cube's poses
-    def iso_w(self, t):
-        """The calibrated AP's proven part per ISO pose (m) and its gradient.
-
-        Returns
-        -------
-        tuple of ndarray
-            ``(p,)`` and ``(p, K)``.
-        """
-        return _worst(t, *self.iso_parts)
-
-    def iso_lam(self, t):
-        """``sqrt(λ_max)`` of the fit's error per ISO pose, its gradient and covariance.
-
-        Returns
-        -------
-        tuple of ndarray
-            ``(p,)``, ``(p, K)``, ``(p, 3, 3)``.
-        """
-        return _largest_sd(t, *self.iso_cov)
-
-    def iso_exact(self, t):
-        """The fit's exact quantile per ISO pose and ``sqrt(λ_max)`` (m).
-
-        Returns
-        -------
-        tuple of ndarray
-            Two ``(p,)`` arrays.
-        """
-        s, _, C = self.iso_lam(t)
-        return norm_quantile(C, self.level), s
-
     def ap(self, t):
         """Calibrated AP per ISO pose (m): proven bound plus exact quantile.
 
@@ -181,7 +160,7 @@ class RandomBudget:
         -------
         (p,) ndarray
         """
-        return self.iso_w(t)[0] + self.iso_exact(t)[0]
+        return self.iso_figure.w(t)[0] + self.iso_figure.exact(t)[0]
 
     def rp(self, t):
         """RP per ISO pose on the fixed draws (m) and its gradient.
@@ -193,13 +172,22 @@ class RandomBudget:
         """
         return rp_with_gradient(self.iso["E"], t)
 
+    def rp_value(self, t):
+        """RP per ISO pose on the fixed draws (m), without its gradient (the checks' path).
+
+        Returns
+        -------
+        (p,) ndarray
+        """
+        return rp_value(self.iso["E"], t)
+
     def _check_iso_lower(self):
         lo = self.lo
         if self.AP is not None and self.ap(lo).max() > self.AP:
             raise ValidationError("requirement.iso9283.AP", self.iso["AP"], f"more than {self.ap(lo).max():.3g} m plus the "
                                   "second-order allowance: the calibrated AP with every random source at its lower bound")
-        if self.RP is not None and self.rp(lo)[0].max() > self.rp_aim:
-            raise ValidationError("requirement.iso9283.RP", self.RP, f"more than {self.rp(lo)[0].max() / (1 - RP_MARGIN):.3g} m, "
+        if self.RP is not None and self.rp_value(lo).max() > self.rp_aim:
+            raise ValidationError("requirement.iso9283.RP", self.RP, f"more than {self.rp_value(lo).max() / (1 - RP_MARGIN):.3g} m, "
                                   "the RP of the random sources at their lower bounds")
 
     def iso_ok(self, t) -> bool:
@@ -210,7 +198,7 @@ class RandomBudget:
         bool
         """
         return self.iso is None or ((self.AP is None or self.ap(t).max() <= self.AP)
-                                    and (self.RP is None or self.rp(t)[0].max() <= self.rp_aim))
+                                    and (self.RP is None or self.rp_value(t).max() <= self.rp_aim))
 
     # -- what every allocator is judged by
     def ok(self, t) -> bool:
@@ -261,8 +249,8 @@ class RandomBudget:
             ``AP``, ``AP_worst_case``, ``AP_quantile``, ``RP`` per pose, ``AP_budget``, ``RP_aim``, ``proven``,
             ``active``.
         """
-        w, q = self.iso_w(t)[0], self.iso_exact(t)[0]
-        rp = self.rp(t)[0]
+        w, q = self.iso_figure.w(t)[0], self.iso_figure.exact(t)[0]
+        rp = self.rp_value(t)
         return {"AP": (w + q).tolist(), "AP_worst_case": w.tolist(), "AP_quantile": q.tolist(), "RP": rp.tolist(),
                 "AP_budget": self.AP, "RP_aim": self.rp_aim,
                 "proven": "AP: the systematic residual and the lost motion's offset, a proven bound (grid / cos δ, convex in "

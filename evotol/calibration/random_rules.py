@@ -30,13 +30,11 @@ rb : evotol.calibration.random_budget.RandomBudget
 from __future__ import annotations
 
 import numpy as np
-from pymoo.algorithms.soo.nonconvex.ga import GA
 from pymoo.core.problem import Problem
-from pymoo.optimize import minimize
-from scipy.stats import qmc
 
 from evotol._runtime.blas_threads import single_threaded_blas
 from evotol.allocators.iso9283_baselines import stack_up
+from evotol.allocators.iso9283_ga import run_ga
 from evotol.allocators.monotone import MonotoneProblem, polyblock_search
 from evotol.calibration.random_budget import RandomBudget
 
@@ -62,8 +60,7 @@ def _figures(rb: RandomBudget, t) -> np.ndarray:
     if rb.AP is not None:
         out.append(rb.ap(t).max() / rb.AP)
     if rb.RP is not None:
-        with np.errstate(invalid="ignore", divide="ignore"):         # RP's gradient at τ = 0 is not used
-            out.append(rb.rp(t)[0].max() / rb.rp_aim)
+        out.append(rb.rp_value(t).max() / rb.rp_aim)
     return np.array(out)
 
 
@@ -114,10 +111,10 @@ class _Surrogate(Problem):
     def _evaluate(self, X, out, *args, **kwargs):
         rb, T = self.rb, np.exp(X)
         out["F"] = sum(np.asarray(c.cost(T[:, k]), float) for k, c in enumerate(rb.costs))[:, None]
-        w, q = _surrogate(T, 0.0, rb.support, rb.cos_delta, rb.C0, rb.cov, self.kappa)
+        w, q = _surrogate(T, rb.task, self.kappa)
         g = (w.max(-1) + q.max(-1)) / rb.budget                        # the budget: max w + max q over the poses
         if rb.AP is not None:                                           # AP: at each ISO pose, w + q
-            g = np.maximum(g, np.add(*_surrogate(T, *rb.iso_parts, *rb.iso_cov, self.kappa_iso)).max(-1) / rb.AP)
+            g = np.maximum(g, np.add(*_surrogate(T, rb.iso_figure, self.kappa_iso)).max(-1) / rb.AP)
         if self.E is not None:
             e = self.E @ T.T                                              # (p, n, 3, designs)
             lens = np.sqrt(np.einsum("pnis,pnis->pns", e, e))
@@ -125,11 +122,11 @@ class _Surrogate(Problem):
         out["G"] = (g - 1.0)[:, None]
 
 
-def _surrogate(T, s0, support, cos_delta, C0, cov, kappa):
-    """Per design and pose the worst case ``w_i`` and ``κ_i sqrt(λ_max(C_i))`` (m): the convex form of a
-    calibrated figure's two parts, for a whole population at once."""
-    w = (s0 + np.einsum("sk,knd->snd", T, support)).max(-1) / cos_delta
-    lam = np.linalg.eigvalsh(C0 + np.einsum("sk,knij->snij", T * T, cov))[..., -1]
+def _surrogate(T, fig, kappa):
+    """Per design and pose the worst case ``w_i`` and ``κ_i sqrt(λ_max(C_i))`` (m) of a calibrated figure
+    (:class:`evotol.calibration.random_budget.Figure`): its convex form, for a whole population at once."""
+    w = (fig.s0 + np.einsum("sk,knd->snd", T, fig.support)).max(-1) / fig.cos_delta
+    lam = np.linalg.eigvalsh(fig.C0 + np.einsum("sk,knij->snij", T * T, fig.cov))[..., -1]
     return w, kappa * np.sqrt(np.maximum(lam, 1e-300))
 
 
@@ -150,17 +147,13 @@ def ga_tolerances(rb: RandomBudget, optimum, pop_size: int = 100, n_gen: int = 2
         ``(τ (K,) ndarray, evaluations)``.
     """
     t0 = np.asarray(optimum, float)
-    q, s = rb.exact(t0)
+    q, s = rb.task.exact(t0)
     kappa_iso = None
     if rb.AP is not None:
-        qi, si = rb.iso_exact(t0)
+        qi, si = rb.iso_figure.exact(t0)
         kappa_iso = qi / np.maximum(si, 1e-300)
-    prob = _Surrogate(rb, q / np.maximum(s, 1e-300), kappa_iso)
-    X0 = qmc.scale(qmc.LatinHypercube(d=prob.n_var, seed=seed).random(int(pop_size)), prob.xl, prob.xu)
-    res = minimize(prob, GA(pop_size=int(pop_size), sampling=X0, eliminate_duplicates=True), ("n_gen", int(n_gen)),
-                   seed=seed, verbose=False)
-    X = res.X if res.X is not None else res.pop.get("X")[np.argmin(res.pop.get("G")[:, 0])]
-    return np.exp(np.atleast_2d(X)[0]), int(res.algorithm.evaluator.n_eval)
+    X, n_eval = run_ga(_Surrogate(rb, q / np.maximum(s, 1e-300), kappa_iso), pop_size, n_gen, seed)
+    return np.exp(X), n_eval
 
 
 def monotone_bracket(rb: RandomBudget, optimum, max_evaluations: int = MONOTONE_EVALUATIONS) -> tuple:

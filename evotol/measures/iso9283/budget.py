@@ -139,6 +139,24 @@ def rp_unit_errors(robot, S, sources, n_samples: int, seed: int = 0) -> np.ndarr
     return E - E.mean(axis=1, keepdims=True)
 
 
+def rp_value(E, t) -> np.ndarray:
+    """RP ``= E l + 3 std l`` of the errors ``E t`` at each pose, as :func:`rp_with_gradient` computes it (the same
+    values), without the gradient.
+
+    Parameters
+    ----------
+    E, t
+        As :func:`rp_with_gradient`: the unit errors and the random tolerances (SI).
+
+    Returns
+    -------
+    (p,) ndarray
+        m.
+    """
+    l = np.linalg.norm(E @ t, axis=-1)
+    return l.mean(1) + 3 * l.std(1, ddof=1)
+
+
 def rp_with_gradient(E, t) -> tuple[np.ndarray, np.ndarray]:
     """RP ``= E l + 3 std l`` (the mean over the draws, ``std`` with ``n − 1``) of the errors ``E t`` at each
     pose, and its gradient with respect to the tolerances (smooth on fixed draws).
