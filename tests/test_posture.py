@@ -195,3 +195,38 @@ def test_dropped_poses_are_stated_with_callouts_too(tmp_path):
     problem = load_problem(spec)
     assert problem.model.part_of("callouts") is not None and problem.n_poses == 20 - n_bad
     assert [line for line in problem.model.notes() if f"{n_bad} of 20 poses dropped" in line]
+
+
+def test_the_branch_check_in_blocks_of_poses_is_the_check_of_all_at_once(monkeypatch):
+    """Poses checked a few at a time (PATH_BLOCK, memory) give the same near-singular poses and refuse the
+    same first pose (its index in the whole set) as one batch; the refusal by the textbook's factors."""
+    import evotol.robots.mechanism.posture.held as held
+
+    model = MechanismModel(FIXTURE)
+    rng = np.random.default_rng(3)
+    Q = ASSEMBLY + rng.normal(0, 0.5, (60, 6))
+    Q[7] = np.radians([0, -90, 90, 0, 0, 0])                  # a wrist singularity among them
+    sol = {f"q{i + 1}": Q[:, i] for i in range(6)}             # the joints themselves: no inverse geometry
+    P = np.array([pose_of(q) for q in Q])
+    sign0 = np.sign(factors(ASSEMBLY)[0])
+    other = [i for i in range(len(Q)) if not np.array_equal(np.sign(factors(Q[i])[0]), sign0)
+             and abs(factors(Q[i])[0]).min() > 1e-3]
+
+    def run():
+        try:
+            return held.check_branch(model.kin, P, sol, model.workspace.names), None
+        except KinematicsError as e:
+            return None, str(e)
+
+    whole = run()
+    monkeypatch.setattr(held, "PATH_BLOCK", 5 * held.PATH_SAMPLES)   # five poses a block: 12 blocks
+    blocked = run()
+    assert whole[1] is not None and whole[1] == blocked[1]
+    assert f"pose {other[0]} " in whole[1] or any(f"pose {i} " in whole[1] for i in range(other[0]))
+    ok = [i for i in range(len(Q)) if i not in other]            # without the refused poses: the near ones
+    sol_ok = {k: v[ok] for k, v in sol.items()}
+    monkeypatch.setattr(held, "PATH_BLOCK", 1 << 15)
+    near_whole = held.check_branch(model.kin, P[ok], sol_ok, model.workspace.names)
+    monkeypatch.setattr(held, "PATH_BLOCK", 5 * held.PATH_SAMPLES)
+    near_blocked = held.check_branch(model.kin, P[ok], sol_ok, model.workspace.names)
+    assert np.array_equal(near_whole, near_blocked) and ok.index(7) in near_whole.tolist()

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.errors import ValidationError
+from evotol.measures.linear.support_grid import support_grid, support_rows
 
 
 class ConstraintRows:
@@ -80,14 +81,12 @@ class ConstraintRows:
                 for sl, coef in problem.coefficient_blocks(comp):      # one block, or blocks of poses (issue 43)
                     c, D = coef[0], coef[1]
                     const = coef[3] if len(coef) > 3 else None
-                    grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ probes.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)
-                    if const is not None:
-                        grid = grid + const[None]
+                    grid = support_grid(coef, probes)                           # (n_probe, poses, directions)
                     k = np.argmax(grid, axis=2)                              # (n_probe, poses of the block)
                     flat = np.unique((np.arange(c.shape[0])[None, :] * D.shape[0] + k).ravel())
                     pp, dd = np.divmod(flat, D.shape[0])
                     first = sl.start or 0
-                    self._add_linear(c[pp, dd, :] / lim, [(comp, first + int(a), int(b)) for a, b in zip(pp, dd)],
+                    self._add_linear(support_rows(c, pp, dd) / lim, [(comp, first + int(a), int(b)) for a, b in zip(pp, dd)],
                                      None if const is None else const[pp, dd] / lim)
             self.check(probes)
             self.prune(probes)

@@ -301,8 +301,14 @@ def _jsonable(obj):
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
+        if all(type(v) is float or type(v) is int for v in obj):     # a list of numbers: no call per number
+            return [v if type(v) is int or math.isfinite(v) else None for v in obj]
         return [_jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "iu":
+            return obj.tolist()
+        if obj.dtype.kind == "f" and obj.ndim and np.isfinite(obj).all():
+            return obj.tolist()
         return _jsonable(obj.tolist())
     if isinstance(obj, (np.floating, float)):
         v = float(obj)

@@ -107,7 +107,8 @@ def sampled_worst_case(problem: ToleranceProblem, T: np.ndarray, component: str)
     """
     out = []
     for _, coeff in problem.coefficient_blocks(component):     # one block, or blocks of poses (issue 43)
-        grid = np.einsum("pdj,nj->npd", coeff[0], np.atleast_2d(T))
+        c, T2 = coeff[0], np.atleast_2d(T)
+        grid = np.einsum("pdj,nj->npd", c, T2) if isinstance(c, np.ndarray) else c.grid(np.asarray(T2, float))
         if len(coeff) > 3:
             grid = grid + coeff[3][None]
         out.append(grid.max(axis=2))

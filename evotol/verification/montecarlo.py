@@ -290,6 +290,33 @@ def yield_check(inside: np.ndarray, n: int, required: float | None, confidence: 
     return out
 
 
+def pose_uniforms(root: np.random.SeedSequence, p: int, n: int, d: int, method: str) -> np.ndarray:
+    """Pose ``p``'s (n, d) uniforms: :func:`~evotol.measures.statistical.distributions.uniforms` with
+    the Generator of ``root.spawn(P)[p]``, made directly from its spawn key (as is the child a Latin
+    hypercube spawns from it): the draws of ``uniforms(n, d, method, default_rng(root.spawn(P)[p]))``.
+
+    Parameters
+    ----------
+    root : numpy.random.SeedSequence
+        The run's seed sequence (nothing spawned from it yet).
+    p : int
+        The pose's index.
+    n, d : int
+        Rows (samples) and columns (the sum of the source dimensions).
+    method : {"lhs", "mc"}
+        As :func:`~evotol.measures.statistical.distributions.uniforms`.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, d) uniforms in [0, 1).
+    """
+    if method == "lhs":
+        rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(root.entropy, spawn_key=(p, 0))))
+        return distributions.latin_hypercube_from(n, d, rng)
+    return np.random.default_rng(np.random.SeedSequence(root.entropy, spawn_key=(p,))).random((n, d))
+
+
 @single_threaded_blas
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
            nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
@@ -386,7 +413,7 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     dists = problem.distributions if distribution is None else \
         [distributions.as_distribution(distribution, f"distribution (source {s.name})", s.dim) for s in robot.sources]
     comps = problem.components
-    seeds = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(problem.n_poses)]
+    root = np.random.SeedSequence(seed)      # pose p's stream: its child p, made when its chunk is sampled
     P = problem.n_poses
     exceed = {c: np.zeros(P) for c, _ in comps}
     exceed_nl = {c: np.zeros(P) for c, _ in comps} if (nonlinear and robot.has_nonlinear_model) else {}
@@ -400,10 +427,9 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
                        + (" (nonlinear model)" if exceed_nl else ""))
     for start in range(0, P, chunk_poses):
         idx = np.arange(start, min(start + chunk_poses, P))
-        E = np.empty((idx.size, n_samples, robot.n_columns))
-        for a, p in enumerate(idx):
-            Z = distributions.draw(distributions.uniforms(n_samples, sum(dims), method, seeds[p]), dims, dists, radial)
-            E[a] = np.concatenate(problem.source_errors(Z, t), axis=1)   # inside shifted intervals too
+        U = np.concatenate([pose_uniforms(root, int(p), n_samples, sum(dims), method) for p in idx])
+        Z = distributions.draw(U, dims, dists, radial)                  # row by row: the chunk's poses at once
+        E = np.concatenate(problem.source_errors(Z, t), axis=1).reshape(idx.size, n_samples, robot.n_columns)
         lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
         if problem.clearances is not None:   # consistent clearance states inside the classes' bounds
             lin = lin + clearances.sample_twists(robot, problem.poses[idx], t[robot.n_geometric:], n_samples,

@@ -16,12 +16,14 @@ from collections.abc import Sequence
 import numpy as np
 
 from evotol.measures.linear.stackup import WorstCase, worst_case
-from evotol.measures.linear.support import IntervalShape, support_coefficients, support_constant
+from evotol.measures.linear.support import IntervalShape, support_constant
+from evotol.measures.linear.support_grid import LazySupport, support_grid
 
 
 class PoseBlocks(Sequence):
-    """``[(poses, (c, D, delta[, const]))]`` for consecutive blocks of ``step`` poses, each computed when
-    indexed and not kept (the layout of :meth:`evotol.core.problem.ToleranceProblem.coefficients`).
+    """``[(poses, (c, D, delta[, const]))]`` for consecutive blocks of ``step`` poses (the layout of
+    :meth:`evotol.core.problem.ToleranceProblem.coefficients`), ``c`` a
+    :class:`~evotol.measures.linear.support_grid.LazySupport`: never kept whole.
 
     Parameters
     ----------
@@ -52,7 +54,7 @@ class PoseBlocks(Sequence):
         i %= len(self)
         sl = slice(i * self.step, min(self.n_poses, (i + 1) * self.step))
         part = [B[sl] for B in self.blocks]
-        c = support_coefficients(part, self.D, self.shape)
+        c = LazySupport(part, self.D, self.shape)           # computed a few poses at a time when used
         return sl, (c, self.D, self.delta) if self.shape is None else (c, self.D, self.delta,
                                                                          support_constant(part, self.D, self.shape))
 
@@ -86,11 +88,7 @@ def worst_case_by_blocks(blocks: list, t: np.ndarray, pieces, top_only: bool = F
     if top_only:            # the largest grid value of each design over every pose: a first pass
         level = np.full(T.shape[0], -np.inf)
         for _, coef in pieces:
-            c = coef[0]
-            g = (c.reshape(-1, c.shape[2]) @ T.T).reshape(c.shape[0], c.shape[1], -1)
-            if len(coef) > 3:
-                g = g + coef[3][..., None]
-            level = np.maximum(level, g.max(axis=(0, 1)))
+            level = np.maximum(level, support_grid(coef, T).max(axis=(1, 2)))
     parts = [worst_case([B[sl] for B in blocks], T, coefficients=coef, top_only=top_only, shape=shape,
                         n_starts=n_starts, top_level=level) for sl, coef in pieces]
     res = WorstCase(*(np.concatenate([getattr(r, f) for r in parts], axis=1) for f in WorstCase.__dataclass_fields__))

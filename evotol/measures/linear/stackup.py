@@ -40,6 +40,7 @@ import numpy as np
 
 from evotol.measures.linear.directions import directions_for
 from evotol.measures.linear.support import IntervalShape, mean_shift, support_coefficients, support_constant
+from evotol.measures.linear.support_grid import support_grid
 
 
 @dataclass(frozen=True)
@@ -184,9 +185,7 @@ def worst_case(blocks: list[np.ndarray], t: np.ndarray, n_directions: int = 600,
                             top_level=None if top_level is None else top_level[i:i + step])
                  for i in range(0, T.shape[0], step)]
         return WorstCase(*(np.concatenate([getattr(r, f) for r in parts]) for f in WorstCase.__dataclass_fields__))
-    grid = np.moveaxis((c.reshape(-1, c.shape[2]) @ T.T).reshape(c.shape[0], c.shape[1], -1), 2, 0)  # (n, p, d)
-    if const is not None:
-        grid = grid + const[None]
+    grid = support_grid((c, D, delta) if const is None else (c, D, delta, const), T)      # (n, p, d)
     k = np.argmax(grid, axis=2)
     gmax = np.take_along_axis(grid, k[..., None], axis=2)[..., 0]
     u0 = D[k]

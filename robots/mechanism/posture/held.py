@@ -32,6 +32,10 @@ from evotol.robots.mechanism.kinematics.serial import SERIAL_COMPILED, SerialCha
 NEAR_SINGULAR = 1e-3
 #: samples of the joint-space path from the assembly joints to a solution (det J sign along it)
 PATH_SAMPLES = 24
+#: path samples (configurations) whose Jacobians are held at once: poses are checked in blocks of
+#: ``PATH_BLOCK // PATH_SAMPLES``, so the check's memory does not grow with the poses (issue 43 item 4:
+#: 103 823 UR5 poses at once took 2.3 GB)
+PATH_BLOCK = 1 << 15
 
 
 def wrapped(kin, q: dict) -> dict:
@@ -119,15 +123,19 @@ def check_branch(kin, poses: np.ndarray, q: dict, names, chain=None) -> np.ndarr
     n = len(poses)
     diff = {k: np.asarray(q[k], float) - q0[k] for k in kin.variables}
     diff = {k: (wrapped(kin, {k: d})[k]) for k, d in diff.items()}
-    # every sample of every path in one batch (n x PATH_SAMPLES configurations): one pass over the frames
+    # every sample of the paths of a block of poses in one batch (poses x PATH_SAMPLES configurations)
     S = np.linspace(0.0, 1.0, PATH_SAMPLES + 1)[1:]
-    qs = {k: (q0[k] + S[:, None] * diff[k][None, :]).ravel() for k in kin.variables}
-    J = _task_jacobian(kin, qs, np.tile(poses, (len(S), 1)), chain).reshape(len(S), n, *J0.shape[1:])
-    det = np.linalg.det(J)                                          # (samples, n)
-    sv = np.linalg.svd(J[-1], compute_uv=False)                     # at the solution
-    rel_end = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
     scale = np.abs(np.linalg.det(J0[0])) if np.linalg.det(J0[0]) != 0 else 1.0
-    crossed = ((np.sign(det) != sign0) & (np.abs(det) > 1e-12 * scale)).any(axis=0)
+    rel_end, crossed = np.empty(n), np.empty(n, dtype=bool)
+    step = max(1, PATH_BLOCK // len(S))
+    for b in range(0, n, step):
+        sl = slice(b, min(n, b + step))
+        qs = {k: (q0[k] + S[:, None] * diff[k][None, sl]).ravel() for k in kin.variables}
+        J = _task_jacobian(kin, qs, np.tile(poses[sl], (len(S), 1)), chain).reshape(len(S), sl.stop - b, *J0.shape[1:])
+        det = np.linalg.det(J)                                      # (samples, poses of the block)
+        sv = np.linalg.svd(J[-1], compute_uv=False)                 # at the solution
+        rel_end[sl] = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
+        crossed[sl] = ((np.sign(det) != sign0) & (np.abs(det) > 1e-12 * scale)).any(axis=0)
     near = np.flatnonzero(rel_end < NEAR_SINGULAR)
     other = np.flatnonzero(crossed & ~(rel_end < NEAR_SINGULAR))
     if other.size:

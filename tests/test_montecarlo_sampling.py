@@ -1,0 +1,84 @@
+"""The Monte Carlo verification's sampling and the worst case's coefficients of many poses, made fast
+without changing a number (issue 43 item 4): checked against SciPy's Latin hypercube class and against
+the stored support coefficients, element by element."""
+import numpy as np
+import pytest
+from scipy.stats import qmc
+
+from evotol.measures.linear import support_coefficients
+from evotol.measures.linear.support import IntervalShape
+from evotol.measures.linear.support_grid import LazySupport, support_grid, support_rows
+from evotol.measures.statistical.distributions import latin_hypercube
+
+
+@pytest.mark.parametrize("n, d", [(100, 36), (1, 5), (7, 3), (300, 54)])
+def test_latin_hypercube_draws_what_scipys_class_draws(n, d):
+    for seed in range(20):
+        def child():         # a fresh Generator of the same stream each time (spawning changes its seed sequence)
+            return np.random.default_rng(np.random.SeedSequence(seed).spawn(3)[2])
+        ref = qmc.LatinHypercube(d=d, seed=child()).random(n)
+        got = latin_hypercube(n, d, child())
+        assert np.array_equal(got, ref)
+        assert np.array_equal(latin_hypercube(n, d, seed), qmc.LatinHypercube(d=d, seed=seed).random(n))
+        strata = np.sort(np.floor(got * n), axis=0)             # one value in each of the n strata, per column
+        assert np.array_equal(strata, np.tile(np.arange(n)[:, None], (1, d)))
+
+
+def test_verify_streams_are_each_poses_own_spawned_child():
+    """The verification draws pose p's samples from SeedSequence(seed).spawn(P)[p] (its docstring):
+    the child made directly from the spawn key is that child."""
+    root = np.random.SeedSequence(11)
+    kids = np.random.SeedSequence(11).spawn(6)
+    for p, kid in enumerate(kids):
+        direct = np.random.SeedSequence(root.entropy, spawn_key=(p,))
+        assert np.array_equal(direct.generate_state(8), kid.generate_state(8))
+
+
+def _blocks(rng, n_poses, dims):
+    return [rng.normal(size=(n_poses, 3, k)) for k in dims]
+
+
+@pytest.mark.parametrize("mixed", [False, True])
+@pytest.mark.parametrize("shaped", [False, True])
+def test_lazy_support_gives_the_stored_coefficients_products_and_rows(shaped, mixed):
+    rng = np.random.default_rng(4)
+    dims = [1, 1, 2, 1, 3, 1, 1] if mixed else [1] * 6
+    blocks = _blocks(rng, 53, dims)
+    D = rng.normal(size=(40, 3))
+    D /= np.linalg.norm(D, axis=1, keepdims=True)
+    n = len(dims)
+    shape = None
+    if shaped:
+        line = np.array([k == 1 for k in dims])
+        shape = IntervalShape(np.where(line, rng.uniform(0.5, 1.5, n), 1.0), np.where(line, rng.uniform(-0.4, 0.4, n), 0.0),
+                              np.where(line, rng.uniform(-1e-4, 1e-4, n), 0.0))
+    c = support_coefficients(blocks, D, shape)
+    lazy = LazySupport(blocks, D, shape)
+    assert lazy.shape == c.shape
+    assert np.array_equal(np.asarray(lazy), c)
+    T = rng.uniform(1e-5, 1e-3, size=(3, n))
+    const = rng.normal(size=(53, 40))
+    own = np.einsum("pdj,nj->npd", c, T) + const[None]            # written out: sum over sources
+    import evotol.measures.linear.support_grid as sg
+    step = sg.STEP_BYTES
+    try:
+        sg.STEP_BYTES = 8 * 40 * n * 4                              # four poses a step: several steps and a short last one
+        got = support_grid((lazy, D, 0.1, const), T)
+        pp, dd = rng.integers(0, 53, 30), rng.integers(0, 40, 30)
+        rows = support_rows(lazy, pp, dd)
+    finally:
+        sg.STEP_BYTES = step
+    assert np.allclose(got, own, rtol=1e-13, atol=0)
+    assert np.array_equal(support_grid((c, D, 0.1, const), T), got)    # stored or not: the same products
+    assert np.array_equal(rows, c[pp, dd, :])
+
+
+@pytest.mark.parametrize("method", ["lhs", "mc"])
+def test_pose_uniforms_are_the_spawned_childs_draws(method):
+    from evotol.measures.statistical.distributions import uniforms
+    from evotol.verification.montecarlo import pose_uniforms
+
+    kids = np.random.SeedSequence(5).spawn(9)
+    for p in (0, 3, 8):
+        ref = uniforms(40, 7, method, np.random.default_rng(kids[p]))
+        assert np.array_equal(pose_uniforms(np.random.SeedSequence(5), p, 40, 7, method), ref)
