@@ -9,20 +9,23 @@ sphere). Measured on the UR5 study (36 sources, 600 directions, position and ori
 poses: the two caches take 1.17 GB and the peak beyond the imports was 2.2 GB, so the estimate is
 twice the caches (:data:`WORKING_FACTOR`) plus the sensitivities. Above
 :data:`~evotol.core.problem.tolerance_problem.COEFFICIENT_CACHE_BYTES` a component's coefficients are
-computed by blocks of poses and not kept (slower, bounded).
+not kept: a few poses' at a time are computed and multiplied by the designs
+(:class:`~evotol.measures.linear.support_grid.LazySupport`); what stays is a block's grid values.
 """
 from __future__ import annotations
 
 from evotol._runtime.memory import available_bytes
 from evotol.errors import ValidationError
 from evotol.core.problem.tolerance_problem import COEFFICIENT_CACHE_BYTES
+from evotol.measures.linear.stackup import DESIGN_BLOCK_BYTES
 
 #: the peak over the caches: the optimum's and the feasibility check's working copies (measured 1.9 on the UR5)
 WORKING_FACTOR = 2.0
 #: what a study keeps per pose besides its sensitivities (results, Monte Carlo records, the page), measured on
-#: the UR5 study (sensitivity, Monte Carlo, report) in blocks: max RSS 0.963 GB at 10 648 poses, 3.096 GB at
-#: 103 823 poses (2026-11-27): 22.9 kB a pose more, the sensitivities' 1.7 kB included; rounded up
-PER_POSE_BYTES = 25_000
+#: the UR5 study (sensitivity, Monte Carlo of 100 samples a pose, report; coefficients computed a few poses at a
+#: time, posture checked in blocks): max RSS 0.565 GB at 10 648 poses, 1.113 GB at 103 823 poses (2026-12-02):
+#: 5.9 kB a pose more, the sensitivities' 1.7 kB included; rounded up (was 25 kB before those two changes)
+PER_POSE_BYTES = 8_000
 #: share of the available memory a study may plan to take
 USABLE_SHARE = 0.9
 
@@ -38,8 +41,9 @@ def study_bytes(problem) -> int:
     Returns
     -------
     int
-        ``WORKING_FACTOR * Σ_components P D (n_src + [asymmetric]) * 8`` (a quarter of
-        ``COEFFICIENT_CACHE_BYTES``, one block of poses, when above it) plus, per pose, the sensitivities and
+        ``WORKING_FACTOR * Σ_components P D (n_src + [asymmetric]) * 8`` (when above
+        ``COEFFICIENT_CACHE_BYTES``: the grid values of a block of designs and poses,
+        :data:`~evotol.measures.linear.stackup.DESIGN_BLOCK_BYTES`) plus, per pose, the sensitivities and
         :data:`PER_POSE_BYTES`, with D
         the directions :func:`evotol.measures.linear.directions_for` takes for each component (fewer for a
         planar error, 1 for an error along one axis).
@@ -47,7 +51,7 @@ def study_bytes(problem) -> int:
     caches = 0
     for comp in problem.blocks:                 # position and orientation: both are evaluated for the report
         full = problem.coefficient_bytes(comp)
-        caches += full if full <= COEFFICIENT_CACHE_BYTES else COEFFICIENT_CACHE_BYTES // 4    # else: one block
+        caches += full if full <= COEFFICIENT_CACHE_BYTES else DESIGN_BLOCK_BYTES    # else: a block's grid values
     return int(WORKING_FACTOR * caches + problem.n_poses * (6 * problem.error_model.n_columns * 8 + PER_POSE_BYTES))
 
 
