@@ -8,16 +8,23 @@ at once: every pose's grid maximum, ascent and bound are its own. Two things cou
 kept: ``top_only``'s test for a pose that may hold a design's largest error uses the largest grid value
 over *all* poses (a first pass over the blocks finds it), and the ascent's common stopping test, which
 makes the attained values agree to round-off and the worst directions to the ascent's precision.
+Blocks are taken by up to :data:`MAX_THREADS` threads at a time (one per core).
 """
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 from evotol.measures.linear.stackup import WorstCase, worst_case
 from evotol.measures.linear.support import IntervalShape, support_constant
 from evotol.measures.linear.support_grid import LazySupport, support_grid
+
+#: threads that take blocks of poses at the same time (NumPy and BLAS release the GIL in their loops); each
+#: block's numbers are its own, so they do not depend on the number of threads
+MAX_THREADS = 4
 
 
 class PoseBlocks(Sequence):
@@ -85,11 +92,13 @@ def worst_case_by_blocks(blocks: list, t: np.ndarray, pieces, top_only: bool = F
     t = np.asarray(t, dtype=float)
     T = np.atleast_2d(t)
     level = None
-    if top_only:            # the largest grid value of each design over every pose: a first pass
-        level = np.full(T.shape[0], -np.inf)
-        for _, coef in pieces:
-            level = np.maximum(level, support_grid(coef, T).max(axis=(1, 2)))
-    parts = [worst_case([B[sl] for B in blocks], T, coefficients=coef, top_only=top_only, shape=shape,
-                        n_starts=n_starts, top_level=level) for sl, coef in pieces]
+    with ThreadPoolExecutor(max_workers=max(1, min(len(pieces), os.cpu_count() or 1, MAX_THREADS))) as pool:
+        if top_only:        # the largest grid value of each design over every pose: a first pass
+            level = np.full(T.shape[0], -np.inf)
+            for top in pool.map(lambda piece: support_grid(piece[1], T).max(axis=(1, 2)), pieces):
+                level = np.maximum(level, top)
+        parts = list(pool.map(lambda piece: worst_case([B[piece[0]] for B in blocks], T, coefficients=piece[1],
+                                                       top_only=top_only, shape=shape, n_starts=n_starts,
+                                                       top_level=level), pieces))
     res = WorstCase(*(np.concatenate([getattr(r, f) for r in parts], axis=1) for f in WorstCase.__dataclass_fields__))
     return WorstCase(*(getattr(res, f)[0] for f in WorstCase.__dataclass_fields__)) if t.ndim == 1 else res
