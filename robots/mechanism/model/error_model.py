@@ -138,13 +138,39 @@ class MechanismModel(RobotErrorModel):
 
     def _inverse_geometry(self, poses) -> dict:
         """:meth:`Kinematics.inverse_geometry`, compiled for a serial chain (same steps, per pose);
-        a serial arm's posture is then held (:func:`evotol.robots.mechanism.posture.held.check_posture`)."""
+        a serial arm's posture is then held (:func:`evotol.robots.mechanism.posture.held.check_posture`).
+
+        Poses that are rows of the largest pose set solved so far take its joint values (a study's Monte
+        Carlo and vertex checks ask for its poses a chunk at a time: 10^5 poses were solved and checked
+        three times over, issue 43 item 4). The continuation from the assembly of a chunk and of the whole
+        set end at the same solution to round-off (converged at the pose, the posture checked)."""
+        poses = np.atleast_2d(np.asarray(poses, float))
+        known = self._known_joints(poses)
+        if known is not None:
+            return known
         if self._serial is None:
             q = self.kin.inverse_geometry(poses)
         else:
             q = serial_inverse_geometry(self.kin, self._serial, poses)
         check_posture(self, poses, q)
+        seen = self.__dict__.get("_solved")
+        if len(poses) > 1 and (seen is None or len(poses) > len(seen[0])):
+            self._solved = (poses.copy(), q, None)             # rows indexed when first looked up
         return q
+
+    def _known_joints(self, poses: np.ndarray) -> dict | None:
+        """The joint values of ``poses`` when every row is a row of the largest solved set, else None."""
+        seen = self.__dict__.get("_solved")
+        if seen is None or len(poses) > len(seen[0]) or poses.shape[1:] != seen[0].shape[1:]:
+            return None
+        P, q, index = seen
+        if index is None:
+            index = {row.tobytes(): i for i, row in enumerate(P)}
+            self._solved = (P, q, index)
+        rows = [index.get(row.tobytes()) for row in poses]
+        if any(i is None for i in rows):
+            return None
+        return {k: v[rows] for k, v in q.items()}
 
     def _param_names(self):
         return [c for c in self.columns if isinstance(c, str)]  # parameters and actuated variables
