@@ -1,5 +1,5 @@
 """The serial-arm Monte Carlo kernel (issue 43 item 2): the perturbed tip of a block of poses times a
-block of samples in one compiled pass, eight samples at a time in SIMD lanes.
+block of samples in one compiled pass, :data:`W` samples at a time in SIMD lanes.
 
 The chain of :mod:`evotol.robots.mechanism.kinematics.serial_kernels` (stages ``P_s``, placement
 errors ``E_m = exp(delta_m)`` after ``P_s``, joint motions ``J_s(theta_s + delta_s)``) is rewritten,
@@ -60,8 +60,8 @@ from numba import prange
 from evotol._runtime.numba_cache import njit
 from evotol.robots.mechanism.kinematics import serial_kernels  # noqa: F401  (its threading layer choice)
 
-#: samples per SIMD group (eight float64 lanes: one AVX-512 register, two AVX2 ones)
-W = 32
+#: samples per group: the lanes of one row (64 float64: eight AVX-512 registers, sixteen AVX2 ones)
+W = 64
 #: samples of one pose per parallel task
 TASK = 512
 #: t^2 below which the Rodrigues and joint series serve (t < 0.1 rad)
