@@ -268,10 +268,10 @@ def _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coe
     n_cols x W scratch; lanes from nk on are zero errors)."""
     if nk < W:                                 # the group's errors, one row per column (lanes contiguous)
         eg[:] = 0.0
-    for col in range(e.shape[1]):
-        x = eg[col * W:(col + 1) * W]
-        for l in range(nk):
-            x[l] = e[k0 + l, col]
+    for l in range(nk):                        # read sample by sample: e streams from memory in its order
+        row = e[k0 + l]
+        for col in range(e.shape[1]):
+            eg[col * W + l] = row[col]
     # rows as slices of W lanes: a row index read from the program inside the lane loop keeps LLVM
     # from vectorising it (same sums, same order)
     off[:] = 0.0
