@@ -14,13 +14,16 @@ Each sensitivity timing is the fastest of three calls, for evotol and for Pinocc
    damped-Newton IK in Pinocchio (from the assembly configuration, ``log6`` error in the tip frame,
    damped least squares ``J^T (J J^T + 1e-12 I)^-1``, to 1e-12, then the regressor);
 3. **nonlinear Monte Carlo**: ``evotol.verification.nonlinear.verify_nonlinear`` of the UR5 study's optimum
-   (the study's own verification) and ``pose_error`` alone, in pose-samples per second;
+   (the study's own verification) and ``pose_error`` alone, in pose-samples per second (its first call on
+   new poses, which includes their inverse geometry, then the fastest of three with the joint values cached:
+   the rate the issue's target reads);
 4. **the Monte Carlo kernel before and after** (issue 43 item 2): the scalar kernel
    (``SerialChain._pose_error_scalar``) and the batched one (``serial_montecarlo``) on the same poses and
    samples, their ratio (less noisy than either rate on a shared machine) and the load average; the
    batched kernel alone on one thread and on every thread, the share of the Python wrapper, the
-   arithmetic per pose-sample against the machine's SIMD peak, the samples shared by every pose
-   (``pose_error_shared``); the UR5 study's ``verify_nonlinear`` with each kernel and a cProfile of it.
+   arithmetic per pose-sample against the machine's SIMD peak, the split of its time between the
+   samples' operations and their application (the batched kernel minus ``pose_error_shared``, one thread),
+   the samples shared by every pose (``pose_error_shared``); the UR5 study's ``verify_nonlinear`` with each kernel and a cProfile of it.
 
 Run it from the repository root with ``PYTHONPATH=.`` to measure this checkout (``python benchmarks/...``
 puts ``benchmarks/`` first on ``sys.path``, so an installed evotol would be imported instead).
@@ -157,12 +160,15 @@ def mc_profile(robot, poses, E) -> None:
     args = (ch.P, ch.kind, ch.var, ch.a, ch.c, *mc.program(ch), ch.v_col, ch.v_var, Q, E)
     n = E.shape[0] * E.shape[1]
     threads = numba.get_num_threads()
-    rates = {}
+    rates, shared1 = {}, None
     for k in sorted({1, threads}):
         numba.set_num_threads(k)
         mc.pose_error(*args)
         c, w = best(lambda: mc.pose_error(*args))
         rates[k] = (n / c, n / w)
+        if k == 1:
+            mc.pose_error_shared(*args[:-1], E[0])
+            shared1 = best(lambda: mc.pose_error_shared(*args[:-1], E[0]))[0] / n
     numba.set_num_threads(threads)
     Eb = np.broadcast_to(E[0], E.shape)                   # the same samples at every pose
     mc.pose_error_shared(*args[:-1], E[0])
@@ -175,6 +181,10 @@ def mc_profile(robot, poses, E) -> None:
     print(f"  Monte Carlo profile (batched kernel): 1 thread {r1:.3g} pose-samples/s per CPU second; {threads} threads "
           f"{rates[threads][0]:.3g} per CPU second, {rt:.3g} wall; public pose_error {n / w_pub:.3g}/s wall "
           f"(wrapper: inverse geometry cache, checks, {100 * max(0.0, 1 - n / w_pub / rt):.0f} % of its time)")
+    print(f"    where its time goes (1 thread, CPU ns per pose-sample): {1e9 / r1:.0f} in all; the operations (errors "
+          f"gathered into lanes, placement exponentials, joint coefficients) {1e9 * (1 / r1 - shared1):.0f} (batched minus "
+          f"shared); applying them to the pose's constants and the tip error {1e9 * shared1:.0f} (pose_error_shared, "
+          f"which computes the operations once for all poses)")
     print(f"    per pose-sample ~{ops} operations: {r1 * ops / 1e9:.2f} Gflop/s per core achieved; peak of "
           f"{os.cpu_count()} cores at {ghz:.1f} GHz with {lanes} float64 lanes x 2 FMA {peak / 1e9:.0f} Gflop/s = "
           f"{peak / ops:.3g} pose-samples/s; reached {os.cpu_count() * r1 / (peak / ops):.0%} (CPU-time rate x cores)")
@@ -220,9 +230,11 @@ def main(quick: bool = False) -> None:
         m = 300
         poses = robot.workspace.latin_hypercube(1000, seed=1)
         E = np.random.default_rng(0).uniform(-1e-4, 1e-4, (len(poses), m, robot.n_columns))
-        robot.pose_error(poses[:4], E[:4, :4])
-        _, c_mc, w_mc = timed(lambda: robot.pose_error(poses, E))
-        print(f"  pose_error: {len(poses)} poses x {m} samples in {c_mc:.3f} ({w_mc:.3f}): "
+        robot.pose_error(poses[:4], np.ascontiguousarray(E[:4, :4]))   # compile / load E's layout (C-contiguous)
+        _, c_ig, w_ig = timed(lambda: robot.pose_error(poses, E))      # with the inverse geometry of the new poses
+        c_mc, w_mc = best(lambda: robot.pose_error(poses, E))          # the joint values cached: the Monte Carlo
+        print(f"  pose_error: {len(poses)} poses x {m} samples, first call with the inverse geometry of the poses "
+              f"{c_ig:.3f} s CPU, {w_ig:.3f} s wall; then, joint values cached (best of 3), {c_mc:.3f} ({w_mc:.3f}): "
               f"{len(poses) * m / c_mc:.3g} pose-samples/s CPU ({len(poses) * m / w_mc:.3g} wall)")
         if robot._serial is not None:
             Q = robot._serial.joints_array(robot.joint_values(poses))

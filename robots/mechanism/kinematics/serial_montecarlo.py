@@ -1,5 +1,5 @@
 """The serial-arm Monte Carlo kernel (issue 43 item 2): the perturbed tip of a block of poses times a
-block of samples in one compiled pass, eight samples at a time in SIMD lanes.
+block of samples in one compiled pass, :data:`W` samples at a time in SIMD lanes.
 
 The chain of :mod:`evotol.robots.mechanism.kinematics.serial_kernels` (stages ``P_s``, placement
 errors ``E_m = exp(delta_m)`` after ``P_s``, joint motions ``J_s(theta_s + delta_s)``) is rewritten,
@@ -60,8 +60,8 @@ from numba import prange
 from evotol._runtime.numba_cache import njit
 from evotol.robots.mechanism.kinematics import serial_kernels  # noqa: F401  (its threading layer choice)
 
-#: samples per SIMD group (eight float64 lanes: one AVX-512 register, two AVX2 ones)
-W = 32
+#: samples per group: the lanes of one row (64 float64: eight AVX-512 registers, sixteen AVX2 ones)
+W = 64
 #: samples of one pose per parallel task
 TASK = 512
 #: t^2 below which the Rodrigues and joint series serve (t < 0.1 rad)
@@ -266,30 +266,45 @@ def _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coe
     """The operations of samples k0 <= k < k0 + nk (rows of e (m, n_cols)) at joint values q:
     EK (K, 12 W) the placement exponentials, JK (K, 2 W) the joint errors' coefficients (eg: an
     n_cols x W scratch; lanes from nk on are zero errors)."""
-    eg[:] = 0.0                                # the group's errors, one row per column (lanes contiguous)
-    for l in range(nk):
+    if nk < W:                                 # the group's errors, one row per column (lanes contiguous)
+        eg[:] = 0.0
+    for l in range(nk):                        # read sample by sample: e streams from memory in its order
+        row = e[k0 + l]
         for col in range(e.shape[1]):
-            eg[col * W + l] = e[k0 + l, col]
+            eg[col * W + l] = row[col]
+    # rows as slices of W lanes: a row index read from the program inside the lane loop keeps LLVM
+    # from vectorising it (same sums, same order)
     off[:] = 0.0
     for t in range(v_col.shape[0]):
-        for l in range(W):
-            off[v_var[t] * W + l] += eg[v_col[t] * W + l]
+        _add_row(off[v_var[t] * W:(v_var[t] + 1) * W], eg[v_col[t] * W:(v_col[t] + 1) * W])
     for k in range(op_stage.shape[0]):
         if op_p[k + 1] > op_p[k]:
             d[:] = 0.0
             for t in range(op_p[k], op_p[k + 1]):
-                for l in range(W):
-                    d[p_field[t] * W + l] += eg[p_col[t] * W + l]
+                _add_row(d[p_field[t] * W:(p_field[t] + 1) * W], eg[p_col[t] * W:(p_col[t] + 1) * W])
             _exp6_lanes(d, EK[k], co)
         s = op_stage[k]
         if s >= 0:                                # offsets and joint terms
+            a_s, o = a[s], off[var[s] * W:(var[s] + 1) * W]
             for l in range(W):
-                dl[l] = a[s] * off[var[s] * W + l]
+                dl[l] = a_s * o[l]
             for t in range(op_j[k], op_j[k + 1]):
-                for l in range(W):
-                    g = j_coef[t] * (q[j_var[t]] + off[j_var[t] * W + l] if j_var[t] >= 0 else 1.0)
-                    dl[l] += eg[j_col[t] * W + l] * g
+                c_t, v, x = j_coef[t], j_var[t], eg[j_col[t] * W:(j_col[t] + 1) * W]
+                if v >= 0:
+                    qv, ov = q[v], off[v * W:(v + 1) * W]
+                    for l in range(W):
+                        dl[l] += x[l] * (c_t * (qv + ov[l]))
+                else:
+                    for l in range(W):
+                        dl[l] += x[l] * (c_t * 1.0)
             _joint_coefficients(kind[s], dl, JK[k])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _add_row(dst, src):
+    """dst += src (rows of W lanes)."""
+    for l in range(W):
+        dst[l] += src[l]
 
 
 @njit(cache=True, error_model="numpy")
