@@ -319,9 +319,11 @@ class SerialChain:
                       self.v_col, self.v_var)
 
     def inverse_geometry(self, q0: np.ndarray, targets: np.ndarray, Rts: np.ndarray | None, axes, scale: float):
-        """(Q (n, n_vars), scaled residual (n,)) continued from q0 through targets (K, n, n_axes).
+        """(Q (n, n_vars), scaled residual (n,), evaluations (n,)) continued from q0 through targets
+        (K, n, n_axes).
 
-        One Gauss-Newton correction per intermediate step, up to 40 iterations (tolerance 1e-12)
+        One Gauss-Newton correction per intermediate step, up to 40 iterations (tolerance 1e-12,
+        or the damped steps' floor: :data:`~evotol.robots.mechanism.kinematics.serial_kernels.FLOOR`)
         at the last; a redundant arm keeps the posture nearest ``q0``.
 
         Parameters
@@ -331,7 +333,8 @@ class SerialChain:
         targets : (K, n, n_axes) ndarray
             Target tip coordinates (m) of the ``K`` continuation steps, the last the poses.
         Rts : (K, n, 3, 3) ndarray or None
-            Target orientations of the tip per step, or None when the orientation is free.
+            Target orientations of the tip per step (a broadcast view with zero strides where one
+            orientation holds at every step or pose), or None when the orientation is free.
         axes : sequence of int
             Base axis (0 x, 1 y, 2 z) of each target coordinate.
         scale : float
@@ -343,15 +346,18 @@ class SerialChain:
             Joint values at the poses (rad or m).
         residual : (n,) ndarray
             Largest scaled residual per pose (dimensionless); the caller checks it.
+        evaluations : (n,) ndarray of int
+            Forward kinematics and Jacobian evaluations per pose (continuation steps included).
         """
         K = _kernels()
 
         js = np.array([s for s in range(len(self.kind)) if self.kind[s] > 0], np.int64)
         has_rot = Rts is not None
         if Rts is None:
-            Rts = np.zeros(targets.shape[:2] + (3, 3))
+            Rts = np.broadcast_to(np.zeros((1, 1, 3, 3)), targets.shape[:2] + (3, 3))
+        Rts = np.asarray(Rts, float)                   # zero strides kept: numba indexes views as they are
         return K.inverse_geometry(*self._args(), np.asarray(q0, float), np.ascontiguousarray(targets, float),
-                                  np.ascontiguousarray(Rts, float), has_rot, np.asarray(axes, np.int64), js, self.var[js].copy(),
+                                  Rts, has_rot, np.asarray(axes, np.int64), js, self.var[js].copy(),
                                   self.a[js].copy(), float(scale), 40, 1e-12)
 
 
@@ -400,11 +406,13 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
     steps = np.linspace(1.0 / K, 1.0, K)
     targets = x0 + steps[:, None, None] * (poses - x0)[None]
     Rts = None
-    if kin.orientation:
-        Rts = np.stack([kin._target_orientation(t) for t in targets])
+    if kin.orientation and not any(e.names & {c.name for c in mech.coordinates} for _, e in kin.orientation):
+        Rts = np.broadcast_to(kin._target_orientation(x0[None]), targets.shape[:2] + (3, 3))   # the same at every target
+    elif kin.orientation:
+        Rts = kin._target_orientation(targets.reshape(-1, targets.shape[2])).reshape(targets.shape[:2] + (3, 3))
     idx = [i for i, _ in kin.coord_axes]
     axes = [ax for _, ax in kin.coord_axes]
-    Q, res = chain.inverse_geometry(np.array([q0[v] for v in chain.variables]), targets[:, :, idx], Rts, axes,
+    Q, res, _ = chain.inverse_geometry(np.array([q0[v] for v in chain.variables]), targets[:, :, idx], Rts, axes,
                                     kin.length_scale)
     bad = ~(res < 1e-9)
     if bad.any():
