@@ -195,3 +195,26 @@ def test_dropped_poses_are_stated_with_callouts_too(tmp_path):
     problem = load_problem(spec)
     assert problem.model.part_of("callouts") is not None and problem.n_poses == 20 - n_bad
     assert [line for line in problem.model.notes() if f"{n_bad} of 20 poses dropped" in line]
+
+
+def test_compiled_path_determinants_equal_numpy_det_of_the_general_jacobian():
+    """The posture check's compiled kernel (serial_newton.path_determinants, issue 43 item 1): det J
+    at every sample of the joint-space paths and J at their ends equal LAPACK's determinant of the
+    general path's task Jacobian (tree.py) at the same configurations, on the PUMA (RPY) and the UR5."""
+    from evotol.robots.mechanism.posture.held import _path_determinants, _task_jacobian
+    from evotol.robots.mechanism.kinematics.serial import SERIAL_COMPILED, SerialChain
+    if not SERIAL_COMPILED:
+        pytest.skip("numba not available: the general path is the only one")
+    for f in (FIXTURE, Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"):
+        kin = MechanismModel(f).kin
+        chain = SerialChain.build(kin, list(kin.variables))
+        rng = np.random.default_rng(1)
+        q0 = {v: float(x) for v, x in zip(kin.variables, rng.uniform(-2, 2, len(kin.variables)))}
+        diff = {v: rng.uniform(-3, 3, 15) for v in kin.variables}
+        S = np.linspace(0.0, 1.0, 5)[1:]
+        det, J_end = _path_determinants(kin, chain, q0, diff, S)
+        q = {v: (q0[v] + S[:, None] * diff[v][None, :]).ravel() for v in kin.variables}
+        J = _task_jacobian(kin, q, np.zeros((60, len(kin.mech.coordinates)))).reshape(4, 15, *J_end.shape[1:])
+        ref = np.linalg.det(J)
+        assert np.abs(det - ref).max() < 1e-12 * np.abs(ref).max() and (np.sign(det) == np.sign(ref)).all()
+        assert np.abs(J_end - J[-1]).max() < 1e-12

@@ -1,6 +1,7 @@
 """The fast path of a serial chain (a URDF arm, or any description without loops): the frames from
 the base to the end-effector folded into stages, and the sources into terms, for the compiled
-kernels of :mod:`evotol.robots.mechanism.kinematics.serial_kernels`.
+kernels of :mod:`evotol.robots.mechanism.kinematics.serial_kernels` and
+:mod:`evotol.robots.mechanism.kinematics.serial_newton`.
 
 Why: the general description machinery evaluates every DH entry as an expression and builds every
 frame's twists with NumPy over all poses; for a 6-joint arm that is about 35 frames of small array
@@ -45,7 +46,7 @@ def _kernels():
     if not _ANNOUNCED:
         _ANNOUNCED.append(True)
         try:
-            index = serial_kernels.inverse_geometry._cache._cache_file._index_path   # numba internals; silent if they change
+            index = serial_kernels.sensitivity._cache._cache_file._index_path   # numba internals; silent if they change
         except AttributeError:
             return serial_kernels
         if not os.path.exists(index):
@@ -73,6 +74,7 @@ class SerialChain:
         self.mark_of = {}               # frame -> mark index (its placement)
         self.stage_of = {}              # joint frame -> stage index
         self._mc = None                 # the Monte Carlo kernel's program (serial_montecarlo.program), on first use
+        self._sens = None               # the sensitivity kernel's terms (column, mark, field, coefficient, variable)
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -264,18 +266,17 @@ class SerialChain:
             <evotol.robots.mechanism.model.error_model.MechanismModel.sensitivity>`.
         """
         K = _kernels()
-
-        vs = [(c, s) for c, v in zip(self.v_col, self.v_var) for s in np.flatnonzero((self.var == v) & (self.kind > 0))]
-        j_col = np.concatenate([self.j_col, np.array([c for c, _ in vs], np.int64)])
-        j_stage = np.concatenate([self.j_stage, np.array([s for _, s in vs], np.int64)])
-        j_coef = np.concatenate([self.j_coef, self.a[[s for _, s in vs]]])
-        j_var = np.concatenate([self.j_var, np.full(len(vs), -1, np.int64)])
-        t_col = np.concatenate([self.p_terms[:, 0], j_col])
-        t_mark = np.concatenate([self.p_terms[:, 1], self.mark[j_stage]])
-        t_field = np.concatenate([self.p_terms[:, 2], np.where(self.kind[j_stage] == 1, 5, 2)])
-        t_coef = np.concatenate([np.ones(len(self.p_terms)), j_coef])
-        t_var = np.concatenate([np.full(len(self.p_terms), -1, np.int64), j_var])
-        return K.sensitivity(*self._args(), np.ascontiguousarray(Q, float), t_col, t_mark, t_field, t_coef, t_var, self.n_cols)
+        if self._sens is None:                     # the terms of the kernel, built once (a call of 1 000 poses is ~0.5 ms)
+            vs = [(c, s) for c, v in zip(self.v_col, self.v_var) for s in np.flatnonzero((self.var == v) & (self.kind > 0))]
+            j_col = np.concatenate([self.j_col, np.array([c for c, _ in vs], np.int64)])
+            j_stage = np.concatenate([self.j_stage, np.array([s for _, s in vs], np.int64)])
+            j_coef = np.concatenate([self.j_coef, self.a[[s for _, s in vs]]])
+            j_var = np.concatenate([self.j_var, np.full(len(vs), -1, np.int64)])
+            self._sens = (np.concatenate([self.p_terms[:, 0], j_col]), np.concatenate([self.p_terms[:, 1], self.mark[j_stage]]),
+                          np.concatenate([self.p_terms[:, 2], np.where(self.kind[j_stage] == 1, 5, 2)]),
+                          np.concatenate([np.ones(len(self.p_terms)), j_coef]),
+                          np.concatenate([np.full(len(self.p_terms), -1, np.int64), j_var]))
+        return K.sensitivity(*self._args(), np.ascontiguousarray(Q, float), *self._sens, self.n_cols)
 
     def pose_error(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
         """(n, m, 6) nonlinear tip error for errors (n, m, n_cols) at joint values Q (n, n_vars), by the
@@ -349,14 +350,15 @@ class SerialChain:
         evaluations : (n,) ndarray of int
             Forward kinematics and Jacobian evaluations per pose (continuation steps included).
         """
-        K = _kernels()
+        from evotol.robots.mechanism.kinematics import serial_newton
 
+        _kernels()
         js = np.array([s for s in range(len(self.kind)) if self.kind[s] > 0], np.int64)
         has_rot = Rts is not None
         if Rts is None:
             Rts = np.broadcast_to(np.zeros((1, 1, 3, 3)), targets.shape[:2] + (3, 3))
         Rts = np.asarray(Rts, float)                   # zero strides kept: numba indexes views as they are
-        return K.inverse_geometry(*self._args(), np.asarray(q0, float), np.ascontiguousarray(targets, float),
+        return serial_newton.inverse_geometry(*self._args(), np.asarray(q0, float), np.ascontiguousarray(targets, float),
                                   Rts, has_rot, np.asarray(axes, np.int64), js, self.var[js].copy(),
                                   self.a[js].copy(), float(scale), 40, 1e-12)
 

@@ -1,5 +1,6 @@
-"""Compiled (numba) kernels of a serial chain: forward kinematics, sensitivity, perturbed forward
-kinematics and the continued Newton inverse geometry, one pose per loop iteration.
+"""Compiled (numba) kernels of a serial chain: forward kinematics, sensitivity and perturbed forward
+kinematics, one pose per loop iteration (the Newton kernels, inverse geometry and posture check, are
+:mod:`evotol.robots.mechanism.kinematics.serial_newton`).
 
 The chain is a list of **stages** (:class:`evotol.robots.mechanism.kinematics.serial.SerialChain`): ``T <- T P_s``
 (a constant 4x4, the fixed rows and the joint row's ``Rot(z,gamma) Trans(z,b) Rot(x,alpha)
@@ -137,7 +138,7 @@ def _chain(P, ident, kind, var, a, c, mark, q, dq, E, has_E, marks, T, tmp):
             _joint(tmp, kind[s], a[s] * q[var[s]] + c[s] + dq[s], T)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _frames(P, ident, kind, var, a, c, mark, q, marks, T):
     """Nominal forward kinematics at joint values ``a q[var] + c``, row by row (row i of ``T P_s`` and
     of the joint motion needs only row i of ``T``, so nothing is copied): the frames after ``P``
@@ -227,7 +228,7 @@ def sensitivity(P, ident, kind, var, a, c, mark, n_marks, Q, t_col, t_mark, t_fi
     return S
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rotvec(T, Rt, w, r):
     """Rotation vector (rad) of ``R Rt^T`` (``R`` the rotation of the 3x4 ``T``) into ``w[r:r + 3]``."""
     R00 = T[0, 0] * Rt[0, 0] + T[0, 1] * Rt[0, 1] + T[0, 2] * Rt[0, 2]
@@ -356,204 +357,3 @@ def pose_error(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mar
         _pose_error_block(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage,
                           j_coef, j_var, v_col, v_var, b * BLOCK, min(total, (b + 1) * BLOCK), out)
     return out
-
-
-@njit(cache=True)
-def _task(P, ident, kind, var, a, c, mark, q, target, Rt, has_rot, axes, jstage, jvar, jcoef, scale, F, J, marks, T, S):
-    """Residual F (m,) and Jacobian J (m, n_vars) of the task at q, rows scaled (lengths / scale);
-    ``marks``, ``T`` (3x4) and ``S`` (6, n_vars) are scratch. Returns the largest ``|F|``."""
-    _frames(P, ident, kind, var, a, c, mark, q, marks, T)
-    nv = J.shape[1]
-    S[:, :] = 0.0
-    px, py, pz = T[0, 3], T[1, 3], T[2, 3]
-    for t in range(jstage.shape[0]):             # the joint twists: [z x (p - o); z] or [z; 0] (tree.py)
-        s, v, coef = jstage[t], jvar[t], jcoef[t]
-        m = mark[s]
-        ax0, ax1, ax2 = marks[m, 0, 2], marks[m, 1, 2], marks[m, 2, 2]
-        if kind[s] == 2:
-            S[0, v] += coef * ax0
-            S[1, v] += coef * ax1
-            S[2, v] += coef * ax2
-        else:
-            rx, ry, rz = px - marks[m, 0, 3], py - marks[m, 1, 3], pz - marks[m, 2, 3]
-            S[0, v] += coef * (ax1 * rz - ax2 * ry)
-            S[1, v] += coef * (ax2 * rx - ax0 * rz)
-            S[2, v] += coef * (ax0 * ry - ax1 * rx)
-            S[3, v] += coef * ax0
-            S[4, v] += coef * ax1
-            S[5, v] += coef * ax2
-    r = 0
-    for k in range(axes.shape[0]):
-        F[r] = (T[axes[k], 3] - target[k]) / scale
-        for v in range(nv):
-            J[r, v] = S[axes[k], v] / scale
-        r += 1
-    if has_rot:
-        _rotvec(T, Rt, F, r)
-        for k in range(3):
-            for v in range(nv):
-                J[r + k, v] = S[3 + k, v]
-    big = 0.0
-    for k in range(F.shape[0]):
-        if not abs(F[k]) <= big:
-            if F[k] != F[k]:
-                return np.nan                    # as np.max: a NaN residual is not converged
-            big = abs(F[k])
-    return big
-
-
-@njit(cache=True)
-def _gram(J, m, nv, rows, A):
-    """A = J J^T (rows) or J^T J, damped by 1e-13 of its trace (as Kinematics._newton)."""
-    k = m if rows else nv
-    tr = 0.0
-    for i in range(k):
-        for j in range(k):
-            s = 0.0
-            if rows:
-                for v in range(nv):
-                    s += J[i, v] * J[j, v]
-            else:
-                for r in range(m):
-                    s += J[r, i] * J[r, j]
-            A[i, j] = s
-        tr += A[i, i]
-    lam = 1e-13 * max(tr, 1e-300)
-    for i in range(k):
-        A[i, i] += lam
-
-
-@njit(cache=True)
-def _solve(A, b, k):
-    """Solve A x = b in place (b <- x) for the leading k x k block: Gaussian elimination with
-    partial pivoting (A is overwritten)."""
-    for c in range(k):
-        p = c
-        for r in range(c + 1, k):
-            if abs(A[r, c]) > abs(A[p, c]):
-                p = r
-        if p != c:
-            for j in range(k):
-                A[c, j], A[p, j] = A[p, j], A[c, j]
-            b[c], b[p] = b[p], b[c]
-        piv = A[c, c]
-        for r in range(c + 1, k):
-            f = A[r, c] / piv
-            if f != 0.0:
-                for j in range(c, k):
-                    A[r, j] -= f * A[c, j]
-                b[r] -= f * b[c]
-    for c in range(k - 1, -1, -1):
-        s = b[c]
-        for j in range(c + 1, k):
-            s -= A[c, j] * b[j]
-        b[c] = s / A[c, c]
-
-
-#: The damping of the Gauss-Newton steps (1e-13 of the trace, :func:`_gram`) leaves a redundant arm's scaled
-#: residual at about 1e-12 where the posture is far from the assembly (35 % of the Panda's task box stays
-#: between 1e-12 and 2.1e-12): a pose whose step moved no joint by more than STILL (rad or m) with a scaled
-#: residual below FLOOR is converged (further steps move its joints by less than 1e-14; the caller accepts 1e-9)
-FLOOR, STILL = 1e-10, 1e-13
-
-
-@njit(cache=True)
-def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts, has_rot, axes, jstage, jvar, jcoef, scale,
-                     n_final, tol):
-    """Joint values (n, n_vars) continued from q0 through the targets (K, n, n_axes) (rotations
-    Rts (K, n, 3, 3)): one Gauss-Newton step per intermediate target, up to n_final at the last;
-    redundant tasks step to the solution nearest q0 (see Kinematics._newton). Returns (q, residual,
-    evaluations). A pose stops at ``tol`` or at the floor of the damped steps (:data:`FLOOR`, :data:`STILL`).
-
-    Parameters
-    ----------
-    q0 : (n_vars,) ndarray
-        Starting (assembly) joint values (rad or m).
-    targets : (K, n, n_axes) ndarray
-        Target tip coordinates (m) per continuation step.
-    Rts : (K, n, 3, 3) ndarray
-        Target tip orientations per step (ignored unless ``has_rot``).
-    has_rot : bool
-        The orientation is part of the task.
-    axes : (n_axes,) ndarray of int64
-        Base axis (0-2) of each target coordinate.
-    jstage, jvar : (nj,) ndarray of int64
-        Joint stages and their joint variable indices.
-    jcoef : (nj,) ndarray
-        ``a_s`` of those stages (d value / d q).
-    scale : float
-        Length (m) dividing the position rows.
-    n_final : int
-        Largest number of Gauss-Newton iterations at the last target.
-    tol : float
-        Convergence tolerance of the scaled residual (dimensionless).
-
-    Returns
-    -------
-    Q : (n, n_vars) ndarray
-        Joint values at the last targets (rad or m).
-    residual : (n,) ndarray
-        Largest absolute scaled residual per pose (dimensionless).
-    evaluations : (n,) ndarray of int64
-        Task evaluations (forward kinematics and Jacobian) per pose, continuation steps included.
-    """
-    K, n = targets.shape[0], targets.shape[1]
-    nv = q0.shape[0]
-    m = axes.shape[0] + (3 if has_rot else 0)
-    Q = np.empty((n, nv))
-    res = np.empty(n)
-    evals = np.zeros(n, np.int64)
-    F = np.empty(m)
-    J = np.empty((m, nv))
-    A = np.empty((max(m, nv), max(m, nv)))
-    y = np.empty(max(m, nv))
-    d = np.empty(nv)
-    marks, T, S = np.empty((n_marks, 3, 4)), np.empty((3, 4)), np.empty((6, nv))
-    for i in range(n):
-        q = q0.copy()
-        r = np.inf
-        for k in range(K):
-            last = k == K - 1
-            iters = n_final if last else 1
-            moved = step = 0.0
-            for it in range(iters + 1):
-                if it == iters and not last:
-                    break
-                r = _task(P, ident, kind, var, a, c, mark, q, targets[k, i], Rts[k, i], has_rot, axes, jstage, jvar, jcoef,
-                          scale, F, J, marks, T, S)
-                evals[i] += 1
-                if (r < tol and moved <= 1e-11) or (r < FLOOR and step <= STILL) or it == iters:
-                    break
-                if m < nv:                  # redundant: q <- q0 + J^T (J J^T)^-1 (J (q - q0) - F)
-                    for j in range(nv):
-                        d[j] = q[j] - q0[j]
-                    _gram(J, m, nv, True, A)
-                    for j in range(m):
-                        s_ = -F[j]
-                        for v in range(nv):
-                            s_ += J[j, v] * d[v]
-                        y[j] = s_
-                    _solve(A, y, m)
-                    moved = 0.0
-                    for v in range(nv):
-                        s_ = 0.0
-                        for j in range(m):
-                            s_ += J[j, v] * y[j]
-                        moved = max(moved, abs(s_ - d[v]))
-                        q[v] = q0[v] + s_
-                    step = moved
-                else:                         # q <- q - (J^T J)^-1 J^T F
-                    _gram(J, m, nv, False, A)
-                    for v in range(nv):
-                        s_ = 0.0
-                        for j in range(m):
-                            s_ += J[j, v] * F[j]
-                        y[v] = s_
-                    _solve(A, y, nv)
-                    step = 0.0
-                    for v in range(nv):
-                        q[v] -= y[v]
-                        step = max(step, abs(y[v]))
-        Q[i] = q
-        res[i] = r
-    return Q, res, evals

@@ -75,6 +75,18 @@ def _task_jacobian(kin, q: dict, poses: np.ndarray, chain=None) -> np.ndarray | 
     return J * w[None, :, None]
 
 
+def _path_determinants(kin, chain, q0: dict, diff: dict, S: np.ndarray):
+    """(det J (samples, n), J at the last sample (n, m, m)) of :func:`check_branch`'s paths by the
+    compiled kernel (:func:`evotol.robots.mechanism.kinematics.serial_newton.path_determinants`)."""
+    from evotol.robots.mechanism.kinematics import serial_newton
+
+    js = np.flatnonzero(chain.kind > 0)
+    D = np.ascontiguousarray(np.stack([diff[v] for v in chain.variables], axis=1), float)
+    return serial_newton.path_determinants(*chain._args(), np.array([q0[v] for v in chain.variables], float), D, S,
+                                           bool(kin.orientation), np.array([ax for _, ax in kin.coord_axes], np.int64),
+                                           js, chain.var[js].copy(), chain.a[js].copy(), float(kin.length_scale))
+
+
 def check_branch(kin, poses: np.ndarray, q: dict, names, chain=None) -> np.ndarray:
     """Refuse poses reached on another branch than the assembly's; report those near a singularity.
 
@@ -119,12 +131,14 @@ def check_branch(kin, poses: np.ndarray, q: dict, names, chain=None) -> np.ndarr
     n = len(poses)
     diff = {k: np.asarray(q[k], float) - q0[k] for k in kin.variables}
     diff = {k: (wrapped(kin, {k: d})[k]) for k, d in diff.items()}
-    # every sample of every path in one batch (n x PATH_SAMPLES configurations): one pass over the frames
     S = np.linspace(0.0, 1.0, PATH_SAMPLES + 1)[1:]
-    qs = {k: (q0[k] + S[:, None] * diff[k][None, :]).ravel() for k in kin.variables}
-    J = _task_jacobian(kin, qs, np.tile(poses, (len(S), 1)), chain).reshape(len(S), n, *J0.shape[1:])
-    det = np.linalg.det(J)                                          # (samples, n)
-    sv = np.linalg.svd(J[-1], compute_uv=False)                     # at the solution
+    if chain is not None:           # compiled: det J at every sample, no Jacobian stored (issue 43 item 1)
+        det, J_end = _path_determinants(kin, chain, q0, diff, S)
+    else:                           # every sample of every path in one batch (n x PATH_SAMPLES configurations)
+        qs = {k: (q0[k] + S[:, None] * diff[k][None, :]).ravel() for k in kin.variables}
+        J = _task_jacobian(kin, qs, np.tile(poses, (len(S), 1)), chain).reshape(len(S), n, *J0.shape[1:])
+        det, J_end = np.linalg.det(J), J[-1]                        # (samples, n); at the solution
+    sv = np.linalg.svd(J_end, compute_uv=False)
     rel_end = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
     scale = np.abs(np.linalg.det(J0[0])) if np.linalg.det(J0[0]) != 0 else 1.0
     crossed = ((np.sign(det) != sign0) & (np.abs(det) > 1e-12 * scale)).any(axis=0)
