@@ -218,3 +218,21 @@ def test_compiled_path_determinants_equal_numpy_det_of_the_general_jacobian():
         ref = np.linalg.det(J)
         assert np.abs(det - ref).max() < 1e-12 * np.abs(ref).max() and (np.sign(det) == np.sign(ref)).all()
         assert np.abs(J_end - J[-1]).max() < 1e-12
+
+
+def test_smallest_singular_value_bound_decides_as_the_svd():
+    """The posture check's near-singular test (issue 43 item 1): the SVD runs only where the bound
+    ``|det J| / U^m`` (U from Gershgorin's circles of J^T J) is below NEAR_SINGULAR. On matrices of
+    every conditioning, near-singular ones included, the decision equals the SVD's, the value is the
+    SVD's where it is below the threshold, and a lower bound of it elsewhere."""
+    from evotol.robots.mechanism.posture.held import NEAR_SINGULAR, _relative_smallest_singular_value
+    rng = np.random.default_rng(4)
+    U, V = np.linalg.qr(rng.normal(size=(400, 6, 6)))[0], np.linalg.qr(rng.normal(size=(400, 6, 6)))[0]
+    sv = np.concatenate([rng.uniform(0.3, 3.0, (400, 5)), 10.0 ** rng.uniform(-5, 0, (400, 1))], axis=1)
+    J = np.einsum("nij,nj,nkj->nik", U, sv, V)
+    ref = np.linalg.svd(J, compute_uv=False)
+    ref = ref[:, -1] / ref[:, 0]
+    got = _relative_smallest_singular_value(J, np.linalg.det(J))
+    near = ref < NEAR_SINGULAR
+    assert 50 < near.sum() < 350 and ((got < NEAR_SINGULAR) == near).all()
+    assert np.allclose(got[near], ref[near], rtol=1e-12, atol=0) and (got[~near] <= ref[~near] * (1 + 1e-12)).all()

@@ -79,7 +79,7 @@ def _gram(J, m, nv, rows, A):
     k = m if rows else nv
     tr = 0.0
     for i in range(k):
-        for j in range(k):
+        for j in range(i + 1):                   # symmetric: the lower triangle, mirrored (the same sums)
             s = 0.0
             if rows:
                 for v in range(nv):
@@ -87,7 +87,7 @@ def _gram(J, m, nv, rows, A):
             else:
                 for r in range(m):
                     s += J[r, i] * J[r, j]
-            A[i, j] = s
+            A[i, j] = A[j, i] = s
         tr += A[i, i]
     lam = 1e-13 * max(tr, 1e-300)
     for i in range(k):
