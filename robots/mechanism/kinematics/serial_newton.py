@@ -95,19 +95,34 @@ def _gram(J, m, nv, rows, A):
 
 
 @njit(cache=True, inline="always")
+def _jt(J, x, v, m):
+    """``(J^T x)[v]`` over the first m rows of J."""
+    s = 0.0
+    for j in range(m):
+        s += J[j, v] * x[j]
+    return s
+
+
+@njit(cache=True, inline="always")
 def _solve(A, b, k):
     """Solve A x = b in place (b <- x) for the leading k x k block: Gaussian elimination with
-    partial pivoting (A is overwritten)."""
+    partial pivoting (A is overwritten). Returns det A (the pivots' product, signed by the row
+    exchanges); 0.0 at a zero pivot, b then unsolved (a damped Gram matrix never has one)."""
+    det = 1.0
     for c in range(k):
         p = c
         for r in range(c + 1, k):
             if abs(A[r, c]) > abs(A[p, c]):
                 p = r
         if p != c:
+            det = -det
             for j in range(k):
                 A[c, j], A[p, j] = A[p, j], A[c, j]
             b[c], b[p] = b[p], b[c]
         piv = A[c, c]
+        det *= piv
+        if piv == 0.0:
+            return 0.0
         for r in range(c + 1, k):
             f = A[r, c] / piv
             if f != 0.0:
@@ -119,6 +134,7 @@ def _solve(A, b, k):
         for j in range(c + 1, k):
             s -= A[c, j] * b[j]
         b[c] = s / A[c, c]
+    return det
 
 
 #: The damping of the Gauss-Newton steps (1e-13 of the trace, :func:`_gram`) leaves a redundant arm's scaled
@@ -207,19 +223,14 @@ def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts,
                     _solve(A, y, m)
                     moved = 0.0
                     for v in range(nv):
-                        s_ = 0.0
-                        for j in range(m):
-                            s_ += J[j, v] * y[j]
+                        s_ = _jt(J, y, v, m)
                         moved = max(moved, abs(s_ - d[v]))
                         q[v] = q0[v] + s_
                     step = moved
                 else:                         # q <- q - (J^T J)^-1 J^T F
                     _gram(J, m, nv, False, A)
                     for v in range(nv):
-                        s_ = 0.0
-                        for j in range(m):
-                            s_ += J[j, v] * F[j]
-                        y[v] = s_
+                        y[v] = _jt(J, F, v, m)
                     _solve(A, y, nv)
                     step = 0.0
                     for v in range(nv):
@@ -228,31 +239,6 @@ def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts,
         Q[i] = q
         res[i] = r
     return Q, res, evals
-
-
-@njit(cache=True, inline="always")
-def _det(A, k):
-    """Determinant of the leading k x k block of A (overwritten): Gaussian elimination with partial
-    pivoting, the product of the pivots times the sign of the row exchanges."""
-    det = 1.0
-    for c in range(k):
-        p = c
-        for r in range(c + 1, k):
-            if abs(A[r, c]) > abs(A[p, c]):
-                p = r
-        if p != c:
-            det = -det
-            for j in range(k):
-                A[c, j], A[p, j] = A[p, j], A[c, j]
-        piv = A[c, c]
-        det *= piv
-        if piv == 0.0:
-            return 0.0
-        for r in range(c + 1, k):
-            f = A[r, c] / piv
-            for j in range(c + 1, k):
-                A[r, j] -= f * A[c, j]
-    return det
 
 
 @njit(cache=True)
@@ -283,7 +269,7 @@ def path_determinants(P, ident, kind, var, a, c, mark, n_marks, q0, diff, S, has
     n, nv = diff.shape[0], q0.shape[0]
     det = np.empty((S.shape[0], n))
     J_end = np.empty((n, nv, nv))
-    J, A, q = np.empty((nv, nv)), np.empty((nv, nv)), np.empty(nv)
+    J, A, q, b = np.empty((nv, nv)), np.empty((nv, nv)), np.empty(nv), np.zeros(nv)
     marks, T, Sc = np.empty((n_marks, 3, 4)), np.empty((3, 4)), np.empty((6, nv))
     for i in range(n):
         for k in range(S.shape[0]):
@@ -291,6 +277,6 @@ def path_determinants(P, ident, kind, var, a, c, mark, n_marks, q0, diff, S, has
                 q[v] = q0[v] + S[k] * diff[i, v]
             _jacobian(P, ident, kind, var, a, c, mark, q, has_rot, axes, jstage, jvar, jcoef, scale, J, marks, T, Sc)
             A[:, :] = J
-            det[k, i] = _det(A, nv)
+            det[k, i] = _solve(A, b, nv)          # b = 0: only the elimination's pivots matter
         J_end[i] = J
     return det, J_end
