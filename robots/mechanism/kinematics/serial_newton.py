@@ -261,8 +261,8 @@ def path_determinants(P, ident, kind, var, a, c, mark, n_marks, q0, diff, S, has
     Returns
     -------
     det : (n_samples, n) ndarray
-        Determinant of the scaled task Jacobian at every sample (units of its rows: 1/m for the
-        position rows' ``1/scale`` times rad/rad).
+        Determinant of the scaled task Jacobian at every sample (its position rows per rad divided by
+        ``scale``, its rotation rows rad per rad: dimensionless for revolute joints).
     J_end : (n, n_vars, n_vars) ndarray
         The scaled task Jacobian at ``q0 + S[-1] diff[i]``.
     """
