@@ -362,7 +362,7 @@ NO_LOCATOR = """
     from evotol.robots.mechanism.kinematics import serial_kernels as k
     out = np.zeros((4, 4))
     k._mul(2 * np.eye(4), np.eye(4), out)         # rigid product, last row (0, 0, 0, 1): trace 2+2+2+1
-    print(type(k.inverse_geometry._cache).__name__, out.trace())
+    print(type(k.sensitivity._cache).__name__, out.trace())
 """
 
 

@@ -230,3 +230,44 @@ def test_the_branch_check_in_blocks_of_poses_is_the_check_of_all_at_once(monkeyp
     monkeypatch.setattr(held, "PATH_BLOCK", 5 * held.PATH_SAMPLES)
     near_blocked = held.check_branch(model.kin, P[ok], sol_ok, model.workspace.names)
     assert np.array_equal(near_whole, near_blocked) and ok.index(7) in near_whole.tolist()
+
+
+def test_compiled_path_determinants_equal_numpy_det_of_the_general_jacobian():
+    """The posture check's compiled kernel (serial_newton.path_determinants, issue 43 item 1): det J
+    at every sample of the joint-space paths and J at their ends equal LAPACK's determinant of the
+    general path's task Jacobian (tree.py) at the same configurations, on the PUMA (RPY) and the UR5."""
+    from evotol.robots.mechanism.posture.held import _path_determinants, _task_jacobian
+    from evotol.robots.mechanism.kinematics.serial import SERIAL_COMPILED, SerialChain
+    if not SERIAL_COMPILED:
+        pytest.skip("numba not available: the general path is the only one")
+    for f in (FIXTURE, Path(__file__).resolve().parents[1] / "robots" / "mechanisms" / "ur5.toml"):
+        kin = MechanismModel(f).kin
+        chain = SerialChain.build(kin, list(kin.variables))
+        rng = np.random.default_rng(1)
+        q0 = {v: float(x) for v, x in zip(kin.variables, rng.uniform(-2, 2, len(kin.variables)))}
+        diff = {v: rng.uniform(-3, 3, 15) for v in kin.variables}
+        S = np.linspace(0.0, 1.0, 5)[1:]
+        det, J_end = _path_determinants(kin, chain, q0, diff, S)
+        q = {v: (q0[v] + S[:, None] * diff[v][None, :]).ravel() for v in kin.variables}
+        J = _task_jacobian(kin, q, np.zeros((60, len(kin.mech.coordinates)))).reshape(4, 15, *J_end.shape[1:])
+        ref = np.linalg.det(J)
+        assert np.abs(det - ref).max() < 1e-12 * np.abs(ref).max() and (np.sign(det) == np.sign(ref)).all()
+        assert np.abs(J_end - J[-1]).max() < 1e-12
+
+
+def test_smallest_singular_value_bound_decides_as_the_svd():
+    """The posture check's near-singular test (issue 43 item 1): the SVD runs only where the bound
+    ``|det J| / U^m`` (U from Gershgorin's circles of J^T J) is below NEAR_SINGULAR. On matrices of
+    every conditioning, near-singular ones included, the decision equals the SVD's, the value is the
+    SVD's where it is below the threshold, and a lower bound of it elsewhere."""
+    from evotol.robots.mechanism.posture.held import NEAR_SINGULAR, _relative_smallest_singular_value
+    rng = np.random.default_rng(4)
+    U, V = np.linalg.qr(rng.normal(size=(400, 6, 6)))[0], np.linalg.qr(rng.normal(size=(400, 6, 6)))[0]
+    sv = np.concatenate([rng.uniform(0.3, 3.0, (400, 5)), 10.0 ** rng.uniform(-5, 0, (400, 1))], axis=1)
+    J = np.einsum("nij,nj,nkj->nik", U, sv, V)
+    ref = np.linalg.svd(J, compute_uv=False)
+    ref = ref[:, -1] / ref[:, 0]
+    got = _relative_smallest_singular_value(J, np.linalg.det(J))
+    near = ref < NEAR_SINGULAR
+    assert 50 < near.sum() < 350 and ((got < NEAR_SINGULAR) == near).all()
+    assert np.allclose(got[near], ref[near], rtol=1e-12, atol=0) and (got[~near] <= ref[~near] * (1 + 1e-12)).all()

@@ -101,3 +101,27 @@ def test_unsupported_sources_use_the_general_path():
     m = MechanismModel(HERE / "ur5.toml", sources=["elbow_joint_x", "elbow_joint"])
     assert m._serial is None
     assert MechanismModel(HERE / "fivebar.toml")._serial is None          # loops
+
+
+def test_panda_poses_at_the_damped_floor_equal_forty_general_steps():
+    """Issue 43 item 1: where the damping of the steps (1e-13 of the trace) leaves the Panda's scaled
+    residual between 1e-12 and 2.1e-12, the compiled inverse geometry stops once no joint moves by more
+    than 1e-13 (serial_newton.FLOOR, STILL) instead of running its 40 iterations. The general NumPy path
+    runs all 40 for the batch: the same joints to 2e-12 rad (1.28e-12 here, as from main's compiled path,
+    which ran the 40: the two paths' round-off at the damped fixed point), with far fewer evaluations."""
+    fast, slow = pair(HERE / "panda.toml")
+    run, seen = fast._serial.inverse_geometry, {}
+
+    def spy(*args):
+        seen["out"] = run(*args)
+        return seen["out"]
+
+    fast._serial.inverse_geometry = spy
+    poses = fast.workspace.latin_hypercube(200, seed=0)
+    qf = fast.joint_values(poses)
+    _, res, evals = seen["out"]
+    floor = res >= 1e-12                             # stopped at the floor, not at the tolerance
+    assert floor.sum() >= 20 and (res < 1e-10).all()
+    assert evals[floor].max() < 40 and evals.mean() < 25     # 10 continuation steps + a few at the pose
+    qs = slow.kin.inverse_geometry(poses)
+    assert max(np.abs(qf[v] - qs[v]).max() for v in qs) < 2e-12

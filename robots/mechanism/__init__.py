@@ -18,8 +18,9 @@ Sub-packages, one concept each (issue 39 item 5):
   :mod:`.urdf.check` (agreement with Pinocchio and finite differences);
 * :mod:`.kinematics` -- :mod:`.kinematics.tree` (forward kinematics of the frame tree, exact
   first-order maps), :mod:`.kinematics.placement` (placement errors as local twists),
-  :mod:`.kinematics.rotations`, :mod:`.kinematics.serial` and :mod:`.kinematics.serial_kernels` (the
-  compiled path of a serial chain), :mod:`.kinematics.forward_at` (the chain at given joint values);
+  :mod:`.kinematics.rotations`, :mod:`.kinematics.serial`, :mod:`.kinematics.serial_kernels` and
+  :mod:`.kinematics.serial_newton` (the compiled path of a serial chain: sensitivities, Monte Carlo,
+  inverse geometry and posture check), :mod:`.kinematics.forward_at` (the chain at given joint values);
 * :mod:`.posture` -- :mod:`.posture.inverse_geometry` (continued Newton inverse geometry),
   :mod:`.posture.working_mode` (the declared assembly), :mod:`.posture.held` (the posture over a task);
 * :mod:`.model` -- the error model: :mod:`.model.error_model` (:class:`MechanismModel`),

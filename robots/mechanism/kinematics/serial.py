@@ -1,6 +1,7 @@
 """The fast path of a serial chain (a URDF arm, or any description without loops): the frames from
 the base to the end-effector folded into stages, and the sources into terms, for the compiled
-kernels of :mod:`evotol.robots.mechanism.kinematics.serial_kernels`.
+kernels of :mod:`evotol.robots.mechanism.kinematics.serial_kernels` and
+:mod:`evotol.robots.mechanism.kinematics.serial_newton`.
 
 Why: the general description machinery evaluates every DH entry as an expression and builds every
 frame's twists with NumPy over all poses; for a 6-joint arm that is about 35 frames of small array
@@ -45,7 +46,7 @@ def _kernels():
     if not _ANNOUNCED:
         _ANNOUNCED.append(True)
         try:
-            index = serial_kernels.inverse_geometry._cache._cache_file._index_path   # numba internals; silent if they change
+            index = serial_kernels.sensitivity._cache._cache_file._index_path   # numba internals; silent if they change
         except AttributeError:
             return serial_kernels
         if not os.path.exists(index):
@@ -73,6 +74,7 @@ class SerialChain:
         self.mark_of = {}               # frame -> mark index (its placement)
         self.stage_of = {}              # joint frame -> stage index
         self._mc = None                 # the Monte Carlo kernel's program (serial_montecarlo.program), on first use
+        self._sens = None               # the sensitivity kernel's terms (column, mark, field, coefficient, variable)
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -264,18 +266,17 @@ class SerialChain:
             <evotol.robots.mechanism.model.error_model.MechanismModel.sensitivity>`.
         """
         K = _kernels()
-
-        vs = [(c, s) for c, v in zip(self.v_col, self.v_var) for s in np.flatnonzero((self.var == v) & (self.kind > 0))]
-        j_col = np.concatenate([self.j_col, np.array([c for c, _ in vs], np.int64)])
-        j_stage = np.concatenate([self.j_stage, np.array([s for _, s in vs], np.int64)])
-        j_coef = np.concatenate([self.j_coef, self.a[[s for _, s in vs]]])
-        j_var = np.concatenate([self.j_var, np.full(len(vs), -1, np.int64)])
-        t_col = np.concatenate([self.p_terms[:, 0], j_col])
-        t_mark = np.concatenate([self.p_terms[:, 1], self.mark[j_stage]])
-        t_field = np.concatenate([self.p_terms[:, 2], np.where(self.kind[j_stage] == 1, 5, 2)])
-        t_coef = np.concatenate([np.ones(len(self.p_terms)), j_coef])
-        t_var = np.concatenate([np.full(len(self.p_terms), -1, np.int64), j_var])
-        return K.sensitivity(*self._args(), np.ascontiguousarray(Q, float), t_col, t_mark, t_field, t_coef, t_var, self.n_cols)
+        if self._sens is None:                     # the terms of the kernel, built once (a call of 1 000 poses is ~0.5 ms)
+            vs = [(c, s) for c, v in zip(self.v_col, self.v_var) for s in np.flatnonzero((self.var == v) & (self.kind > 0))]
+            j_col = np.concatenate([self.j_col, np.array([c for c, _ in vs], np.int64)])
+            j_stage = np.concatenate([self.j_stage, np.array([s for _, s in vs], np.int64)])
+            j_coef = np.concatenate([self.j_coef, self.a[[s for _, s in vs]]])
+            j_var = np.concatenate([self.j_var, np.full(len(vs), -1, np.int64)])
+            self._sens = (np.concatenate([self.p_terms[:, 0], j_col]), np.concatenate([self.p_terms[:, 1], self.mark[j_stage]]),
+                          np.concatenate([self.p_terms[:, 2], np.where(self.kind[j_stage] == 1, 5, 2)]),
+                          np.concatenate([np.ones(len(self.p_terms)), j_coef]),
+                          np.concatenate([np.full(len(self.p_terms), -1, np.int64), j_var]))
+        return K.sensitivity(*self._args(), np.ascontiguousarray(Q, float), *self._sens, self.n_cols)
 
     def pose_error(self, Q: np.ndarray, errors: np.ndarray) -> np.ndarray:
         """(n, m, 6) nonlinear tip error for errors (n, m, n_cols) at joint values Q (n, n_vars), by the
@@ -319,9 +320,11 @@ class SerialChain:
                       self.v_col, self.v_var)
 
     def inverse_geometry(self, q0: np.ndarray, targets: np.ndarray, Rts: np.ndarray | None, axes, scale: float):
-        """(Q (n, n_vars), scaled residual (n,)) continued from q0 through targets (K, n, n_axes).
+        """(Q (n, n_vars), scaled residual (n,), evaluations (n,)) continued from q0 through targets
+        (K, n, n_axes).
 
-        One Gauss-Newton correction per intermediate step, up to 40 iterations (tolerance 1e-12)
+        One Gauss-Newton correction per intermediate step, up to 40 iterations (tolerance 1e-12,
+        or the damped steps' floor: :data:`~evotol.robots.mechanism.kinematics.serial_kernels.FLOOR`)
         at the last; a redundant arm keeps the posture nearest ``q0``.
 
         Parameters
@@ -331,7 +334,8 @@ class SerialChain:
         targets : (K, n, n_axes) ndarray
             Target tip coordinates (m) of the ``K`` continuation steps, the last the poses.
         Rts : (K, n, 3, 3) ndarray or None
-            Target orientations of the tip per step, or None when the orientation is free.
+            Target orientations of the tip per step (a broadcast view with zero strides where one
+            orientation holds at every step or pose), or None when the orientation is free.
         axes : sequence of int
             Base axis (0 x, 1 y, 2 z) of each target coordinate.
         scale : float
@@ -343,15 +347,19 @@ class SerialChain:
             Joint values at the poses (rad or m).
         residual : (n,) ndarray
             Largest scaled residual per pose (dimensionless); the caller checks it.
+        evaluations : (n,) ndarray of int
+            Forward kinematics and Jacobian evaluations per pose (continuation steps included).
         """
-        K = _kernels()
+        from evotol.robots.mechanism.kinematics import serial_newton
 
+        _kernels()
         js = np.array([s for s in range(len(self.kind)) if self.kind[s] > 0], np.int64)
         has_rot = Rts is not None
         if Rts is None:
-            Rts = np.zeros(targets.shape[:2] + (3, 3))
-        return K.inverse_geometry(*self._args(), np.asarray(q0, float), np.ascontiguousarray(targets, float),
-                                  np.ascontiguousarray(Rts, float), has_rot, np.asarray(axes, np.int64), js, self.var[js].copy(),
+            Rts = np.broadcast_to(np.zeros((1, 1, 3, 3)), targets.shape[:2] + (3, 3))
+        Rts = np.asarray(Rts, float)                   # zero strides kept: numba indexes views as they are
+        return serial_newton.inverse_geometry(*self._args(), np.asarray(q0, float), np.ascontiguousarray(targets, float),
+                                  Rts, has_rot, np.asarray(axes, np.int64), js, self.var[js].copy(),
                                   self.a[js].copy(), float(scale), 40, 1e-12)
 
 
@@ -400,11 +408,13 @@ def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step
     steps = np.linspace(1.0 / K, 1.0, K)
     targets = x0 + steps[:, None, None] * (poses - x0)[None]
     Rts = None
-    if kin.orientation:
-        Rts = np.stack([kin._target_orientation(t) for t in targets])
+    if kin.orientation and not any(e.names & {c.name for c in mech.coordinates} for _, e in kin.orientation):
+        Rts = np.broadcast_to(kin._target_orientation(x0[None]), targets.shape[:2] + (3, 3))   # the same at every target
+    elif kin.orientation:
+        Rts = kin._target_orientation(targets.reshape(-1, targets.shape[2])).reshape(targets.shape[:2] + (3, 3))
     idx = [i for i, _ in kin.coord_axes]
     axes = [ax for _, ax in kin.coord_axes]
-    Q, res = chain.inverse_geometry(np.array([q0[v] for v in chain.variables]), targets[:, :, idx], Rts, axes,
+    Q, res, _ = chain.inverse_geometry(np.array([q0[v] for v in chain.variables]), targets[:, :, idx], Rts, axes,
                                     kin.length_scale)
     bad = ~(res < 1e-9)
     if bad.any():

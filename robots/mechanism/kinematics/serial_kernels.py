@@ -1,5 +1,6 @@
-"""Compiled (numba) kernels of a serial chain: forward kinematics, sensitivity, perturbed forward
-kinematics and the continued Newton inverse geometry, one pose per loop iteration.
+"""Compiled (numba) kernels of a serial chain: forward kinematics, sensitivity and perturbed forward
+kinematics, one pose per loop iteration (the Newton kernels, inverse geometry and posture check, are
+:mod:`evotol.robots.mechanism.kinematics.serial_newton`).
 
 The chain is a list of **stages** (:class:`evotol.robots.mechanism.kinematics.serial.SerialChain`): ``T <- T P_s``
 (a constant 4x4, the fixed rows and the joint row's ``Rot(z,gamma) Trans(z,b) Rot(x,alpha)
@@ -137,30 +138,45 @@ def _chain(P, ident, kind, var, a, c, mark, q, dq, E, has_E, marks, T, tmp):
             _joint(tmp, kind[s], a[s] * q[var[s]] + c[s] + dq[s], T)
 
 
-@njit(cache=True)
-def _column(marks, m, field, p, coef, S, col):
-    """Add coef * (motion [dp; dphi] of the point p) of a unit placement error ``field`` at mark m."""
-    k = field % 3
-    ax0, ax1, ax2 = marks[m, 0, k], marks[m, 1, k], marks[m, 2, k]
-    if field < 3:                                   # shift: translation along the axis
-        S[0, col] += coef * ax0
-        S[1, col] += coef * ax1
-        S[2, col] += coef * ax2
-    else:                                           # tilt: rotation about the axis through the mark's origin
-        rx, ry, rz = p[0] - marks[m, 0, 3], p[1] - marks[m, 1, 3], p[2] - marks[m, 2, 3]
-        S[0, col] += coef * (ax1 * rz - ax2 * ry)
-        S[1, col] += coef * (ax2 * rx - ax0 * rz)
-        S[2, col] += coef * (ax0 * ry - ax1 * rx)
-        S[3, col] += coef * ax0
-        S[4, col] += coef * ax1
-        S[5, col] += coef * ax2
+@njit(cache=True, inline="always")
+def _frames(P, ident, kind, var, a, c, mark, q, marks, T):
+    """Nominal forward kinematics at joint values ``a q[var] + c``, row by row (row i of ``T P_s`` and
+    of the joint motion needs only row i of ``T``, so nothing is copied): the frames after ``P``
+    (3x4) into ``marks``, the tip into ``T`` (3x4). The same products, in the same order, as
+    :func:`_chain` with no errors."""
+    for i in range(3):
+        for j in range(4):
+            T[i, j] = 1.0 if i == j else 0.0
+    for s in range(P.shape[0]):
+        k, m = kind[s], mark[s]
+        cs = sn = v = 0.0
+        if k == 1:
+            v = a[s] * q[var[s]] + c[s]
+            cs, sn = np.cos(v), np.sin(v)
+        elif k == 2:
+            v = a[s] * q[var[s]] + c[s]
+        for i in range(3):
+            u0, u1, u2, u3 = T[i, 0], T[i, 1], T[i, 2], T[i, 3]
+            if not ident[s]:
+                r0, r1, r2 = u0, u1, u2
+                u0 = r0 * P[s, 0, 0] + r1 * P[s, 1, 0] + r2 * P[s, 2, 0]
+                u1 = r0 * P[s, 0, 1] + r1 * P[s, 1, 1] + r2 * P[s, 2, 1]
+                u2 = r0 * P[s, 0, 2] + r1 * P[s, 1, 2] + r2 * P[s, 2, 2]
+                u3 = r0 * P[s, 0, 3] + r1 * P[s, 1, 3] + r2 * P[s, 2, 3] + u3
+            if m >= 0:
+                marks[m, i, 0], marks[m, i, 1], marks[m, i, 2], marks[m, i, 3] = u0, u1, u2, u3
+            if k == 1:
+                u0, u1 = cs * u0 + sn * u1, -sn * u0 + cs * u1
+            elif k == 2:
+                u3 = u3 + v * u2
+            T[i, 0], T[i, 1], T[i, 2], T[i, 3] = u0, u1, u2, u3
 
 
 @njit(cache=True, error_model="numpy")
 def sensitivity(P, ident, kind, var, a, c, mark, n_marks, Q, t_col, t_mark, t_field, t_coef, t_var, n_cols):
     """(n, 6, n_cols) first-order map at joint values Q (n, n_vars); terms: column, mark, field,
-    coefficient, variable (coefficient times q[var] when var >= 0). The columns are those of
-    :func:`_column`, written out here so the loop over terms touches no array views.
+    coefficient, variable (coefficient times q[var] when var >= 0): a shift moves the tip along the
+    mark's axis, a tilt turns it about the axis through the mark's origin (``[ax x (p - o); ax]``).
 
     Parameters
     ----------
@@ -183,16 +199,12 @@ def sensitivity(P, ident, kind, var, a, c, mark, n_marks, Q, t_col, t_mark, t_fi
         ``[dp (m); dphi (rad)]`` of the tip, base frame, per unit of each column (m or rad).
     """
     n = Q.shape[0]
-    S = np.empty((n, 6, n_cols))
+    S = np.empty((n, 6, n_cols))                  # each pose's block zeroed while in cache (np.zeros: a memset pass)
     marks = np.empty((n_marks, 3, 4))
-    T = np.empty((4, 4))
-    tmp = np.empty((4, 4))
-    dq = np.zeros(P.shape[0])
-    E = np.empty((1, 4, 4))
-    has_E = np.zeros(n_marks, np.bool_)
+    T = np.empty((3, 4))
     nt = t_col.shape[0]
     for i in range(n):
-        _chain(P, ident, kind, var, a, c, mark, Q[i], dq, E, has_E, marks, T, tmp)
+        _frames(P, ident, kind, var, a, c, mark, Q[i], marks, T)
         S[i] = 0.0
         px, py, pz = T[0, 3], T[1, 3], T[2, 3]
         for t in range(nt):
@@ -217,12 +229,20 @@ def sensitivity(P, ident, kind, var, a, c, mark, n_marks, Q, t_col, t_mark, t_fi
     return S
 
 
-@njit(cache=True)
-def _rotvec(R):
-    cs = min(1.0, max(-1.0, (R[0, 0] + R[1, 1] + R[2, 2] - 1.0) / 2.0))
+@njit(cache=True, inline="always")
+def _rotvec(T, Rt, w, r):
+    """Rotation vector (rad) of ``R Rt^T`` (``R`` the rotation of the 3x4 ``T``) into ``w[r:r + 3]``."""
+    R00 = T[0, 0] * Rt[0, 0] + T[0, 1] * Rt[0, 1] + T[0, 2] * Rt[0, 2]
+    R11 = T[1, 0] * Rt[1, 0] + T[1, 1] * Rt[1, 1] + T[1, 2] * Rt[1, 2]
+    R22 = T[2, 0] * Rt[2, 0] + T[2, 1] * Rt[2, 1] + T[2, 2] * Rt[2, 2]
+    cs = min(1.0, max(-1.0, (R00 + R11 + R22 - 1.0) / 2.0))
     th = np.arccos(cs)
     f = 0.5 + th * th / 12.0 if th < 1e-8 else th / (2.0 * np.sin(th))
-    return np.array([(R[2, 1] - R[1, 2]) * f, (R[0, 2] - R[2, 0]) * f, (R[1, 0] - R[0, 1]) * f])
+    for k in range(3):                  # R[i, j] - R[j, i] for (i, j) = (2, 1), (0, 2), (1, 0)
+        i, j = (k + 2) % 3, (k + 1) % 3
+        Rij = T[i, 0] * Rt[j, 0] + T[i, 1] * Rt[j, 1] + T[i, 2] * Rt[j, 2]
+        Rji = T[j, 0] * Rt[i, 0] + T[j, 1] * Rt[i, 1] + T[j, 2] * Rt[i, 2]
+        w[r + k] = (Rij - Rji) * f
 
 
 @njit(cache=True)
@@ -338,178 +358,3 @@ def pose_error(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mar
         _pose_error_block(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col, p_mark, p_field, j_col, j_stage,
                           j_coef, j_var, v_col, v_var, b * BLOCK, min(total, (b + 1) * BLOCK), out)
     return out
-
-
-@njit(cache=True)
-def _task(P, ident, kind, var, a, c, mark, n_marks, q, target, Rt, has_rot, axes, jstage, jvar, jcoef, scale, F, J):
-    """Residual F (m,) and Jacobian J (m, n_vars) of the task at q, rows scaled (lengths / scale)."""
-    marks = np.empty((n_marks, 3, 4))
-    T = np.empty((4, 4))
-    dq = np.zeros(P.shape[0])
-    E = np.empty((1, 4, 4))
-    none = np.zeros(n_marks, np.bool_)
-    _chain(P, ident, kind, var, a, c, mark, q, dq, E, none, marks, T, np.empty((4, 4)))
-    nv = J.shape[1]
-    S = np.zeros((6, nv))
-    p = T[:3, 3]
-    for t in range(jstage.shape[0]):
-        s = jstage[t]
-        _column(marks, mark[s], 5 if kind[s] == 1 else 2, p, jcoef[t], S, jvar[t])
-    r = 0
-    for k in range(axes.shape[0]):
-        F[r] = (p[axes[k]] - target[k]) / scale
-        for v in range(nv):
-            J[r, v] = S[axes[k], v] / scale
-        r += 1
-    if has_rot:
-        R = np.empty((3, 3))
-        for i in range(3):
-            for j in range(3):
-                R[i, j] = T[i, 0] * Rt[j, 0] + T[i, 1] * Rt[j, 1] + T[i, 2] * Rt[j, 2]
-        w = _rotvec(R)
-        for k in range(3):
-            F[r] = w[k]
-            for v in range(nv):
-                J[r, v] = S[3 + k, v]
-            r += 1
-
-
-@njit(cache=True)
-def _gram(J, m, nv, rows, A):
-    """A = J J^T (rows) or J^T J, damped by 1e-13 of its trace (as Kinematics._newton)."""
-    k = m if rows else nv
-    tr = 0.0
-    for i in range(k):
-        for j in range(k):
-            s = 0.0
-            if rows:
-                for v in range(nv):
-                    s += J[i, v] * J[j, v]
-            else:
-                for r in range(m):
-                    s += J[r, i] * J[r, j]
-            A[i, j] = s
-        tr += A[i, i]
-    lam = 1e-13 * max(tr, 1e-300)
-    for i in range(k):
-        A[i, i] += lam
-
-
-@njit(cache=True)
-def _solve(A, b, k):
-    """Solve A x = b in place (b <- x) for the leading k x k block: Gaussian elimination with
-    partial pivoting (A is overwritten)."""
-    for c in range(k):
-        p = c
-        for r in range(c + 1, k):
-            if abs(A[r, c]) > abs(A[p, c]):
-                p = r
-        if p != c:
-            for j in range(k):
-                A[c, j], A[p, j] = A[p, j], A[c, j]
-            b[c], b[p] = b[p], b[c]
-        piv = A[c, c]
-        for r in range(c + 1, k):
-            f = A[r, c] / piv
-            if f != 0.0:
-                for j in range(c, k):
-                    A[r, j] -= f * A[c, j]
-                b[r] -= f * b[c]
-    for c in range(k - 1, -1, -1):
-        s = b[c]
-        for j in range(c + 1, k):
-            s -= A[c, j] * b[j]
-        b[c] = s / A[c, c]
-
-
-@njit(cache=True)
-def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts, has_rot, axes, jstage, jvar, jcoef, scale,
-                     n_final, tol):
-    """Joint values (n, n_vars) continued from q0 through the targets (K, n, n_axes) (rotations
-    Rts (K, n, 3, 3)): one Gauss-Newton step per intermediate target, up to n_final at the last;
-    redundant tasks step to the solution nearest q0 (see Kinematics._newton). Returns (q, residual).
-
-    Parameters
-    ----------
-    q0 : (n_vars,) ndarray
-        Starting (assembly) joint values (rad or m).
-    targets : (K, n, n_axes) ndarray
-        Target tip coordinates (m) per continuation step.
-    Rts : (K, n, 3, 3) ndarray
-        Target tip orientations per step (ignored unless ``has_rot``).
-    has_rot : bool
-        The orientation is part of the task.
-    axes : (n_axes,) ndarray of int64
-        Base axis (0-2) of each target coordinate.
-    jstage, jvar : (nj,) ndarray of int64
-        Joint stages and their joint variable indices.
-    jcoef : (nj,) ndarray
-        ``a_s`` of those stages (d value / d q).
-    scale : float
-        Length (m) dividing the position rows.
-    n_final : int
-        Largest number of Gauss-Newton iterations at the last target.
-    tol : float
-        Convergence tolerance of the scaled residual (dimensionless).
-
-    Returns
-    -------
-    Q : (n, n_vars) ndarray
-        Joint values at the last targets (rad or m).
-    residual : (n,) ndarray
-        Largest absolute scaled residual per pose (dimensionless).
-    """
-    K, n = targets.shape[0], targets.shape[1]
-    nv = q0.shape[0]
-    m = axes.shape[0] + (3 if has_rot else 0)
-    Q = np.empty((n, nv))
-    res = np.empty(n)
-    F = np.empty(m)
-    J = np.empty((m, nv))
-    A = np.empty((max(m, nv), max(m, nv)))
-    y = np.empty(max(m, nv))
-    d = np.empty(nv)
-    for i in range(n):
-        q = q0.copy()
-        r = np.inf
-        for k in range(K):
-            last = k == K - 1
-            iters = n_final if last else 1
-            moved = 0.0
-            for it in range(iters + 1):
-                if it == iters and not last:
-                    break
-                _task(P, ident, kind, var, a, c, mark, n_marks, q, targets[k, i], Rts[k, i], has_rot, axes, jstage, jvar, jcoef, scale, F, J)
-                r = np.max(np.abs(F))
-                if (r < tol and moved <= 1e-11) or it == iters:
-                    break
-                if m < nv:                  # redundant: q <- q0 + J^T (J J^T)^-1 (J (q - q0) - F)
-                    for j in range(nv):
-                        d[j] = q[j] - q0[j]
-                    _gram(J, m, nv, True, A)
-                    for j in range(m):
-                        s_ = -F[j]
-                        for v in range(nv):
-                            s_ += J[j, v] * d[v]
-                        y[j] = s_
-                    _solve(A, y, m)
-                    moved = 0.0
-                    for v in range(nv):
-                        s_ = 0.0
-                        for j in range(m):
-                            s_ += J[j, v] * y[j]
-                        moved = max(moved, abs(s_ - d[v]))
-                        q[v] = q0[v] + s_
-                else:                         # q <- q - (J^T J)^-1 J^T F
-                    _gram(J, m, nv, False, A)
-                    for v in range(nv):
-                        s_ = 0.0
-                        for j in range(m):
-                            s_ += J[j, v] * F[j]
-                        y[v] = s_
-                    _solve(A, y, nv)
-                    for v in range(nv):
-                        q[v] -= y[v]
-        Q[i] = q
-        res[i] = r
-    return Q, res

@@ -224,6 +224,10 @@ class MechanismModel(RobotErrorModel):
             A parallel singularity or an over-constrained loop at a configuration (the pose
             reported is zeros: the poses are not known here).
         """
+        if self._serial is not None and not isinstance(q, dict):
+            Q = np.atleast_2d(np.asarray(q, float))
+            if Q.ndim == 2 and Q.shape[1] == len(self.kin.variables):     # the chain's order: no dict round trip
+                return self._serial.sensitivity(Q)
         q, n = self._joint_dict(q)
         if self._serial is not None:
             return self._serial.sensitivity(self._serial.joints_array(q))

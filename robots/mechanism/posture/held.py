@@ -32,9 +32,9 @@ from evotol.robots.mechanism.kinematics.serial import SERIAL_COMPILED, SerialCha
 NEAR_SINGULAR = 1e-3
 #: samples of the joint-space path from the assembly joints to a solution (det J sign along it)
 PATH_SAMPLES = 24
-#: path samples (configurations) whose Jacobians are held at once: poses are checked in blocks of
-#: ``PATH_BLOCK // PATH_SAMPLES``, so the check's memory does not grow with the poses (issue 43 item 4:
-#: 103 823 UR5 poses at once took 2.3 GB)
+#: path samples (configurations) whose Jacobians the general path holds at once: its poses are checked in
+#: blocks of ``PATH_BLOCK // PATH_SAMPLES``, so the check's memory does not grow with the poses (issue 43
+#: item 4: 103 823 UR5 poses at once took 2.3 GB; the compiled path stores no Jacobian)
 PATH_BLOCK = 1 << 15
 
 
@@ -77,6 +77,32 @@ def _task_jacobian(kin, q: dict, poses: np.ndarray, chain=None) -> np.ndarray | 
         return None
     w = np.where(is_len, 1.0 / kin.length_scale, 1.0)
     return J * w[None, :, None]
+
+
+def _path_determinants(kin, chain, q0: dict, diff: dict, S: np.ndarray):
+    """(det J (samples, n), J at the last sample (n, m, m)) of :func:`check_branch`'s paths by the
+    compiled kernel (:func:`evotol.robots.mechanism.kinematics.serial_newton.path_determinants`)."""
+    from evotol.robots.mechanism.kinematics import serial_newton
+
+    js = np.flatnonzero(chain.kind > 0)
+    D = np.ascontiguousarray(np.stack([diff[v] for v in chain.variables], axis=1), float)
+    return serial_newton.path_determinants(*chain._args(), np.array([q0[v] for v in chain.variables], float), D, S,
+                                           bool(kin.orientation), np.array([ax for _, ax in kin.coord_axes], np.int64),
+                                           js, chain.var[js].copy(), chain.a[js].copy(), float(kin.length_scale))
+
+
+def _relative_smallest_singular_value(J: np.ndarray, det: np.ndarray) -> np.ndarray:
+    """``sigma_min / sigma_max`` of each square J (n, m, m) where it may be below :data:`NEAR_SINGULAR`,
+    else a lower bound of it that is not: ``|det J| / U^m`` with ``U^2 >= sigma_max^2`` (Gershgorin's
+    circles of ``J^T J``), since ``sigma_min >= |det J| / sigma_max^(m-1)``. The SVD runs only where
+    the bound does not decide (on the UR5's task box: nowhere; it was a quarter of the check)."""
+    U2 = np.abs(np.einsum("nki,nkj->nij", J, J)).sum(axis=2).max(axis=1)
+    rel = np.abs(det) / np.maximum(U2, 1e-300) ** (J.shape[1] / 2)
+    low = np.flatnonzero(~(rel >= NEAR_SINGULAR))
+    if low.size:
+        sv = np.linalg.svd(J[low], compute_uv=False)
+        rel[low] = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
+    return rel
 
 
 def check_branch(kin, poses: np.ndarray, q: dict, names, chain=None) -> np.ndarray:
@@ -123,19 +149,23 @@ def check_branch(kin, poses: np.ndarray, q: dict, names, chain=None) -> np.ndarr
     n = len(poses)
     diff = {k: np.asarray(q[k], float) - q0[k] for k in kin.variables}
     diff = {k: (wrapped(kin, {k: d})[k]) for k, d in diff.items()}
-    # every sample of the paths of a block of poses in one batch (poses x PATH_SAMPLES configurations)
     S = np.linspace(0.0, 1.0, PATH_SAMPLES + 1)[1:]
     scale = np.abs(np.linalg.det(J0[0])) if np.linalg.det(J0[0]) != 0 else 1.0
-    rel_end, crossed = np.empty(n), np.empty(n, dtype=bool)
-    step = max(1, PATH_BLOCK // len(S))
-    for b in range(0, n, step):
-        sl = slice(b, min(n, b + step))
-        qs = {k: (q0[k] + S[:, None] * diff[k][None, sl]).ravel() for k in kin.variables}
-        J = _task_jacobian(kin, qs, np.tile(poses[sl], (len(S), 1)), chain).reshape(len(S), sl.stop - b, *J0.shape[1:])
-        det = np.linalg.det(J)                                      # (samples, poses of the block)
-        sv = np.linalg.svd(J[-1], compute_uv=False)                 # at the solution
-        rel_end[sl] = sv[:, -1] / np.maximum(sv[:, 0], 1e-300)
-        crossed[sl] = ((np.sign(det) != sign0) & (np.abs(det) > 1e-12 * scale)).any(axis=0)
+    if chain is not None:           # compiled: det J at every sample, no Jacobian stored (issue 43 item 1)
+        det, J_end = _path_determinants(kin, chain, q0, diff, S)
+        rel_end = _relative_smallest_singular_value(J_end, det[-1])
+        crossed = ((np.sign(det) != sign0) & (np.abs(det) > 1e-12 * scale)).any(axis=0)
+    else:                           # every sample of the paths of a block of poses in one batch
+        rel_end, crossed = np.empty(n), np.empty(n, dtype=bool)
+        step = max(1, PATH_BLOCK // len(S))
+        for b in range(0, n, step):
+            sl = slice(b, min(n, b + step))
+            qs = {k: (q0[k] + S[:, None] * diff[k][None, sl]).ravel() for k in kin.variables}
+            J = _task_jacobian(kin, qs, np.tile(poses[sl], (len(S), 1)), chain).reshape(len(S), sl.stop - b,
+                                                                                       *J0.shape[1:])
+            det = np.linalg.det(J)                                  # (samples, poses of the block)
+            rel_end[sl] = _relative_smallest_singular_value(J[-1], det[-1])
+            crossed[sl] = ((np.sign(det) != sign0) & (np.abs(det) > 1e-12 * scale)).any(axis=0)
     near = np.flatnonzero(rel_end < NEAR_SINGULAR)
     other = np.flatnonzero(crossed & ~(rel_end < NEAR_SINGULAR))
     if other.size:
