@@ -82,3 +82,35 @@ def test_pose_uniforms_are_the_spawned_childs_draws(method):
     for p in (0, 3, 8):
         ref = uniforms(40, 7, method, np.random.default_rng(kids[p]))
         assert np.array_equal(pose_uniforms(np.random.SeedSequence(5), p, 40, 7, method), ref)
+
+
+def test_compiled_latin_hypercubes_are_the_numpy_draws():
+    from evotol.measures.statistical.lhs_compiled import latin_hypercubes
+    from evotol.verification.montecarlo import pose_uniforms
+
+    root = np.random.SeedSequence(13)
+    for n, d, poses in [(100, 36, range(40)), (1, 3, [5]), (7, 5, [0, 9, 2]), (300, 54, [1, 77])]:
+        got = latin_hypercubes(root, poses, n, d)
+        if got is None:
+            pytest.skip("numba is not available (EVOTOL_NO_NUMBA or not installed): the NumPy path serves")
+        ref = np.stack([pose_uniforms(root, p, n, d, "lhs") for p in poses])
+        assert np.array_equal(got, ref)
+
+
+def test_a_verification_draws_the_same_samples_compiled_or_not(monkeypatch):
+    """verify() switches to the compiled hypercubes from lhs_compiled.MIN_POSES poses: forced on a small
+    study, every rate, maximum and yield is the same to the last bit."""
+    import evotol.verification.montecarlo as mc
+    from tests.test_combinations import STUDIES, ur5
+    from evotol.studyfile.problem import load_problem
+
+    p = load_problem(ur5(), base_dir=STUDIES)
+    t = np.sqrt(p.lower * p.upper)
+    ref = mc.verify(p, t, n_samples=64, seed=4)
+    monkeypatch.setattr(mc, "LHS_MIN_POSES", 0)
+    got = mc.verify(p, t, n_samples=64, seed=4)
+    for name in ("exceed_rate", "max_error", "quantile_95", "nonlinear_exceed_rate"):
+        a, b = getattr(ref, name), getattr(got, name)
+        assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+    assert np.array_equal(ref.yield_linear, got.yield_linear) and np.array_equal(ref.yield_nonlinear, got.yield_nonlinear)
+    assert ref.nonlinear_exceed_rate and ref.yield_nonlinear is not None          # the nonlinear model was sampled too

@@ -31,6 +31,7 @@ from evotol.measures import clearances
 
 from evotol.measures.statistical import distributions
 from evotol.measures.statistical.distributions import METHODS
+from evotol.measures.statistical.lhs_compiled import MIN_POSES as LHS_MIN_POSES, latin_hypercubes
 from evotol.errors import ValidationError, is_integer, is_real
 from evotol.verification.nonlinear import verify_nonlinear
 from evotol.core.problem import ToleranceProblem
@@ -427,7 +428,9 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
                        + (" (nonlinear model)" if exceed_nl else ""))
     for start in range(0, P, chunk_poses):
         idx = np.arange(start, min(start + chunk_poses, P))
-        U = np.concatenate([pose_uniforms(root, int(p), n_samples, sum(dims), method) for p in idx])
+        U = latin_hypercubes(root, idx, n_samples, sum(dims)) if method == "lhs" and P >= LHS_MIN_POSES else None
+        U = (np.concatenate([pose_uniforms(root, int(p), n_samples, sum(dims), method) for p in idx]) if U is None
+             else U.reshape(-1, U.shape[2]))                            # the same draws, compiled (many poses)
         Z = distributions.draw(U, dims, dists, radial)                  # row by row: the chunk's poses at once
         E = np.concatenate(problem.source_errors(Z, t), axis=1).reshape(idx.size, n_samples, robot.n_columns)
         lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
