@@ -168,7 +168,7 @@ def test_first_compile_is_announced(tmp_path, caplog, capsys):
     def fake(index):
         return SimpleNamespace(_cache=SimpleNamespace(_cache_file=SimpleNamespace(_index_path=str(index))))
 
-    with caplog.at_level(logging.INFO, logger="robots"):
+    with caplog.at_level(logging.INFO, logger="evotol.robots.clearance.newton_kernel"):
         newton_kernel._say_if_compiling(fake(tmp_path / "missing.nbi"))
         assert [r.name for r in caplog.records] == ["evotol.robots.clearance.newton_kernel"]
         assert "compiling the clearance engine's Newton kernels" in caplog.records[0].getMessage()
