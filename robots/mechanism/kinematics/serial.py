@@ -38,7 +38,7 @@ _ANNOUNCED = []
 def _kernels():
     """The compiled kernels; one log line (INFO, standard error under the ``evotol`` command) the first
     time a process finds no compiled copy in numba's on-disk cache (a fresh install compiles them once,
-    about 10 s), so it does not look hung."""
+    up to about 40 s on a 2-core machine), so it does not look hung."""
     import os
 
     from evotol.robots.mechanism.kinematics import serial_kernels
@@ -50,7 +50,7 @@ def _kernels():
         except AttributeError:
             return serial_kernels
         if not os.path.exists(index):
-            logger.info("compiling the serial-arm kernels with numba (once per install, about 10 s; cached in %s)",
+            logger.info("compiling the serial-arm kernels with numba (once per install, up to about 40 s; cached in %s)",
                         os.path.dirname(index))
     return serial_kernels
 

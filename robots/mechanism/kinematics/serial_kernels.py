@@ -279,7 +279,8 @@ def _pose_error_block(P, ident, kind, var, a, c, mark, n_marks, Q, errors, p_col
         for mk in range(n_marks):
             if has_E[mk]:
                 _exp6(delta[mk], E[mk])
-        qe[:] = Q[i]
+        for v in range(Q.shape[1]):
+            qe[v] = Q[i, v]
         for t in range(v_col.shape[0]):
             qe[v_var[t]] += e[v_col[t]]
         dq[:] = 0.0

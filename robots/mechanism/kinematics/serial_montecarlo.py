@@ -154,7 +154,9 @@ def _constants(P, kind, var, a, c, q, seg_start, fac_kind, fac_stage, C, T0):
             s = fac_stage[f]
             if fac_kind[f] == 0:
                 _mul34(C[k], P[s], tmp)
-                C[k] = tmp
+                for i in range(3):        # element by element: a slice assignment compiles numba's error-text machinery (seconds)
+                    for j in range(4):
+                        C[k, i, j] = tmp[i, j]
             else:
                 v = a[s] * q[var[s]] + c[s]
                 if kind[s] == 1:
@@ -167,7 +169,9 @@ def _constants(P, kind, var, a, c, q, seg_start, fac_kind, fac_stage, C, T0):
                     for i in range(3):
                         C[k, i, 3] += v * C[k, i, 2]
         _mul34(T0, C[k], tmp)
-        T0[:, :] = tmp
+        for i in range(3):
+            for j in range(4):
+                T0[i, j] = tmp[i, j]
 
 
 @njit(cache=True, error_model="numpy")
@@ -229,7 +233,8 @@ def _exp6_lanes(d, E, co):
 def _joint_coefficients(kind, dl, J):
     """J (2 rows of W): cos and sin of the joint errors dl (kind 1; series below SMALL), or dl itself (kind 2)."""
     if kind == 2:
-        J[:W] = dl
+        for l in range(W):
+            J[l] = dl[l]
         return
     for l in range(W):
         u = dl[l]

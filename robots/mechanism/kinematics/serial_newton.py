@@ -236,7 +236,8 @@ def inverse_geometry(P, ident, kind, var, a, c, mark, n_marks, q0, targets, Rts,
                     for v in range(nv):
                         q[v] -= y[v]
                         step = max(step, abs(y[v]))
-        Q[i] = q
+        for v in range(nv):                       # element by element (a row assignment compiles seconds of numba)
+            Q[i, v] = q[v]
         res[i] = r
     return Q, res, evals
 
@@ -276,7 +277,11 @@ def path_determinants(P, ident, kind, var, a, c, mark, n_marks, q0, diff, S, has
             for v in range(nv):
                 q[v] = q0[v] + S[k] * diff[i, v]
             _jacobian(P, ident, kind, var, a, c, mark, q, has_rot, axes, jstage, jvar, jcoef, scale, J, marks, T, Sc)
-            A[:, :] = J
+            for u in range(nv):                   # element by element: an array slice assignment compiles
+                for v in range(nv):               # numba's error-message machinery (seconds per process)
+                    A[u, v] = J[u, v]
             det[k, i] = _solve(A, b, nv)          # b = 0: only the elimination's pivots matter
-        J_end[i] = J
+        for u in range(nv):
+            for v in range(nv):
+                J_end[i, u, v] = J[u, v]
     return det, J_end
