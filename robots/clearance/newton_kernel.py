@@ -11,7 +11,8 @@ reduced log barrier ``F(mu) = sum_c q_c - log(1 + q_c)``, ``q_c = sqrt(1 + tau^2
 3. the Newton step ``d = -H^{-1} g`` (Cholesky; LU with partial pivoting if round-off makes
    ``H`` indefinite), the decrement ``lambda^2 = -g^T d`` and ``B d``;
 4. the backtracking line search on ``F`` (steps 1, .5, .25, .12, never shorter than the damped
-   step ``1 / (1 + lambda)`` that self-concordance guarantees; only when ``lambda > 0.25``);
+   step ``1 / (1 + lambda)`` that self-concordance guarantees; only when ``lambda > 0.25``; a trial
+   not longer than the damped step is not evaluated, the damped step is taken: the same step);
 5. the update of ``mu`` and ``y`` and, optionally, the certified dual value ``sum_c ||y_c||``.
 
 At a centred point two more compiled steps run on the centred problems only: the feasible

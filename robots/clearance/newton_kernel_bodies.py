@@ -64,12 +64,26 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
     sig = np.empty(R)
     w = np.empty(R)
     cd = np.empty(nd)
+    qv = np.empty(R)
     g = np.empty(m)
     L = np.empty((m, m))
     d = np.empty(m)
     z = np.empty(m)
     BD = np.empty(R)
     dl = np.empty(max(smax, 1))
+    nrmax = 0
+    dnmax = 0
+    for q in range(ng):
+        dnq = gd[q, 1] - gd[q, 0]
+        nrmax = max(nrmax, 2 * dnq + gi[q, 1] - gi[q, 0])
+        dnmax = max(dnmax, dnq)
+    Bwb = np.empty(max(nrmax * smax, 1))
+    Gmb = np.empty(max(dnmax * smax, 1))
+    sgb = np.empty(max(nrmax, 1))
+    Hgb = np.empty(max(smax * smax, 1))
+    Gsb = np.empty(max(smax * smax, 1))
+    ggb = np.empty(max(smax, 1))
+    bdb = np.empty(max(nrmax, 1))
     for p in range(k):
         t = tau[p]
         F0 = 0.0
@@ -85,15 +99,16 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
             w[2 * c] = t / td
             w[2 * c + 1] = t / td
             cd[c] = np.sqrt(t * t / (td * td * q))
-            F0 += q - np.log1p(q)
+            qv[c] = q
         for j in range(2 * nd, R):
             y = Y[p, j]
             q = np.sqrt(1.0 + (t * y) ** 2)
             ti = (1.0 + q) / t
             sig[j] = y / ti
             w[j] = (t / ti) * (1.0 - t * y * y / (ti * q))
-            F0 += q - np.log1p(q)
-        # 2. gradient and Hessian, group by group (two BLAS products per group, scattered into H)
+            qv[j] = q
+        # 2. gradient and Hessian, group by group (two BLAS products per group into buffers allocated
+        #    once per call, scattered into H)
         H = H_out[p]
         for a in range(m):
             g[a] = 0.0
@@ -105,9 +120,9 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
             dn = gd[q, 1] - gd[q, 0]
             nr = 2 * dn + gi[q, 1] - gi[q, 0]
             Bg = GB[rows[p], boff[q]:boff[q] + nr * s].reshape((nr, s))   # the group's rows x columns
-            Bw = np.empty((nr, s))
-            Gm = np.empty((dn, s))
-            sg = np.empty(nr)
+            Bw = Bwb[:nr * s].reshape((nr, s))
+            Gm = Gmb[:dn * s].reshape((dn, s))
+            sg = sgb[:nr]
             # the group's rows: its disks' pairs, then its intervals
             for rr in range(nr):
                 j = 2 * gd[q, 0] + rr if rr < 2 * dn else gi[q, 0] + rr - 2 * dn
@@ -120,10 +135,16 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
                 e1 = Y[p, 2 * (gd[q, 0] + c) + 1] * cd[gd[q, 0] + c]
                 for a in range(s):
                     Gm[c, a] = e0 * Bg[2 * c, a] + e1 * Bg[2 * c + 1, a]
-            Hg = np.dot(Bw.T, Bg)
+            Hg = Hgb[:s * s].reshape((s, s))
+            np.dot(Bw.T, Bg, Hg)
             if dn:
-                Hg -= np.dot(Gm.T, Gm)
-            gg = np.dot(sg, Bg)
+                Gs = Gsb[:s * s].reshape((s, s))
+                np.dot(Gm.T, Gm, Gs)
+                for a in range(s):
+                    for b in range(s):
+                        Hg[a, b] -= Gs[a, b]
+            gg = ggb[:s]
+            np.dot(sg, Bg, gg)
             for a in range(s):
                 ja = gcols[c0 + a]
                 g[ja] += gg[a]
@@ -196,7 +217,8 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
             Bg = GB[rows[p], boff[q]:boff[q] + nr * s].reshape((nr, s))
             for a in range(s):
                 dl[a] = d[gcols[c0 + a]]
-            bd = np.dot(Bg, dl[:s])
+            bd = bdb[:nr]
+            np.dot(Bg, dl[:s], bd)
             for rr in range(nr):
                 j = 2 * gd[q, 0] + rr if rr < 2 * dn else gi[q, 0] + rr - 2 * dn
                 BD[j] = bd[rr]
@@ -205,8 +227,15 @@ def _newton_iterate_py(Y, mu, GB, rows, tau, nd, gd, gi, gcols, goff, boff, ls, 
         if lam > 0.25:
             damped = 1.0 / (1.0 + lam)
             step = damped
+            # the barrier at the start point, summed in the order of step 1 (disks, then intervals)
+            for c in range(nd):
+                F0 += qv[c] - np.log1p(qv[c])
+            for j in range(2 * nd, R):
+                F0 += qv[j] - np.log1p(qv[j])
             for i in range(ls.shape[0]):
                 st = ls[i]
+                if st <= damped:      # max(st, damped) is the damped step whether or not st passes
+                    break
                 Ft = 0.0
                 for c in range(nd):
                     y0 = Y[p, 2 * c] + st * BD[2 * c]
