@@ -139,8 +139,8 @@ def group_blocks(B, grows):
     out = np.empty((K, sum(sizes)))
     o = 0
     for (dr, ir, cols, _), n in zip(grows, sizes):
-        block = out[:, o:o + n].reshape(K, -1, len(cols))
         n2 = dr.stop - dr.start
+        block = out[:, o:o + n].reshape(K, n2 + ir.stop - ir.start, len(cols))
         # each run of consecutive columns is copied as a slice (a fancy index costs twice as much)
         for run in np.split(np.arange(len(cols)), np.nonzero(np.diff(cols) != 1)[0] + 1):
             if run.size:
