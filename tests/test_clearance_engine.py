@@ -291,3 +291,28 @@ def test_bad_input_is_named(mech):
     with pytest.raises(KinematicsError) as e:
         max_pose_error(mech, [[0.0, 0.2]])
     assert "0.2" in str(e.value)
+
+
+@pytest.mark.parametrize("mode", ["uniform", "boundary"])
+def test_sampled_screws_are_consistent_states_inside_the_certified_bound(mech, mode):
+    """Random clearance states (``PoseMaps.sample_screws``, the plain Monte Carlo of the 5-bar study)
+    lie in the clearance set (disks and intervals, eq. III.2), close the loops (``B^T s = 0``,
+    eq. III.13) and never exceed the certified maximum of the branch and bound."""
+    from evotol.robots.clearance.maxerror import as_bounds
+
+    pose = [0.01, 0.06]
+    b = as_bounds(mech, None, 1)
+    cert = max_pose_error(mech, [pose])
+    p2 = np.zeros(4000)
+    for pm in mech.pose_maps(np.atleast_2d(pose)):
+        s = pm.sample_screws(0, b, 4000, np.random.default_rng(7), mode)
+        D = pm.row_bounds(b[None])[0]
+        nd = pm.n_disk
+        assert np.all(s[:, D == 0] == 0)            # rows without clearance stay at zero
+        sig = np.divide(s, D, out=np.zeros_like(s), where=D > 0)
+        assert np.all(np.hypot(sig[:, 0:2 * nd:2], sig[:, 1:2 * nd:2]) <= 1 + 1e-12)
+        assert np.all(np.abs(sig[:, 2 * nd:]) <= 1 + 1e-12)
+        np.testing.assert_allclose(s @ pm.B[0], 0.0, atol=1e-12 * np.abs(s).max() * np.abs(pm.B[0]).max())
+        p2 += ((s @ pm.C_pos[0].T) ** 2).sum(-1)
+    assert np.sqrt(p2).max() <= cert.p_upper[0] * (1 + 1e-12)
+    assert np.sqrt(p2).max() > 0.3 * cert.p_max[0]       # the samples are not all trivial

@@ -191,3 +191,43 @@ def test_warm_up_compiles_every_signature_the_solver_uses():
     max_pose_error(IRSBot2.thesis("VI.1").clearance_mechanism(parallelograms=True), centre[None])
     max_pose_error(FiveBar().clearance_mechanism(), [[0.0, 0.07]])
     assert [len(f.signatures) for f in newton_kernel._kernel()] == before
+
+
+def _cholesky_row_by_row(H):
+    """The textbook Cholesky-Crout order (row by row, each sum from the first column on), in plain
+    Python floats: the reference of the blocked factor's bits."""
+    m = len(H)
+    L = [[0.0] * m for _ in range(m)]
+    for a in range(m):
+        for b in range(a + 1):
+            v = float(H[a][b])
+            for c in range(b):
+                v -= L[a][c] * L[b][c]
+            if a == b:
+                if v <= 0.0:
+                    return None
+                L[a][a] = v ** 0.5
+            else:
+                L[a][b] = v / L[b][b]
+    return np.array(L)
+
+
+@pytest.mark.parametrize("m", [1, 3, 4, 5, 8, 18, 30, 33])
+def test_blocked_cholesky_is_the_row_by_row_factor_to_the_last_bit(m):
+    """The factor of the Newton step and of the predictor (rows four at a time, the sums left of the
+    block side by side) is the textbook row-by-row factor bit for bit, ``L L^T = H`` to round-off, and
+    it refuses an indefinite matrix as the row-by-row factor does."""
+    from evotol.robots.clearance.newton_kernel_bodies import _chol_factor
+
+    rng = np.random.default_rng(m)
+    A = rng.standard_normal((m, 2 * m + 1))
+    H = A @ A.T
+    L = np.zeros((m, m))
+    assert _chol_factor(H, L, m)
+    ref = _cholesky_row_by_row(H)
+    assert np.array_equal(np.tril(L), ref)
+    np.testing.assert_allclose(np.tril(L) @ np.tril(L).T, H, rtol=0, atol=1e-12 * np.abs(H).max())
+    if m > 1:
+        H[m - 1, m - 1] = -1.0
+        assert _cholesky_row_by_row(H) is None
+        assert not _chol_factor(H, np.zeros((m, m)), m)

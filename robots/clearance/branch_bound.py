@@ -110,20 +110,21 @@ class SupportEvaluator:
         mu : (n, m) ndarray
             Final dual points (warm starts).
         """
-        a = np.einsum("kqr,kq->kr", self.Ct[case], u)
+        Ct, Bt = self.Ct[case], self.Bt[case]          # gathered once (the largest copies of a solve)
+        a = np.einsum("kqr,kq->kr", Ct, u)
         rtol = self.tol_solve if rtol is None else rtol
         tol = 0.0 if scale is None else rtol * scale
         gap0 = None
         if mu0 is not None:
             # start the barrier at the certified gap of the warm start: f(mu0) - u^T x_best
-            f0 = true_dual(a + (self.Bt[case] @ mu0[..., None])[..., 0], self.nd)
-            lo = np.einsum("kq,kq->k", u, np.einsum("kqr,kr->kq", self.Ct[case], self.sigma[case]))
+            f0 = true_dual(a + (Bt @ mu0[..., None])[..., 0], self.nd)
+            lo = np.einsum("kq,kq->k", u, np.einsum("kqr,kr->kq", Ct, self.sigma[case]))
             gap0 = np.maximum(f0 - np.maximum(lo, 0.0), np.maximum(tol, rtol * f0))
-        res = solve_support(a, self.Bt[case], self.nd, tol=tol, rtol=rtol, mu0=mu0, gap0=gap0, gram_inv=self.gi[case],
+        res = solve_support(a, Bt, self.nd, tol=tol, rtol=rtol, mu0=mu0, gap0=gap0, gram_inv=self.gi[case],
                             groups=self.groups, stop_below=stop_below, options=self.options)
         self.n_solves += len(case)
         self.n_newton += res.newton
-        norms = np.linalg.norm(np.einsum("kqr,kr->kq", self.Ct[case], res.sigma), axis=-1)
+        norms = np.linalg.norm(np.einsum("kqr,kr->kq", Ct, res.sigma), axis=-1)
         order = np.argsort(norms)          # last write wins -> the largest per case
         c_sorted = case[order]
         better = norms[order] > self.best[c_sorted]

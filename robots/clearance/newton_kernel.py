@@ -11,7 +11,8 @@ reduced log barrier ``F(mu) = sum_c q_c - log(1 + q_c)``, ``q_c = sqrt(1 + tau^2
 3. the Newton step ``d = -H^{-1} g`` (Cholesky; LU with partial pivoting if round-off makes
    ``H`` indefinite), the decrement ``lambda^2 = -g^T d`` and ``B d``;
 4. the backtracking line search on ``F`` (steps 1, .5, .25, .12, never shorter than the damped
-   step ``1 / (1 + lambda)`` that self-concordance guarantees; only when ``lambda > 0.25``);
+   step ``1 / (1 + lambda)`` that self-concordance guarantees; only when ``lambda > 0.25``; a trial
+   not longer than the damped step is not evaluated, the damped step is taken: the same step);
 5. the update of ``mu`` and ``y`` and, optionally, the certified dual value ``sum_c ||y_c||``.
 
 At a centred point two more compiled steps run on the centred problems only: the feasible
@@ -133,8 +134,21 @@ def group_blocks(B, grows):
         if (dr.start == 0 and ir.start == dr.stop and ir.stop == B.shape[1]
                 and np.array_equal(cols, np.arange(B.shape[2])) and B.flags.c_contiguous):
             return B.reshape(len(B), -1)
-    parts = [np.concatenate([B[:, dr], B[:, ir]], axis=1)[:, :, cols].reshape(len(B), -1) for dr, ir, cols, _ in grows]
-    return np.ascontiguousarray(np.concatenate(parts, axis=1) if parts else np.zeros((len(B), 0)))
+    K = len(B)
+    sizes = [(dr.stop - dr.start + ir.stop - ir.start) * len(cols) for dr, ir, cols, _ in grows]
+    out = np.empty((K, sum(sizes)))
+    o = 0
+    for (dr, ir, cols, _), n in zip(grows, sizes):
+        n2 = dr.stop - dr.start
+        block = out[:, o:o + n].reshape(K, n2 + ir.stop - ir.start, len(cols))
+        # each run of consecutive columns is copied as a slice (a fancy index costs twice as much)
+        for run in np.split(np.arange(len(cols)), np.nonzero(np.diff(cols) != 1)[0] + 1):
+            if run.size:
+                c0, c1, r0, r1 = cols[run[0]], cols[run[-1]] + 1, run[0], run[-1] + 1
+                block[:, :n2, r0:r1] = B[:, dr, c0:c1]
+                block[:, n2:, r0:r1] = B[:, ir, c0:c1]
+        o += n
+    return out
 
 
 def _say_if_compiling(dispatcher) -> None:

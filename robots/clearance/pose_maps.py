@@ -134,13 +134,18 @@ class PoseMaps:
         nd = self.n_disk
         ni = self.n_rows - 2 * nd
         ang = rng.uniform(0, 2 * np.pi, (n, nd))
-        rad = np.ones((n, nd)) if mode == "boundary" else np.sqrt(rng.uniform(0, 1, (n, nd)))
-        disk = np.stack([rad * np.cos(ang), rad * np.sin(ang)], -1).reshape(n, 2 * nd)
-        inter = rng.choice([-1.0, 1.0], (n, ni)) if mode == "boundary" else rng.uniform(-1, 1, (n, ni))
-        sig = np.concatenate([disk, inter], 1)
+        sig = np.empty((n, 2 * nd + ni))       # disks' pairs, then intervals, written in place
+        np.cos(ang, out=sig[:, 0:2 * nd:2])
+        np.sin(ang, out=sig[:, 1:2 * nd:2])
+        if mode == "boundary":                 # on the circles: radius 1 (the same numbers as 1 * cos)
+            sig[:, 2 * nd:] = rng.choice([-1.0, 1.0], (n, ni))
+        else:
+            sig[:, :2 * nd] *= np.repeat(np.sqrt(rng.uniform(0, 1, (n, nd))), 2, axis=1)
+            sig[:, 2 * nd:] = rng.uniform(-1, 1, (n, ni))
         Bt = self.B[i] * D[:, None]
         if Bt.shape[1]:
             sig = sig - (sig @ Bt) @ np.linalg.pinv(Bt)      # orthogonal projection onto B^T s = 0
-        nrm_d = np.sqrt((sig[:, :2 * nd].reshape(n, nd, 2) ** 2).sum(-1)).max(-1, initial=0.0)
+        x, y = sig[:, 0:2 * nd:2], sig[:, 1:2 * nd:2]
+        nrm_d = np.sqrt(x * x + y * y).max(-1, initial=0.0)
         nrm_i = np.abs(sig[:, 2 * nd:]).max(-1, initial=0.0)
         return sig / np.maximum(np.maximum(nrm_d, nrm_i), 1.0)[:, None] * D

@@ -194,7 +194,10 @@ def solve_support(a: np.ndarray, B: np.ndarray, nd: int, *, tol: np.ndarray | fl
     perm = np.concatenate([np.stack([2 * dperm, 2 * dperm + 1], 1).ravel(), iperm]).astype(int)
     inv = np.empty_like(perm)
     inv[perm] = np.arange(R)
-    a, B, Y = np.take(a, perm, axis=1), np.take(B, perm, axis=1), np.take(Y, perm, axis=1)   # (C-contiguous copies)
+    if np.array_equal(perm, np.arange(R)):     # cones already grouped (the IRSBot-2, the 5-bar): no copies
+        a, B, Y = np.ascontiguousarray(a), np.ascontiguousarray(B), np.ascontiguousarray(Y)
+    else:
+        a, B, Y = np.take(a, perm, axis=1), np.take(B, perm, axis=1), np.take(Y, perm, axis=1)   # (C-contiguous copies)
     grows, d0, i0 = [], 0, 2 * nd
     for dcone, irows, cols in groups:
         dn, inn = len(dcone), len(irows)
