@@ -243,6 +243,7 @@ def main(quick: bool = False) -> None:
             c_p, w_p = pin_regressor_loop(robot, Q)
             robot.kin._cache.clear()
             robot.__dict__.pop("_posture_checked", None)      # the posture check is part of the public path
+            robot.__dict__.pop("_solved", None)               # and the inverse geometry: no joint values kept
             _, c_pub, w_pub = timed(lambda: robot.sensitivity(poses))
             c_ig, c_held, evals = inverse_geometry_parts(robot, poses)
             n_ik = min(n, 1000)                          # Pinocchio's IK loop timed on 1 000 poses, scaled
@@ -259,6 +260,7 @@ def main(quick: bool = False) -> None:
         poses = robot.workspace.latin_hypercube(1000, seed=1)
         E = np.random.default_rng(0).uniform(-1e-4, 1e-4, (len(poses), m, robot.n_columns))
         robot.pose_error(poses[:4], np.ascontiguousarray(E[:4, :4]))   # compile / load E's layout (C-contiguous)
+        robot.__dict__.pop("_solved", None)                            # no joint values kept from earlier sets
         _, c_ig, w_ig = timed(lambda: robot.pose_error(poses, E))      # with the inverse geometry of the new poses
         c_mc, w_mc = best(lambda: robot.pose_error(poses, E))          # the joint values cached: the Monte Carlo
         print(f"  pose_error: {len(poses)} poses x {m} samples, first call with the inverse geometry of the poses "
