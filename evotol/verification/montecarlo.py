@@ -31,7 +31,7 @@ from evotol.measures import clearances
 
 from evotol.measures.statistical import distributions
 from evotol.measures.statistical.distributions import METHODS
-from evotol.measures.statistical.lhs_compiled import MIN_POSES as LHS_MIN_POSES, latin_hypercubes
+from evotol.measures.statistical.lhs_compiled import MIN_POSES as LHS_MIN_POSES, latin_hypercubes, pose_lhs_generator
 from evotol.errors import ValidationError, is_integer, is_real
 from evotol.verification.nonlinear import verify_nonlinear
 from evotol.core.problem import ToleranceProblem
@@ -313,7 +313,7 @@ def pose_uniforms(root: np.random.SeedSequence, p: int, n: int, d: int, method: 
         (n, d) uniforms in [0, 1).
     """
     if method == "lhs":
-        rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(root.entropy, spawn_key=(p, 0))))
+        rng = np.random.Generator(pose_lhs_generator(root, p))
         return distributions.latin_hypercube_from(n, d, rng)
     return np.random.default_rng(np.random.SeedSequence(root.entropy, spawn_key=(p,))).random((n, d))
 

@@ -114,6 +114,26 @@ def mean_shift(blocks: list[np.ndarray], shape: IntervalShape, T: np.ndarray) ->
 _POSES_PER_STEP = 64
 
 
+def line_coefficients(Bl: np.ndarray, D: np.ndarray, rho_kappa, out: np.ndarray) -> None:
+    """``out[p, d, k] = ρ_k |u_d·b_k| + κ_k u_d·b_k`` of interval sources, in place: one (d, 3) @ (3, m)
+    product per pose.
+
+    Parameters
+    ----------
+    Bl : ndarray, shape (n_poses, 3, m)
+        The interval sources' columns ``b_k``.
+    rho_kappa : tuple of ndarray or None
+        ``(ρ, κ)`` of those sources; None: plain ±t (``|u_d·b_k|``).
+    out : ndarray, shape (n_poses, n_dir, m)
+        Written.
+    """
+    np.matmul(D, Bl, out=out)
+    if rho_kappa is None:
+        np.abs(out, out=out)
+    else:
+        out[...] = rho_kappa[0] * np.abs(out) + rho_kappa[1] * out
+
+
 def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: IntervalShape | None = None) -> np.ndarray:
     """c[p, d, j] = ρ_j ‖B_jᵀ u_d‖ + κ_j u_d·b_j for blocks B_j (n_poses, 3, dim_j); shape
     (n_poses, n_dir, n_src). With the default shape (ρ = 1, κ = 0): ‖B_jᵀ u_d‖.
@@ -134,12 +154,8 @@ def support_coefficients(blocks: list[np.ndarray], D: np.ndarray, shape: Interva
         Bl = np.concatenate([blocks[j] for j in line], axis=2)                       # (p, 3, m_line)
         c = out if len(line) == len(blocks) else np.empty((len(Bl), D.shape[0], len(line)))
         for s in range(0, len(Bl), _POSES_PER_STEP):
-            seg = c[s:s + _POSES_PER_STEP]
-            np.matmul(D, Bl[s:s + _POSES_PER_STEP], out=seg)
-            if shape is None:
-                np.abs(seg, out=seg)
-            else:
-                seg[...] = shape.rho[line] * np.abs(seg) + shape.kappa[line] * seg
+            line_coefficients(Bl[s:s + _POSES_PER_STEP], D, None if shape is None else (shape.rho[line], shape.kappa[line]),
+                              c[s:s + _POSES_PER_STEP])
         if c is out:
             return out
         out[:, :, line] = c

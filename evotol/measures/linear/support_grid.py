@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from evotol.measures.linear.support import IntervalShape, support_coefficients
+from evotol.measures.linear.support import IntervalShape, line_coefficients, support_coefficients
 
 #: bytes of coefficients computed and multiplied at a time (they stay in the processor's cache)
 STEP_BYTES = 1 << 20
@@ -59,15 +59,11 @@ class LazySupport:
         step = max(1, STEP_BYTES // (8 * nd * m))
         out = np.empty((T.shape[0], P, nd))
         if all(B.shape[2] == 1 for B in self.blocks):       # intervals only: support_coefficients' steps, inlined
-            Bl, sh = np.concatenate(self.blocks, axis=2), self.interval_shape
+            Bl, sh = np.concatenate(self.blocks, axis=2), self.interval_shape     # concatenated once, not per step
             buf = np.empty((step, nd, m))
             for s in range(0, P, step):
                 seg = buf[:min(step, P - s)]
-                np.matmul(self.D, Bl[s:s + step], out=seg)
-                if sh is None:
-                    np.abs(seg, out=seg)
-                else:
-                    seg[...] = sh.rho * np.abs(seg) + sh.kappa * seg
+                line_coefficients(Bl[s:s + step], self.D, None if sh is None else (sh.rho, sh.kappa), seg)
                 out[:, s:s + seg.shape[0]] = _product(seg, T)
             return out
         for s in range(0, P, step):

@@ -77,6 +77,23 @@ def _compile():
     return kernel
 
 
+def pose_lhs_generator(root: np.random.SeedSequence, p: int) -> np.random.PCG64:
+    """The bit generator of pose ``p``'s Latin hypercube: ``SeedSequence(entropy, spawn_key=(p, 0))``,
+    the child SciPy's class spawns from the pose's stream ``root.spawn(P)[p]`` (both paths draw from it).
+
+    Parameters
+    ----------
+    root, p
+        As :func:`evotol.verification.montecarlo.pose_uniforms`.
+
+    Returns
+    -------
+    numpy.random.PCG64
+        A new generator, nothing drawn from it yet.
+    """
+    return np.random.PCG64(np.random.SeedSequence(root.entropy, spawn_key=(p, 0)))
+
+
 def latin_hypercubes(root: np.random.SeedSequence, poses, n: int, d: int) -> np.ndarray | None:
     """The (n, d) Latin hypercube of each pose in ``poses``, or None when the kernel is not available.
 
@@ -98,7 +115,7 @@ def latin_hypercubes(root: np.random.SeedSequence, poses, n: int, d: int) -> np.
     if kernel is None:
         return None
     get = _STATE["pointer"]
-    gens = [np.random.PCG64(np.random.SeedSequence(root.entropy, spawn_key=(int(p), 0))) for p in poses]
+    gens = [pose_lhs_generator(root, int(p)) for p in poses]
     # a bitgen_t starts with its state's address (numpy/random/bitgen.h)
     states = np.array([ctypes.c_void_p.from_address(get(g.capsule, b"BitGenerator")).value for g in gens], np.uint64)
     out = np.empty((len(gens), int(n), int(d)))
