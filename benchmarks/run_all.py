@@ -45,6 +45,8 @@ TARGETS = [
     ("bench_stack.py", "[stack.allocation] worst-case optimum, {n} dimensions (s)",
      r"^\s*(?P<n>\d+) dimensions: optimum (?P<v>[\d.]+) s", "5 000 in <= 2 s",
      lambda v: v <= 2.0),
+    ("bench_polyblock.py", "monotone allocator on the UR5 study's 36 sources, default budget (s)",
+     r"^monotone allocator, UR5 study .*: (?P<v>[\d.]+) s wall", "seconds (<= 10 s)", lambda v: v <= 10.0),
     ("bench_stack.py", "refusal of rss on asymmetric zones, {n} dimensions (s)",
      r"^\s*(?P<n>\d+) dimensions: rss refusal after (?P<v>[\d.]+) s", "before any work (<= 0.5 s)",
      lambda v: v <= 0.5),

@@ -152,6 +152,21 @@ def test_the_monotone_bracket_holds_the_least_cost(case):
     assert f"Its bracket of the least cost: [{m['lower_bound']:.6g}, {m['upper_bound']:.6g}]" in line
 
 
+def test_the_methods_monotone_settings_reach_the_calibrated_bracket(case):
+    """``[methods] monotone``'s ``max_evaluations``, ``rel_gap`` and ``batch`` reach the bracket in the calibrated budget
+    (it ran at its own 150 evaluations and 1 % gap whatever the study said): a budget of one design stops it
+    before any round, and so does a gap wider than the incumbent's bracket, where the defaults make rounds."""
+    from types import SimpleNamespace
+    from evotol.studyfile.iso9283_calibrated import calibrated_allocations
+    spec, problem, _, designs = case
+    assert designs["monotone"]["rounds"] > 0
+    for settings, stop in (({"max_evaluations": 1, "rel_gap": 1e-4, "batch": 2}, "evaluations"),
+                           ({"rel_gap": 0.99}, "gap")):
+        assert calibrated_methods({**spec, "methods": {"monotone": settings}}, problem) == {"monotone": settings}
+        out = calibrated_allocations(SimpleNamespace(calibrated={"monotone": settings}), problem.calibration, 0)
+        assert out["monotone"]["stop"] == stop and out["monotone"]["rounds"] == 0, settings
+
+
 def test_an_nsga2_beside_the_calibrated_iso_allocation_is_refused_from_the_file_alone(monkeypatch):
     """The ISO front does not take a calibrated budget: refused in one line before the robot is calibrated (the
     check was made after the calibrated problem, ~10 s of identification and budget here)."""

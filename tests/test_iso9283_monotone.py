@@ -128,3 +128,16 @@ def test_a_study_with_monotone_writes_its_iso_bracket():
     rep = Report("t", "s")                                      # the page states the same bracket as the terminal
     iso9283_section(rep, {"iso9283": block, "display_units": DisplayUnits().to_dict()})
     assert line.split("; bracket ")[1] in rep.render()
+
+
+def test_the_methods_monotone_settings_reach_the_iso_bracket():
+    """``[methods] monotone``'s ``max_evaluations``, ``rel_gap`` and ``batch`` reach the ISO bracket too (they reached the
+    ordinary run alone, and the ISO bracket ran at its own defaults): with a budget of 50 designs, spent on the
+    start designs and the upper reduction, the search makes no round and says the budget stopped it, where the
+    defaults make rounds and stop at a cut's size (the test above)."""
+    settings = {"max_evaluations": 50, "rel_gap": 0.25, "batch": 4}
+    problem, iso, block = study_block({"optimum": {}, "monotone": settings})
+    assert iso.monotone == settings
+    g = block["allocation_monotone"]
+    assert g["stop"] == "evaluations" and g["rounds"] == 0 and g["feasible"]
+    assert g["lower_bound"] <= block["allocation"]["cost"] * (1 + 1e-6)

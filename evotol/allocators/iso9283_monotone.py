@@ -81,7 +81,7 @@ def iso_monotone_problem(terms: dict, costs) -> tuple[MonotoneProblem, callable]
 
 def allocate_iso9283_monotone(robot, positions, sys_costs, sys_bounds, free, sources, rand_costs, rand_bounds, AP, RP,
                               *, n_samples: int = 10000, seed: int = 0, max_seconds: float = 10.0,
-                              rel_gap: float = 1e-2, max_evaluations: int = 20000) -> dict:
+                              rel_gap: float = 1e-2, max_evaluations: int = 20000, batch: int = 16) -> dict:
     """The polyblock bracket of the least cost meeting AP (proven bound) and RP (module docstring).
 
     Parameters
@@ -94,6 +94,8 @@ def allocate_iso9283_monotone(robot, positions, sys_costs, sys_bounds, free, sou
         As :func:`evotol.allocators.monotone.polyblock`.
     max_evaluations : int
         Stop after about this many designs checked (a budget that does not depend on the machine).
+    batch : int
+        Cheapest vertices projected per round (:func:`evotol.allocators.monotone.polyblock_search`).
 
     Returns
     -------
@@ -112,7 +114,7 @@ def allocate_iso9283_monotone(robot, positions, sys_costs, sys_bounds, free, sou
         :func:`evotol.allocators.iso9283.iso_terms`.
     """
     for field, value, ok in (("max_seconds", max_seconds, max_seconds > 0), ("rel_gap", rel_gap, rel_gap > 0),
-                             ("max_evaluations", max_evaluations, max_evaluations >= 1)):
+                             ("max_evaluations", max_evaluations, max_evaluations >= 1), ("batch", batch, batch >= 1)):
         if not ok:
             raise ValidationError(f"monotone.{field}", value, "a positive number")
     terms = iso_terms(robot, positions, sys_bounds, free, sources, rand_bounds, AP, RP, None, n_samples, seed)
@@ -128,7 +130,7 @@ def allocate_iso9283_monotone(robot, positions, sys_costs, sys_bounds, free, sou
     incumbent = min(held, key=lambda k: design_cost(costs, held[k][None])[0], default=None)
     ub = np.inf if incumbent is None else float(design_cost(costs, held[incumbent][None])[0])
     res = polyblock_search(mp, upper_bound=ub, spent=len(starts), rel_gap=rel_gap, max_evaluations=max_evaluations,
-                           max_seconds=max_seconds, max_new_vertices=MAX_NEW_VERTICES, reduce_upper=True)
+                           batch=batch, max_seconds=max_seconds, max_new_vertices=MAX_NEW_VERTICES, reduce_upper=True)
     t = held.get(incumbent) if res["x"] is None else design(res["x"][None])[0]
     if t is None:                   # nothing found that holds: every tolerance at its lower bound, judged as it is
         t = terms["lo"].copy()

@@ -73,34 +73,60 @@ def new_vertices(V: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray] 
     return keep, np.unique(cand, axis=0)
 
 
-def _cut(V: np.ndarray, z: np.ndarray, chunk: int = 256) -> np.ndarray:
+def _cut(V: np.ndarray, z: np.ndarray, chunk_bytes: int = 1 << 24) -> np.ndarray:
     """The polyblock's vertices after removing {x > z}: every vertex v > z is replaced by
     v + (z_i - v_i) e_i (i = 1..n), and new vertices dominated by another vertex are dropped.
 
-    Only few vertices can dominate a new one ``c = v + (z_i - v_i) e_i``: ``u >= c`` needs ``u_j >= v_j > z_j``
-    for every ``j != i``, so ``u <= z`` at most in coordinate ``i`` (the new vertices of the same ``i``, and
-    the kept vertices at most equal to ``z`` only there). The check runs per ``i`` over those alone: the same
-    vertices as comparing every pair, in ``n`` times fewer comparisons per pair group (a 36-source problem's
-    cut went from minutes to below a second).
+    Which vertices can dominate a new one ``c = v + (z_i - v_i) e_i`` (``u >= c``, ``u != c``): ``u_j >= v_j > z_j``
+    for every ``j != i`` and ``u_i >= z_i``. A kept vertex (not above ``z``) then has ``u_i = z_i``: it lies on the
+    cut's face (rare; checked one by one). A new vertex ``u = w + (z_k - w_k) e_k`` needs ``k = i`` and
+    ``w_j >= v_j`` for every ``j != i``: so ``v``'s new vertex in ``i`` is dominated exactly when another vertex
+    above ``z`` is below ``v`` in coordinate ``i`` alone (or nowhere, with another coordinate differing). One
+    pass over the pairs of vertices above ``z`` counts, per pair, the coordinates where ``w < v`` -- all ``n``
+    coordinates' groups at once. The vertices kept are those of comparing every pair (a test checks it on
+    random cuts with ties); a 36-source cut of 3 341 vertices above ``z`` takes 0.03 s instead of 0.8 s.
+
+    Parameters
+    ----------
+    V : (M, n) ndarray
+        The polyblock's vertices (log tolerances), none dominating another.
+    z : (n,) ndarray
+        The cut point: no design above it is feasible.
+    chunk_bytes : int
+        Size of one block of pair comparisons (bytes of booleans).
+
+    Returns
+    -------
+    (M', n) ndarray
+        The vertices not above ``z``, then the new ones not dominated (unique, sorted).
     """
-    split = new_vertices(V, z)
-    if split is None:
+    above = np.all(V > z, axis=1)
+    if not above.any():
         return V
-    keep, cand = split
-    allv = np.concatenate([keep, cand])
-    low = allv <= z                                                       # (M, n): coordinates not above z
-    single = low.sum(1) == 1
-    index = np.argmax(low[len(keep):], axis=1)                            # the i of each new vertex
-    ok = np.ones(len(cand), bool)
-    for i in np.unique(index):
-        group = np.flatnonzero(index == i)
-        dom = allv[single & low[:, i]]                                    # the only vertices that can dominate
-        for s in range(0, len(group), chunk):
-            c = cand[group[s:s + chunk]]
-            ge = np.all(dom[None, :, :] >= c[:, None, :], axis=2)         # (chunk, D): u >= w
-            eq = np.all(dom[None, :, :] == c[:, None, :], axis=2)
-            ok[group[s:s + chunk]] = ~np.any(ge & ~eq, axis=1)
-    return np.concatenate([keep, cand[ok]])
+    keep, up = V[~above], np.unique(V[above], axis=0)
+    K, n = up.shape
+    kill = np.zeros((K, n), bool)                              # kill[v, i]: v's new vertex in i is dominated
+    step = max(1, chunk_bytes // (K * n))
+    for s in range(0, K, step):
+        w = up[s:s + step]                                                   # the would-be dominators
+        less = w[:, None, :] < up[None, :, :]                                # (k, K, n): w_j < v_j
+        n_less = less.sum(2)
+        n_diff = (w[:, None, :] != up[None, :, :]).sum(2)
+        a, b = np.nonzero((n_less == 1) & (n_diff > 1))       # w below v in one coordinate i: w^i > v^i
+        kill[b, np.argmax(less[a, b], axis=1)] = True
+        a, b = np.nonzero((n_less == 0) & (n_diff > 0))       # w >= v, w != v (no such pair without dominance)
+        np.logical_or.at(kill, b, (n_diff[a, b] > 1)[:, None] | (w[a] == up[b]))   # w^i > v^i unless only i differs
+    low = keep <= z
+    face = (low.sum(1) == 1) & np.any(low & (keep == z), axis=1)
+    for u in keep[face]:                                      # a kept vertex with u_i = z_i
+        i = int(np.argmax(u <= z))
+        c = up.copy()
+        c[:, i] = z[i]
+        kill[:, i] |= np.all(u >= c, axis=1) & ~np.all(u == c, axis=1)
+    vi, ii = np.nonzero(~kill)
+    cand = up[vi]
+    cand[np.arange(len(cand)), ii] = z[ii]
+    return np.concatenate([keep, np.unique(cand, axis=0)])
 
 
 @dataclass(frozen=True)

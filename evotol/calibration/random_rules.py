@@ -156,7 +156,8 @@ def ga_tolerances(rb: RandomBudget, optimum, pop_size: int = 100, n_gen: int = 2
     return np.exp(X), n_eval
 
 
-def monotone_bracket(rb: RandomBudget, optimum, max_evaluations: int = MONOTONE_EVALUATIONS) -> tuple:
+def monotone_bracket(rb: RandomBudget, optimum, max_evaluations: int = MONOTONE_EVALUATIONS, rel_gap: float = 1e-2,
+                     batch: int = 16) -> tuple:
     """The polyblock bracket of the least cost in the calibrated budget (:func:`polyblock_search` in ``log τ``, the
     least-cost design as the incumbent): ``(τ, bracket)``.
 
@@ -171,6 +172,8 @@ def monotone_bracket(rb: RandomBudget, optimum, max_evaluations: int = MONOTONE_
         The least-cost design (SI), feasible by the budget's check.
     max_evaluations : int
         The search's budget of checked designs (it stops at the first round past it).
+    rel_gap, batch
+        As :func:`evotol.allocators.monotone.polyblock_search` (the study's ``[methods] monotone`` settings).
 
     Returns
     -------
@@ -187,7 +190,8 @@ def monotone_bracket(rb: RandomBudget, optimum, max_evaluations: int = MONOTONE_
     mp = MonotoneProblem(np.log(rb.lo), np.log(rb.hi), lambda X: np.array([rb.ok(t) for t in np.exp(X)]),
                          lambda X: var_costs(X).sum(1), var_costs)
     t0 = np.asarray(optimum, float)
-    res = polyblock_search(mp, upper_bound=rb.cost(t0), max_evaluations=int(max_evaluations))
+    res = polyblock_search(mp, upper_bound=rb.cost(t0), max_evaluations=int(max_evaluations), rel_gap=float(rel_gap),
+                           batch=int(batch))
     t = t0 if res["x"] is None else np.exp(res["x"])
     keys = ("lower_bound", "upper_bound", "gap", "rounds", "evaluations", "converged", "stop")
     return t, {**{k: res[k] for k in keys},
@@ -195,7 +199,8 @@ def monotone_bracket(rb: RandomBudget, optimum, max_evaluations: int = MONOTONE_
                                          "meets RP (the sampled RP is not monotone)"}
 
 
-def calibrated_design(rb: RandomBudget, method: str, optimum: dict, names, seed: int = 0, ga=None) -> dict:
+def calibrated_design(rb: RandomBudget, method: str, optimum: dict, names, seed: int = 0, ga=None,
+                      monotone=None) -> dict:
     """One method's random tolerances in the calibrated budget, moved onto the boundary and judged (SI).
 
     Parameters
@@ -210,6 +215,9 @@ def calibrated_design(rb: RandomBudget, method: str, optimum: dict, names, seed:
         The GA's seed unless ``ga`` sets one.
     ga : dict or None
         The GA's ``pop_size``, ``n_gen`` and ``seed``.
+    monotone : dict or None
+        The bracket's ``max_evaluations``, ``rel_gap`` and ``batch`` (:func:`monotone_bracket`'s defaults for
+        the ones not given).
 
     Returns
     -------
@@ -220,7 +228,7 @@ def calibrated_design(rb: RandomBudget, method: str, optimum: dict, names, seed:
     """
     extra = {}
     if method == "monotone":
-        t, extra = monotone_bracket(rb, [optimum["tolerances"][n] for n in names])
+        t, extra = monotone_bracket(rb, [optimum["tolerances"][n] for n in names], **(monotone or {}))
         extra = {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in extra.items()}
     elif method == "ga":
         opts = {"pop_size": 100, "n_gen": 200, "seed": seed, **(ga or {})}

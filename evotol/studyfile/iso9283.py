@@ -132,6 +132,9 @@ class IsoStudy:
     rules : tuple of str
         The study's ``sensitivity``, ``equal``, ``lagrange``, ``monotone`` that allocate the random sources to AP/RP
         too, each by its rule (:func:`evotol.studyfile.iso9283_methods.iso_rules_wanted`).
+    monotone : dict
+        The ``[methods] monotone`` settings the ISO bracket takes (``max_evaluations``, ``rel_gap``, ``batch``; its
+        defaults for the others).
     front : dict or None
         The study's ``nsga2`` settings when it also runs the ISO front, cost against AP with RP held
         (:func:`evotol.studyfile.iso9283_methods.iso_front_options`).
@@ -155,6 +158,7 @@ class IsoStudy:
     orientation: dict = field(default_factory=dict)
     ga: dict | None = None
     rules: tuple = ()
+    monotone: dict = field(default_factory=dict)
     front: dict | None = None
     calibrated: dict = field(default_factory=dict)
 

@@ -14,6 +14,27 @@ from evotol.studyfile.methods import study_methods
 
 #: the GA's settings the calibrated GA takes (the ordinary run takes the whole table)
 GA_KEYS = ("pop_size", "n_gen", "seed")
+#: the settings of ``[methods] monotone`` every polyblock bracket takes: the ordinary run's, the calibrated one's and
+#: the ISO one's (:func:`evotol.allocators.monotone.allocate_monotone`'s other keys, ``budget`` and ``incumbent``,
+#: are the ordinary run's alone)
+MONOTONE_KEYS = ("max_evaluations", "rel_gap", "batch")
+
+
+def monotone_options(methods: dict) -> dict:
+    """The settings of ``[methods] monotone`` a polyblock bracket on the random sources takes too (:data:`MONOTONE_KEYS`).
+
+    Parameters
+    ----------
+    methods : dict
+        The study's methods and their settings.
+
+    Returns
+    -------
+    dict
+        ``max_evaluations`` (int), ``rel_gap`` (float), ``batch`` (int): the ones the study gives.
+    """
+    kinds = {"max_evaluations": int, "rel_gap": float, "batch": int}
+    return {k: kinds[k](v) for k, v in (methods.get("monotone") or {}).items() if k in MONOTONE_KEYS}
 
 
 def calibrated_methods(spec: dict, problem) -> dict:
@@ -29,14 +50,16 @@ def calibrated_methods(spec: dict, problem) -> dict:
     Returns
     -------
     dict
-        Method -> settings (the GA's ``pop_size``, ``n_gen``, ``seed``; ``{}`` for a rule), in the study's order;
+        Method -> settings (the GA's ``pop_size``, ``n_gen``, ``seed``; the bracket's :func:`monotone_options`;
+        ``{}`` for a rule), in the study's order;
         empty without ``[calibration]`` or when the random sources are not allocated.
     """
     info = getattr(problem, "calibration", None)
     if info is None or info.random_budget is None:
         return {}
     methods = study_methods(spec, problem)
-    return {m: ({k: int(v) for k, v in methods[m].items() if k in GA_KEYS} if m == "ga" else {})
+    return {m: ({k: int(v) for k, v in methods[m].items() if k in GA_KEYS} if m == "ga" else
+                monotone_options(methods) if m == "monotone" else {})
             for m in methods if m in CALIBRATED_RULES}
 
 
@@ -58,7 +81,8 @@ def calibrated_allocations(iso, info, seed: int) -> dict:
         Method -> :func:`evotol.calibration.random_rules.calibrated_design`'s result.
     """
     names = [s.name for s in info.random.sources]
-    return {m: calibrated_design(info.random_budget, m, info.random_allocation, names, seed, ga=opts if m == "ga" else None)
+    return {m: calibrated_design(info.random_budget, m, info.random_allocation, names, seed, ga=opts if m == "ga" else None,
+                                 monotone=opts if m == "monotone" else None)
             for m, opts in iso.calibrated.items()}
 
 

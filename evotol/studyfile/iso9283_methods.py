@@ -23,6 +23,7 @@ from evotol.allocators.iso9283_ga import allocate_iso9283_ga
 from evotol.allocators.iso9283_monotone import allocate_iso9283_monotone
 from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
 from evotol.errors import ValidationError
+from evotol.studyfile.iso9283_calibrated import monotone_options
 from evotol.studyfile.methods import study_methods
 
 #: the GA's settings the ISO GA takes (pymoo's operators; ``progress`` is the ordinary run's bar)
@@ -334,7 +335,7 @@ def rule_allocation(iso, problem, optimum: dict, seed: int, rule: str) -> dict:
         bracket (:data:`BRACKET_KEYS`).
     """
     allocate, what = ISO_RULES[rule]
-    res = allocate(*allocator_args(iso, problem), seed=seed)
+    res = allocate(*allocator_args(iso, problem), seed=seed, **(iso.monotone if rule == "monotone" else {}))
     return {**judged_design(iso, res, optimum), **{k: res[k] for k in BRACKET_KEYS if k in res},
             "meaning": what + " and judged by the optimum's check: feasible if the proven AP bound meets AP and the RP "
                               "on the optimum's fixed draws meets RP; the gap is what the optimum saves"}
@@ -351,11 +352,13 @@ def study_method_options(spec: dict, problem, orientation: dict) -> dict:
     Returns
     -------
     dict
-        ``ga`` (:func:`iso_ga_options`), ``rules`` (:func:`iso_rules_wanted`), ``front``
+        ``ga`` (:func:`iso_ga_options`), ``rules`` (:func:`iso_rules_wanted`), ``monotone`` (the ISO bracket's
+        settings, :func:`evotol.studyfile.iso9283_calibrated.monotone_options`), ``front``
         (:func:`iso_front_options`): the :class:`evotol.studyfile.iso9283.IsoStudy` fields.
     """
-    return {"ga": iso_ga_options(spec, problem, orientation),
-            "rules": iso_rules_wanted(spec, problem, orientation),
+    rules = iso_rules_wanted(spec, problem, orientation)
+    return {"ga": iso_ga_options(spec, problem, orientation), "rules": rules,
+            "monotone": monotone_options(study_methods(spec, problem)) if "monotone" in rules else {},
             "front": iso_front_options(spec, problem, orientation)}
 
 
