@@ -117,3 +117,32 @@ def test_tasks_split_poses_and_a_broadcast_array():
     assert np.abs(fast.pose_error_at_joints(q1, E) - slow.pose_error_at_joints(q1, E)).max() < 1e-12
     Eb = np.broadcast_to(E[:, :40], (4, 40, fast.n_columns))
     assert np.abs(fast.pose_error_at_joints(q, Eb) - slow.pose_error_at_joints(q, np.ascontiguousarray(Eb))).max() < 1e-12
+
+
+def test_the_result_does_not_depend_on_the_threads_or_the_calling_thread(monkeypatch):
+    """The kernels' tasks run on Python threads (task_threads.run_tasks): one thread, three, and two calls at once
+    from two other threads (each then runs in its caller's thread) give the same array, for independent samples
+    at each pose and for samples shared by every pose; a range of tasks per call covers every task once."""
+    import threading
+    from evotol.robots.mechanism.kinematics import task_threads
+    fast, _ = models("ur5")
+    q, Q = joints(fast, 7, 4)
+    E = np.random.default_rng(3).normal(scale=1e-4, size=(7, 1100, fast.n_columns))
+    shared = np.broadcast_to(E[0], E.shape)
+    ref = {k: fast._serial.pose_error(Q, e) for k, e in (("each", E), ("shared", shared))}
+    for threads in (1, 3):
+        monkeypatch.setattr(task_threads, "threads_available", lambda t=threads: t)
+        for k, e in (("each", E), ("shared", shared)):
+            assert np.array_equal(fast._serial.pose_error(Q, e), ref[k]), (threads, k)
+    monkeypatch.undo()
+    got = {}
+    calls = [threading.Thread(target=lambda k=k, e=e: got.setdefault(k, fast._serial.pose_error(Q, e)))
+             for k, e in (("each", E), ("shared", shared))]
+    for t in calls:
+        t.start()
+    for t in calls:
+        t.join()
+    assert all(np.array_equal(got[k], ref[k]) for k in ref)
+    seen = []
+    task_threads.run_tasks(lambda a, b: seen.extend(range(a, b)), 37, threads=2)
+    assert sorted(seen) == list(range(37))

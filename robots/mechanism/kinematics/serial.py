@@ -302,9 +302,7 @@ class SerialChain:
             self._mc = mc.program(self)
         errors = np.asarray(errors, float)                     # broadcast views as they are
         args = (self.P, self.kind, self.var, self.a, self.c, *self._mc, self.v_col, self.v_var, np.ascontiguousarray(Q, float))
-        # the parallel kernels from the main thread only: their fork-safe threading layer is not thread-safe
-        if threading.current_thread() is not threading.main_thread():
-            return mc.pose_error_serial(*args, errors)
+        # from any thread: the kernels run on threads of their own from the main thread, in the caller's otherwise
         if errors.shape[0] > 1 and errors.strides[0] == 0 and not (self.j_var >= 0).any():
             return mc.pose_error_shared(*args, errors[0])      # the same samples at every pose (verify_nonlinear)
         return mc.pose_error(*args, errors)

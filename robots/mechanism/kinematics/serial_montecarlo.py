@@ -19,7 +19,8 @@ give: the Rodrigues coefficients ``sin t/t``, ``(1 - cos t)/t^2``, ``(t - sin t)
 series for ``s < 0.01``); a lane beyond those ranges takes the closed forms. The lanes are the
 innermost loops over flat rows of W lanes (a row stride LLVM knows, so its alias checks stay
 few and it vectorises them: AVX2/AVX-512); a task is one pose and up to
-:data:`TASK` of its samples, and tasks run in parallel (``numba.prange``).
+:data:`TASK` of its samples, and tasks run on the cores by threads
+(:mod:`evotol.robots.mechanism.kinematics.task_threads`).
 
 ``tests/test_serial_montecarlo.py`` compares it with the general description path
 (:class:`evotol.robots.mechanism.kinematics.tree.Kinematics`), the scalar kernel it replaces
@@ -55,14 +56,13 @@ v_col, v_var : ndarray of int64
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
 from evotol._runtime.numba_cache import njit
-from evotol.robots.mechanism.kinematics import serial_kernels  # noqa: F401  (its threading layer choice)
+from evotol.robots.mechanism.kinematics.task_threads import run_tasks
 
 #: samples per group: the lanes of one row (64 float64: eight AVX-512 registers, sixteen AVX2 ones)
 W = 64
-#: samples of one pose per parallel task
+#: samples of one pose per task (a thread runs a range of tasks)
 TASK = 512
 #: t^2 below which the Rodrigues and joint series serve (t < 0.1 rad)
 SMALL = 1e-2
@@ -379,83 +379,97 @@ def _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_
         _tip_error(Tt, T0, res, i, k0, nk, out)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def pose_error(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
-               j_var, v_col, v_var, Q, errors):
-    """(n, m, 6) ``[dp (m); rotation vector of R R0^T (rad)]`` of the perturbed tip for errors
-    (n, m, n_cols) at joint values Q (n, n_vars): tasks of one pose and up to :data:`TASK` samples
-    in parallel; each sample's arithmetic does not depend on the number of threads.
-
-    Parameters
-    ----------
-    Q : (n, n_vars) ndarray
-        The poses' joint values (rad or m), one row per pose.
-    errors : (n, m, n_cols) ndarray
-        Source errors (m or rad); any strides (a broadcast array is read as it is).
-
-    Returns
-    -------
-    (n, m, 6) ndarray
-        The tip's error relative to the nominal, base frame.
-    """
-    n, m = errors.shape[0], errors.shape[1]
-    out = np.empty((n, m, 6))
+@njit(cache=True, nogil=True, error_model="numpy")
+def pose_error_tasks(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col,
+                     j_coef, j_var, v_col, v_var, Q, errors, b0, b1, out):
+    """Tasks ``b0 <= b < b1`` of :func:`pose_error` into ``out`` (n, m, 6): task ``b`` is pose ``b // per`` and
+    its samples from ``(b % per) TASK`` (``per`` tasks a pose, :data:`TASK` samples each)."""
+    m = errors.shape[1]
     per = (m + TASK - 1) // TASK
-    for b in prange(n * per):
+    for b in range(b0, b1):
         i, lo = b // per, (b % per) * TASK
         _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
               j_var, v_col, v_var, Q, errors, i, lo, min(m, lo + TASK), out)
-    return out
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def pose_error_shared(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col,
-                      j_coef, j_var, v_col, v_var, Q, errors):
-    """:func:`pose_error` for the same samples errors (m, n_cols) at every pose (no joint term
-    scaled by a joint value, ``j_var`` all -1): the operations of :data:`TASK` samples at a time are
-    computed once, in parallel, then applied at every pose, in parallel.
+def pose_error(*args):
+    """(n, m, 6) ``[dp (m); rotation vector of R R0^T (rad)]`` of the perturbed tip for errors
+    (n, m, n_cols) at joint values Q (n, n_vars): tasks of one pose and up to :data:`TASK` samples,
+    run on the cores by threads (:func:`~evotol.robots.mechanism.kinematics.task_threads.run_tasks`);
+    each sample's arithmetic does not depend on the number of threads.
 
     Parameters
     ----------
-    Q : (n, n_vars) ndarray
-        The poses' joint values (rad or m), one row per pose.
-    errors : (m, n_cols) ndarray
-        Source errors (m or rad), shared by every pose.
+    *args
+        The program (module docstring: ``P`` .. ``v_var``), then ``Q`` (n, n_vars), the poses' joint
+        values (rad or m), one row per pose, and ``errors`` (n, m, n_cols), source errors (m or rad);
+        any strides (a broadcast array is read as it is).
 
     Returns
     -------
     (n, m, 6) ndarray
         The tip's error relative to the nominal, base frame.
     """
+    errors = args[-1]
+    n, m = errors.shape[0], errors.shape[1]
+    out = np.empty((n, m, 6))
+    run_tasks(lambda b0, b1: pose_error_tasks(*args, b0, b1, out), n * ((m + TASK - 1) // TASK))
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _shared_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, q, errors, g0,
+                ga, gb, EK, JK):
+    """The operations of sample groups ``g0 + g`` (``ga <= g < gb``, :data:`W` samples each) into ``EK[g]``, ``JK[g]``."""
+    m = errors.shape[0]
+    for g in range(ga, gb):
+        k0 = (g0 + g) * W
+        _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, errors, q, k0,
+                    min(W, m - k0), EK[g], JK[g], np.empty(6 * W), np.empty(4 * W), np.empty(q.shape[0] * W),
+                    np.empty(W), np.empty(errors.shape[1] * W))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _shared_apply(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, Q, m, g0, ng, EK, JK, i0, i1, out):
+    """Groups ``g0 <= g0 + g < g0 + ng`` of samples applied at poses ``i0 <= i < i1`` into ``out`` (n, m, 6)."""
+    K = op_stage.shape[0]
+    C, T0 = np.empty((K + 1, 3, 4)), np.empty((3, 4))
+    T, T2, res = np.empty(12 * W), np.empty(12 * W), np.empty(8 * W)
+    for i in range(i0, i1):
+        _constants(P, kind, var, a, c, Q[i], seg_start, fac_kind, fac_stage, C, T0)
+        for g in range(ng):
+            k0 = (g0 + g) * W
+            Tt = _apply_ops(T, T2, C, EK[g], JK[g], kind, op_stage, op_p, seg_start)
+            _tip_error(Tt, T0, res, i, k0, min(W, m - k0), out)
+
+
+def pose_error_shared(*args):
+    """:func:`pose_error` for the same samples errors (m, n_cols) at every pose (no joint term
+    scaled by a joint value, ``j_var`` all -1): the operations of :data:`TASK` samples at a time are
+    computed once, on the cores, then applied at every pose, on the cores (threads, as :func:`pose_error`).
+
+    Parameters
+    ----------
+    *args
+        The program (module docstring: ``P`` .. ``v_var``), then ``Q`` (n, n_vars), the poses' joint
+        values (rad or m), one row per pose, and ``errors`` (m, n_cols), source errors (m or rad) shared by
+        every pose.
+
+    Returns
+    -------
+    (n, m, 6) ndarray
+        The tip's error relative to the nominal, base frame.
+    """
+    (P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var,
+     v_col, v_var, Q, errors) = args
     n, m, K = Q.shape[0], errors.shape[0], op_stage.shape[0]
     out = np.empty((n, m, 6))
     G, CH = (m + W - 1) // W, TASK // W
     EK, JK = np.empty((CH, K, 12 * W)), np.empty((CH, K, 2 * W))
     for g0 in range(0, G, CH):
         ng = min(CH, G - g0)
-        for g in prange(ng):
-            k0 = (g0 + g) * W
-            _sample_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var, v_col, v_var, errors,
-                        Q[0], k0, min(W, m - k0), EK[g], JK[g], np.empty(6 * W), np.empty(4 * W),
-                        np.empty(Q.shape[1] * W), np.empty(W), np.empty(errors.shape[1] * W))
-        for i in prange(n):
-            C, T0 = np.empty((K + 1, 3, 4)), np.empty((3, 4))
-            _constants(P, kind, var, a, c, Q[i], seg_start, fac_kind, fac_stage, C, T0)
-            T, T2, res = np.empty(12 * W), np.empty(12 * W), np.empty(8 * W)
-            for g in range(ng):
-                k0 = (g0 + g) * W
-                Tt = _apply_ops(T, T2, C, EK[g], JK[g], kind, op_stage, op_p, seg_start)
-                _tip_error(Tt, T0, res, i, k0, min(W, m - k0), out)
-    return out
-
-
-@njit(cache=True, error_model="numpy")
-def pose_error_serial(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col,
-                      j_coef, j_var, v_col, v_var, Q, errors):
-    """:func:`pose_error` in the calling thread only (for threads other than the main one)."""
-    n, m = errors.shape[0], errors.shape[1]
-    out = np.empty((n, m, 6))
-    for i in range(n):
-        _task(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef,
-              j_var, v_col, v_var, Q, errors, i, 0, m, out)
+        run_tasks(lambda ga, gb: _shared_ops(kind, var, a, op_stage, op_p, p_col, p_field, op_j, j_col, j_coef, j_var,
+                                             v_col, v_var, Q[0], errors, g0, ga, gb, EK, JK), ng)
+        run_tasks(lambda i0, i1: _shared_apply(P, kind, var, a, c, seg_start, fac_kind, fac_stage, op_stage, op_p, Q, m,
+                                               g0, ng, EK, JK, i0, i1, out), n)
     return out
