@@ -133,6 +133,30 @@ def test_norm_quantile_against_closed_forms():
         norm_quantile(np.eye(3), 1.0)
 
 
+def test_norm_within_decides_as_the_quantile_does():
+    """``norm_within`` (one distribution evaluation per covariance, what the calibrated budget's check uses) accepts
+    limits 1e-9 above every quantile and refuses limits 1e-9 below any one, on random covariances of rank 1-3 and a
+    zero one; a negative limit is missed, a zero covariance holds a zero limit; the chi-square closed form too."""
+    from evotol.calibration.noise_share import norm_within
+    p = level_of(3.0)
+    rng = np.random.default_rng(5)
+    covs = []
+    for rank in (1, 2, 3, 3, 3):
+        A = rng.normal(scale=1e-5, size=(3, rank))
+        covs.append(A @ A.T)
+    covs = np.array(covs)
+    q = norm_quantile(covs, p)
+    assert norm_within(covs, p, q * (1 + 1e-9))
+    for i in range(len(covs)):
+        assert not norm_within(covs, p, np.where(np.arange(len(covs)) == i, q * (1 - 1e-9), q * (1 + 1e-9)))
+    s = 2e-5
+    assert norm_within(s * s * np.eye(3), p, s * np.sqrt(chi2(3).ppf(p)) * (1 + 1e-9))
+    assert not norm_within(s * s * np.eye(3), p, s * np.sqrt(chi2(3).ppf(p)) * (1 - 1e-9))
+    assert norm_within(np.zeros((1, 3, 3)), p, 0.0) and not norm_within(np.zeros((1, 3, 3)), p, -1e-12)
+    with pytest.raises(ValidationError, match="^probability = 1.0: expected"):
+        norm_within(np.eye(3), 1.0, 1.0)
+
+
 def test_noise_share_is_a_quantile_of_sampled_noise(offsets):
     """Noise drawn on the readings (20 um per axis), fitted by numpy.linalg.lstsq on the first-order readings of
     the identified columns and pushed to the pose with the largest share: the norm exceeds the stated

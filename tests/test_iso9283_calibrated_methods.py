@@ -152,6 +152,26 @@ def test_the_monotone_bracket_holds_the_least_cost(case):
     assert f"Its bracket of the least cost: [{m['lower_bound']:.6g}, {m['upper_bound']:.6g}]" in line
 
 
+def test_the_budget_check_decides_as_the_solved_quantiles_do(case):
+    """``RandomBudget.ok`` decides each figure by one distribution evaluation per pose (``norm_within``); written
+    here from the solved quantiles (``position`` = max q + max w <= budget, AP = w + q per ISO pose, RP on the fixed
+    draws), it gives the same verdict on every method's design moved 1e-6 and 1e-9 either side of the boundary."""
+    _, problem, names, designs = case
+    rb = problem.calibration.random_budget
+
+    def by_quantiles(t):
+        return (rb.position(t) <= rb.budget and rb.ap(t).max() <= rb.AP and rb.rp_value(t).max() <= rb.rp_aim)
+
+    checked = 0
+    for m in METHODS:
+        t = np.array([designs[m]["tolerances"][n] for n in names])
+        for f in (1 - 1e-6, 1 - 1e-9, 1 + 1e-9, 1 + 1e-6):
+            x = np.clip(t * f, rb.lo, rb.hi)
+            assert rb.ok(x) == by_quantiles(x), (m, f)
+            checked += rb.ok(x)
+    assert 0 < checked < 4 * len(METHODS)
+
+
 def test_the_methods_monotone_settings_reach_the_calibrated_bracket(case):
     """``[methods] monotone``'s ``max_evaluations``, ``rel_gap`` and ``batch`` reach the bracket in the calibrated budget
     (it ran at its own 150 evaluations and 1 % gap whatever the study said): a budget of one design stops it

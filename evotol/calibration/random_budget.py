@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from evotol.allocators.iso9283 import RP_MARGIN
-from evotol.calibration.noise_share import norm_quantile
+from evotol.calibration.noise_share import norm_quantile, norm_within
 from evotol.errors import ValidationError
 from evotol.measures.iso9283.budget import rp_value, rp_with_gradient
 
@@ -94,6 +94,24 @@ class Figure:
         """
         s, _, C = self.lam(t)
         return norm_quantile(C, self.level), s
+
+    def within(self, t, limits) -> bool:
+        """Whether the exact quantile of the fit's error is at most ``limits`` at every pose (m): the check
+        :meth:`exact` would give against them, by one evaluation of the distribution per pose
+        (:func:`evotol.calibration.noise_share.norm_within`).
+
+        Parameters
+        ----------
+        limits : float or (n,) array_like
+            Per pose the largest quantile allowed (m).
+
+        Returns
+        -------
+        bool
+        """
+        t = np.asarray(t, float)
+        C = self.C0 + np.einsum("k,knij->nij", t * t, self.cov)
+        return norm_within(C, self.level, limits)
 
 
 class RandomBudget:
@@ -197,8 +215,11 @@ class RandomBudget:
         -------
         bool
         """
-        return self.iso is None or ((self.AP is None or self.ap(t).max() <= self.AP)
-                                    and (self.RP is None or self.rp_value(t).max() <= self.rp_aim))
+        if self.iso is None:
+            return True
+        if self.AP is not None and not self.iso_figure.within(t, self.AP - self.iso_figure.w(t)[0]):
+            return False                # AP_i = w_i + q_i <= AP at every ISO pose
+        return self.RP is None or self.rp_value(t).max() <= self.rp_aim
 
     # -- what every allocator is judged by
     def ok(self, t) -> bool:
@@ -208,7 +229,8 @@ class RandomBudget:
         -------
         bool
         """
-        return self.position(t) <= self.budget and self.iso_ok(t)
+        # max q_i + max w_i <= budget: every q_i within budget - max w_i (no quantile solved)
+        return self.task.within(t, self.budget - self.task.w(t)[0].max()) and self.iso_ok(t)
 
     def cost(self, t) -> float:
         """``Σ_k c_k(τ_k)`` (cost units).

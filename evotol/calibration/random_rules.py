@@ -49,7 +49,7 @@ CALIBRATED_RULES = {
     "monotone": "the polyblock bracket of the least cost (Tuy 2000), started from the least-cost design",
 }
 
-#: the calibrated ``monotone``'s budget of checked designs (the exact check costs 10-50 ms a design; a count, not a
+#: the calibrated ``monotone``'s budget of checked designs (the exact check costs about 7 ms a design; a count, not a
 #: time, so that the bracket is the same on every machine)
 MONOTONE_EVALUATIONS = 150
 
