@@ -101,10 +101,10 @@ def entry_point_models() -> dict[str, type]:
     ValidationError
         An entry point loads something that is not a CostModel subclass.
     """
-    from importlib.metadata import entry_points
+    from evotol._runtime.plugins import group_entry_points
 
     found = {}
-    for ep in entry_points(group="evotol.cost_models"):
+    for ep in group_entry_points("evotol.cost_models"):
         cls = ep.load()
         if not (isinstance(cls, type) and issubclass(cls, CostModel)):
             raise ValidationError(f"entry point evotol.cost_models:{ep.name}", cls, "a CostModel subclass")

@@ -35,10 +35,10 @@ def available() -> dict[str, type]:
     evotol.errors.ValidationError
         A built-in's ``module:Class`` path does not import.
     """
-    from importlib.metadata import entry_points
+    from evotol._runtime.plugins import group_entry_points
 
     found = {name: _load(path) for name, path in BUILTIN.items()}
-    found.update({ep.name: ep.load() for ep in entry_points(group="evotol.robots")})
+    found.update({ep.name: ep.load() for ep in group_entry_points("evotol.robots")})
     return found
 
 
@@ -66,9 +66,9 @@ def get(name: str):
     """
     if ":" in name:
         return _load(name)
-    from importlib.metadata import entry_points
+    from evotol._runtime.plugins import group_entry_points
 
-    eps = {ep.name: ep for ep in entry_points(group="evotol.robots")}
+    eps = {ep.name: ep for ep in group_entry_points("evotol.robots")}
     if name in eps:
         return eps[name].load()
     if name in BUILTIN:

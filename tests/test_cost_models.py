@@ -184,3 +184,22 @@ def test_starting_guesses_are_carried_by_the_model_class():
     assert cm.CostModel.initial_guess(t, c).tolist() == []      # no coefficients, no guess
     np.testing.assert_array_equal(cm.ExponentialCost.initial_guess(t, 3 * np.exp(-0.4 * t / 1e-5), scale=1e-5),
                                   cm.ExponentialCost.initial_guess(t / 1e-5, 3 * np.exp(-0.4 * t / 1e-5)))
+
+
+def test_entry_points_are_read_once_per_sys_path(tmp_path, monkeypatch):
+    """The registries' entry points are kept per ``sys.path`` (evotol/_runtime/plugins.py): the same tuple on a
+    second lookup, and a plugin in a folder put on ``sys.path`` afterwards is seen (its cost model usable by name)."""
+    from evotol._runtime.plugins import group_entry_points
+    from evotol.cost_models import registry
+    before = group_entry_points("evotol.cost_models")
+    assert group_entry_points("evotol.cost_models") is before and "toy_power" not in {ep.name for ep in before}
+    (tmp_path / "toy_cost.py").write_text("from evotol.cost_models import PowerCost\n\n\nclass ToyPower(PowerCost):\n"
+                                          "    name = 'toy_power'\n")
+    info = tmp_path / "toy_cost-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: toy-cost\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text("[evotol.cost_models]\ntoy_power = toy_cost:ToyPower\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert "toy_power" in {ep.name for ep in group_entry_points("evotol.cost_models")}
+    model = registry.from_dict({"model": "toy_power", "a0": 1.0, "a1": 1.0})
+    assert type(model).__name__ == "ToyPower" and float(model.cost(0.5)) == float(cm.PowerCost(1.0, 1.0).cost(0.5))

@@ -13,7 +13,7 @@ then selects it; :func:`evotol.core.measure_checks.check_measure` proves it foll
 from __future__ import annotations
 
 import importlib
-from importlib.metadata import entry_points
+from evotol._runtime.plugins import group_entry_points
 
 from evotol.measures.protocol import Measure
 from evotol.errors import ValidationError
@@ -41,7 +41,7 @@ def _instance(obj, name: str, where: str) -> Measure:
 
 
 def _entry_points() -> dict:
-    return {ep.name: ep for ep in entry_points(group=GROUP)}
+    return {ep.name: ep for ep in group_entry_points(GROUP)}
 
 
 def names() -> tuple[str, ...]:
