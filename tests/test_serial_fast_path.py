@@ -75,9 +75,9 @@ def _ur5_errors_in_a_child(args):
 
 
 def test_parallel_monte_carlo_survives_a_fork_and_threads():
-    """The parallel kernel runs in the parent, then in forked pool workers (GNU OpenMP would kill
-    them: a fork-safe threading layer is chosen) and in two threads at once (they take the serial
-    kernel): every result equals the parent's."""
+    """The Monte Carlo kernel runs on its thread pool in the parent, then in forked pool workers (the pool's
+    threads do not exist there: task_threads makes a new pool after a fork) and in two threads at once (each
+    runs the tasks in its own thread): every result equals the parent's."""
     import threading
     from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 

@@ -18,7 +18,7 @@ from typing import Callable
 PIECES_PER_THREAD = 4
 #: the threads, made at the first parallel call and kept (a pool per call cost 10 % of a shared-samples
 #: Monte Carlo of 20 000 samples, which calls :func:`run_tasks` twice per 512 samples)
-_POOL: list[ThreadPoolExecutor] = []
+_POOL: list[tuple[int, ThreadPoolExecutor]] = []
 
 
 def _forget_pool() -> None:
@@ -63,11 +63,12 @@ def run_tasks(run: Callable[[int, int], None], total: int, threads: int | None =
         if total > 0:
             run(0, total)
         return
-    if not _POOL or _POOL[0]._max_workers < threads:
-        _POOL[:] = [ThreadPoolExecutor(max_workers=threads, thread_name_prefix="evotol-kernel")]
-    pieces = min(total, threads * PIECES_PER_THREAD) if threads == _POOL[0]._max_workers else threads
+    if not _POOL or _POOL[0][0] < threads:
+        _POOL[:] = [(threads, ThreadPoolExecutor(max_workers=threads, thread_name_prefix="evotol-kernel"))]
+    size, pool = _POOL[0]
+    pieces = min(total, threads * PIECES_PER_THREAD) if threads == size else threads   # at most `threads` at once
     cuts = [total * k // pieces for k in range(pieces + 1)]
-    futures = [_POOL[0].submit(run, a, b) for a, b in zip(cuts[:-1], cuts[1:])]
+    futures = [pool.submit(run, a, b) for a, b in zip(cuts[:-1], cuts[1:])]
     try:
         for f in futures:
             f.result()
