@@ -150,6 +150,10 @@ STUDY_CASES = {
                                             ["methods.ga.budget", "0.001", "cheapest design"]),
     "optimum budget NaN": ((("optimum = {}", "optimum = { budget = nan }"),), ["methods.optimum.budget", "nan"]),
     "sensitivity budget negative": ((("sensitivity = {}", "sensitivity = { budget = -2.0 }"),), ["methods.sensitivity.budget", "-2.0"]),
+    # a batch of 0 ended in "argmin of an empty sequence", a text rel_gap in a TypeError, after the other methods ran
+    "monotone batch 0": ((("optimum = {}", "optimum = {}\nmonotone = { batch = 0 }"),), ["methods.monotone", "batch = 0", "integer >= 1"]),
+    "monotone rel_gap text": ((("optimum = {}", "optimum = {}\nmonotone = { rel_gap = \"1 %\" }"),),
+                              ["methods.monotone", "rel_gap = '1 %'", "a number > 0"]),
     "locked above upper": ((("locked = 2e-5", "locked = 5e-4"),), ["tolerances['R1'].locked", "0.0005", "0.0002"]),
     "locked below lower": ((("locked = 2e-5", "locked = 1e-7"),), ["tolerances['R1'].locked", "1e-07"]),
     "grid = 3.5": ((("grid = [5, 5, 3]", "grid = 3.5"),), ["grid counts", "3.5"]),

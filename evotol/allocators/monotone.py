@@ -39,7 +39,7 @@ from typing import Callable
 import numpy as np
 
 from evotol.measures.constraints import ExactRows
-from evotol.errors import ValidationError
+from evotol.errors import ValidationError, is_integer, is_real
 from evotol.core.problem import ToleranceProblem
 from evotol.core.plausibility import issue
 from evotol.measures import feasibility
@@ -129,6 +129,27 @@ def _cut(V: np.ndarray, z: np.ndarray, chunk_bytes: int = 1 << 24) -> np.ndarray
     return np.concatenate([keep, np.unique(cand, axis=0)])
 
 
+def check_monotone_options(*, max_evaluations=4000, rel_gap=1e-2, batch=16) -> None:
+    """The polyblock's settings checked before any work (a ``batch`` of 0 never ended; a text ``rel_gap`` failed in a
+    comparison after the first round).
+
+    Parameters
+    ----------
+    max_evaluations, rel_gap, batch
+        As :func:`polyblock_search`.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        ``max_evaluations`` or ``batch`` not an integer of at least 1, ``rel_gap`` not a finite number above 0.
+    """
+    for field, value in (("max_evaluations", max_evaluations), ("batch", batch)):
+        if not is_integer(value, 1):
+            raise ValidationError(field, value, "an integer >= 1")
+    if not (is_real(rel_gap) and 0 < float(rel_gap) < np.inf):
+        raise ValidationError("rel_gap", rel_gap, "a number > 0 (the relative gap at which the bracket stops)")
+
+
 @dataclass(frozen=True)
 class MonotoneProblem:
     """A monotone minimisation in log variables, the polyblock's input (module docstring): minimise ``cost(x)``
@@ -183,6 +204,7 @@ def polyblock_search(mp: MonotoneProblem, *, upper_bound: float = np.inf, spent:
         ``upper_bound``), ``gap``, ``evaluations``, ``vertices``, ``rounds``, ``converged`` and ``stop`` (what ended
         the search: ``"gap"``, ``"loosest design"``, ``"evaluations"``, ``"vertices"``, ``"time"``, ``"cut size"``).
     """
+    check_monotone_options(max_evaluations=max_evaluations, rel_gap=rel_gap, batch=batch)
     t0 = time.perf_counter()
     lo, hi, cost = mp.lo, mp.hi, mp.cost
 
@@ -389,7 +411,8 @@ def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None,
     Raises
     ------
     evotol.errors.ValidationError
-        A ``budget`` that is not None, or ``max_evaluations`` too few to find a feasible design.
+        A ``budget`` that is not None, ``max_evaluations`` too few to find a feasible design, or a setting out of
+        range (:func:`check_monotone_options`).
     evotol.errors.InfeasibleError
         Even every free tolerance at its lower bound misses the requirement.
 
@@ -410,6 +433,7 @@ def allocate_monotone(problem: ToleranceProblem, *, budget: float | None = None,
     if budget is not None:
         raise ValidationError("budget", budget, "None for allocate_monotone (it brackets the minimum cost at the "
                               "requirement; allocate_ga(problem, budget=...) gives the best accuracy at a budget)")
+    check_monotone_options(max_evaluations=max_evaluations, rel_gap=rel_gap, batch=batch)
     problem.check_feasible()
     res = polyblock(problem, incumbent=incumbent, rel_gap=rel_gap, max_evaluations=max_evaluations, batch=batch)
     if res["t"] is None:

@@ -9,6 +9,7 @@ message are the allocator's.
 from __future__ import annotations
 
 from evotol.allocators.ga import check_ga_options
+from evotol.allocators.monotone import check_monotone_options
 from evotol.allocators.optimum import check_optimum
 from evotol.allocators.sensitivity import check_sensitivity
 from evotol.core.problem import ToleranceProblem
@@ -28,8 +29,12 @@ def _check_optimum(problem: ToleranceProblem, budget=None, refine=False, **kw) -
     check_optimum(problem, budget=budget, refine=refine)
 
 
+def _check_monotone(problem: ToleranceProblem, max_evaluations=4000, rel_gap=1e-2, batch=16, **kw) -> None:
+    check_monotone_options(max_evaluations=max_evaluations, rel_gap=rel_gap, batch=batch)
+
+
 #: method name -> its check (keyword arguments: the method's table)
-CHECKS = {"optimum": _check_optimum, "sensitivity": _check_sensitivity, "ga": _check_ga}
+CHECKS = {"optimum": _check_optimum, "sensitivity": _check_sensitivity, "ga": _check_ga, "monotone": _check_monotone}
 
 
 def check_methods(problem: ToleranceProblem, methods: dict) -> None:

@@ -9,7 +9,9 @@ run on the systematic sources, each judged by the budget's own check; the block'
 """
 from __future__ import annotations
 
+from evotol.allocators.monotone import check_monotone_options
 from evotol.calibration.random_rules import CALIBRATED_RULES, calibrated_design
+from evotol.errors import ValidationError
 from evotol.studyfile.methods import study_methods
 
 #: the GA's settings the calibrated GA takes (the ordinary run takes the whole table)
@@ -32,9 +34,19 @@ def monotone_options(methods: dict) -> dict:
     -------
     dict
         ``max_evaluations`` (int), ``rel_gap`` (float), ``batch`` (int): the ones the study gives.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        One line, ``methods.monotone.<key>``: a setting out of range
+        (:func:`evotol.allocators.monotone.check_monotone_options`).
     """
-    kinds = {"max_evaluations": int, "rel_gap": float, "batch": int}
-    return {k: kinds[k](v) for k, v in (methods.get("monotone") or {}).items() if k in MONOTONE_KEYS}
+    given = {k: v for k, v in (methods.get("monotone") or {}).items() if k in MONOTONE_KEYS}
+    try:
+        check_monotone_options(**given)
+    except ValidationError as exc:
+        raise ValidationError(f"methods.monotone.{exc.field}", exc.value, exc.expected) from None
+    return given
 
 
 def calibrated_methods(spec: dict, problem) -> dict:
