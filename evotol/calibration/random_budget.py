@@ -78,7 +78,7 @@ class Figure:
         tuple of ndarray
             ``(n,)``, ``(n, K)``, ``(n, 3, 3)``.
         """
-        C = self.C0 + np.einsum("k,knij->nij", t * t, self.cov)
+        C = self.covariance(t)
         ev, V = np.linalg.eigh(C)
         v = V[:, :, -1]
         dl = 2 * t[None] * np.einsum("ni,knij,nj->nk", v, self.cov, v)
@@ -109,9 +109,17 @@ class Figure:
         -------
         bool
         """
+        return norm_within(self.covariance(t), self.level, limits)
+
+    def covariance(self, t):
+        """The fit's error covariance per pose, ``C_0 + Σ_k τ_k² C_k`` (m²).
+
+        Returns
+        -------
+        (n, 3, 3) ndarray
+        """
         t = np.asarray(t, float)
-        C = self.C0 + np.einsum("k,knij->nij", t * t, self.cov)
-        return norm_within(C, self.level, limits)
+        return self.C0 + np.einsum("k,knij->nij", t * t, self.cov)
 
 
 class RandomBudget:

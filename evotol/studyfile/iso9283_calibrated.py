@@ -9,46 +9,11 @@ run on the systematic sources, each judged by the budget's own check; the block'
 """
 from __future__ import annotations
 
-from evotol.allocators.monotone import check_monotone_options
 from evotol.calibration.random_rules import CALIBRATED_RULES, calibrated_design
-from evotol.errors import ValidationError
-from evotol.studyfile.methods import study_methods
+from evotol.studyfile.methods import monotone_options, study_methods
 
 #: the GA's settings the calibrated GA takes (the ordinary run takes the whole table)
 GA_KEYS = ("pop_size", "n_gen", "seed")
-#: the settings of ``[methods] monotone`` every polyblock bracket takes: the ordinary run's, the calibrated one's and
-#: the ISO one's (:func:`evotol.allocators.monotone.allocate_monotone`'s other keys, ``budget`` and ``incumbent``,
-#: are the ordinary run's alone)
-MONOTONE_KEYS = ("max_evaluations", "rel_gap", "batch")
-
-
-def monotone_options(methods: dict) -> dict:
-    """The settings of ``[methods] monotone`` a polyblock bracket on the random sources takes too (:data:`MONOTONE_KEYS`).
-
-    Parameters
-    ----------
-    methods : dict
-        The study's methods and their settings.
-
-    Returns
-    -------
-    dict
-        ``max_evaluations`` (int), ``rel_gap`` (float), ``batch`` (int): the ones the study gives.
-
-    Raises
-    ------
-    evotol.errors.ValidationError
-        One line, ``methods.monotone.<key>``: a setting out of range
-        (:func:`evotol.allocators.monotone.check_monotone_options`).
-    """
-    given = {k: v for k, v in (methods.get("monotone") or {}).items() if k in MONOTONE_KEYS}
-    try:
-        check_monotone_options(**given)
-    except ValidationError as exc:
-        raise ValidationError(f"methods.monotone.{exc.field}", exc.value, exc.expected) from None
-    return given
-
-
 def calibrated_methods(spec: dict, problem) -> dict:
     """The study's methods that also allocate the random sources in the calibrated budget, with their settings.
 
@@ -62,7 +27,8 @@ def calibrated_methods(spec: dict, problem) -> dict:
     Returns
     -------
     dict
-        Method -> settings (the GA's ``pop_size``, ``n_gen``, ``seed``; the bracket's :func:`monotone_options`;
+        Method -> settings (the GA's ``pop_size``, ``n_gen``, ``seed``; the bracket's
+        :func:`evotol.studyfile.methods.monotone_options`;
         ``{}`` for a rule), in the study's order;
         empty without ``[calibration]`` or when the random sources are not allocated.
     """

@@ -23,8 +23,7 @@ from evotol.allocators.iso9283_ga import allocate_iso9283_ga
 from evotol.allocators.iso9283_monotone import allocate_iso9283_monotone
 from evotol.allocators.iso9283_sensitivity import allocate_iso9283_sensitivity
 from evotol.errors import ValidationError
-from evotol.studyfile.iso9283_calibrated import monotone_options
-from evotol.studyfile.methods import study_methods
+from evotol.studyfile.methods import monotone_options, study_methods
 
 #: the GA's settings the ISO GA takes (pymoo's operators; ``progress`` is the ordinary run's bar)
 ISO_GA_KEYS = ("pop_size", "n_gen", "seed", "progress")
@@ -353,7 +352,7 @@ def study_method_options(spec: dict, problem, orientation: dict) -> dict:
     -------
     dict
         ``ga`` (:func:`iso_ga_options`), ``rules`` (:func:`iso_rules_wanted`), ``monotone`` (the ISO bracket's
-        settings, :func:`evotol.studyfile.iso9283_calibrated.monotone_options`), ``front``
+        settings, :func:`evotol.studyfile.methods.monotone_options`), ``front``
         (:func:`iso_front_options`): the :class:`evotol.studyfile.iso9283.IsoStudy` fields.
     """
     rules = iso_rules_wanted(spec, problem, orientation)

@@ -8,6 +8,7 @@ from evotol._runtime.keyword_checks import check_keywords, unknown_key_message
 from evotol.allocators import (allocate_equal, allocate_ga, allocate_lagrange, allocate_monotone, allocate_nsga2,
                                allocate_optimum, allocate_sensitivity)
 from evotol.allocators.budget import check_budget
+from evotol.allocators.monotone import check_monotone_options
 from evotol.allocators.optimum import check_optimum
 from evotol.allocators.preflight import check_methods as check_refusals
 from evotol.core.problem import ToleranceProblem
@@ -89,3 +90,36 @@ def check_methods(spec: dict, problem: ToleranceProblem, methods: dict) -> None:
                 raise ValidationError(field, exc.value, exc.expected) from None
     # every other method's own refusals, before the first one runs (issue 34); the optimum's are checked above
     check_refusals(problem, {m: kw for m, kw in methods.items() if m != "optimum"})
+
+
+#: the settings of ``[methods] monotone`` every polyblock bracket takes: the ordinary run's, the calibrated one's and
+#: the ISO one's (:func:`evotol.allocators.monotone.allocate_monotone`'s other keys, ``budget`` and ``incumbent``,
+#: are the ordinary run's alone)
+MONOTONE_KEYS = ("max_evaluations", "rel_gap", "batch")
+
+
+def monotone_options(methods: dict) -> dict:
+    """The settings of ``[methods] monotone`` a polyblock bracket on the random sources takes too (:data:`MONOTONE_KEYS`).
+
+    Parameters
+    ----------
+    methods : dict
+        The study's methods and their settings.
+
+    Returns
+    -------
+    dict
+        ``max_evaluations`` (int), ``rel_gap`` (float), ``batch`` (int): the ones the study gives.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        One line, ``methods.monotone.<key>``: a setting out of range
+        (:func:`evotol.allocators.monotone.check_monotone_options`).
+    """
+    given = {k: v for k, v in (methods.get("monotone") or {}).items() if k in MONOTONE_KEYS}
+    try:
+        check_monotone_options(**given)
+    except ValidationError as exc:
+        raise ValidationError(f"methods.monotone.{exc.field}", exc.value, exc.expected) from None
+    return given
