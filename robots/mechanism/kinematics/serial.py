@@ -230,6 +230,12 @@ class SerialChain:
     def _args(self):
         return self.P, self.ident, self.kind, self.var, self.a, self.c, self.mark, self.n_marks
 
+    def _joint_stages(self):
+        """The joint stages' indices, variables and coefficients ``a`` (the Newton and posture kernels' joint
+        columns), contiguous arrays."""
+        js = np.flatnonzero(self.kind > 0).astype(np.int64)
+        return js, self.var[js].copy(), self.a[js].copy()
+
     def joints_array(self, q: dict) -> np.ndarray:
         """Joint values as the kernels take them.
 
@@ -351,14 +357,13 @@ class SerialChain:
         from evotol.robots.mechanism.kinematics import serial_newton
 
         _kernels()
-        js = np.array([s for s in range(len(self.kind)) if self.kind[s] > 0], np.int64)
         has_rot = Rts is not None
         if Rts is None:
             Rts = np.broadcast_to(np.zeros((1, 1, 3, 3)), targets.shape[:2] + (3, 3))
         Rts = np.asarray(Rts, float)                   # zero strides kept: numba indexes views as they are
         return serial_newton.inverse_geometry(*self._args(), np.asarray(q0, float), np.ascontiguousarray(targets, float),
-                                  Rts, has_rot, np.asarray(axes, np.int64), js, self.var[js].copy(),
-                                  self.a[js].copy(), float(scale), 40, 1e-12)
+                                  Rts, has_rot, np.asarray(axes, np.int64), *self._joint_stages(), float(scale), 40,
+                                  1e-12)
 
 
 def serial_inverse_geometry(kin, chain: SerialChain, poses: np.ndarray, max_step: float = 0.1) -> dict:

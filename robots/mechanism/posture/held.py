@@ -84,11 +84,10 @@ def _path_determinants(kin, chain, q0: dict, diff: dict, S: np.ndarray):
     compiled kernel (:func:`evotol.robots.mechanism.kinematics.serial_newton.path_determinants`)."""
     from evotol.robots.mechanism.kinematics import serial_newton
 
-    js = np.flatnonzero(chain.kind > 0)
     D = np.ascontiguousarray(np.stack([diff[v] for v in chain.variables], axis=1), float)
     return serial_newton.path_determinants(*chain._args(), np.array([q0[v] for v in chain.variables], float), D, S,
                                            bool(kin.orientation), np.array([ax for _, ax in kin.coord_axes], np.int64),
-                                           js, chain.var[js].copy(), chain.a[js].copy(), float(kin.length_scale))
+                                           *chain._joint_stages(), float(kin.length_scale))
 
 
 def _relative_smallest_singular_value(J: np.ndarray, det: np.ndarray) -> np.ndarray:
