@@ -36,6 +36,8 @@ TARGETS = [
      r"^(?P<arm>UR5|Panda): |^\s+pose_error: .*\((?P<v>[\d.e+]+) wall\)", ">= 1e7", lambda v: v >= 1e7),
     ("bench_urdf.py", "UR5 study verification, verify_nonlinear (pose-samples/s, wall)",
      r"^UR5 study verification .*\((?P<v>[\d.e+]+) wall\)", ">= 1e7", lambda v: v >= 1e7),
+    ("bench_urdf.py", "UR5 study verification, verify_nonlinear's Monte Carlo (slope 300 -> 3 000 samples, wall)",
+     r"^\s+its Monte Carlo \(the slope .*\((?P<v>[\d.e+]+) wall\)", ">= 1e7", lambda v: v >= 1e7),
     ("bench_many_poses.py", "UR5 study, {n} poses: wall time (s)",
      r"^\s*(?P<n>\d{6,}) poses: (?P<v>[\d.]+) s wall", "100 000 in <= 60 s", lambda v: v <= 60.0),
     ("bench_many_poses.py", "UR5 study, {n} poses: peak memory (GB)",
