@@ -176,23 +176,33 @@ def _constants(P, kind, var, a, c, q, seg_start, fac_kind, fac_stage, C, T0):
 
 @njit(cache=True, error_model="numpy")
 def _lanes_times_constant(T, C, out):
-    """out = T C for every lane (T, out: 12 rows ``4 i + j`` of the 3x4 by W lanes, flat)."""
+    """out = T C for every lane (T, out: 12 rows ``4 i + j`` of the 3x4 by W lanes, flat). Row i of a
+    lane is read once for its four products (each product the sum it was, in the same order)."""
+    c00, c01, c02, c03 = C[0, 0], C[0, 1], C[0, 2], C[0, 3]
+    c10, c11, c12, c13 = C[1, 0], C[1, 1], C[1, 2], C[1, 3]
+    c20, c21, c22, c23 = C[2, 0], C[2, 1], C[2, 2], C[2, 3]
     for i in range(3):
-        for j in range(4):
-            c0, c1, c2 = C[0, j], C[1, j], C[2, j]
-            t3 = 1.0 if j == 3 else 0.0
-            for l in range(W):
-                out[(4 * i + j) * W + l] = T[(4 * i) * W + l] * c0 + T[(4 * i + 1) * W + l] * c1 + T[(4 * i + 2) * W + l] * c2 + t3 * T[(4 * i + 3) * W + l]
+        r = 4 * i * W
+        for l in range(W):
+            t0, t1, t2, t3 = T[r + l], T[r + W + l], T[r + 2 * W + l], T[r + 3 * W + l]
+            out[r + l] = t0 * c00 + t1 * c10 + t2 * c20 + 0.0 * t3
+            out[r + W + l] = t0 * c01 + t1 * c11 + t2 * c21 + 0.0 * t3
+            out[r + 2 * W + l] = t0 * c02 + t1 * c12 + t2 * c22 + 0.0 * t3
+            out[r + 3 * W + l] = t0 * c03 + t1 * c13 + t2 * c23 + 1.0 * t3
 
 
 @njit(cache=True, error_model="numpy")
 def _lanes_times_lanes(T, E, out):
-    """out = T E lane by lane (3x4 affine, flat rows ``4 i + j`` of W lanes)."""
+    """out = T E lane by lane (3x4 affine, flat rows ``4 i + j`` of W lanes). Row i of T and the
+    lane's E are read once for row i's four products (each the sum it was, in the same order)."""
     for i in range(3):
-        for j in range(4):
-            for l in range(W):
-                s = T[(4 * i) * W + l] * E[j * W + l] + T[(4 * i + 1) * W + l] * E[(4 + j) * W + l] + T[(4 * i + 2) * W + l] * E[(8 + j) * W + l]
-                out[(4 * i + j) * W + l] = s + T[(4 * i + 3) * W + l] if j == 3 else s
+        r = 4 * i * W
+        for l in range(W):
+            t0, t1, t2, t3 = T[r + l], T[r + W + l], T[r + 2 * W + l], T[r + 3 * W + l]
+            out[r + l] = t0 * E[l] + t1 * E[4 * W + l] + t2 * E[8 * W + l]
+            out[r + W + l] = t0 * E[W + l] + t1 * E[5 * W + l] + t2 * E[9 * W + l]
+            out[r + 2 * W + l] = t0 * E[2 * W + l] + t1 * E[6 * W + l] + t2 * E[10 * W + l]
+            out[r + 3 * W + l] = t0 * E[3 * W + l] + t1 * E[7 * W + l] + t2 * E[11 * W + l] + t3
 
 
 @njit(cache=True, error_model="numpy")
