@@ -177,7 +177,8 @@ def _constants(P, kind, var, a, c, q, seg_start, fac_kind, fac_stage, C, T0):
 @njit(cache=True, error_model="numpy")
 def _lanes_times_constant(T, C, out):
     """out = T C for every lane (T, out: 12 rows ``4 i + j`` of the 3x4 by W lanes, flat). Row i of a
-    lane is read once for its four products (each product the sum it was, in the same order)."""
+    lane is read once for its four products (each product the sum it was, in the same order, the
+    ``0.0 * t3`` terms included: a NaN or infinite lane stays what it was)."""
     c00, c01, c02, c03 = C[0, 0], C[0, 1], C[0, 2], C[0, 3]
     c10, c11, c12, c13 = C[1, 0], C[1, 1], C[1, 2], C[1, 3]
     c20, c21, c22, c23 = C[2, 0], C[2, 1], C[2, 2], C[2, 3]
