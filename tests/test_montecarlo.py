@@ -137,20 +137,20 @@ def test_verify_nonlinear_quantile_puts_a_few_misses_above_every_error():
 
 def test_verify_nonlinear_does_not_depend_on_its_chunks_and_refuses_a_bad_one():
     """Every statistic of the nonlinear check (the quantile over every pose-sample included) is the
-    same whether the poses go to pose_error one at a time, 3 at a time or all at once (the default
-    chunk, CHUNK_POSE_SAMPLES pose-samples), with misses among them; a chunk that is not a positive
-    integer is refused by name, by verify_nonlinear and by verify(model="nonlinear")."""
+    same whether the poses go to pose_error one at a time, 3 at a time or all at once (7 poses; the
+    default chunk is 64), with misses among them; a chunk that is not a positive integer is refused by
+    name, by verify_nonlinear, by verify(model="nonlinear") and by verify."""
     from evotol.verification.nonlinear import verify_nonlinear
 
     r = _UnassembledToy(dims=(1, 1))
     tol = {s.name: Tolerance(cm.ExponentialCost(1, 1, scale=1e-3), 1e-6, 1e-3) for s in r.sources}
     P = ToleranceProblem(r, tol, Requirement(position=1e-3), np.linspace(0.0, 0.9, 7)[:, None])
     t = np.full(2, 1e-5)
-    runs = [verify_nonlinear(P, t, n_samples=301, seed=5, chunk_poses=c).to_dict() for c in (None, 1, 3, 7)]
+    runs = [verify_nonlinear(P, t, n_samples=301, seed=5, chunk_poses=c).to_dict() for c in (64, 1, 3, 7)]
     for d in runs:
         d.pop("seconds")
     assert runs[0]["max_exceed_rate"] > 0 and all(d == runs[0] for d in runs[1:])
-    for bad in (0, 2.5, "4"):
+    for bad in (0, 2.5, "4", None):
         with pytest.raises(ValidationError, match="chunk_poses"):
             verify_nonlinear(P, t, n_samples=10, chunk_poses=bad)
         with pytest.raises(ValidationError, match="chunk_poses"):

@@ -320,7 +320,7 @@ def pose_uniforms(root: np.random.SeedSequence, p: int, n: int, d: int, method: 
 
 @single_threaded_blas
 def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
-           nonlinear: bool = True, radial: str = "uniform", chunk_poses: int | None = None,
+           nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
            progress: bool | None = None, confidence: float = 0.95, model: str = "linear",
            distribution=None, rng: int | np.random.Generator | None = None) -> MonteCarloResult:
     """Monte Carlo verification of ``tolerances`` (mapping or array, SI) at every problem pose.
@@ -349,10 +349,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
         Also sample the robot's nonlinear ``pose_error`` where it has one.
     radial : str
         Radial law of disk/ball sources, one of ``evotol.measures.statistical.distributions.RADIAL``.
-    chunk_poses : int or None
-        Poses sampled per chunk (memory); None (default): 64, or with ``model="nonlinear"``
-        :func:`evotol.verification.nonlinear.verify_nonlinear`'s own choice. The result does not
-        depend on it.
+    chunk_poses : int
+        Poses sampled per chunk (memory; default 64). The result does not depend on it.
     progress : bool or None
         tqdm bar over the chunks (default: only on an interactive terminal).
     confidence : float
@@ -403,10 +401,8 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
         return verify_nonlinear(problem, tolerances, n_samples=n_samples, seed=seed, chunk_poses=chunk_poses)
     if model != "linear":
         raise ValidationError("model", model, "'linear' (first-order samples, plus nonlinear exceed rates) or 'nonlinear'")
-    if chunk_poses is None:
-        chunk_poses = 64
-    elif not is_integer(chunk_poses, 1):
-        raise ValidationError("chunk_poses", chunk_poses, "a positive integer or None")
+    if not is_integer(chunk_poses, 1):
+        raise ValidationError("chunk_poses", chunk_poses, "a positive integer")
     t0 = time.perf_counter()
     if method not in METHODS:
         raise ValidationError("method", method, f"one of {METHODS}")
