@@ -26,6 +26,7 @@ import pytest
 from evotol.allocators import allocate_optimum
 from evotol.errors import ValidationError
 from evotol.studyfile.problem import load_problem
+from evotol.verification.montecarlo import verify
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "reports" / "studies"
@@ -180,6 +181,10 @@ def test_calibration_on_joint_configurations_keeps_its_linear_range_bound_and_si
     assert r.feasible and r.cost > 1e-3           # bounded by the user's bounds, not ~0
     sim = simulate_calibration(pc, r.tolerances, n_samples=60, seed=1)
     assert sim.simulated["position"]["max"] <= 5e-4
+    # the calibrated model has no nonlinear pose_error (its nonlinear check is the simulation above): the
+    # refusal names the part that has none, not the UR5, which has one
+    with pytest.raises(ValidationError, match=r"UR5 has one, but not with its calibration part\)$"):
+        verify(pc, r.tolerances, 10, model="nonlinear")
 
 
 # Slow (~8 s alone) because its check is strong: the calibrated problem's linear-range caps from iterated fits, two
