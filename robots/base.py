@@ -459,6 +459,20 @@ class RobotErrorModel:
         """True when the subclass overrides :meth:`pose_error` (nonlinear model available)."""
         return type(self).pose_error is not RobotErrorModel.pose_error
 
+    def without_nonlinear_model(self) -> str:
+        """Why this model has no nonlinear :meth:`pose_error`, said of the model the user built: the parts of
+        the composition that have none when the described robot has one, else the robot.
+
+        Returns
+        -------
+        str
+            ``"UR5 has one, but not with its calibration part"``, or ``"<name> has none"``.
+        """
+        lacking = [m.part for m in self.parts() if m.part and not m.has_nonlinear_model]
+        if lacking and self.described.has_nonlinear_model:
+            return f"{self.described.name} has one, but not with its {' and '.join(lacking)} part"
+        return f"{self.name} has none"
+
     # --- helpers ------------------------------------------------------------------------
     @property
     def source_names(self) -> tuple[str, ...]:

@@ -93,7 +93,7 @@ def least_cost(rb: RandomBudget, start=None) -> dict:
 
         def con(x, kappa=kappa):
             t = np.exp(x)
-            w, _ = rb.task.w(t)
+            w = rb.task.worst(t)
             s, _, _ = rb.task.lam(t)
             return (budget - w[:, None] - (kappa * s)[None, :]).ravel() / budget
 
@@ -119,7 +119,7 @@ def least_cost(rb: RandomBudget, start=None) -> dict:
             mid = (lo_s + hi_s) / 2
             lo_s, hi_s = (mid, hi_s) if rb.ok(np.maximum(t * mid, lo)) else (lo_s, mid)
         t = np.maximum(t * lo_s, lo)
-    q, w = float(rb.task.exact(t)[0].max()), float(rb.task.w(t)[0].max())
+    q, w = float(rb.task.exact(t)[0].max()), float(rb.task.worst(t).max())
     out = {"tolerances": t, "cost": rb.cost(t), "quantile": q, "worst_case": w,
            "budget": float(budget), "active": bool(q + w >= 0.995 * budget), "success": bool(res.success),
            "message": str(res.message)}
@@ -137,7 +137,7 @@ def _iso_constraints(rb: RandomBudget, t0) -> list:
 
         def fun(x):
             t = np.exp(x)
-            return (rb.AP - rb.iso_figure.w(t)[0] - kappa * rb.iso_figure.lam(t)[0]) / rb.AP
+            return (rb.AP - rb.iso_figure.worst(t) - kappa * rb.iso_figure.lam(t)[0]) / rb.AP
 
         def jac(x):
             t = np.exp(x)

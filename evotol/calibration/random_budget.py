@@ -66,9 +66,22 @@ class Figure:
         tuple of ndarray
             ``(n,)`` and ``(n, K)``.
         """
-        h = self.s0 + np.einsum("k,knd->nd", t, self.support)
+        h = self._support(t)
         j = h.argmax(axis=1)
         return h.max(axis=1) / self.cos_delta, self.support[:, np.arange(len(h)), j].T / self.cos_delta
+
+    def worst(self, t):
+        """Worst case per pose (m): :meth:`w`'s value, without its gradient (the checks' and reports' need).
+
+        Returns
+        -------
+        (n,) ndarray
+        """
+        return self._support(t).max(axis=1) / self.cos_delta
+
+    def _support(self, t):
+        """``s_0 + Σ_k τ_k support_k`` per pose and grid direction (m)."""
+        return self.s0 + np.einsum("k,knd->nd", t, self.support)
 
     def lam(self, t):
         """``sqrt(λ_max(C_i(τ)))`` per pose (m), its gradient, and ``C_i(τ)``.
@@ -176,7 +189,7 @@ class RandomBudget:
         -------
         float
         """
-        return float(self.task.exact(t)[0].max() + self.task.w(t)[0].max())
+        return float(self.task.exact(t)[0].max() + self.task.worst(t).max())
 
     # -- the ISO 9283 figures at the test cube's poses
     def ap(self, t):
@@ -186,7 +199,7 @@ class RandomBudget:
         -------
         (p,) ndarray
         """
-        return self.iso_figure.w(t)[0] + self.iso_figure.exact(t)[0]
+        return self.iso_figure.worst(t) + self.iso_figure.exact(t)[0]
 
     def rp(self, t):
         """RP per ISO pose on the fixed draws (m) and its gradient.
@@ -225,7 +238,7 @@ class RandomBudget:
         """
         if self.iso is None:
             return True
-        if self.AP is not None and not self.iso_figure.within(t, self.AP - self.iso_figure.w(t)[0]):
+        if self.AP is not None and not self.iso_figure.within(t, self.AP - self.iso_figure.worst(t)):
             return False                # AP_i = w_i + q_i <= AP at every ISO pose
         return self.RP is None or self.rp_value(t).max() <= self.rp_aim
 
@@ -238,7 +251,7 @@ class RandomBudget:
         bool
         """
         # max q_i + max w_i <= budget: every q_i within budget - max w_i (no quantile solved)
-        return self.task.within(t, self.budget - self.task.w(t)[0].max()) and self.iso_ok(t)
+        return self.task.within(t, self.budget - self.task.worst(t).max()) and self.iso_ok(t)
 
     def cost(self, t) -> float:
         """``Σ_k c_k(τ_k)`` (cost units).
@@ -279,7 +292,7 @@ class RandomBudget:
             ``AP``, ``AP_worst_case``, ``AP_quantile``, ``RP`` per pose, ``AP_budget``, ``RP_aim``, ``proven``,
             ``active``.
         """
-        w, q = self.iso_figure.w(t)[0], self.iso_figure.exact(t)[0]
+        w, q = self.iso_figure.worst(t), self.iso_figure.exact(t)[0]
         rp = self.rp_value(t)
         return {"AP": (w + q).tolist(), "AP_worst_case": w.tolist(), "AP_quantile": q.tolist(), "RP": rp.tolist(),
                 "AP_budget": self.AP, "RP_aim": self.rp_aim,

@@ -54,13 +54,9 @@ def _norms(x: np.ndarray, rows: slice) -> np.ndarray:
 
 
 def _check(problem: ToleranceProblem, seed=0) -> None:
-    model = problem.error_model
-    if not model.has_nonlinear_model:
-        # name the part of the composition that has none (a calibrated UR5 is not "a UR5 without pose_error")
-        lacking = [m.part for m in model.parts() if m.part and not m.has_nonlinear_model]
-        why = (f"{model.described.name} has one, but not with its {' and '.join(lacking)} part"
-               if lacking and model.described.has_nonlinear_model else f"{model.name} has none")
-        raise ValidationError("model", "nonlinear", f"a robot with pose_error ({why})")
+    if not problem.error_model.has_nonlinear_model:
+        raise ValidationError("model", "nonlinear",
+                              f"a robot with pose_error ({problem.error_model.without_nonlinear_model()})")
     if not is_integer(seed, 0):
         raise ValidationError("seed", seed, "a non-negative integer")
 
