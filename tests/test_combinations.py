@@ -187,6 +187,18 @@ def test_calibration_on_joint_configurations_keeps_its_linear_range_bound_and_si
         verify(pc, r.tolerances, 10, model="nonlinear")
 
 
+def test_a_nonlinear_yield_requirement_with_calibration_names_the_calibration_part():
+    """The pair (requirement model = "nonlinear", calibration) is refused in one line naming both: the
+    requirement's model and the calibration part that has no nonlinear pose_error (it said "UR5 has none",
+    of a UR5 that has one)."""
+    spec = with_calibration(with_joints(ur5()))
+    spec["requirement"] = {**spec["requirement"], "measure": "yield", "probability": 0.99, "model": "nonlinear"}
+    p = load_problem(spec, base_dir=STUDIES)
+    with pytest.raises(ValidationError, match=r"^requirement\.model = 'nonlinear': .*UR5 has one, but not with its "
+                                              r"calibration part\)$"):
+        p.evaluate(p.upper[None] * 0.01)
+
+
 # Slow (~8 s alone) because its check is strong: the calibrated problem's linear-range caps from iterated fits, two
 # optima and a calibration simulated on the nonlinear model (60 robots, each identified and compensated).
 def test_puma560_calibrated_on_its_joint_configurations_costs_less_than_uncalibrated():

@@ -79,7 +79,7 @@ class SampledYield:
         from evotol.measures.statistical.distributions import unit_samples
 
         if not robot.has_nonlinear_model:
-            raise ValidationError("requirement.model", "nonlinear", f"a robot with pose_error ({robot.name} has none)")
+            raise ValidationError("requirement.model", "nonlinear", f"a robot with pose_error ({robot.without_nonlinear_model()})")
         self.robot, self.poses = robot, np.asarray(poses, dtype=float)
         self.bounds = {c: float(E) for c, E in bounds.items() if E is not None}
         self.dims = [s.dim for s in robot.sources]
