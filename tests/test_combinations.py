@@ -187,6 +187,33 @@ def test_calibration_on_joint_configurations_keeps_its_linear_range_bound_and_si
         verify(pc, r.tolerances, 10, model="nonlinear")
 
 
+@pytest.mark.parametrize("caps", [("joints",), ("callouts",), ("per-axis",), ("joints", "callouts"), ("joints", "per-axis")])
+def test_nonlinear_verification_on_each_composition_agrees_with_its_first_order_worst_case(caps):
+    """verify(model="nonlinear") on each composition it can meet runs through that composition's own
+    pose_error (tied callout ends, joint configurations, the per-axis frame), not the described robot's: at
+    small tolerances (30x the lower bounds) its worst-vertex error equals the linear worst case of the
+    composed first-order map (support function over directions, an independent computation) to 1e-3 at every
+    pose, and no interval sample exceeds that worst case. Calibration and clearances are refused (above, and
+    tests/test_montecarlo.py)."""
+    p = build(*caps)
+    t = np.minimum(p.lower * 30, p.upper)
+    chk = verify(p, t, 50, model="nonlinear")
+    for c, _ in p.components:
+        np.testing.assert_allclose(chk.worst_vertex[c], chk.linear_worst_case[c], rtol=1e-3)
+        assert chk.mc_max[c] <= chk.linear_worst_case[c].max() * (1 + 1e-3)
+
+def test_nonlinear_verification_with_clearances_is_refused_naming_both():
+    """The pair (nonlinear verification, clearances) is refused in one line before any sample: by verify
+    (the clearance model is first order) and by verify_nonlinear (the clearances part has no pose_error)."""
+    from evotol.verification.nonlinear import verify_nonlinear
+    from tests.test_combination_matrix import study
+
+    p = load_problem(study("closed-loop", ["clearances"]))
+    with pytest.raises(ValidationError, match=r"^model = 'nonlinear': expected 'linear' with clearance sources"):
+        verify(p, p.lower, 10, model="nonlinear")
+    with pytest.raises(ValidationError, match=r"5-bar has one, but not with its clearances part\)$"):
+        verify_nonlinear(p, p.lower, n_samples=10)
+
 def test_a_nonlinear_yield_requirement_with_calibration_names_the_calibration_part():
     """The pair (requirement model = "nonlinear", calibration) is refused in one line naming both: the
     requirement's model and the calibration part that has no nonlinear pose_error (it said "UR5 has none",
