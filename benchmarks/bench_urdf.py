@@ -304,8 +304,9 @@ def main(quick: bool = False) -> None:
               f"({w_v:.2f} wall), {rates[label][0]:.3g} pose-samples/s CPU ({rates[label][1]:.3g} wall)")
     print(f"  after/before x{rates['after'][0] / rates['before'][0]:.2f} CPU, x{rates['after'][1] / rates['before'][1]:.2f} wall; "
           f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
-    # the check's fixed parts (the linear worst case, twice: for the worst vertices and for the
-    # report; the worst vertices through the kernel, one sample a pose in a 64-lane group) do not
+    # the check's fixed parts (the linear worst case of each constrained component, once: its maximisers
+    # are the worst vertices and its value the report's; the worst vertices through the kernel, one
+    # sample a pose in a 64-lane group) do not
     # grow with the samples: the Monte Carlo's own rate is the slope between 300 and 3 000 samples
     n_big = 3000
     c_big, w_big = best(lambda: verify_nonlinear(problem, t, n_samples=n_big))       # best of 3 each: a

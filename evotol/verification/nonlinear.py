@@ -78,16 +78,22 @@ def worst_vertex_errors(problem: ToleranceProblem, t) -> dict[str, np.ndarray]:
         The robot has no nonlinear model, or a bad design.
     """
     _check(problem)
-    t = problem.as_array(t)
-    out = {}
+    return _vertices_and_linear(problem, problem.as_array(t))[0]
+
+
+def _vertices_and_linear(problem: ToleranceProblem, t: np.ndarray) -> tuple[dict, dict]:
+    """(nonlinear error at each pose's worst vertex, linear worst case) per constrained component, from
+    one linear worst case per component (the vertex is its maximiser; the value is the ``worst_case``
+    measure's, computed by the same call)."""
+    vertex, linear = {}, {}
     shape = None if problem.shape.plain else problem.shape
     for comp, _ in problem.components:
         wc = measures.worst_case_by_blocks(problem.blocks[comp], t, problem.coefficient_blocks(comp), shape=shape)
         errs = measures.worst_case_errors(problem.blocks[comp], t, wc.direction, shape)
         E = np.concatenate(errs, axis=1)                                   # (p, n_columns)
         nl = problem.error_model.pose_error(problem.poses, E[:, None, :])[:, 0]
-        out[comp] = _norms(nl, ROWS[comp])
-    return out
+        vertex[comp], linear[comp] = _norms(nl, ROWS[comp]), wc.value
+    return vertex, linear
 
 
 def uniform_interval_samples(problem: ToleranceProblem, t, n_samples: int, seed: int = 0) -> np.ndarray:
@@ -252,9 +258,7 @@ def verify_nonlinear(problem: ToleranceProblem, t, n_samples: int = 1000, seed: 
     if not is_integer(chunk_poses, 1):
         raise ValidationError("chunk_poses", chunk_poses, "a positive integer")
     t = problem.as_array(t)
-    vertex = worst_vertex_errors(problem, t)
-    ev = problem.evaluate(t[None], "worst_case")
-    lin = {c: getattr(ev, c)[0] for c, _ in problem.components}
+    vertex, lin = _vertices_and_linear(problem, t)
     E = uniform_interval_samples(problem, t, n_samples, seed)
     mx = {c: 0.0 for c, _ in problem.components}
     exceed = {c: 0 for c, _ in problem.components}
