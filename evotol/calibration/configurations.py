@@ -199,3 +199,29 @@ def calibration_poses(robot, plan) -> np.ndarray:
                                   f"{list(zip(robot.workspace.low, robot.workspace.high))}")
         return P
     return robot.workspace.latin_hypercube(int(plan.count), seed=plan.seed)
+
+
+def pose_error_of_robots(robot, Q, E) -> np.ndarray:
+    """Nonlinear error (n_conf, m, 6) of ``m`` robots at every configuration: robot ``k`` has the source
+    errors ``E[k]`` (m or rad) at each joint configuration of ``Q`` (rad or m).
+
+    The errors are passed as a read-only broadcast view (the same rows at every configuration), not a
+    copy: a compiled serial arm then builds each robot's operations once for all configurations
+    (``serial_montecarlo.pose_error_shared``, the same arithmetic per pose-sample as the per-pose kernel).
+
+    Parameters
+    ----------
+    robot : evotol.robots.base.RobotErrorModel
+        A model with ``pose_error_at_joints``.
+    Q : (n_conf, n_variables) ndarray
+        Joint configurations (rad or m).
+    E : (m, n_columns) ndarray
+        Each robot's source errors (m or rad).
+
+    Returns
+    -------
+    (n_conf, m, 6) ndarray
+        ``[dp (m); rotation vector (rad)]`` of the tool of each robot at each configuration.
+    """
+    return robot.pose_error_at_joints(Q, np.broadcast_to(E, (len(Q),) + E.shape))
+

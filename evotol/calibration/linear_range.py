@@ -56,6 +56,7 @@ import fnmatch
 import numpy as np
 
 from evotol.calibration.compensation import TOL, Compensation
+from evotol.calibration.configurations import pose_error_of_robots
 from evotol.calibration.identification import registration_columns
 from evotol.calibration.plan import MEASURED
 
@@ -162,7 +163,7 @@ def iterated_fit(robot, idn, plan, Y, fit=None) -> tuple[np.ndarray, np.ndarray]
 
     def readings(z):
         Ehat[:, K] = z[:, n_reg:]
-        f = np.swapaxes(_pose_error(robot, Qc, Ehat)[:, :, mrows], 0, 1).reshape(len(Y), -1) * idn.weights
+        f = np.swapaxes(pose_error_of_robots(robot, Qc, Ehat)[:, :, mrows], 0, 1).reshape(len(Y), -1) * idn.weights
         return f + (z[:, :n_reg] @ R.T if n_reg else 0.0)
 
     z = Y @ Bp.T
@@ -179,15 +180,10 @@ def iterated_fit(robot, idn, plan, Y, fit=None) -> tuple[np.ndarray, np.ndarray]
     return Ehat, (step <= FIT_TOL) & np.all(np.isfinite(z), axis=1)
 
 
-def _pose_error(robot, Q, E) -> np.ndarray:
-    """Nonlinear error (n_conf, m, 6) of the robots E (m, n_columns) at every configuration of Q."""
-    return robot.pose_error_at_joints(Q, np.broadcast_to(E, (len(Q),) + E.shape).copy())
-
-
 def _post_error(robot, idn, plan, comp, E) -> np.ndarray:
     """g(x) (n_task, m, 6) for source errors E (m, n_columns): iterated fit, the controller's compensation."""
     mrows = np.concatenate([np.arange(6)[MEASURED[c]] for c in plan.measure])
-    Y = np.swapaxes(_pose_error(robot, idn.joints, E)[:, :, mrows], 0, 1).reshape(E.shape[0], -1) * idn.weights
+    Y = np.swapaxes(pose_error_of_robots(robot, idn.joints, E)[:, :, mrows], 0, 1).reshape(E.shape[0], -1) * idn.weights
     return comp.residual(E, iterated_fit(robot, idn, plan, Y)[0])
 
 
@@ -422,7 +418,7 @@ def checked_range(robot, idn, plan, task_joints, bounds, requirement, robots: in
 
     def run(c):
         E = c * X
-        Y = np.swapaxes(_pose_error(robot, idn.joints, E)[:, :, mrows], 0, 1).reshape(robots, -1) * idn.weights
+        Y = np.swapaxes(pose_error_of_robots(robot, idn.joints, E)[:, :, mrows], 0, 1).reshape(robots, -1) * idn.weights
         Ehat, ok = iterated_fit(robot, idn, plan, Y, fit)
         beyond = comp.residual(E, Ehat) - np.einsum("pij,sj->psi", JM, E)
         seen = {k: float(np.linalg.norm(beyond[:, :, MEASURED[k]], axis=2).max()) for k in limits}

@@ -26,6 +26,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from evotol.calibration.compensation import Compensation
+from evotol.calibration.configurations import pose_error_of_robots
 from evotol.calibration.identification import registration_columns
 from evotol.calibration.plan import MEASURED
 from evotol.calibration.random_share import draw_visits
@@ -93,11 +94,6 @@ class CalibrationCheck:
                 "n_fit_failures": self.nls_failures, "seconds": self.seconds}
 
 
-def _pose_error(model, Q, E) -> np.ndarray:
-    """Nonlinear error (n, m, 6) for the same errors E (m, n_cols) at every configuration of Q."""
-    return model.pose_error_at_joints(Q, np.broadcast_to(E, (len(Q),) + E.shape).copy())
-
-
 def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 0, quantile: float = 0.95,
                          method: str = "lhs") -> CalibrationCheck:
     """Simulate the plan's calibration of robots drawn within ``tolerances`` (module docstring).
@@ -162,13 +158,13 @@ def simulate_calibration(problem, tolerances, n_samples: int = 200, seed: int = 
     n_reg = 0 if Rlin is None else Rlin.shape[1]
     part = info.random          # random sources: drawn anew at every visit (readings, task poses; random_share.py)
     Rc = None if part is None else draw_visits(part, len(Qc) * n_samples, rng).reshape(len(Qc), n_samples, -1)
-    read = _pose_error(robot, Qc, D) if Rc is None else robot.pose_error_at_joints(Qc, D[None] + Rc)
+    read = pose_error_of_robots(robot, Qc, D) if Rc is None else robot.pose_error_at_joints(Qc, D[None] + Rc)
     Y = (np.swapaxes(read[:, :, mrows], 0, 1).reshape(n_samples, -1) + eps) * w                # whitened
 
     def readings(X):                          # X (b, n_reg + nK) -> whitened model readings (b, n_rows)
         E = np.zeros((X.shape[0], robot.n_columns))
         E[:, K] = X[:, n_reg:]
-        r = np.swapaxes(_pose_error(robot, Qc, E)[:, :, mrows], 0, 1).reshape(X.shape[0], -1) * w
+        r = np.swapaxes(pose_error_of_robots(robot, Qc, E)[:, :, mrows], 0, 1).reshape(X.shape[0], -1) * w
         return r + (X[:, :n_reg] @ Rlin.T if n_reg else 0.0)
 
     AK = robot.sensitivity_at_joints(Qc)[:, mrows][:, :, K].reshape(-1, nK) * w[:, None]
