@@ -224,4 +224,3 @@ def pose_error_of_robots(robot, Q, E) -> np.ndarray:
         ``[dp (m); rotation vector (rad)]`` of the tool of each robot at each configuration.
     """
     return robot.pose_error_at_joints(Q, np.broadcast_to(E, (len(Q),) + E.shape))
-
