@@ -8,12 +8,32 @@ not oversubscribe the cores.
 from __future__ import annotations
 
 import functools
+import sys
 from typing import Callable, ParamSpec, TypeVar
 
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 P = ParamSpec("P")
 R = TypeVar("R")
+
+
+#: (number of imported modules, controller): the process's thread-pool controller, and how many modules
+#: were imported when it was made
+_CONTROLLER: list = [-1, None]
+
+
+def _controller() -> ThreadpoolController:
+    """The process's :class:`threadpoolctl.ThreadpoolController`, made again after any new import.
+
+    ``threadpool_limits`` makes a new controller at every call: it walks every loaded shared library (about
+    5 ms in a study process, where numba, Pinocchio and pyarrow are loaded; 136 calls in the clearance
+    allocation study). A BLAS library is loaded by an import (NumPy's, SciPy's), so a controller made
+    before the last import may miss one: it is made again whenever ``sys.modules`` has grown since.
+    """
+    n = len(sys.modules)
+    if _CONTROLLER[0] != n:
+        _CONTROLLER[:] = [n, ThreadpoolController()]
+    return _CONTROLLER[1]
 
 
 def one_blas_thread():
@@ -21,11 +41,11 @@ def one_blas_thread():
 
     Returns
     -------
-    threadpoolctl.threadpool_limits
-        The context manager; entering it limits the BLAS thread pools to one thread, leaving it
-        restores the previous limits.
+    context manager
+        threadpoolctl's limiter (``ThreadpoolController.limit``); entering it limits the BLAS thread
+        pools to one thread, leaving it restores the limits they had before.
     """
-    return threadpool_limits(limits=1, user_api="blas")
+    return _controller().limit(limits=1, user_api="blas")
 
 
 def single_threaded_blas(func: Callable[P, R]) -> Callable[P, R]:
