@@ -17,23 +17,21 @@ P = ParamSpec("P")
 R = TypeVar("R")
 
 
-#: (number of imported modules, controller): the process's thread-pool controller, and how many modules
-#: were imported when it was made
-_CONTROLLER: list = [-1, None]
-
-
 def _controller() -> ThreadpoolController:
     """The process's :class:`threadpoolctl.ThreadpoolController`, made again after any new import.
 
     ``threadpool_limits`` makes a new controller at every call: it walks every loaded shared library (about
     5 ms in a study process, where numba, Pinocchio and pyarrow are loaded; 136 calls in the clearance
     allocation study). A BLAS library is loaded by an import (NumPy's, SciPy's), so a controller made
-    before the last import may miss one: it is made again whenever ``sys.modules`` has grown since.
+    before the last import may miss one: it is made again whenever the number of imported modules changed.
     """
-    n = len(sys.modules)
-    if _CONTROLLER[0] != n:
-        _CONTROLLER[:] = [n, ThreadpoolController()]
-    return _CONTROLLER[1]
+    return _controller_at(len(sys.modules))
+
+
+@functools.lru_cache(maxsize=1)
+def _controller_at(n_modules: int) -> ThreadpoolController:
+    """A controller of the libraries loaded while ``n_modules`` modules are imported (kept until that changes)."""
+    return ThreadpoolController()
 
 
 def one_blas_thread():
