@@ -31,24 +31,28 @@ from threadpoolctl import threadpool_limits
 STUDIES = Path(__file__).resolve().parents[1] / "reports" / "studies"
 
 #: seconds per file (set-up, call, tear-down of every test), summed from a local run with ``--durations=0``
-#: on 2026-11-27 (2 workers, load average 3.9 with other work beside it: the values are halved), the 40
-#: longest files; the docs site build is left out (it is skipped without the docs extra). Files not listed
-#: run after these, more tests first (pytest-xdist's own order). A guide for the order only: a stale or
-#: missing entry changes how long the run takes, never what it checks. test_bad_inputs, test_checks_optimised and
-#: test_explorer are scaled by the ratio of their own seconds alone after and before their speed-up (2026-12-01).
+#: on 2026-12-02 (2 workers, the machine otherwise idle, numba's cache warm: 900 s in all, 480 s of wall),
+#: the 50 files of 5 s or more; the docs site build is left out (it is skipped without the docs extra). Files
+#: not listed run after these, more tests first (pytest-xdist's own order). A guide for the order only: a stale
+#: or missing entry changes how long the run takes, never what it checks (the table of 2026-11-27 missed
+#: test_iso9283_closed_loop_allocators.py, 64 s, which then ran after every listed file).
 FILE_SECONDS = {
-    "test_iso9283_calibrated_budget.py": 30, "test_iso9283_calibrated_methods.py": 25, "test_feasibility.py": 27, "test_iso9283_closed_loop.py": 24,
-    "test_iso9283_front.py": 23, "test_explorer.py": 15, "test_docstrings.py": 21, "test_bad_inputs.py": 9,
-    "test_tolerances.py": 16, "test_combinations.py": 16, "test_callout_allocation.py": 14,
-    "test_calibration.py": 14, "test_no_task_box.py": 13, "test_checks_optimised.py": 7,
-    "test_calibration_random.py": 13, "test_iso9283_orientation.py": 12, "test_process.py": 12,
-    "test_parcoords.py": 11, "test_calibration_simulation.py": 11, "test_jobs.py": 11,
-    "test_calibration_linear_range.py": 11, "test_calibration_study.py": 11, "test_planar5r.py": 10,
-    "test_urdf_walk.py": 10, "test_cli_conventions.py": 10, "test_interrupt.py": 10, "test_pose_blocks.py": 9,
-    "test_callout_page_chromium.py": 9, "test_deng2012_synth_engine.py": 9, "test_iso9283_ga.py": 9,
-    "test_faults.py": 8, "test_combination_matrix.py": 8, "test_mechanism.py": 8, "test_gough_stewart.py": 8,
-    "test_choi2000_study.py": 7, "test_faults_dask.py": 7, "test_typing.py": 7, "test_quiet_studies.py": 7,
-    "test_irsbot2.py": 6, "test_allocators.py": 6, "test_user_report.py": 6,
+    "test_iso9283_closed_loop_allocators.py": 64, "test_iso9283_closed_loop.py": 34, "test_iso9283_front.py": 29,
+    "test_combinations.py": 28, "test_jobs.py": 26, "test_feasibility.py": 26, "test_tolerances.py": 25,
+    "test_docstrings.py": 25, "test_parcoords.py": 24, "test_explorer.py": 23,
+    "test_iso9283_calibrated_methods.py": 19, "test_iso9283_calibrated_budget.py": 18,
+    "test_callout_allocation.py": 18, "test_iso9283_monotone.py": 17, "test_urdf_walk.py": 16,
+    "test_no_task_box.py": 16, "test_calibration.py": 16, "test_pose_blocks.py": 15,
+    "test_calibration_simulation.py": 15, "test_process.py": 14, "test_iso9283_orientation.py": 14,
+    "test_cli_conventions.py": 13, "test_calibration_random.py": 13, "test_faults.py": 13, "test_interrupt.py": 13,
+    "test_calibration_linear_range.py": 11, "test_choi2000_study.py": 11, "test_allocators.py": 11,
+    "test_calibration_study.py": 11, "test_gough_stewart.py": 10, "test_iso9283_ga.py": 10,
+    "test_iso9283_sensitivity.py": 10, "test_deng2012_synth_engine.py": 10, "test_mechanism.py": 10,
+    "test_callout_page_chromium.py": 9, "test_drawn_callouts.py": 9, "test_faults_full_disk.py": 9,
+    "test_planar5r.py": 8, "test_iso9283_baselines.py": 7, "test_irsbot2.py": 7, "test_user_report.py": 7,
+    "test_delta_study.py": 7, "test_faults_dask.py": 7, "test_checks_optimised.py": 7, "test_quiet_studies.py": 6,
+    "test_typing.py": 6, "test_irsbot2_study.py": 6, "test_posture.py": 6, "test_layers.py": 6,
+    "test_process_studies.py": 5,
 }
 
 

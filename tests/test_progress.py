@@ -131,3 +131,49 @@ def test_heartbeat_bar_on_a_terminal_shows_the_elapsed_time():
     with Heartbeat("optimum", every=0.02, stream=log, bar=True, bar_stream=err2):
         time.sleep(0.1)
     assert "[evotol] optimum: running for" in log.getvalue() and err2.getvalue() == ""
+
+
+# --- issue 43: the expected time is this machine's last run when the folder records one -----------
+def test_heartbeat_quotes_the_last_run_in_the_folder_else_the_projects_machine(tmp_path):
+    from evotol._runtime.output_set import read_manifest
+    from evotol._runtime.progress import last_run_seconds, run_hint
+
+    assert last_run_seconds(tmp_path, "drake1999-motor", quick=True) is None
+    assert run_hint("drake1999-motor", tmp_path, quick=True) == (
+        f"a full run takes about {EXPECTED_SECONDS['drake1999-motor']} s on the project's 2-core machine")
+    studies.get("drake1999-motor").run(tmp_path, quick=True)
+    m = read_manifest(tmp_path, "drake1999-motor")
+    took = m["finished"] - m["started"]
+    assert m["complete"] is True and m["quick"] is True and took > 0
+    assert last_run_seconds(tmp_path, "drake1999-motor", quick=True) == took
+    assert last_run_seconds(tmp_path, "drake1999-motor", quick=False) is None     # a quick run is not a full one
+    beat = Heartbeat("drake1999-motor", out=tmp_path, quick=True)
+    assert beat.hint == f"its last quick run in this folder took {took:.0f} s"
+    # read when made: the run that follows rewrites the manifest as incomplete, the hint stays
+    (tmp_path / "drake1999-motor.manifest.json").write_text('{"complete": false, "started": 1.0}')
+    assert beat.hint.startswith("its last quick run") and last_run_seconds(tmp_path, "drake1999-motor", quick=True) is None
+    log = io.StringIO()
+    with Heartbeat("drake1999-motor", every=0.02, stream=log, out=tmp_path, quick=True):
+        deadline = time.monotonic() + 10
+        while "running for" not in log.getvalue() and time.monotonic() < deadline:
+            time.sleep(0.01)
+    assert "(a full run takes about" in log.getvalue().splitlines()[0]
+
+
+def test_reproduce_all_orders_by_this_machines_last_runs_only_when_every_study_has_one(tmp_path):
+    import json
+
+    from evotol.cli.parallel_studies import longest_first
+
+    names = ["drake1999-motor", "yao2013", "process-stack"]
+    table = longest_first(names)
+    assert table == sorted(names, key=lambda n: -EXPECTED_SECONDS[n])
+    took = {"drake1999-motor": 50.0, "yao2013": 5.0, "process-stack": 20.0}    # this machine, unlike the table
+    for n, s in list(took.items())[:2]:
+        (tmp_path / f"{n}.manifest.json").write_text(json.dumps({"complete": True, "quick": False, "started": 100.0,
+                                                                 "finished": 100.0 + s}))
+    assert longest_first(names, tmp_path) == table                    # one study unknown: no mix, the table
+    (tmp_path / "process-stack.manifest.json").write_text(json.dumps({"complete": True, "quick": False,
+                                                                      "started": 100.0, "finished": 120.0}))
+    assert longest_first(names, tmp_path) == ["drake1999-motor", "process-stack", "yao2013"]
+    assert longest_first(names, tmp_path, quick=True) == table        # those were full runs

@@ -14,7 +14,10 @@ thread, only when the stream is not a terminal, and stops when the study ends.
 machine, each study alone (2026-11-23; the engine studies after the compiled Newton iteration of
 issue 13's fourth session, with the numba cache warm; `evotol reproduce all` runs two at a time,
 longest first, so these also set its order); ``--quick`` runs are much shorter. They are a
-guide, not a promise: the load of the machine changes them.
+guide, not a promise: the machine and its load change them (the same code took 2-3 times as
+long on a slower machine of the same name, 2026-12-02). So the heartbeat prefers what this
+machine took: :func:`last_run_seconds`, the last complete run of the study in the same output
+folder, read from its manifest (``started``, ``finished``; :mod:`evotol._runtime.output_set`).
 """
 from __future__ import annotations
 
@@ -32,6 +35,65 @@ EXPECTED_SECONDS = {
     "deng2012-dimsynth": 35, "drake1999-motor": 1, "deng2012-irsbot2": 56, "deng2012-tolsynth": 17, "laramolina2019-5r": 33,
     "mechanisms": 8, "process-stack": 4, "yao2013": 30,
 }
+
+
+def last_run_seconds(out, name: str, quick: bool = False) -> float | None:
+    """Wall seconds of the last complete run of ``name`` in ``out``, with the same ``--quick``.
+
+    Read from the output set's manifest (``finished - started``), so call it before a new run
+    claims the folder (the claim rewrites the manifest as incomplete).
+
+    Parameters
+    ----------
+    out : str or Path or None
+        The output folder (None: unknown).
+    name : str
+        The output set's (study's) name.
+    quick : bool, optional
+        Whether the run to come is a ``--quick`` one; only a run of the same kind counts.
+
+    Returns
+    -------
+    float or None
+        Seconds (s), or None when no complete run of that kind is recorded there.
+    """
+    if out is None:
+        return None
+    from evotol._runtime.output_set import read_manifest
+
+    m = read_manifest(out, name)
+    try:
+        seconds = float(m["finished"]) - float(m["started"])
+    except (KeyError, TypeError, ValueError):
+        return None
+    ok = m.get("complete") is True and bool(m.get("quick", False)) == bool(quick) and 0.0 < seconds < 1e6
+    return seconds if ok else None
+
+
+def run_hint(name: str, out=None, quick: bool = False) -> str:
+    """What the heartbeat says about the length of a run: this machine's last run if known, else
+    :data:`EXPECTED_SECONDS` (a full run on the project's machine), else ``""``.
+
+    Parameters
+    ----------
+    name : str
+        The study's name.
+    out : str or Path or None, optional
+        The output folder the run writes to (its last run there is read from the manifest).
+    quick : bool, optional
+        Whether this is a ``--quick`` run.
+
+    Returns
+    -------
+    str
+        e.g. ``"its last run in this folder took 2.7 min"`` or ``"a full run takes about 56 s on
+        the project's 2-core machine"``, or ``""``.
+    """
+    last = last_run_seconds(out, name, quick)
+    if last is not None:
+        return f"its last {'quick ' if quick else ''}run in this folder took {_seconds(last)}"
+    hint = expected(name)
+    return f"a full run takes {hint} on the project's 2-core machine" if hint else ""
 
 
 def expected(name: str) -> str:
@@ -64,7 +126,7 @@ class Heartbeat:
     ----------
     name : str
         What runs, named in each line; a seed study's name also gives the expected time
-        (:func:`expected`).
+        (:func:`run_hint`).
     every : float, optional
         Seconds between lines (default 10).
     stream : file, optional
@@ -76,11 +138,17 @@ class Heartbeat:
         On a terminal (and without ``force``), show the elapsed-time tqdm line instead.
     bar_stream : file, optional
         Where that line goes (default: ``sys.stderr``); shown only when it is a terminal.
+    out : str or Path or None, optional
+        The output folder of the run: the lines give the last run's time there when it is
+        recorded (:func:`run_hint`), read when the heartbeat is made.
+    quick : bool, optional
+        Whether the run is a ``--quick`` one (only a last run of the same kind is quoted).
     """
 
     def __init__(self, name: str, every: float = 10.0, stream=None, force: bool = False, bar: bool = False,
-                 bar_stream=None):
+                 bar_stream=None, out=None, quick: bool = False):
         self.name, self.every = name, float(every)
+        self.hint = run_hint(name, out, quick)     # read now: the run about to start rewrites the manifest
         self.stream = stream
         isatty = getattr(sys.stderr if stream is None else stream, "isatty", lambda: False)
         self.active = force or not isatty()
@@ -97,10 +165,9 @@ class Heartbeat:
 
     def _beat(self) -> None:
         t0 = time.perf_counter()
-        hint = expected(self.name)
         while not self._stop.wait(self.every):
             elapsed = time.perf_counter() - t0
-            line = f"{self.name}: running for {elapsed:.0f} s" + (f" (a full run takes {hint})" if hint else "")
+            line = f"{self.name}: running for {elapsed:.0f} s" + (f" ({self.hint})" if self.hint else "")
             if self.stream is None:
                 logger.info(line)
             else:

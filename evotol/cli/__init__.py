@@ -132,7 +132,7 @@ def _reproduce(args, names, out) -> int:
         try:
             extra = {"scheduler": args.scheduler} if args.scheduler and "scheduler" in study.config else {}
             extra.update({"force": True} if args.force else {})    # overwrite a study file's outputs (issue 42)
-            with Heartbeat(name), CtrlC() as ctrl_c:   # progress lines in a log file (no terminal, no tqdm)
+            with Heartbeat(name, out=out, quick=args.quick), CtrlC() as ctrl_c:   # progress lines in a log file (no terminal, no tqdm)
                 summaries[name] = study.run(out, quick=args.quick, seed=args.seed, **extra)
         except KeyboardInterrupt:
             interrupted = (name, "stopped before its files were written (files of an earlier run, if any, are untouched)")
@@ -343,7 +343,8 @@ def cmd_list(args) -> int:
 
     for name, s in studies.available().items():
         print(f"{name:28s} {expected(name) or 'not measured':>12s}  {s.title}")
-    print("(times: a full run on a 2-core machine; --quick is much shorter)")
+    print("(times: a full run on the project's 2-core machine, 2026-11-23; a slower machine took 2-3 times as long; "
+          "`evotol reproduce` quotes your last run in the output folder; --quick is much shorter)")
     return 0
 
 

@@ -3,7 +3,7 @@
 Each seed study runs as its own ``evotol reproduce NAME`` process -- exactly what a user can run
 by hand, with the same seed and options, so the results are those of a run one study at a time
 (the test compares the JSON files number by number). ``jobs`` studies run at the same time,
-the longest expected first (:data:`evotol._runtime.progress.EXPECTED_SECONDS`), so the single-process
+the longest expected first (:func:`longest_first`: this machine's last runs, else the project's), so the single-process
 parts of one study (a GA, a Newton sweep, the report) overlap with another study's work: a
 study's grid and design evaluations still use every core, so two studies at once share the
 cores rather than add processes of their own.
@@ -28,7 +28,7 @@ from pathlib import Path
 
 from evotol._runtime.interrupt import CtrlC
 from evotol._runtime.orphans import end_with_parent
-from evotol._runtime.progress import EXPECTED_SECONDS
+from evotol._runtime.progress import EXPECTED_SECONDS, last_run_seconds
 
 #: exit code of a study process stopped by Ctrl-C (``evotol reproduce``)
 INTERRUPTED = 130
@@ -71,19 +71,32 @@ class JobsOutcome:
         return bool(self.stopped or self.not_run)
 
 
-def longest_first(names) -> list[str]:
-    """Names ordered by expected full-run time, longest first (unknown ones last, order kept).
+def longest_first(names, out=None, quick: bool = False) -> list[str]:
+    """Names ordered by expected run time, longest first (unknown ones last, order kept).
+
+    When every study has a complete run of the same kind in ``out``, their times on this machine
+    order them (:func:`evotol._runtime.progress.last_run_seconds`); otherwise the full-run times of
+    the project's machine do (:data:`evotol._runtime.progress.EXPECTED_SECONDS`), never a mix of
+    the two.
 
     Parameters
     ----------
     names : iterable of str
         Seed study names.
+    out : str or Path or None, optional
+        The output folder (its manifests hold the last runs' times).
+    quick : bool, optional
+        Whether the runs to come are ``--quick`` ones.
 
     Returns
     -------
     list of str
-        The names sorted by :data:`evotol._runtime.progress.EXPECTED_SECONDS`, descending (stable sort).
+        The names sorted by expected seconds, descending (stable sort).
     """
+    names = list(names)
+    last = {n: last_run_seconds(out, n, quick) for n in names}
+    if names and all(s is not None for s in last.values()):
+        return sorted(names, key=lambda n: -last[n])
     return sorted(names, key=lambda n: -EXPECTED_SECONDS.get(n, 0))
 
 
@@ -153,7 +166,7 @@ def reproduce_concurrently(names, out, *, jobs: int = 2, seed: int = 0, quick: b
     out = Path(out)
     logs = out / "logs"
     logs.mkdir(parents=True, exist_ok=True)
-    queue = longest_first(names)
+    queue = longest_first(names, out, quick)
     titles = titles or {}
     res = JobsOutcome()
     running: dict[str, tuple[subprocess.Popen, float, object]] = {}
