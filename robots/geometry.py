@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from evotol.errors import ValidationError
+
 
 def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int, int]:
     """Largest axis-aligned all-True rectangle of grid points in a 2-D boolean array.
@@ -10,7 +12,9 @@ def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int, int]:
     Returns ``(area_in_cells, r0, r1, c0, c1)`` with inclusive row/column indices; the area
     counts cell spans ``(r1 - r0) * (c1 - c0)`` (point grid: the rectangle's corners are grid
     points that are all kept). Histogram-stack algorithm (largest rectangle under a histogram,
-    row by row), O(rows x cols); of equal areas, the first found (lowest last row) is kept.
+    row by row), O(rows x cols); of equal areas, the first found (lowest last row) is kept. Compiled
+    with numba (341 searches of a 161 x 161 grid took 11 s of the dimension synthesis in Python, issue 43);
+    :func:`largest_rectangle_reference` is the same algorithm in Python.
 
     Parameters
     ----------
@@ -27,10 +31,38 @@ def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int, int]:
     c0, c1 : int
         First and last column, inclusive.
 
+    Raises
+    ------
+    evotol.errors.ValidationError
+        A mask that is not 2-D.
+
     Notes
     -----
     When no rectangle of positive area exists the result is ``(0, 0, -1, 0, -1)`` (an empty
     range), even if single True points or lines exist.
+    """
+    mask = np.ascontiguousarray(mask, bool)
+    if mask.ndim != 2:
+        raise ValidationError("mask", mask.shape, "a 2-D (rows, cols) array of kept grid points")
+    kernel = _compiled()
+    if kernel is None:
+        return largest_rectangle_reference(mask)
+    return tuple(int(v) for v in kernel(mask))
+
+
+def largest_rectangle_reference(mask: np.ndarray) -> tuple[int, int, int, int, int]:
+    """:func:`largest_rectangle` in plain Python: the reference the compiled kernel equals, result for
+    result (the same histogram stack, the same order, integers only), and its fallback without numba.
+
+    Parameters
+    ----------
+    mask : (rows, cols) array_like of bool
+        The grid points to search (True: kept).
+
+    Returns
+    -------
+    tuple of int
+        ``(area, r0, r1, c0, c1)`` as :func:`largest_rectangle`.
     """
     mask = np.asarray(mask, bool)
     nr, nc = mask.shape
@@ -51,6 +83,45 @@ def largest_rectangle(mask: np.ndarray) -> tuple[int, int, int, int, int]:
                     best = (area, r - hgt + 1, r, left, c - 1)
             stack.append(c)
     return best
+
+
+def _histogram_stack(mask):
+    """Kernel body of :func:`largest_rectangle_reference` (compiled by :func:`_compiled`): the column
+    heights in one array with a zero sentinel at ``nc``, the stack in another."""
+    nr, nc = mask.shape
+    best_area, b_r0, b_r1, b_c0, b_c1 = 0, 0, -1, 0, -1
+    hs = np.zeros(nc + 1, np.int64)
+    stack = np.empty(nc + 1, np.int64)
+    for r in range(nr):
+        for c in range(nc):
+            hs[c] = hs[c] + 1 if mask[r, c] else 0
+        depth = 0
+        for c in range(nc + 1):
+            while depth > 0 and hs[stack[depth - 1]] >= hs[c]:
+                depth -= 1
+                hgt = hs[stack[depth]]
+                left = stack[depth - 1] + 1 if depth > 0 else 0
+                area = (hgt - 1) * (c - left - 1)
+                if hgt > 0 and area > best_area:
+                    best_area, b_r0, b_r1, b_c0, b_c1 = area, r - hgt + 1, r, left, c - 1
+            stack[depth] = c
+            depth += 1
+    return best_area, b_r0, b_r1, b_c0, b_c1
+
+
+_KERNEL: list = []
+
+
+def _compiled():
+    """The compiled :func:`_histogram_stack` (numba, cached on disk), or None without numba."""
+    if not _KERNEL:
+        try:
+            from evotol._runtime.numba_cache import njit
+
+            _KERNEL.append(njit(cache=True)(_histogram_stack))
+        except ImportError:
+            _KERNEL.append(None)
+    return _KERNEL[0]
 
 
 def largest_centred_rectangle(mask: np.ndarray, column: int) -> tuple[int, int, int, int]:

@@ -17,7 +17,7 @@ import pytest
 
 from evotol.studies import deng2012_dimsynth as ds
 from evotol.studies import deng2012_tolsynth as ts
-from evotol.robots.geometry import largest_centred_rectangle, largest_rectangle
+from evotol.robots.geometry import largest_centred_rectangle, largest_rectangle, largest_rectangle_reference
 from evotol.robots.irsbot2 import IRSBot2, singularity_free_rectangle
 from evotol.units import MM
 
@@ -110,6 +110,25 @@ def test_largest_rectangle_matches_brute_force(centre):
         assert area == _largest_by_brute_force(m, centre)
         if area:
             assert m[r0:r1 + 1, c0:c1 + 1].all() and (r1 - r0) * (c1 - c0) == area
+
+
+def test_compiled_largest_rectangle_is_the_python_one_result_for_result():
+    """The numba kernel (issue 43) returns what the Python histogram stack returns -- area, rows and
+    columns, ties included -- on random masks of every density and shape, empty ones, and the
+    IRSBot-2's own singularity-free masks."""
+    rng = np.random.default_rng(7)
+    masks = [rng.random(tuple(rng.integers(1, 25, 2))) < rng.uniform(0.2, 1.0) for _ in range(400)]
+    masks += [np.zeros((0, 5), bool), np.zeros((4, 0), bool), np.ones((1, 1), bool), np.ones((6, 9), bool)]
+    r = robot()
+    for n in (41, 81):
+        reach = r.l1 + r.l2
+        X, Z = np.meshgrid(np.linspace(-reach, reach, n), np.linspace(-reach - r.e, -r.e, n))
+        g = r.planar_legs(X, Z)
+        s = math.sin(math.radians(2.0))
+        masks.append(g["reachable"] & (g["sin_t2"] <= -s) & (np.abs(g["sin_t1_1"]) >= s) & (np.abs(g["sin_t1_2"]) >= s))
+    for m in masks:
+        assert largest_rectangle(m) == largest_rectangle_reference(m), m.shape
+    assert sum(largest_rectangle(m)[0] > 0 for m in masks[-2:]) == 2        # the robot's masks have a rectangle
 
 
 def test_sub_workspace_is_symmetric_singularity_free_and_grows_with_the_links():
