@@ -12,6 +12,7 @@ file while the other idles (longest processing time first: the makespan is at mo
 """
 from __future__ import annotations
 
+import builtins
 import copy
 import os
 from collections import Counter
@@ -112,3 +113,28 @@ def chromium(_chromium_session):
     for t in browser.send("Target.getTargets")["targetInfos"]:
         if t["type"] == "page" and t["targetId"] not in before:
             browser.send("Target.closeTarget", {"targetId": t["targetId"]})
+
+
+@pytest.fixture
+def hide_numba(monkeypatch):
+    """``hide_numba(*cached)``: ``import numba`` fails until the test ends (the fallbacks without numba);
+    the ``functools.lru_cache`` functions ``cached`` (compiled kernels) are cleared now and again once
+    numba is back."""
+    caches = []
+    real = builtins.__import__
+
+    def no_numba(name, *args, **kwargs):
+        if name == "numba" or name.startswith("numba."):
+            raise ImportError("numba hidden by the test")
+        return real(name, *args, **kwargs)
+
+    def hide(*cached):
+        caches.extend(cached)
+        for c in cached:
+            c.cache_clear()
+        monkeypatch.setattr(builtins, "__import__", no_numba)
+
+    yield hide
+    monkeypatch.undo()
+    for c in caches:
+        c.cache_clear()

@@ -131,29 +131,14 @@ def test_compiled_largest_rectangle_is_the_python_one_result_for_result():
     assert sum(largest_rectangle(m)[0] > 0 for m in masks[-2:]) == 2        # the robot's masks have a rectangle
 
 
-def test_largest_rectangle_without_numba_is_the_python_one(monkeypatch):
+def test_largest_rectangle_without_numba_is_the_python_one(hide_numba):
     """numba missing: the search falls back to the Python histogram stack, same results."""
-    import builtins
-
     from evotol.robots import geometry
 
-    real = builtins.__import__
-
-    def no_numba(name, *args, **kwargs):
-        if name == "numba" or name.startswith("numba."):
-            raise ImportError("numba hidden by the test")
-        return real(name, *args, **kwargs)
-
-    geometry._compiled.cache_clear()
-    monkeypatch.setattr(builtins, "__import__", no_numba)
-    try:
-        assert geometry._compiled() is None
-        m = np.random.default_rng(1).random((30, 40)) < 0.9
-        assert largest_rectangle(m) == largest_rectangle_reference(m) and largest_rectangle(m)[0] > 0
-    finally:
-        monkeypatch.undo()
-        geometry._compiled.cache_clear()
-    assert geometry._compiled() is not None
+    hide_numba(geometry._compiled)
+    assert geometry._compiled() is None
+    m = np.random.default_rng(1).random((30, 40)) < 0.9
+    assert largest_rectangle(m) == largest_rectangle_reference(m) and largest_rectangle(m)[0] > 0
 
 
 def test_sub_workspace_is_symmetric_singularity_free_and_grows_with_the_links():

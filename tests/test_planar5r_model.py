@@ -56,3 +56,52 @@ def test_bad_input_is_named():
         robot.sensitivity([[0.0, 0.0]])                       # outside the declared workspace
     with pytest.raises(ValidationError):
         robot.pose_error(robot.evaluation_poses(), np.zeros((9, 3, 5)))
+
+
+# --- issue 43: pose_error's one compiled pass is the NumPy code, number for number ----------------
+def _reference_pose_error(robot, poses, E):
+    """Planar5R.pose_error as it was: K.perturbed_position on the errors' dict, then the same masking."""
+    theta = robot.nominal_angles(poses)
+    px, py, h2 = K.perturbed_position(theta[:, None, :], robot.r1, robot.r2, robot.r3, robot.errors_dict(E),
+                                      robot.assembly)
+    out = np.zeros(E.shape[:2] + (6,))
+    out[..., 0], out[..., 1] = px - poses[:, 0:1], py - poses[:, 1:2]
+    out[~(h2 >= 0)] = np.nan
+    return out
+
+
+@pytest.mark.parametrize("layout", ["contiguous", "shared samples", "large errors"])
+def test_compiled_pose_error_equals_the_numpy_chain_bit_for_bit(layout):
+    robot = Planar5R("b", D=0.2)
+    poses = robot.evaluation_poses()
+    rng = np.random.default_rng(5)
+    t = 1e-4                                             # 0.1 mm and 0.1 mrad: the scale of the study's tolerances
+    if layout == "contiguous":
+        E = rng.uniform(-1, 1, (len(poses), 3000, 16)) * t
+    elif layout == "shared samples":                     # the nonlinear check's layout: a broadcast view, not copied
+        E = np.broadcast_to(rng.uniform(-1, 1, (3000, 16)) * t, (len(poses), 3000, 16))
+    else:                                                # errors so large that many samples cannot be assembled
+        E = rng.normal(0, 0.05, (len(poses), 3000, 16))
+    ours = robot.pose_error(poses, E, failures="nan")
+    ref = _reference_pose_error(robot, poses, E)
+    assert np.array_equal(ours, ref, equal_nan=True)
+    if layout == "large errors":
+        assert 0 < np.isnan(ours[..., 0]).mean() < 1        # both outcomes occur, and agree
+
+
+def test_compiled_pose_error_without_numba_is_the_numpy_chain(hide_numba):
+    from evotol.robots.planar5r.kinematics import perturbed_compiled
+
+    robot = Planar5R("b", D=0.2)
+    poses = robot.evaluation_poses()
+    E = np.random.default_rng(6).uniform(-1e-4, 1e-4, (len(poses), 200, 16))
+    hide_numba(perturbed_compiled._compiled)
+    assert perturbed_compiled._compiled() is None
+    assert np.array_equal(robot.pose_error(poses, E), _reference_pose_error(robot, poses, E))
+
+
+def test_pose_error_names_errors_with_the_wrong_number_of_columns():
+    robot = Planar5R("b", D=0.2)
+    poses = robot.evaluation_poses()
+    with pytest.raises(ValidationError, match=r"errors shape.*n_samples, 16"):
+        robot.pose_error(poses, np.zeros((len(poses), 4, 15)))

@@ -34,6 +34,7 @@ import numpy as np
 from evotol.errors import KinematicsError, ValidationError
 from evotol.robots.base import RobotErrorModel, SourceSpec, Workspace
 from evotol.robots.planar5r import kinematics as K
+from evotol.robots.planar5r.kinematics.perturbed_compiled import perturbed_position_stacked
 from evotol.robots.planar5r.design import Design5R, get_case
 
 #: the error sources of the 5R model (Lara-Molina 2019 Sec. 2): link lengths (m), actuator angles
@@ -272,10 +273,10 @@ class Planar5R(RobotErrorModel):
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
         theta = self.nominal_angles(poses)
         errors = np.asarray(errors, dtype=float)
-        if errors.ndim != 3 or errors.shape[0] != len(poses):
+        if errors.ndim != 3 or errors.shape[0] != len(poses) or errors.shape[2] != self.n_columns:
             raise ValidationError("errors shape", errors.shape, f"({len(poses)}, n_samples, {self.n_columns})")
-        px, py, h2 = K.perturbed_position(theta[:, None, :], self.r1, self.r2, self.r3, self.errors_dict(errors),
-                                          self.assembly)
+        # one compiled pass over poses x samples, the same numbers as K.perturbed_position (issue 43)
+        px, py, h2 = perturbed_position_stacked(theta, self.r1, self.r2, self.r3, errors, self.assembly)
         ok = h2 >= 0
         bad = ~np.all(ok, axis=1)
         if bad.any() and failures == "raise":
