@@ -7,7 +7,7 @@ strided views: 30 of the 59 s of ``laramolina2019-5r``. :func:`perturbed_positio
 trigonometry in NumPy (the same ``np.cos``/``np.sin`` calls on the same values, so the same bits on
 any machine) and does the rest -- the crank points, the coupler radii and the circle intersection of
 Lara-Molina et al. 2019, Sec. 2.5 -- in one numba loop with every operation of the NumPy code in the
-same order (IEEE +, -, *, /, sqrt: the same results to the last bit; ``tests/test_planar5r.py``
+same order (IEEE ``+ - * /`` and ``sqrt``: the same results to the last bit; ``tests/test_planar5r_model.py``
 compares them with ``array_equal``). Without numba it is the NumPy code itself.
 
 Error columns (m, rad) in the order of ``Planar5R.COLUMN_PARAMETERS``: ``dA1B1 dA2B2 dB1P dB2P dOA1
