@@ -97,6 +97,38 @@ def test_compiled_latin_hypercubes_are_the_numpy_draws():
         assert np.array_equal(got, ref)
 
 
+def test_compiled_pcg64_draws_are_numpys_raw_draws():
+    """pcg64_kernel's 128-bit step and XSL-RR output against ``PCG64.random_raw`` (NumPy's C generator):
+    seeded as the poses' generators and from plain integers, 10 000 draws each, and the state it leaves
+    draws on as NumPy's does."""
+    pytest.importorskip("numba")
+    from evotol.measures.statistical import pcg64_kernel as K
+
+    gens = [np.random.PCG64(np.random.SeedSequence(7, spawn_key=(p, 0))) for p in (0, 1, 99_999)]
+    gens += [np.random.PCG64(s) for s in (0, 1, 2 ** 63, 12345678901234567890)]
+    for g in gens:
+        st = K.generator_states([g])[0].copy()
+        assert np.array_equal(K.raw_draws(st, 10_000), g.random_raw(10_000))
+        assert np.array_equal(K.raw_draws(st, 5), g.random_raw(5))
+
+
+def test_compiled_hypercube_takes_the_kept_half_of_numpys_last_32_bit_draw_first():
+    """A generator whose last 32-bit draw left its high half kept (``has_uint32``): the shuffle's first
+    bounded draw is that half, as in NumPy's ``pcg64_next32``."""
+    pytest.importorskip("numba")
+    from evotol.measures.statistical import pcg64_kernel as K
+    from evotol.measures.statistical.distributions import latin_hypercube_from
+
+    a, b = np.random.PCG64(3), np.random.PCG64(3)
+    np.random.Generator(a).integers(0, 7, size=3)                  # three 32-bit draws: a high half kept
+    np.random.Generator(b).integers(0, 7, size=3)
+    states = K.generator_states([a])
+    assert states[0, 4] == 1                                        # a kept half, to be used first
+    out = np.empty((1, 9, 4))
+    K.latin_hypercube_kernel(states, 9, 4, out)
+    assert np.array_equal(out[0], latin_hypercube_from(9, 4, np.random.Generator(b)))
+
+
 def test_a_verification_draws_the_same_samples_compiled_or_not(monkeypatch):
     """verify() switches to the compiled hypercubes from lhs_compiled.MIN_POSES poses: forced on a small
     study, every rate, maximum and yield is the same to the last bit."""

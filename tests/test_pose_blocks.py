@@ -84,3 +84,47 @@ def test_optimum_in_blocks_equals_the_cached_optimum(pair, small_cache):
     assert ra.feasible and rb.feasible
     assert rb.cost == pytest.approx(ra.cost, rel=1e-7)
     assert np.allclose(rb.t, ra.t, rtol=1e-5)
+
+
+@pytest.mark.parametrize("top_only", [False, True])
+def test_components_computes_the_constrained_ones_to_the_bit(pair, small_cache, top_only):
+    """``evaluate(..., components=[...])`` (the constraint rows' check: a position requirement need not
+    compute the orientation) gives the full evaluation's numbers for those components, bit for bit, on
+    cached and blocked coefficients; the others are None. Refused: a constrained component left out, an
+    unknown one, another measure."""
+    from evotol.errors import ValidationError
+
+    cached, blocked = pair
+    rng = np.random.default_rng(1)
+    T = np.exp(rng.uniform(np.log(cached.lower), np.log(cached.upper), (4, cached.n_sources)))
+    for problem in (cached, blocked):
+        full = problem.evaluate(T, "worst_case", top_only=top_only)
+        both = problem.evaluate(T, "worst_case", top_only=top_only, components=["position", "orientation"])
+        for field in ("position", "position_bound", "position_direction", "position_contrib", "orientation",
+                      "orientation_bound", "violation"):
+            assert np.array_equal(getattr(full, field), getattr(both, field)), field
+    with pytest.raises(ValidationError, match="components"):
+        cached.evaluate(T, "worst_case", components=["position"])          # orientation is constrained here
+    with pytest.raises(ValidationError, match="components"):
+        cached.evaluate(T, "worst_case", components=["position", "orientation", "force"])
+    with pytest.raises(ValidationError, match="components"):
+        cached.evaluate(T, "rss", components=["position", "orientation"])
+
+
+def test_a_position_requirement_checks_the_position_only_to_the_bit(small_cache):
+    """The constraint rows' check of a position-only requirement: the same violation and worst directions
+    as the evaluation of both components, and no orientation computed."""
+    from evotol.measures.constraints import ConstraintRows
+
+    spec = ur5()
+    spec["poses"] = {"grid": [2, 2, 2]}
+    problem = load_problem(spec, base_dir=STUDIES)
+    assert [c for c, _ in problem.components] == ["position"]
+    rng = np.random.default_rng(2)
+    T = np.exp(rng.uniform(np.log(problem.lower), np.log(problem.upper), (5, problem.n_sources)))
+    full = problem.evaluate(T, "worst_case", top_only=True)
+    part = problem.evaluate(T, "worst_case", top_only=True, components=["position"])
+    assert part.orientation is None and np.array_equal(part.violation, full.violation)
+    assert np.array_equal(part.position_direction, full.position_direction)
+    rows = ConstraintRows(problem)
+    assert np.array_equal(rows.check(T)[0], full.violation)

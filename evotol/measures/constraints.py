@@ -119,7 +119,10 @@ class ConstraintRows:
         T = np.atleast_2d(T)
         v = np.full(T.shape[0], -np.inf)
         if self.A.shape[0]:
-            v = np.maximum(v, np.max(T @ self.A.T + self.A0, axis=1) - 1)
+            M = T @ self.A.T
+            if self.A0.any():                 # offsets (asymmetric intervals); otherwise adding zeros changes no bit
+                M += self.A0                  # in place: a (designs x rows) temporary less (4 of a GA's 5 ms)
+            v = np.maximum(v, np.max(M, axis=1) - 1)
         if self.shifted_rss:
             return self.problem.evaluate(T, "rss").violation
         if self.B.shape[0]:
@@ -151,7 +154,8 @@ class ConstraintRows:
         T = np.atleast_2d(T)
         if self.measure == "rss":
             return self.violation(T), 0
-        ev = self.problem.evaluate(T, "worst_case", top_only=True)
+        ev = self.problem.evaluate(T, "worst_case", top_only=True,             # the violation's components only
+                                   components=[c for c, _ in self.problem.components])
         added = 0
         for comp, lim in self.problem.components:
             val = getattr(ev, comp)

@@ -441,7 +441,7 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         const = 0.0 if self.shape.plain else float(measures.support_constant(blocks, u[None], self.shape)[0, 0])
         return row, const
 
-    def evaluate(self, T, measure: str | None = None, top_only: bool = False) -> Evaluation:
+    def evaluate(self, T, measure: str | None = None, top_only: bool = False, components=None) -> Evaluation:
         """Errors of designs at every pose under a measure.
 
         Parameters
@@ -453,6 +453,10 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         top_only : bool
             Exact only at the poses that can hold the largest error (faster; enough for
             feasibility).
+        components : sequence of str, optional
+            ``worst_case`` only: the components computed (default both; the others None). They must
+            hold the constrained ones (:meth:`WorstCaseMeasure.evaluate
+            <evotol.measures.builtin.worst_case.WorstCaseMeasure.evaluate>`).
 
         Returns
         -------
@@ -462,14 +466,19 @@ class ToleranceProblem(DerivedProblems, VariableMapping, ProblemCosts):
         Raises
         ------
         ValidationError
-            An unknown measure, a measure that cannot judge clearance sources, or bad tolerances.
+            An unknown measure, a measure that cannot judge clearance sources, bad tolerances, or
+            ``components`` with another measure than ``worst_case`` or without a constrained one.
         """
         T = np.atleast_2d(self.as_array(T))
         name = measure or self.requirement.measure
         m = measure_registry.get(name)
         if self.clearances is not None and not m.clearances:
             raise ValidationError("measure", name, f"one of {self._clearance_measures()} with clearance sources")
-        return m.evaluate(self, T, top_only)
+        if components is None:
+            return m.evaluate(self, T, top_only)
+        if name != "worst_case":
+            raise ValidationError("components", list(components), f"None with the {name!r} measure (worst_case only)")
+        return m.evaluate(self, T, top_only, components=components)
 
     def first_order_yield(self):
         """The ``yield`` measure's statistical model of this problem (cached):

@@ -21,23 +21,38 @@ class WorstCaseMeasure(Measure):
     name = "worst_case"
     clearances = True
 
-    def evaluate(self, problem, T: np.ndarray, top_only: bool = False) -> Evaluation:
+    def evaluate(self, problem, T: np.ndarray, top_only: bool = False, components=None) -> Evaluation:
         """Attained worst case (``position`` / ``orientation``), proven bound (``*_bound``), worst
         direction (``*_direction``) and each source's share (``*_contrib``), per component.
 
         ``top_only`` refines only the poses that can hold the largest error (others keep a lower grid
         estimate); it is not used with clearance sources.
 
+        Parameters
+        ----------
+        components : sequence of str, optional
+            The components computed (default both), the others left None. They must hold the
+            requirement's constrained ones, which the violation reads: a feasibility check of a
+            position requirement need not compute the orientation (half of a GA's checks). With
+            clearance sources the engine computes the constrained components, as without it.
+
         Raises
         ------
         evotol.errors.ValidationError
-            Clearance sources next to intervals that are not centred ±t.
+            Clearance sources next to intervals that are not centred ±t; ``components`` without a
+            constrained component, or with one that is not ``position``/``orientation``.
         """
         if problem.clearances is not None:
             return self._with_clearances(problem, T)
         shape = None if problem.shape.plain else problem.shape
+        if components is None:
+            components = COMPONENTS
+        missing = [c for c, _ in problem.components if c not in components]
+        if missing or any(c not in COMPONENTS for c in components):
+            raise ValidationError("components", list(components), f"a subset of {list(COMPONENTS)} holding the "
+                                  f"constrained {[c for c, _ in problem.components]}")
         parts = {}
-        for comp in COMPONENTS:
+        for comp in components:
             wc = measures.worst_case_by_blocks(problem.blocks[comp], T, problem.coefficient_blocks(comp),
                                                top_only=top_only, shape=shape)
             parts[comp] = ComponentErrors(wc.value, wc.bound, wc.contributions, wc.direction)
