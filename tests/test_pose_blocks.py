@@ -128,3 +128,26 @@ def test_a_position_requirement_checks_the_position_only_to_the_bit(small_cache)
     assert np.array_equal(part.position_direction, full.position_direction)
     rows = ConstraintRows(problem)
     assert np.array_equal(rows.check(T)[0], full.violation)
+
+
+def test_with_tolerances_keeps_the_coefficients_of_the_same_shape_only(pair):
+    """A drawing's re-check (``with_tolerances`` with the zones it had) reuses the support coefficients, and
+    evaluates as a problem that computes its own, to the bit; another shape computes its own."""
+    cached, _ = pair
+    c = cached.coefficients("position")[0]
+    sh = cached.shape
+    minus, plus = sh.rho - sh.kappa, sh.rho + sh.kappa
+    again = cached.with_tolerances(minus=minus, plus=plus)
+    assert again.coefficients("position")[0] is c                      # kept, not recomputed
+    fresh = copy.copy(again)
+    fresh._coeff_cache = {}
+    rng = np.random.default_rng(3)
+    T = np.exp(rng.uniform(np.log(cached.lower), np.log(cached.upper), (3, cached.n_sources)))
+    a, b = again.evaluate(T), fresh.evaluate(T)
+    for field in ("position", "position_bound", "orientation", "violation"):
+        assert np.array_equal(getattr(a, field), getattr(b, field)), field
+    j = next(k for k, src in enumerate(cached.error_model.sources) if src.dim == 1)   # an interval source
+    moved = minus.copy()
+    moved[j] *= 0.5
+    other = cached.with_tolerances(minus=moved, plus=plus)
+    assert other._coeff_cache == {}
