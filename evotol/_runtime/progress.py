@@ -203,9 +203,11 @@ class _Estimate:
     filled), which made a 103 823-pose Monte Carlo announce 12.4 min for a run of 23 s."""
 
     size = ""
+    _first: tuple | None = None      # (steps, seconds) of the first update
+    _estimated = False               # the estimate line was said
 
     def update(self, n=1):
-        if n and not self.disable and self.total and self.n == getattr(self, "_first", (None,))[0]:
+        if n and not self.disable and self.total and self._first is not None and self.n == self._first[0]:
             first, took = self._first                                   # the second step: state the estimate
             now = self._time()
             total = took + (now - self.start_t - took) / n * (self.total - first)
@@ -247,7 +249,7 @@ class _Lines(_Estimate, tqdm):
         elapsed = self._time() - getattr(self, "start_t", self._time())
         if not self.disable and self.n and elapsed >= self.delay:     # how far it got, in how long
             post = f", {self.postfix}" if self.postfix else ""
-            size = f"{self.size}; " if self.size and not getattr(self, "_estimated", False) else ""   # not said yet
+            size = f"{self.size}; " if self.size and not self._estimated else ""   # the size not said yet
             self.say(f"{self.desc}: {size}{self.n}/{self.total} {self.unit} in {_seconds(elapsed)}{post}")
         super().close()
 

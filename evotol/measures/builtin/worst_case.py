@@ -42,15 +42,15 @@ class WorstCaseMeasure(Measure):
             Clearance sources next to intervals that are not centred ±t; ``components`` without a
             constrained component, or with one that is not ``position``/``orientation``.
         """
-        if problem.clearances is not None:
-            return self._with_clearances(problem, T)
-        shape = None if problem.shape.plain else problem.shape
         if components is None:
             components = COMPONENTS
         missing = [c for c, _ in problem.components if c not in components]
         if missing or any(c not in COMPONENTS for c in components):
             raise ValidationError("components", list(components), f"a subset of {list(COMPONENTS)} holding the "
                                   f"constrained {[c for c, _ in problem.components]}")
+        if problem.clearances is not None:
+            return self._with_clearances(problem, T)
+        shape = None if problem.shape.plain else problem.shape
         parts = {}
         for comp in components:
             wc = measures.worst_case_by_blocks(problem.blocks[comp], T, problem.coefficient_blocks(comp),
