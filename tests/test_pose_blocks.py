@@ -111,14 +111,20 @@ def test_components_computes_the_constrained_ones_to_the_bit(pair, small_cache, 
         cached.evaluate(T, "rss", components=["position", "orientation"])
 
 
-def test_a_position_requirement_checks_the_position_only_to_the_bit(small_cache):
+@pytest.mark.parametrize("blocked", [False, True])
+def test_a_position_requirement_checks_the_position_only_to_the_bit(monkeypatch, blocked):
     """The constraint rows' check of a position-only requirement: the same violation and worst directions
-    as the evaluation of both components, and no orientation computed."""
+    as the evaluation of both components, and no orientation computed; cached and blocked coefficients."""
     from evotol.measures.constraints import ConstraintRows
 
     spec = ur5()
     spec["poses"] = {"grid": [2, 2, 2]}
     problem = load_problem(spec, base_dir=STUDIES)
+    if blocked:                                     # 8 poses do not fit: blocks of one pose
+        D, _ = problem.directions("position")
+        monkeypatch.setattr(tp, "COEFFICIENT_CACHE_BYTES", 7 * 8 * len(D) * (problem.n_sources + 1))
+        problem = load_problem(spec, base_dir=STUDIES)
+        assert len(problem.coefficient_blocks("position")) == 8
     assert [c for c, _ in problem.components] == ["position"]
     rng = np.random.default_rng(2)
     T = np.exp(rng.uniform(np.log(problem.lower), np.log(problem.upper), (5, problem.n_sources)))
