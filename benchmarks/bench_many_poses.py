@@ -21,27 +21,35 @@ ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "reports" / "studies" / "ur5_urdf.toml"
 
 
+def shipped_text(n: int) -> str:
+    """``ur5_urdf.toml`` as shipped on an n x n x n grid (its mechanism file named by its path)."""
+    text = STUDY.read_text().replace("grid = [3, 3, 3]", f"grid = [{n}, {n}, {n}]")
+    return text.replace('mechanism = "ur5"', f'mechanism = "{ROOT / "robots" / "mechanisms" / "ur5.toml"}"')
+
+
 def study_text(n: int) -> str:
     """The UR5 study on an n x n x n grid, sensitivity only, 100 Monte Carlo samples a pose."""
-    text = STUDY.read_text()
-    text = text.replace("grid = [3, 3, 3]", f"grid = [{n}, {n}, {n}]")
-    text = text.replace('mechanism = "ur5"', f'mechanism = "{ROOT / "robots" / "mechanisms" / "ur5.toml"}"')
-    text = re.sub(r"\[methods\].*?\n\n", "[methods]\nsensitivity = {}\n\n", text, flags=re.S)
+    text = re.sub(r"\[methods\].*?\n\n", "[methods]\nsensitivity = {}\n\n", shipped_text(n), flags=re.S)
     return text.replace("n_samples = 300", "n_samples = 100")
 
 
-def run(n: int, folder: Path) -> tuple[float, float]:
-    """(wall s, peak resident GB) of ``evotol run`` of the n³-pose study in a child process."""
-    path = folder / f"ur5_{n}.toml"
-    path.write_text(study_text(n))
+def run_text(text: str, name: str, folder: Path) -> tuple[float, float]:
+    """(wall s, peak resident GB) of ``evotol run`` of the study file ``text`` in a child process."""
+    path = folder / f"{name}.toml"
+    path.write_text(text)
     t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "evotol.cli", "run", str(path), "--out", str(folder / f"out{n}")],
+    proc = subprocess.Popen([sys.executable, "-m", "evotol.cli", "run", str(path), "--out", str(folder / f"out_{name}")],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t0
     if status != 0:
-        raise SystemExit(f"evotol run of {n}^3 poses failed: {proc.stderr.read()[-2000:]}")
+        raise SystemExit(f"evotol run of {name} failed: {proc.stderr.read()[-2000:]}")
     return wall, usage.ru_maxrss * 1024 / 1e9            # ru_maxrss: kB on Linux
+
+
+def run(n: int, folder: Path) -> tuple[float, float]:
+    """(wall s, peak resident GB) of ``evotol run`` of the n³-pose study in a child process."""
+    return run_text(study_text(n), f"ur5_{n}", folder)
 
 
 def main(grids: list[int]) -> None:

@@ -9,28 +9,10 @@ puts beside the target.
 """
 import argparse
 import os
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-STUDY = ROOT / "reports" / "studies" / "ur5_urdf.toml"
-
-
-def run(n: int, folder: Path) -> float:
-    """Wall seconds of ``evotol run`` of the shipped UR5 study on an n x n x n grid, in a child process."""
-    text = STUDY.read_text().replace("grid = [3, 3, 3]", f"grid = [{n}, {n}, {n}]")
-    text = text.replace('mechanism = "ur5"', f'mechanism = "{ROOT / "robots" / "mechanisms" / "ur5.toml"}"')
-    path = folder / f"ur5_{n}.toml"
-    path.write_text(text)
-    t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "evotol.cli", "run", str(path), "--out", str(folder / f"out{n}")],
-                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    if proc.returncode != 0:
-        raise SystemExit(f"evotol run of {n}^3 poses failed: {proc.stderr[-2000:]}")
-    return time.perf_counter() - t0
+from bench_many_poses import run_text, shipped_text
 
 
 def main(grids: list[int]) -> None:
@@ -38,8 +20,8 @@ def main(grids: list[int]) -> None:
           "(sensitivity, optimum, GA 80 x 150, Monte Carlo 300 samples a pose), page and JSON")
     with tempfile.TemporaryDirectory() as tmp:
         for n in grids:
-            print(f"  UR5 study, {n ** 3:5d} poses: {run(n, Path(tmp)):.1f} s wall (load {os.getloadavg()[0]:.1f})",
-                  flush=True)
+            wall, _ = run_text(shipped_text(n), f"ur5_{n}", Path(tmp))
+            print(f"  UR5 study, {n ** 3:5d} poses: {wall:.1f} s wall (load {os.getloadavg()[0]:.1f})", flush=True)
 
 
 if __name__ == "__main__":

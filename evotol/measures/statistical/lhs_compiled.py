@@ -12,6 +12,7 @@ poses on. ``tests/test_montecarlo_sampling.py`` compares it with the NumPy path,
 """
 from __future__ import annotations
 
+import functools
 import os
 
 import numpy as np
@@ -20,21 +21,15 @@ import numpy as np
 #: (100 samples x 36 columns), loading numba and the cached kernel about 0.5-1.5 s once per process
 MIN_POSES = 500
 
-_STATE: dict = {}
-
-
-def _compile():
-    """The kernel (None when numba is missing or ``EVOTOL_NO_NUMBA`` is set), imported on first use."""
-    if "kernel" in _STATE:
-        return _STATE["kernel"]
-    _STATE["kernel"] = None
+@functools.lru_cache(maxsize=1)
+def _kernel():
+    """The kernel module (None when numba is missing or ``EVOTOL_NO_NUMBA`` is set), imported on first use."""
     if os.environ.get("EVOTOL_NO_NUMBA", "").lower() in ("1", "true", "yes"):
         return None
     try:
         from evotol.measures.statistical import pcg64_kernel
     except ImportError:          # pragma: no cover - numba is a dependency
         return None
-    _STATE["kernel"] = pcg64_kernel
     return pcg64_kernel
 
 
@@ -72,7 +67,7 @@ def latin_hypercubes(root: np.random.SeedSequence, poses, n: int, d: int) -> np.
     ndarray, shape (len(poses), n, d) or None
         ``pose_uniforms(root, p, n, d, "lhs")`` for each p, stacked.
     """
-    kernel = _compile() if n < 2 ** 32 else None          # (NumPy draws 64-bit integers from 2^32 samples on)
+    kernel = _kernel() if n < 2 ** 32 else None          # (NumPy draws 64-bit integers from 2^32 samples on)
     if kernel is None:
         return None
     states = kernel.generator_states([pose_lhs_generator(root, int(p)) for p in poses])

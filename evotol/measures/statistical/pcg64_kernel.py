@@ -12,9 +12,10 @@ arithmetic is written with two 64-bit halves (the product's high half from four 
 
 The shuffle is NumPy's Fisher-Yates of ``Generator.permuted`` (``random_interval``: the smallest bit mask
 covering the bound, 32-bit draws rejected above it). A kernel that called NumPy's C functions through
-``ctypes`` could not be cached by numba (a second of compilation in every process); this one is, so a
-verification uses it from any number of poses. ``tests/test_montecarlo_sampling.py`` compares both the
-raw draws with ``PCG64.random_raw`` and the hypercubes with the NumPy path.
+``ctypes`` could not be cached by numba (a second of compilation in every process, so a verification
+used it only from 20 000 poses on); this one is, and a verification uses it from
+:data:`evotol.measures.statistical.lhs_compiled.MIN_POSES` poses on. ``tests/test_montecarlo_sampling.py``
+compares both the raw draws with ``PCG64.random_raw`` and the hypercubes with the NumPy path.
 """
 from __future__ import annotations
 
