@@ -199,3 +199,30 @@ def test_bound_is_proven_whatever_rtol_caps_dropped_early_count(seed, k):
     assert attained <= dense * (1 + 1e-12)
     assert bound >= dense
     assert bound <= dense * 1.05 / np.cos(np.pi / (2 * k))
+
+
+@pytest.mark.parametrize("name", ["planar3rrr.toml", "ur5_callouts.toml"])
+def test_proven_cuts_evaluation_is_evaluate_proven_bit_for_bit(name):
+    """The optimum hands the evaluation its last certified search tightened to hold_to_rule instead
+    of searching again: it must be the evaluation evaluate_proven makes, to the bit, at a design whose
+    grid bound is above the requirement at some poses (so the certified search runs there)."""
+    from evotol.measures.constraints import ConstraintRows
+    from evotol.measures.feasibility import proven_cuts
+    from evotol.allocators.sensitivity import sensitivity_design
+    problem = _example_problem(name)
+    t = sensitivity_design(problem)
+    comp, lim = problem.components[0]
+    # scale the free tolerances until the largest grid bound is just above the requirement (a few
+    # fixed-point steps: locked sources make the bound affine, not linear, in the scale)
+    f = problem.free
+    for _ in range(6):
+        t[f] *= lim * (1 + 2e-3) / float(np.max(getattr(problem.evaluate(t[None]), f"{comp}_bound")[0]))
+    grid = getattr(problem.evaluate(t[None]), f"{comp}_bound")[0]
+    assert np.sum(grid > lim * (1 + FEASIBILITY_RTOL)) >= 1          # the search has poses to tighten
+    added, ev = proven_cuts(problem, ConstraintRows(problem), t, return_evaluation=True)
+    ref = evaluate_proven(problem, t)
+    for c, _ in problem.components:
+        for key in (c, f"{c}_bound"):
+            np.testing.assert_array_equal(getattr(ev, key), getattr(ref, key))
+    assert np.any(getattr(ref, f"{comp}_bound")[0] < grid)              # ... and it did tighten
+    np.testing.assert_array_equal(ev.violation, ref.violation)

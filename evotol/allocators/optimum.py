@@ -366,12 +366,15 @@ def _allocate_optimum_at_poses(problem: ToleranceProblem, *, budget: float | Non
             viol, _ = rows.check(t[None])
         # the ascent from the direction grid can stop at a local maximum of the support function:
         # the certified search finds the directions it missed; their rows go in and we re-solve
-        if not feasibility.proven_cuts(problem, rows, t):
+        added, proven = feasibility.proven_cuts(problem, rows, t, return_evaluation=True)
+        if not added:
             break
     cert = certificate(problem, rows, t)
     cert["rounds"] = rounds
     cert["solver"] = "SLSQP + cutting planes"
-    t, ev, repair = feasibility.hold_to_rule(problem, t, max_miss=np.inf)     # the working rows' hair outside
+    # the working rows' hair outside; `proven` is t's evaluation with the certified search's bounds
+    # (the rows it added do not change it)
+    t, ev, repair = feasibility.hold_to_rule(problem, t, max_miss=np.inf, evaluation=proven)
     result = issue(make_result(problem, "optimum", t, evaluation=ev, certificate=cert, seconds=time.perf_counter() - t0,
                                info={"solver_message": str(getattr(res, "message", "")), **repair}))
     if problem.requirement.measure == "worst_case":

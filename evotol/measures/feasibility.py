@@ -82,7 +82,7 @@ def tighten_bounds(problem, ev, t: np.ndarray) -> None:
             value[0, p] = max(float(value[0, p]), attained)
 
 
-def proven_cuts(problem, rows, t: np.ndarray) -> int:
+def proven_cuts(problem, rows, t: np.ndarray, return_evaluation: bool = False):
     """Add to a cutting-plane working set (:class:`evotol.measures.constraints.ConstraintRows`) the rows of
     the directions where the certified search of :mod:`evotol.measures.linear.proven_bound` finds design ``t``
     above the requirement (directions the ascent from the grid missed). Returns the rows added;
@@ -94,15 +94,21 @@ def proven_cuts(problem, rows, t: np.ndarray) -> int:
         The problem; nothing is added unless its measure is ``worst_case`` without clearances.
     rows : evotol.measures.constraints.ConstraintRows
         The working set, extended in place with rows ``row·t / requirement`` (+ constant).
+    return_evaluation : bool
+        Also return the evaluation of ``t`` with its bounds tightened: the search is the one
+        :func:`tighten_bounds` makes (same poses, same calls), so this equals
+        :func:`evaluate_proven` of ``t`` bit for bit and a caller need not search again.
 
     Returns
     -------
-    int
-        Number of rows added.
+    int or (int, Evaluation)
+        Number of rows added; with ``return_evaluation``, also the tightened evaluation (``None``
+        when the measure is not ``worst_case`` or there are clearance sources).
     """
     if problem.requirement.measure != "worst_case" or problem.clearances is not None:
-        return 0
-    ev = problem.evaluate(np.asarray(t, dtype=float)[None])
+        return (0, None) if return_evaluation else 0
+    t = np.asarray(t, dtype=float)
+    ev = problem.evaluate(t[None])
     shape = None if problem.shape.plain else problem.shape
     added = 0
     for comp, lim in problem.components:
@@ -110,12 +116,14 @@ def proven_cuts(problem, rows, t: np.ndarray) -> int:
         blocks = problem.blocks[comp]
         bound, value = getattr(ev, f"{comp}_bound"), getattr(ev, comp)
         for p in np.flatnonzero(bound[0] > lim * (1 + FEASIBILITY_RTOL)):
-            _, attained, u = certified_max([B[p:p + 1] for B in blocks], t, D, delta, float(value[0, p]),
+            b, attained, u = certified_max([B[p:p + 1] for B in blocks], t, D, delta, float(value[0, p]),
                                            shape, rtol=BOUND_RTOL, return_direction=True)
+            bound[0, p] = min(float(bound[0, p]), b)            # as tighten_bounds
+            value[0, p] = max(float(value[0, p]), attained)
             if u is not None and attained > lim * (1 + 0.1 * FEASIBILITY_RTOL):
                 row, const = problem.support_row(comp, int(p), u)
                 added += rows._add_linear(row[None] / lim, [(comp, int(p), tuple(np.round(u, 12)))], [const / lim])
-    return added
+    return (added, ev) if return_evaluation else added
 
 
 def bound_ratio(problem, ev) -> float:
@@ -235,7 +243,7 @@ def repair_by_scaling(problem, t: np.ndarray, ev=None, max_steps: int = 40, max_
     return t, evaluate_proven(problem, t), {"scale": 1.0, "ratio_before": ratio0, "ratio_after": ratio0, "failed": True}
 
 
-def hold_to_rule(problem, t, max_miss: float = REPAIR_MAX):
+def hold_to_rule(problem, t, max_miss: float = REPAIR_MAX, evaluation=None):
     """An allocator's final design held to the rule: its proven evaluation and, when it misses by at
     most ``max_miss``, the free tolerances scaled until it holds (:func:`repair_by_scaling`).
 
@@ -246,6 +254,9 @@ def hold_to_rule(problem, t, max_miss: float = REPAIR_MAX):
     max_miss : float
         Largest relative miss repaired: ``REPAIR_MAX`` for a rule's answer (sensitivity, Lagrange,
         equal tolerance), ``inf`` for a search method (GA, cutting planes, the polyblock bracket).
+    evaluation : Evaluation, optional
+        The proven evaluation of ``t`` (:func:`evaluate_proven`, or :func:`proven_cuts` with
+        ``return_evaluation``) when the caller has it; default: computed here.
 
     Returns
     -------
@@ -263,7 +274,7 @@ def hold_to_rule(problem, t, max_miss: float = REPAIR_MAX):
         A design that is not one non-negative finite value per source.
     """
     t = np.asarray(problem.as_array(t), dtype=float)
-    t, ev, fix = repair_by_scaling(problem, t, max_miss=max_miss)
+    t, ev, fix = repair_by_scaling(problem, t, ev=evaluation, max_miss=max_miss)
     return t, ev, ({} if fix is None else {"feasibility_repair": fix})
 
 
