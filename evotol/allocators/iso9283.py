@@ -54,6 +54,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
+from evotol._runtime.memo import last_point
 from evotol.errors import ValidationError
 from evotol.measures.iso9283.budget import (joints_and_maps, lost_motion_parts, orientation_variance_weights,
                                            rp_unit_errors, rp_with_gradient)
@@ -124,16 +125,16 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
         g[:, m:] = grad * t[m:]
         return rp, g[:, var]
 
+    # SLSQP asks a constraint's value and then its jacobian at the same point: each is computed once
+    ap_at, rp_at = last_point(lambda x: ap_parts(full(x))), last_point(lambda x: rp_parts(full(x)))
     cons = []
     # aim at AP cos δ: the proven bound (grid maximum / cos δ <= attained / cos δ) then meets AP
     ap_aim = None if AP is None else AP * np.cos(terms["delta"])
     if AP is not None:
-        cons.append({"type": "ineq", "fun": lambda x: (ap_aim - ap_parts(full(x))[0]) / AP,
-                     "jac": lambda x: -ap_parts(full(x))[1] / AP})
+        cons.append({"type": "ineq", "fun": lambda x: (ap_aim - ap_at(x)[0]) / AP, "jac": lambda x: -ap_at(x)[1] / AP})
     rp_aim = terms["rp_aim"]
     if RP is not None and K:
-        cons.append({"type": "ineq", "fun": lambda x: (rp_aim - rp_parts(full(x))[0]) / RP,
-                     "jac": lambda x: -rp_parts(full(x))[1] / RP})
+        cons.append({"type": "ineq", "fun": lambda x: (rp_aim - rp_at(x)[0]) / RP, "jac": lambda x: -rp_at(x)[1] / RP})
     R = S[:, 3:]                                                              # orientation rows (p, 3, m)
     Wv = orientation_variance_weights(R, loadings, sources) if K else np.zeros((len(J), 3, 0))
 
@@ -153,8 +154,9 @@ def allocate_iso9283(robot, positions, sys_costs, sys_bounds, free, sources, ran
 
     ori = {k: float(v) for k, v in (orientation or {}).items() if v is not None}
     for key, L in ori.items():          # aimed 1e-6 below: the exact figure then meets the limit, not rounds onto it
-        cons.append({"type": "ineq", "fun": lambda x, k=key, L=L: (L * (1 - 1e-6) - angle_parts(full(x), k)[0]) / L,
-                     "jac": lambda x, k=key, L=L: -angle_parts(full(x), k)[1] / L})
+        at = last_point(lambda x, k=key: angle_parts(full(x), k))
+        cons.append({"type": "ineq", "fun": lambda x, at=at, L=L: (L * (1 - 1e-6) - at(x)[0]) / L,
+                     "jac": lambda x, at=at, L=L: -at(x)[1] / L})
     start = np.sqrt(lo * hi) if x0 is None else np.clip(np.asarray(x0, float), lo, hi)
     res = minimize(lambda x: cost(x), np.log(start[var]), jac=True, method="SLSQP", constraints=cons,
                    bounds=list(zip(np.log(lo[var]), np.log(hi[var]))), options={"maxiter": maxiter, "ftol": 1e-10})

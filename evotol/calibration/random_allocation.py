@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize
 
+from evotol._runtime.memo import last_point
 from evotol.calibration.random_budget import RandomBudget
 
 
@@ -145,7 +146,8 @@ def _iso_constraints(rb: RandomBudget, t0) -> list:
             s, dl, _ = rb.iso_figure.lam(t)
             return -(dw + kappa[:, None] * dl / (2 * s[:, None])) * t / rb.AP
         out.append({"type": "ineq", "fun": fun, "jac": jac})
-    if rb.RP is not None:
-        out.append({"type": "ineq", "fun": lambda x: (rb.rp_aim - rb.rp(np.exp(x))[0]) / rb.RP,
-                    "jac": lambda x: -rb.rp(np.exp(x))[1] * np.exp(x) / rb.RP})
+    if rb.RP is not None:       # RP and its gradient from one computation at each point (last_point)
+        rp_at = last_point(lambda x: rb.rp(np.exp(x)))
+        out.append({"type": "ineq", "fun": lambda x: (rb.rp_aim - rp_at(x)[0]) / rb.RP,
+                    "jac": lambda x: -rp_at(x)[1] * np.exp(x) / rb.RP})
     return out
