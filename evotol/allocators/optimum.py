@@ -194,15 +194,22 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
         return problem.variable_dcost(T(y)) * hi / c0
 
     t_cur = t_start.copy()
+    kept_a = np.zeros(0, dtype=int)
+    kept_b = np.zeros(0, dtype=int)
     for _ in range(20):
         cons = []
         if rows.A.shape[0]:
-            sel = _select(rows.A @ t_cur + rows.A0, max_rows)
+            # the largest rows at the current design, and every row an earlier pass of this solve took:
+            # a re-selection alone can cycle (one component's rows crowd out the other's, whose
+            # variables then run to their upper bounds, and back), a growing set cannot
+            sel = kept_a = np.union1d(kept_a, _select(rows.A @ t_cur + rows.A0, max_rows)) if kept_a.size else \
+                _select(rows.A @ t_cur + rows.A0, max_rows)
             A = rows.A[sel]
             Af, off = problem.to_variables(A) * hi, 1 - _locked_part(problem, A, 1) - rows.A0[sel]
             cons.append({"type": "ineq", "fun": lambda y, Af=Af, off=off: off - Af @ y, "jac": lambda y, Af=Af: -Af})
         if rows.B.shape[0]:
-            sel = _select(rows.B @ t_cur ** 2, max_rows)
+            sel = kept_b = np.union1d(kept_b, _select(rows.B @ t_cur ** 2, max_rows)) if kept_b.size else \
+                _select(rows.B @ t_cur ** 2, max_rows)
             B = rows.B[sel]
             Bf = problem.to_variables(B) * hi ** 2
             off = 1 - _locked_part(problem, B, 2)
