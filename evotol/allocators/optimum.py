@@ -77,6 +77,16 @@ def _select(values: np.ndarray, k: int) -> np.ndarray:
     return np.argpartition(-values, k)[:k]
 
 
+def _grow(kept: np.ndarray | None, values: np.ndarray, k: int) -> np.ndarray:
+    """The working rows a solve hands SLSQP: the ``k`` largest ``values`` at the current design and every row
+    ``kept`` from its earlier passes (the first pass: the ``k`` largest alone). Re-selecting alone can cycle:
+    with two binding components one's rows crowd out the other's, whose variables then run to their upper
+    bounds, and back; a growing set cannot. Rows are only appended to the working set during a solve, so the
+    indices stay valid."""
+    new = _select(values, k)
+    return new if kept is None else np.union1d(kept, new)
+
+
 def _min_1d(problem: ToleranceProblem, w: np.ndarray, v: np.ndarray) -> np.ndarray:
     """argmin over [lo, hi] of c_v(x) + w_v x + v_v x² for every free variable (bisection on the
     derivative); w, v are per source and are collected per variable."""
@@ -194,22 +204,16 @@ def _solve_min_cost(problem, rows, t_start, max_rows, tol):
         return problem.variable_dcost(T(y)) * hi / c0
 
     t_cur = t_start.copy()
-    kept_a = np.zeros(0, dtype=int)
-    kept_b = np.zeros(0, dtype=int)
+    sel_a = sel_b = None
     for _ in range(20):
         cons = []
         if rows.A.shape[0]:
-            # the largest rows at the current design, and every row an earlier pass of this solve took:
-            # a re-selection alone can cycle (one component's rows crowd out the other's, whose
-            # variables then run to their upper bounds, and back), a growing set cannot
-            sel = kept_a = np.union1d(kept_a, _select(rows.A @ t_cur + rows.A0, max_rows)) if kept_a.size else \
-                _select(rows.A @ t_cur + rows.A0, max_rows)
+            sel = sel_a = _grow(sel_a, rows.A @ t_cur + rows.A0, max_rows)
             A = rows.A[sel]
             Af, off = problem.to_variables(A) * hi, 1 - _locked_part(problem, A, 1) - rows.A0[sel]
             cons.append({"type": "ineq", "fun": lambda y, Af=Af, off=off: off - Af @ y, "jac": lambda y, Af=Af: -Af})
         if rows.B.shape[0]:
-            sel = kept_b = np.union1d(kept_b, _select(rows.B @ t_cur ** 2, max_rows)) if kept_b.size else \
-                _select(rows.B @ t_cur ** 2, max_rows)
+            sel = sel_b = _grow(sel_b, rows.B @ t_cur ** 2, max_rows)
             B = rows.B[sel]
             Bf = problem.to_variables(B) * hi ** 2
             off = 1 - _locked_part(problem, B, 2)
@@ -423,18 +427,19 @@ def _best_accuracy(problem, rows, budget, t0, tol, max_rounds, max_rows):
     y = np.clip(sensitivity_design(problem)[f] / hi, lo / hi, 1)
     s0 = float(rows.normalised_error(T(y)[None])[0])
     z = np.concatenate([y, [s0]])
+    sel_a = sel_b = None
     for rounds in range(1, max_rounds + 1):
         cons = [{"type": "ineq", "fun": lambda z: (budget - float(problem.cost(T(z[:-1])))) / budget,
                  "jac": lambda z: np.concatenate([-problem.variable_dcost(T(z[:-1])) * hi, [0.0]]) / budget}]
         tz = T(z[:-1])
         if rows.A.shape[0]:
-            sel = _select(rows.A @ tz + rows.A0, max_rows)
+            sel = sel_a = _grow(sel_a, rows.A @ tz + rows.A0, max_rows)
             A = rows.A[sel]
             Af, off = problem.to_variables(A) * hi, _locked_part(problem, A, 1) + rows.A0[sel]
             cons.append({"type": "ineq", "fun": lambda z, Af=Af, off=off: z[-1] - off - Af @ z[:-1],
                          "jac": lambda z, Af=Af: np.hstack([-Af, np.ones((Af.shape[0], 1))])})
         if rows.B.shape[0]:
-            sel = _select(rows.B @ tz ** 2, max_rows)
+            sel = sel_b = _grow(sel_b, rows.B @ tz ** 2, max_rows)
             B = rows.B[sel]
             Bf = problem.to_variables(B) * hi ** 2
             off = _locked_part(problem, B, 2)
@@ -448,6 +453,10 @@ def _best_accuracy(problem, rows, budget, t0, tol, max_rounds, max_rows):
         viol, added = rows.check(T(z[:-1])[None])
         if added == 0 and rows.violation(T(z[:-1])[None])[0] <= z[-1] - 1 + tol:
             break
+    else:       # the design of the last round is not the best accuracy the working rows prove: say so
+        raise ConvergenceError(f"cutting planes (best accuracy at budget) did not converge in {max_rounds} rounds "
+                               f"(normalised error {float(rows.normalised_error(T(z[:-1])[None])[0]):.3g} against "
+                               f"{z[-1]:.3g} on the working rows)")
     t = T(np.clip(z[:-1], lo / hi, 1))
     return issue(make_result(problem, "optimum (best accuracy at budget)", t, seconds=time.perf_counter() - t0,
                              budget=budget, certificate={"rounds": rounds, "budget": budget, "solver": "SLSQP + cutting planes"},
