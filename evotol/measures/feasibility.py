@@ -65,9 +65,17 @@ def tighten_bounds(problem, ev, t: np.ndarray) -> None:
     t : ndarray, shape (n_sources,)
         The design (SI: m or rad).
     """
+    _tighten(problem, ev, np.asarray(t, dtype=float))
+
+
+def _tighten(problem, ev, t: np.ndarray) -> list:
+    """:func:`tighten_bounds`' search, in place; returns ``(component, requirement, pose, attained, direction)`` of
+    each pose it searched (the direction ``None`` when the value passed in was not beaten), for
+    :func:`proven_cuts`."""
     if problem.requirement.measure != "worst_case" or problem.clearances is not None:
-        return
+        return []
     shape = None if problem.shape.plain else problem.shape
+    found = []
     for comp, lim in problem.components:
         bound = getattr(ev, f"{comp}_bound")
         value = getattr(ev, comp)
@@ -76,10 +84,12 @@ def tighten_bounds(problem, ev, t: np.ndarray) -> None:
         D, delta = problem.directions(comp)
         blocks = problem.blocks[comp]
         for p in np.flatnonzero(bound[0] > lim * (1 + FEASIBILITY_RTOL)):
-            b, attained = certified_max([B[p:p + 1] for B in blocks], t, D, delta, float(value[0, p]), shape,
-                                        rtol=BOUND_RTOL)
+            b, attained, u = certified_max([B[p:p + 1] for B in blocks], t, D, delta, float(value[0, p]), shape,
+                                           rtol=BOUND_RTOL, return_direction=True)
             bound[0, p] = min(float(bound[0, p]), b)
             value[0, p] = max(float(value[0, p]), attained)
+            found.append((comp, lim, int(p), attained, u))
+    return found
 
 
 def proven_cuts(problem, rows, t: np.ndarray, return_evaluation: bool = False):
@@ -109,20 +119,11 @@ def proven_cuts(problem, rows, t: np.ndarray, return_evaluation: bool = False):
         return (0, None) if return_evaluation else 0
     t = np.asarray(t, dtype=float)
     ev = problem.evaluate(t[None])
-    shape = None if problem.shape.plain else problem.shape
     added = 0
-    for comp, lim in problem.components:
-        D, delta = problem.directions(comp)
-        blocks = problem.blocks[comp]
-        bound, value = getattr(ev, f"{comp}_bound"), getattr(ev, comp)
-        for p in np.flatnonzero(bound[0] > lim * (1 + FEASIBILITY_RTOL)):
-            b, attained, u = certified_max([B[p:p + 1] for B in blocks], t, D, delta, float(value[0, p]),
-                                           shape, rtol=BOUND_RTOL, return_direction=True)
-            bound[0, p] = min(float(bound[0, p]), b)            # as tighten_bounds
-            value[0, p] = max(float(value[0, p]), attained)
-            if u is not None and attained > lim * (1 + 0.1 * FEASIBILITY_RTOL):
-                row, const = problem.support_row(comp, int(p), u)
-                added += rows._add_linear(row[None] / lim, [(comp, int(p), tuple(np.round(u, 12)))], [const / lim])
+    for comp, lim, p, attained, u in _tighten(problem, ev, t):      # the search tighten_bounds makes
+        if u is not None and attained > lim * (1 + 0.1 * FEASIBILITY_RTOL):
+            row, const = problem.support_row(comp, p, u)
+            added += rows._add_linear(row[None] / lim, [(comp, p, tuple(np.round(u, 12)))], [const / lim])
     return (added, ev) if return_evaluation else added
 
 
