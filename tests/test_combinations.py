@@ -187,6 +187,27 @@ def test_calibration_on_joint_configurations_keeps_its_linear_range_bound_and_si
         verify(pc, r.tolerances, 10, model="nonlinear")
 
 
+def test_calibration_with_a_binding_orientation_requirement_holds_on_the_simulated_calibration():
+    """Calibration (position measured, over joint configurations) + an orientation requirement that binds:
+    the fit's noise reaches the orientation too, so the allocator's orientation limit is the user's less the
+    noise allowance (propagated through the fit, not only the position's); the optimum's first-order
+    orientation residual sits at that limit, and robots drawn within its tolerances, calibrated on the
+    nonlinear model, stay within both of the user's limits. (0.3 x what the position optimum turns.)"""
+    from evotol.calibration import simulate_calibration
+
+    turned = float(allocate_optimum(build("joints", "calibration")).errors.orientation.max())
+    spec = with_calibration(with_joints(ur5()))
+    spec["requirement"]["orientation"] = limit = 0.3 * turned
+    p = load_problem(spec, base_dir=STUDIES)
+    held = dict(p.components)
+    assert held["position"] < 5e-4 and held["orientation"] < limit           # both keep a noise allowance
+    r = allocate_optimum(p)
+    assert r.feasible
+    assert float(r.errors.orientation.max()) / held["orientation"] == pytest.approx(1.0, abs=1e-9)   # binds
+    sim = simulate_calibration(p, r.tolerances, n_samples=60, seed=1)
+    assert sim.simulated["position"]["max"] <= 5e-4 and sim.simulated["orientation"]["max"] <= limit
+
+
 @pytest.mark.parametrize("caps", [("joints",), ("callouts",), ("per-axis",), ("joints", "callouts"), ("joints", "per-axis")])
 def test_nonlinear_verification_on_each_composition_agrees_with_its_first_order_worst_case(caps):
     """verify(model="nonlinear") on each composition it can meet runs through that composition's own
