@@ -61,7 +61,7 @@ def bench_irsbot2(workers: int | None, out: Path) -> None:
 
     t = time.perf_counter()
     try:
-        s = ds.run(out / "irsbot2", workers=workers, progress=False)
+        s = ds.STUDY.run(out / "irsbot2", workers=workers)         # the study as `evotol reproduce` runs it
     except EvotolError as exc:
         print(f"  not run: {exc}")
         return
