@@ -244,3 +244,69 @@ def test_calibrate_scale_checks_confidence_iters_and_samples_first(field, value,
     with pytest.raises(ValidationError) as exc:
         calibrate_scale(_asymmetric_yield_problem(), np.full(3, 2e-4), **kw)
     assert str(exc.value) == f"{field} = {value!r}: expected {expected}"
+
+
+def _same(a, b) -> bool:
+    """Equal to the last bit (NaN equal to NaN), through dicts, sequences and arrays."""
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple, np.ndarray)) or isinstance(b, (list, tuple, np.ndarray)):
+        return np.array_equal(np.asarray(a), np.asarray(b), equal_nan=np.asarray(a).dtype.kind == "f")
+    if isinstance(a, float) and isinstance(b, float) and np.isnan(a) and np.isnan(b):
+        return True
+    return a == b
+
+
+def _fields(res) -> dict:
+    d = {k: v for k, v in res.to_dict().items() if k != "seconds"}
+    return {**d, "exceed": res.exceed_rate, "max": res.max_error, "q95": res.quantile_95,
+            "exceed_nl": res.nonlinear_exceed_rate, "yield_linear": res.yield_linear, "yield_nonlinear": res.yield_nonlinear}
+
+
+def _clearance_problem():
+    from evotol.measures.clearances import ClearanceSources, thesis_classes
+    from evotol.robots.mechanism.model.error_model import MechanismModel, resolve_description
+
+    robot = MechanismModel(resolve_description("fivebar"))
+    mech = robot.clearance_mechanism()
+    cl = ClearanceSources(mech, thesis_classes([j.name for j in mech.joints], h=0.01))
+    names = list(robot.source_names) + list(cl.names)
+    tols = {n: Tolerance(cm.ReciprocalCost(1.0, 1.0, scale=1e-6), lower=1e-7, upper=1e-4) for n in names}
+    return ToleranceProblem(robot, tols, Requirement(position=1e-4), robot.workspace.grid([3, 3]), clearances=cl)
+
+
+@pytest.mark.parametrize("case", ["ucr3 nonlinear", "ucr3 paper, normal, mc", "toy 600 poses (compiled hypercubes)",
+                                  "toy yield", "5-bar with clearances"])
+def test_verify_designs_equals_verify_of_each_design_bit_for_bit(case):
+    """verify_designs draws each chunk's unit samples once for all designs: every result equals verify of
+    that design alone (per-pose arrays, the yield verdict, the linearisation error, the worst-case ratio), on
+    a nonlinear model with disk sources, with one given distribution and plain sampling, on the compiled
+    hypercube path (>= 500 poses), with a yield requirement and with clearance sources (whose states are
+    drawn per chunk, per design)."""
+    from evotol.studies.yao2013 import PAPER_TABLE1, PAPER_TABLE2
+    from evotol.verification.montecarlo import verify_designs
+
+    kw = dict(n_samples=200, seed=3)
+    if case.startswith("ucr3"):
+        P = yao2013_problem("verified" if "nonlinear" in case else "paper", "rss", grid=(2, 2, 2))
+        designs = [PAPER_TABLE1, PAPER_TABLE2, np.asarray(PAPER_TABLE1) * 0.5]
+        if "normal" in case:
+            kw.update(method="mc", distribution="normal", nonlinear=False)
+    elif case == "5-bar with clearances":
+        P = _clearance_problem()
+        designs = [P.upper, P.upper * 0.3, np.sqrt(P.lower * P.upper)]
+    else:
+        r = ToyRobot()
+        req = Requirement(position=1e-3, measure="yield", probability=0.99) if "yield" in case else Requirement(position=1e-3)
+        tol = {s.name: Tolerance(cm.ExponentialCost(1, 1, scale=1e-3), 1e-5, 1e-2) for s in r.sources}
+        P = ToleranceProblem(r, tol, req, np.linspace(0, 1, 600 if "600" in case else 5)[:, None])
+        designs = [np.full(P.n_sources, 2e-4), np.full(P.n_sources, 5e-4), np.linspace(1e-4, 6e-4, P.n_sources)]
+        kw["chunk_poses"] = 128
+    together = verify_designs(P, designs, **kw)
+    assert len(together) == len(designs)
+    for t, res in zip(designs, together):
+        alone = verify(P, t, **kw)
+        assert _same(_fields(res), _fields(alone))
+    assert not _same(_fields(together[0])["max"], _fields(together[1])["max"])     # designs not mixed up
+    with pytest.raises(ValidationError, match="designs"):
+        verify_designs(P, [], **kw)

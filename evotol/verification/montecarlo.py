@@ -33,6 +33,7 @@ from evotol.measures.statistical import distributions
 from evotol.measures.statistical.distributions import METHODS
 from evotol.measures.statistical.lhs_compiled import MIN_POSES as LHS_MIN_POSES, latin_hypercubes, pose_lhs_generator
 from evotol.errors import ValidationError, is_integer, is_real
+from evotol.verification.mc_tally import Tally
 from evotol.verification.nonlinear import verify_nonlinear
 from evotol.core.problem import ToleranceProblem
 from evotol._runtime.progress import progress_bar
@@ -401,6 +402,41 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
         return verify_nonlinear(problem, tolerances, n_samples=n_samples, seed=seed, chunk_poses=chunk_poses)
     if model != "linear":
         raise ValidationError("model", model, "'linear' (first-order samples, plus nonlinear exceed rates) or 'nonlinear'")
+    return verify_designs(problem, [tolerances], n_samples, method, seed, nonlinear, radial, chunk_poses, progress,
+                          confidence, distribution)[0]
+
+
+@single_threaded_blas
+def verify_designs(problem: ToleranceProblem, designs, n_samples: int = 1000, method: str = "lhs", seed: int = 0,
+                   nonlinear: bool = True, radial: str = "uniform", chunk_poses: int = 64,
+                   progress: bool | None = None, confidence: float = 0.95, distribution=None,
+                   rng: int | np.random.Generator | None = None) -> list[MonteCarloResult]:
+    """:func:`verify` (``model="linear"``) of several designs on one set of samples.
+
+    Each chunk's unit samples (a pose's uniforms from its own stream, then each source's
+    distribution per unit tolerance) do not depend on the design: they are drawn once and scaled by
+    every design, so each result equals ``verify`` of that design alone with the same arguments, bit
+    for bit, and the designs are compared on common random numbers (Yao 2013 checks five designs
+    this way). Only the draws are shared; memory stays one chunk of samples a design at a time.
+
+    Parameters
+    ----------
+    designs : sequence of mapping or array_like
+        The designs: each a mapping source name -> tolerance, or one value per source (SI: m or rad).
+    problem, n_samples, method, seed, nonlinear, radial, chunk_poses, progress, confidence, distribution, rng
+        As :func:`verify`.
+
+    Returns
+    -------
+    list of MonteCarloResult
+        One per design, in order; ``seconds`` is the wall time of the call up to that result.
+
+    Raises
+    ------
+    evotol.errors.ValidationError
+        As :func:`verify`, or no design.
+    """
+    seed = seed_from(rng, seed)
     if not is_integer(chunk_poses, 1):
         raise ValidationError("chunk_poses", chunk_poses, "a positive integer")
     t0 = time.perf_counter()
@@ -410,7 +446,9 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
         raise ValidationError("radial", radial, f"one of {RADIAL}")
     if not isinstance(n_samples, (int, np.integer)) or n_samples < 1:
         raise ValidationError("n_samples", n_samples, "a positive integer")
-    t = problem.as_array(tolerances)
+    designs = [problem.as_array(t) for t in designs]
+    if not designs:
+        raise ValidationError("designs", designs, "at least one design")
     robot = problem.error_model
     dims = [s.dim for s in robot.sources]
     dists = problem.distributions if distribution is None else \
@@ -418,63 +456,43 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
     comps = problem.components
     root = np.random.SeedSequence(seed)      # pose p's stream: its child p, made when its chunk is sampled
     P = problem.n_poses
-    exceed = {c: np.zeros(P) for c, _ in comps}
-    exceed_nl = {c: np.zeros(P) for c, _ in comps} if (nonlinear and robot.has_nonlinear_model) else {}
-    maxerr = {c: np.zeros(P) for c, _ in comps}
-    q95 = {c: np.zeros(P) for c, _ in comps}
-    inside_lin = np.zeros(P)
-    inside_nl = np.zeros(P) if exceed_nl else None
-    lin_err, lin_scale = 0.0, 0.0
-    rows = {"position": slice(0, 3), "orientation": slice(3, 6)}
+    with_nl = bool(nonlinear and robot.has_nonlinear_model)
+    tallies = [Tally(comps, P, with_nl) for _ in designs]
     bar = progress_bar(P, "Monte Carlo", "pose", progress, size=f"{P} poses × {n_samples} samples"
-                       + (" (nonlinear model)" if exceed_nl else ""))
+                       + (" (nonlinear model)" if with_nl else "") + (f", {len(designs)} designs" if len(designs) > 1 else ""))
     for start in range(0, P, chunk_poses):
         idx = np.arange(start, min(start + chunk_poses, P))
         U = latin_hypercubes(root, idx, n_samples, sum(dims)) if method == "lhs" and P >= LHS_MIN_POSES else None
         U = (np.concatenate([pose_uniforms(root, int(p), n_samples, sum(dims), method) for p in idx]) if U is None
              else U.reshape(-1, U.shape[2]))                            # the same draws, compiled (many poses)
         Z = distributions.draw(U, dims, dists, radial)                  # row by row: the chunk's poses at once
-        E = np.concatenate(problem.source_errors(Z, t), axis=1).reshape(idx.size, n_samples, robot.n_columns)
-        lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
-        if problem.clearances is not None:   # consistent clearance states inside the classes' bounds
-            lin = lin + clearances.sample_twists(robot, problem.poses[idx], t[robot.n_geometric:], n_samples,
-                                                 np.random.default_rng([seed, start]))
-        ok = np.ones(lin.shape[:2], dtype=bool)
-        for c, lim in comps:
-            nrm = np.linalg.norm(lin[:, :, rows[c]], axis=2)
-            ok &= nrm <= lim
-            exceed[c][idx] = np.mean(nrm > lim, axis=1)
-            maxerr[c][idx] = nrm.max(axis=1)
-            q95[c][idx] = np.quantile(nrm, 0.95, axis=1)
-        inside_lin[idx] = ok.mean(axis=1)
-        if exceed_nl:
-            nl = pose_error_nan(robot, problem.poses[idx], E)
-            assembled = np.all(np.isfinite(nl), axis=2)
-            if assembled.any():
-                lin_err = max(lin_err, float(np.max(np.abs(nl - lin)[assembled])))
-            lin_scale = max(lin_scale, float(np.max(np.abs(lin))))
-            ok = np.ones(lin.shape[:2], dtype=bool)
-            for c, lim in comps:
-                nrm = np.linalg.norm(nl[:, :, rows[c]], axis=2)
-                ok &= nrm <= lim                                 # NaN (not assembled) is a miss
-                exceed_nl[c][idx] = np.mean(~(nrm <= lim), axis=1)
-            inside_nl[idx] = ok.mean(axis=1)
+        for t, tally in zip(designs, tallies):
+            E = np.concatenate(problem.source_errors(Z, t), axis=1).reshape(idx.size, n_samples, robot.n_columns)
+            lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
+            if problem.clearances is not None:   # consistent clearance states inside the classes' bounds
+                lin = lin + clearances.sample_twists(robot, problem.poses[idx], t[robot.n_geometric:], n_samples,
+                                                     np.random.default_rng([seed, start]))
+            tally.add(idx, lin, pose_error_nan(robot, problem.poses[idx], E) if with_nl else None)
         bar.update(idx.size)
     bar.close()
-    res = MonteCarloResult(method, int(n_samples), seed, exceed, maxerr, q95, exceed_nl,
-                           (lin_err / lin_scale) if exceed_nl and lin_scale > 0 else None)
-    res.yield_linear, res.yield_nonlinear = inside_lin, inside_nl
-    res.sampled = None if distribution is None else dists[0]
     req = problem.requirement.required_yield if problem.requirement.measure == "yield" else None
-    res.yield_check = yield_check(inside_nl if inside_nl is not None else inside_lin, n_samples, req, confidence,
-                                  "nonlinear" if inside_nl is not None else "linear")
-    ev = problem.evaluate(t[None], "worst_case")
-    for c, _ in comps:
-        res.max_error_over_worst_case[c] = float(np.max(maxerr[c] / np.maximum(getattr(ev, c)[0], 1e-300)))
-    if nonlinear:       # each part's own check on the nonlinear model (a calibration: simulated)
-        res.part_checks = problem.error_model.nonlinear_checks(problem, t, seed)
-    res.seconds = time.perf_counter() - t0
-    return res
+    out = []
+    for t, tally in zip(designs, tallies):
+        res = MonteCarloResult(method, int(n_samples), seed, tally.exceed, tally.maxerr, tally.q95, tally.exceed_nl,
+                               tally.linearisation_error)
+        res.yield_linear, res.yield_nonlinear = tally.inside_lin, tally.inside_nl
+        res.sampled = None if distribution is None else dists[0]
+        inside = tally.inside_nl if tally.inside_nl is not None else tally.inside_lin
+        res.yield_check = yield_check(inside, n_samples, req, confidence,
+                                      "nonlinear" if tally.inside_nl is not None else "linear")
+        ev = problem.evaluate(t[None], "worst_case")
+        for c, _ in comps:
+            res.max_error_over_worst_case[c] = float(np.max(tally.maxerr[c] / np.maximum(getattr(ev, c)[0], 1e-300)))
+        if nonlinear:       # each part's own check on the nonlinear model (a calibration: simulated)
+            res.part_checks = problem.error_model.nonlinear_checks(problem, t, seed)
+        res.seconds = time.perf_counter() - t0
+        out.append(res)
+    return out
 
 
 def calibrate_scale(problem: ToleranceProblem, tolerances, n_samples: int, seed=1, confidence: float = 0.95,
