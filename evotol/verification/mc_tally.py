@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-#: the rows of an error twist each component takes (position m, orientation rad)
-ROWS = {"position": slice(0, 3), "orientation": slice(3, 6)}
+from evotol.verification.nonlinear import ROWS       # the rows of an error twist each component takes
 
 
 class Tally:
