@@ -257,8 +257,13 @@ def _same(a, b) -> bool:
     return a == b
 
 
+def _timeless(d):
+    """``d`` without its wall times (``seconds``, at any depth)."""
+    return {k: _timeless(v) for k, v in d.items() if k != "seconds"} if isinstance(d, dict) else d
+
+
 def _fields(res) -> dict:
-    d = {k: v for k, v in res.to_dict().items() if k != "seconds"}
+    d = _timeless(res.to_dict())
     return {**d, "exceed": res.exceed_rate, "max": res.max_error, "q95": res.quantile_95,
             "exceed_nl": res.nonlinear_exceed_rate, "yield_linear": res.yield_linear, "yield_nonlinear": res.yield_nonlinear}
 
@@ -276,13 +281,13 @@ def _clearance_problem():
 
 
 @pytest.mark.parametrize("case", ["ucr3 nonlinear", "ucr3 paper, normal, mc", "toy 600 poses (compiled hypercubes)",
-                                  "toy yield", "5-bar with clearances"])
+                                  "toy yield", "5-bar with clearances", "UR5 calibrated (simulated per design)"])
 def test_verify_designs_equals_verify_of_each_design_bit_for_bit(case):
     """verify_designs draws each chunk's unit samples once for all designs: every result equals verify of
     that design alone (per-pose arrays, the yield verdict, the linearisation error, the worst-case ratio), on
     a nonlinear model with disk sources, with one given distribution and plain sampling, on the compiled
-    hypercube path (>= 500 poses), with a yield requirement and with clearance sources (whose states are
-    drawn per chunk, per design)."""
+    hypercube path (>= 500 poses), with a yield requirement, with clearance sources (whose states are
+    drawn per chunk, per design) and on a calibrated robot (each design's calibration simulated)."""
     from evotol.studies.yao2013 import PAPER_TABLE1, PAPER_TABLE2
     from evotol.verification.montecarlo import verify_designs
 
@@ -292,6 +297,12 @@ def test_verify_designs_equals_verify_of_each_design_bit_for_bit(case):
         designs = [PAPER_TABLE1, PAPER_TABLE2, np.asarray(PAPER_TABLE1) * 0.5]
         if "normal" in case:
             kw.update(method="mc", distribution="normal", nonlinear=False)
+    elif case.startswith("UR5 calibrated"):          # each design's own simulated calibration (part_checks)
+        from tests.test_combinations import build
+
+        P = build("calibration")
+        designs = [P.upper, np.sqrt(P.lower * P.upper), np.minimum(P.lower * 30, P.upper)]
+        kw["n_samples"] = 60
     elif case == "5-bar with clearances":
         P = _clearance_problem()
         designs = [P.upper, P.upper * 0.3, np.sqrt(P.lower * P.upper)]
@@ -307,6 +318,7 @@ def test_verify_designs_equals_verify_of_each_design_bit_for_bit(case):
     for t, res in zip(designs, together):
         alone = verify(P, t, **kw)
         assert _same(_fields(res), _fields(alone))
+        assert res.part_checks.keys() == alone.part_checks.keys()
     assert not _same(_fields(together[0])["max"], _fields(together[1])["max"])     # designs not mixed up
     with pytest.raises(ValidationError, match="designs"):
         verify_designs(P, [], **kw)
