@@ -402,8 +402,9 @@ def verify(problem: ToleranceProblem, tolerances, n_samples: int = 1000, method:
         return verify_nonlinear(problem, tolerances, n_samples=n_samples, seed=seed, chunk_poses=chunk_poses)
     if model != "linear":
         raise ValidationError("model", model, "'linear' (first-order samples, plus nonlinear exceed rates) or 'nonlinear'")
-    return verify_designs(problem, [tolerances], n_samples, method, seed, nonlinear, radial, chunk_poses, progress,
-                          confidence, distribution)[0]
+    return verify_designs(problem, [tolerances], n_samples=n_samples, method=method, seed=seed, nonlinear=nonlinear,
+                          radial=radial, chunk_poses=chunk_poses, progress=progress, confidence=confidence,
+                          distribution=distribution)[0]
 
 
 @single_threaded_blas
@@ -466,9 +467,10 @@ def verify_designs(problem: ToleranceProblem, designs, n_samples: int = 1000, me
         U = (np.concatenate([pose_uniforms(root, int(p), n_samples, sum(dims), method) for p in idx]) if U is None
              else U.reshape(-1, U.shape[2]))                            # the same draws, compiled (many poses)
         Z = distributions.draw(U, dims, dists, radial)                  # row by row: the chunk's poses at once
+        J = problem.jacobian[idx]                                       # the chunk's maps, taken once for all designs
         for t, tally in zip(designs, tallies):
             E = np.concatenate(problem.source_errors(Z, t), axis=1).reshape(idx.size, n_samples, robot.n_columns)
-            lin = np.einsum("pij,psj->psi", problem.jacobian[idx], E)
+            lin = np.einsum("pij,psj->psi", J, E)
             if problem.clearances is not None:   # consistent clearance states inside the classes' bounds
                 lin = lin + clearances.sample_twists(robot, problem.poses[idx], t[robot.n_geometric:], n_samples,
                                                      np.random.default_rng([seed, start]))
